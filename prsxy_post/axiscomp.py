@@ -1,0 +1,201 @@
+"""Real-axis error tables: the contract's play model and its compensation.
+
+For motor m with a table of forward errors F(p) and reverse errors R(p)
+(actual − commanded, linear between table points, end values held outside):
+
+    lo(p) = p + min(F(p), R(p)),   hi(p) = p + max(F(p), R(p))
+
+Play model (what the machine does with commands p_0, p_1, ... in time order):
+
+    y_0 = lo(p_0),   y_k = min(max(y_(k−1), lo(p_k)), hi(p_k))
+
+Compensation (the E_i(P_i) term of the paper's Eq. 3): choose commands whose
+result is the wanted positions T_k: lo(p_k) = T_k where T rises, hi(p_k) = T_k
+where it falls, p_k = p_(k−1) where it stands.
+
+Both are vectorised over a whole chunk of points and can be continued across
+chunks with a :class:`PlayState`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .profile import AxisComp
+
+#: A wanted position that moves by less than this between two points stands still.
+#: Without it, rounding noise of 1e-15 mm in a motor that should stand would be
+#: read as reversals, and every one would make the command jump across the play.
+STAND_TOL_MM = 1e-9
+
+
+@dataclass(frozen=True)
+class MotorTable:
+    """lo/hi envelopes of one motor as piecewise-linear functions.
+
+    ``breaks`` are the table positions plus every point where F and R cross
+    between two table points, so min/max of the two is exactly linear between
+    consecutive breaks.
+    """
+
+    motor: int
+    breaks: np.ndarray
+    lo_err: np.ndarray
+    hi_err: np.ndarray
+
+    @classmethod
+    def from_comp(cls, comp: AxisComp) -> MotorTable:
+        p, f, r = (np.asarray(a, dtype=float) for a in (comp.positions, comp.forward,
+                                                       comp.reverse))
+        diff = f - r
+        extra = []
+        for j in range(len(p) - 1):
+            if diff[j] * diff[j + 1] < 0:
+                s = diff[j] / (diff[j] - diff[j + 1])
+                extra.append(p[j] + s * (p[j + 1] - p[j]))
+        breaks = np.union1d(p, np.array(extra)) if extra else p.copy()
+        fb = np.interp(breaks, p, f)
+        rb = np.interp(breaks, p, r)
+        return cls(comp.motor, breaks, np.minimum(fb, rb), np.maximum(fb, rb))
+
+    def lo(self, p: np.ndarray) -> np.ndarray:
+        """Where the part ends when approached moving + (forward error)."""
+        return p + np.interp(p, self.breaks, self.lo_err)
+
+    def hi(self, p: np.ndarray) -> np.ndarray:
+        """Where the part ends when approached moving − (reverse error)."""
+        return p + np.interp(p, self.breaks, self.hi_err)
+
+    @staticmethod
+    def _invert(target: np.ndarray, breaks: np.ndarray, err: np.ndarray) -> np.ndarray:
+        vals = breaks + err  # strictly increasing: the profile rejects slopes <= -0.5
+        out = np.interp(target, vals, breaks)
+        below = target < vals[0]
+        above = target > vals[-1]
+        out[below] = target[below] - err[0]
+        out[above] = target[above] - err[-1]
+        return out
+
+    def lo_inv(self, target: np.ndarray) -> np.ndarray:
+        """p with lo(p) = target."""
+        return self._invert(np.asarray(target, dtype=float), self.breaks, self.lo_err)
+
+    def hi_inv(self, target: np.ndarray) -> np.ndarray:
+        """p with hi(p) = target."""
+        return self._invert(np.asarray(target, dtype=float), self.breaks, self.hi_err)
+
+    @property
+    def max_play(self) -> float:
+        return float(np.max(self.hi_err - self.lo_err))
+
+
+@dataclass
+class PlayState:
+    """What the play model and the compensation remember between chunks.
+
+    y : where the driven part is (play model)
+    target : last wanted position (compensation)
+    command : last command (compensation)
+    """
+
+    y: float | None = None
+    target: float | None = None
+    command: float | None = None
+
+
+def _clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Prefix composition of y ↦ clamp(y, lo_k, hi_k), evaluated at y = −∞.
+
+    Clamps compose into clamps: clamp(clamp(y, a1, b1), a2, b2) =
+    clamp(y, clamp(a1, a2, b2), clamp(b1, a2, b2)). That makes the play model an
+    associative scan, done here in log2(N) vectorised doubling steps.
+    """
+    a = lo.copy()
+    b = hi.copy()
+    n = len(a)
+    off = 1
+    while off < n:
+        a_prev = a[:-off]
+        b_prev = b[:-off]
+        a_new = np.clip(a_prev, a[off:], b[off:])
+        b_new = np.clip(b_prev, a[off:], b[off:])
+        a[off:] = a_new
+        b[off:] = b_new
+        off *= 2
+    return a
+
+
+def play_model(table: MotorTable | None, p: np.ndarray, state: PlayState | None = None
+               ) -> np.ndarray:
+    """Where the driven part ends for commanded positions ``p`` (time order).
+
+    Parameters
+    ----------
+    table : MotorTable or None (an ideal motor: y = p)
+    p : (N,) commanded positions [mm]
+    state : PlayState, optional
+        Carries the part's position across chunks; updated in place.
+    """
+    p = np.asarray(p, dtype=float)
+    if table is None or len(p) == 0:
+        return p.copy()
+    lo = table.lo(p)
+    hi = table.hi(p)
+    if state is not None and state.y is not None:
+        lo = np.concatenate([[state.y], lo])
+        hi = np.concatenate([[state.y], hi])
+        y = _clamp_scan(lo, hi)[1:]
+    else:
+        y = _clamp_scan(lo, hi)
+    if state is not None:
+        state.y = float(y[-1])
+    return y
+
+
+def approach(table: MotorTable | None, p: np.ndarray, direction: int) -> np.ndarray:
+    """Result of approaching each position on its own from one side (poses, laser runs)."""
+    p = np.asarray(p, dtype=float)
+    if table is None:
+        return p.copy()
+    return table.lo(p) if direction > 0 else table.hi(p)
+
+
+def compensate(table: MotorTable | None, target: np.ndarray, state: PlayState | None = None
+               ) -> np.ndarray:
+    """Commands whose play-model result is ``target`` (time order).
+
+    Rising wanted position: lo(p_k) = T_k; falling: hi(p_k) = T_k; standing
+    (|ΔT| < :data:`STAND_TOL_MM`): p_k = p_(k−1). The first point of a motion is
+    approached from below (lo), as the play model starts at lo(p_0).
+    """
+    target = np.asarray(target, dtype=float)
+    if table is None or len(target) == 0:
+        return target.copy()
+    prev_t = state.target if state is not None else None
+    if prev_t is None:
+        dT = np.diff(target, prepend=-np.inf)  # first point: rising
+    else:
+        dT = np.diff(target, prepend=prev_t)
+    rising = dT >= STAND_TOL_MM
+    falling = dT <= -STAND_TOL_MM
+    cmd = np.where(rising, table.lo_inv(target), table.hi_inv(target))
+    standing = ~(rising | falling)
+    if np.any(standing):
+        idx = np.where(standing, -1, np.arange(len(target)))
+        idx = np.maximum.accumulate(idx)
+        prev_cmd = state.command if state is not None else None
+        if prev_cmd is None:
+            # Cannot happen for the very first point (it always rises from −∞).
+            prev_cmd = float(cmd[0])
+        cmd = np.where(idx >= 0, cmd[np.maximum(idx, 0)], prev_cmd)
+    if state is not None:
+        state.target = float(target[-1])
+        state.command = float(cmd[-1])
+    return cmd
+
+
+def tables_by_motor(comps: tuple[AxisComp, ...]) -> dict[int, MotorTable]:
+    """MotorTable for every motor that has an ``[[axis_comp]]`` entry."""
+    return {c.motor: MotorTable.from_comp(c) for c in comps}

@@ -1,0 +1,386 @@
+"""Inverse and forward kinematics of the PRS-XY machine (contract: machine-model.md).
+
+Notation (frames as in the contract)
+------------------------------------
+``q``       : (N, 5) virtual axes [x, y, z, A, B], workpiece frame [mm, mm, mm, deg, deg]
+``P``       : (N, 5) motor positions [P1, P2, P3, P5, P6] [mm]
+``c``       : (N, 3) platform centre, machine frame [mm]
+``gamma``   : (N,)  parasitic spin about the spindle axis [rad]
+``R``       : (N, 3, 3) platform orientation, R = Ry(B) · Rx(A) · Rz(γ)
+
+The paper writes the inverse map as P_i = g_i(Q1, Q2, Q7, Q8, Q9) (Eq. 1–2); the
+calibrated map g'_i of Eq. 3 is the same function evaluated with the calibrated
+geometry.
+
+The inverse kinematics is solved in closed form. The three hinge-plane
+constraints and the tool-tip height are linear in c:
+
+    M c = r(γ),   M = [u_1; u_2; u_3; e_z]  (4 × 3)
+    r_i(γ) = g_i·u_i − u_i·(R b_i),   r_4(γ) = o_z + z − (R t)_z
+
+and r is affine in (cos γ, sin γ). Four equations in three unknowns are
+consistent only when n·r(γ) = 0 for the left null vector n of M, a single
+equation K0 + Kc cos γ + Ks sin γ = 0; of its two roots the one nearest γ = 0
+is the one a Newton iteration from γ = 0 finds (the contract's definition).
+Then c = M⁺ r(γ) exactly. No iteration, no warm start, and vectorised.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .profile import KinematicParams, TableParams
+
+
+def rot_x(a: np.ndarray) -> np.ndarray:
+    """Right-handed rotation matrices about x, shape (..., 3, 3); ``a`` in rad."""
+    c, s = np.cos(a), np.sin(a)
+    o, z = np.ones_like(a), np.zeros_like(a)
+    return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1),
+                     np.stack([z, s, c], -1)], -2)
+
+
+def rot_y(a: np.ndarray) -> np.ndarray:
+    """Right-handed rotation matrices about y, shape (..., 3, 3); ``a`` in rad."""
+    c, s = np.cos(a), np.sin(a)
+    o, z = np.ones_like(a), np.zeros_like(a)
+    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1),
+                     np.stack([-s, z, c], -1)], -2)
+
+
+def rot_z(a: np.ndarray) -> np.ndarray:
+    """Right-handed rotation matrices about z, shape (..., 3, 3); ``a`` in rad."""
+    c, s = np.cos(a), np.sin(a)
+    o, z = np.ones_like(a), np.zeros_like(a)
+    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1),
+                     np.stack([z, z, o], -1)], -2)
+
+
+def tool_axis(a_deg: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
+    """Tool axis R·(0,0,1) = (cos A sin B, −sin A, cos A cos B), shape (N, 3)."""
+    a, b = np.radians(a_deg), np.radians(b_deg)
+    return np.stack([np.cos(a) * np.sin(b), -np.sin(a), np.cos(a) * np.cos(b)], -1)
+
+
+def angles_from_axis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A = asin(−a_y), B = atan2(a_x, a_z) in degrees (contract)."""
+    axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    return (np.degrees(np.arcsin(np.clip(-axis[..., 1], -1.0, 1.0))),
+            np.degrees(np.arctan2(axis[..., 0], axis[..., 2])))
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """A profile's geometry as arrays, radians, ready for vectorised kinematics.
+
+    Attributes
+    ----------
+    g : (3, 3) guide points g_i (rows), machine frame [mm]
+    d : (3, 3) guide directions d_i
+    u : (3, 3) hinge axes u_i
+    b : (3, 3) ball joints in the platform frame b_i [mm]
+    L : (3,) strut lengths [mm]
+    tool : (3,) tool tip in the platform frame t [mm] (without any G43 offset)
+    origin : (3,) machine position of the workpiece origin with both table motors at 0
+    scale_x, scale_y, squareness : table errors (squareness in rad)
+    """
+
+    g: np.ndarray
+    d: np.ndarray
+    u: np.ndarray
+    b: np.ndarray
+    L: np.ndarray
+    tool: np.ndarray
+    origin: np.ndarray
+    scale_x: float = 0.0
+    scale_y: float = 0.0
+    squareness: float = 0.0
+
+    @classmethod
+    def from_params(cls, kp: KinematicParams, origin: np.ndarray,
+                    table: TableParams | None = None) -> Geometry:
+        """Build the arrays of machine-model.md "Geometry of leg i" from profile values."""
+        table = table or TableParams()
+        g, d, u, b, L = [], [], [], [], []
+        for leg in kp.legs:
+            th = np.radians(leg.guide_angle)
+            g.append([leg.guide_radius * np.cos(th), leg.guide_radius * np.sin(th),
+                      leg.guide_height])
+            di = rot_x(np.radians(leg.guide_tilt_x)) @ rot_y(np.radians(leg.guide_tilt_y)) \
+                @ np.array([0.0, 0.0, 1.0])
+            tangent = np.array([-np.sin(th), np.cos(th), 0.0])
+            radial = np.array([np.cos(th), np.sin(th), 0.0])
+            k = np.radians(leg.hinge_twist)
+            v = np.cos(k) * tangent + np.sin(k) * radial
+            ui = v - (v @ di) * di
+            u.append(ui / np.linalg.norm(ui))
+            d.append(di)
+            ph = np.radians(leg.platform_angle)
+            b.append([leg.platform_radius * np.cos(ph), leg.platform_radius * np.sin(ph),
+                      leg.platform_z])
+            L.append(leg.strut_length)
+        return cls(np.array(g), np.array(d), np.array(u), np.array(b), np.array(L),
+                   np.array([kp.tool_offset_x, kp.tool_offset_y, -kp.tool_length]),
+                   np.asarray(origin, dtype=float).copy(),
+                   table.scale_x, table.scale_y, table.squareness)
+
+    # Precomputed linear algebra of the closed-form IK.
+    @property
+    def _m(self) -> tuple[np.ndarray, np.ndarray]:
+        M = np.vstack([self.u, [0.0, 0.0, 1.0]])
+        U, _, _ = np.linalg.svd(M)
+        return U[:, 3], np.linalg.pinv(M)
+
+
+@dataclass(frozen=True)
+class PlatformPose:
+    """Platform centre c (N, 3) [mm], spin gamma (N,) [rad], orientation R (N, 3, 3)."""
+
+    c: np.ndarray
+    gamma: np.ndarray
+    R: np.ndarray
+
+
+def _tool_vectors(geo: Geometry, n: int, tool_length_offset: np.ndarray | float | None
+                  ) -> np.ndarray:
+    t = np.broadcast_to(geo.tool, (n, 3)).copy()
+    if tool_length_offset is not None:
+        t[:, 2] -= tool_length_offset
+    return t
+
+
+def solve_platform(geo: Geometry, q: np.ndarray,
+                   tool_length_offset: np.ndarray | float | None = None) -> PlatformPose:
+    """Platform centre and spin for tool poses ``q`` (step 1 of the contract's IK).
+
+    Parameters
+    ----------
+    geo : Geometry
+    q : (N, 5) ndarray [mm, mm, mm, deg, deg]
+    tool_length_offset : (N,) or float, optional
+        G43 length added to the tool (the tip sits that much further along the
+        spindle axis, away from the spindle).
+
+    Returns
+    -------
+    PlatformPose; rows with no solution hold NaN.
+    """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    n = q.shape[0]
+    t = _tool_vectors(geo, n, tool_length_offset)
+    Rab = rot_y(np.radians(q[:, 4])) @ rot_x(np.radians(q[:, 3]))  # (N, 3, 3)
+    nul, Mp = geo._m
+    # R b = cos γ · Rab (bx, by, 0) + sin γ · Rab (−by, bx, 0) + Rab (0, 0, bz)
+    bxy = geo.b.copy()
+    bxy[:, 2] = 0.0
+    bperp = np.stack([-geo.b[:, 1], geo.b[:, 0], np.zeros(3)], -1)
+    bz = np.zeros_like(geo.b)
+    bz[:, 2] = geo.b[:, 2]
+    # u_i · (Rab w) = (Rab^T u_i) · w : project hinge axes into the tilted frame once.
+    uR = np.einsum("nji,kj->nki", Rab, geo.u)  # (N, 3 legs, 3)
+    gu = np.einsum("ij,ij->i", geo.g, geo.u)  # (3,)
+    const_legs = gu[None, :] - np.einsum("nkj,kj->nk", uR, bz)
+    cos_legs = -np.einsum("nkj,kj->nk", uR, bxy)
+    sin_legs = -np.einsum("nkj,kj->nk", uR, bperp)
+    rz = Rab[:, 2, :]  # row giving the z component of Rab w
+    txy = t.copy()
+    txy[:, 2] = 0.0
+    tperp = np.stack([-t[:, 1], t[:, 0], np.zeros(n)], -1)
+    const_z = geo.origin[2] + q[:, 2] - rz[:, 2] * t[:, 2]
+    cos_z = -np.einsum("nj,nj->n", rz, txy)
+    sin_z = -np.einsum("nj,nj->n", rz, tperp)
+    r0 = np.column_stack([const_legs, const_z])  # (N, 4)
+    rc = np.column_stack([cos_legs, cos_z])
+    rs = np.column_stack([sin_legs, sin_z])
+    K0, Kc, Ks = r0 @ nul, rc @ nul, rs @ nul
+    rho = np.hypot(Kc, Ks)
+    phi = np.arctan2(Ks, Kc)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        delta = np.arccos(-K0 / rho)  # NaN when out of [-1, 1]: no spin satisfies all legs
+    g1 = _wrap(phi + delta)
+    g2 = _wrap(phi - delta)
+    gamma = np.where(np.abs(g1) <= np.abs(g2), g1, g2)
+    cg, sg = np.cos(gamma), np.sin(gamma)
+    r = r0 + rc * cg[:, None] + rs * sg[:, None]
+    c = r @ Mp.T
+    R = Rab @ rot_z(gamma)
+    return PlatformPose(c, gamma, R)
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def strut_discriminant(geo: Geometry, pose: PlatformPose) -> np.ndarray:
+    """(d_i·v_i)² − |v_i|² + L_i², shape (N, 3); negative: strut i cannot reach."""
+    s = pose.c[:, None, :] + np.einsum("nij,kj->nki", pose.R, geo.b)
+    v = s - geo.g[None]
+    dv = np.einsum("nki,ki->nk", v, geo.d)
+    return dv**2 - np.einsum("nki,nki->nk", v, v) + geo.L[None] ** 2
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """Motor positions and what the solution went through.
+
+    P : (N, 5) [P1, P2, P3, P5, P6] mm; NaN where unreachable
+    pose : PlatformPose
+    reachable : (N,) bool
+    """
+
+    P: np.ndarray
+    pose: PlatformPose
+    reachable: np.ndarray
+
+
+def inverse(geo: Geometry, q: np.ndarray,
+            tool_length_offset: np.ndarray | float | None = None) -> IKResult:
+    """Virtual → real: motor positions for tool poses (contract "Inverse kinematics").
+
+    P_i = d_i·v_i + sqrt((d_i·v_i)² − |v_i|² + L_i²),  v_i = c + R b_i − g_i
+    (hinge above the ball joint), and the table equation solved for P5, P6:
+
+        D = o + (x, y, ·) − T,  P6 = D_y / (1 + s_y),  P5 = (D_x − σ P6) / (1 + s_x)
+
+    Parameters
+    ----------
+    geo : Geometry
+    q : (N, 5) ndarray [mm, mm, mm, deg, deg], workpiece frame
+    tool_length_offset : (N,) or float, optional  [mm]
+
+    Returns
+    -------
+    IKResult
+    """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    pose = solve_platform(geo, q, tool_length_offset)
+    s = pose.c[:, None, :] + np.einsum("nij,kj->nki", pose.R, geo.b)
+    v = s - geo.g[None]
+    dv = np.einsum("nki,ki->nk", v, geo.d)
+    disc = dv**2 - np.einsum("nki,nki->nk", v, v) + geo.L[None] ** 2
+    with np.errstate(invalid="ignore"):
+        p_head = dv + np.sqrt(disc)
+    t = _tool_vectors(geo, q.shape[0], tool_length_offset)
+    T = pose.c + np.einsum("nij,nj->ni", pose.R, t)
+    Dx = geo.origin[0] + q[:, 0] - T[:, 0]
+    Dy = geo.origin[1] + q[:, 1] - T[:, 1]
+    p6 = Dy / (1.0 + geo.scale_y)
+    p5 = (Dx - geo.squareness * p6) / (1.0 + geo.scale_x)
+    P = np.column_stack([p_head, p5, p6])
+    reachable = np.all(np.isfinite(P), axis=1)
+    return IKResult(P, pose, reachable)
+
+
+def table_displacement(geo: Geometry, p5: np.ndarray, p6: np.ndarray) -> np.ndarray:
+    """D = (P5(1 + s_x) + σ P6, P6(1 + s_y), 0), shape (N, 3) (contract "Table")."""
+    p5 = np.asarray(p5, dtype=float)
+    p6 = np.asarray(p6, dtype=float)
+    return np.stack([p5 * (1.0 + geo.scale_x) + geo.squareness * p6,
+                     p6 * (1.0 + geo.scale_y), np.zeros_like(p5)], -1)
+
+
+def _fk_residual(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
+    """Six FK equations for unknowns xv = (c, A, B, γ) [mm, rad], shape (N, 6)."""
+    c = xv[:, :3]
+    R = rot_y(xv[:, 4]) @ rot_x(xv[:, 3]) @ rot_z(xv[:, 5])
+    s = c[:, None, :] + np.einsum("nij,kj->nki", R, geo.b)
+    v = s - geo.g[None]
+    plane = np.einsum("nki,ki->nk", v, geo.u)
+    w = v - P[:, :3, None] * geo.d[None]
+    # Length residual scaled to mm: |w| − L behaves like a distance.
+    length = np.sqrt(np.einsum("nki,nki->nk", w, w)) - geo.L[None]
+    return np.concatenate([plane, length], axis=1)
+
+
+def _fk_guess(geo: Geometry, P: np.ndarray) -> np.ndarray:
+    """Start for Newton: the platform parallel to the plane through the hinges."""
+    a = geo.g[None] + P[:, :3, None] * geo.d[None]  # hinge centres (N, 3, 3)
+    nrm = np.cross(a[:, 1] - a[:, 0], a[:, 2] - a[:, 0])
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    nrm *= np.sign(nrm[:, 2:3])
+    A = np.arcsin(np.clip(-nrm[:, 1], -1, 1))
+    B = np.arctan2(nrm[:, 0], nrm[:, 2])
+    drop = np.sqrt(np.maximum(geo.L**2 - (np.linalg.norm(geo.g[:, :2], axis=1)
+                                          - np.linalg.norm(geo.b[:, :2], axis=1)) ** 2, 0.0))
+    c = a.mean(axis=1) - nrm * drop.mean()
+    return np.column_stack([c, A, B, np.zeros(len(P))])
+
+
+def forward_platform(geo: Geometry, P: np.ndarray, guess: np.ndarray | None = None,
+                     tol: float = 1e-12, max_iter: int = 30) -> tuple[np.ndarray, np.ndarray]:
+    """Solve the six constraint equations for (c, A, B, γ) by batched Newton.
+
+    Parameters
+    ----------
+    P : (N, 5) motor positions [mm]
+    guess : (N, 6) start (c [mm], A, B, γ [rad]); default: platform parallel to the
+        plane of the hinge centres.
+
+    Returns
+    -------
+    xv : (N, 6) solution; converged : (N,) bool
+    """
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    xv = _fk_guess(geo, P) if guess is None else np.array(guess, dtype=float)
+    n = len(P)
+    active = np.ones(n, dtype=bool)
+    converged = np.zeros(n, dtype=bool)
+    h = np.array([1e-6, 1e-6, 1e-6, 1e-8, 1e-8, 1e-8])
+    for _ in range(max_iter):
+        idx = np.nonzero(active)[0]
+        if idx.size == 0:
+            break
+        x = xv[idx]
+        Pi = P[idx]
+        f = _fk_residual(geo, Pi, x)
+        J = np.empty((idx.size, 6, 6))
+        for j in range(6):
+            xp = x.copy()
+            xm = x.copy()
+            xp[:, j] += h[j]
+            xm[:, j] -= h[j]
+            J[:, :, j] = (_fk_residual(geo, Pi, xp) - _fk_residual(geo, Pi, xm)) / (2 * h[j])
+        with np.errstate(all="ignore"):
+            try:
+                step = np.linalg.solve(J, -f[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                step = np.full_like(x, np.nan)
+        bad = ~np.all(np.isfinite(step), axis=1)
+        step[bad] = 0.0
+        xv[idx] = x + step
+        done = (np.max(np.abs(step), axis=1) < tol * 1e3) & ~bad
+        # Stop when the step is at rounding level; one more Newton step after the
+        # step first gets small would not change the result.
+        converged[idx[done]] = True
+        active[idx[done | bad]] = False
+    res = np.max(np.abs(_fk_residual(geo, P, xv)), axis=1)
+    converged &= res < 1e-9
+    return xv, converged
+
+
+def forward(geo: Geometry, P: np.ndarray, tool_length_offset: np.ndarray | float | None = None,
+            guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Real → virtual (contract "Forward kinematics").
+
+    Returns
+    -------
+    q : (N, 5) [x, y, z, A, B] workpiece frame [mm, deg]; NaN where not converged
+    converged : (N,) bool
+    """
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    xv, ok = forward_platform(geo, P, guess)
+    R = rot_y(xv[:, 4]) @ rot_x(xv[:, 3]) @ rot_z(xv[:, 5])
+    t = _tool_vectors(geo, len(P), tool_length_offset)
+    T = xv[:, :3] + np.einsum("nij,nj->ni", R, t)
+    D = table_displacement(geo, P[:, 3], P[:, 4])
+    w = T - geo.origin + D
+    q = np.column_stack([w, np.degrees(xv[:, 3]), np.degrees(xv[:, 4])])
+    q[~ok] = np.nan
+    return q, ok
+
+
+def platform_guess(pose: PlatformPose, q: np.ndarray) -> np.ndarray:
+    """An FK start (c, A, B, γ) from an IK solution, for warm-started FK."""
+    return np.column_stack([pose.c, np.radians(q[:, 3]), np.radians(q[:, 4]), pose.gamma])

@@ -1,0 +1,543 @@
+"""Machine profiles: read, validate, default and write the TOML profile.
+
+The contract (``shared/spec/machine-model.md``, ``data-formats.md``) fixes the
+sections ``[machine]``, ``[work]``, ``[kinematics]`` (three ``legs``), ``[table]``,
+``[[axis_comp]]`` and ``[controller_kinematics]``. Everything else is this
+project's and optional; a profile holding only the contract's keys is valid.
+The project's sections, with their defaults, are documented in
+``profiles/README.md`` and in :data:`DEFAULTS`.
+
+Angles are degrees in the file and in :class:`Profile`; :mod:`kinematics` turns
+them into radians.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .errors import ProfileError
+
+MOTORS = (1, 2, 3, 5, 6)
+DEFAULT_AXIS_NAMES = {1: "U", 2: "V", 3: "W", 5: "X", 6: "Y"}
+
+LEG_REQUIRED = (
+    "guide_radius",
+    "guide_angle",
+    "guide_height",
+    "strut_length",
+    "platform_radius",
+    "platform_angle",
+)
+LEG_OPTIONAL = ("guide_tilt_x", "guide_tilt_y", "hinge_twist", "platform_z")
+KIN_REQUIRED = ("tool_length",)
+KIN_OPTIONAL = ("tool_offset_x", "tool_offset_y")
+TABLE_KEYS = ("scale_x", "scale_y", "squareness")
+
+#: Defaults of the project's own sections. Each key is documented in profiles/README.md.
+DEFAULTS: dict[str, dict[str, Any]] = {
+    "limits": {
+        "max_tilt_deg": 30.0,
+        "max_feed_mm_min": 30000.0,
+        "rapid_mm_min": 10000.0,
+        "rapid_deg_min": 3600.0,
+        "max_accel_mm_s2": 2000.0,
+        "max_accel_deg_s2": 3600.0,
+        "max_points": 50_000_000,
+        "max_time_s": 360_000.0,
+    },
+    "interpolation": {"period_ms": 10.0},
+    "start": {"pose": [0.0, 0.0, 0.0, 0.0, 0.0]},
+    "gcode": {"g28": [0.0, 0.0, 0.0, 0.0, 0.0], "g30": [0.0, 0.0, 0.0, 0.0, 0.0]},
+    "output": {
+        "coordinate_system": 1,
+        "program": 1,
+        "decimals": 5,
+        "max_points_per_program": 0,
+        "rotary_buffer_points": 0,
+        "gcode_tolerance_mm": 0.0,
+    },
+}
+
+DEFAULT_MOTOR_LIMITS = {1: (-200.0, 200.0), 2: (-200.0, 200.0), 3: (-200.0, 200.0)}
+DEFAULT_TABLE_LIMITS = (-300.0, 300.0)
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One PRS leg, in the units of the file (mm, degrees)."""
+
+    guide_radius: float
+    guide_angle: float
+    guide_height: float
+    strut_length: float
+    platform_radius: float
+    platform_angle: float
+    guide_tilt_x: float = 0.0
+    guide_tilt_y: float = 0.0
+    hinge_twist: float = 0.0
+    platform_z: float = 0.0
+
+
+@dataclass(frozen=True)
+class KinematicParams:
+    """The ``[kinematics]`` (or ``[controller_kinematics]``) section."""
+
+    tool_length: float
+    legs: tuple[Leg, Leg, Leg]
+    tool_offset_x: float = 0.0
+    tool_offset_y: float = 0.0
+
+
+@dataclass(frozen=True)
+class TableParams:
+    """The ``[table]`` section: scale errors (dimensionless), squareness (rad)."""
+
+    scale_x: float = 0.0
+    scale_y: float = 0.0
+    squareness: float = 0.0
+
+
+@dataclass(frozen=True)
+class AxisComp:
+    """One ``[[axis_comp]]`` table (contract: real-axis error per motor)."""
+
+    motor: int
+    positions: np.ndarray
+    forward: np.ndarray
+    reverse: np.ndarray
+
+
+@dataclass(frozen=True)
+class MotorConfig:
+    """Output name, resolution and travel of one motor."""
+
+    motor: int
+    axis: str
+    counts_per_mm: float
+    min: float
+    max: float
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A validated machine profile.
+
+    ``raw`` keeps the parsed document (with defaults filled in) so that a profile
+    can be written back with every key the user had, including ones this version
+    only carries along (the error map, provenance notes).
+    """
+
+    name: str
+    origin: np.ndarray  # (3,) mm, machine frame
+    kinematics: KinematicParams
+    table: TableParams
+    axis_comp: tuple[AxisComp, ...]
+    controller_kinematics: KinematicParams | None
+    motors: tuple[MotorConfig, ...]
+    limits: Mapping[str, float]
+    period_ms: float
+    start: np.ndarray  # (5,) workpiece frame
+    work_offsets: Mapping[int, tuple[float, float, float, float, float]]
+    g28: tuple[float, float, float, float, float]
+    g30: tuple[float, float, float, float, float]
+    tools: Mapping[int, tuple[float, float]]  # number -> (length, diameter)
+    output: Mapping[str, Any]
+    raw: dict[str, Any] = field(repr=False)
+    source: str = "<profile>"
+
+    def motor(self, m: int) -> MotorConfig:
+        for mc in self.motors:
+            if mc.motor == m:
+                return mc
+        raise KeyError(m)
+
+
+# ---------------------------------------------------------------- validation
+
+
+class _Checker:
+    """Reads typed values out of a TOML table, naming the key in every error."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def fail(self, key: str, message: str, expected: str | None = None) -> ProfileError:
+        return ProfileError(message, source=self.source, key=key, expected=expected)
+
+    def table(self, doc: Mapping[str, Any], name: str, path: str, required: bool) -> dict | None:
+        if name not in doc:
+            if required:
+                raise self.fail(_join(path, name), "missing section", "a TOML table")
+            return None
+        value = doc[name]
+        if not isinstance(value, dict):
+            raise self.fail(_join(path, name), f"is a {_tname(value)}", "a TOML table")
+        return value
+
+    def number(self, doc: Mapping[str, Any], name: str, path: str, default: float | None = None,
+               lo: float | None = None, hi: float | None = None, positive: bool = False) -> float:
+        key = _join(path, name)
+        if name not in doc:
+            if default is None:
+                raise self.fail(key, "missing key", "a number")
+            return float(default)
+        value = doc[name]
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.fail(key, f"is a {_tname(value)} ({value!r})", "a number")
+        x = float(value)
+        if not math.isfinite(x):
+            raise self.fail(key, f"is {value!r}", "a finite number")
+        if positive and x <= 0:
+            raise self.fail(key, f"is {x:g}", "a number > 0")
+        if lo is not None and x < lo or hi is not None and x > hi:
+            raise self.fail(key, f"is {x:g}", f"a number in [{lo}, {hi}]")
+        return x
+
+    def integer(self, doc: Mapping[str, Any], name: str, path: str, default: int | None = None,
+                lo: int | None = None) -> int:
+        key = _join(path, name)
+        if name not in doc:
+            if default is None:
+                raise self.fail(key, "missing key", "an integer")
+            return default
+        value = doc[name]
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.fail(key, f"is a {_tname(value)} ({value!r})", "an integer")
+        if lo is not None and value < lo:
+            raise self.fail(key, f"is {value}", f"an integer >= {lo}")
+        return value
+
+    def string(self, doc: Mapping[str, Any], name: str, path: str, default: str | None = None) -> str:
+        key = _join(path, name)
+        if name not in doc:
+            if default is None:
+                raise self.fail(key, "missing key", "a string")
+            return default
+        value = doc[name]
+        if not isinstance(value, str):
+            raise self.fail(key, f"is a {_tname(value)}", "a string")
+        return value
+
+    def vector(self, doc: Mapping[str, Any], name: str, path: str, n: int | None,
+               default: Any = None) -> np.ndarray:
+        key = _join(path, name)
+        if name not in doc:
+            if default is None:
+                raise self.fail(key, "missing key", f"an array of {n or 'some'} numbers")
+            return np.array(default, dtype=float)
+        value = doc[name]
+        want = f"an array of {n} numbers" if n else "an array of numbers"
+        if not isinstance(value, list):
+            raise self.fail(key, f"is a {_tname(value)}", want)
+        if n is not None and len(value) != n:
+            raise self.fail(key, f"has {len(value)} values", want)
+        for i, v in enumerate(value):
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                raise self.fail(f"{key}[{i}]", f"is {v!r}", "a finite number")
+        return np.array(value, dtype=float)
+
+    def unknown(self, doc: Mapping[str, Any], allowed: set[str], path: str) -> None:
+        for k in doc:
+            if k not in allowed:
+                raise self.fail(_join(path, k), "unknown key",
+                                "one of " + ", ".join(sorted(allowed)))
+
+
+def _join(path: str, name: str) -> str:
+    return f"{path}.{name}" if path else name
+
+
+def _tname(value: Any) -> str:
+    return {dict: "table", list: "array", str: "string", bool: "boolean"}.get(
+        type(value), type(value).__name__
+    )
+
+
+def _kinematics(c: _Checker, sec: dict, path: str) -> KinematicParams:
+    c.unknown(sec, set(KIN_REQUIRED + KIN_OPTIONAL) | {"legs"}, path)
+    tool_length = c.number(sec, "tool_length", path)
+    ox = c.number(sec, "tool_offset_x", path, 0.0)
+    oy = c.number(sec, "tool_offset_y", path, 0.0)
+    legs_raw = sec.get("legs")
+    if not isinstance(legs_raw, list) or not all(isinstance(x, dict) for x in legs_raw):
+        raise c.fail(f"{path}.legs", "missing or not an array of tables",
+                     "three [[" + path + ".legs]] tables, for motors 1, 2, 3")
+    if len(legs_raw) != 3:
+        raise c.fail(f"{path}.legs", f"has {len(legs_raw)} legs",
+                     "exactly three, for motors 1, 2, 3")
+    legs = []
+    for i, leg in enumerate(legs_raw):
+        lp = f"{path}.legs[{i + 1}]"
+        c.unknown(leg, set(LEG_REQUIRED + LEG_OPTIONAL), lp)
+        vals = {k: c.number(leg, k, lp) for k in LEG_REQUIRED}
+        for k in ("guide_radius", "strut_length", "platform_radius"):
+            if vals[k] <= 0:
+                raise c.fail(f"{lp}.{k}", f"is {vals[k]:g}", "a length > 0")
+        vals.update({k: c.number(leg, k, lp, 0.0, lo=-45.0, hi=45.0)
+                     if k != "platform_z" else c.number(leg, k, lp, 0.0) for k in LEG_OPTIONAL})
+        legs.append(Leg(**vals))
+    return KinematicParams(tool_length, (legs[0], legs[1], legs[2]), ox, oy)
+
+
+def _axis_comp(c: _Checker, entries: Any) -> tuple[AxisComp, ...]:
+    if not isinstance(entries, list) or not all(isinstance(x, dict) for x in entries):
+        raise c.fail("axis_comp", "is not an array of tables", "[[axis_comp]] tables")
+    out: list[AxisComp] = []
+    seen: set[int] = set()
+    for i, e in enumerate(entries):
+        p = f"axis_comp[{i + 1}]"
+        c.unknown(e, {"motor", "positions", "forward", "reverse", "note"}, p)
+        m = c.integer(e, "motor", p)
+        if m not in MOTORS:
+            raise c.fail(f"{p}.motor", f"is {m}", "one of 1, 2, 3, 5, 6")
+        if m in seen:
+            raise c.fail(f"{p}.motor", f"motor {m} has a second table", "one table per motor")
+        seen.add(m)
+        pos = c.vector(e, "positions", p, None)
+        fwd = c.vector(e, "forward", p, len(pos))
+        rev = c.vector(e, "reverse", p, len(pos))
+        if len(pos) < 1:
+            raise c.fail(f"{p}.positions", "is empty", "at least one position")
+        if np.any(np.diff(pos) <= 0):
+            raise c.fail(f"{p}.positions", "is not strictly ascending", "ascending positions")
+        # The play model needs lo(p) and hi(p) increasing in p, or compensation
+        # could not invert them: an error slope below -1 would be a machine that
+        # moves backwards when commanded forwards.
+        for name, err in (("forward", fwd), ("reverse", rev)):
+            if len(pos) > 1 and np.any(np.diff(err) / np.diff(pos) <= -0.5):
+                raise c.fail(f"{p}.{name}", "changes faster than -0.5 mm per mm",
+                             "a positioning error table (small, slowly varying)")
+        out.append(AxisComp(m, pos, fwd, rev))
+    return tuple(sorted(out, key=lambda a: a.motor))
+
+
+def _motors(c: _Checker, entries: Any) -> tuple[MotorConfig, ...]:
+    given: dict[int, dict] = {}
+    if entries is not None:
+        if not isinstance(entries, list) or not all(isinstance(x, dict) for x in entries):
+            raise c.fail("motors", "is not an array of tables", "[[motors]] tables")
+        for i, e in enumerate(entries):
+            p = f"motors[{i + 1}]"
+            c.unknown(e, {"motor", "axis", "counts_per_mm", "min", "max"}, p)
+            m = c.integer(e, "motor", p)
+            if m not in MOTORS:
+                raise c.fail(f"{p}.motor", f"is {m}", "one of 1, 2, 3, 5, 6")
+            if m in given:
+                raise c.fail(f"{p}.motor", f"motor {m} given twice", "each motor once")
+            given[m] = {"_path": p, **e}
+    out = []
+    names: set[str] = set()
+    for m in MOTORS:
+        e = given.get(m, {"_path": "motors"})
+        p = e["_path"]
+        lo_d, hi_d = DEFAULT_MOTOR_LIMITS.get(m, DEFAULT_TABLE_LIMITS)
+        axis = c.string(e, "axis", p, DEFAULT_AXIS_NAMES[m])
+        if len(axis) != 1 or axis not in "ABCUVWXYZ":
+            raise c.fail(f"{p}.axis", f"is {axis!r}", "one PMAC axis letter A B C U V W X Y Z")
+        if axis in names:
+            raise c.fail(f"{p}.axis", f"axis {axis} is used twice", "a letter per motor")
+        names.add(axis)
+        cpm = c.number(e, "counts_per_mm", p, 10000.0, positive=True)
+        lo = c.number(e, "min", p, lo_d)
+        hi = c.number(e, "max", p, hi_d)
+        if hi <= lo:
+            raise c.fail(f"{p}.max", f"is {hi:g}, not above min {lo:g}", "max > min")
+        out.append(MotorConfig(m, axis, cpm, lo, hi))
+    return tuple(out)
+
+
+def _section_with_defaults(c: _Checker, doc: Mapping[str, Any], name: str) -> dict[str, Any]:
+    defaults = DEFAULTS[name]
+    sec = c.table(doc, name, "", False) or {}
+    c.unknown(sec, set(defaults), name)
+    out: dict[str, Any] = {}
+    for k, d in defaults.items():
+        if isinstance(d, list):
+            out[k] = [float(x) for x in c.vector(sec, k, name, len(d), d)]
+        elif isinstance(d, int) and not isinstance(d, bool):
+            out[k] = c.integer(sec, k, name, d, lo=0)
+        else:
+            out[k] = c.number(sec, k, name, d, lo=0.0)
+    return out
+
+
+def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Profile:
+    """Validate a parsed profile document and fill in the defaults.
+
+    Raises
+    ------
+    ProfileError
+        Naming the offending key (``kinematics.legs[2].strut_length``) and what
+        was expected.
+    """
+    c = _Checker(source)
+    known = {"machine", "work", "kinematics", "table", "axis_comp", "controller_kinematics",
+             "motors", "tools", "error_map", "provenance", *DEFAULTS}
+    c.unknown(doc, known, "")
+    machine = c.table(doc, "machine", "", False) or {}
+    name = c.string(machine, "name", "machine", "unnamed machine")
+    c.unknown(machine, {"name", "note"}, "machine")
+    work = c.table(doc, "work", "", True) or {}
+    c.unknown(work, {"origin", "offsets"}, "work")
+    origin = c.vector(work, "origin", "work", 3)
+    offsets: dict[int, tuple[float, float, float, float, float]] = {}
+    off_sec = c.table(work, "offsets", "work", False) or {}
+    for k in off_sec:
+        if k not in {f"G{n}" for n in range(54, 60)}:
+            raise c.fail(f"work.offsets.{k}", "unknown work offset", "G54 ... G59")
+        v = c.vector(off_sec, k, "work.offsets", 5)
+        offsets[int(k[1:])] = (v[0], v[1], v[2], v[3], v[4])
+
+    kin = _kinematics(c, c.table(doc, "kinematics", "", True) or {}, "kinematics")
+    ck_sec = c.table(doc, "controller_kinematics", "", False)
+    ckin = _kinematics(c, ck_sec, "controller_kinematics") if ck_sec is not None else None
+    tsec = c.table(doc, "table", "", False) or {}
+    c.unknown(tsec, set(TABLE_KEYS), "table")
+    table = TableParams(*(c.number(tsec, k, "table", 0.0, lo=-0.01, hi=0.01) for k in TABLE_KEYS))
+    axis_comp = _axis_comp(c, doc["axis_comp"]) if "axis_comp" in doc else ()
+    motors = _motors(c, doc.get("motors"))
+
+    sections = {name_: _section_with_defaults(c, doc, name_) for name_ in DEFAULTS}
+    limits = sections["limits"]
+    for k in ("max_feed_mm_min", "rapid_mm_min", "rapid_deg_min", "max_accel_mm_s2",
+              "max_accel_deg_s2", "max_time_s"):
+        if limits[k] <= 0:
+            raise c.fail(f"limits.{k}", f"is {limits[k]:g}", "a number > 0")
+    period = sections["interpolation"]["period_ms"]
+    if not 0.1 <= period <= 1000.0:
+        raise c.fail("interpolation.period_ms", f"is {period:g}", "0.1 to 1000 ms")
+    out_sec = sections["output"]
+    if out_sec["decimals"] < 4 or out_sec["decimals"] > 9:
+        raise c.fail("output.decimals", f"is {out_sec['decimals']}", "4 to 9 decimals")
+
+    tools: dict[int, tuple[float, float]] = {}
+    tools_raw = doc.get("tools", [])
+    if not isinstance(tools_raw, list) or not all(isinstance(x, dict) for x in tools_raw):
+        raise c.fail("tools", "is not an array of tables", "[[tools]] tables")
+    for i, t in enumerate(tools_raw):
+        p = f"tools[{i + 1}]"
+        c.unknown(t, {"number", "length", "diameter", "note"}, p)
+        n = c.integer(t, "number", p, lo=1)
+        if n in tools:
+            raise c.fail(f"{p}.number", f"tool {n} given twice", "each tool once")
+        tools[n] = (c.number(t, "length", p), c.number(t, "diameter", p, 0.0, lo=0.0))
+
+    if "error_map" in doc and not isinstance(doc["error_map"], dict):
+        raise c.fail("error_map", "is not a table", "an [error_map] table")
+
+    raw = copy.deepcopy(dict(doc))
+    g = sections["gcode"]
+    prof = Profile(
+        name=name,
+        origin=origin,
+        kinematics=kin,
+        table=table,
+        axis_comp=axis_comp,
+        controller_kinematics=ckin,
+        motors=motors,
+        limits=limits,
+        period_ms=period,
+        start=np.array(sections["start"]["pose"], dtype=float),
+        work_offsets=offsets,
+        g28=tuple(g["g28"]),  # type: ignore[arg-type]
+        g30=tuple(g["g30"]),  # type: ignore[arg-type]
+        tools=tools,
+        output=out_sec,
+        raw=raw,
+        source=source,
+    )
+    _check_reach(prof)
+    return prof
+
+
+def _check_reach(prof: Profile) -> None:
+    """A geometry whose struts cannot reach the start pose is an error naming the leg."""
+    from . import kinematics  # local: kinematics imports this module's types
+
+    for section, kp in (("kinematics", prof.kinematics),
+                        ("controller_kinematics", prof.controller_kinematics)):
+        if kp is None:
+            continue
+        geo = kinematics.Geometry.from_params(kp, prof.origin, prof.table)
+        q = prof.start[None, :]
+        try:
+            sol = kinematics.solve_platform(geo, q)
+        except Exception as exc:  # degenerate geometry: no solution at all
+            raise ProfileError(f"the platform cannot be placed at the start pose ({exc})",
+                               source=prof.source, key=section,
+                               expected="a 3-PRS geometry close to the nominal design") from None
+        disc = kinematics.strut_discriminant(geo, sol)
+        for i in range(3):
+            if not disc[0, i] >= 0:
+                raise ProfileError(
+                    f"strut {i + 1} cannot reach the platform at the start pose "
+                    f"(it falls short by {math.sqrt(-disc[0, i]) if disc[0, i] < 0 else math.nan:.3f} mm "
+                    "across the guide)",
+                    source=prof.source, key=f"{section}.legs[{i + 1}].strut_length",
+                    expected="a strut longer than the hinge-to-ball distance across the guide")
+
+
+def loads(text: str, source: str = "<profile>") -> Profile:
+    """Parse and validate profile TOML text."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(exc)
+        line = col = None
+        # tomllib says "... (at line 3, column 7)"
+        import re
+
+        m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
+        if m:
+            line, col = int(m.group(1)), int(m.group(2))
+            msg = msg[: m.start()].strip()
+        raise ProfileError(f"not valid TOML: {msg}", source=source, line=line, column=col,
+                           expected="a TOML profile") from None
+    return profile_from_dict(doc, source)
+
+
+def dumps(doc: Mapping[str, Any]) -> str:
+    """Write a profile document as TOML (deterministic key order as given)."""
+    import tomli_w
+
+    return tomli_w.dumps(_plain(doc))
+
+
+def _plain(x: Any) -> Any:
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_plain(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return [_plain(v) for v in x.tolist()]
+    if isinstance(x, np.floating):
+        return float(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
+def kinematics_to_dict(kp: KinematicParams) -> dict[str, Any]:
+    """The ``[kinematics]`` section for a parameter set (all keys written)."""
+    return {
+        "tool_length": kp.tool_length,
+        "tool_offset_x": kp.tool_offset_x,
+        "tool_offset_y": kp.tool_offset_y,
+        "legs": [
+            {k: getattr(leg, k) for k in LEG_REQUIRED + LEG_OPTIONAL} for leg in kp.legs
+        ],
+    }
+
+
+def nominal_kinematics() -> KinematicParams:
+    """The contract's nominal design (machine-model.md)."""
+    h = math.sqrt(400.0**2 - 150.0**2)
+    legs = tuple(Leg(250.0, a, h, 400.0, 100.0, a) for a in (90.0, 210.0, 330.0))
+    return KinematicParams(150.0, legs)  # type: ignore[arg-type]
