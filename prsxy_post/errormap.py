@@ -1,0 +1,251 @@
+"""The virtual-axis error map E(x, y, z, A, B) of the paper's Eq. 4–5.
+
+Structure (Eq. 5)::
+
+    e_x = e_x'(x, y) + e_x''(z, A, B)
+    e_y = e_y'(x, y) + e_y''(z, A, B)
+    e_z = e_z(z)
+    e_A = e_A(z, A, B)
+    e_B = e_B(z, A, B)
+
+Each function is a sum of products of Legendre polynomials of the coordinates
+scaled to [−1, 1] over the fitted domain, total degree at most ``degree``.
+Coordinates outside the domain are clamped to its edge: the map holds its
+boundary value rather than extrapolate a polynomial.
+
+The fit is ridge-regularised least squares on standardised columns; the degree
+and the regularisation λ are chosen by K-fold cross-validation, so the map
+averages measurement noise out instead of interpolating it (the paper's warning
+about interpolating raw errors). The cross-validated RMS is kept as the map's
+honest prediction error on points it was not fitted on.
+
+The compensation is Q' = Q − e(Q) (Eq. 6), iterated in :func:`chain.correct_virtual`.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.polynomial import legendre
+from scipy import linalg
+
+from .errors import FitError, ProfileError
+from .profile import Profile
+
+COMPONENTS = ("x", "y", "z", "a", "b")
+#: Variables each component depends on (indices into q = [x, y, z, A, B]): Eq. 5.
+STRUCTURE: dict[str, tuple[tuple[int, ...], ...]] = {
+    "x": ((0, 1), (2, 3, 4)),
+    "y": ((0, 1), (2, 3, 4)),
+    "z": ((2,),),
+    "a": ((2, 3, 4),),
+    "b": ((2, 3, 4),),
+}
+UNITS = {"x": "mm", "y": "mm", "z": "mm", "a": "deg", "b": "deg"}
+
+
+def _exponents(nvar: int, degree: int) -> list[tuple[int, ...]]:
+    """Multi-indices of total degree 1..degree (the constant is shared)."""
+    out = [e for e in itertools.product(range(degree + 1), repeat=nvar)
+           if 0 < sum(e) <= degree]
+    return sorted(out, key=lambda e: (sum(e), e))
+
+
+def _legendre_table(u: np.ndarray, degree: int) -> np.ndarray:
+    """P_0..P_degree at u, shape (N, degree + 1)."""
+    return legendre.legvander(u, degree)
+
+
+def design(q: np.ndarray, comp: str, degree: int, lo: np.ndarray, hi: np.ndarray
+           ) -> tuple[np.ndarray, list[tuple[tuple[int, ...], tuple[int, ...]]]]:
+    """Design matrix of one component: a constant, then every group's terms.
+
+    Returns
+    -------
+    X : (N, m) ndarray
+    terms : list of (variables, exponents) describing each column after the first
+    """
+    span = np.where(hi > lo, hi - lo, 1.0)
+    u = np.clip(2.0 * (q - lo) / span - 1.0, -1.0, 1.0)
+    cols = [np.ones(len(q))]
+    terms: list[tuple[tuple[int, ...], tuple[int, ...]]] = []
+    tables = {v: _legendre_table(u[:, v], degree) for v in range(5)}
+    for group in STRUCTURE[comp]:
+        for e in _exponents(len(group), degree):
+            col = np.ones(len(q))
+            for v, k in zip(group, e, strict=True):
+                col = col * tables[v][:, k]
+            cols.append(col)
+            terms.append((group, e))
+    return np.column_stack(cols), terms
+
+
+@dataclass(frozen=True)
+class ErrorMap:
+    """A fitted map: per component, degree and coefficients over a domain.
+
+    lo, hi : (5,) domain of q [mm, mm, mm, deg, deg]
+    degree : dict component → total degree
+    coef : dict component → (m,) coefficients [mm or deg]
+    cv_rms : dict component → cross-validated RMS prediction error
+    fit_rms : dict component → RMS residual on the fitted points
+    provenance : free-form notes (data files, date, counts)
+    """
+
+    lo: np.ndarray
+    hi: np.ndarray
+    degree: dict[str, int]
+    coef: dict[str, np.ndarray]
+    cv_rms: dict[str, float]
+    fit_rms: dict[str, float]
+    lam: dict[str, float]
+    provenance: dict[str, Any]
+
+    def __call__(self, q: np.ndarray) -> np.ndarray:
+        """e(q), shape (N, 5) [mm, mm, mm, deg, deg]."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        out = np.zeros_like(q)
+        for i, c in enumerate(COMPONENTS):
+            if c not in self.coef:
+                continue
+            X, _ = design(q, c, self.degree[c], self.lo, self.hi)
+            out[:, i] = X @ self.coef[c]
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """The profile's ``[error_map]`` section."""
+        return {
+            "model": "legendre-eq5",
+            "lo": [float(x) for x in self.lo],
+            "hi": [float(x) for x in self.hi],
+            "components": {
+                c: {
+                    "degree": int(self.degree[c]),
+                    "lambda": float(self.lam[c]),
+                    "coef": [float(x) for x in self.coef[c]],
+                    "cv_rms": float(self.cv_rms[c]),
+                    "fit_rms": float(self.fit_rms[c]),
+                    "unit": UNITS[c],
+                }
+                for c in self.coef
+            },
+            "provenance": dict(self.provenance),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any], source: str = "<profile>") -> ErrorMap:
+        def bad(key: str, msg: str, exp: str) -> ProfileError:
+            return ProfileError(msg, source=source, key=f"error_map.{key}", expected=exp)
+
+        if d.get("model") != "legendre-eq5":
+            raise bad("model", f"is {d.get('model')!r}", "'legendre-eq5'")
+        lo = np.asarray(d.get("lo", []), dtype=float)
+        hi = np.asarray(d.get("hi", []), dtype=float)
+        if lo.shape != (5,) or hi.shape != (5,) or not np.all(hi >= lo):
+            raise bad("lo", "domain is not two arrays of 5 with hi >= lo", "lo, hi of x,y,z,a,b")
+        comps = d.get("components", {})
+        if not isinstance(comps, dict):
+            raise bad("components", "is not a table", "a table per component x y z a b")
+        degree, coef, cv, fit, lam = {}, {}, {}, {}, {}
+        for c, v in comps.items():
+            if c not in COMPONENTS or not isinstance(v, dict):
+                raise bad(f"components.{c}", "unknown component", "x, y, z, a or b")
+            deg = v.get("degree")
+            if not isinstance(deg, int) or not 0 <= deg <= 8:
+                raise bad(f"components.{c}.degree", f"is {deg!r}", "an integer 0..8")
+            co = np.asarray(v.get("coef", []), dtype=float)
+            X, _ = design(np.zeros((1, 5)), c, deg, lo, hi)
+            if co.shape != (X.shape[1],) or not np.all(np.isfinite(co)):
+                raise bad(f"components.{c}.coef", f"has {co.size} values",
+                          f"{X.shape[1]} finite coefficients for degree {deg}")
+            degree[c], coef[c] = deg, co
+            cv[c] = float(v.get("cv_rms", np.nan))
+            fit[c] = float(v.get("fit_rms", np.nan))
+            lam[c] = float(v.get("lambda", 0.0))
+        return cls(lo, hi, degree, coef, cv, fit, lam, dict(d.get("provenance", {})))
+
+
+def from_profile(profile: Profile) -> ErrorMap | None:
+    """The profile's error map, or None when it has none."""
+    d = profile.raw.get("error_map")
+    if not d:
+        return None
+    return ErrorMap.from_dict(d, profile.source)
+
+
+def _ridge(X: np.ndarray, y: np.ndarray, lam: float) -> np.ndarray:
+    """Ridge solution on standardised columns (the constant is not penalised)."""
+    scale = np.sqrt(np.mean(X**2, axis=0))
+    scale[scale == 0] = 1.0
+    Xs = X / scale
+    m = X.shape[1]
+    pen = np.sqrt(lam) * np.eye(m)
+    pen[0, 0] = 0.0
+    A = np.vstack([Xs, pen])
+    b = np.concatenate([y, np.zeros(m)])
+    sol, *_ = linalg.lstsq(A, b, lapack_driver="gelsy")
+    return sol / scale
+
+
+def fit(q: np.ndarray, err: np.ndarray, *, rng: np.random.Generator,
+        degrees: Sequence[int] = (1, 2, 3, 4), lambdas: Sequence[float] | None = None,
+        folds: int = 5, provenance: dict[str, Any] | None = None) -> ErrorMap:
+    """Fit the Eq. 5 map to errors measured at commanded poses.
+
+    Parameters
+    ----------
+    q : (N, 5) commanded poses [mm, mm, mm, deg, deg]
+    err : (N, 5) measured − commanded (NaN where a component was not measured)
+    rng : random generator for the fold split
+    degrees, lambdas : the cross-validation grid
+    folds : K of K-fold cross-validation
+
+    Returns
+    -------
+    ErrorMap with the (degree, λ) of least cross-validated RMS per component.
+    """
+    q = np.asarray(q, dtype=float)
+    err = np.asarray(err, dtype=float)
+    if q.ndim != 2 or q.shape[1] != 5 or err.shape != q.shape:
+        raise FitError("error map data must be (N, 5) poses and errors",
+                       expected="matching arrays")
+    lam_grid = list(lambdas) if lambdas is not None else list(np.logspace(-8, 2, 11))
+    lo, hi = q.min(axis=0), q.max(axis=0)
+    degree, coef, cv_rms, fit_rms, lam_best = {}, {}, {}, {}, {}
+    for i, c in enumerate(COMPONENTS):
+        ok = np.isfinite(err[:, i])
+        n = int(ok.sum())
+        if n < 2 * folds:
+            continue
+        qi, yi = q[ok], err[ok, i]
+        fold = rng.permutation(n) % folds
+        best = (np.inf, 0, 0.0)
+        for deg in degrees:
+            X, _ = design(qi, c, deg, lo, hi)
+            if X.shape[1] >= n * (folds - 1) / folds:
+                continue  # more terms than the training folds can determine
+            for lam in lam_grid:
+                sse = 0.0
+                for f in range(folds):
+                    tr, te = fold != f, fold == f
+                    w = _ridge(X[tr], yi[tr], lam)
+                    sse += float(np.sum((X[te] @ w - yi[te]) ** 2))
+                rms = np.sqrt(sse / n)
+                if rms < best[0] * (1 - 1e-9):
+                    best = (rms, deg, lam)
+        if not np.isfinite(best[0]):
+            continue
+        _, deg, lam = best
+        X, _ = design(qi, c, deg, lo, hi)
+        w = _ridge(X, yi, lam)
+        degree[c], coef[c], lam_best[c] = deg, w, lam
+        cv_rms[c] = float(best[0])
+        fit_rms[c] = float(np.sqrt(np.mean((X @ w - yi) ** 2)))
+    if not coef:
+        raise FitError(f"too few points for an error map ({len(q)})",
+                       expected=f"at least {2 * folds} measured poses")
+    return ErrorMap(lo, hi, degree, coef, cv_rms, fit_rms, lam_best, dict(provenance or {}))

@@ -1,0 +1,99 @@
+"""Profile reading, defaults and validation errors that name the key."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from prsxy_post import profile as profile_mod
+from prsxy_post.errors import ProfileError
+
+from .conftest import ROOT, VECTORS
+
+NOMINAL_TEXT = (ROOT / "profiles" / "prsxy-nominal.toml").read_text()
+
+
+def test_nominal_profile_is_the_contract_design() -> None:
+    p = profile_mod.loads(NOMINAL_TEXT, "nominal")
+    h = math.sqrt(400.0**2 - 150.0**2)
+    assert p.kinematics.tool_length == 150.0
+    np.testing.assert_array_equal(p.origin, [0.0, 0.0, -150.0])
+    for leg, ang in zip(p.kinematics.legs, (90.0, 210.0, 330.0), strict=True):
+        assert (leg.guide_radius, leg.guide_angle, leg.strut_length) == (250.0, ang, 400.0)
+        assert (leg.platform_radius, leg.platform_angle) == (100.0, ang)
+        assert leg.guide_height == h
+        assert (leg.guide_tilt_x, leg.guide_tilt_y, leg.hinge_twist, leg.platform_z) == (0,) * 4
+    assert p.kinematics == profile_mod.nominal_kinematics()
+    assert p.table == profile_mod.TableParams()
+
+
+def test_contract_only_profile_gets_documented_defaults() -> None:
+    p = profile_mod.loads((VECTORS / "nominal.toml").read_text(), "nominal.toml")
+    assert p.period_ms == 10.0
+    assert p.limits == profile_mod.DEFAULTS["limits"]
+    assert [m.axis for m in p.motors] == ["U", "V", "W", "X", "Y"]
+    np.testing.assert_array_equal(p.start, np.zeros(5))
+    assert p.work_offsets == {}
+    assert p.controller_kinematics is None
+
+
+def test_perturbed_vectors_profile_reads(perturbed: profile_mod.Profile) -> None:
+    assert [a.motor for a in perturbed.axis_comp] == [1, 2, 3, 5, 6]
+
+
+def _err(text: str) -> str:
+    with pytest.raises(ProfileError) as exc:
+        profile_mod.loads(text, "bad.toml")
+    return str(exc.value)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "expect"),
+    [
+        ("tool_length = 150.0", "tool_lenght = 150.0", "bad.toml: kinematics.tool_lenght: unknown key"),
+        ("tool_length = 150.0", 'tool_length = "150"', "kinematics.tool_length: is a string"),
+        ("strut_length = 400.0\nplatform_radius = 100.0\nplatform_angle = 210.0",
+         "strut_length = 100.0\nplatform_radius = 100.0\nplatform_angle = 210.0",
+         "kinematics.legs[2].strut_length: strut 2 cannot reach"),
+        ("squareness = 0.0", "squareness = nan", "table.squareness: is nan (expected a finite"),
+        ("origin = [0.0, 0.0, -150.0]", "origin = [0.0, -150.0]", "work.origin: has 2 values"),
+        ("[machine]", "[limits]\nmax_tilt_deg = -1.0\n[machine]",
+         "limits.max_tilt_deg: is -1"),
+        ("[machine]", "[interpolation]\nperiod_ms = 0.0\n[machine]",
+         "interpolation.period_ms: is 0"),
+        ("guide_radius = 250.0\nguide_angle = 330.0", "guide_angle = 330.0",
+         "kinematics.legs[3].guide_radius: missing key"),
+    ],
+)
+def test_bad_profiles_name_the_key(old: str, new: str, expect: str) -> None:
+    assert old in NOMINAL_TEXT
+    assert expect in _err(NOMINAL_TEXT.replace(old, new, 1))
+
+
+def test_missing_leg_is_named() -> None:
+    i = NOMINAL_TEXT.rindex("[[kinematics.legs]]")
+    j = NOMINAL_TEXT.index("[table]")
+    msg = _err(NOMINAL_TEXT[:i] + NOMINAL_TEXT[j:])
+    assert "kinematics.legs: has 2 legs (expected exactly three" in msg
+
+
+def test_toml_syntax_error_is_located() -> None:
+    msg = _err(NOMINAL_TEXT.replace("tool_length = 150.0", "tool_length = = 150.0"))
+    assert msg.startswith("bad.toml:")
+    assert "not valid TOML" in msg
+    line = NOMINAL_TEXT.splitlines().index("tool_length = 150.0") + 1
+    assert msg.startswith(f"bad.toml:{line}:")
+
+
+def test_axis_comp_must_ascend() -> None:
+    text = NOMINAL_TEXT + "\n[[axis_comp]]\nmotor = 5\npositions = [0.0, -1.0]\n" \
+        "forward = [0.0, 0.0]\nreverse = [0.0, 0.0]\n"
+    assert "axis_comp[1].positions: is not strictly ascending" in _err(text)
+
+
+def test_round_trip_through_dumps(perturbed: profile_mod.Profile) -> None:
+    again = profile_mod.loads(profile_mod.dumps(perturbed.raw), "again")
+    assert again.kinematics == perturbed.kinematics
+    assert again.table == perturbed.table
