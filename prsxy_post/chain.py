@@ -13,14 +13,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import axiscomp, kinematics
 from .errors import LimitError, PrsxyError, ReachError
-from .gcode import InterpreterConfig, Motion, ToolEntry
 from .interpolate import Blocks, Limits, Samples, TimeLaw, interpolate
 from .profile import MOTORS, Profile, nominal_kinematics
+
+if TYPE_CHECKING:
+    from .gcode import InterpreterConfig, Motion
 
 #: Name of each motor column of P, in order.
 MOTOR_ORDER = MOTORS
@@ -69,6 +72,8 @@ class ChainResult:
 def interpreter_config(profile: Profile, start: Sequence[float] | None = None
                        ) -> InterpreterConfig:
     """The G-code interpreter's settings from a profile (offsets, tools, G28/G30, start)."""
+    from .gcode import InterpreterConfig, ToolEntry
+
     st = tuple(float(x) for x in (profile.start if start is None else start))
     return InterpreterConfig(
         work_offsets=dict(profile.work_offsets),

@@ -21,9 +21,9 @@ from typing import Any, NoReturn
 import click
 import numpy as np
 
-from . import __version__, profile as profile_mod
-from .errors import EXIT_INTERNAL, GCodeError, PrsxyError, ProfileError, UsageError
-
+from . import __version__
+from . import profile as profile_mod
+from .errors import EXIT_INTERNAL, PrsxyError, UsageError
 
 # ------------------------------------------------------------------ file helpers
 
@@ -364,7 +364,3 @@ def check(program: str, profile_path: str, start: str | None, no_error_map: bool
         sys.exit(1)
     click.echo(f"{program}: ok ({len(motions)} motions, {len(s)} points, "
                f"{float(np.sum(s.dt)):.2f} s)", err=True)
-
-
-def _unused(_: Any) -> None:  # keep imported names referenced for linters
-    del GCodeError, ProfileError

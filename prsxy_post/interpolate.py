@@ -26,10 +26,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .gcode import Motion
+if TYPE_CHECKING:
+    from .gcode import Motion
 
 KIND_RAPID, KIND_FEED, KIND_ARC, KIND_DWELL = 0, 1, 2, 3
 _KIND = {"rapid": KIND_RAPID, "feed": KIND_FEED, "arc": KIND_ARC, "dwell": KIND_DWELL}
@@ -99,128 +101,119 @@ class Blocks:
         return Blocks(**{k: getattr(self, k)[sl] for k in self.__dataclass_fields__})
 
 
-def _arc_geometry(m: Motion) -> tuple[float, float, float, float, float, float, np.ndarray,
-                                      np.ndarray]:
-    """Sweep, radii, start angle, length and end tangents of an arc motion."""
-    iu, iv, iw = PLANE_AXES[m.plane]
-    assert m.center is not None
-    cu, cv = m.center[iu], m.center[iv]
-    u0, v0 = m.start[iu] - cu, m.start[iv] - cv
-    u1, v1 = m.end[iu] - cu, m.end[iv] - cv
-    r0, r1 = math.hypot(u0, v0), math.hypot(u1, v1)
-    th0, th1 = math.atan2(v0, u0), math.atan2(v1, u1)
-    turns = abs(m.rotation)
-    if m.rotation > 0:
-        d = (th1 - th0) % (2 * math.pi)
-        if d <= 1e-12:
-            d = 2 * math.pi
-        sweep = d + 2 * math.pi * (turns - 1)
-    else:
-        d = (th0 - th1) % (2 * math.pi)
-        if d <= 1e-12:
-            d = 2 * math.pi
-        sweep = -(d + 2 * math.pi * (turns - 1))
-    dw = m.end[iw] - m.start[iw]
+def _arc_geometry(start: np.ndarray, end: np.ndarray, center: np.ndarray, plane: np.ndarray,
+                  rotation: np.ndarray) -> dict[str, np.ndarray]:
+    """Sweep, radii, start angle, XYZ length and end tangents of arcs (vectorised).
+
+    The sweep follows LinuxCNC's ARC_FEED rotation: sign = direction (+ counter-
+    clockwise seen from the positive end of the plane's normal), magnitude =
+    turns; an arc whose end angle equals its start angle is a full turn.
+    """
+    n = len(start)
+    iu = np.empty(n, dtype=int)
+    iv = np.empty(n, dtype=int)
+    iw = np.empty(n, dtype=int)
+    for pl, (a, b_, c) in PLANE_AXES.items():
+        sel = plane == pl
+        iu[sel], iv[sel], iw[sel] = a, b_, c
+    r = np.arange(n)
+    u0, v0 = start[r, iu] - center[r, iu], start[r, iv] - center[r, iv]
+    u1, v1 = end[r, iu] - center[r, iu], end[r, iv] - center[r, iv]
+    r0, r1 = np.hypot(u0, v0), np.hypot(u1, v1)
+    th0, th1 = np.arctan2(v0, u0), np.arctan2(v1, u1)
+    turns = np.abs(rotation)
+    ccw = rotation > 0
+    d = np.where(ccw, (th1 - th0) % (2 * np.pi), (th0 - th1) % (2 * np.pi))
+    d = np.where(d <= 1e-12, 2 * np.pi, d)
+    sweep = np.where(ccw, 1.0, -1.0) * (d + 2 * np.pi * (turns - 1))
+    dw = end[r, iw] - start[r, iw]
     rm = 0.5 * (r0 + r1)
-    length = math.hypot(rm * sweep, dw)
-    # tangents: d/ds of (u, v, w) at both ends
-    sgn = 1.0 if sweep > 0 else -1.0
-    t_in = np.zeros(3)
-    t_out = np.zeros(3)
-    if length > 0:
-        k = abs(rm * sweep) / length
-        t_in[iu], t_in[iv], t_in[iw] = -math.sin(th0) * sgn * k, math.cos(th0) * sgn * k, \
-            dw / length
-        th_e = th0 + sweep
-        t_out[iu], t_out[iv], t_out[iw] = -math.sin(th_e) * sgn * k, math.cos(th_e) * sgn * k, \
-            dw / length
-    return sweep, r0, r1, th0, length, rm, t_in, t_out
+    length = np.hypot(rm * sweep, dw)
+    sgn = np.sign(sweep)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k = np.where(length > 0, np.abs(rm * sweep) / length, 0.0)
+        kw = np.where(length > 0, dw / length, 0.0)
+    t_in = np.zeros((n, 3))
+    t_out = np.zeros((n, 3))
+    th_e = th0 + sweep
+    t_in[r, iu] = -np.sin(th0) * sgn * k
+    t_in[r, iv] = np.cos(th0) * sgn * k
+    t_in[r, iw] = kw
+    t_out[r, iu] = -np.sin(th_e) * sgn * k
+    t_out[r, iv] = np.cos(th_e) * sgn * k
+    t_out[r, iw] = kw
+    return {"sweep": sweep, "r0": r0, "r1": r1, "theta0": th0, "length": length, "rm": rm,
+            "t_in": t_in, "t_out": t_out}
 
 
 def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
-    """Turn interpreted motions into planning arrays; zero-length moves are dropped."""
-    rows: list[tuple] = []
-    for m in motions:
-        kind = _KIND[m.kind]
-        s = np.asarray(m.start, dtype=float)
-        e = np.asarray(m.end, dtype=float)
-        sweep = r0 = r1 = th0 = 0.0
-        center = np.zeros(3)
-        plane = 0
-        t_in = np.zeros(3)
-        t_out = np.zeros(3)
-        duration = 0.0
-        angular = False
-        if kind == KIND_DWELL:
-            length = 0.0
-            vmax = accel = 1.0
-            duration = float(m.duration)
-        else:
-            dxyz = e[:3] - s[:3]
-            ang = float(np.hypot(e[3] - s[3], e[4] - s[4]))
-            if kind == KIND_ARC:
-                sweep, r0, r1, th0, length, rm, t_in, t_out = _arc_geometry(m)
-                center = np.asarray(m.center, dtype=float)
-                plane = m.plane
-            else:
-                length = float(np.linalg.norm(dxyz))
-                if length > LINEAR_EPS_MM:
-                    t_in = t_out = dxyz / length
-                rm = math.inf
-            if length <= LINEAR_EPS_MM:
-                if ang <= ANGULAR_EPS_DEG:
-                    continue  # no motion: nothing to interpolate
-                angular = True
-                length = ang
-                t_in = t_out = np.zeros(3)
-                if kind == KIND_RAPID:
-                    vmax = limits.rapid_deg_min / 60.0
-                else:
-                    vmax = min(m.feed, limits.rapid_deg_min) / 60.0
-                accel = limits.accel_deg_s2
-            else:
-                if kind == KIND_RAPID:
-                    vmax = limits.rapid_mm_min / 60.0
-                else:
-                    vmax = m.feed / 60.0
-                accel = limits.accel_mm_s2
-                if ang > 0:
-                    # A/B turn with the XYZ move: their rate and acceleration
-                    # scale with the path speed by ang / length.
-                    vmax = min(vmax, limits.rapid_deg_min / 60.0 * length / ang)
-                    accel = min(accel, limits.accel_deg_s2 * length / ang)
-                if kind == KIND_ARC and rm > 0:
-                    # centripetal acceleration v²/r stays within the limit
-                    vmax = min(vmax, math.sqrt(accel * rm))
-        rows.append((kind, s, e, m.line, m.tool_length, length, angular, vmax, accel, duration,
-                     plane, center, sweep, r0, r1, th0, t_in, t_out))
-    n = len(rows)
-    if n == 0:
-        z = np.zeros(0)
-        return Blocks(np.zeros(0, int), np.zeros((0, 5)), np.zeros((0, 5)), np.zeros(0, int),
-                      z, z, np.zeros(0, bool), z, z, z, np.zeros(0, int), np.zeros((0, 3)), z, z,
-                      z, z, np.zeros((0, 3)), np.zeros((0, 3)))
-    cols = list(zip(*rows, strict=True))
-    return Blocks(
-        kind=np.array(cols[0], dtype=int),
-        start=np.array(cols[1], dtype=float),
-        end=np.array(cols[2], dtype=float),
-        line=np.array(cols[3], dtype=int),
-        tool_length=np.array(cols[4], dtype=float),
-        length=np.array(cols[5], dtype=float),
-        angular=np.array(cols[6], dtype=bool),
-        vmax=np.array(cols[7], dtype=float),
-        accel=np.array(cols[8], dtype=float),
-        duration=np.array(cols[9], dtype=float),
-        plane=np.array(cols[10], dtype=int),
-        center=np.array(cols[11], dtype=float),
-        sweep=np.array(cols[12], dtype=float),
-        r0=np.array(cols[13], dtype=float),
-        r1=np.array(cols[14], dtype=float),
-        theta0=np.array(cols[15], dtype=float),
-        t_in=np.array(cols[16], dtype=float),
-        t_out=np.array(cols[17], dtype=float),
-    )
+    """Turn interpreted motions into planning arrays (vectorised); no-motion moves are dropped.
+
+    Speed limits: F (mm/min) along XYZ, or degrees/min for rotary-only moves;
+    the profile's rapid rates for G0; A/B rates and accelerations capped by the
+    rotary limits scaled by length/angle; on arcs v ≤ sqrt(a r) (centripetal).
+    """
+    n = len(motions)
+    kind = np.array([_KIND[m.kind] for m in motions], dtype=int) if n else np.zeros(0, int)
+    start = np.array([m.start for m in motions], dtype=float).reshape(n, 5)
+    end = np.array([m.end for m in motions], dtype=float).reshape(n, 5)
+    line = np.array([m.line for m in motions], dtype=int)
+    tool_length = np.array([m.tool_length for m in motions], dtype=float)
+    feed = np.array([m.feed for m in motions], dtype=float)
+    duration = np.array([m.duration for m in motions], dtype=float)
+    is_arc = kind == KIND_ARC
+    arcs = [m for m in motions if m.kind == "arc"]
+    plane = np.zeros(n, dtype=int)
+    center = np.zeros((n, 3))
+    rotation = np.zeros(n, dtype=int)
+    if arcs:
+        plane[is_arc] = [m.plane for m in arcs]
+        center[is_arc] = np.array([m.center for m in arcs], dtype=float)
+        rotation[is_arc] = [m.rotation for m in arcs]
+
+    dxyz = end[:, :3] - start[:, :3]
+    lin_len = np.sqrt(np.einsum("ij,ij->i", dxyz, dxyz))
+    ang = np.hypot(end[:, 3] - start[:, 3], end[:, 4] - start[:, 4])
+    length = lin_len.copy()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t_lin = np.where(lin_len[:, None] > LINEAR_EPS_MM, dxyz / lin_len[:, None], 0.0)
+    t_in = t_lin.copy()
+    t_out = t_lin.copy()
+    sweep = np.zeros(n)
+    r0 = np.zeros(n)
+    r1 = np.zeros(n)
+    theta0 = np.zeros(n)
+    rm = np.full(n, np.inf)
+    if arcs:
+        g = _arc_geometry(start[is_arc], end[is_arc], center[is_arc], plane[is_arc],
+                          rotation[is_arc])
+        sweep[is_arc], r0[is_arc], r1[is_arc] = g["sweep"], g["r0"], g["r1"]
+        theta0[is_arc], length[is_arc], rm[is_arc] = g["theta0"], g["length"], g["rm"]
+        t_in[is_arc], t_out[is_arc] = g["t_in"], g["t_out"]
+
+    dwell = kind == KIND_DWELL
+    rapid = kind == KIND_RAPID
+    angular = ~dwell & (length <= LINEAR_EPS_MM)
+    keep = dwell | ~angular | (ang > ANGULAR_EPS_DEG)
+    length = np.where(dwell, 0.0, np.where(angular, ang, length))
+    t_in[angular | dwell] = 0.0
+    t_out[angular | dwell] = 0.0
+    rate_deg = limits.rapid_deg_min / 60.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        v_lin = np.where(rapid, limits.rapid_mm_min / 60.0, feed / 60.0)
+        v_ang = np.where(rapid, rate_deg, np.minimum(feed / 60.0, rate_deg))
+        turning = ang > 0
+        scale = np.where(turning, length / np.where(turning, ang, 1.0), np.inf)
+        v_lin = np.minimum(v_lin, rate_deg * scale)
+        a_lin = np.minimum(limits.accel_mm_s2, limits.accel_deg_s2 * scale)
+        v_lin = np.where(is_arc & (rm > 0), np.minimum(v_lin, np.sqrt(a_lin * rm)), v_lin)
+    vmax = np.where(dwell, 1.0, np.where(angular, v_ang, v_lin))
+    accel = np.where(dwell, 1.0, np.where(angular, limits.accel_deg_s2, a_lin))
+    b = Blocks(kind=kind, start=start, end=end, line=line, tool_length=tool_length,
+               length=length, angular=angular, vmax=vmax, accel=accel,
+               duration=np.where(dwell, duration, 0.0), plane=plane, center=center,
+               sweep=sweep, r0=r0, r1=r1, theta0=theta0, t_in=t_in, t_out=t_out)
+    return b if keep.all() else b.take(keep)
 
 
 def junction_limits(b: Blocks, period_s: float) -> np.ndarray:
@@ -320,7 +313,7 @@ def time_law(b: Blocks, v_out: np.ndarray, v_start: float = 0.0) -> TimeLaw:
 
 def _distance(law: TimeLaw, k: np.ndarray, tau: np.ndarray, L: np.ndarray) -> np.ndarray:
     """Path distance s(τ) into block k at local time τ (trapezoid law)."""
-    v0, vp, v1, a = law.v0[k], law.vp[k], law.v1[k], law.a[k]
+    v0, vp, a = law.v0[k], law.vp[k], law.a[k]
     t1, t2, t3 = law.t1[k], law.t2[k], law.t3[k]
     s1 = v0 * t1 + 0.5 * a * t1**2
     s2 = vp * t2

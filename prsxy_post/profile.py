@@ -196,7 +196,7 @@ class _Checker:
             raise self.fail(key, f"is {value!r}", "a finite number")
         if positive and x <= 0:
             raise self.fail(key, f"is {x:g}", "a number > 0")
-        if lo is not None and x < lo or hi is not None and x > hi:
+        if (lo is not None and x < lo) or (hi is not None and x > hi):
             raise self.fail(key, f"is {x:g}", f"a number in [{lo}, {hi}]")
         return x
 
@@ -214,7 +214,8 @@ class _Checker:
             raise self.fail(key, f"is {value}", f"an integer >= {lo}")
         return value
 
-    def string(self, doc: Mapping[str, Any], name: str, path: str, default: str | None = None) -> str:
+    def string(self, doc: Mapping[str, Any], name: str, path: str,
+               default: str | None = None) -> str:
         key = _join(path, name)
         if name not in doc:
             if default is None:
@@ -476,10 +477,10 @@ def _check_reach(prof: Profile) -> None:
         disc = kinematics.strut_discriminant(geo, sol)
         for i in range(3):
             if not disc[0, i] >= 0:
+                short = math.sqrt(-disc[0, i]) if disc[0, i] < 0 else math.nan
                 raise ProfileError(
                     f"strut {i + 1} cannot reach the platform at the start pose "
-                    f"(it falls short by {math.sqrt(-disc[0, i]) if disc[0, i] < 0 else math.nan:.3f} mm "
-                    "across the guide)",
+                    f"(it falls short by {short:.3f} mm across the guide)",
                     source=prof.source, key=f"{section}.legs[{i + 1}].strut_length",
                     expected="a strut longer than the hinge-to-ball distance across the guide")
 

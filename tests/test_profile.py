@@ -52,7 +52,8 @@ def _err(text: str) -> str:
 @pytest.mark.parametrize(
     ("old", "new", "expect"),
     [
-        ("tool_length = 150.0", "tool_lenght = 150.0", "bad.toml: kinematics.tool_lenght: unknown key"),
+        ("tool_length = 150.0", "tool_lenght = 150.0",
+         "bad.toml: kinematics.tool_lenght: unknown key"),
         ("tool_length = 150.0", 'tool_length = "150"', "kinematics.tool_length: is a string"),
         ("strut_length = 400.0\nplatform_radius = 100.0\nplatform_angle = 210.0",
          "strut_length = 100.0\nplatform_radius = 100.0\nplatform_angle = 210.0",
