@@ -98,7 +98,8 @@ def limits_of(profile: Profile) -> Limits:
 def geometry_of(profile: Profile, stages: Stages) -> kinematics.Geometry:
     """The geometry the IK uses: calibrated, or the contract's nominal design."""
     if stages.calibrated:
-        return kinematics.Geometry.from_params(profile.kinematics, profile.origin, profile.table)
+        return kinematics.Geometry.from_params(profile.kinematics, profile.origin, profile.table,
+                                              profile.effects)
     return kinematics.Geometry.from_params(nominal_kinematics(), profile.origin)
 
 

@@ -31,7 +31,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .profile import KinematicParams, TableParams
+from .profile import Effects, KinematicParams, TableParams
+
+#: Travel at which ``effects.guide_bow`` is given [mm].
+BOW_REF_MM = 100.0
 
 
 def rot_x(a: np.ndarray) -> np.ndarray:
@@ -97,10 +100,31 @@ class Geometry:
     scale_x: float = 0.0
     scale_y: float = 0.0
     squareness: float = 0.0
+    guide_bow: np.ndarray | None = None
+    table_straightness: np.ndarray | None = None
+
+    @property
+    def radial(self) -> np.ndarray:
+        """Unit radial direction of each guide (rows): the direction a guide bows in."""
+        r = self.g[:, :2] / np.linalg.norm(self.g[:, :2], axis=1, keepdims=True)
+        return np.column_stack([r, np.zeros(3)])
+
+    def hinge_offset(self, P: np.ndarray) -> np.ndarray:
+        """Hinge centre a_i − g_i for motor positions P (N, 3) → (N, 3 legs, 3).
+
+        Contract: a_i = g_i + P_i d_i. Extension ``effects.guide_bow`` b_i [mm]:
+        a guide bowed in its radial direction by b_i (P_i / 100 mm)².
+        """
+        off = P[:, :, None] * self.d[None]
+        if self.guide_bow is not None:
+            off = off + (self.guide_bow[None, :, None] * (P[:, :, None] / BOW_REF_MM) ** 2
+                         * self.radial[None])
+        return off
 
     @classmethod
     def from_params(cls, kp: KinematicParams, origin: np.ndarray,
-                    table: TableParams | None = None) -> Geometry:
+                    table: TableParams | None = None,
+                    effects: Effects | None = None) -> Geometry:
         """Build the arrays of machine-model.md "Geometry of leg i" from profile values."""
         table = table or TableParams()
         g, d, u, b, L = [], [], [], [], []
@@ -121,10 +145,15 @@ class Geometry:
             b.append([leg.platform_radius * np.cos(ph), leg.platform_radius * np.sin(ph),
                       leg.platform_z])
             L.append(leg.strut_length)
+        bow = straight = None
+        if effects is not None and any(effects.guide_bow):
+            bow = np.array(effects.guide_bow, dtype=float)
+        if effects is not None and any(effects.table_straightness):
+            straight = np.array(effects.table_straightness, dtype=float)
         return cls(np.array(g), np.array(d), np.array(u), np.array(b), np.array(L),
                    np.array([kp.tool_offset_x, kp.tool_offset_y, -kp.tool_length]),
                    np.asarray(origin, dtype=float).copy(),
-                   table.scale_x, table.scale_y, table.squareness)
+                   table.scale_x, table.scale_y, table.squareness, bow, straight)
 
     # Precomputed linear algebra of the closed-form IK.
     @property
@@ -262,23 +291,59 @@ def inverse(geo: Geometry, q: np.ndarray,
     disc = dv**2 - np.einsum("nki,nki->nk", v, v) + geo.L[None] ** 2
     with np.errstate(invalid="ignore"):
         p_head = dv + np.sqrt(disc)
+    if geo.guide_bow is not None and np.any(geo.guide_bow):
+        p_head = _bowed_guides(geo, v, p_head)
     t = _tool_vectors(geo, q.shape[0], tool_length_offset)
     T = pose.c + np.einsum("nij,nj->ni", pose.R, t)
     Dx = geo.origin[0] + q[:, 0] - T[:, 0]
     Dy = geo.origin[1] + q[:, 1] - T[:, 1]
-    p6 = Dy / (1.0 + geo.scale_y)
-    p5 = (Dx - geo.squareness * p6) / (1.0 + geo.scale_x)
+    p5, p6 = table_motors(geo, Dx, Dy)
     P = np.column_stack([p_head, p5, p6])
     reachable = np.all(np.isfinite(P), axis=1)
     return IKResult(P, pose, reachable)
 
 
+def _bowed_guides(geo: Geometry, v: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Newton on |v_i − a_i(P_i) + g_i|² = L_i² from the straight-guide solution."""
+    for _ in range(6):
+        w = v - geo.hinge_offset(p)
+        da = geo.d[None] + (2 * geo.guide_bow[None, :, None] * p[:, :, None]
+                            / BOW_REF_MM**2 * geo.radial[None])  # type: ignore[index]
+        f = np.einsum("nki,nki->nk", w, w) - geo.L[None] ** 2
+        fp = -2 * np.einsum("nki,nki->nk", w, da)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            p = p - f / fp
+    return p
+
+
 def table_displacement(geo: Geometry, p5: np.ndarray, p6: np.ndarray) -> np.ndarray:
-    """D = (P5(1 + s_x) + σ P6, P6(1 + s_y), 0), shape (N, 3) (contract "Table")."""
+    """D = (P5(1 + s_x) + σ P6, P6(1 + s_y), 0), shape (N, 3) (contract "Table").
+
+    Extension ``effects.table_straightness`` (k_x, k_y) [mm/m²]: the X motion
+    bends towards +Y by k_x (P5 / 1000)², the Y motion towards +X by k_y (P6 / 1000)².
+    """
     p5 = np.asarray(p5, dtype=float)
     p6 = np.asarray(p6, dtype=float)
-    return np.stack([p5 * (1.0 + geo.scale_x) + geo.squareness * p6,
-                     p6 * (1.0 + geo.scale_y), np.zeros_like(p5)], -1)
+    dx = p5 * (1.0 + geo.scale_x) + geo.squareness * p6
+    dy = p6 * (1.0 + geo.scale_y)
+    if geo.table_straightness is not None:
+        kx, ky = geo.table_straightness
+        dx = dx + ky * (p6 / 1000.0) ** 2
+        dy = dy + kx * (p5 / 1000.0) ** 2
+    return np.stack([dx, dy, np.zeros_like(p5)], -1)
+
+
+def table_motors(geo: Geometry, dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Solve the table equation D(P5, P6) = (dx, dy) for the motors."""
+    p6 = dy / (1.0 + geo.scale_y)
+    p5 = (dx - geo.squareness * p6) / (1.0 + geo.scale_x)
+    if geo.table_straightness is not None:
+        kx, ky = geo.table_straightness
+        # the bends are µm over hundreds of mm: a few fixed-point steps converge
+        for _ in range(4):
+            p6 = (dy - kx * (p5 / 1000.0) ** 2) / (1.0 + geo.scale_y)
+            p5 = (dx - geo.squareness * p6 - ky * (p6 / 1000.0) ** 2) / (1.0 + geo.scale_x)
+    return p5, p6
 
 
 def _fk_residual(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
@@ -288,7 +353,7 @@ def _fk_residual(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
     s = c[:, None, :] + np.einsum("nij,kj->nki", R, geo.b)
     v = s - geo.g[None]
     plane = np.einsum("nki,ki->nk", v, geo.u)
-    w = v - P[:, :3, None] * geo.d[None]
+    w = v - geo.hinge_offset(P[:, :3])
     # Length residual scaled to mm: |w| − L behaves like a distance.
     length = np.sqrt(np.einsum("nki,nki->nk", w, w)) - geo.L[None]
     return np.concatenate([plane, length], axis=1)
@@ -296,7 +361,7 @@ def _fk_residual(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
 
 def _fk_guess(geo: Geometry, P: np.ndarray) -> np.ndarray:
     """Start for Newton: the platform parallel to the plane through the hinges."""
-    a = geo.g[None] + P[:, :3, None] * geo.d[None]  # hinge centres (N, 3, 3)
+    a = geo.g[None] + geo.hinge_offset(P[:, :3])  # hinge centres (N, 3, 3)
     nrm = np.cross(a[:, 1] - a[:, 0], a[:, 2] - a[:, 0])
     nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
     nrm *= np.sign(nrm[:, 2:3])

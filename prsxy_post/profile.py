@@ -105,6 +105,20 @@ class TableParams:
 
 
 @dataclass(frozen=True)
+class Effects:
+    """Physical effects beyond the contract's terms (the ``[effects]`` section).
+
+    guide_bow : per leg, radial bow of the guide [mm] at 100 mm of travel
+        (hinge centre a_i = g_i + P_i d_i + b_i (P_i / 100)² r_i)
+    table_straightness : (k_x, k_y) [mm/m²]: the X motion bends towards +Y by
+        k_x (P5 / 1000)², the Y motion towards +X by k_y (P6 / 1000)²
+    """
+
+    guide_bow: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    table_straightness: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass(frozen=True)
 class AxisComp:
     """One ``[[axis_comp]]`` table (contract: real-axis error per motor)."""
 
@@ -140,6 +154,7 @@ class Profile:
     table: TableParams
     axis_comp: tuple[AxisComp, ...]
     controller_kinematics: KinematicParams | None
+    effects: Effects
     motors: tuple[MotorConfig, ...]
     limits: Mapping[str, float]
     period_ms: float
@@ -380,7 +395,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     """
     c = _Checker(source)
     known = {"machine", "work", "kinematics", "table", "axis_comp", "controller_kinematics",
-             "motors", "tools", "error_map", "provenance", *DEFAULTS}
+             "motors", "tools", "error_map", "provenance", "effects", *DEFAULTS}
     c.unknown(doc, known, "")
     machine = c.table(doc, "machine", "", False) or {}
     name = c.string(machine, "name", "machine", "unnamed machine")
@@ -403,6 +418,14 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     c.unknown(tsec, set(TABLE_KEYS), "table")
     table = TableParams(*(c.number(tsec, k, "table", 0.0, lo=-0.01, hi=0.01) for k in TABLE_KEYS))
     axis_comp = _axis_comp(c, doc["axis_comp"]) if "axis_comp" in doc else ()
+    esec = c.table(doc, "effects", "", False) or {}
+    c.unknown(esec, {"guide_bow", "table_straightness"}, "effects")
+    bow = c.vector(esec, "guide_bow", "effects", 3, [0.0, 0.0, 0.0])
+    straight = c.vector(esec, "table_straightness", "effects", 2, [0.0, 0.0])
+    for key, vals in (("guide_bow", bow), ("table_straightness", straight)):
+        if np.any(np.abs(vals) > 1.0):
+            raise c.fail(f"effects.{key}", f"is {vals.tolist()}", "values within ±1 mm")
+    effects = Effects((bow[0], bow[1], bow[2]), (straight[0], straight[1]))
     motors = _motors(c, doc.get("motors"))
 
     sections = {name_: _section_with_defaults(c, doc, name_) for name_ in DEFAULTS}
@@ -442,6 +465,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         table=table,
         axis_comp=axis_comp,
         controller_kinematics=ckin,
+        effects=effects,
         motors=motors,
         limits=limits,
         period_ms=period,
@@ -466,7 +490,8 @@ def _check_reach(prof: Profile) -> None:
                         ("controller_kinematics", prof.controller_kinematics)):
         if kp is None:
             continue
-        geo = kinematics.Geometry.from_params(kp, prof.origin, prof.table)
+        geo = (kinematics.Geometry.from_params(kp, prof.origin, prof.table, prof.effects)
+               if section == "kinematics" else kinematics.Geometry.from_params(kp, prof.origin))
         q = prof.start[None, :]
         try:
             sol = kinematics.solve_platform(geo, q)

@@ -19,7 +19,8 @@ from .profile import Profile
 
 
 def truth_geometry(truth: Profile) -> kinematics.Geometry:
-    return kinematics.Geometry.from_params(truth.kinematics, truth.origin, truth.table)
+    return kinematics.Geometry.from_params(truth.kinematics, truth.origin, truth.table,
+                                              truth.effects)
 
 
 def actual_motors(truth: Profile, P_cmd: np.ndarray, *, approach: int | None = None
@@ -89,7 +90,8 @@ def random_axis_table(motor: int, rng: np.random.Generator, *, lo: float = -250.
 
 
 def random_machine(base: Profile, rng: np.random.Generator, *, scale: float = 1.0,
-                   axis_errors: bool = False, name: str = "random machine") -> Profile:
+                   axis_errors: bool = False, effects: bool = False,
+                   name: str = "random machine") -> Profile:
     """A machine whose every contract term differs from ``base`` by a random error.
 
     Parameters
@@ -98,6 +100,8 @@ def random_machine(base: Profile, rng: np.random.Generator, *, scale: float = 1.
     rng : random generator
     scale : multiplies :data:`ERROR_SIGMA`
     axis_errors : add real-axis tables with backlash for every motor
+    effects : add effects outside the contract's terms (bowed guides, curved
+        table axes) that only the virtual-axis error map can take up
     """
     from .profile import kinematics_to_dict, profile_from_dict
 
@@ -114,5 +118,8 @@ def random_machine(base: Profile, rng: np.random.Generator, *, scale: float = 1.
                     for k in ("scale_x", "scale_y", "squareness")}
     if axis_errors:
         doc["axis_comp"] = [random_axis_table(m, rng) for m in MOTOR_ORDER]
+    if effects:
+        doc["effects"] = {"guide_bow": rng.normal(0, 0.01, 3).tolist(),
+                          "table_straightness": rng.normal(0, 0.05, 2).tolist()}
     doc["machine"] = {"name": name}
     return profile_from_dict(doc, f"<{name}>")

@@ -162,3 +162,30 @@ def test_tool_length_offset_moves_tip_along_spindle(nominal: profile_mod.Profile
     np.testing.assert_allclose(q1, q, atol=1e-9)
     assert np.isclose(c1[0, 2] - c0[0, 2], 10 * axis[2], atol=1e-9)
     assert not np.allclose(P0, P1)
+
+
+@settings(max_examples=50, deadline=None)
+@given(pose, st.integers(0, 2**32 - 1))
+def test_round_trip_with_effects_beyond_the_contract(qv: tuple[float, ...], seed: int) -> None:
+    """Bowed guides and curved table axes ([effects]) are modelled in IK and FK alike."""
+    nominal = profile_mod.loads((VECTORS / "nominal.toml").read_text(), "nominal")
+    truth = simulate.random_machine(nominal, np.random.default_rng(seed), effects=True)
+    geo = K.Geometry.from_params(truth.kinematics, truth.origin, truth.table, truth.effects)
+    assert geo.guide_bow is not None
+    q = np.array([qv])
+    r = K.inverse(geo, q)
+    q2, ok = K.forward(geo, r.P)
+    assert ok.all()
+    np.testing.assert_allclose(q2, q, atol=1e-9)
+
+
+def test_effects_move_the_tip(nominal: profile_mod.Profile) -> None:
+    doc = dict(nominal.raw, effects={"guide_bow": [0.01, 0.0, 0.0],
+                                     "table_straightness": [0.0, 0.0]})
+    bowed = profile_mod.profile_from_dict(doc)
+    geo_b = K.Geometry.from_params(bowed.kinematics, bowed.origin, bowed.table, bowed.effects)
+    q = np.array([[0.0, 0.0, -100.0, 0.0, 0.0]])
+    P = K.inverse(geo_b, q).P
+    q_plain, _ = K.forward(_geo(nominal), P)
+    # 10 µm of bow at 100 mm moves the tip by a few µm
+    assert 1e-3 < np.abs(q_plain - q)[0, :3].max() < 2e-2
