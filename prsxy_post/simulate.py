@@ -123,3 +123,139 @@ def random_machine(base: Profile, rng: np.random.Generator, *, scale: float = 1.
                           "table_straightness": rng.normal(0, 0.05, 2).tolist()}
     doc["machine"] = {"name": name}
     return profile_from_dict(doc, f"<{name}>")
+
+
+# ---------------------------------------------------------------- measurements
+#
+# What measuring instruments see on the truth machine when it is commanded by a
+# profile (the "commanded" one, with everything it holds: geometry, tables,
+# error map). These are the forward models behind `simulate`, `calibrate` and
+# `diagnose`; the contract's measurement files record their inputs and outputs.
+
+
+def commanded_geometry(commanded: Profile) -> kinematics.Geometry:
+    return kinematics.Geometry.from_params(commanded.kinematics, commanded.origin,
+                                           commanded.table, commanded.effects)
+
+
+def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -> np.ndarray:
+    """Motor commands for static poses, each approached with every motor moving +.
+
+    The commanding profile's chain: Q' = Q − e(Q), its IK, then for each motor the
+    command p with lo(p) = wanted (the part ends at lo when approached from below).
+    """
+    from . import chain, errormap
+
+    emap = errormap.from_profile(commanded)
+    qt = chain.correct_virtual(q, emap) if emap is not None else q
+    ik = kinematics.inverse(commanded_geometry(commanded), qt, tool_length)
+    if not np.all(ik.reachable):
+        raise ValueError(f"{int(np.sum(~ik.reachable))} poses out of reach")
+    P = ik.P.copy()
+    tables = axiscomp.tables_by_motor(commanded.axis_comp)
+    for col, m in enumerate(MOTOR_ORDER):
+        if m in tables:
+            P[:, col] = tables[m].lo_inv(P[:, col])
+    return P
+
+
+def motion_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -> np.ndarray:
+    """Motor commands for a continuous motion through poses q (time order)."""
+    from . import chain, errormap
+
+    emap = errormap.from_profile(commanded)
+    qt = chain.correct_virtual(q, emap) if emap is not None else q
+    ik = kinematics.inverse(commanded_geometry(commanded), qt, tool_length)
+    if not np.all(ik.reachable):
+        raise ValueError(f"{int(np.sum(~ik.reachable))} poses out of reach")
+    P = ik.P.copy()
+    tables = axiscomp.tables_by_motor(commanded.axis_comp)
+    for col, m in enumerate(MOTOR_ORDER):
+        if m in tables:
+            P[:, col] = axiscomp.compensate(tables[m], P[:, col])
+    return P
+
+
+def measure_poses(truth: Profile, commanded: Profile, q: np.ndarray, rng: np.random.Generator,
+                  noise_um: float = 1.0, noise_deg: float = 0.0003) -> np.ndarray:
+    """Measured tip and axis (N, 5) [mm, deg] at commanded poses q (N, 5)."""
+    P = pose_commands(commanded, q)
+    meas = execute(truth, P, approach=+1)
+    meas[:, :3] += rng.normal(0, noise_um * 1e-3, (len(q), 3))
+    meas[:, 3:] += rng.normal(0, noise_deg, (len(q), 2))
+    return meas
+
+
+def measure_ballbar(truth: Profile, commanded: Profile, q: np.ndarray, pivot: np.ndarray,
+                    length: float, rng: np.random.Generator, noise_um: float = 0.5
+                    ) -> np.ndarray:
+    """Ballbar reading dev_um (N,) along a commanded motion q (N, 5) in time order."""
+    P = motion_commands(commanded, q)
+    tip = execute(truth, P)[:, :3]
+    dev = (np.linalg.norm(tip - pivot, axis=1) - length) * 1000.0
+    return dev + rng.normal(0, noise_um, len(dev))
+
+
+def measure_axis(truth: Profile, motor: int, targets: np.ndarray, runs: int,
+                 rng: np.random.Generator, noise_um: float = 0.3) -> np.ndarray:
+    """Laser runs per ISO 230-2: rows (motor, target, measured, direction, run).
+
+    Each run goes up through the targets then down, no compensation active: the
+    part ends at lo(target) approached from below and hi(target) from above.
+    """
+    tables = axiscomp.tables_by_motor(truth.axis_comp)
+    t = tables.get(motor)
+    rows = []
+    for run in range(1, runs + 1):
+        for direction, seq in ((1, targets), (-1, targets[::-1])):
+            reached = axiscomp.approach(t, seq, direction)
+            reached = reached + rng.normal(0, noise_um * 1e-3, len(seq))
+            rows += [(motor, float(a), float(b), direction, run)
+                     for a, b in zip(seq, reached, strict=True)]
+    return np.array(rows, dtype=float)
+
+
+def ballbar_gcode(radius: float, *, plane: str = "XY", ccw: bool = True, tilt_deg: float = 0.0,
+                  feed: float = 1000.0, pivot: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                  chord_tol_mm: float = 2e-5) -> str:
+    """A ballbar test program: a full circle about the pivot, from and back to rest.
+
+    XY circles without tilt are one G2/G3; tilted ("cone") circles keep the tool
+    axis tilted by ``tilt_deg`` away from the pivot all round, which needs A/B to
+    follow the angle, so they are written as short G1 moves whose chords stay
+    within ``chord_tol_mm`` of the circle (the ballbar would see the polygon).
+    """
+    px, py, pz = pivot
+    d = "G3" if ccw else "G2"
+    out = [f"(ballbar {plane} r{radius:g} {'ccw' if ccw else 'cw'} tilt {tilt_deg:g})",
+           "G21 G90 G94"]
+    if plane == "XY" and tilt_deg == 0.0:
+        out += ["G17", f"G0 X{px + radius:.6f} Y{py:.6f} Z{pz:.6f} A0 B0",
+                f"{d} X{px + radius:.6f} Y{py:.6f} I{-radius:.6f} J0 F{feed:g}"]
+    elif plane == "XY":
+        sgn = 1 if ccw else -1
+        segments = int(np.ceil(np.pi / np.arccos(1.0 - chord_tol_mm / radius)))
+        th = sgn * np.linspace(0, 2 * np.pi, segments + 1)
+        ax = np.stack([np.sin(np.radians(tilt_deg)) * np.cos(th),
+                       np.sin(np.radians(tilt_deg)) * np.sin(th),
+                       np.full_like(th, np.cos(np.radians(tilt_deg)))], -1)
+        a, b = kinematics.angles_from_axis(ax)
+        a, b = np.round(a, 6) + 0.0, np.round(b, 6) + 0.0
+        x = px + radius * np.cos(th)
+        y = py + radius * np.sin(th)
+        out.append(f"G0 X{x[0]:.6f} Y{y[0]:.6f} Z{pz:.6f} A{a[0]:.6f} B{b[0]:.6f}")
+        out.append(f"F{feed:g}")
+        out += [f"G1 X{x[k]:.6f} Y{y[k]:.6f} A{a[k]:.6f} B{b[k]:.6f}"
+                for k in range(1, len(th))]
+    elif plane in ("XZ", "YZ"):
+        code, first = ("G18", "X") if plane == "XZ" else ("G19", "Y")
+        c0 = px if plane == "XZ" else py
+        off = "I" if plane == "XZ" else "J"
+        # G18: positive rotation is counter-clockwise seen from +Y (Z towards X)
+        out += [code, f"G0 {first}{c0 + radius:.6f} {'Y' if plane == 'XZ' else 'X'}"
+                f"{(py if plane == 'XZ' else px):.6f} Z{pz:.6f} A0 B0",
+                f"{d} {first}{c0 + radius:.6f} Z{pz:.6f} {off}{-radius:.6f} K0 F{feed:g}"]
+    else:
+        raise ValueError(f"unknown ballbar plane {plane!r}")
+    out.append("M2")
+    return "\n".join(out) + "\n"

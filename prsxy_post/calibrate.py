@@ -1,0 +1,400 @@
+"""Calibration from measurements: real-axis tables, kinematic parameters, error map.
+
+Three stages, as in the paper (section 4):
+
+1. real-axis tables per motor from laser (axis) runs, with ISO 230-2 figures
+   (the E_i(P_i) of Eq. 3);
+2. the kinematic and table parameters of the contract (the g'_i of Eq. 3) from
+   pose and ballbar measurements, by nonlinear least squares with an
+   identifiability analysis;
+3. the virtual-axis error map (Eq. 4–5) from what the calibrated model leaves.
+
+Stage 2 in detail
+-----------------
+Unknowns θ: every contract term (36: per leg guide radius, angle, height, strut
+length, platform radius, angle, z, guide tilts, hinge twist; tool length and
+offsets; table scales and squareness), in profile units.
+
+The data were taken with the machine commanded by a known profile, so the motor
+commands are known; what the parts did follows from the real-axis tables (the
+play model). The model of a measurement is then the forward kinematics of the
+geometry θ:
+
+    pose:    y = FK_θ(P_actual)                     (tip x, y, z and A, B)
+    ballbar: y = |w_θ(P_actual) − pivot|            (ball-to-ball distance)
+
+Residuals are whitened by the measurement noise (σ_tip, σ_angle, σ_ballbar). The
+Jacobian ∂y/∂θ comes from the implicit function theorem on the FK constraints
+F(x, θ) = 0 (x = platform pose): ∂x/∂θ = −F_x⁻¹ F_θ, so one FK solve per
+iteration suffices.
+
+Identifiability: with the parameters scaled by their prior size s (typical
+manufacturing error), the whitened Jacobian J·diag(s) = U Σ Vᵀ. A combination
+v_k is determined by the data to ±1/Σ_k of its prior size. Combinations with
+1/Σ_k > ``max_rel_stderr`` cannot be told apart by these data (for example a
+strut's length and its guide's height, which move the tip alike): they are left
+at the starting profile's values (minimum-norm Gauss–Newton step in the
+identified subspace) and reported as groups of parameters.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import axiscomp, kinematics, simulate
+from .errors import FitError
+from .profile import LEG_OPTIONAL, LEG_REQUIRED, MOTORS, KinematicParams, Profile, TableParams
+
+LEG_KEYS = LEG_REQUIRED + LEG_OPTIONAL
+
+
+def parameter_names() -> list[str]:
+    """Profile paths of every contract parameter, in θ order."""
+    names = ["kinematics.tool_length", "kinematics.tool_offset_x", "kinematics.tool_offset_y"]
+    for i in range(1, 4):
+        names += [f"kinematics.legs[{i}].{k}" for k in LEG_KEYS]
+    names += ["table.scale_x", "table.scale_y", "table.squareness"]
+    return names
+
+
+PARAMS = parameter_names()
+
+
+def _prior_scale(name: str) -> float:
+    key = name.rsplit(".", 1)[-1]
+    return simulate.ERROR_SIGMA[key]
+
+
+PRIOR = np.array([_prior_scale(n) for n in PARAMS])
+
+
+def units(name: str) -> str:
+    key = name.rsplit(".", 1)[-1]
+    if key in ("guide_angle", "platform_angle", "guide_tilt_x", "guide_tilt_y", "hinge_twist"):
+        return "deg"
+    if key in ("scale_x", "scale_y"):
+        return "1"
+    if key == "squareness":
+        return "rad"
+    return "mm"
+
+
+def theta_of(profile: Profile) -> np.ndarray:
+    kp, tb = profile.kinematics, profile.table
+    v = [kp.tool_length, kp.tool_offset_x, kp.tool_offset_y]
+    for leg in kp.legs:
+        v += [getattr(leg, k) for k in LEG_KEYS]
+    v += [tb.scale_x, tb.scale_y, tb.squareness]
+    return np.array(v, dtype=float)
+
+
+def params_of(theta: np.ndarray) -> tuple[KinematicParams, TableParams]:
+    """KinematicParams and TableParams for θ (inverse of :func:`theta_of`)."""
+    from .profile import Leg
+
+    n = len(LEG_KEYS)
+    legs = tuple(Leg(**dict(zip(LEG_KEYS, (float(x) for x in theta[3 + i * n:3 + (i + 1) * n]),
+                                strict=True))) for i in range(3))
+    kp = KinematicParams(float(theta[0]), legs, float(theta[1]), float(theta[2]))  # type: ignore[arg-type]
+    tb = TableParams(float(theta[-3]), float(theta[-2]), float(theta[-1]))
+    return kp, tb
+
+
+def geometry_of(profile: Profile, theta: np.ndarray) -> kinematics.Geometry:
+    kp, tb = params_of(theta)
+    return kinematics.Geometry.from_params(kp, profile.origin, tb, profile.effects)
+
+
+# ---------------------------------------------------------------- data
+
+
+@dataclass
+class Observations:
+    """Measurements turned into model inputs and targets.
+
+    P_pose : (Np, 5) motor positions the parts reached at each pose
+    y_pose : (Np, 5) measured tip [mm] and A, B [deg] (NaN where not measured)
+    P_bb : (Nb, 5) motor positions the parts reached along ballbar runs
+    pivot_bb : (Nb, 3); dist_bb : (Nb,) measured ball-to-ball distance [mm]
+    run_bb : (Nb,) index of the run each ballbar sample belongs to
+    q_pose, q_bb : commanded poses (for guesses and the error map)
+    """
+
+    P_pose: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
+    y_pose: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
+    q_pose: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
+    P_bb: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
+    q_bb: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
+    pivot_bb: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    dist_bb: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    run_bb: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    run_names: list[str] = field(default_factory=list)
+    sigma_tip_mm: float = 1e-3
+    sigma_deg: float = 3e-4
+    sigma_bb_mm: float = 0.5e-3
+
+
+def reached_motors(real_axis: Sequence[Any], P_cmd: np.ndarray, approach: int | None
+                   ) -> np.ndarray:
+    """Where the parts end for commands, by the given real-axis tables (play model)."""
+    tables = axiscomp.tables_by_motor(tuple(real_axis))
+    out = P_cmd.copy()
+    for col, m in enumerate(MOTORS):
+        t = tables.get(m)
+        if t is None:
+            continue
+        out[:, col] = (axiscomp.play_model(t, P_cmd[:, col]) if approach is None
+                       else axiscomp.approach(t, P_cmd[:, col], approach))
+    return out
+
+
+def observations(commanded: Profile, real_axis: Sequence[Any], poses: Sequence[Any],
+                 runs: Sequence[Any], ballbar_stride: int = 1) -> Observations:
+    """Model inputs for pose files (measure.PoseData) and ballbar runs (measure.BallbarRun).
+
+    ``commanded``: the profile the machine was commanded with (its chain made the
+    motor commands); ``real_axis``: the best knowledge of the real-axis tables
+    (the truth's, as calibrated in stage 1, else the commanded profile's).
+    """
+    obs = Observations()
+    if poses:
+        q = np.vstack([p.commanded for p in poses])
+        y = np.vstack([np.column_stack([p.tip, p.axis]) for p in poses])
+        P_cmd = simulate.pose_commands(commanded, q)
+        obs.P_pose = reached_motors(real_axis, P_cmd, +1)
+        obs.y_pose, obs.q_pose = y, q
+    P_all, q_all, piv, dist, run = [], [], [], [], []
+    for k, r in enumerate(runs):
+        P_cmd = simulate.motion_commands(commanded, r.commanded)
+        P = reached_motors(real_axis, P_cmd, None)[::ballbar_stride]
+        P_all.append(P)
+        q_all.append(r.commanded[::ballbar_stride])
+        piv.append(np.broadcast_to(r.pivot, (len(P), 3)))
+        dist.append((r.length + r.dev_um[::ballbar_stride] * 1e-3))
+        run.append(np.full(len(P), k))
+        obs.run_names.append(getattr(r, "name", "") or getattr(r, "source", f"run {k + 1}"))
+    if runs:
+        obs.P_bb = np.vstack(P_all)
+        obs.q_bb = np.vstack(q_all)
+        obs.pivot_bb = np.vstack(piv)
+        obs.dist_bb = np.concatenate(dist)
+        obs.run_bb = np.concatenate(run)
+    return obs
+
+
+# ---------------------------------------------------------------- the model
+
+
+def _out(geo: kinematics.Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
+    """Tip [mm] and A, B [deg] for platform poses xv = (c, A, B, γ) [mm, rad]."""
+    R = kinematics.rot_y(xv[:, 4]) @ kinematics.rot_x(xv[:, 3]) @ kinematics.rot_z(xv[:, 5])
+    T = xv[:, :3] + np.einsum("nij,j->ni", R, geo.tool)
+    w = T - geo.origin + kinematics.table_displacement(geo, P[:, 3], P[:, 4])
+    return np.column_stack([w, np.degrees(xv[:, 3]), np.degrees(xv[:, 4])])
+
+
+def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
+                     guess: np.ndarray | None = None, want_jac: bool = True
+                     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """Tip and axis (N, 5) for motor positions P under geometry θ, and ∂/∂θ (N, 5, m).
+
+    Implicit differentiation of the FK constraints F(x, θ) = 0.
+    """
+    geo = make_geo(theta)
+    xv, ok = kinematics.forward_platform(geo, P, guess)
+    if not np.all(ok):
+        raise FitError(f"forward kinematics failed at {int(np.sum(~ok))} measured points",
+                       expected="measurements of poses this geometry can reach")
+    y = _out(geo, P, xv)
+    if not want_jac:
+        return y, None, xv
+    n, m = len(P), len(theta)
+    hx = np.array([1e-6, 1e-6, 1e-6, 1e-8, 1e-8, 1e-8])
+    Fx = np.empty((n, 6, 6))
+    Gx = np.empty((n, 5, 6))
+    for j in range(6):
+        xp, xm = xv.copy(), xv.copy()
+        xp[:, j] += hx[j]
+        xm[:, j] -= hx[j]
+        Fx[:, :, j] = (kinematics._fk_residual(geo, P, xp)
+                       - kinematics._fk_residual(geo, P, xm)) / (2 * hx[j])
+        Gx[:, :, j] = (_out(geo, P, xp) - _out(geo, P, xm)) / (2 * hx[j])
+    Ft = np.empty((n, 6, m))
+    Gt = np.empty((n, 5, m))
+    for j in range(m):
+        h = 1e-6 * max(1.0, abs(theta[j])) if PARAMS[j].startswith("kinematics") else 1e-7
+        tp, tm = theta.copy(), theta.copy()
+        tp[j] += h
+        tm[j] -= h
+        gp, gm = make_geo(tp), make_geo(tm)
+        Ft[:, :, j] = (kinematics._fk_residual(gp, P, xv)
+                       - kinematics._fk_residual(gm, P, xv)) / (2 * h)
+        Gt[:, :, j] = (_out(gp, P, xv) - _out(gm, P, xv)) / (2 * h)
+    dx = -np.linalg.solve(Fx, Ft)
+    J = np.einsum("nij,njm->nim", Gx, dx) + Gt
+    return y, J, xv
+
+
+@dataclass
+class ModelEval:
+    r: np.ndarray  # whitened residuals, measured − model
+    J: np.ndarray | None  # whitened Jacobian of the model (∂ model / ∂θ)
+    raw: dict[str, np.ndarray]  # unwhitened residuals per data type [mm, deg]
+
+
+def evaluate(profile: Profile, theta: np.ndarray, obs: Observations, want_jac: bool = True,
+             guesses: dict[str, np.ndarray] | None = None) -> ModelEval:
+    """Whitened residuals (and Jacobian) of all observations under θ."""
+    def make_geo(t: np.ndarray) -> kinematics.Geometry:
+        return geometry_of(profile, t)
+
+    rs, Js = [], []
+    raw: dict[str, np.ndarray] = {}
+    g = guesses if guesses is not None else {}
+    if len(obs.P_pose):
+        y, J, xv = fk_with_jacobian(make_geo, theta, obs.P_pose, g.get("pose"), want_jac)
+        g["pose"] = xv
+        res = obs.y_pose - y
+        ok = np.isfinite(res)
+        w = np.array([1 / obs.sigma_tip_mm] * 3 + [1 / obs.sigma_deg] * 2)
+        raw["pose_tip"] = res[:, :3]
+        raw["pose_axis"] = res[:, 3:]
+        rs.append((np.where(ok, res, 0.0) * w)[ok])
+        if J is not None:
+            Js.append((J * w[None, :, None])[ok])
+    if len(obs.P_bb):
+        y, J, xv = fk_with_jacobian(make_geo, theta, obs.P_bb, g.get("bb"), want_jac)
+        g["bb"] = xv
+        vec = y[:, :3] - obs.pivot_bb
+        d = np.linalg.norm(vec, axis=1)
+        res = obs.dist_bb - d
+        raw["ballbar"] = res
+        rs.append(res / obs.sigma_bb_mm)
+        if J is not None:
+            Js.append(np.einsum("ni,nim->nm", vec / d[:, None], J[:, :3, :]) / obs.sigma_bb_mm)
+    if not rs:
+        raise FitError("no pose or ballbar measurements to calibrate from",
+                       expected="pose or ballbar files")
+    r = np.concatenate(rs)
+    Jall = np.vstack(Js) if want_jac else None
+    return ModelEval(r, Jall, raw)
+
+
+@dataclass
+class KinematicFit:
+    theta0: np.ndarray
+    theta: np.ndarray
+    stderr: np.ndarray  # NaN for parameters not identified
+    identified: np.ndarray  # bool per parameter: known to max_rel_stderr of its prior size
+    singular_values: np.ndarray
+    condition: float
+    unidentified_groups: list[list[tuple[str, float]]]
+    rms_before: dict[str, float]
+    rms_after: dict[str, float]
+    max_before: dict[str, float]
+    max_after: dict[str, float]
+    iterations: int
+    noise_scale: float
+
+
+def _stats(raw: dict[str, np.ndarray]) -> tuple[dict[str, float], dict[str, float]]:
+    rms, mx = {}, {}
+    for k, v in raw.items():
+        a = v[np.isfinite(v)]
+        if a.size:
+            rms[k] = float(np.sqrt(np.mean(a**2)))
+            mx[k] = float(np.max(np.abs(a)))
+    return rms, mx
+
+
+def fit_kinematics(profile: Profile, obs: Observations, *, max_rel_stderr: float = 0.25,
+                   max_iter: int = 12, only: Sequence[str] | None = None) -> KinematicFit:
+    """Stage 2: Gauss–Newton in the identified subspace (see module docstring).
+
+    Parameters
+    ----------
+    profile : the starting profile (θ0 and everything not fitted)
+    obs : Observations
+    max_rel_stderr : a combination whose standard error exceeds this fraction of
+        its prior size is not identified and stays at θ0
+    only : restrict the fit to these parameter names (others held)
+    """
+    theta0 = theta_of(profile)
+    theta = theta0.copy()
+    mask = np.ones(len(PARAMS), dtype=bool) if only is None else np.array(
+        [n in set(only) for n in PARAMS])
+    guesses: dict[str, np.ndarray] = {}
+    ev = evaluate(profile, theta, obs, True, guesses)
+    rms_b, max_b = _stats(ev.raw)
+    s = PRIOR * mask
+    assert ev.J is not None
+    Js = -ev.J * s[None, :]  # residual = measured − model: ∂r/∂θ = −J
+    U, S, Vt = np.linalg.svd(Js, full_matrices=False)
+    keep = (S > 0) & (1.0 / np.maximum(S, 1e-300) < max_rel_stderr)
+    if not np.any(keep):
+        raise FitError("these measurements identify no kinematic parameter",
+                       expected="poses or ballbar runs that move the tip measurably")
+    V = Vt[keep].T  # (m, k) identified directions, scaled space
+    cost = float(ev.r @ ev.r)
+    it = 0
+    for it in range(1, max_iter + 1):
+        assert ev.J is not None
+        A = (-ev.J * s[None, :]) @ V
+        dz, *_ = np.linalg.lstsq(A, -ev.r, rcond=None)
+        step = s * (V @ dz)
+        lam = 1.0
+        while True:
+            trial = theta + lam * step
+            try:
+                ev_t = evaluate(profile, trial, obs, True, dict(guesses))
+                cost_t = float(ev_t.r @ ev_t.r)
+            except FitError:
+                cost_t = np.inf
+            if cost_t <= cost or lam < 1e-3:
+                break
+            lam /= 4
+        if cost_t > cost:
+            break
+        theta, ev = trial, ev_t
+        done = abs(cost - cost_t) <= 1e-10 * max(cost, 1e-30) or np.max(np.abs(dz * lam)) < 1e-9
+        cost = cost_t
+        if done:
+            break
+    rms_a, max_a = _stats(ev.raw)
+    # report: covariance of the identified combinations at the solution
+    assert ev.J is not None
+    Js = -ev.J * s[None, :]
+    U, S, Vt = np.linalg.svd(Js, full_matrices=False)
+    keep = (S > 0) & (1.0 / np.maximum(S, 1e-300) < max_rel_stderr)
+    dof = max(len(ev.r) - int(keep.sum()), 1)
+    noise_scale = float(np.sqrt(float(ev.r @ ev.r) / dof))
+    cov_scaled = (Vt[keep].T / S[keep] ** 2) @ Vt[keep]
+    se = s * np.sqrt(np.maximum(np.diag(cov_scaled), 0.0)) * max(noise_scale, 1.0)
+    se = np.where(mask, se, np.nan)
+    identified = mask & (se < max_rel_stderr * PRIOR)
+    groups = []
+    for v in Vt[~keep]:
+        big = np.nonzero(np.abs(v) >= 0.3 * np.max(np.abs(v)))[0]
+        if big.size and np.any(mask[big]):
+            groups.append([(PARAMS[j], float(v[j])) for j in big if mask[j]])
+    smax = S[0] if S.size else 0.0
+    smin = S[-1] if S.size else 0.0
+    return KinematicFit(theta0, theta, se, identified, S,
+                        float(smax / smin) if smin > 0 else float("inf"), groups, rms_b, rms_a,
+                        max_b, max_a, it, noise_scale)
+
+
+def apply_theta(profile_doc: dict[str, Any], theta: np.ndarray) -> dict[str, Any]:
+    """A profile document with the contract parameters set to θ."""
+    from .profile import kinematics_to_dict
+
+    kp, tb = params_of(theta)
+    doc = dict(profile_doc)
+    doc["kinematics"] = kinematics_to_dict(kp)
+    doc["table"] = dataclasses.asdict(tb)
+    return doc
