@@ -175,7 +175,7 @@ def observations(commanded: Profile, real_axis: Sequence[Any], poses: Sequence[A
         P_all.append(P)
         q_all.append(r.commanded[::ballbar_stride])
         piv.append(np.broadcast_to(r.pivot, (len(P), 3)))
-        dist.append((r.length + r.dev_um[::ballbar_stride] * 1e-3))
+        dist.append(r.length + r.dev_um[::ballbar_stride] * 1e-3)
         run.append(np.full(len(P), k))
         obs.run_names.append(getattr(r, "name", "") or getattr(r, "source", f"run {k + 1}"))
     if runs:
@@ -334,15 +334,16 @@ def fit_kinematics(profile: Profile, obs: Observations, *, max_rel_stderr: float
     s = PRIOR * mask
     assert ev.J is not None
     Js = -ev.J * s[None, :]  # residual = measured − model: ∂r/∂θ = −J
-    U, S, Vt = np.linalg.svd(Js, full_matrices=False)
+    _, S, Vt = np.linalg.svd(Js, full_matrices=False)
     keep = (S > 0) & (1.0 / np.maximum(S, 1e-300) < max_rel_stderr)
     if not np.any(keep):
         raise FitError("these measurements identify no kinematic parameter",
                        expected="poses or ballbar runs that move the tip measurably")
     V = Vt[keep].T  # (m, k) identified directions, scaled space
     cost = float(ev.r @ ev.r)
-    it = 0
-    for it in range(1, max_iter + 1):
+    iterations = 0
+    for _ in range(max_iter):
+        iterations += 1
         assert ev.J is not None
         A = (-ev.J * s[None, :]) @ V
         dz, *_ = np.linalg.lstsq(A, -ev.r, rcond=None)
@@ -369,7 +370,7 @@ def fit_kinematics(profile: Profile, obs: Observations, *, max_rel_stderr: float
     # report: covariance of the identified combinations at the solution
     assert ev.J is not None
     Js = -ev.J * s[None, :]
-    U, S, Vt = np.linalg.svd(Js, full_matrices=False)
+    _, S, Vt = np.linalg.svd(Js, full_matrices=False)
     keep = (S > 0) & (1.0 / np.maximum(S, 1e-300) < max_rel_stderr)
     dof = max(len(ev.r) - int(keep.sum()), 1)
     noise_scale = float(np.sqrt(float(ev.r @ ev.r) / dof))
@@ -386,7 +387,7 @@ def fit_kinematics(profile: Profile, obs: Observations, *, max_rel_stderr: float
     smin = S[-1] if S.size else 0.0
     return KinematicFit(theta0, theta, se, identified, S,
                         float(smax / smin) if smin > 0 else float("inf"), groups, rms_b, rms_a,
-                        max_b, max_a, it, noise_scale)
+                        max_b, max_a, iterations, noise_scale)
 
 
 def apply_theta(profile_doc: dict[str, Any], theta: np.ndarray) -> dict[str, Any]:
