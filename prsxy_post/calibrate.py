@@ -399,3 +399,125 @@ def apply_theta(profile_doc: dict[str, Any], theta: np.ndarray) -> dict[str, Any
     doc["kinematics"] = kinematics_to_dict(kp)
     doc["table"] = dataclasses.asdict(tb)
     return doc
+
+
+# ---------------------------------------------------------------- the three stages
+
+
+@dataclass
+class StageReport:
+    """What one stage changed and how the residuals moved."""
+
+    name: str
+    changed: list[dict[str, Any]]
+    rms_before: dict[str, float]
+    rms_after: dict[str, float]
+    max_before: dict[str, float]
+    max_after: dict[str, float]
+    notes: list[str] = field(default_factory=list)
+    details: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def _axis_residuals(tables: Sequence[Any], axis: Sequence[Any]) -> dict[str, np.ndarray]:
+    """measured − predicted position for laser runs under given tables [mm], per motor."""
+    t = axiscomp.tables_by_motor(tuple(tables))
+    out: dict[str, list[np.ndarray]] = {}
+    for a in axis:
+        for m in np.unique(a.motor):
+            for d in (1, -1):
+                sel = (a.motor == m) & (a.direction == d)
+                pred = axiscomp.approach(t.get(int(m)), a.target[sel], d)
+                out.setdefault(f"axis_{int(m)}", []).append(a.measured[sel] - pred)
+    return {k: np.concatenate(v) for k, v in out.items()}
+
+
+def stage_tables(start: Profile, axis: Sequence[Any]) -> tuple[list[Any], StageReport]:
+    """Stage 1: [[axis_comp]] tables and ISO 230-2 figures from laser runs."""
+    from . import tables as tables_mod
+    from .profile import AxisComp
+
+    motor = np.concatenate([a.motor for a in axis])
+    target = np.concatenate([a.target for a in axis])
+    measured = np.concatenate([a.measured for a in axis])
+    direction = np.concatenate([a.direction for a in axis])
+    run = np.concatenate([a.run for a in axis])
+    new = [AxisComp(t.motor, t.positions, t.forward, t.reverse)
+           for t in tables_mod.tables_from_axis(motor, target, measured, direction, run)]
+    figures = tables_mod.iso230_2(motor, target, measured, direction, run)
+    merged = {c.motor: c for c in start.axis_comp}
+    merged.update({c.motor: c for c in new})
+    tabs = [merged[m] for m in sorted(merged)]
+    before = _axis_residuals(start.axis_comp, axis)
+    after = _axis_residuals(tabs, axis)
+    rb, mb = _stats(before)
+    ra, ma = _stats(after)
+    changed = []
+    for c in new:
+        f = figures[c.motor]
+        changed.append({
+            "name": f"axis_comp[motor={c.motor}]", "points": len(c.positions),
+            "from": float(c.positions[0]), "to": float(c.positions[-1]),
+            "iso230_2": {k: _jsonable(getattr(f, k)) for k in
+                         ("systematic_E", "reversal_B", "repeatability_R", "accuracy_A")
+                         if hasattr(f, k)},
+        })
+    return tabs, StageReport("real-axis tables (ISO 230-2)", changed, rb, ra, mb, ma)
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, np.ndarray):
+        return [float(v) for v in x.ravel()] if x.size > 1 else float(x)
+    if isinstance(x, np.floating | np.integer):
+        return float(x)
+    return x
+
+
+def stage_kinematics(start: Profile, commanded: Profile, real_axis: Sequence[Any],
+                     poses: Sequence[Any], runs: Sequence[Any], **kw: Any
+                     ) -> tuple[np.ndarray, KinematicFit, Observations, StageReport]:
+    """Stage 2: contract parameters from poses and ballbar runs."""
+    obs = observations(commanded, real_axis, poses, runs)
+    fit = fit_kinematics(start, obs, **kw)
+    changed = []
+    for j, name in enumerate(PARAMS):
+        d = fit.theta[j] - fit.theta0[j]
+        if fit.identified[j] and abs(d) > 0:
+            changed.append({"name": name, "from": float(fit.theta0[j]),
+                            "to": float(fit.theta[j]), "change": float(d),
+                            "stderr": float(fit.stderr[j]), "unit": units(name)})
+    notes = [f"condition number of the scaled Jacobian: {fit.condition:.3g}",
+             f"{int(fit.identified.sum())} of {len(PARAMS)} parameters identified to "
+             f"{kw.get('max_rel_stderr', 0.25):.0%} of their prior size"]
+    for g in fit.unidentified_groups:
+        txt = " ".join(f"{w:+.2f}·{n}" for n, w in g)
+        notes.append(f"not separable by these data (left as they were): {txt}")
+    rep = StageReport("kinematic and table parameters", changed, fit.rms_before,
+                      fit.rms_after, fit.max_before, fit.max_after, notes,
+                      {"iterations": fit.iterations, "noise_scale": fit.noise_scale})
+    return fit.theta, fit, obs, rep
+
+
+def stage_error_map(calibrated: Profile, theta: np.ndarray, obs: Observations,
+                    rng: np.random.Generator, provenance: dict[str, Any]
+                    ) -> tuple[Any, StageReport]:
+    """Stage 3: the Eq. 5 error map from the pose residuals the calibrated model leaves."""
+    from . import errormap
+
+    if not len(obs.P_pose):
+        raise FitError("the error map needs pose measurements",
+                       expected="a pose file (kind: poses)")
+    ev = evaluate(calibrated, theta, obs, want_jac=False)
+    resid = np.column_stack([ev.raw["pose_tip"], ev.raw["pose_axis"]])
+    emap = errormap.fit(obs.q_pose, resid, rng=rng, provenance=provenance)
+    after = resid - emap(obs.q_pose)
+    rb, mb = _stats({"pose_tip": resid[:, :3], "pose_axis": resid[:, 3:]})
+    ra, ma = _stats({"pose_tip": after[:, :3], "pose_axis": after[:, 3:]})
+    changed = [{"name": f"error_map.{c}", "degree": emap.degree[c], "lambda": emap.lam[c],
+                "cv_rms": emap.cv_rms[c], "fit_rms": emap.fit_rms[c],
+                "unit": errormap.UNITS[c]} for c in emap.coef]
+    notes = ["cv_rms: cross-validated prediction error on poses left out of the fit; "
+             "fit_rms below it by much would mean the map follows noise"]
+    return emap, StageReport("virtual-axis error map (Eq. 5)", changed, rb, ra, mb, ma, notes)

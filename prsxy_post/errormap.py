@@ -37,13 +37,28 @@ from .errors import FitError, ProfileError
 from .profile import Profile
 
 COMPONENTS = ("x", "y", "z", "a", "b")
-#: Variables each component depends on (indices into q = [x, y, z, A, B]): Eq. 5.
-STRUCTURE: dict[str, tuple[tuple[int, ...], ...]] = {
-    "x": ((0, 1), (2, 3, 4)),
-    "y": ((0, 1), (2, 3, 4)),
-    "z": ((2,),),
-    "a": ((2, 3, 4),),
-    "b": ((2, 3, 4),),
+XY, ZAB = (0, 1), (2, 3, 4)
+#: Variables each component depends on (indices into q = [x, y, z, A, B]).
+#: "eq5" is the paper's Eq. 5 exactly. "eq5-coupled" adds what the additive form
+#: misses on a real PRS-XY: the table moves by the tip position *plus* the head's
+#: parasitic offset (a function of z, A, B), so table errors couple x, y with
+#: z, A, B (bilinear terms), and guide errors move the tip height with the tilt
+#: (e_z''(z, A, B)). Cross-validation chooses between the two per component.
+STRUCTURES: dict[str, dict[str, tuple[tuple[tuple[int, ...], ...], ...]]] = {
+    "eq5": {
+        "x": ((XY,), (ZAB,)),
+        "y": ((XY,), (ZAB,)),
+        "z": (((2,),),),
+        "a": ((ZAB,),),
+        "b": ((ZAB,),),
+    },
+    "eq5-coupled": {
+        "x": ((XY,), (ZAB,), (XY, ZAB)),
+        "y": ((XY,), (ZAB,), (XY, ZAB)),
+        "z": (((2,),), (ZAB,)),
+        "a": ((ZAB,),),
+        "b": ((ZAB,),),
+    },
 }
 UNITS = {"x": "mm", "y": "mm", "z": "mm", "a": "deg", "b": "deg"}
 
@@ -60,9 +75,13 @@ def _legendre_table(u: np.ndarray, degree: int) -> np.ndarray:
     return legendre.legvander(u, degree)
 
 
-def design(q: np.ndarray, comp: str, degree: int, lo: np.ndarray, hi: np.ndarray
-           ) -> tuple[np.ndarray, list[tuple[tuple[int, ...], tuple[int, ...]]]]:
+def design(q: np.ndarray, comp: str, degree: int, lo: np.ndarray, hi: np.ndarray,
+           structure: str = "eq5") -> tuple[np.ndarray, list[tuple[tuple[int, ...], ...]]]:
     """Design matrix of one component: a constant, then every group's terms.
+
+    A group of one variable set holds every Legendre product of total degree
+    1..degree; a group of two sets (coupling) holds the products of a degree-1
+    term of the first set with the terms of degree 1..2 of the second.
 
     Returns
     -------
@@ -72,15 +91,28 @@ def design(q: np.ndarray, comp: str, degree: int, lo: np.ndarray, hi: np.ndarray
     span = np.where(hi > lo, hi - lo, 1.0)
     u = np.clip(2.0 * (q - lo) / span - 1.0, -1.0, 1.0)
     cols = [np.ones(len(q))]
-    terms: list[tuple[tuple[int, ...], tuple[int, ...]]] = []
-    tables = {v: _legendre_table(u[:, v], degree) for v in range(5)}
-    for group in STRUCTURE[comp]:
-        for e in _exponents(len(group), degree):
-            col = np.ones(len(q))
-            for v, k in zip(group, e, strict=True):
+    terms: list[tuple[tuple[int, ...], ...]] = []
+    tables = {v: _legendre_table(u[:, v], max(degree, 2)) for v in range(5)}
+
+    def product(group: tuple[int, ...], e: tuple[int, ...]) -> np.ndarray:
+        col = np.ones(len(q))
+        for v, k in zip(group, e, strict=True):
+            if k:
                 col = col * tables[v][:, k]
-            cols.append(col)
-            terms.append((group, e))
+        return col
+
+    for spec in STRUCTURES[structure][comp]:
+        if len(spec) == 1:
+            group = spec[0]
+            for e in _exponents(len(group), degree):
+                cols.append(product(group, e))
+                terms.append((group, e))
+        else:
+            ga, gb = spec
+            for ea in _exponents(len(ga), 1):
+                for eb in _exponents(len(gb), min(degree, 2)):
+                    cols.append(product(ga, ea) * product(gb, eb))
+                    terms.append((ga + gb, ea + eb))
     return np.column_stack(cols), terms
 
 
@@ -99,6 +131,7 @@ class ErrorMap:
     lo: np.ndarray
     hi: np.ndarray
     degree: dict[str, int]
+    structure: dict[str, str]
     coef: dict[str, np.ndarray]
     cv_rms: dict[str, float]
     fit_rms: dict[str, float]
@@ -112,7 +145,7 @@ class ErrorMap:
         for i, c in enumerate(COMPONENTS):
             if c not in self.coef:
                 continue
-            X, _ = design(q, c, self.degree[c], self.lo, self.hi)
+            X, _ = design(q, c, self.degree[c], self.lo, self.hi, self.structure[c])
             out[:, i] = X @ self.coef[c]
         return out
 
@@ -124,6 +157,7 @@ class ErrorMap:
             "hi": [float(x) for x in self.hi],
             "components": {
                 c: {
+                    "structure": self.structure[c],
                     "degree": int(self.degree[c]),
                     "lambda": float(self.lam[c]),
                     "coef": [float(x) for x in self.coef[c]],
@@ -150,23 +184,27 @@ class ErrorMap:
         comps = d.get("components", {})
         if not isinstance(comps, dict):
             raise bad("components", "is not a table", "a table per component x y z a b")
-        degree, coef, cv, fit, lam = {}, {}, {}, {}, {}
+        degree, coef, cv, fit, lam, struct = {}, {}, {}, {}, {}, {}
         for c, v in comps.items():
             if c not in COMPONENTS or not isinstance(v, dict):
                 raise bad(f"components.{c}", "unknown component", "x, y, z, a or b")
             deg = v.get("degree")
             if not isinstance(deg, int) or not 0 <= deg <= 8:
                 raise bad(f"components.{c}.degree", f"is {deg!r}", "an integer 0..8")
+            st = v.get("structure", "eq5")
+            if st not in STRUCTURES:
+                raise bad(f"components.{c}.structure", f"is {st!r}",
+                          " or ".join(repr(k) for k in STRUCTURES))
             co = np.asarray(v.get("coef", []), dtype=float)
-            X, _ = design(np.zeros((1, 5)), c, deg, lo, hi)
+            X, _ = design(np.zeros((1, 5)), c, deg, lo, hi, st)
             if co.shape != (X.shape[1],) or not np.all(np.isfinite(co)):
                 raise bad(f"components.{c}.coef", f"has {co.size} values",
                           f"{X.shape[1]} finite coefficients for degree {deg}")
-            degree[c], coef[c] = deg, co
+            degree[c], coef[c], struct[c] = deg, co, st
             cv[c] = float(v.get("cv_rms", np.nan))
             fit[c] = float(v.get("fit_rms", np.nan))
             lam[c] = float(v.get("lambda", 0.0))
-        return cls(lo, hi, degree, coef, cv, fit, lam, dict(d.get("provenance", {})))
+        return cls(lo, hi, degree, struct, coef, cv, fit, lam, dict(d.get("provenance", {})))
 
 
 def from_profile(profile: Profile) -> ErrorMap | None:
@@ -193,7 +231,8 @@ def _ridge(X: np.ndarray, y: np.ndarray, lam: float) -> np.ndarray:
 
 def fit(q: np.ndarray, err: np.ndarray, *, rng: np.random.Generator,
         degrees: Sequence[int] = (1, 2, 3, 4), lambdas: Sequence[float] | None = None,
-        folds: int = 5, provenance: dict[str, Any] | None = None) -> ErrorMap:
+        structures: Sequence[str] = ("eq5", "eq5-coupled"), folds: int = 5,
+        provenance: dict[str, Any] | None = None) -> ErrorMap:
     """Fit the Eq. 5 map to errors measured at commanded poses.
 
     Parameters
@@ -201,12 +240,13 @@ def fit(q: np.ndarray, err: np.ndarray, *, rng: np.random.Generator,
     q : (N, 5) commanded poses [mm, mm, mm, deg, deg]
     err : (N, 5) measured − commanded (NaN where a component was not measured)
     rng : random generator for the fold split
-    degrees, lambdas : the cross-validation grid
+    degrees, lambdas, structures : the cross-validation grid
     folds : K of K-fold cross-validation
 
     Returns
     -------
-    ErrorMap with the (degree, λ) of least cross-validated RMS per component.
+    ErrorMap with the (structure, degree, λ) of least cross-validated RMS per
+    component; a richer structure must lower the CV error by 2 % to be chosen.
     """
     q = np.asarray(q, dtype=float)
     err = np.asarray(err, dtype=float)
@@ -215,7 +255,7 @@ def fit(q: np.ndarray, err: np.ndarray, *, rng: np.random.Generator,
                        expected="matching arrays")
     lam_grid = list(lambdas) if lambdas is not None else list(np.logspace(-8, 2, 11))
     lo, hi = q.min(axis=0), q.max(axis=0)
-    degree, coef, cv_rms, fit_rms, lam_best = {}, {}, {}, {}, {}
+    degree, coef, cv_rms, fit_rms, lam_best, struct = {}, {}, {}, {}, {}, {}
     for i, c in enumerate(COMPONENTS):
         ok = np.isfinite(err[:, i])
         n = int(ok.sum())
@@ -223,29 +263,33 @@ def fit(q: np.ndarray, err: np.ndarray, *, rng: np.random.Generator,
             continue
         qi, yi = q[ok], err[ok, i]
         fold = rng.permutation(n) % folds
-        best = (np.inf, 0, 0.0)
-        for deg in degrees:
-            X, _ = design(qi, c, deg, lo, hi)
-            if X.shape[1] >= n * (folds - 1) / folds:
-                continue  # more terms than the training folds can determine
-            for lam in lam_grid:
-                sse = 0.0
-                for f in range(folds):
-                    tr, te = fold != f, fold == f
-                    w = _ridge(X[tr], yi[tr], lam)
-                    sse += float(np.sum((X[te] @ w - yi[te]) ** 2))
-                rms = np.sqrt(sse / n)
-                if rms < best[0] * (1 - 1e-9):
-                    best = (rms, deg, lam)
+        best: tuple[float, int, float, str] = (np.inf, 0, 0.0, "eq5")
+        for si, st in enumerate(structures):
+            # prefer the simpler structure unless the richer one predicts better
+            margin = 1.0 if si == 0 else 0.98
+            for deg in degrees:
+                X, _ = design(qi, c, deg, lo, hi, st)
+                if X.shape[1] >= n * (folds - 1) / folds:
+                    continue  # more terms than the training folds can determine
+                for lam in lam_grid:
+                    sse = 0.0
+                    for f in range(folds):
+                        tr, te = fold != f, fold == f
+                        w = _ridge(X[tr], yi[tr], lam)
+                        sse += float(np.sum((X[te] @ w - yi[te]) ** 2))
+                    rms = np.sqrt(sse / n)
+                    if rms < best[0] * margin * (1 - 1e-9):
+                        best = (rms, deg, lam, st)
         if not np.isfinite(best[0]):
             continue
-        _, deg, lam = best
-        X, _ = design(qi, c, deg, lo, hi)
+        _, deg, lam, st = best
+        X, _ = design(qi, c, deg, lo, hi, st)
         w = _ridge(X, yi, lam)
-        degree[c], coef[c], lam_best[c] = deg, w, lam
+        degree[c], coef[c], lam_best[c], struct[c] = deg, w, lam, st
         cv_rms[c] = float(best[0])
         fit_rms[c] = float(np.sqrt(np.mean((X @ w - yi) ** 2)))
     if not coef:
         raise FitError(f"too few points for an error map ({len(q)})",
                        expected=f"at least {2 * folds} measured poses")
-    return ErrorMap(lo, hi, degree, coef, cv_rms, fit_rms, lam_best, dict(provenance or {}))
+    return ErrorMap(lo, hi, degree, struct, coef, cv_rms, fit_rms, lam_best,
+                    dict(provenance or {}))
