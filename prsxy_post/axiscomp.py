@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .profile import AxisComp
+from .profile import AxisComp, Effects, Profile
 
 #: A wanted position that moves by less than this between two points stands still.
 #: Without it, rounding noise of 1e-15 mm in a motor that should stand would be
@@ -44,6 +44,17 @@ class MotorTable:
     breaks: np.ndarray
     lo_err: np.ndarray
     hi_err: np.ndarray
+    cyclic: tuple[tuple[float, float, float], ...] = ()  # (amplitude, period, phase deg)
+
+    def _cyc(self, p: np.ndarray) -> np.ndarray | float:
+        """Periodic error terms (profile ``[[effects.cyclic]]``), both directions alike."""
+        out: np.ndarray | float = 0.0
+        for amp, period, phase in self.cyclic:
+            out = out + amp * np.sin(2 * np.pi * p / period + np.radians(phase))
+        return out
+
+    def with_cyclic(self, terms: tuple[tuple[float, float, float], ...]) -> MotorTable:
+        return MotorTable(self.motor, self.breaks, self.lo_err, self.hi_err, terms)
 
     @classmethod
     def from_comp(cls, comp: AxisComp) -> MotorTable:
@@ -62,11 +73,23 @@ class MotorTable:
 
     def lo(self, p: np.ndarray) -> np.ndarray:
         """Where the part ends when approached moving + (forward error)."""
-        return p + np.interp(p, self.breaks, self.lo_err)
+        return p + np.interp(p, self.breaks, self.lo_err) + self._cyc(p)
 
     def hi(self, p: np.ndarray) -> np.ndarray:
         """Where the part ends when approached moving − (reverse error)."""
-        return p + np.interp(p, self.breaks, self.hi_err)
+        return p + np.interp(p, self.breaks, self.hi_err) + self._cyc(p)
+
+    def _solve(self, target: np.ndarray, err: np.ndarray) -> np.ndarray:
+        p = self._invert(target, self.breaks, err)
+        if self.cyclic:
+            # p = inv(T − cyc(p)): a contraction while |cyc'| ≪ 1 (µm over mm)
+            for _ in range(30):
+                p_new = self._invert(target - self._cyc(p), self.breaks, err)
+                if np.max(np.abs(p_new - p), initial=0.0) < 1e-13:
+                    p = p_new
+                    break
+                p = p_new
+        return p
 
     @staticmethod
     def _invert(target: np.ndarray, breaks: np.ndarray, err: np.ndarray) -> np.ndarray:
@@ -80,11 +103,11 @@ class MotorTable:
 
     def lo_inv(self, target: np.ndarray) -> np.ndarray:
         """p with lo(p) = target."""
-        return self._invert(np.asarray(target, dtype=float), self.breaks, self.lo_err)
+        return self._solve(np.asarray(target, dtype=float), self.lo_err)
 
     def hi_inv(self, target: np.ndarray) -> np.ndarray:
         """p with hi(p) = target."""
-        return self._invert(np.asarray(target, dtype=float), self.breaks, self.hi_err)
+        return self._solve(np.asarray(target, dtype=float), self.hi_err)
 
     @property
     def max_play(self) -> float:
@@ -196,6 +219,19 @@ def compensate(table: MotorTable | None, target: np.ndarray, state: PlayState | 
     return cmd
 
 
-def tables_by_motor(comps: tuple[AxisComp, ...]) -> dict[int, MotorTable]:
-    """MotorTable for every motor that has an ``[[axis_comp]]`` entry."""
-    return {c.motor: MotorTable.from_comp(c) for c in comps}
+def tables_by_motor(comps: tuple[AxisComp, ...], effects: Effects | None = None
+                    ) -> dict[int, MotorTable]:
+    """MotorTable for every motor with an ``[[axis_comp]]`` entry or a cyclic error."""
+    out = {c.motor: MotorTable.from_comp(c) for c in comps}
+    if effects is not None:
+        for m in {c.motor for c in effects.cyclic}:
+            terms = tuple((c.amplitude, c.period, c.phase) for c in effects.cyclic
+                          if c.motor == m)
+            base = out.get(m) or MotorTable(m, np.array([0.0]), np.zeros(1), np.zeros(1))
+            out[m] = base.with_cyclic(terms)
+    return out
+
+
+def profile_tables(profile: Profile) -> dict[int, MotorTable]:
+    """Every motor's real-axis error model of a profile (tables and cyclic errors)."""
+    return tables_by_motor(profile.axis_comp, profile.effects)

@@ -139,10 +139,10 @@ class Observations:
     sigma_bb_mm: float = 0.5e-3
 
 
-def reached_motors(real_axis: Sequence[Any], P_cmd: np.ndarray, approach: int | None
-                   ) -> np.ndarray:
+def reached_motors(real_axis: Sequence[Any], P_cmd: np.ndarray, approach: int | None,
+                   effects: Any = None) -> np.ndarray:
     """Where the parts end for commands, by the given real-axis tables (play model)."""
-    tables = axiscomp.tables_by_motor(tuple(real_axis))
+    tables = axiscomp.tables_by_motor(tuple(real_axis), effects)
     out = P_cmd.copy()
     for col, m in enumerate(MOTORS):
         t = tables.get(m)
@@ -170,7 +170,7 @@ def observations(commanded: Profile, real_axis: Sequence[Any], poses: Sequence[A
         obs.y_pose, obs.q_pose = y, q
     P_all, q_all, piv, dist, run = [], [], [], [], []
     for k, r in enumerate(runs):
-        P_cmd = simulate.motion_commands(commanded, r.commanded)
+        P_cmd = simulate.motion_commands(commanded, r.commanded, t=r.t)
         P = reached_motors(real_axis, P_cmd, None)[::ballbar_stride]
         P_all.append(P)
         q_all.append(r.commanded[::ballbar_stride])

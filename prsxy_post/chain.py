@@ -211,11 +211,15 @@ def run_chain(motions: Sequence[Motion], profile: Profile, stages: Stages = Stag
     ik = kinematics.inverse(geo, q_target, samples.tool_length)
     P_ideal = ik.P
     P_cmd = P_ideal.copy()
-    if stages.axis_comp and profile.axis_comp:
-        tables = axiscomp.tables_by_motor(profile.axis_comp)
+    if stages.axis_comp and np.all(ik.reachable):
+        tables = axiscomp.profile_tables(profile)
         for col, m in enumerate(MOTOR_ORDER):
-            if m in tables and np.all(ik.reachable):
+            if m in tables:
                 P_cmd[:, col] = axiscomp.compensate(tables[m], P_ideal[:, col])
+        if any(profile.effects.servo_lag_ms):
+            from .simulate import lagged
+
+            P_cmd = lagged(profile, P_cmd, np.cumsum(samples.dt), +1.0)
     problems += check_points(profile, samples, ik, P_cmd)
     if problems and not collect:
         raise sorted(problems, key=lambda e: e.line or 0)[0]

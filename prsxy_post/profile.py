@@ -112,10 +112,27 @@ class Effects:
         (hinge centre a_i = g_i + P_i d_i + b_i (P_i / 100)² r_i)
     table_straightness : (k_x, k_y) [mm/m²]: the X motion bends towards +Y by
         k_x (P5 / 1000)², the Y motion towards +X by k_y (P6 / 1000)²
+    servo_lag_ms : per motor 1, 2, 3, 5, 6: how far the motor follows behind its
+        command [ms]; the part is where the command was that long ago, so on a
+        moving axis the error is −lag · velocity and flips with direction
+    cyclic : periodic positioning errors per motor, added to both directions of
+        its real-axis error: amplitude · sin(2π p / period + phase)
     """
 
     guide_bow: tuple[float, float, float] = (0.0, 0.0, 0.0)
     table_straightness: tuple[float, float] = (0.0, 0.0)
+    servo_lag_ms: tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0)
+    cyclic: tuple[Cyclic, ...] = ()
+
+
+@dataclass(frozen=True)
+class Cyclic:
+    """A periodic error of one motor [mm, mm, deg]."""
+
+    motor: int
+    amplitude: float
+    period: float
+    phase: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -419,13 +436,29 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     table = TableParams(*(c.number(tsec, k, "table", 0.0, lo=-0.01, hi=0.01) for k in TABLE_KEYS))
     axis_comp = _axis_comp(c, doc["axis_comp"]) if "axis_comp" in doc else ()
     esec = c.table(doc, "effects", "", False) or {}
-    c.unknown(esec, {"guide_bow", "table_straightness"}, "effects")
+    c.unknown(esec, {"guide_bow", "table_straightness", "servo_lag_ms", "cyclic"}, "effects")
     bow = c.vector(esec, "guide_bow", "effects", 3, [0.0, 0.0, 0.0])
     straight = c.vector(esec, "table_straightness", "effects", 2, [0.0, 0.0])
-    for key, vals in (("guide_bow", bow), ("table_straightness", straight)):
-        if np.any(np.abs(vals) > 1.0):
-            raise c.fail(f"effects.{key}", f"is {vals.tolist()}", "values within ±1 mm")
-    effects = Effects((bow[0], bow[1], bow[2]), (straight[0], straight[1]))
+    lag = c.vector(esec, "servo_lag_ms", "effects", 5, [0.0] * 5)
+    for key, vals, lim in (("guide_bow", bow, 1.0), ("table_straightness", straight, 1.0),
+                           ("servo_lag_ms", lag, 100.0)):
+        if np.any(np.abs(vals) > lim):
+            raise c.fail(f"effects.{key}", f"is {vals.tolist()}", f"values within ±{lim:g}")
+    cyc_raw = esec.get("cyclic", [])
+    if not isinstance(cyc_raw, list) or not all(isinstance(x, dict) for x in cyc_raw):
+        raise c.fail("effects.cyclic", "is not an array of tables", "[[effects.cyclic]] tables")
+    cyclic = []
+    for i, e in enumerate(cyc_raw):
+        p = f"effects.cyclic[{i + 1}]"
+        c.unknown(e, {"motor", "amplitude", "period", "phase"}, p)
+        m = c.integer(e, "motor", p)
+        if m not in MOTORS:
+            raise c.fail(f"{p}.motor", f"is {m}", "one of 1, 2, 3, 5, 6")
+        cyclic.append(Cyclic(m, c.number(e, "amplitude", p, lo=-1.0, hi=1.0),
+                             c.number(e, "period", p, positive=True),
+                             c.number(e, "phase", p, 0.0)))
+    effects = Effects((bow[0], bow[1], bow[2]), (straight[0], straight[1]),
+                      (lag[0], lag[1], lag[2], lag[3], lag[4]), tuple(cyclic))
     motors = _motors(c, doc.get("motors"))
 
     sections = {name_: _section_with_defaults(c, doc, name_) for name_ in DEFAULTS}

@@ -23,14 +23,35 @@ def truth_geometry(truth: Profile) -> kinematics.Geometry:
                                               truth.effects)
 
 
-def actual_motors(truth: Profile, P_cmd: np.ndarray, *, approach: int | None = None
-                  ) -> np.ndarray:
+def lagged(profile: Profile, P: np.ndarray, t: np.ndarray | None, sign: float = -1.0
+           ) -> np.ndarray:
+    """Motor positions shifted in time by each motor's servo lag.
+
+    sign = −1: where a lagging motor is at time t, P(t − lag) (the machine);
+    sign = +1: the command that makes it be at P(t), P(t + lag) (compensation).
+    Positions are linear between points, as the interpolation points are.
+    """
+    lag = np.asarray(profile.effects.servo_lag_ms) / 1000.0
+    if t is None or not np.any(lag):
+        return P
+    out = P.copy()
+    for col in range(5):
+        if lag[col]:
+            out[:, col] = np.interp(t + sign * lag[col], t, P[:, col])
+    return out
+
+
+def actual_motors(truth: Profile, P_cmd: np.ndarray, *, approach: int | None = None,
+                  t: np.ndarray | None = None) -> np.ndarray:
     """Where the driven parts end for commands ``P_cmd`` (N, 5) in time order.
 
     approach : None for a continuous motion (play model); +1 or −1 for points
         each approached on its own from that side (poses, laser runs).
+    t : (N,) time stamps [s] of a continuous motion, for the servo lag.
     """
-    tables = axiscomp.tables_by_motor(truth.axis_comp)
+    tables = axiscomp.profile_tables(truth)
+    if approach is None:
+        P_cmd = lagged(truth, P_cmd, t, -1.0)
     out = np.array(P_cmd, dtype=float, copy=True)
     for col, m in enumerate(MOTOR_ORDER):
         t = tables.get(m)
@@ -44,7 +65,8 @@ def actual_motors(truth: Profile, P_cmd: np.ndarray, *, approach: int | None = N
 
 
 def execute(truth: Profile, P_cmd: np.ndarray, tool_length: np.ndarray | float | None = None,
-            *, approach: int | None = None, guess: np.ndarray | None = None) -> np.ndarray:
+            *, approach: int | None = None, guess: np.ndarray | None = None,
+            t: np.ndarray | None = None) -> np.ndarray:
     """Tool poses q (N, 5) [mm, deg] the truth machine reaches for motor commands.
 
     Raises
@@ -54,7 +76,7 @@ def execute(truth: Profile, P_cmd: np.ndarray, tool_length: np.ndarray | float |
         of this machine); callers pass commands from a converted program.
     """
     geo = truth_geometry(truth)
-    P = actual_motors(truth, P_cmd, approach=approach)
+    P = actual_motors(truth, P_cmd, approach=approach, t=t)
     q, ok = kinematics.forward(geo, P, tool_length, guess=guess)
     if not np.all(ok):
         raise RuntimeError(f"forward kinematics did not converge at {np.sum(~ok)} points")
@@ -152,15 +174,16 @@ def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -
     if not np.all(ik.reachable):
         raise ValueError(f"{int(np.sum(~ik.reachable))} poses out of reach")
     P = ik.P.copy()
-    tables = axiscomp.tables_by_motor(commanded.axis_comp)
+    tables = axiscomp.profile_tables(commanded)
     for col, m in enumerate(MOTOR_ORDER):
         if m in tables:
             P[:, col] = tables[m].lo_inv(P[:, col])
     return P
 
 
-def motion_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -> np.ndarray:
-    """Motor commands for a continuous motion through poses q (time order)."""
+def motion_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0,
+                    t: np.ndarray | None = None) -> np.ndarray:
+    """Motor commands for a continuous motion through poses q at times t (time order)."""
     from . import chain, errormap
 
     emap = errormap.from_profile(commanded)
@@ -169,11 +192,11 @@ def motion_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0)
     if not np.all(ik.reachable):
         raise ValueError(f"{int(np.sum(~ik.reachable))} poses out of reach")
     P = ik.P.copy()
-    tables = axiscomp.tables_by_motor(commanded.axis_comp)
+    tables = axiscomp.profile_tables(commanded)
     for col, m in enumerate(MOTOR_ORDER):
         if m in tables:
             P[:, col] = axiscomp.compensate(tables[m], P[:, col])
-    return P
+    return lagged(commanded, P, t, +1.0)
 
 
 def measure_poses(truth: Profile, commanded: Profile, q: np.ndarray, rng: np.random.Generator,
@@ -186,12 +209,12 @@ def measure_poses(truth: Profile, commanded: Profile, q: np.ndarray, rng: np.ran
     return meas
 
 
-def measure_ballbar(truth: Profile, commanded: Profile, q: np.ndarray, pivot: np.ndarray,
-                    length: float, rng: np.random.Generator, noise_um: float = 0.5
-                    ) -> np.ndarray:
-    """Ballbar reading dev_um (N,) along a commanded motion q (N, 5) in time order."""
-    P = motion_commands(commanded, q)
-    tip = execute(truth, P)[:, :3]
+def measure_ballbar(truth: Profile, commanded: Profile, q: np.ndarray, t: np.ndarray,
+                    pivot: np.ndarray, length: float, rng: np.random.Generator,
+                    noise_um: float = 0.5) -> np.ndarray:
+    """Ballbar reading dev_um (N,) along a commanded motion q (N, 5) at times t."""
+    P = motion_commands(commanded, q, t=t)
+    tip = execute(truth, P, t=t)[:, :3]
     dev = (np.linalg.norm(tip - pivot, axis=1) - length) * 1000.0
     return dev + rng.normal(0, noise_um, len(dev))
 
@@ -203,7 +226,7 @@ def measure_axis(truth: Profile, motor: int, targets: np.ndarray, runs: int,
     Each run goes up through the targets then down, no compensation active: the
     part ends at lo(target) approached from below and hi(target) from above.
     """
-    tables = axiscomp.tables_by_motor(truth.axis_comp)
+    tables = axiscomp.profile_tables(truth)
     t = tables.get(motor)
     rows = []
     for run in range(1, runs + 1):
