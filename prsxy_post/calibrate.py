@@ -198,12 +198,25 @@ def _out(geo: kinematics.Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
     return np.column_stack([w, np.degrees(xv[:, 3]), np.degrees(xv[:, 4])])
 
 
-def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
-                     guess: np.ndarray | None = None, want_jac: bool = True
-                     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
-    """Tip and axis (N, 5) for motor positions P under geometry θ, and ∂/∂θ (N, 5, m).
+def default_steps(names: Sequence[str], theta: np.ndarray) -> np.ndarray:
+    """Central-difference steps: relative for lengths and angles, absolute for small terms."""
+    return np.array([1e-6 * max(1.0, abs(t)) if n.startswith("kinematics") else 1e-7
+                     for n, t in zip(names, theta, strict=True)])
 
-    Implicit differentiation of the FK constraints F(x, θ) = 0.
+
+def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
+                     guess: np.ndarray | None = None, want_jac: bool = True,
+                     steps: np.ndarray | None = None, motors: bool = False
+                     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray | None]:
+    """Tip and axis y (N, 5) for motor positions P under geometry θ, with derivatives.
+
+    Implicit differentiation of the FK constraints F(x, θ, P) = 0 (x: platform pose):
+    ∂x/∂θ = −F_x⁻¹ F_θ, ∂y/∂θ = G_x ∂x/∂θ + G_θ, and likewise for P.
+
+    Returns
+    -------
+    y : (N, 5) [mm, deg]; J : (N, 5, m) ∂y/∂θ or None; xv : (N, 6) platform poses;
+    JP : (N, 5, 5) ∂y/∂P (motor sensitivities) when ``motors``, else None
     """
     geo = make_geo(theta)
     xv, ok = kinematics.forward_platform(geo, P, guess)
@@ -212,7 +225,7 @@ def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
                        expected="measurements of poses this geometry can reach")
     y = _out(geo, P, xv)
     if not want_jac:
-        return y, None, xv
+        return y, None, xv, None
     n, m = len(P), len(theta)
     hx = np.array([1e-6, 1e-6, 1e-6, 1e-8, 1e-8, 1e-8])
     Fx = np.empty((n, 6, 6))
@@ -224,10 +237,11 @@ def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
         Fx[:, :, j] = (kinematics._fk_residual(geo, P, xp)
                        - kinematics._fk_residual(geo, P, xm)) / (2 * hx[j])
         Gx[:, :, j] = (_out(geo, P, xp) - _out(geo, P, xm)) / (2 * hx[j])
+    h_all = steps if steps is not None else default_steps(PARAMS, theta)
     Ft = np.empty((n, 6, m))
     Gt = np.empty((n, 5, m))
     for j in range(m):
-        h = 1e-6 * max(1.0, abs(theta[j])) if PARAMS[j].startswith("kinematics") else 1e-7
+        h = h_all[j]
         tp, tm = theta.copy(), theta.copy()
         tp[j] += h
         tm[j] -= h
@@ -235,9 +249,21 @@ def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
         Ft[:, :, j] = (kinematics._fk_residual(gp, P, xv)
                        - kinematics._fk_residual(gm, P, xv)) / (2 * h)
         Gt[:, :, j] = (_out(gp, P, xv) - _out(gm, P, xv)) / (2 * h)
-    dx = -np.linalg.solve(Fx, Ft)
-    J = np.einsum("nij,njm->nim", Gx, dx) + Gt
-    return y, J, xv
+    lu = np.linalg.inv(Fx)
+    J = np.einsum("nij,njm->nim", Gx, -lu @ Ft) + Gt
+    JP = None
+    if motors:
+        FP = np.empty((n, 6, 5))
+        GP = np.empty((n, 5, 5))
+        for j in range(5):
+            Pp, Pm = P.copy(), P.copy()
+            Pp[:, j] += 1e-6
+            Pm[:, j] -= 1e-6
+            FP[:, :, j] = (kinematics._fk_residual(geo, Pp, xv)
+                           - kinematics._fk_residual(geo, Pm, xv)) / 2e-6
+            GP[:, :, j] = (_out(geo, Pp, xv) - _out(geo, Pm, xv)) / 2e-6
+        JP = np.einsum("nij,njm->nim", Gx, -lu @ FP) + GP
+    return y, J, xv, JP
 
 
 @dataclass
@@ -257,7 +283,7 @@ def evaluate(profile: Profile, theta: np.ndarray, obs: Observations, want_jac: b
     raw: dict[str, np.ndarray] = {}
     g = guesses if guesses is not None else {}
     if len(obs.P_pose):
-        y, J, xv = fk_with_jacobian(make_geo, theta, obs.P_pose, g.get("pose"), want_jac)
+        y, J, xv, _ = fk_with_jacobian(make_geo, theta, obs.P_pose, g.get("pose"), want_jac)
         g["pose"] = xv
         res = obs.y_pose - y
         ok = np.isfinite(res)
@@ -268,7 +294,7 @@ def evaluate(profile: Profile, theta: np.ndarray, obs: Observations, want_jac: b
         if J is not None:
             Js.append((J * w[None, :, None])[ok])
     if len(obs.P_bb):
-        y, J, xv = fk_with_jacobian(make_geo, theta, obs.P_bb, g.get("bb"), want_jac)
+        y, J, xv, _ = fk_with_jacobian(make_geo, theta, obs.P_bb, g.get("bb"), want_jac)
         g["bb"] = xv
         vec = y[:, :3] - obs.pivot_bb
         d = np.linalg.norm(vec, axis=1)
