@@ -55,19 +55,21 @@ def sha256_of(path: str) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def write_atomic(files: dict[Path, str]) -> None:
+def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]
+                 ) -> None:
     """Write every file or none: temp files beside the targets, then renames.
 
     An existing output is replaced only once every new file is complete on disk.
     """
     temps: list[tuple[str, Path]] = []
     try:
-        for path, text in files.items():
+        for path, content in files.items():
             path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
             temps.append((tmp, path))
-            with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-                fh.write(text)
+            data = content.encode("utf-8") if isinstance(content, str) else content
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
                 fh.flush()
                 os.fsync(fh.fileno())
         for tmp, path in temps:
@@ -364,3 +366,278 @@ def check(program: str, profile_path: str, start: str | None, no_error_map: bool
         sys.exit(1)
     click.echo(f"{program}: ok ({len(motions)} motions, {len(s)} points, "
                f"{float(np.sum(s.dt)):.2f} s)", err=True)
+
+
+# ------------------------------------------------------------------ measurements
+
+
+def read_measurements(paths: Sequence[str]) -> tuple[list[Any], list[Any], list[Any]]:
+    """Read measurement files, sorted by kind: poses, ballbar runs, axis runs."""
+    from . import measure
+
+    poses, runs, axis = [], [], []
+    for p in paths:
+        m = measure.read_measurement(read_text(p, "measurement file"), p)
+        if isinstance(m, measure.PoseData):
+            poses.append(m)
+        elif isinstance(m, measure.BallbarRun):
+            runs.append(m)
+        else:
+            axis.append(m)
+    return poses, runs, axis
+
+
+def _out_dir_files(out_dir: str, files: dict[str, str]) -> None:
+    write_atomic({Path(out_dir) / name: text for name, text in files.items()})
+
+
+@main.command()
+@click.option("--truth", "truth_path", required=True, type=click.Path(dir_okay=False),
+              help="Profile of the machine as it really is (may hold [effects]).")
+@profile_option
+@click.option("-o", "--out-dir", required=True, type=click.Path(file_okay=False),
+              help="Directory for the measurement files.")
+@click.option("--seed", default=0, show_default=True, type=int, help="Noise seed.")
+@click.option("--noise-um", default=0.5, show_default=True, type=click.FloatRange(0),
+              help="Ballbar noise (1 sigma) [um].")
+@click.option("--pose-noise-um", default=1.0, show_default=True, type=click.FloatRange(0),
+              help="Pose (laser tracker) noise [um].")
+@click.option("--laser-noise-um", default=0.3, show_default=True, type=click.FloatRange(0),
+              help="Laser interferometer noise [um].")
+@click.option("--radii", default="50,100", show_default=True,
+              help="X-Y ballbar radii [mm], comma separated.")
+@click.option("--tilts", default="5,15", show_default=True,
+              help="Cone test tilts [deg], comma separated.")
+@click.option("--poses", "n_poses", default=300, show_default=True, type=click.IntRange(0),
+              help="Number of poses in the pose grid.")
+@click.option("--feed", default=1000.0, show_default=True, type=click.FloatRange(min=1),
+              help="Ballbar feed [mm/min].")
+@click.option("--no-axis-runs", is_flag=True, help="Write no laser (axis) runs.")
+@click.option("--only-xy", is_flag=True, help="Only X-Y ballbar circles (no cones, X-Z, Y-Z).")
+@guarded
+def simulate(truth_path: str, profile_path: str, out_dir: str, seed: int, noise_um: float,
+             pose_noise_um: float, laser_noise_um: float, radii: str, tilts: str, n_poses: int,
+             feed: float, no_axis_runs: bool, only_xy: bool) -> None:
+    """What the machine TRUTH measures when commanded with PROFILE.
+
+    Writes contract measurement files into OUT_DIR: ballbar runs (X-Y circles,
+    cone tests, X-Z and Y-Z circles; each ccw and cw), a pose grid and laser runs
+    per motor. Rehearse calibration with them, or hide effects in them.
+    """
+    from . import experiments
+
+    truth = load_profile(truth_path)
+    commanded = load_profile(profile_path)
+    try:
+        r_list = [float(x) for x in radii.split(",") if x.strip()]
+        t_list = [float(x) for x in tilts.split(",") if x.strip()]
+    except ValueError:
+        raise UsageError("--radii and --tilts take numbers separated by commas",
+                         expected="e.g. --radii 40,50,60") from None
+    rng = np.random.default_rng(seed)
+    files = experiments.measurement_files(
+        truth, commanded, rng, radii=r_list, tilts=[] if only_xy else t_list,
+        planes=["XY"] if only_xy else ["XY", "XZ", "YZ"], n_poses=n_poses, feed=feed,
+        noise_um=noise_um, pose_noise_um=pose_noise_um, laser_noise_um=laser_noise_um,
+        axis_runs=not no_axis_runs)
+    _out_dir_files(out_dir, files)
+    click.echo(f"wrote {len(files)} files to {out_dir}", err=True)
+
+
+def _fmt_stats(d: dict[str, float]) -> str:
+    parts = []
+    for k, v in d.items():
+        scale, unit = (3600.0, "arcsec") if k == "pose_axis" else (1000.0, "um")
+        parts.append(f"{k} {v * scale:.3f} {unit}")
+    return ", ".join(parts) or "-"
+
+
+def _print_stage(rep: Any) -> None:
+    click.echo(f"== {rep.name}")
+    for c in rep.changed:
+        if "change" in c:
+            click.echo(f"  {c['name']}: {c['from']:.6g} -> {c['to']:.6g} "
+                       f"({c['change']:+.3g} ± {c['stderr']:.2g} {c['unit']})")
+        elif "cv_rms" in c:
+            scale = 3600.0 if c["unit"] == "deg" else 1000.0
+            u = "arcsec" if c["unit"] == "deg" else "um"
+            click.echo(f"  {c['name']}: degree {c['degree']}, cross-validated RMS "
+                       f"{c['cv_rms'] * scale:.3f} {u}")
+        else:
+            iso = c.get("iso230_2", {})
+            figs = ", ".join(f"{k.split('_')[-1]} {np.max(np.abs(v)) * 1000:.2f} um"
+                             for k, v in iso.items())
+            click.echo(f"  {c['name']}: {c['points']} points {c['from']:g}..{c['to']:g} mm"
+                       + (f"; ISO 230-2 {figs}" if figs else ""))
+    for n in rep.notes:
+        click.echo(f"  note: {n}")
+    click.echo(f"  residual RMS before: {_fmt_stats(rep.rms_before)}")
+    click.echo(f"  residual RMS after:  {_fmt_stats(rep.rms_after)}")
+    click.echo(f"  residual max before: {_fmt_stats(rep.max_before)}")
+    click.echo(f"  residual max after:  {_fmt_stats(rep.max_after)}")
+
+
+def _check_output(out: str, inputs: Sequence[str], in_place: bool, backup: bool = True) -> None:
+    """Never overwrite an input profile unless asked; keep a backup when asked."""
+    outp = Path(out).resolve()
+    for p in inputs:
+        if Path(p).resolve() == outp and not in_place:
+            raise UsageError(f"-o {out} would overwrite the input profile {p}",
+                             expected="another output file, or --in-place")
+
+
+@main.command()
+@click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@profile_option
+@click.option("-o", "--output", required=True, help="Calibrated profile to write (TOML).")
+@click.option("--commanded-with", default=None, type=click.Path(dir_okay=False),
+              help="Profile the machine was commanded with when measured (default: --profile).")
+@click.option("--stages", default="tables,kinematics,map", show_default=True,
+              help="Which stages to run (comma separated).")
+@click.option("--max-rel-stderr", default=0.25, show_default=True, type=click.FloatRange(0.001),
+              help="Leave a parameter combination alone when the data know it worse than "
+                   "this fraction of its typical size.")
+@click.option("--seed", default=0, show_default=True, type=int,
+              help="Seed of the cross-validation split.")
+@click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
+@click.option("--json", "as_json", is_flag=True, help="Print the stage reports as JSON.")
+@guarded
+def calibrate(data: Sequence[str], profile_path: str, output: str, commanded_with: str | None,
+              stages: str, max_rel_stderr: float, seed: int, in_place: bool,
+              as_json: bool) -> None:
+    """Calibrate PROFILE from measurement files DATA (axis, poses, ballbar).
+
+    Stage 1 fits real-axis tables from laser runs (ISO 230-2 figures), stage 2 the
+    kinematic and table parameters from poses and ballbar runs, stage 3 the
+    virtual-axis error map from what remains. Each stage prints what it changed
+    and the residuals before and after.
+    """
+    from . import calibrate as cal
+    from .profile import dumps, profile_from_dict
+
+    _check_output(output, [profile_path], in_place)
+    start = load_profile(profile_path)
+    commanded = load_profile(commanded_with) if commanded_with else start
+    want = {s.strip() for s in stages.split(",") if s.strip()}
+    unknown = want - {"tables", "kinematics", "map"}
+    if unknown:
+        raise UsageError(f"unknown stage {sorted(unknown)[0]!r}",
+                         expected="tables, kinematics, map")
+    poses, runs, axis = read_measurements(data)
+    reports = []
+    doc = dict(start.raw)
+    real_axis = list(start.axis_comp)
+    if "tables" in want and axis:
+        real_axis, rep = cal.stage_tables(start, axis)
+        reports.append(rep)
+        doc["axis_comp"] = [{"motor": c.motor, "positions": c.positions, "forward": c.forward,
+                             "reverse": c.reverse} for c in real_axis]
+    fitted = None
+    if "kinematics" in want and (poses or runs):
+        theta, _, obs, rep = cal.stage_kinematics(start, commanded, real_axis, poses, runs,
+                                                  max_rel_stderr=max_rel_stderr)
+        reports.append(rep)
+        doc = cal.apply_theta(doc, theta)
+        fitted = (theta, obs)
+    if "map" in want and poses:
+        prof_now = profile_from_dict(doc, output)
+        if fitted is None:
+            obs = cal.observations(commanded, real_axis, poses, [])
+            theta = cal.theta_of(prof_now)
+        else:
+            theta, obs = fitted
+        emap, rep = cal.stage_error_map(prof_now, theta, obs, np.random.default_rng(seed),
+                                        {"from": [p.source for p in poses]})
+        reports.append(rep)
+        doc["error_map"] = emap.to_dict()
+    if not reports:
+        raise UsageError("no stage had data to work on",
+                         expected="axis files for tables, pose or ballbar files for the "
+                                  "kinematics, pose files for the map")
+    prov = dict(doc.get("provenance", {}))
+    prov["calibrate"] = {"by": f"prsxy-post {__version__}", "start": profile_path,
+                         "commanded_with": commanded_with or profile_path,
+                         "data": list(data), "stages": [r.name for r in reports]}
+    doc["provenance"] = prov
+    text = dumps(doc)
+    profile_mod.loads(text, output)  # what we write must read back
+    files = {Path(output): text}
+    if in_place and Path(output).resolve() == Path(profile_path).resolve():
+        files[Path(output + ".bak")] = read_text(profile_path, "profile")
+    write_atomic(files)
+    if as_json:
+        click.echo(json.dumps({"stages": [r.to_dict() for r in reports], "output": output},
+                              default=_json_default, indent=1))
+    else:
+        for r in reports:
+            _print_stage(r)
+        click.echo(f"wrote {output}")
+
+
+def _json_default(x: Any) -> Any:
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, np.floating | np.integer):
+        return x.item()
+    raise TypeError(type(x).__name__)
+
+
+@main.command()
+@click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@profile_option
+@click.option("-o", "--output", default=None, help="Write the updated profile here.")
+@click.option("--commanded-with", default=None, type=click.Path(dir_okay=False),
+              help="Profile the machine was commanded with (default: --profile).")
+@click.option("--json", "as_json", is_flag=True, help="Print the diagnosis as JSON.")
+@click.option("--report", "report_dir", default=None, type=click.Path(file_okay=False),
+              help="Write report.md and plots into this directory.")
+@click.option("--alpha", default=1e-3, show_default=True, type=click.FloatRange(1e-12, 0.5),
+              help="Significance level of the F-test for each new effect.")
+@click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
+@guarded
+def diagnose(data: Sequence[str], profile_path: str, output: str | None,
+             commanded_with: str | None, as_json: bool, report_dir: str | None, alpha: float,
+             in_place: bool) -> None:
+    """Find where PROFILE's simulation and the measurements DATA disagree and why."""
+    from . import diagnose as dg
+    from .profile import dumps
+
+    if output:
+        _check_output(output, [profile_path], in_place)
+    current = load_profile(profile_path)
+    commanded = load_profile(commanded_with) if commanded_with else current
+    poses, runs, axis = read_measurements(data)
+    d = dg.Data.build(commanded, poses, runs, axis)
+    result = dg.diagnose(current, d, alpha=alpha)
+    files: dict[Path, str | bytes] = {}
+    if output:
+        text = dumps(result.updated)
+        profile_mod.loads(text, output)
+        files[Path(output)] = text
+        if in_place and Path(output).resolve() == Path(profile_path).resolve():
+            files[Path(output + ".bak")] = read_text(profile_path, "profile")
+    if report_dir:
+        from . import report
+
+        files.update({Path(report_dir) / k: v for k, v in
+                      report.diagnose_report(result, current, d).items()})
+    if files:
+        write_atomic(files)
+    if as_json:
+        click.echo(json.dumps(result.to_json(), default=_json_default, indent=1))
+        return
+    click.echo(f"noise: {', '.join(f'{k} {v:.3f}' for k, v in result.to_json()['noise'].items())}")
+    for r in result.regions[:5]:
+        unit = "arcsec" if r["kind"] == "pose_axis" else "um"
+        click.echo(f"disagreement: {r['source']} {r['region']}: rms {r[f'rms_{unit}']:.3f} "
+                   f"{unit} ({r['ratio']:.1f} x noise)")
+    if not result.effects:
+        click.echo("no missing effect found: the model explains the data to their noise")
+    for e in result.effects:
+        al = f" (cannot be told apart from: {', '.join(e.aliases)})" if e.aliases else ""
+        extra = f", period {e.period:g} mm" if e.period else ""
+        click.echo(f"effect: {e.name} {e.estimate:+.6g} ± {e.stderr:.2g} {e.unit}{extra}{al}")
+    click.echo(f"residual RMS: {result.rms_before_um:.3f} um -> {result.rms_after_um:.3f} um")
+    click.echo(result.summary)
+    if output:
+        click.echo(f"wrote {output}")
