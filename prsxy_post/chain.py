@@ -19,7 +19,19 @@ import numpy as np
 
 from . import axiscomp, kinematics
 from .errors import LimitError, PrsxyError, ReachError
-from .interpolate import Blocks, Limits, Samples, TimeLaw, interpolate
+from .interpolate import (
+    KIND_DWELL,
+    Blocks,
+    Limits,
+    Samples,
+    TimeLaw,
+    backward_pass,
+    blocks_from_motions,
+    forward_pass,
+    junction_limits,
+    sample,
+    time_law,
+)
 from .profile import MOTORS, Profile, nominal_kinematics
 
 if TYPE_CHECKING:
@@ -60,13 +72,12 @@ class ChainResult:
     """
 
     samples: Samples
-    blocks: Blocks
-    law: TimeLaw
     q_target: np.ndarray
     P_ideal: np.ndarray
     P_cmd: np.ndarray
     geometry: kinematics.Geometry
     problems: list[PrsxyError] = field(default_factory=list)
+    t: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def interpreter_config(profile: Profile, start: Sequence[float] | None = None
@@ -133,41 +144,277 @@ def _first_per_line(bad: np.ndarray, lines: np.ndarray) -> list[int]:
     return sorted(idx[first].tolist())
 
 
-def check_points(profile: Profile, samples: Samples, ik: kinematics.IKResult,
-                 P_cmd: np.ndarray) -> list[PrsxyError]:
-    """Reach, tilt and travel problems, one per G-code line and kind."""
+@dataclass
+class PointChunk:
+    """A run of consecutive interpolation points with everything the chain computed.
+
+    t : (n,) time at each point [s] from the program start
+    Other fields as in :class:`ChainResult` (``samples`` split into arrays).
+    """
+
+    q: np.ndarray
+    dt: np.ndarray
+    t: np.ndarray
+    line: np.ndarray
+    first: np.ndarray
+    tool_length: np.ndarray
+    speed: np.ndarray
+    q_target: np.ndarray
+    P_ideal: np.ndarray
+    P_cmd: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.dt)
+
+    def take(self, sl: slice) -> PointChunk:
+        return PointChunk(**{k: getattr(self, k)[sl] for k in self.__dataclass_fields__})
+
+    @staticmethod
+    def concat(chunks: Sequence[PointChunk]) -> PointChunk:
+        return PointChunk(**{k: np.concatenate([getattr(c, k) for c in chunks])
+                             for k in PointChunk.__dataclass_fields__})
+
+
+class Planner:
+    """Look-ahead speed planning over a stream of blocks, in bounded memory.
+
+    Blocks wait until the path after them is long enough to stop from any speed
+    (1.5 · v_max² / 2a) or a forced stop follows; then their junction speeds
+    cannot change with anything further in the program, and they are committed.
+    The result is the same, bit for bit, as planning the whole program at once.
+    """
+
+    def __init__(self, limits: Limits) -> None:
+        self.limits = limits
+        self.pending: Blocks | None = None
+        self.v_start = 0.0
+
+    def push(self, new: Blocks, final: bool = False) -> tuple[Blocks, TimeLaw] | None:
+        if self.pending is None or len(self.pending) == 0:
+            b = new
+        elif len(new) == 0:
+            b = self.pending
+        else:
+            b = Blocks(**{k: np.concatenate([getattr(self.pending, k), getattr(new, k)])
+                          for k in Blocks.__dataclass_fields__})
+        n = len(b)
+        if n == 0:
+            self.pending = b
+            return None
+        vj = junction_limits(b, self.limits.period_s)
+        v_back = backward_pass(b, vj)
+        if final:
+            c = n - 1
+        else:
+            moving = b.kind != KIND_DWELL
+            length = np.where(moving & ~b.angular, b.length, 0.0)
+            remaining = np.cumsum(length[::-1])[::-1]  # remaining[k]: blocks k..n-1
+            after = np.concatenate([remaining[1:], [0.0]])
+            lin = ~b.angular & moving
+            vmax = float(np.max(b.vmax[lin])) if np.any(lin) else 0.0
+            amin = float(np.min(b.accel[lin])) if np.any(lin) else 1.0
+            need = 1.5 * vmax * vmax / (2.0 * amin)
+            ok = np.nonzero(after >= need)[0]
+            c = int(ok[-1]) if ok.size else -1
+            stops = np.nonzero(vj[:-1] == 0.0)[0]
+            if stops.size:
+                c = max(c, int(stops[-1]))
+        if c < 0:
+            self.pending = b
+            return None
+        done = b.take(slice(0, c + 1))
+        v_out = forward_pass(done, v_back[: c + 1], self.v_start)
+        law = time_law(done, v_out, self.v_start)
+        self.v_start = float(v_out[-1])
+        self.pending = b.take(slice(c + 1, n))
+        return done, law
+
+
+class Pipeline:
+    """The compensation chain over a stream of motions, chunk by chunk.
+
+    Feed it lists of motions; it returns :class:`PointChunk` s as they become
+    final. State carried across chunks: the planner's pending blocks and speed,
+    the real-axis compensation state of every motor, the last point (for the
+    servo lead), the clock, and the counters of the work guard.
+    """
+
+    def __init__(self, profile: Profile, stages: Stages = Stages(),
+                 error_map: ErrorMap | None = None, *, start: Sequence[float] | None = None,
+                 collect: bool = False) -> None:
+        self.profile = profile
+        self.stages = stages
+        self.error_map = error_map if stages.error_map else None
+        self.start = np.asarray(profile.start if start is None else start, dtype=float)
+        self.collect = collect
+        self.limits = limits_of(profile)
+        self.planner = Planner(self.limits)
+        self.geo = geometry_of(profile, stages)
+        self.tables = axiscomp.profile_tables(profile) if stages.axis_comp else {}
+        self.states = {m: axiscomp.PlayState() for m in self.tables}
+        self.lag = (np.asarray(profile.effects.servo_lag_ms) / 1000.0
+                    if stages.axis_comp else np.zeros(5))
+        self.held: PointChunk | None = None  # points waiting for the servo lead
+        self.prev: tuple[np.ndarray, float] | None = None  # last released (P, t)
+        self.problems: list[PrsxyError] = []
+        self.t = 0.0
+        self.n_points = 0
+        self.started = False
+        self.any_motion = False
+
+    # -- problems
+    def _problem(self, errs: list[PrsxyError]) -> None:
+        if not errs:
+            return
+        if not self.collect:
+            raise sorted(errs, key=lambda e: e.line or 0)[0]
+        self.problems += errs
+
+    def feed(self, motions: Sequence[Motion], final: bool = False) -> list[PointChunk]:
+        self._problem(check_motions(motions, self.profile))
+        b = blocks_from_motions(motions, self.limits)
+        out: list[PointChunk] = []
+        if not self.started:
+            line0 = int(b.line[0]) if len(b) else (motions[0].line if motions else 0)
+            tl0 = float(b.tool_length[0]) if len(b) else 0.0
+            first = self._points(self.start[None, :], np.zeros(1), np.array([line0]),
+                                 np.array([False]), np.array([tl0]), np.zeros(1))
+            if first is not None:
+                out.append(first)
+            self.started = True
+        res = self.planner.push(b, final)
+        if res is not None:
+            done, law = res
+            if len(done):
+                self.any_motion = True
+            s = sample(done, law, self.limits.period_s)
+            self._guard(s.dt, s.line)
+            pc = self._points(s.q, s.dt, s.line, s.first, s.tool_length, s.speed)
+            if pc is not None:
+                out.append(pc)
+        if final:
+            if not self.any_motion:
+                raise LimitError("the program moves nothing", expected="at least one move "
+                                 "(G0, G1, G2, G3) or dwell")
+            tail = self._release(final=True)
+            if tail is not None:
+                out.append(tail)
+        return out
+
+    def finish(self) -> list[PointChunk]:
+        return self.feed([], final=True)
+
+    def _guard(self, dt: np.ndarray, line: np.ndarray) -> None:
+        """Refuse absurd work: more points or machining time than the profile allows."""
+        lim = self.profile.limits
+        n_after = self.n_points + np.arange(1, len(dt) + 1)
+        t_after = self.t + np.cumsum(dt)
+        over = np.nonzero((n_after > lim["max_points"]) | (t_after > lim["max_time_s"]))[0]
+        if over.size:
+            k = int(over[0])
+            raise LimitError(
+                f"the program would interpolate to more than {int(lim['max_points'])} points or "
+                f"run longer than {lim['max_time_s']:g} s (reached here)", line=int(line[k]),
+                expected="a shorter program, or larger limits.max_points / limits.max_time_s")
+
+    def _points(self, q: np.ndarray, dt: np.ndarray, line: np.ndarray, first: np.ndarray,
+                tool: np.ndarray, speed: np.ndarray) -> PointChunk | None:
+        # a running sum continued across chunks (not chunk offset + cumsum), so the
+        # clock is the same bit for bit however the program was cut
+        t = np.cumsum(np.concatenate([[self.t], dt]))[1:]
+        if len(t):
+            self.t = float(t[-1])
+        self.n_points += len(dt)
+        q_target = correct_virtual(q, self.error_map) if self.error_map is not None else q
+        ik = kinematics.inverse(self.geo, q_target, tool)
+        self._problem(check_pose_problems(self.profile, q, line, ik.reachable))
+        P_comp = ik.P.copy()
+        if np.all(ik.reachable):
+            for col, m in enumerate(MOTOR_ORDER):
+                if m in self.tables:
+                    P_comp[:, col] = axiscomp.compensate(self.tables[m], ik.P[:, col],
+                                                         self.states[m])
+        pc = PointChunk(q, dt, t, line, first, tool, speed, q_target, ik.P, P_comp)
+        self.held = pc if self.held is None else PointChunk.concat([self.held, pc])
+        return self._release(final=False)
+
+    def _release(self, final: bool) -> PointChunk | None:
+        """Points whose servo lead is final.
+
+        The lead c = M + τ v(M) uses the central-difference velocity, so a point
+        is final once the next one exists; the last point released is kept as
+        the previous point of the next chunk.
+        """
+        h = self.held
+        if h is None or len(h) == 0:
+            return None
+        lagging = bool(np.any(self.lag))
+        k = len(h) if (final or not lagging) else len(h) - 1
+        if k <= 0:
+            return None
+        ready = h.take(slice(0, k))
+        if lagging:
+            prev = self.prev
+            # neighbours of every ready point: the previous one (or itself at the
+            # start) and the next one (or itself at the end)
+            P_all = np.vstack([prev[0][None, :] if prev else h.P_cmd[:1], h.P_cmd])
+            t_all = np.concatenate([[prev[1]] if prev else h.t[:1], h.t])
+            if final:
+                P_all = np.vstack([P_all, h.P_cmd[-1:]])
+                t_all = np.concatenate([t_all, h.t[-1:]])
+            span = np.maximum(t_all[2:k + 2] - t_all[:k], 1e-9)
+            v = (P_all[2:k + 2] - P_all[:k]) / span[:, None]
+            if prev is None:
+                v[0] = 0.0
+            if final:
+                v[-1] = 0.0
+            self.prev = (h.P_cmd[k - 1].copy(), float(h.t[k - 1]))
+            ready.P_cmd = ready.P_cmd + self.lag[None, :] * v
+        self.held = None if k == len(h) else h.take(slice(k, len(h)))
+        self._problem(check_travel(self.profile, ready.P_cmd, ready.line))
+        return ready
+
+
+def check_pose_problems(profile: Profile, q: np.ndarray, line: np.ndarray,
+                        reachable: np.ndarray) -> list[PrsxyError]:
+    """Tilt beyond the limit and poses out of reach, one per G-code line and kind."""
     out: list[PrsxyError] = []
-    q = samples.q
     max_tilt = profile.limits["max_tilt_deg"]
     cos_tilt = np.cos(np.radians(q[:, 3])) * np.cos(np.radians(q[:, 4]))
     tilt = np.degrees(np.arccos(np.clip(cos_tilt, -1.0, 1.0)))
-    for i in _first_per_line(tilt > max_tilt + 1e-9, samples.line):
+    for i in _first_per_line(tilt > max_tilt + 1e-9, line):
         out.append(LimitError(
             f"tool axis tilted {tilt[i]:.3f}° at A{q[i, 3]:.4f} B{q[i, 4]:.4f}",
-            line=int(samples.line[i]), expected=f"at most {max_tilt:g}° (limits.max_tilt_deg)"))
-    for i in _first_per_line(~ik.reachable, samples.line):
+            line=int(line[i]), expected=f"at most {max_tilt:g}° (limits.max_tilt_deg)"))
+    for i in _first_per_line(~reachable, line):
         out.append(ReachError(
             "pose out of the machine's reach at X{:.4f} Y{:.4f} Z{:.4f} A{:.4f} B{:.4f}".format(
                 *q[i]),
-            line=int(samples.line[i]),
+            line=int(line[i]),
             expected="a pose the struts can reach (see the profile's [kinematics])"))
-    ok = ik.reachable
+    return out
+
+
+def check_travel(profile: Profile, P_cmd: np.ndarray, line: np.ndarray) -> list[PrsxyError]:
+    """Motors commanded beyond their travel, one per G-code line and motor."""
+    out: list[PrsxyError] = []
+    ok = np.all(np.isfinite(P_cmd), axis=1)
     for col, m in enumerate(MOTOR_ORDER):
         mc = profile.motor(m)
         p = P_cmd[:, col]
         bad = ok & ((p < mc.min - 1e-9) | (p > mc.max + 1e-9))
-        for i in _first_per_line(bad, samples.line):
+        for i in _first_per_line(bad, line):
             out.append(ReachError(
                 f"motor {m} ({mc.axis}) commanded to {p[i]:.4f} mm, beyond its travel",
-                line=int(samples.line[i]),
+                line=int(line[i]),
                 expected=f"{mc.min:g} to {mc.max:g} mm (motors[{m}].min/max)"))
     return out
 
 
 def run_chain(motions: Sequence[Motion], profile: Profile, stages: Stages = Stages(),
               error_map: ErrorMap | None = None, *, start: Sequence[float] | None = None,
-              collect: bool = False) -> ChainResult:
-    """Interpolate, correct, solve and compensate a program.
+              collect: bool = False, chunk: int = 0) -> ChainResult:
+    """Interpolate, correct, solve and compensate a whole program in memory.
 
     Parameters
     ----------
@@ -180,50 +427,25 @@ def run_chain(motions: Sequence[Motion], profile: Profile, stages: Stages = Stag
     start : (5,) start pose; default the profile's
     collect : bool
         Gather every problem in ``result.problems`` instead of raising the first.
+    chunk : feed the pipeline this many motions at a time (0: all at once); the
+        result is the same either way.
 
     Raises
     ------
     LimitError, ReachError
         Naming the G-code line (unless ``collect``).
     """
-    problems = check_motions(motions, profile)
-    if problems and not collect:
-        raise problems[0]
-    b, law, s = interpolate(motions, limits_of(profile))
-    st = np.asarray(profile.start if start is None else start, dtype=float)
-    if len(s) == 0:
-        raise LimitError("the program moves nothing",
-                         expected="at least one move (G0, G1, G2, G3) or dwell")
-    # Point 0 is the start pose: the program's first block starts from it.
-    first_line = int(s.line[0])
-    q0 = st[None, :]
-    samples = Samples(
-        q=np.vstack([q0, s.q]), dt=np.concatenate([[0.0], s.dt]),
-        line=np.concatenate([[first_line], s.line]), block=np.concatenate([[-1], s.block]),
-        first=np.concatenate([[False], s.first]),
-        tool_length=np.concatenate([[s.tool_length[0]], s.tool_length]),
-        speed=np.concatenate([[0.0], s.speed]),
-    )
-    q_target = samples.q
-    if stages.error_map and error_map is not None:
-        q_target = correct_virtual(samples.q, error_map)
-    geo = geometry_of(profile, stages)
-    ik = kinematics.inverse(geo, q_target, samples.tool_length)
-    P_ideal = ik.P
-    P_cmd = P_ideal.copy()
-    if stages.axis_comp and np.all(ik.reachable):
-        tables = axiscomp.profile_tables(profile)
-        for col, m in enumerate(MOTOR_ORDER):
-            if m in tables:
-                P_cmd[:, col] = axiscomp.compensate(tables[m], P_ideal[:, col])
-        if any(profile.effects.servo_lag_ms):
-            from .simulate import lagged
-
-            P_cmd = lagged(profile, P_cmd, np.cumsum(samples.dt), +1.0)
-    problems += check_points(profile, samples, ik, P_cmd)
-    if problems and not collect:
-        raise sorted(problems, key=lambda e: e.line or 0)[0]
-    return ChainResult(samples, b, law, q_target, P_ideal, P_cmd, geo, problems)
+    pipe = Pipeline(profile, stages, error_map, start=start, collect=collect)
+    parts: list[PointChunk] = []
+    step = chunk if chunk > 0 else max(len(motions), 1)
+    for i in range(0, len(motions), step):
+        parts += pipe.feed(motions[i:i + step])
+    parts += pipe.finish()
+    pc = PointChunk.concat(parts)
+    samples = Samples(q=pc.q, dt=pc.dt, line=pc.line, block=np.zeros(len(pc), dtype=int),
+                      first=pc.first, tool_length=pc.tool_length, speed=pc.speed)
+    return ChainResult(samples, pc.q_target, pc.P_ideal, pc.P_cmd, pipe.geo, pipe.problems,
+                       pc.t)
 
 
 def correct_virtual(q: np.ndarray, error_map: ErrorMap, iterations: int = 3) -> np.ndarray:

@@ -118,7 +118,7 @@ class Data:
         for r in runs:
             P = simulate.motion_commands(commanded, r.commanded, t=r.t)
             d.P_run.append(P)
-            v = np.gradient(P, r.t, axis=0) if len(r.t) > 1 else np.zeros_like(P)
+            v = simulate.servo_velocity(P, r.t)
             d.v_run.append(v)
             step = np.diff(P, axis=0, prepend=P[:1])
             sgn = np.sign(np.where(np.abs(step) > 1e-12, step, 0.0))

@@ -243,32 +243,42 @@ def junction_limits(b: Blocks, period_s: float) -> np.ndarray:
     return vj
 
 
-def plan_speeds(b: Blocks, vj: np.ndarray, v_start: float = 0.0) -> np.ndarray:
-    """Junction speeds after look-ahead: v_out[k] = speed at the end of block k.
+def backward_pass(b: Blocks, vj: np.ndarray) -> np.ndarray:
+    """v_out[k] ≤ sqrt(v_out[k+1]² + 2 a_{k+1} L_{k+1}): every block can slow down in time.
 
-    Backward pass: v_out[k] ≤ sqrt(v_out[k+1]² + 2 a_{k+1} L_{k+1}) so the next
-    block can always slow down in time; forward pass: v_out[k] ≤
-    sqrt(v_out[k−1]² + 2 a_k L_k) so it can speed up in time.
+    A plain loop over Python floats: its arithmetic does not depend on where a
+    stream was cut, which keeps streamed output identical to one-shot output.
     """
     n = len(b)
-    v = vj.astype(float).copy()
-    two_al = 2.0 * b.accel * b.length
-    two_al[b.kind == KIND_DWELL] = 0.0
-    # backward
-    nxt = 0.0 if n == 0 else v[-1]
+    v = vj.tolist()
+    two_al = np.where(b.kind == KIND_DWELL, 0.0, 2.0 * b.accel * b.length).tolist()
+    sqrt = math.sqrt
+    nxt = v[-1] if n else 0.0
     for k in range(n - 2, -1, -1):
-        lim = math.sqrt(nxt * nxt + two_al[k + 1])
+        lim = sqrt(nxt * nxt + two_al[k + 1])
         if v[k] > lim:
             v[k] = lim
         nxt = v[k]
-    # forward
+    return np.array(v, dtype=float)
+
+
+def forward_pass(b: Blocks, v_back: np.ndarray, v_start: float = 0.0) -> np.ndarray:
+    """v_out[k] ≤ sqrt(v_out[k−1]² + 2 a_k L_k): every block can speed up in time."""
+    v = v_back.tolist()
+    two_al = np.where(b.kind == KIND_DWELL, 0.0, 2.0 * b.accel * b.length).tolist()
+    sqrt = math.sqrt
     prev = v_start
-    for k in range(n):
-        lim = math.sqrt(prev * prev + two_al[k])
+    for k in range(len(v)):
+        lim = sqrt(prev * prev + two_al[k])
         if v[k] > lim:
             v[k] = lim
         prev = v[k]
-    return v
+    return np.array(v, dtype=float)
+
+
+def plan_speeds(b: Blocks, vj: np.ndarray, v_start: float = 0.0) -> np.ndarray:
+    """Junction speeds after look-ahead: v_out[k] = speed at the end of block k."""
+    return forward_pass(b, backward_pass(b, vj), v_start)
 
 
 @dataclass(frozen=True)

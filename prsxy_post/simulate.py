@@ -23,21 +23,45 @@ def truth_geometry(truth: Profile) -> kinematics.Geometry:
                                               truth.effects)
 
 
-def lagged(profile: Profile, P: np.ndarray, t: np.ndarray | None, sign: float = -1.0
-           ) -> np.ndarray:
-    """Motor positions shifted in time by each motor's servo lag.
+def servo_velocity(P: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Central-difference velocity (P_{k+1} − P_{k−1}) / (t_{k+1} − t_{k−1}); 0 at both ends."""
+    v = np.zeros_like(P)
+    if len(P) > 2:
+        span = np.maximum(t[2:] - t[:-2], 1e-9)
+        v[1:-1] = (P[2:] - P[:-2]) / span[:, None]
+    return v
 
-    sign = −1: where a lagging motor is at time t, P(t − lag) (the machine);
-    sign = +1: the command that makes it be at P(t), P(t + lag) (compensation).
-    Positions are linear between points, as the interpolation points are.
-    """
+
+def servo_lead(profile: Profile, M: np.ndarray, t: np.ndarray | None) -> np.ndarray:
+    """Commands that make lagging motors reach M: c = M + τ · v(M) (exact inverse of
+    :func:`servo_follow`). τ from ``effects.servo_lag_ms``."""
     lag = np.asarray(profile.effects.servo_lag_ms) / 1000.0
     if t is None or not np.any(lag):
-        return P
-    out = P.copy()
+        return M
+    return M + lag[None, :] * servo_velocity(M, t)
+
+
+def servo_follow(profile: Profile, c: np.ndarray, t: np.ndarray | None) -> np.ndarray:
+    """Where motors with a servo lag τ are for commands c: the following error is
+    τ times the motor's velocity, m = c − τ · v(m) (the velocity as central
+    differences over the points, zero at the ends). Solved as a banded system."""
+    from scipy.linalg import solve_banded
+
+    lag = np.asarray(profile.effects.servo_lag_ms) / 1000.0
+    if t is None or not np.any(lag) or len(c) < 3:
+        return c
+    out = c.copy()
+    n = len(c)
+    span = np.maximum(t[2:] - t[:-2], 1e-9)
     for col in range(5):
-        if lag[col]:
-            out[:, col] = np.interp(t + sign * lag[col], t, P[:, col])
+        if not lag[col]:
+            continue
+        a = lag[col] / span  # rows 1..n-2: −a m_{k−1} + m_k + a m_{k+1} = c_k
+        ab = np.zeros((3, n))
+        ab[1] = 1.0
+        ab[0, 2:] = a  # super-diagonal of row k at column k+1
+        ab[2, :-2] = -a  # sub-diagonal of row k at column k−1
+        out[:, col] = solve_banded((1, 1), ab, c[:, col])
     return out
 
 
@@ -51,7 +75,7 @@ def actual_motors(truth: Profile, P_cmd: np.ndarray, *, approach: int | None = N
     """
     tables = axiscomp.profile_tables(truth)
     if approach is None:
-        P_cmd = lagged(truth, P_cmd, t, -1.0)
+        P_cmd = servo_follow(truth, P_cmd, t)
     out = np.array(P_cmd, dtype=float, copy=True)
     for col, m in enumerate(MOTOR_ORDER):
         t = tables.get(m)
@@ -196,7 +220,7 @@ def motion_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0,
     for col, m in enumerate(MOTOR_ORDER):
         if m in tables:
             P[:, col] = axiscomp.compensate(tables[m], P[:, col])
-    return lagged(commanded, P, t, +1.0)
+    return servo_lead(commanded, P, t)
 
 
 def measure_poses(truth: Profile, commanded: Profile, q: np.ndarray, rng: np.random.Generator,
