@@ -7,12 +7,13 @@ rerun with ``--debug`` for the traceback and report it).
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import os
 import sys
 import tempfile
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -206,54 +207,165 @@ class ConvertJob:
     program: str
     profile_path: str
     fmt: str
-    outputs: tuple[str, ...]  # one path, or "-" for stdout; parts get .partN
+    output: str  # a path, or "-" for standard output; parts get .partN before the suffix
     start: tuple[float, ...] | None
     stages: tuple[bool, bool, bool]
     options: str
+    progress: bool = False
+    chunk: int = 4096
 
 
-def _convert_one(job: ConvertJob) -> dict[str, str]:
-    """Convert one program; returns {output path: text}. Pure but for reading inputs."""
-    from . import chain, errormap, gcode, kinematics, writers
+def inspect_source(path: str) -> str:
+    """sha256 of a program file, refusing binary files (a NUL byte) with its line."""
+    h = hashlib.sha256()
+    line = 1
+    try:
+        with open(path, "rb") as fh:
+            while block := fh.read(1 << 20):
+                if b"\0" in block:
+                    line += block[: block.index(b"\0")].count(b"\n")
+                    raise PrsxyError("binary data (a NUL byte) in the G-code program",
+                                     source=path, line=line, expected="a text file")
+                line += block.count(b"\n")
+                h.update(block)
+    except OSError as exc:
+        raise PrsxyError(f"cannot read G-code program: {exc.strerror}", source=path,
+                         expected="a readable file") from None
+    return h.hexdigest()
+
+
+def iter_program_lines(path: str, progress: Callable[[int], None] | None = None
+                       ) -> Iterator[str]:
+    """The program's lines without their ends (CR, LF or CRLF), read as a stream.
+
+    Bytes that are not UTF-8 become lone surrogates: harmless in comments, and
+    rejected by the parser anywhere else.
+    """
+    with open(path, encoding="utf-8", errors="surrogateescape", newline="") as fh:
+        if fh.read(1) != "\ufeff":
+            fh.seek(0)
+        n = 0
+        for raw in fh:
+            n += 1
+            if progress is not None and n % 20000 == 0:
+                progress(fh.buffer.tell() if hasattr(fh, "buffer") else 0)
+            yield raw.rstrip("\r\n")
+
+
+class _Progress:
+    """A one-line progress display on a terminal's stderr."""
+
+    def __init__(self, name: str, total: int) -> None:
+        self.name = name
+        self.total = max(total, 1)
+
+    def __call__(self, done: int) -> None:
+        pct = min(100.0, 100.0 * done / self.total)
+        sys.stderr.write(f"\r{self.name}: {pct:5.1f}%")
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        sys.stderr.write(f"\r{self.name}: done  \n")
+
+
+def _part_path(out: str, part: int, nparts_hint: bool) -> str:
+    if not nparts_hint:
+        return out
+    base, ext = os.path.splitext(out)
+    return f"{base}.part{part + 1}{ext}"
+
+
+def _convert_one(job: ConvertJob) -> list[str]:
+    """Convert one program, streaming, into its output file(s); returns the paths written.
+
+    Outputs go to temp files beside the targets and are renamed only when the
+    whole conversion succeeded; on any error the temp files are removed.
+    """
+    from . import chain, errormap, gcode, writers
 
     prof = load_profile(job.profile_path)
-    text = read_text(job.program, "G-code program")
+    sha = inspect_source(job.program) if job.program != "-" else ""
     cfg = chain.interpreter_config(prof, job.start)
+    stages = chain.Stages(*job.stages)
+    emap = errormap.from_profile(prof) if stages.error_map else None
+    prov = writers.Provenance(
+        source=job.program, source_sha256=sha, profile_name=prof.name,
+        profile_source=job.profile_path, profile_sha256=sha256_of(job.profile_path),
+        options=job.options)
+    writer: writers.PmacWriter | writers.GcodeWriter
+    if job.fmt == "pmac":
+        writer = writers.PmacWriter(prof, prov)
+        split = writer.max_pts > 0
+    else:
+        writer = writers.GcodeWriter(prof, prov, float(prof.output["gcode_tolerance_mm"]))
+        split = False
+    bar = None
+    if job.progress and job.program != "-":
+        bar = _Progress(job.program, os.path.getsize(job.program))
+    sinks: dict[int, Any] = {}
+    temps: dict[int, str] = {}
+    memory: dict[int, list[str]] = {}
+
+    def emit(pieces: list[tuple[int, str]]) -> None:
+        for part, text in pieces:
+            if job.output == "-":
+                memory.setdefault(part, []).append(text)
+                continue
+            if part not in sinks:
+                target = Path(_part_path(job.output, part, split))
+                target.parent.mkdir(parents=True, exist_ok=True)
+                fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp",
+                                           dir=target.parent)
+                temps[part] = tmp
+                sinks[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
+            sinks[part].write(text)
+
     try:
-        motions = list(gcode.iter_motions(gcode.split_lines(text), cfg, job.program))
-        stages = chain.Stages(*job.stages)
-        emap = errormap.from_profile(prof) if stages.error_map else None
-        result = chain.run_chain(motions, prof, stages, emap, start=job.start)
+        lines = (iter_program_lines(job.program, bar) if job.program != "-"
+                 else iter(gcode.split_lines(read_text("-", "G-code program"))))
+        motions = gcode.iter_motions(lines, cfg, job.program)
+        pipe = chain.Pipeline(prof, stages, emap, start=job.start)
+        emit(writer.begin())
+        while True:
+            batch = list(itertools.islice(motions, job.chunk))
+            for pc in pipe.feed(batch):
+                emit(writer.feed(pc))
+            if len(batch) < job.chunk:
+                break
+        tail = pipe.finish()
+        for pc in tail[:-1]:
+            emit(writer.feed(pc))
+        emit(writer.finish(tail[-1] if tail else None))
+        for fh in sinks.values():
+            fh.flush()
+            os.fsync(fh.fileno())
+            fh.close()
+        written = []
+        for part in sorted(temps):
+            target = _part_path(job.output, part, split)
+            os.replace(temps[part], target)
+            written.append(target)
+        if job.output == "-":
+            sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))
+            written = ["-"]
+        return written
     except PrsxyError as err:
         raise err.located(source=job.program) from None
-    prov = writers.Provenance(
-        source=job.program, source_sha256=hashlib.sha256(text.encode()).hexdigest(),
-        profile_name=prof.name, profile_source=job.profile_path,
-        profile_sha256=sha256_of(job.profile_path), options=job.options)
-    out = job.outputs[0]
-    if job.fmt == "pmac":
-        texts = writers.write_pmac(result, prof, prov)
-        if len(texts) == 1:
-            return {out: texts[0]}
-        if out == "-":
-            return {"-": "".join(texts)}
-        base, ext = os.path.splitext(out)
-        return {f"{base}.part{i + 1}{ext}": t for i, t in enumerate(texts)}
-    cgeo = chain.controller_geometry(prof)
-    guess = kinematics.platform_guess(
-        kinematics.solve_platform(cgeo, result.q_target), result.q_target)
-    q_written, ok = kinematics.forward(cgeo, result.P_cmd, guess=guess)
-    if not np.all(ok):
-        bad = int(np.argmin(ok))
-        raise PrsxyError(
-            "the controller's kinematics cannot express this point",
-            source=job.program, line=int(result.samples.line[bad]),
-            expected="a pose within reach of [controller_kinematics]")
-    return {out: writers.write_gcode(result, q_written, prof, prov,
-                                     float(prof.output["gcode_tolerance_mm"]))}
+    except OSError as exc:
+        raise PrsxyError(f"cannot write output: {exc.strerror}", source=job.output,
+                         expected="a writable location") from None
+    finally:
+        if bar is not None:
+            bar.close()
+        for fh in sinks.values():
+            if not fh.closed:
+                fh.close()
+        for tmp in temps.values():
+            if os.path.exists(tmp):
+                os.unlink(tmp)
 
 
-def _run_job(job: ConvertJob) -> tuple[dict[str, str] | None, str | None, int]:
+def _run_job(job: ConvertJob) -> tuple[list[str] | None, str | None, int]:
     try:
         return _convert_one(job), None, 0
     except PrsxyError as err:
@@ -304,13 +416,15 @@ def convert(programs: Sequence[str], profile_path: str, fmt: str, output: str | 
     if start:
         opts.append(f"--start {start}")
     ext = ".pmc" if fmt == "pmac" else ".ngc"
+    show_progress = not quiet and sys.stderr.isatty() and jobs == 1
     jobs_list = []
     for prog in programs:
         if out_dir:
             out = str(Path(out_dir) / (Path(prog).stem + ext))
         else:
             out = output or "-"
-        jobs_list.append(ConvertJob(prog, profile_path, fmt, (out,), st, stages, " ".join(opts)))
+        jobs_list.append(ConvertJob(prog, profile_path, fmt, out, st, stages, " ".join(opts),
+                                    progress=show_progress))
     if jobs > 1 and len(jobs_list) > 1:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
             results = list(pool.map(_run_job, jobs_list))
@@ -322,13 +436,8 @@ def convert(programs: Sequence[str], profile_path: str, fmt: str, output: str | 
             click.echo(err, err=True)
             worst = max(worst, code)
             continue
-        assert files is not None
-        if "-" in files:
-            sys.stdout.write(files["-"])
-            continue
-        write_atomic({Path(p): t for p, t in files.items()})
-        if not quiet:
-            click.echo(f"{job.program} -> {', '.join(files)}", err=True)
+        if not quiet and files != ["-"]:
+            click.echo(f"{job.program} -> {', '.join(files or [])}", err=True)
     if worst:
         sys.exit(worst)
 

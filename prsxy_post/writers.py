@@ -1,6 +1,9 @@
 """Output writers: Turbo PMAC motion programs and corrected Cartesian G-code.
 
-Both take the chain's arrays and return text; they never touch files.
+Both are streaming: ``begin()``, then ``feed(chunk)`` for every
+:class:`~prsxy_post.chain.PointChunk` in order, then ``finish()``. Each returns
+text pieces tagged with the output part they belong to; the caller (the CLI)
+decides where they go. Nothing here touches files.
 
 PMAC output uses PVT mode: each line gives every motor's end position and end
 velocity, and Turbo PMAC computes the unique cubic between consecutive points
@@ -17,12 +20,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import __version__
-from .chain import MOTOR_ORDER, ChainResult
+from . import __version__, kinematics
+from .chain import MOTOR_ORDER, ChainResult, PointChunk
 from .profile import Profile
 
 #: PVT segment times are limited to 4095.9998 ms with I42 = 0; longer stays are DWELLs.
 PVT_MAX_MS = 4095.0
+
+Piece = tuple[int, str]  # (output part, text)
 
 
 @dataclass(frozen=True)
@@ -37,217 +42,309 @@ class Provenance:
     options: str
 
 
-def _fmt(x: np.ndarray, decimals: int) -> np.ndarray:
+def _round(x: np.ndarray, decimals: int) -> np.ndarray:
     """Round and clear negative zeros so equal values print equal bytes."""
     return np.round(x, decimals) + 0.0
 
 
-def motor_velocities(P: np.ndarray, dt: np.ndarray, speed: np.ndarray) -> np.ndarray:
-    """End velocities for PVT [mm/s]: central differences over the two segments.
-
-    v_k = (P_{k+1} − P_{k−1}) / (dt_k + dt_{k+1}); zero where the path stands
-    (planned speed 0: start, stops, dwells, the end).
-    """
-    n = len(P)
-    v = np.zeros_like(P)
-    if n >= 3:
-        span = dt[1:-1] + dt[2:]
-        v[1:-1] = (P[2:] - P[:-2]) / span[:, None]
-    v[speed <= 0] = 0.0
-    v[-1] = 0.0
-    return v
-
-
-def _header_lines(prov: Provenance, profile: Profile, result: ChainResult,
-                  extra: Sequence[str]) -> list[str]:
-    s = result.samples
-    total = float(np.sum(s.dt))
-    lines = [
+def _header(prov: Provenance, profile: Profile, extra: Sequence[str]) -> list[str]:
+    return [
         f"prsxy-post {__version__}",
         f"source: {prov.source}",
         f"source sha256: {prov.source_sha256}",
         f"profile: {prov.profile_name} ({prov.profile_source})",
         f"profile sha256: {prov.profile_sha256}",
         f"options: {prov.options}",
-        f"points: {len(s)}; period: {profile.period_ms:g} ms; duration: {total:.3f} s",
+        f"interpolation period: {profile.period_ms:g} ms",
         *extra,
     ]
-    return lines
 
 
-def write_pmac(result: ChainResult, profile: Profile, prov: Provenance,
-               parts: int | None = None) -> list[str]:
-    """A Turbo PMAC motion program (one text per part).
+def _empty_chunk() -> PointChunk:
+    return PointChunk(*(np.zeros((0, 5)) if f in ("q", "q_target", "P_ideal", "P_cmd")
+                        else np.zeros(0, dtype=bool) if f == "first" else np.zeros(0)
+                        for f in PointChunk.__dataclass_fields__))
 
-    Parameters
-    ----------
-    result : ChainResult
-    profile : Profile (motor names, counts per mm, coordinate system, program number)
-    prov : Provenance
-    parts : split into programs of at most ``output.max_points_per_program``
-        points when that is > 0; ``output.rotary_buffer_points`` > 0 writes for a
-        rotary buffer instead (one text).
 
-    Returns
-    -------
-    list of str, one per program.
+class _Lookahead:
+    """Holds one point back: a point's velocity needs the next point."""
+
+    def __init__(self) -> None:
+        self.buf: PointChunk | None = None
+        self.prev: tuple[np.ndarray, float] | None = None  # (P, dt) of the last point out
+
+    def push(self, chunk: PointChunk, final: bool
+             ) -> tuple[PointChunk, np.ndarray, np.ndarray] | None:
+        """Points now complete, their PVT velocities, and whether each ends its block."""
+        buf = chunk if self.buf is None else PointChunk.concat([self.buf, chunk])
+        n = len(buf)
+        k = n if final else n - 1
+        if k <= 0:
+            self.buf = buf
+            return None
+        P = buf.P_cmd
+        dt = buf.dt
+        # neighbours: previous point (carried) and next point (buffered)
+        P_prev = np.vstack([self.prev[0][None, :] if self.prev else P[:1], P[:-1]])
+        P_next = np.vstack([P[1:], P[-1:]])
+        dt_next = np.concatenate([dt[1:], [0.0]])
+        span = dt[:k] + dt_next[:k]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            v = np.where(span[:, None] > 0, (P_next[:k] - P_prev[:k]) / span[:, None], 0.0)
+        v[buf.speed[:k] <= 0] = 0.0  # the path stands here: start, stops, dwells
+        if self.prev is None:
+            v[0] = 0.0
+        if final:
+            v[-1] = 0.0
+        ends = np.concatenate([buf.first[1:], [True]])[:k]
+        self.prev = (P[k - 1].copy(), float(dt[k - 1]))
+        self.buf = None if k == n else buf.take(slice(k, n))
+        return buf.take(slice(0, k)), v, ends
+
+
+class PmacWriter:
+    """A Turbo PMAC PVT motion program, streamed.
+
+    Long jobs: ``output.max_points_per_program`` > 0 splits the points into
+    programs PROG n, n+1, ... (parts, each a file, run in order);
+    ``output.rotary_buffer_points`` > 0 writes for a rotary buffer instead.
     """
-    out = profile.output
-    dec = int(out["decimals"])
-    cs = int(out["coordinate_system"])
-    prog = int(out["program"])
-    s = result.samples
-    P = _fmt(result.P_cmd, dec)
-    V = _fmt(motor_velocities(result.P_cmd, s.dt, s.speed), 4)
-    names = [profile.motor(m).axis for m in MOTOR_ORDER]
-    motors_txt = " ".join(str(m) for m in MOTOR_ORDER)
-    setup = [
-        "Controller settings that must be OFF on motors " + motors_txt + ", or the errors",
-        "are compensated twice: leadscrew compensation tables (DEFINE COMP; Ixx51 = 0),",
-        "backlash (Ixx86 = 0, Ixx85 = 0), and any kinematic subroutines in this",
-        "coordinate system (Isx50 = 0): motors are commanded directly.",
-        "PVT velocities are in mm/s: Isx90 = 1000. Motor positions in mm (#n->counts/mm).",
-        "Spindle, coolant and tool changes are not in this program.",
-    ]
-    head = ["; " + x for x in _header_lines(prov, profile, result, setup)]
-    defs = [f"#{m}->{profile.motor(m).counts_per_mm:g}{profile.motor(m).axis}"
-            for m in MOTOR_ORDER]
-    rot = int(out["rotary_buffer_points"])
-    max_pts = int(out["max_points_per_program"])
-    n = len(s)
-    if rot > 0:
-        bounds = [(0, n)]
-    elif max_pts > 0:
-        bounds = [(i, min(i + max_pts, n)) for i in range(0, n, max_pts)]
-    else:
-        bounds = [(0, n)]
-    texts = []
-    for part, (i0, i1) in enumerate(bounds):
-        body: list[str] = []
-        body += head
-        if len(bounds) > 1:
-            body.append(f"; part {part + 1} of {len(bounds)}: points {i0} to {i1 - 1}; run the "
-                        "parts in order (each starts where the previous ended)")
-        body.append("CLOSE")
-        body.append(f"&{cs}")
-        body += defs
-        if rot > 0:
-            body.append(f"DEFINE ROT {rot}")
-            body.append("; stream the lines below into the rotary buffer (B0 R), "
-                        f"keeping at most {rot} points ahead")
-            body.append("OPEN ROT")
+
+    def __init__(self, profile: Profile, prov: Provenance) -> None:
+        self.profile = profile
+        self.prov = prov
+        out = profile.output
+        self.dec = int(out["decimals"])
+        self.cs = int(out["coordinate_system"])
+        self.prog = int(out["program"])
+        self.rot = int(out["rotary_buffer_points"])
+        self.max_pts = 0 if self.rot else int(out["max_points_per_program"])
+        self.names = [profile.motor(m).axis for m in MOTOR_ORDER]
+        self.look = _Lookahead()
+        self.part = 0
+        self.in_part = 0  # points written in the current part
+        self.n = 0  # points written in all
+        self.t_total = 0.0
+        self.tm_cur: str | None = None
+        self.last_line: int | None = None
+        self.last_P: np.ndarray | None = None
+        d = self.dec
+        self.row_fmt = " ".join(f"{a}%.{d}f:%.4f" for a in self.names)
+        self.pos_fmt = " ".join(f"{a}%.{d}f" for a in self.names)
+
+    def _open_part(self, P0: np.ndarray) -> list[str]:
+        motors = " ".join(str(m) for m in MOTOR_ORDER)
+        setup = [
+            "Controller settings that must be OFF on motors " + motors + ", or the errors",
+            "are compensated twice: leadscrew compensation tables (DEFINE COMP; Ixx51 = 0),",
+            "backlash (Ixx86 = 0, Ixx85 = 0), and any kinematic subroutines in this",
+            "coordinate system (Isx50 = 0): motors are commanded directly.",
+            "PVT velocities are in mm/s: Isx90 = 1000. Motor positions in mm (#n->counts/mm).",
+            "Spindle, coolant and tool changes are not in this program.",
+        ]
+        lines = ["; " + x for x in _header(self.prov, self.profile, setup)]
+        if self.max_pts:
+            lines.append(f"; part {self.part + 1}: run the parts in order; each starts where "
+                         "the previous one ended")
+        lines += ["CLOSE", f"&{self.cs}"]
+        lines += [f"#{m}->{self.profile.motor(m).counts_per_mm:g}{self.profile.motor(m).axis}"
+                  for m in MOTOR_ORDER]
+        if self.rot:
+            lines += [f"DEFINE ROT {self.rot}",
+                      f"; stream the lines below into the rotary buffer (B0 R), at most "
+                      f"{self.rot} points ahead", "OPEN ROT"]
         else:
-            body.append(f"OPEN PROG {prog + part} CLEAR")
-        body.append("ABS")
-        start = P[i0]
-        body.append("RAPID " + " ".join(f"{a}{x:.{dec}f}" for a, x in zip(names, start,
-                                                                            strict=True)))
-        body.append("DWELL0")
-        tm_cur = None
-        last_line = None
-        for k in range(max(i0, 1), i1):
-            if s.first[k] or s.line[k] != last_line:
-                body.append(f"; line {int(s.line[k])}")
-                last_line = s.line[k]
-            ms = float(s.dt[k] * 1000.0)
-            pos = P[k]
-            if np.array_equal(pos, P[k - 1]) and s.speed[k] == 0 and ms > 0:
-                # the path stands (dwell): a DWELL keeps it there for any length
-                body.append(f"DWELL{ms:.4f}")
-                continue
-            if ms > PVT_MAX_MS:
-                raise AssertionError("segment longer than PVT allows")  # period <= 1000 ms
-            ms_txt = f"{ms:.4f}"
-            if ms_txt != tm_cur:
-                body.append(f"PVT{ms_txt}")
-                tm_cur = ms_txt
-            vel = V[k] if k < i1 - 1 else np.zeros(5)
-            body.append(" ".join(f"{a}{x:.{dec}f}:{v:.4f}" for a, x, v in zip(
-                names, pos, vel, strict=True)))
-        body.append("CLOSE")
-        texts.append("\n".join(body) + "\n")
-    return texts
+            lines.append(f"OPEN PROG {self.prog + self.part} CLEAR")
+        lines += ["ABS", "RAPID " + self.pos_fmt % tuple(_round(P0, self.dec)), "DWELL0"]
+        self.tm_cur = None
+        self.last_line = None
+        return lines
+
+    def begin(self) -> list[Piece]:
+        return []
+
+    def feed(self, chunk: PointChunk, final: bool = False) -> list[Piece]:
+        got = self.look.push(chunk, final)
+        if got is None:
+            return []
+        pts, vel, _ = got
+        P = _round(pts.P_cmd, self.dec)
+        V = _round(vel, 4)
+        pieces: list[Piece] = []
+        lines: list[str] = []
+        for k in range(len(pts)):
+            if self.n == 0 or (self.max_pts and self.in_part >= self.max_pts):
+                if lines:
+                    pieces.append((self.part, "\n".join(lines) + "\n"))
+                    lines = []
+                if self.n:
+                    pieces.append((self.part, "CLOSE\n"))
+                    self.part += 1
+                    self.in_part = 0
+                lines += self._open_part(P[k])
+                if self.n == 0:
+                    self.n = 1
+                    self.in_part = 1
+                    self.last_P = P[k]
+                    continue
+            if pts.line[k] != self.last_line:
+                lines.append(f"; line {int(pts.line[k])}")
+                self.last_line = int(pts.line[k])
+            ms = float(pts.dt[k] * 1000.0)
+            self.t_total += float(pts.dt[k])
+            if (self.last_P is not None and np.array_equal(P[k], self.last_P)
+                    and pts.speed[k] == 0 and ms > 0):
+                # the path stands (dwell): a DWELL holds it for any length
+                lines.append(f"DWELL{ms:.4f}")
+            else:
+                ms_txt = f"{ms:.4f}"
+                if ms_txt != self.tm_cur:
+                    lines.append(f"PVT{ms_txt}")
+                    self.tm_cur = ms_txt
+                lines.append(self.row_fmt % tuple(np.column_stack([P[k], V[k]]).ravel()))
+            self.last_P = P[k]
+            self.n += 1
+            self.in_part += 1
+        if lines:
+            pieces.append((self.part, "\n".join(lines) + "\n"))
+        return pieces
+
+    def finish(self, chunk: PointChunk | None = None) -> list[Piece]:
+        pieces = self.feed(chunk if chunk is not None else _empty_chunk(), final=True)
+        pieces.append((self.part, f"; end: {self.n} points, {self.t_total:.3f} s\nCLOSE\n"))
+        return pieces
 
 
-def write_gcode(result: ChainResult, q_written: np.ndarray, profile: Profile,
-                prov: Provenance, tolerance_mm: float = 0.0) -> str:
+class GcodeWriter:
     """Corrected Cartesian G-code for a controller running [controller_kinematics].
 
     Each point is FK_controller(final motor commands), so the controller's own
     inverse kinematics reproduces the compensated motor commands. Timing is kept
-    with G93 inverse time: F = 1 / (segment minutes).
-
-    Parameters
-    ----------
-    q_written : (N, 5) the points to write [mm, deg], controller workpiece frame
-    tolerance_mm : drop points while the chord through the kept ones stays within
-        this distance (in XYZ, and in A/B read as mm at 1 mm = 1°); 0 keeps every point.
+    with G93 inverse time: F = 1 / (segment minutes). With a tolerance > 0,
+    points are dropped while the chord from the last written point stays within
+    it of every point in between (XYZ in mm, A/B read as mm at 1 mm per degree);
+    a block's end point and every stop are always written.
     """
-    dec = int(profile.output["decimals"])
-    s = result.samples
-    keep = _reduce(q_written, s, tolerance_mm)
-    ck = "profile [controller_kinematics]" if profile.controller_kinematics else \
-        "the nominal design"
-    extra = [
-        f"For a controller whose inverse kinematics is {ck}, with an ideal table.",
-        "Run with no tool length offset (G49) and no work offset: tool lengths and",
-        "offsets are in the points. Timing is G93 inverse time per segment.",
-    ]
-    lines = ["%"]
-    # G-code comments cannot nest parentheses
-    lines += ["(" + x.replace("(", "[").replace(")", "]") + ")"
-              for x in _header_lines(prov, profile, result, extra)]
-    lines.append("G21 G90 G17 G40 G49 G94")
-    q = _fmt(q_written, dec)
-    ax = "XYZAB"
-    lines.append("G0 " + " ".join(f"{a}{x:.{dec}f}" for a, x in zip(ax, q[0], strict=True)))
-    lines.append("G93")
-    last_line = None
-    t_acc = 0.0
-    for k in range(1, len(s)):
-        t_acc += float(s.dt[k])
-        if s.first[k] and s.line[k] != last_line:
-            lines.append(f"(line {int(s.line[k])})")
-            last_line = s.line[k]
-        if not keep[k]:
-            continue
-        if np.array_equal(q[k], q[k - 1]) and s.speed[k] == 0:
-            lines.append(f"G4 P{t_acc:.4f}")
-        else:
-            f = 1.0 / (t_acc / 60.0)
-            lines.append("G1 " + " ".join(f"{a}{x:.{dec}f}" for a, x in zip(ax, q[k],
-                                                                           strict=True))
-                         + f" F{f:.3f}")
-        t_acc = 0.0
-    lines.append("G94")
-    lines.append("M2")
-    lines.append("%")
-    return "\n".join(lines) + "\n"
 
+    def __init__(self, profile: Profile, prov: Provenance, tolerance_mm: float = 0.0) -> None:
+        from .chain import controller_geometry
 
-def _reduce(q: np.ndarray, s, tol: float) -> np.ndarray:
-    """Points to keep: all when tol = 0; else a greedy chord test within each block."""
-    n = len(q)
-    keep = np.ones(n, dtype=bool)
-    if tol <= 0 or n < 3:
-        return keep
-    anchor = 0
-    for k in range(1, n - 1):
-        # never drop a block's end point (next point starts a new block) or a stop
-        if s.first[k + 1] or s.speed[k] == 0:
-            anchor = k
-            continue
-        seg = q[anchor:k + 2]
-        a, b = seg[0], seg[-1]
-        d = b - a
+        self.profile = profile
+        self.prov = prov
+        self.tol = tolerance_mm
+        self.dec = int(profile.output["decimals"])
+        self.cgeo = controller_geometry(profile)
+        self.n = 0
+        self.t_acc = 0.0
+        self.t_total = 0.0
+        self.last_line: int | None = None
+        self.last_q: np.ndarray | None = None
+        self.run: list[np.ndarray] = []  # points since the last written one
+        self.look = _Lookahead()
+        self.fmt = " ".join(f"{a}%.{self.dec}f" for a in "XYZAB")
+
+    def begin(self) -> list[Piece]:
+        ck = ("profile [controller_kinematics]" if self.profile.controller_kinematics
+              else "the nominal design")
+        extra = [f"For a controller whose inverse kinematics is {ck}, with an ideal table.",
+                 "Run with no tool length offset (G49) and no work offset: tool lengths and",
+                 "offsets are in the points. Timing is G93 inverse time per segment."]
+        lines = ["%"] + ["(" + x.replace("(", "[").replace(")", "]") + ")"
+                         for x in _header(self.prov, self.profile, extra)]
+        lines.append("G21 G90 G17 G40 G49 G94")
+        return [(0, "\n".join(lines) + "\n")]
+
+    def written_points(self, chunk: PointChunk) -> np.ndarray:
+        """FK of the controller's geometry at the motor commands, warm-started."""
+        from .errors import ReachError
+
+        guess = kinematics.platform_guess(kinematics.solve_platform(self.cgeo, chunk.q_target),
+                                          chunk.q_target)
+        q, ok = kinematics.forward(self.cgeo, chunk.P_cmd, guess=guess)
+        if not np.all(ok):
+            k = int(np.argmin(ok))
+            raise ReachError("the controller's kinematics cannot express this point",
+                             line=int(chunk.line[k]),
+                             expected="a pose within reach of [controller_kinematics]")
+        return q
+
+    def feed(self, chunk: PointChunk, final: bool = False) -> list[Piece]:
+        got = self.look.push(chunk, final)
+        if got is None:
+            return []
+        chunk, _, ends = got
+        q = _round(self.written_points(chunk), self.dec)
+        lines: list[str] = []
+        for k in range(len(chunk)):
+            qk = q[k]
+            if self.n == 0:
+                lines.append("G0 " + self.fmt % tuple(qk))
+                lines.append("G93")
+                self.last_q = qk
+                self.n = 1
+                continue
+            if chunk.line[k] != self.last_line:
+                lines.append(f"(line {int(chunk.line[k])})")
+                self.last_line = int(chunk.line[k])
+            self.t_acc += float(chunk.dt[k])
+            self.t_total += float(chunk.dt[k])
+            standing = self.last_q is not None and np.array_equal(qk, self.last_q) \
+                and chunk.speed[k] == 0
+            if standing:
+                lines.append(f"G4 P{self.t_acc:.4f}")
+                self.t_acc = 0.0
+                self.run = []
+                continue
+            if self.tol > 0 and not ends[k] and chunk.speed[k] > 0:
+                if self._within(qk):
+                    self.run.append(qk)
+                    continue
+            lines.append("G1 " + self.fmt % tuple(qk) + f" F{60.0 / self.t_acc:.3f}")
+            self.t_acc = 0.0
+            self.last_q = qk
+            self.run = []
+            self.n += 1
+        return [(0, "\n".join(lines) + "\n")] if lines else []
+
+    def _within(self, qk: np.ndarray) -> bool:
+        """Would the chord from the last written point to qk pass the skipped points?"""
+        if not self.run or self.last_q is None:
+            return True
+        a = self.last_q
+        d = qk - a
         dd = float(d @ d)
         if dd == 0:
-            anchor = k
-            continue
-        t = np.clip((seg - a) @ d / dd, 0, 1)
-        dev = np.linalg.norm(seg - (a + t[:, None] * d), axis=1).max()
-        if dev <= tol:
-            keep[k] = False
-        else:
-            anchor = k
-    return keep
+            return False
+        pts = np.array(self.run)
+        t = np.clip((pts - a) @ d / dd, 0, 1)
+        return float(np.linalg.norm(pts - (a + t[:, None] * d), axis=1).max()) <= self.tol
+
+    def finish(self, chunk: PointChunk | None = None) -> list[Piece]:
+        pieces = self.feed(chunk if chunk is not None else _empty_chunk(), final=True)
+        pieces.append((0, f"G94\nM2\n(end: {self.n} points, {self.t_total:.3f} s)\n%\n"))
+        return pieces
+
+
+def _collect(writer: PmacWriter | GcodeWriter, chunk: PointChunk) -> list[str]:
+    parts: dict[int, list[str]] = {}
+    for part, text in [*writer.begin(), *writer.finish(chunk)]:
+        parts.setdefault(part, []).append(text)
+    return ["".join(parts[k]) for k in sorted(parts)]
+
+
+def _chunk_of(result: ChainResult) -> PointChunk:
+    s = result.samples
+    t = result.t if len(result.t) == len(s) else np.cumsum(s.dt)
+    return PointChunk(s.q, s.dt, t, s.line, s.first, s.tool_length, s.speed, result.q_target,
+                      result.P_ideal, result.P_cmd)
+
+
+def write_pmac(result: ChainResult, profile: Profile, prov: Provenance) -> list[str]:
+    """A whole PMAC program in memory (one text per part)."""
+    return _collect(PmacWriter(profile, prov), _chunk_of(result))
+
+
+def write_gcode(result: ChainResult, profile: Profile, prov: Provenance,
+                tolerance_mm: float = 0.0) -> str:
+    """Whole corrected G-code in memory."""
+    return _collect(GcodeWriter(profile, prov, tolerance_mm), _chunk_of(result))[0]
