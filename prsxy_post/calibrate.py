@@ -316,7 +316,7 @@ class KinematicFit:
     theta0: np.ndarray
     theta: np.ndarray
     stderr: np.ndarray  # NaN for parameters not identified
-    identified: np.ndarray  # bool per parameter: known to max_rel_stderr of its prior size
+    identified: np.ndarray  # bool per parameter: determined on its own by these data
     singular_values: np.ndarray
     condition: float
     unidentified_groups: list[list[tuple[str, float]]]
@@ -403,7 +403,12 @@ def fit_kinematics(profile: Profile, obs: Observations, *, max_rel_stderr: float
     cov_scaled = (Vt[keep].T / S[keep] ** 2) @ Vt[keep]
     se = s * np.sqrt(np.maximum(np.diag(cov_scaled), 0.0)) * max(noise_scale, 1.0)
     se = np.where(mask, se, np.nan)
-    identified = mask & (se < max_rel_stderr * PRIOR)
+    # A parameter is identified on its own only if it has (almost) no part in the
+    # combinations the data leave open: otherwise its estimate carries whatever
+    # those combinations were left at, which no standard error describes.
+    dropped = Vt[~keep]
+    open_part = np.sqrt(np.sum(dropped**2, axis=0)) if len(dropped) else np.zeros(len(s))
+    identified = mask & (se < max_rel_stderr * PRIOR) & (open_part < 0.1)
     groups = []
     for v in Vt[~keep]:
         big = np.nonzero(np.abs(v) >= 0.3 * np.max(np.abs(v)))[0]
