@@ -88,10 +88,10 @@ def interpreter_config(profile: Profile, start: Sequence[float] | None = None
     st = tuple(float(x) for x in (profile.start if start is None else start))
     return InterpreterConfig(
         work_offsets=dict(profile.work_offsets),
-        g28_position=tuple(profile.g28),  # type: ignore[arg-type]
-        g30_position=tuple(profile.g30),  # type: ignore[arg-type]
+        g28_position=tuple(profile.g28),
+        g30_position=tuple(profile.g30),
         tool_table={n: ToolEntry(length=ln, diameter=d) for n, (ln, d) in profile.tools.items()},
-        start=st,  # type: ignore[arg-type]
+        start=st,
     )
 
 

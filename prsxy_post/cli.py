@@ -244,11 +244,12 @@ def iter_program_lines(path: str, progress: Callable[[int], None] | None = None
     with open(path, encoding="utf-8", errors="surrogateescape", newline="") as fh:
         if fh.read(1) != "\ufeff":
             fh.seek(0)
-        n = 0
+        n = chars = 0
         for raw in fh:
             n += 1
+            chars += len(raw)
             if progress is not None and n % 20000 == 0:
-                progress(fh.buffer.tell() if hasattr(fh, "buffer") else 0)
+                progress(chars)
             yield raw.rstrip("\r\n")
 
 

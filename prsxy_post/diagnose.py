@@ -163,7 +163,7 @@ class Linearised:
 
 
 def predict(model: Profile, data: Data, want_columns: bool = True,
-            geo_guess: dict[str, list[np.ndarray]] | None = None) -> Linearised:
+            geo_guess: dict[str, list[np.ndarray | None]] | None = None) -> Linearised:
     """Simulate every measurement with ``model``; optionally each effect's signature."""
     tables = axiscomp.profile_tables(model)
     theta = _theta_ext(model)
@@ -198,7 +198,7 @@ def predict(model: Profile, data: Data, want_columns: bool = True,
             lag = -(vel[:, i] * 1e-3) if vel is not None else np.zeros(len(Pm))
             push(f"servo_lag[{m}]", reduce(sens * lag[:, None]))
 
-    guesses = geo_guess if geo_guess is not None else {}
+    guesses: dict[str, list[np.ndarray | None]] = dict(geo_guess or {})
     for k, P_cmd in enumerate(data.P_pose):
         Pm = simulate.actual_motors(model, P_cmd, approach=+1)
         g = guesses.get("pose", [None] * len(data.poses))[k]
@@ -252,9 +252,9 @@ def predict(model: Profile, data: Data, want_columns: bool = True,
                 push(f"servo_lag[{m}]", np.zeros(len(pa)))
     _, segs = data.measured()
     columns = {k: np.concatenate(v) for k, v in cols.items()} if want_columns else {}
-    for k in columns:
-        if k.startswith("cyclic"):
-            cyc_period[k] = float(k.split("@")[1])
+    for key in columns:
+        if key.startswith("cyclic"):
+            cyc_period[key] = float(key.split("@")[1])
     return Linearised(np.concatenate(preds) if preds else np.zeros(0), columns, cyc_period,
                       segs)
 

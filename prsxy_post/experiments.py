@@ -29,7 +29,7 @@ def ballbar_run(truth: Profile, commanded: Profile, rng: np.random.Generator, *,
     circle = motions[first_cut:]
     start = np.array(circle[0].start, dtype=float)
     res = chain.run_chain(circle, commanded, chain.Stages(error_map=False, axis_comp=False),
-                          start=start)
+                          start=start.tolist())
     q = res.samples.q
     t = np.cumsum(res.samples.dt)
     piv = np.asarray(pivot, dtype=float)

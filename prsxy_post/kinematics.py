@@ -305,10 +305,12 @@ def inverse(geo: Geometry, q: np.ndarray,
 
 def _bowed_guides(geo: Geometry, v: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Newton on |v_i − a_i(P_i) + g_i|² = L_i² from the straight-guide solution."""
+    assert geo.guide_bow is not None
+    bow = geo.guide_bow
     for _ in range(6):
         w = v - geo.hinge_offset(p)
-        da = geo.d[None] + (2 * geo.guide_bow[None, :, None] * p[:, :, None]
-                            / BOW_REF_MM**2 * geo.radial[None])  # type: ignore[index]
+        da = geo.d[None] + (2 * bow[None, :, None] * p[:, :, None]
+                            / BOW_REF_MM**2 * geo.radial[None])
         f = np.einsum("nki,nki->nk", w, w) - geo.L[None] ** 2
         fp = -2 * np.einsum("nki,nki->nk", w, da)
         with np.errstate(invalid="ignore", divide="ignore"):

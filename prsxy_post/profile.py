@@ -504,8 +504,8 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         period_ms=period,
         start=np.array(sections["start"]["pose"], dtype=float),
         work_offsets=offsets,
-        g28=tuple(g["g28"]),  # type: ignore[arg-type]
-        g30=tuple(g["g30"]),  # type: ignore[arg-type]
+        g28=tuple(g["g28"]),
+        g30=tuple(g["g30"]),
         tools=tools,
         output=out_sec,
         raw=raw,
@@ -598,5 +598,5 @@ def kinematics_to_dict(kp: KinematicParams) -> dict[str, Any]:
 def nominal_kinematics() -> KinematicParams:
     """The contract's nominal design (machine-model.md)."""
     h = math.sqrt(400.0**2 - 150.0**2)
-    legs = tuple(Leg(250.0, a, h, 400.0, 100.0, a) for a in (90.0, 210.0, 330.0))
-    return KinematicParams(150.0, legs)  # type: ignore[arg-type]
+    l1, l2, l3 = (Leg(250.0, a, h, 400.0, 100.0, a) for a in (90.0, 210.0, 330.0))
+    return KinematicParams(150.0, (l1, l2, l3))

@@ -78,13 +78,13 @@ def actual_motors(truth: Profile, P_cmd: np.ndarray, *, approach: int | None = N
         P_cmd = servo_follow(truth, P_cmd, t)
     out = np.array(P_cmd, dtype=float, copy=True)
     for col, m in enumerate(MOTOR_ORDER):
-        t = tables.get(m)
-        if t is None:
+        table = tables.get(m)
+        if table is None:
             continue
         if approach is None:
-            out[:, col] = axiscomp.play_model(t, P_cmd[:, col])
+            out[:, col] = axiscomp.play_model(table, P_cmd[:, col])
         else:
-            out[:, col] = axiscomp.approach(t, P_cmd[:, col], approach)
+            out[:, col] = axiscomp.approach(table, P_cmd[:, col], approach)
     return out
 
 

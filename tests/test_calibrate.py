@@ -68,7 +68,7 @@ def test_error_map_takes_up_effects_outside_the_contract(nominal: profile_mod.Pr
     poses, runs, _ = campaign(truth, nominal, rng, n_poses=400)
     theta, _, obs, _ = calibrate.stage_kinematics(nominal, nominal, [], poses, runs)
     cal = profile_mod.profile_from_dict(calibrate.apply_theta(nominal.raw, theta))
-    emap, rep = calibrate.stage_error_map(cal, theta, obs, rng, {})
+    emap, _ = calibrate.stage_error_map(cal, theta, obs, rng, {})
     mapped = profile_mod.profile_from_dict(dict(cal.raw, error_map=emap.to_dict()))
     q = random_poses(np.random.default_rng(99), 500)
     e_cal = _tip_error(truth, cal, q)
