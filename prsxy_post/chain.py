@@ -11,6 +11,7 @@ G-code line) for anything the machine cannot do.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -261,6 +262,9 @@ class Pipeline:
         self.n_points = 0
         self.started = False
         self.any_motion = False
+        #: seconds spent per stage (for the benchmark and profiling)
+        self.timings = {"interpolate": 0.0, "error_map": 0.0, "kinematics": 0.0,
+                        "axis_tables": 0.0}
 
     # -- problems
     def _problem(self, errs: list[PrsxyError]) -> None:
@@ -271,6 +275,7 @@ class Pipeline:
         self.problems += errs
 
     def feed(self, motions: Sequence[Motion], final: bool = False) -> list[PointChunk]:
+        t0 = time.perf_counter()
         self._problem(check_motions(motions, self.profile))
         b = blocks_from_motions(motions, self.limits)
         out: list[PointChunk] = []
@@ -289,6 +294,7 @@ class Pipeline:
                 self.any_motion = True
             s = sample(done, law, self.limits.period_s)
             self._guard(s.dt, s.line)
+            self.timings["interpolate"] += time.perf_counter() - t0
             pc = self._points(s.q, s.dt, s.line, s.first, s.tool_length, s.speed)
             if pc is not None:
                 out.append(pc)
@@ -325,15 +331,21 @@ class Pipeline:
         if len(t):
             self.t = float(t[-1])
         self.n_points += len(dt)
+        t0 = time.perf_counter()
         q_target = correct_virtual(q, self.error_map) if self.error_map is not None else q
+        t1 = time.perf_counter()
         ik = kinematics.inverse(self.geo, q_target, tool)
         self._problem(check_pose_problems(self.profile, q, line, ik.reachable))
+        t2 = time.perf_counter()
         P_comp = ik.P.copy()
         if np.all(ik.reachable):
             for col, m in enumerate(MOTOR_ORDER):
                 if m in self.tables:
                     P_comp[:, col] = axiscomp.compensate(self.tables[m], ik.P[:, col],
                                                          self.states[m])
+        self.timings["error_map"] += t1 - t0
+        self.timings["kinematics"] += t2 - t1
+        self.timings["axis_tables"] += time.perf_counter() - t2
         pc = PointChunk(q, dt, t, line, first, tool, speed, q_target, ik.P, P_comp)
         self.held = pc if self.held is None else PointChunk.concat([self.held, pc])
         return self._release(final=False)

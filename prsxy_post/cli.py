@@ -12,6 +12,7 @@ import json
 import os
 import sys
 import tempfile
+import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -276,8 +277,23 @@ def _part_path(out: str, part: int, nparts_hint: bool) -> str:
     return f"{base}.part{part + 1}{ext}"
 
 
+@dataclass
+class ConvertStats:
+    """What a conversion did, for the benchmark: paths, counts and seconds per stage."""
+
+    written: list[str]
+    lines: int = 0
+    motions: int = 0
+    points: int = 0
+    timings: dict[str, float] | None = None
+
+
 def _convert_one(job: ConvertJob) -> list[str]:
-    """Convert one program, streaming, into its output file(s); returns the paths written.
+    return convert_file(job).written
+
+
+def convert_file(job: ConvertJob) -> ConvertStats:
+    """Convert one program, streaming, into its output file(s).
 
     Outputs go to temp files beside the targets and are renamed only when the
     whole conversion succeeded; on any error the temp files are removed.
@@ -321,22 +337,42 @@ def _convert_one(job: ConvertJob) -> list[str]:
                 sinks[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
             sinks[part].write(text)
 
+    n_lines = n_motions = n_points = 0
+    t_parse = t_write = 0.0
+
+    def counted(it: Iterator[str]) -> Iterator[str]:
+        nonlocal n_lines
+        for ln in it:
+            n_lines += 1
+            yield ln
+
+    def write(make: Callable[[], list[tuple[int, str]]]) -> None:
+        nonlocal t_write
+        t0 = time.perf_counter()
+        emit(make())
+        t_write += time.perf_counter() - t0
+
     try:
         lines = (iter_program_lines(job.program, bar) if job.program != "-"
                  else iter(gcode.split_lines(read_text("-", "G-code program"))))
-        motions = gcode.iter_motions(lines, cfg, job.program)
+        motions = gcode.iter_motions(counted(lines), cfg, job.program)
         pipe = chain.Pipeline(prof, stages, emap, start=job.start)
-        emit(writer.begin())
+        write(writer.begin)
         while True:
+            t0 = time.perf_counter()
             batch = list(itertools.islice(motions, job.chunk))
+            t_parse += time.perf_counter() - t0
+            n_motions += len(batch)
             for pc in pipe.feed(batch):
-                emit(writer.feed(pc))
+                n_points += len(pc)
+                write(lambda pc=pc: writer.feed(pc))
             if len(batch) < job.chunk:
                 break
         tail = pipe.finish()
+        n_points += sum(len(pc) for pc in tail)
         for pc in tail[:-1]:
-            emit(writer.feed(pc))
-        emit(writer.finish(tail[-1] if tail else None))
+            write(lambda pc=pc: writer.feed(pc))
+        write(lambda: writer.finish(tail[-1] if tail else None))
         for fh in sinks.values():
             fh.flush()
             os.fsync(fh.fileno())
@@ -349,7 +385,8 @@ def _convert_one(job: ConvertJob) -> list[str]:
         if job.output == "-":
             sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))
             written = ["-"]
-        return written
+        timings = {"parse": t_parse, **pipe.timings, "write": t_write}
+        return ConvertStats(written, n_lines, n_motions, n_points, timings)
     except PrsxyError as err:
         raise err.located(source=job.program) from None
     except OSError as exc:
