@@ -1,0 +1,193 @@
+"""Benchmark: the whole chain on generated finishing programs, beside rs274 and pygcode.
+
+Usage::
+
+    python bench/bench.py                 # 200 k and 2 M lines
+    python bench/bench.py --lines 200000  # one size
+    python bench/bench.py --json out.json
+
+For each size it generates a five-axis finishing program (short G1 moves at F2000,
+five-axis passes, small R arcs), converts it with every compensation stage on and
+PMAC output (a calibrated profile with real-axis tables and an error map), in a child
+process so peak resident memory is that conversion's alone, and reports per stage:
+seconds, lines/s, interpolation points/s. In the same run and on the same file it
+times LinuxCNC's ``rs274 -g`` and pygcode's ``Machine`` when they are installed.
+
+It is a script, not a test: the figures depend on the machine. README shows the
+latest figures with the machine they were taken on.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def generate(n_lines: int, seed: int = 0) -> str:
+    """A finishing program: raster passes of short G1 moves, tilted passes, small R arcs."""
+    rng = np.random.default_rng(seed)
+    out = ["(generated finishing program)", "G21 G90 G17 G94", "G0 X-60 Y-60 Z5 A0 B0",
+           "G1 Z0 F2000"]
+    x, y, a, b = -60.0, -60.0, 0.0, 0.0
+    direction = 1.0
+    while len(out) < n_lines - 2:
+        kind = rng.random()
+        if kind < 0.80:
+            x += direction * rng.uniform(0.05, 0.3)
+            z = 0.2 * np.sin(x / 7.0) * np.cos(y / 9.0)
+            if abs(x) > 60:
+                direction = -direction
+                y = y + 0.5 if y < 60 else -60.0
+                out.append(f"G1 X{x:.4f} Y{y:.4f} Z{z:.4f}")
+            else:
+                out.append(f"G1 X{x:.4f} Z{z:.4f}")
+        elif kind < 0.92:
+            a = float(np.clip(a + rng.normal(0, 0.3), -15, 15))
+            b = float(np.clip(b + rng.normal(0, 0.3), -15, 15))
+            x += direction * rng.uniform(0.05, 0.3)
+            out.append(f"G1 X{x:.4f} A{a:.4f} B{b:.4f}")
+        else:
+            r = rng.uniform(0.5, 2.0)
+            dx = direction * r * 0.8
+            x += dx
+            code = "G2" if rng.random() < 0.5 else "G3"
+            out.append(f"{code} X{x:.4f} Y{y:.4f} R{r:.4f}")
+    out += ["G0 Z5", "M2"]
+    return "\n".join(out) + "\n"
+
+
+def bench_profile(path: Path) -> Path:
+    """A calibrated-looking profile: perturbed geometry, tables for every motor, a map."""
+    sys.path.insert(0, str(ROOT))
+    from prsxy_post import errormap, profile, simulate
+
+    nominal = profile.loads((ROOT / "profiles" / "prsxy-nominal.toml").read_text(), "nominal")
+    rng = np.random.default_rng(1)
+    truth = simulate.random_machine(nominal, rng, axis_errors=True, name="bench machine")
+    q = np.column_stack([rng.uniform(-150, 150, (300, 2)), rng.uniform(-60, 40, 300),
+                         rng.uniform(-25, 25, (300, 2))])
+    err = rng.normal(0, 1e-3, q.shape) + 1e-3 * np.sin(q / 50.0)
+    emap = errormap.fit(q, err, rng=rng, degrees=(3,), lambdas=[1e-4])
+    doc = dict(truth.raw, error_map=emap.to_dict())
+    path.write_text(profile.dumps(doc))
+    return path
+
+
+def child_convert(program: str, prof: str, out: str) -> None:
+    """Run in a child process: convert and print the stats as JSON."""
+    sys.path.insert(0, str(ROOT))
+    from prsxy_post.cli import ConvertJob, convert_file
+
+    t0 = time.perf_counter()
+    st = convert_file(ConvertJob(program, prof, "pmac", out, None, (True, True, True), "bench"))
+    total = time.perf_counter() - t0
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # MB (Linux: KiB)
+    print(json.dumps({"total_s": total, "lines": st.lines, "motions": st.motions,
+                      "points": st.points, "timings": st.timings, "peak_rss_mb": rss}))
+
+
+def time_rs274(program: Path) -> float | None:
+    exe = shutil.which("rs274")
+    if exe is None:
+        return None
+    with tempfile.TemporaryDirectory() as d:
+        tbl = Path(d) / "tool.tbl"
+        tbl.write_text("T1 P1 Z0 D6 ;\n")
+        t0 = time.perf_counter()
+        subprocess.run([exe, "-t", str(tbl), "-g", str(program)], stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, check=False)
+        return time.perf_counter() - t0
+
+
+def time_pygcode(program: Path, limit_lines: int) -> float | None:
+    try:
+        from pygcode import Line, Machine
+    except ImportError:
+        return None
+    lines = program.read_text().splitlines()
+    if len(lines) > limit_lines:
+        return None
+    t0 = time.perf_counter()
+    m = Machine()
+    for text in lines:
+        m.process_block(Line(text).block)
+    return time.perf_counter() - t0
+
+
+def run(sizes: list[int], pygcode_limit: int) -> list[dict]:
+    results = []
+    with tempfile.TemporaryDirectory() as d:
+        prof = bench_profile(Path(d) / "bench.toml")
+        for n in sizes:
+            prog = Path(d) / f"finish-{n}.ngc"
+            prog.write_text(generate(n))
+            out = Path(d) / f"finish-{n}.pmc"
+            proc = subprocess.run(
+                [sys.executable, __file__, "--child", str(prog), str(prof), str(out)],
+                capture_output=True, text=True, check=True)
+            r = json.loads(proc.stdout.strip().splitlines()[-1])
+            r["size_lines"] = n
+            r["rs274_s"] = time_rs274(prog)
+            r["pygcode_s"] = time_pygcode(prog, pygcode_limit)
+            r["output_mb"] = out.stat().st_size / 1e6
+            results.append(r)
+            prog.unlink()
+            out.unlink()
+    return results
+
+
+def report(results: list[dict]) -> str:
+    cpu = platform.processor() or platform.machine()
+    lines = [f"Machine: {platform.platform()}, {os.cpu_count()} cores, {cpu}, "
+             f"Python {platform.python_version()}", ""]
+    lines += ["| lines | total s | lines/s | points | points/s | peak RSS MB | rs274 -g s | "
+              "pygcode Machine s | total / rs274 |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in results:
+        rs = r["rs274_s"]
+        pg = r["pygcode_s"]
+        lines.append(
+            f"| {r['lines']:,} | {r['total_s']:.2f} | {r['lines'] / r['total_s']:,.0f} | "
+            f"{r['points']:,} | {r['points'] / r['total_s']:,.0f} | {r['peak_rss_mb']:.0f} | "
+            + (f"{rs:.2f}" if rs else "-") + " | " + (f"{pg:.1f}" if pg else "-") + " | "
+            + (f"{r['total_s'] / rs:.2f}" if rs else "-") + " |")
+    lines += ["", "Per stage (seconds):", "",
+              "| lines | " + " | ".join(results[0]["timings"]) + " |",
+              "|---:|" + "---:|" * len(results[0]["timings"])]
+    for r in results:
+        lines.append(f"| {r['lines']:,} | " + " | ".join(f"{v:.2f}" for v in r["timings"].values())
+                     + " |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--lines", type=int, action="append", help="program size (repeatable)")
+    ap.add_argument("--json", help="also write the results here")
+    ap.add_argument("--pygcode-limit", type=int, default=250_000,
+                    help="skip pygcode above this many lines (it needs minutes)")
+    ap.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        child_convert(*args.child)
+        return
+    results = run(args.lines or [200_000, 2_000_000], args.pygcode_limit)
+    print(report(results))
+    if args.json:
+        Path(args.json).write_text(json.dumps(results, indent=1))
+
+
+if __name__ == "__main__":
+    main()
