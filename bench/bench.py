@@ -154,7 +154,7 @@ def report(results: list[dict]) -> str:
     lines = [f"Machine: {platform.platform()}, {os.cpu_count()} cores, {cpu}, "
              f"Python {platform.python_version()}", ""]
     lines += ["| lines | total s | lines/s | points | points/s | peak RSS MB | rs274 -g s | "
-              "pygcode Machine s | total / rs274 |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+              "pygcode Machine s | total / rs274 |", "|" + "---:|" * 9]
     for r in results:
         rs = r["rs274_s"]
         pg = r["pygcode_s"]
