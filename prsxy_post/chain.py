@@ -281,7 +281,7 @@ class Pipeline:
         out: list[PointChunk] = []
         if not self.started:
             line0 = int(b.line[0]) if len(b) else (motions[0].line if motions else 0)
-            tl0 = float(b.tool_length[0]) if len(b) else 0.0
+            tl0 = 0.0  # the program starts with no tool length offset in effect
             first = self._points(self.start[None, :], np.zeros(1), np.array([line0]),
                                  np.array([False]), np.array([tl0]), np.zeros(1))
             if first is not None:

@@ -1,0 +1,123 @@
+"""LinuxCNC's ``rs274 -g`` as a test oracle: run it, read its canonical calls back as motions.
+
+rs274 prints positions in program coordinates (the work offset is printed apart,
+by SET_G5X_OFFSET) and in the length units in effect (USE_LENGTH_UNITS); this
+turns them into the workpiece frame in mm, the frame of ``inspect --json``.
+Its standalone tool table and parameter file are in inches.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+
+RS274 = shutil.which("rs274")
+NUM = r"(-?\d+\.\d+)"
+
+
+@dataclass
+class OracleMotion:
+    line_index: int
+    kind: str
+    end: tuple[float, ...]
+    feed: float | None
+    plane: int = 0
+    center: tuple[float, float, float] | None = None
+    rotation: int = 0
+    duration: float = 0.0
+
+
+@dataclass
+class OracleResult:
+    motions: list[OracleMotion]
+    error: str | None
+
+
+def run(program_text: str, offsets: dict[int, tuple[float, ...]] | None = None,
+        g28: tuple[float, ...] = (0, 0, 0, 0, 0), g30: tuple[float, ...] = (0, 0, 0, 0, 0),
+        tools: dict[int, float] | None = None, timeout: float = 60.0) -> OracleResult:
+    """Interpret a program with rs274; offsets/positions in mm (converted to its inches)."""
+    assert RS274 is not None
+    with tempfile.TemporaryDirectory() as d:
+        prog = os.path.join(d, "p.ngc")
+        with open(prog, "w", encoding="utf-8", newline="") as fh:
+            fh.write(program_text)
+        var = os.path.join(d, "p.var")
+        lines = []
+        for base, pos in ((5161, g28), (5181, g30)):
+            lines += [f"{base + i} {v / 25.4:.12f}" for i, v in enumerate(pos[:3])]
+            lines += [f"{base + 3 + i} {v:.12f}" for i, v in enumerate(pos[3:5])]
+        for n, off in (offsets or {}).items():
+            base = 5221 + 20 * (n - 54)
+            lines += [f"{base + i} {v / 25.4:.12f}" for i, v in enumerate(off[:3])]
+            lines += [f"{base + 3 + i} {v:.12f}" for i, v in enumerate(off[3:5])]
+        with open(var, "w") as fh:
+            fh.write("\n".join(sorted(lines, key=lambda s: int(s.split()[0]))) + "\n")
+        tbl = os.path.join(d, "p.tbl")
+        with open(tbl, "w") as fh:
+            for n, length in (tools or {}).items():
+                fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D0 ;\n")
+        proc = subprocess.run([RS274, "-t", tbl, "-v", var, "-g", prog], capture_output=True,
+                              text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+    return parse(proc.stdout + proc.stderr)
+
+
+def parse(out: str) -> OracleResult:
+    scale = 1.0
+    offset = [0.0] * 6
+    feed = 0.0
+    plane = 17
+    motions: list[OracleMotion] = []
+    last: tuple[float, ...] = (0.0,) * 5
+    error = None
+    lines = out.splitlines()
+    for i, ln in enumerate(lines):
+        m = re.match(r"\s*\d+ N[\d.]+\s+(\w+)\((.*)\)\s*$", ln)
+        if not m:
+            if ln.strip() and not ln.startswith("executing") and not re.match(r"\s*\d+ N", ln):
+                # an error message, followed by the offending line
+                if error is None:
+                    error = ln.strip()
+            continue
+        name, args = m.group(1), m.group(2)
+        vals = [float(v) for v in re.findall(r"-?\d+\.\d+|-?\d+", args)] if args else []
+        if name == "USE_LENGTH_UNITS":
+            scale = 25.4 if "INCHES" in args else 1.0
+        elif name == "SET_G5X_OFFSET":
+            offset = [v for v in vals[1:7]]
+        elif name == "SELECT_PLANE":
+            plane = {"CANON_PLANE_XY": 17, "CANON_PLANE_XZ": 18, "CANON_PLANE_YZ": 19}[args]
+        elif name == "SET_FEED_RATE":
+            feed = vals[0]
+        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
+            x, y, z, a, b = vals[:5]
+            end = (x * scale + offset[0], y * scale + offset[1], z * scale + offset[2],
+                   a + offset[3], b + offset[4])
+            kind = "rapid" if name == "STRAIGHT_TRAVERSE" else "feed"
+            # the feed is in length units per minute when X, Y or Z move, else deg/min
+            moved = math.dist(end[:3], last[:3]) > 1e-9 or end[3:] == last[3:]
+            f = feed * (scale if moved else 1.0)
+            motions.append(OracleMotion(i, kind, end, None if kind == "rapid" else f))
+            last = end
+        elif name == "ARC_FEED":
+            e1, e2, c1, c2, rot, ax, a, b = vals[:8]
+            # first/second axis per plane: XY: (x, y), XZ: (z, x), YZ: (y, z)
+            idx = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[plane]
+            end = [0.0] * 3
+            cen = [0.0] * 3
+            end[idx[0]], end[idx[1]], end[idx[2]] = e1, e2, ax
+            cen[idx[0]], cen[idx[1]], cen[idx[2]] = c1, c2, ax
+            end5 = tuple(end[k] * scale + offset[k] for k in range(3)) + (a + offset[3],
+                                                                          b + offset[4])
+            center = tuple(cen[k] * scale + offset[k] for k in range(3))
+            motions.append(OracleMotion(i, "arc", end5, feed * scale, plane, center, int(rot)))
+            last = end5
+        elif name == "DWELL":
+            p = motions[-1].end if motions else None
+            motions.append(OracleMotion(i, "dwell", p or (math.nan,) * 5, None, duration=vals[0]))
+    return OracleResult(motions, error)

@@ -1,0 +1,239 @@
+"""The Core promise, end to end: a converted program, run by the machine it was made
+for, traces the programmed path.
+
+The written PMAC program (and the written G-code, through a controller running
+[controller_kinematics]) is read back from its text, executed by the machine as the
+contract defines it (play model, then forward kinematics of the true geometry), and
+every executed point is held against the G-code's own geometry, computed here from
+the interpreted motions (lines, arcs, helices), not from the interpolator:
+
+- every point lies within 0.5 µm and 0.5 arcsec of its block's path;
+- every block's end point is reached within 0.5 µm and 0.5 arcsec;
+- the speed between points never exceeds F.
+
+Machines: the nominal design and several with random errors in every contract term
+and real-axis tables with backlash.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from prsxy_post import chain, gcode, kinematics, simulate, writers
+from prsxy_post import profile as profile_mod
+
+from .conftest import ROOT
+
+TOL_MM = 0.5e-3
+TOL_DEG = 0.5 / 3600
+
+PROGRAMS = sorted((ROOT / "samples").glob("*.ngc"))
+
+
+def read_pmac(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Motor positions (N, 5), segment times [s] and source line of every point."""
+    names = "UVWXY"
+    P, dt, line = [], [], []
+    tm = 0.0
+    cur_line = 0
+    for raw in text.splitlines():
+        s = raw.strip()
+        if s.startswith("; line "):
+            cur_line = int(s[7:])
+            continue
+        if not s or s.startswith(";"):
+            continue
+        if s.startswith("PVT"):
+            tm = float(s[3:]) / 1000.0
+            continue
+        if s.startswith("DWELL"):
+            if P and float(s[5:]) > 0:
+                P.append(P[-1])
+                dt.append(float(s[5:]) / 1000.0)
+                line.append(cur_line)
+            continue
+        words = dict(re.findall(r"([UVWXY])(-?\d+\.\d+)", s))
+        if set(words) == set(names):
+            P.append([float(words[a]) for a in names])
+            dt.append(0.0 if s.startswith("RAPID") else tm)
+            line.append(cur_line)
+    return np.array(P), np.array(dt), np.array(line)
+
+
+def read_gcode_points(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Written G-code points (N, 5), segment times [s] from G93 F, source lines."""
+    q, dt, line = [], [], []
+    cur = 0
+    for s in text.splitlines():
+        m = re.match(r"\(line (\d+)\)", s)
+        if m:
+            cur = int(m.group(1))
+            continue
+        w = dict(re.findall(r"([XYZABFP])(-?\d+\.?\d*)", s))
+        if s.startswith("G0 ") or s.startswith("G1 "):
+            q.append([float(w[a]) for a in "XYZAB"])
+            dt.append(60.0 / float(w["F"]) if "F" in w else 0.0)
+            line.append(cur)
+        elif s.startswith("G4 "):
+            q.append(q[-1])
+            dt.append(float(w["P"]))
+            line.append(cur)
+    return np.array(q), np.array(dt), np.array(line)
+
+
+def path_distance(m: gcode.Motion, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distance [mm] of points q (k, 5) from motion m's XYZ path, and their A/B error [deg]
+    from the A/B the path has at the nearest path parameter."""
+    s, e = np.array(m.start), np.array(m.end)
+    if m.kind in ("rapid", "feed", "dwell"):
+        d = e[:3] - s[:3]
+        dd = float(d @ d)
+        if dd == 0:
+            # rotary-only or dwell: the tip stands, A/B move linearly
+            dist = np.linalg.norm(q[:, :3] - s[:3], axis=1)
+            ab = e[3:] - s[3:]
+            ab2 = float(ab @ ab)
+            t = np.clip((q[:, 3:] - s[3:]) @ ab / ab2, 0, 1) if ab2 else np.zeros(len(q))
+        else:
+            t = np.clip((q[:, :3] - s[:3]) @ d / dd, 0, 1)
+            dist = np.linalg.norm(q[:, :3] - (s[:3] + t[:, None] * d), axis=1)
+        ab_err = np.abs(q[:, 3:] - (s[3:] + t[:, None] * (e[3:] - s[3:]))).max(axis=1)
+        return dist, ab_err
+    # arc / helix about the plane's normal through the centre
+    iu, iv, iw = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[m.plane]
+    c = np.array(m.center)
+    th0 = np.arctan2(s[iv] - c[iv], s[iu] - c[iu])
+    r0 = np.hypot(s[iu] - c[iu], s[iv] - c[iv])
+    r1 = np.hypot(e[iu] - c[iu], e[iv] - c[iv])
+    th1 = np.arctan2(e[iv] - c[iv], e[iu] - c[iu])
+    turns = abs(m.rotation)
+    if m.rotation > 0:
+        sweep = (th1 - th0) % (2 * np.pi) or 2 * np.pi
+        sweep += 2 * np.pi * (turns - 1)
+    else:
+        sweep = -(((th0 - th1) % (2 * np.pi) or 2 * np.pi) + 2 * np.pi * (turns - 1))
+    th = np.arctan2(q[:, iv] - c[iv], q[:, iu] - c[iu])
+    # unwrap each point's angle to the nearest parameter consistent with its axial position
+    dw = e[iw] - s[iw]
+    base = (th - th0) / sweep
+    cands = [(base + k * 2 * np.pi / sweep) for k in range(-turns - 1, turns + 2)]
+    best = np.full(len(q), np.inf)
+    best_t = np.zeros(len(q))
+    for t in cands:
+        t = np.clip(t, 0, 1)
+        pu = c[iu] + (r0 + (r1 - r0) * t) * np.cos(th0 + sweep * t)
+        pv = c[iv] + (r0 + (r1 - r0) * t) * np.sin(th0 + sweep * t)
+        pw = s[iw] + dw * t
+        dist = np.sqrt((q[:, iu] - pu) ** 2 + (q[:, iv] - pv) ** 2 + (q[:, iw] - pw) ** 2)
+        better = dist < best
+        best[better] = dist[better]
+        best_t[better] = t[better]
+    ab_err = np.abs(q[:, 3:] - (s[3:] + best_t[:, None] * (e[3:] - s[3:]))).max(axis=1)
+    return best, ab_err
+
+
+def _moves(m: gcode.Motion) -> bool:
+    return m.kind in ("dwell", "arc") or m.start != m.end
+
+
+def check_trace(motions: list[gcode.Motion], q_exec: np.ndarray, dt: np.ndarray,
+                lines: np.ndarray, tool: np.ndarray, rapid_mm_min: float = 10000.0) -> None:
+    """Every point on its block's path, every block end reached, speed ≤ F.
+
+    Points are matched to the motions of their line in time order: a point belongs
+    to the current motion until that motion's end point has been reached (every
+    block's end is an interpolation point, which this also checks).
+    """
+    by_line: dict[int, list[gcode.Motion]] = {}
+    for m in motions:
+        if _moves(m):
+            by_line.setdefault(m.line, []).append(m)
+    worst = 0.0
+    worst_ab = 0.0
+    limit = np.full(len(q_exec), np.inf)
+    for ln in np.unique(lines[1:]):
+        sel = np.nonzero(lines == ln)[0]
+        sel = sel[sel > 0]
+        ms = by_line[int(ln)]
+        j = 0
+        for k in sel:
+            m = ms[j]
+            d, a = path_distance(m, q_exec[k:k + 1])
+            worst = max(worst, float(d[0]))
+            worst_ab = max(worst_ab, float(a[0]))
+            xyz = np.linalg.norm(np.array(m.end[:3]) - np.array(m.start[:3])) > 1e-9 \
+                or m.kind == "arc"
+            if xyz and m.kind != "dwell":
+                limit[k] = rapid_mm_min if m.kind == "rapid" else m.feed
+            at_end = (np.linalg.norm(q_exec[k, :3] - np.array(m.end[:3])) <= 2 * TOL_MM
+                      and np.abs(q_exec[k, 3:] - np.array(m.end[3:])).max() <= 2 * TOL_DEG)
+            if m.kind == "dwell":
+                at_end = k + 1 >= len(lines) or lines[k + 1] != ln or \
+                    not np.array_equal(q_exec[k + 1], q_exec[k])
+            if at_end and j + 1 < len(ms):
+                j += 1
+        assert j == len(ms) - 1, f"line {ln}: not every block's end point was reached"
+    assert worst <= TOL_MM, f"path error {worst * 1000:.4f} µm"
+    assert worst_ab <= TOL_DEG, f"A/B error {worst_ab * 3600:.4f} arcsec"
+    # speed: chord over segment time never above F (a little over for rounding of
+    # the written positions and times); not across a tool length change, where the
+    # tip jumps along the spindle while the machine stands
+    seg = np.linalg.norm(np.diff(q_exec[:, :3], axis=0), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = np.where(dt[1:] > 0, seg / dt[1:] * 60.0, 0.0)
+    same_tool = tool[1:] == tool[:-1]
+    over = (v > limit[1:] * (1 + 1e-4) + 0.06) & same_tool
+    assert not np.any(over), f"faster than F at lines {np.unique(lines[1:][over])[:5]}"
+
+
+def machines() -> list[tuple[str, int | None]]:
+    return [("nominal", None), ("random", 11), ("random", 12), ("random", 13)]
+
+
+def _truth(kind: str, seed: int | None) -> profile_mod.Profile:
+    nominal = profile_mod.loads((ROOT / "profiles" / "prsxy-shop.toml").read_text(), "shop")
+    if seed is None:
+        return nominal
+    return simulate.random_machine(nominal, np.random.default_rng(seed), axis_errors=True,
+                                   name=f"random {seed}")
+
+
+def _convert(truth: profile_mod.Profile, path) -> tuple[list[gcode.Motion], chain.ChainResult]:
+    text = path.read_text()
+    cfg = chain.interpreter_config(truth)
+    motions = list(gcode.iter_motions(gcode.split_lines(text), cfg, str(path)))
+    return motions, chain.run_chain(motions, truth)
+
+
+PROV = writers.Provenance("x.ngc", "0" * 64, "p", "p.toml", "0" * 64, "")
+
+
+@pytest.mark.parametrize(("kind", "seed"), machines())
+@pytest.mark.parametrize("path", PROGRAMS, ids=lambda p: p.name)
+def test_pmac_program_traces_the_path(kind: str, seed: int | None, path) -> None:
+    truth = _truth(kind, seed)
+    motions, res = _convert(truth, path)
+    text = writers.write_pmac(res, truth, PROV)[0]
+    P, dt, lines = read_pmac(text)
+    assert len(P) == len(res.samples)
+    q_exec = simulate.execute(truth, P, res.samples.tool_length)
+    check_trace(motions, q_exec, dt, lines, res.samples.tool_length)
+
+
+@pytest.mark.parametrize(("kind", "seed"), machines()[:3])
+@pytest.mark.parametrize("path", PROGRAMS, ids=lambda p: p.name)
+def test_gcode_output_through_controller_traces_the_path(kind: str, seed: int | None,
+                                                        path) -> None:
+    """The controller runs its own IK (here the nominal design) on the written points;
+    the true machine executes the resulting motor commands."""
+    truth = _truth(kind, seed)
+    motions, res = _convert(truth, path)
+    cgeo = chain.controller_geometry(truth)
+    text = writers.write_gcode(res, truth, PROV)
+    q_read, dt, lines = read_gcode_points(text)
+    P_ctrl = kinematics.inverse(cgeo, q_read).P  # the controller's own IK
+    q_exec = simulate.execute(truth, P_ctrl, res.samples.tool_length)
+    check_trace(motions, q_exec, dt, lines, res.samples.tool_length)
