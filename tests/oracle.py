@@ -30,6 +30,7 @@ class OracleMotion:
     center: tuple[float, float, float] | None = None
     rotation: int = 0
     duration: float = 0.0
+    scale: float = 1.0  # 25.4 when the interpreter printed inches (4 decimals of them)
 
 
 @dataclass
@@ -89,7 +90,8 @@ def parse(out: str) -> OracleResult:
         if name == "USE_LENGTH_UNITS":
             scale = 25.4 if "INCHES" in args else 1.0
         elif name == "SET_G5X_OFFSET":
-            offset = [v for v in vals[1:7]]
+            # printed in the length units in effect when it is set
+            offset = [v * scale for v in vals[1:4]] + list(vals[4:7])
         elif name == "SELECT_PLANE":
             plane = {"CANON_PLANE_XY": 17, "CANON_PLANE_XZ": 18, "CANON_PLANE_YZ": 19}[args]
         elif name == "SET_FEED_RATE":
@@ -102,7 +104,8 @@ def parse(out: str) -> OracleResult:
             # the feed is in length units per minute when X, Y or Z move, else deg/min
             moved = math.dist(end[:3], last[:3]) > 1e-9 or end[3:] == last[3:]
             f = feed * (scale if moved else 1.0)
-            motions.append(OracleMotion(i, kind, end, None if kind == "rapid" else f))
+            motions.append(OracleMotion(i, kind, end, None if kind == "rapid" else f,
+                                        scale=scale))
             last = end
         elif name == "ARC_FEED":
             e1, e2, c1, c2, rot, ax, a, b = vals[:8]
@@ -112,10 +115,11 @@ def parse(out: str) -> OracleResult:
             cen = [0.0] * 3
             end[idx[0]], end[idx[1]], end[idx[2]] = e1, e2, ax
             cen[idx[0]], cen[idx[1]], cen[idx[2]] = c1, c2, ax
-            end5 = tuple(end[k] * scale + offset[k] for k in range(3)) + (a + offset[3],
-                                                                          b + offset[4])
+            end5 = (*(end[k] * scale + offset[k] for k in range(3)), a + offset[3],
+                    b + offset[4])
             center = tuple(cen[k] * scale + offset[k] for k in range(3))
-            motions.append(OracleMotion(i, "arc", end5, feed * scale, plane, center, int(rot)))
+            motions.append(OracleMotion(i, "arc", end5, feed * scale, plane, center, int(rot),
+                                        scale=scale))
             last = end5
         elif name == "DWELL":
             p = motions[-1].end if motions else None

@@ -1,0 +1,222 @@
+"""The G-code reader: features, located errors, and robustness."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from prsxy_post import gcode
+from prsxy_post.errors import GCodeError
+
+CFG = gcode.InterpreterConfig(
+    work_offsets={55: (100.0, 0.0, -5.0, 0.0, 0.0)},
+    g28_position=(1.0, 2.0, 3.0, 0.0, 0.0),
+    tool_table={1: gcode.ToolEntry(35.0)},
+)
+
+
+def run(text: str, cfg: gcode.InterpreterConfig = CFG) -> list[gcode.Motion]:
+    return gcode.interpret(text, cfg, "t.ngc")
+
+
+def err(text: str) -> str:
+    with pytest.raises(GCodeError) as exc:
+        run(text)
+    return str(exc.value)
+
+
+# ---------------------------------------------------------------- what is read
+
+
+def test_line_ends_number_like_an_editor() -> None:
+    for sep in ("\n", "\r\n", "\r"):
+        text = sep.join(["G21 G90", "G0 X1", "(comment)", "G1 X2 F100", "M2"])
+        ms = run(text)
+        assert [m.line for m in ms] == [2, 4]
+    assert gcode.split_lines("a\r\nb\rc\nd") == ["a", "b", "c", "d"]
+
+
+def test_spaces_case_comments_and_numbers() -> None:
+    ms = run("g21 g90\nN10 G0 X 1 0.5 (ten and a half) Y-.5 ; rest\nG0Z  0.1000\nm2\n")
+    assert ms[0].end[:2] == (10.5, -0.5)
+    assert ms[1].end[2] == pytest.approx(0.1)
+
+
+def test_block_delete_runs_the_line_as_linuxcnc_does() -> None:
+    assert len(run("G21\n/G0 X5\nM2\n")) == 1
+
+
+def test_percent_delimits_the_program() -> None:
+    ms = run("%\nG21 G0 X1\n%\nG0 X2 (never read)\n")
+    assert len(ms) == 1
+
+
+def test_program_end_stops_reading() -> None:
+    assert len(run("G21 G0 X1\nM30\nG0 X2\n")) == 1
+
+
+def test_units_and_offsets() -> None:
+    ms = run("G20 G90 G0 X1 Y1\nG21 G55 G0 X0 Y0 Z0\nM2\n")
+    assert ms[0].end[:2] == pytest.approx((25.4, 25.4))
+    assert ms[1].end[:3] == pytest.approx((100.0, 0.0, -5.0))
+
+
+def test_incremental_and_feed_units() -> None:
+    ms = run("G21 G91 G1 X1 Y2 F300\nX1\nG20 G1 X1 F10\nG1 A5 F90\nM2\n")
+    assert ms[1].end[:2] == (2.0, 2.0)
+    assert ms[2].end[0] == pytest.approx(2.0 + 25.4)
+    assert ms[2].feed == pytest.approx(254.0)
+    assert ms[3].feed == 90.0  # rotary-only: degrees per minute in either unit
+
+
+def test_inverse_time_feed_is_length_times_f() -> None:
+    ms = run("G21 G93 G1 X30 Y40 F2\nM2\n")
+    assert ms[0].feed == pytest.approx(100.0)
+    assert ms[0].inverse_time
+
+
+def test_arc_ijk_r_turns_and_planes() -> None:
+    ms = run("G21 G17 G0 X10 Y0\nG3 X-10 Y0 I-10 J0 F100\nG2 X10 Y0 R10\n"
+             "G3 X10 Y0 I-10 J0 Z-3 P2\nG18 G2 X20 Z-3 I5 K0\nM2\n")
+    a = ms[1]
+    assert (a.kind, a.plane, a.rotation) == ("arc", 17, 1)
+    assert a.center == pytest.approx((0.0, 0.0, 0.0))
+    assert ms[2].rotation == -1
+    assert ms[2].center[:2] == pytest.approx((0.0, 0.0), abs=1e-12)
+    assert ms[3].rotation == 2 and ms[3].end[2] == -3
+    assert ms[4].plane == 18 and ms[4].center == pytest.approx((15.0, 0.0, -3.0))
+    # helix feed is along the helix
+    assert ms[3].feed == 100.0
+
+
+def test_r_arc_negative_takes_the_long_way() -> None:
+    short = run("G21 G0 X0 Y0\nG2 X10 Y0 R8 F100\nM2\n")[1]
+    long = run("G21 G0 X0 Y0\nG2 X10 Y0 R-8 F100\nM2\n")[1]
+    assert short.center[1] < 0 < long.center[1]
+
+
+def test_g28_goes_through_the_intermediate_point() -> None:
+    ms = run("G21 G0 X5 Y5 Z5\nG28 Z10\nG28\nM2\n")
+    assert ms[1].end == (5.0, 5.0, 10.0, 0.0, 0.0)
+    assert ms[2].end == (5.0, 5.0, 3.0, 0.0, 0.0)  # only Z goes home
+    assert ms[4].end == (1.0, 2.0, 3.0, 0.0, 0.0)
+
+
+def test_tool_length_offsets() -> None:
+    ms = run("G21 G0 Z50\nT1 M6 G43 H1\nG1 Z0 F100\nG49 G0 Z10\nM2\n")
+    assert ms[1].tool_length == 35.0 and ms[1].tool == 1
+    assert ms[2].tool_length == 0.0
+
+
+def test_canned_cycle_expands_like_linuxcnc() -> None:
+    ms = run("G21 G0 X0 Y0 Z10\nG99 G81 X5 Y5 Z-2 R1 F100\nM2\n")
+    kinds = [(m.kind, m.end[:3]) for m in ms[1:]]
+    assert kinds == [("rapid", (5.0, 5.0, 10.0)), ("rapid", (5.0, 5.0, 1.0)),
+                     ("feed", (5.0, 5.0, -2.0)), ("rapid", (5.0, 5.0, 1.0))]
+
+
+def test_dwell() -> None:
+    ms = run("G21 G4 P1.5\nM2\n")
+    assert ms[0].kind == "dwell" and ms[0].duration == 1.5
+
+
+def test_inspect_json_shape() -> None:
+    ms = run("G21 G0 X1\nG2 X3 Y0 I1 J0 F60\nG4 P1\nM2\n")
+    j = [gcode.motion_to_json(m) for m in ms]
+    assert j[0] == {"line": 1, "kind": "rapid", "end": [1.0, 0.0, 0.0, 0.0, 0.0], "feed": None}
+    assert j[1]["plane"] == 17 and j[1]["rotation"] == -1 and j[1]["center"][0] == 2.0
+    assert j[2]["kind"] == "dwell" and j[2]["duration"] == 1.0
+
+
+# ---------------------------------------------------------------- what is rejected
+
+REJECT = [
+    ("G21\nG1 X#1 F100\nM2\n", "t.ngc:2:5:", "parameters (#)"),
+    ("G21\nG1 X[1+2] F100\nM2\n", "t.ngc:2:5:", "expressions"),
+    ("G21\no100 sub\nM2\n", "t.ngc:2:1:", "O-words"),
+    ("G21\nG41 D1 G1 X1 F100\nM2\n", "t.ngc:2:1:", "is not supported ('G41')"),
+    ("G21\nG92 X0\nM2\n", "t.ngc:2:1:", "G92"),
+    ("G21\nG10 L2 P1 X0\nM2\n", "t.ngc:2:1:", "G10"),
+    ("G21\nG5.2 X1\nM2\n", "t.ngc:2:1:", "NURBS"),
+    ("G21\nG16\nM2\n", "t.ngc:2:1:", "polar"),
+    ("G21\nG0 C10\nM2\n", "t.ngc:2:4:", "C axis"),
+    ("G21\nG0 G1 X1 F1\nM2\n", "t.ngc:2:4:", "same modal group ('G1')"),
+    ("G21\nG0 X1 X2\nM2\n", "t.ngc:2:7:", "X word repeated ('X2')"),
+    ("G21\nG0 X0 Y0\nG2 X10 Y0 I3 J0 F100\nM2\n", "t.ngc:3:11:", "not on the arc's circle"),
+    ("G21\nG1 X5\nM2\n", "t.ngc:2:4:", "no feed rate"),
+    ("G21\nG93 G1 X5\nM2\n", "t.ngc:2:8:", "without F in inverse time"),
+    ("G21\nX5\nM2\n", "t.ngc:2:1:", "axis words with no motion mode"),
+    ("G21\nG0 X0\nG2 X0 Y0 R5 F100\nM2\n", "t.ngc:3:10:", "end point is its start point"),
+    ("G21\nG0 X0\nG2 X20 Y0 R5 F100\nM2\n", "t.ngc:3:11:", "radius too small"),
+    ("G21\nG1 X1 E2 F1\nM2\n", "t.ngc:2:7:", "unknown word letter 'E'"),
+    ("G21\nG1 X F1\nM2\n", "t.ngc:2:4:", "word 'X' has no number"),
+    ("G21\nG1 X1 (open\nM2\n", "t.ngc:2:7:", "comment not closed"),
+    ("G21\nG999 X1\nM2\n", "t.ngc:2:1:", "unknown G code"),
+    ("G21\nM123\nM2\n", "t.ngc:2:1:", "unsupported M code"),
+    ("G21\nG43 H7\nM2\n", "t.ngc:2:5:", "tool 7 is not in the profile's tool table"),
+    ("G21\nG81 X1 Y1 R1 F100\nM2\n", "t.ngc:2:5:", "Z missing in the first block"),
+    ("G21\nG0 Z0\nG81 X1 Z5 R1 F100\nM2\n", "t.ngc:3:", "R below the bottom"),
+    ("G21\nG4\nM2\n", "t.ngc:2:1:", "G4 without a dwell time"),
+    ("G21\nG0 X1\n", "t.ngc:2:", "ends without M2"),
+    ("G21\nG1 X1 F100\n%\nM2\n", "t.ngc:3:1:", "'%' after the start"),
+    ("G21\nG80 X1\nM2\n", "t.ngc:2:5:", "axis words with G80"),
+    ("G21\nG0 X1 I2\nM2\n", "t.ngc:2:7:", "I word with G0"),
+]
+
+
+@pytest.mark.parametrize(("text", "where", "what"), REJECT, ids=[r[2][:30] for r in REJECT])
+def test_rejections_name_file_line_column_and_word(text: str, where: str, what: str) -> None:
+    msg = err(text)
+    assert msg.startswith(where), msg
+    assert what in msg, msg
+    assert "(expected " in msg
+
+
+# ---------------------------------------------------------------- robustness
+
+WORDS = st.sampled_from(["G0", "G1", "G2", "G3", "G17", "G18", "G19", "G90", "G91", "G20",
+                         "G21", "G81", "G80", "G4", "M3", "M5", "F", "X", "Y", "Z", "A", "B",
+                         "I", "J", "K", "R", "P", "Q", "#", "[", "(", ")", ";", "%", "/", " ",
+                         "\t", "1", "-", ".", "5", "e", "N", "H", "T"])
+
+
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.lists(WORDS, max_size=12).map("".join), max_size=12))
+def test_any_text_gives_motions_or_a_located_error(lines: list[str]) -> None:
+    text = "\n".join(["G21 G90", *lines, "M2"])
+    try:
+        ms = run(text)
+    except GCodeError as exc:
+        assert str(exc).startswith("t.ngc:")
+        return
+    prev = (0.0,) * 5
+    for m in ms:
+        assert m.start == pytest.approx(prev)  # motions chain
+        assert all(math.isfinite(v) for v in m.end)
+        prev = m.end
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.binary(max_size=200))
+def test_random_bytes_never_crash(data: bytes) -> None:
+    text = data.decode("latin-1")
+    try:
+        run(text)
+    except GCodeError as exc:
+        assert str(exc).startswith("t.ngc")
+
+
+def test_speed_of_the_interpreter() -> None:
+    """A sanity bound, not a benchmark (bench/bench.py measures): 20 k lines well
+    under a second on any machine that runs the suite."""
+    import time
+
+    lines = ["G21 G90 G1 F2000"] + [f"G1 X{i * 0.1:.3f} Y{(i % 7) * 0.1:.3f}"
+                                    for i in range(20000)] + ["M2"]
+    t0 = time.perf_counter()
+    n = sum(1 for _ in gcode.iter_motions(lines, CFG))
+    assert n == 20001  # "G1 F2000" alone is a zero-length move, as in LinuxCNC
+    assert time.perf_counter() - t0 < 5.0

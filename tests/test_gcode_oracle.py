@@ -1,0 +1,109 @@
+"""Our interpreter against LinuxCNC's own (``rs274 -g``), program by program.
+
+For every program: when both accept it, the same motions (kind, end point, feed,
+arc plane, centre and rotation, dwell); when rs274 rejects it, we reject it too;
+when we reject it as outside the supported subset, the motions before agree. rs274
+prints four decimals of its current unit, which sets the tolerance.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from prsxy_post import gcode
+from prsxy_post.errors import GCodeError
+
+from . import oracle
+from .conftest import DATA, ROOT
+
+OFFSETS = {55: (100.0, 0.0, -5.0, 0.0, 0.0), 56: (-40.0, 25.0, 0.0, 0.0, 0.0)}
+G28 = (1.0, 2.0, 3.0, 0.0, 0.0)
+G30 = (-5.0, 0.0, 10.0, 0.0, 0.0)
+TOOLS = {n: 10.0 + n for n in range(1, 100)}
+
+OUT_OF_SUBSET = ("not supported",)
+
+
+def _programs() -> list[Path]:
+    files = sorted((DATA / "gcode" / "features").glob("*.ngc"))
+    files += sorted(p for p in (DATA / "gcode" / "corpus").iterdir() if p.suffix != ".md")
+    files += sorted((ROOT / "samples").glob("*.ngc"))
+    shared = ROOT.parent / "shared" / "corpus"
+    if shared.is_dir():
+        # GPL-2.0-only programs stay in ../shared; read them there when it is present
+        files += sorted(p for p in shared.rglob("*") if p.is_file()
+                        and p.suffix.lower() in (".ngc", ".nc", ".gcode", ".tap")
+                        and p.relative_to(shared).parts[0] in ("linuxcnc", "bCNC"))
+    return files
+
+
+def _require_rs274() -> None:
+    if oracle.RS274 is None:
+        if os.environ.get("PRSXY_REQUIRE_RS274"):
+            pytest.fail("rs274 is required here (PRSXY_REQUIRE_RS274) but not installed")
+        pytest.skip("rs274 not installed: apt-get install linuxcnc-uspace to run the oracle")
+
+
+def _ours(text: str) -> tuple[list[gcode.Motion], GCodeError | None]:
+    cfg = gcode.InterpreterConfig(work_offsets=OFFSETS, g28_position=G28, g30_position=G30,
+                                  tool_table={n: gcode.ToolEntry(v) for n, v in TOOLS.items()})
+    out: list[gcode.Motion] = []
+    try:
+        for m in gcode.iter_motions(gcode.split_lines(text), cfg, "p.ngc"):
+            out.append(m)
+    except GCodeError as err:
+        return out, err
+    return out, None
+
+
+def _agree(om: oracle.OracleMotion, m: gcode.Motion) -> str | None:
+    tol = 6e-5 * om.scale + 1e-9
+    if om.kind != m.kind:
+        return f"kind {om.kind} vs {m.kind}"
+    if om.kind == "dwell":
+        return None if abs(om.duration - m.duration) < 1e-4 else "dwell time"
+    d = max(abs(a - b) for a, b in zip(om.end, m.end, strict=True))
+    if d > tol:
+        return f"end differs by {d:.6f}"
+    feed_tol = 6e-5 * om.scale + 1e-6 * m.feed
+    if om.kind in ("feed", "arc") and abs((om.feed or 0.0) - m.feed) > feed_tol:
+        return f"feed {om.feed} vs {m.feed}"
+    if om.kind == "arc":
+        assert om.center is not None and m.center is not None
+        if om.rotation != m.rotation or om.plane != m.plane:
+            return "arc rotation or plane"
+        if max(abs(a - b) for a, b in zip(om.center, m.center, strict=True)) > tol:
+            return "arc centre"
+    return None
+
+
+@pytest.mark.linuxcnc
+@pytest.mark.parametrize("path", _programs(), ids=lambda p: p.name)
+def test_agrees_with_linuxcnc(path: Path) -> None:
+    _require_rs274()
+    text = path.read_bytes().decode("utf-8", errors="surrogateescape")
+    ref = oracle.run(text, offsets=OFFSETS, g28=G28, g30=G30, tools=TOOLS)
+    ours, err = _ours(text)
+    outside = err is not None and any(s in str(err) for s in OUT_OF_SUBSET)
+    if err is not None and not outside:
+        assert ref.error is not None, f"we reject what LinuxCNC accepts: {err}"
+    if err is None:
+        assert ref.error is None, f"LinuxCNC rejects what we accept: {ref.error}"
+        assert len(ours) == len(ref.motions)
+    n = min(len(ours), len(ref.motions))
+    if err is not None:
+        assert len(ours) <= len(ref.motions) or ref.error is not None
+    for k in range(n):
+        why = _agree(ref.motions[k], ours[k])
+        assert why is None, f"motion {k} (our line {ours[k].line}): {why}"
+
+
+@pytest.mark.linuxcnc
+def test_oracle_sees_the_work_offsets() -> None:
+    """The oracle is configured like us: a G55 move ends at the offset position."""
+    _require_rs274()
+    ref = oracle.run("G21 G90\nG55 G0 X1 Y1 Z1\nM2\n", offsets=OFFSETS)
+    assert ref.motions[-1].end[:3] == pytest.approx((101.0, 1.0, -4.0), abs=1e-4)
