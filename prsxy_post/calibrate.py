@@ -154,12 +154,15 @@ def reached_motors(real_axis: Sequence[Any], P_cmd: np.ndarray, approach: int | 
 
 
 def observations(commanded: Profile, real_axis: Sequence[Any], poses: Sequence[Any],
-                 runs: Sequence[Any], ballbar_stride: int = 1) -> Observations:
+                 runs: Sequence[Any], ballbar_points: int = 720) -> Observations:
     """Model inputs for pose files (measure.PoseData) and ballbar runs (measure.BallbarRun).
 
     ``commanded``: the profile the machine was commanded with (its chain made the
     motor commands); ``real_axis``: the best knowledge of the real-axis tables
     (the truth's, as calibrated in stage 1, else the commanded profile's).
+    ``ballbar_points``: each run is thinned to about this many samples (every
+    half degree of a circle) after the whole run went through the play model;
+    ten-millisecond neighbours carry the same information.
     """
     obs = Observations()
     if poses:
@@ -170,12 +173,13 @@ def observations(commanded: Profile, real_axis: Sequence[Any], poses: Sequence[A
         obs.y_pose, obs.q_pose = y, q
     P_all, q_all, piv, dist, run = [], [], [], [], []
     for k, r in enumerate(runs):
+        stride = max(1, len(r.t) // ballbar_points)
         P_cmd = simulate.motion_commands(commanded, r.commanded, t=r.t)
-        P = reached_motors(real_axis, P_cmd, None)[::ballbar_stride]
+        P = reached_motors(real_axis, P_cmd, None)[::stride]
         P_all.append(P)
-        q_all.append(r.commanded[::ballbar_stride])
+        q_all.append(r.commanded[::stride])
         piv.append(np.broadcast_to(r.pivot, (len(P), 3)))
-        dist.append(r.length + r.dev_um[::ballbar_stride] * 1e-3)
+        dist.append(r.length + r.dev_um[::stride] * 1e-3)
         run.append(np.full(len(P), k))
         obs.run_names.append(getattr(r, "name", "") or getattr(r, "source", f"run {k + 1}"))
     if runs:

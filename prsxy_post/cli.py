@@ -677,8 +677,9 @@ def calibrate(data: Sequence[str], profile_path: str, output: str, commanded_wit
     if "tables" in want and axis:
         real_axis, rep = cal.stage_tables(start, axis)
         reports.append(rep)
-        doc["axis_comp"] = [{"motor": c.motor, "positions": c.positions, "forward": c.forward,
-                             "reverse": c.reverse} for c in real_axis]
+        doc["axis_comp"] = [{"motor": c.motor, "positions": c.positions.tolist(),
+                             "forward": c.forward.tolist(), "reverse": c.reverse.tolist()}
+                            for c in real_axis]
     fitted = None
     if "kinematics" in want and (poses or runs):
         theta, _, obs, rep = cal.stage_kinematics(start, commanded, real_axis, poses, runs,
