@@ -1,0 +1,219 @@
+"""The command line as users meet it: outputs, golden files, errors and exit codes."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from prsxy_post.cli import main
+
+from .conftest import ROOT
+
+GOLDEN = ROOT / "tests" / "golden"
+SAMPLES = sorted(p.name for p in (ROOT / "samples").glob("*.ngc"))
+SHOP = "profiles/prsxy-shop.toml"
+PERTURBED = "tests/data/vectors/perturbed.toml"
+
+
+@pytest.fixture
+def runner(monkeypatch: pytest.MonkeyPatch) -> CliRunner:
+    monkeypatch.chdir(ROOT)  # golden headers name paths relative to the project
+    return CliRunner()
+
+
+def invoke(runner: CliRunner, *args: str):  # noqa: ANN201
+    return runner.invoke(main, list(args), catch_exceptions=False)
+
+
+def _no_traceback(text: str) -> None:
+    assert "Traceback" not in text
+
+
+# ---------------------------------------------------------------- golden files
+
+CASES = [(s, fmt, SHOP) for s in SAMPLES for fmt in ("pmac", "gcode")]
+CASES += [(s, "pmac", PERTURBED) for s in ("pocket.ngc", "five-axis.ngc")]
+
+
+@pytest.mark.parametrize(("sample", "fmt", "prof"), CASES,
+                         ids=[f"{s}-{f}-{Path(p).stem}" for s, f, p in CASES])
+def test_golden_outputs(runner: CliRunner, tmp_path: Path, sample: str, fmt: str,
+                        prof: str) -> None:
+    out = tmp_path / "out.txt"
+    r = invoke(runner, "convert", f"samples/{sample}", "--profile", prof, "--format", fmt,
+               "-o", str(out), "--quiet")
+    assert r.exit_code == 0, r.output
+    golden = GOLDEN / f"{Path(sample).stem}.{Path(prof).stem}.{fmt}"
+    got = out.read_text()
+    if os.environ.get("PRSXY_UPDATE_GOLDEN"):
+        golden.write_text(got)
+    assert golden.exists(), f"no golden file {golden.name} (PRSXY_UPDATE_GOLDEN=1 writes it)"
+    assert got == golden.read_text(), f"{golden.name} changed"
+
+
+def test_output_is_deterministic(runner: CliRunner, tmp_path: Path) -> None:
+    a, b = tmp_path / "a.pmc", tmp_path / "b.pmc"
+    invoke(runner, "convert", "samples/pocket.ngc", "--profile", PERTURBED, "-o", str(a))
+    invoke(runner, "convert", "samples/pocket.ngc", "--profile", PERTURBED, "-o", str(b))
+    assert a.read_bytes() == b.read_bytes()
+
+
+def test_streamed_output_equals_one_shot(tmp_path: Path) -> None:
+    """Chunks of 3 motions (cutting arcs, reversals and the canned cycles) = one chunk."""
+    from prsxy_post.cli import ConvertJob, convert_file
+
+    os.chdir(ROOT)
+    for sample in SAMPLES:
+        outs = []
+        for chunk in (3, 1_000_000):
+            out = tmp_path / f"{sample}.{chunk}.pmc"
+            convert_file(ConvertJob(f"samples/{sample}", SHOP if "drill" in sample else
+                                    PERTURBED, "pmac", str(out), None, (True, True, True), "",
+                                    chunk=chunk))
+            outs.append(out.read_bytes())
+        assert outs[0] == outs[1], sample
+
+
+def test_batch_with_jobs(runner: CliRunner, tmp_path: Path) -> None:
+    r = invoke(runner, "convert", *[f"samples/{s}" for s in SAMPLES], "--profile", SHOP,
+               "--out-dir", str(tmp_path), "--jobs", "2", "--quiet")
+    assert r.exit_code == 0, r.output
+    for s in SAMPLES:
+        got = (tmp_path / f"{Path(s).stem}.pmc").read_text()
+        assert got == (GOLDEN / f"{Path(s).stem}.prsxy-shop.pmac").read_text()
+
+
+def test_stdout_and_split_programs(runner: CliRunner, tmp_path: Path) -> None:
+    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP)
+    assert r.exit_code == 0 and "OPEN PROG 1 CLEAR" in r.output
+    prof = tmp_path / "split.toml"
+    prof.write_text((ROOT / SHOP).read_text().replace("max_points_per_program = 0",
+                                                     "max_points_per_program = 500"))
+    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", str(prof), "-o",
+               str(tmp_path / "p.pmc"))
+    assert r.exit_code == 0, r.output
+    parts = sorted(tmp_path.glob("p.part*.pmc"))
+    assert len(parts) >= 3
+    assert "OPEN PROG 2 CLEAR" in parts[1].read_text()
+
+
+def test_stages_can_be_switched_off(runner: CliRunner, tmp_path: Path) -> None:
+    outs = {}
+    for flag in ("", "--no-axis-comp", "--nominal-kinematics"):
+        out = tmp_path / f"o{flag}.pmc"
+        args = ["convert", "samples/pocket.ngc", "--profile", PERTURBED, "-o", str(out)]
+        r = invoke(runner, *(args + ([flag] if flag else [])))
+        assert r.exit_code == 0
+        body = out.read_text().split("OPEN PROG")[1]
+        outs[flag] = body
+        if flag:
+            assert flag in out.read_text().split("\n")[5]  # the options header line
+    assert len(set(outs.values())) == 3
+
+
+def test_inspect_json(runner: CliRunner) -> None:
+    r = invoke(runner, "inspect", "samples/pocket.ngc", "--json")
+    assert r.exit_code == 0
+    rows = [json.loads(x) for x in r.output.splitlines()]
+    assert rows[0]["kind"] == "rapid" and rows[0]["line"] == 5
+    arcs = [x for x in rows if x["kind"] == "arc"]
+    assert arcs and {"plane", "center", "rotation"} <= set(arcs[0])
+
+
+def test_check_lists_every_problem(runner: CliRunner, tmp_path: Path) -> None:
+    prog = tmp_path / "far.ngc"
+    prog.write_text("G21 G90\nG0 X500\nG1 Y0 A40 F100\nG1 F99999 X0\nM2\n")
+    r = invoke(runner, "check", str(prog), "--profile", SHOP)
+    assert r.exit_code == 1
+    assert f"{prog}:2:" in r.output and "beyond its travel" in r.output
+    assert f"{prog}:3:" in r.output and "tilted" in r.output
+    assert f"{prog}:4:" in r.output and "above the machine's maximum" in r.output
+    ok = invoke(runner, "check", "samples/pocket.ngc", "--profile", SHOP)
+    assert ok.exit_code == 0
+
+
+# ---------------------------------------------------------------- errors
+
+BAD_PROGRAMS = [
+    ("G21\nG1 X1 Y1 Z#1 F100\nM2\n", ":2:11:", "parameters"),
+    ("G21\nG0 X1\n", ":2:", "ends without M2"),
+    ("G21\nG1 X10\nM2\n", ":2:4:", "no feed rate"),
+    ("G21\nG0 X9000\nM2\n", ":2:", "beyond its travel"),
+    ("G21\nG0 B60\nM2\n", ":2:", "tilted"),
+    ("G21\nM2\n", "", "moves nothing"),
+    ("", "", "ends without M2"),
+]
+
+
+@pytest.mark.parametrize(("text", "where", "what"), BAD_PROGRAMS,
+                         ids=[b[2] for b in BAD_PROGRAMS])
+def test_bad_programs_fail_cleanly_and_keep_the_old_output(
+        runner: CliRunner, tmp_path: Path, text: str, where: str, what: str) -> None:
+    prog = tmp_path / "bad.ngc"
+    prog.write_text(text)
+    out = tmp_path / "out.pmc"
+    out.write_text("precious\n")
+    r = invoke(runner, "convert", str(prog), "--profile", SHOP, "-o", str(out))
+    assert r.exit_code == 1
+    assert f"{prog}{where}" in r.output and what in r.output, r.output
+    _no_traceback(r.output)
+    assert out.read_text() == "precious\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.ngc", "out.pmc"]
+
+
+def test_binary_file(runner: CliRunner, tmp_path: Path) -> None:
+    prog = tmp_path / "bin.ngc"
+    prog.write_bytes(b"G21\nG0 X1\n\x00\x01\x02")
+    r = invoke(runner, "convert", str(prog), "--profile", SHOP, "-o", str(tmp_path / "o"))
+    assert r.exit_code == 1 and f"{prog}:3: binary data" in r.output
+
+
+def test_bad_profile_names_the_key(runner: CliRunner, tmp_path: Path) -> None:
+    prof = tmp_path / "p.toml"
+    prof.write_text((ROOT / SHOP).read_text().replace("strut_length = 400.0", "strut_length = -1",
+                                                      1))
+    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", str(prof), "-o",
+               str(tmp_path / "o.pmc"))
+    assert r.exit_code == 1
+    assert "kinematics.legs[1].strut_length" in r.output
+    _no_traceback(r.output)
+
+
+@pytest.mark.parametrize("args", [
+    ["convert", "samples/pocket.ngc", "samples/drill.ngc", "--profile", SHOP, "-o", "x"],
+    ["convert", "samples/pocket.ngc", "--profile", SHOP, "--start", "1,2"],
+    ["convert", "samples/pocket.ngc", "--profile", SHOP, "--format", "dxf"],
+    ["convert", "samples/pocket.ngc"],
+])
+def test_usage_errors_exit_2(runner: CliRunner, args: list[str]) -> None:
+    r = runner.invoke(main, args)
+    assert r.exit_code == 2, r.output
+    _no_traceback(r.output)
+
+
+def test_missing_file(runner: CliRunner) -> None:
+    r = invoke(runner, "convert", "nope.ngc", "--profile", SHOP)
+    assert r.exit_code == 1 and "nope.ngc" in r.output
+
+
+def test_calibrate_refuses_to_overwrite_its_input(runner: CliRunner, tmp_path: Path) -> None:
+    prof = tmp_path / "p.toml"
+    prof.write_text((ROOT / SHOP).read_text())
+    r = invoke(runner, "calibrate", "tests/data/spec/poses.csv", "--profile", str(prof), "-o",
+               str(prof))
+    assert r.exit_code == 2 and "--in-place" in r.output
+    assert prof.read_text() == (ROOT / SHOP).read_text()
+
+
+def test_malformed_measurement_names_file_and_row(runner: CliRunner, tmp_path: Path) -> None:
+    bad = tmp_path / "poses.csv"
+    lines = (ROOT / "tests/data/spec/poses.csv").read_text().splitlines()
+    lines[5] = lines[5].replace(",", ",nan,", 1).rsplit(",", 1)[0]
+    bad.write_text("\n".join(lines) + "\n")
+    r = invoke(runner, "calibrate", str(bad), "--profile", SHOP, "-o", str(tmp_path / "o.toml"))
+    assert r.exit_code == 1 and f"{bad}:6" in r.output, r.output
+    assert not (tmp_path / "o.toml").exists()
