@@ -25,7 +25,7 @@ def runner(monkeypatch: pytest.MonkeyPatch) -> CliRunner:
     return CliRunner()
 
 
-def invoke(runner: CliRunner, *args: str):  # noqa: ANN201
+def invoke(runner: CliRunner, *args: str):
     return runner.invoke(main, list(args), catch_exceptions=False)
 
 
