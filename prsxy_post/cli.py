@@ -789,3 +789,49 @@ def diagnose(data: Sequence[str], profile_path: str, output: str | None,
     click.echo(result.summary)
     if output:
         click.echo(f"wrote {output}")
+
+
+@main.command()
+@click.argument("runs", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print the figures as JSON.")
+@click.option("--plot", "plot_path", default=None, help="Write polar plots to this PNG.")
+@click.option("--profile", "profile_path", default=None, type=click.Path(dir_okay=False),
+              help="A model of the machine: adds its simulated prediction to the plot.")
+@click.option("--commanded-with", default=None, type=click.Path(dir_okay=False),
+              help="Profile the machine was commanded with (default: --profile).")
+@guarded
+def ballbar(runs: Sequence[str], as_json: bool, plot_path: str | None,
+            profile_path: str | None, commanded_with: str | None) -> None:
+    """ISO 230-4 circular deviation and ballbar diagnostics of ballbar RUNS."""
+    from . import ballbar as bb
+    from . import diagnose as dg
+    from . import measure
+
+    data = [measure.read_ballbar(read_text(p, "ballbar file"), p) for p in runs]
+    results, pairs = bb.analyse_runs(data)
+    if plot_path:
+        predicted = None
+        if profile_path:
+            model = load_profile(profile_path)
+            commanded = load_profile(commanded_with) if commanded_with else model
+            d = dg.Data.build(commanded, [], data, [])
+            pred = dg.predict(model, d, want_columns=False).pred
+            _, segs = d.measured()
+            predicted = {s.source: pred[s.start:s.stop] * 1000.0 for s in segs}
+        write_atomic({Path(plot_path): bb.plot_runs(results, data, predicted)})
+    if as_json:
+        click.echo(json.dumps({"runs": [bb.result_to_json(r) for r in results],
+                               "pairs": [bb.result_to_json(p) for p in pairs]}, indent=1))
+        return
+    for r in results:
+        click.echo(f"{r.source}: {r.plane} r{r.radius:g} {r.direction} F{r.feed_mm_min:.0f}: "
+                   f"circular deviation {r.circular_deviation_um:.2f} um, squareness "
+                   f"{r.squareness_mm_per_m:+.4f} mm/m, scale mismatch "
+                   f"{r.scale_mismatch_mm:+.4f} mm, backlash X {r.backlash_um[0]:+.2f} "
+                   f"Y {r.backlash_um[1]:+.2f} um, cyclic {r.cyclic_um:.2f} um "
+                   f"(order {r.cyclic_order}), reversal spike {r.reversal_spike_um:.2f} um, "
+                   f"straightness {r.straightness_um[0]:+.2f} / {r.straightness_um[1]:+.2f} um")
+    for p in pairs:
+        click.echo(f"pair {p.name} r{p.radius:g}: squareness {p.squareness_mm_per_m:+.4f} mm/m, "
+                   f"scale mismatch {p.scale_mismatch_mm:+.4f} mm, servo mismatch "
+                   f"{p.servo_mismatch_ms:+.3f} ms, hysteresis {p.circular_hysteresis_um:.2f} um")
