@@ -835,3 +835,7 @@ def ballbar(runs: Sequence[str], as_json: bool, plot_path: str | None,
         click.echo(f"pair {p.name} r{p.radius:g}: squareness {p.squareness_mm_per_m:+.4f} mm/m, "
                    f"scale mismatch {p.scale_mismatch_mm:+.4f} mm, servo mismatch "
                    f"{p.servo_mismatch_ms:+.3f} ms, hysteresis {p.circular_hysteresis_um:.2f} um")
+
+
+if __name__ == "__main__":  # python -m prsxy_post.cli
+    main()
