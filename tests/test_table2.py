@@ -11,7 +11,7 @@ from .conftest import ROOT
 
 
 @pytest.mark.slow
-def test_table2_replay(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:  # noqa: ANN001
+def test_table2_replay(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:
     spec = importlib.util.spec_from_file_location("replay", ROOT / "samples/table2/replay.py")
     assert spec and spec.loader
     mod = importlib.util.module_from_spec(spec)

@@ -43,7 +43,7 @@ def cli(*args: str) -> str:
 def pairs(out_dir: Path) -> dict[int, dict]:
     files = sorted(str(p) for p in out_dir.glob("ballbar-*.csv"))
     j = json.loads(cli("ballbar", *files, "--json"))
-    return {int(round(p["radius"])): p for p in j["pairs"]}
+    return {round(p["radius"]): p for p in j["pairs"]}
 
 
 def main() -> dict[int, tuple[dict, dict]]:
