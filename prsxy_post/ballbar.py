@@ -89,7 +89,8 @@ def angles(run: BallbarRun) -> tuple[str, np.ndarray, str]:
     """Plane (the two axes the commanded path spans most), angles, direction."""
     rel = run.commanded[:, :3] - run.pivot
     ext = np.ptp(rel, axis=0)
-    two = tuple(sorted(int(i) for i in np.argsort(ext)[::-1][:2]))
+    i0, i1 = sorted(int(i) for i in np.argsort(ext)[::-1][:2])
+    two = (i0, i1)
     plane = {v: k for k, v in PLANES.items()}[two]
     i, j = PLANES[plane]
     th = np.arctan2(rel[:, j], rel[:, i])

@@ -6,6 +6,7 @@ rerun with ``--debug`` for the traceback and report it).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import itertools
 import json
@@ -117,7 +118,6 @@ def fail(err: PrsxyError) -> NoReturn:
 
 def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
     """Run a command: user errors become one located line, bugs exit 3."""
-    import functools
 
     @functools.wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -192,7 +192,7 @@ def inspect(program: str, profile_path: str | None, start: str | None, as_json: 
         if as_json:
             out.write(json.dumps(d) + "\n")
         else:
-            end = " ".join(f"{v:.4f}" for v in d["end"])
+            end = " ".join(f"{v:.4f}" for v in m.end)
             extra = ""
             if d["kind"] == "arc":
                 extra = f" G{d['plane']} centre {d['center']} rotation {d['rotation']}"
@@ -365,14 +365,14 @@ def convert_file(job: ConvertJob) -> ConvertStats:
             n_motions += len(batch)
             for pc in pipe.feed(batch):
                 n_points += len(pc)
-                write(lambda pc=pc: writer.feed(pc))
+                write(functools.partial(writer.feed, pc))
             if len(batch) < job.chunk:
                 break
         tail = pipe.finish()
         n_points += sum(len(pc) for pc in tail)
         for pc in tail[:-1]:
-            write(lambda pc=pc: writer.feed(pc))
-        write(lambda: writer.finish(tail[-1] if tail else None))
+            write(functools.partial(writer.feed, pc))
+        write(functools.partial(writer.finish, tail[-1] if tail else None))
         for fh in sinks.values():
             fh.flush()
             os.fsync(fh.fileno())

@@ -39,7 +39,7 @@ SPIRAL_REL_TOLERANCE = 0.001
 #: G73/G83 back-off before the next peck (LinuxCNC's G83_RAPID_DELTA, inch).
 G83_RAPID_DELTA_INCH = 0.010
 
-Pose = tuple[float, float, float, float, float]
+Pose = tuple[float, ...]  # (x, y, z, A, B)
 
 
 @dataclass(frozen=True)
@@ -307,7 +307,8 @@ _G_REJECT = {
     43.2: "G43.2 (additional offsets) is not supported", 52: "G52 is not supported",
     64.1: "G64 variants are not supported", 90.2: "unknown G code",
 }
-_M_GROUP = {0: 4, 1: 4, 2: 4, 30: 4, 60: 4, 3: 7, 4: 7, 5: 7, 6: 6, 7: 8, 8: 8, 9: 8,
+_M_GROUP: dict[float, int] = {0: 4, 1: 4, 2: 4, 30: 4, 60: 4, 3: 7, 4: 7, 5: 7, 6: 6,
+                              7: 8, 8: 8, 9: 8,
             48: 9, 49: 9}
 _CYCLES = {73, 81, 82, 83, 84, 85, 86, 89}
 _AXES = "XYZAB"
@@ -449,7 +450,7 @@ class Interpreter:
             if code not in _M_GROUP:
                 raise self.err("unsupported M code", line, w,
                                "M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30 M48 M49 M60")
-            grp = _M_GROUP[code]
+            grp = _M_GROUP[int(code)]
             if grp in mgroups:
                 raise self.err("two M codes of the same modal group", line, w,
                                f"one of them (already {mgroups[grp][1].text})")

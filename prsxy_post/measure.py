@@ -175,7 +175,11 @@ def read_measurement(text: str, source: str = "<string>") -> Measurement:
     """Read any contract measurement file, by its ``# kind:``."""
     tab = _split(text, source)
     kind = _kind(tab, source)
-    return {"poses": _poses, "ballbar": _ballbar, "axis": _axis}[kind](tab, source)
+    if kind == "poses":
+        return _poses(tab, source)
+    if kind == "ballbar":
+        return _ballbar(tab, source)
+    return _axis(tab, source)
 
 
 def _expect_kind(text: str, source: str, want: str) -> _Table:
