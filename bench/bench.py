@@ -45,15 +45,16 @@ def generate(n_lines: int, seed: int = 0) -> str:
     direction = 1.0
     while len(out) < n_lines - 2:
         kind = rng.random()
+        if abs(x) > 60:  # end of a raster line: step over and turn
+            direction = -1.0 if x > 0 else 1.0
+            y = y + 0.5 if y < 60 else -60.0
+            out.append(f"G1 X{x:.4f} Y{y:.4f}")
+            x += direction * 0.1
+            continue
         if kind < 0.80:
             x += direction * rng.uniform(0.05, 0.3)
             z = 0.2 * np.sin(x / 7.0) * np.cos(y / 9.0)
-            if abs(x) > 60:
-                direction = -direction
-                y = y + 0.5 if y < 60 else -60.0
-                out.append(f"G1 X{x:.4f} Y{y:.4f} Z{z:.4f}")
-            else:
-                out.append(f"G1 X{x:.4f} Z{z:.4f}")
+            out.append(f"G1 X{x:.4f} Z{z:.4f}")
         elif kind < 0.92:
             a = float(np.clip(a + rng.normal(0, 0.3), -15, 15))
             b = float(np.clip(b + rng.normal(0, 0.3), -15, 15))
@@ -61,8 +62,7 @@ def generate(n_lines: int, seed: int = 0) -> str:
             out.append(f"G1 X{x:.4f} A{a:.4f} B{b:.4f}")
         else:
             r = rng.uniform(0.5, 2.0)
-            dx = direction * r * 0.8
-            x += dx
+            x += direction * r * 0.8
             code = "G2" if rng.random() < 0.5 else "G3"
             out.append(f"{code} X{x:.4f} Y{y:.4f} R{r:.4f}")
     out += ["G0 Z5", "M2"]
