@@ -75,8 +75,17 @@ def _legendre_table(u: np.ndarray, degree: int) -> np.ndarray:
     return legendre.legvander(u, degree)
 
 
+def legendre_tables(q: np.ndarray, lo: np.ndarray, hi: np.ndarray, degree: int
+                    ) -> dict[int, np.ndarray]:
+    """P_0..P_degree of every coordinate scaled to [−1, 1] (clamped outside)."""
+    span = np.where(hi > lo, hi - lo, 1.0)
+    u = np.clip(2.0 * (q - lo) / span - 1.0, -1.0, 1.0)
+    return {v: _legendre_table(u[:, v], max(degree, 2)) for v in range(5)}
+
+
 def design(q: np.ndarray, comp: str, degree: int, lo: np.ndarray, hi: np.ndarray,
-           structure: str = "eq5") -> tuple[np.ndarray, list[tuple[tuple[int, ...], ...]]]:
+           structure: str = "eq5", tables: dict[int, np.ndarray] | None = None
+           ) -> tuple[np.ndarray, list[tuple[tuple[int, ...], ...]]]:
     """Design matrix of one component: a constant, then every group's terms.
 
     A group of one variable set holds every Legendre product of total degree
@@ -88,11 +97,10 @@ def design(q: np.ndarray, comp: str, degree: int, lo: np.ndarray, hi: np.ndarray
     X : (N, m) ndarray
     terms : list of (variables, exponents) describing each column after the first
     """
-    span = np.where(hi > lo, hi - lo, 1.0)
-    u = np.clip(2.0 * (q - lo) / span - 1.0, -1.0, 1.0)
+    if tables is None:
+        tables = legendre_tables(q, lo, hi, degree)
     cols = [np.ones(len(q))]
     terms: list[tuple[tuple[int, ...], ...]] = []
-    tables = {v: _legendre_table(u[:, v], max(degree, 2)) for v in range(5)}
 
     def product(group: tuple[int, ...], e: tuple[int, ...]) -> np.ndarray:
         col = np.ones(len(q))
@@ -142,10 +150,11 @@ class ErrorMap:
         """e(q), shape (N, 5) [mm, mm, mm, deg, deg]."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
         out = np.zeros_like(q)
+        tables = legendre_tables(q, self.lo, self.hi, max(self.degree.values(), default=2))
         for i, c in enumerate(COMPONENTS):
             if c not in self.coef:
                 continue
-            X, _ = design(q, c, self.degree[c], self.lo, self.hi, self.structure[c])
+            X, _ = design(q, c, self.degree[c], self.lo, self.hi, self.structure[c], tables)
             out[:, i] = X @ self.coef[c]
         return out
 

@@ -28,6 +28,7 @@ import math
 import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from .errors import GCodeError
 
@@ -68,9 +69,9 @@ class InterpreterConfig:
     active_work_offset: int = 54
 
 
-@dataclass(frozen=True, slots=True)
-class Motion:
-    """One move, arc or dwell the machine makes.
+class Motion(NamedTuple):
+    """One move, arc or dwell the machine makes (a named tuple: cheap to make by
+    the hundred thousand).
 
     start, end : (x, y, z, A, B) [mm, deg], workpiece frame
     feed : mm/min along the XYZ path; deg/min when only A/B move; for G93 the
@@ -924,6 +925,72 @@ class Interpreter:
             current_cc = clear
 
 
+#: The common CAM block: an optional G0/G1, axis words, an optional F, nothing else.
+_FAST = re.compile(
+    r"\s*(?:[Nn]\s*\d+\s*)?(?:[Gg]\s*0*([01])(?![0-9.])\s*)?((?:[XYZABxyzab]\s*[-+]?(?:\d+\.?\d*|\.\d+)\s*)+)"
+    r"(?:[Ff]\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*)?")
+_FAST_AXIS = re.compile(r"([XYZABxyzab])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_AXIS_INDEX = {"X": 0, "Y": 1, "Z": 2, "A": 3, "B": 4, "x": 0, "y": 1, "z": 2, "a": 3, "b": 4}
+
+
+def _fast(it: Interpreter, raw: str, n: int) -> bool:
+    """Interpret the common straight-move block without building a Block.
+
+    Only blocks the full path would accept the same way take it: G0/G1 (or
+    none, with G0/G1 in effect), each axis once, F only in G94; anything else
+    (and every error) goes the full way, which reports it with its column.
+    """
+    m = _FAST.fullmatch(raw)
+    if m is None:
+        return False
+    st = it.st
+    g = m.group(1)
+    motion = int(g) if g is not None else st.motion
+    if motion not in (0, 1) or st.ended or st.inverse_time:
+        return False
+    words = _FAST_AXIS.findall(m.group(2))
+    idx = [_AXIS_INDEX[w[0]] for w in words]
+    if len(set(idx)) != len(idx):
+        return False
+    f = m.group(3)
+    if f is not None:
+        fv = float(f)
+        if fv < 0:
+            return False
+    elif motion == 1 and st.feed <= 0:
+        return False
+    start = st.pos
+    end = list(start)
+    sc = MM_PER_INCH if st.units == "inch" else 1.0
+    if st.absolute:
+        off = it.offset()
+        for i, (_, v) in zip(idx, words, strict=True):
+            end[i] = float(v) * (sc if i < 3 else 1.0) + off[i]
+    else:
+        for i, (_, v) in zip(idx, words, strict=True):
+            end[i] = start[i] + float(v) * (sc if i < 3 else 1.0)
+    if f is not None:
+        st.feed = fv
+        st.feed_units = st.units
+        if st.feed <= 0 and motion == 1:
+            return False
+    if g is not None:
+        st.motion = motion
+        st.cycle_il = None
+    it.started = True
+    ts, te = tuple(start), tuple(end)
+    if motion == 0:
+        it.out.append(Motion(n, "rapid", ts, te, math.nan, 0, None, 0, 0.0, st.tool_length,
+                             st.tool, st.spindle * st.spindle_dir, False))
+    else:
+        moved = (te[0] - ts[0]) ** 2 + (te[1] - ts[1]) ** 2 + (te[2] - ts[2]) ** 2 > 1e-24
+        rate = st.feed * sc if (moved or te[3:] == ts[3:]) else st.feed
+        it.out.append(Motion(n, "feed", ts, te, rate, 0, None, 0, 0.0, st.tool_length,
+                             st.tool, st.spindle * st.spindle_dir, False))
+    st.pos = end
+    return True
+
+
 def iter_motions(lines: Iterable[str], config: InterpreterConfig | None = None,
                  source: str = "<string>") -> Iterator[Motion]:
     """Interpret lines (without their line ends) and yield motions as they come.
@@ -937,6 +1004,11 @@ def iter_motions(lines: Iterable[str], config: InterpreterConfig | None = None,
     n = 0
     last_text = 0
     for n, raw in enumerate(lines, 1):
+        if _fast(it, raw, n):
+            yield from it.out
+            it.out.clear()
+            last_text = n
+            continue
         try:
             blk = parse_line(raw, n, source)
             it.run(blk)

@@ -168,45 +168,54 @@ class PmacWriter:
         if got is None:
             return []
         pts, vel, _ = got
+        n = len(pts)
         P = _round(pts.P_cmd, self.dec)
-        V = _round(vel, 4)
+        PV = np.empty((n, 10))
+        PV[:, 0::2] = P
+        PV[:, 1::2] = _round(vel, 4)
+        # everything per point that can be decided on arrays is decided here; the
+        # loop below only assembles text
+        rows = [self.row_fmt % tuple(r) for r in PV.tolist()]
+        dts = pts.dt.tolist()
+        ms_txt = ["%.4f" % (x * 1000.0) for x in dts]
+        prev = np.vstack([self.last_P[None, :] if self.last_P is not None else P[:1], P[:-1]])
+        standing = (np.all(P == prev, axis=1) & (pts.speed == 0) & (pts.dt > 0)).tolist()
+        lines_ = pts.line.tolist()
         pieces: list[Piece] = []
-        lines: list[str] = []
-        for k in range(len(pts)):
+        out: list[str] = []
+        for k in range(n):
             if self.n == 0 or (self.max_pts and self.in_part >= self.max_pts):
-                if lines:
-                    pieces.append((self.part, "\n".join(lines) + "\n"))
-                    lines = []
+                if out:
+                    pieces.append((self.part, "\n".join(out) + "\n"))
+                    out = []
                 if self.n:
                     pieces.append((self.part, "CLOSE\n"))
                     self.part += 1
                     self.in_part = 0
-                lines += self._open_part(P[k])
+                out += self._open_part(P[k])
                 if self.n == 0:
                     self.n = 1
                     self.in_part = 1
-                    self.last_P = P[k]
                     continue
-            if pts.line[k] != self.last_line:
-                lines.append(f"; line {int(pts.line[k])}")
-                self.last_line = int(pts.line[k])
-            ms = float(pts.dt[k] * 1000.0)
-            self.t_total += float(pts.dt[k])
-            if (self.last_P is not None and np.array_equal(P[k], self.last_P)
-                    and pts.speed[k] == 0 and ms > 0):
+            ln = lines_[k]
+            if ln != self.last_line:
+                out.append(f"; line {ln}")
+                self.last_line = ln
+            self.t_total += dts[k]
+            if standing[k]:
                 # the path stands (dwell): a DWELL holds it for any length
-                lines.append(f"DWELL{ms:.4f}")
+                out.append("DWELL" + ms_txt[k])
             else:
-                ms_txt = f"{ms:.4f}"
-                if ms_txt != self.tm_cur:
-                    lines.append(f"PVT{ms_txt}")
-                    self.tm_cur = ms_txt
-                lines.append(self.row_fmt % tuple(np.column_stack([P[k], V[k]]).ravel()))
-            self.last_P = P[k]
+                if ms_txt[k] != self.tm_cur:
+                    out.append("PVT" + ms_txt[k])
+                    self.tm_cur = ms_txt[k]
+                out.append(rows[k])
             self.n += 1
             self.in_part += 1
-        if lines:
-            pieces.append((self.part, "\n".join(lines) + "\n"))
+        if n:
+            self.last_P = P[-1]
+        if out:
+            pieces.append((self.part, "\n".join(out) + "\n"))
         return pieces
 
     def finish(self, chunk: PointChunk | None = None) -> list[Piece]:
