@@ -31,6 +31,7 @@ from .interpolate import (
     forward_pass,
     junction_limits,
     sample,
+    steps_per_block,
     time_law,
 )
 from .profile import MOTORS, Profile, nominal_kinematics
@@ -292,8 +293,10 @@ class Pipeline:
             done, law = res
             if len(done):
                 self.any_motion = True
+            self._check_ends(done)
+            # before any point is made: a block of a billion points must not be tried
+            self._guard(law, done.line)
             s = sample(done, law, self.limits.period_s)
-            self._guard(s.dt, s.line)
             self.timings["interpolate"] += time.perf_counter() - t0
             pc = self._points(s.q, s.dt, s.line, s.first, s.tool_length, s.speed)
             if pc is not None:
@@ -310,11 +313,26 @@ class Pipeline:
     def finish(self) -> list[PointChunk]:
         return self.feed([], final=True)
 
-    def _guard(self, dt: np.ndarray, line: np.ndarray) -> None:
-        """Refuse absurd work: more points or machining time than the profile allows."""
+    def _check_ends(self, b: Blocks) -> None:
+        """Reach and travel at the blocks' end points, before interpolating them: a move
+        to X1e9 is an error at its line, not a billion points."""
+        if not len(b):
+            return
+        ends = b.end
+        q_t = correct_virtual(ends, self.error_map) if self.error_map is not None else ends
+        ik = kinematics.inverse(self.geo, q_t, b.tool_length)
+        errs = check_pose_problems(self.profile, ends, b.line, ik.reachable)
+        errs += check_travel(self.profile, ik.P, b.line)
+        if errs and not self.collect:
+            raise sorted(errs, key=lambda e: e.line or 0)[0]
+
+    def _guard(self, law: TimeLaw, line: np.ndarray) -> None:
+        """Refuse absurd work: more points or machining time than the profile allows,
+        judged from the time law, before the points are made."""
         lim = self.profile.limits
-        n_after = self.n_points + np.arange(1, len(dt) + 1)
-        t_after = self.t + np.cumsum(dt)
+        steps = steps_per_block(law, self.limits.period_s)
+        n_after = self.n_points + np.cumsum(steps)
+        t_after = self.t + np.cumsum(law.duration)
         over = np.nonzero((n_after > lim["max_points"]) | (t_after > lim["max_time_s"]))[0]
         if over.size:
             k = int(over[0])

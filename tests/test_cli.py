@@ -217,3 +217,50 @@ def test_malformed_measurement_names_file_and_row(runner: CliRunner, tmp_path: P
     r = invoke(runner, "calibrate", str(bad), "--profile", SHOP, "-o", str(tmp_path / "o.toml"))
     assert r.exit_code == 1 and f"{bad}:6" in r.output, r.output
     assert not (tmp_path / "o.toml").exists()
+
+
+NUMERIC = [
+    ("G21\nG1 Xnan F100\nM2\n", ":2:", "no number"),
+    ("G21\nG1 X1e308 F100\nM2\n", ":2:", "unknown word letter 'E'"),
+    ("G21\nG1 X999999999 F100\nM2\n", ":2:", "beyond its travel"),
+    ("G21\nG1 X1 F-5\nM2\n", ":2:", "negative F"),
+    ("G21\nG1 X1 F0\nM2\n", ":2:", "no feed rate"),
+    ("G21\nG0 X1\nG2 X1 Y0 R5 F100\nM2\n", ":3:", "end point is its start point"),
+    ("G21\nG0 X0\nG2 X0.000001 Y0 I0.0000001 J0 F100\nM2\n", ":3:", "zero-radius arc"),
+    ("G21\nG0 X0 Y0\nG2 X0 Y0 I1000000 J0 F100\nM2\n", ":3:", "would interpolate to more than"),
+    ("G21\nG0 Z-2000\nM2\n", ":2:", "beyond its travel"),
+]
+
+
+@pytest.mark.parametrize(("text", "where", "what"), NUMERIC, ids=[n[2] for n in NUMERIC])
+def test_numeric_hygiene(runner: CliRunner, tmp_path: Path, text: str, where: str,
+                         what: str) -> None:
+    prog = tmp_path / "n.ngc"
+    prog.write_text(text)
+    out = tmp_path / "o.pmc"
+    r = invoke(runner, "convert", str(prog), "--profile", SHOP, "-o", str(out))
+    assert r.exit_code == 1, r.output
+    assert f"{prog}{where}" in r.output and what in r.output, r.output
+    _no_traceback(r.output)
+    assert not out.exists()
+
+
+def test_pose_at_the_edge_of_reach(runner: CliRunner, tmp_path: Path) -> None:
+    """Tilts up to the profile's limit convert; one step beyond is refused at its line."""
+    prog = tmp_path / "tilt.ngc"
+    prog.write_text("G21\nG1 B30 F1000\nG1 B30.01\nM2\n")
+    r = invoke(runner, "check", str(prog), "--profile", SHOP)
+    assert r.exit_code == 1
+    assert f"{prog}:3:" in r.output and f"{prog}:2:" not in r.output
+
+
+def test_in_place_keeps_a_backup(runner: CliRunner, tmp_path: Path) -> None:
+    prof = tmp_path / "p.toml"
+    original = (ROOT / SHOP).read_text()
+    prof.write_text(original)
+    r = invoke(runner, "calibrate", *sorted(str(p) for p in (ROOT / "tests/data/spec").glob(
+        "*.csv")), "--profile", str(prof), "-o", str(prof), "--in-place",
+        "--commanded-with", "tests/data/vectors/nominal.toml")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "p.toml.bak").read_text() == original
+    assert prof.read_text() != original
