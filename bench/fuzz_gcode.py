@@ -1,0 +1,100 @@
+"""Fuzz the G-code reader: mutated real programs must give motions or a located GCodeError.
+
+    python bench/fuzz_gcode.py --seconds 20      # what CI runs
+    python bench/fuzz_gcode.py --seconds 3600    # a long run
+
+Mutations: byte flips, inserted G-code fragments, deleted and duplicated lines, cut
+files, random unicode. Any other exception, or a hang (each case has a time
+budget), is a finding: the case is written to fuzz-failures/ and the run fails.
+"""
+
+from __future__ import annotations
+
+import argparse
+import random
+import signal
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from prsxy_post import gcode  # noqa: E402
+from prsxy_post.errors import GCodeError  # noqa: E402
+
+FRAGMENTS = ["G2", "G3", "G81", "G83 Q", "R-", "X1e9", "#1", "[", "(", ")", ";", "%", "G20",
+             "G91", "G93", "F0", "P0", "L0", "G43 H1", "G28", "G53", "M2", "N", ".", "-",
+             "G4", "I0 J0", "Z", "\r", "\n", "\t", "\x00", "é", "G18", "G19", "G90.1"]
+
+
+def mutate(text: str, rng: random.Random) -> str:
+    lines = text.splitlines() or [""]
+    for _ in range(rng.randint(1, 6)):
+        op = rng.random()
+        k = rng.randrange(len(lines))
+        if op < 0.3:
+            s = lines[k]
+            p = rng.randint(0, len(s))
+            lines[k] = s[:p] + rng.choice(FRAGMENTS) + s[p:]
+        elif op < 0.5 and lines[k]:
+            s = lines[k]
+            p = rng.randrange(len(s))
+            lines[k] = s[:p] + chr(rng.randint(1, 0x2FF)) + s[p + 1:]
+        elif op < 0.65 and len(lines) > 1:
+            del lines[k]
+        elif op < 0.8:
+            lines.insert(k, lines[rng.randrange(len(lines))])
+        else:
+            lines = lines[: rng.randint(1, len(lines))]
+    return "\n".join(lines)
+
+
+class Hang(Exception):
+    pass
+
+
+def _alarm(signum: int, frame: object) -> None:
+    raise Hang
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seconds", type=float, default=20.0)
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    seeds = [p.read_text(errors="surrogateescape") for p in sorted(
+        (ROOT / "tests" / "data" / "gcode").rglob("*")) if p.suffix in (".ngc", ".nc", ".tap",
+                                                                        ".gcode")]
+    seeds = [s[:20000] for s in seeds]
+    rng = random.Random(args.seed)
+    signal.signal(signal.SIGALRM, _alarm)
+    end = time.monotonic() + args.seconds
+    n = ok = rejected = 0
+    failures = ROOT / "fuzz-failures"
+    while time.monotonic() < end:
+        text = mutate(rng.choice(seeds), rng)
+        n += 1
+        signal.alarm(5)
+        try:
+            gcode.interpret(text, source="fuzz.ngc")
+            ok += 1
+        except GCodeError as exc:
+            if not str(exc).startswith("fuzz.ngc:"):
+                raise AssertionError(f"error without location: {exc}") from None
+            rejected += 1
+        except Exception as exc:  # a finding
+            failures.mkdir(exist_ok=True)
+            path = failures / f"case-{args.seed}-{n}.ngc"
+            path.write_text(text, errors="surrogateescape")
+            print(f"FAIL {type(exc).__name__}: {exc} ({path})")
+            return 1
+        finally:
+            signal.alarm(0)
+    print(f"fuzz: {n} mutated programs, {ok} accepted, {rejected} rejected with a location, "
+          "0 crashes")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
