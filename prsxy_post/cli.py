@@ -837,5 +837,90 @@ def ballbar(runs: Sequence[str], as_json: bool, plot_path: str | None,
                    f"{p.servo_mismatch_ms:+.3f} ms, hysteresis {p.circular_hysteresis_um:.2f} um")
 
 
+
+@main.group()
+def tables() -> None:
+    """Real-axis tables in the formats controllers read: LinuxCNC, Turbo PMAC."""
+
+
+TABLE_FORMATS = click.Choice(["linuxcnc0", "linuxcnc1", "pmac"])
+
+
+@tables.command("export")
+@profile_option
+@click.option("--format", "fmt", type=TABLE_FORMATS, required=True,
+              help="linuxcnc0/linuxcnc1: COMP_FILE_TYPE 0/1; pmac: DEFINE COMP + backlash.")
+@click.option("--out-dir", required=True, type=click.Path(file_okay=False))
+@guarded
+def tables_export(profile_path: str, fmt: str, out_dir: str) -> None:
+    """Write the profile's [[axis_comp]] tables, one file per motor."""
+    from . import tables as tb
+
+    prof = load_profile(profile_path)
+    if not prof.axis_comp:
+        raise PrsxyError("the profile has no [[axis_comp]] tables", source=profile_path,
+                         key="axis_comp", expected="tables to export")
+    files: dict[Path, str] = {}
+    for c in prof.axis_comp:
+        t = tb.AxisTable(c.motor, c.positions, c.forward, c.reverse)
+        if fmt == "pmac":
+            text = tb.format_pmac_comp(t, motor=c.motor,
+                                       counts_per_mm=prof.motor(c.motor).counts_per_mm)
+            files[Path(out_dir) / f"motor{c.motor}.pmc"] = text
+        else:
+            files[Path(out_dir) / f"motor{c.motor}.comp"] = tb.format_linuxcnc_comp(
+                t, file_type=int(fmt[-1]))
+    write_atomic(files)
+    click.echo(f"wrote {len(files)} files to {out_dir}", err=True)
+
+
+@tables.command("import")
+@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@profile_option
+@click.option("--format", "fmt", type=TABLE_FORMATS, required=True)
+@click.option("--motor", type=click.IntRange(1, 6), default=None,
+              help="Motor of a LinuxCNC file (PMAC tables name their motor).")
+@click.option("-o", "--output", required=True, help="Profile to write with the tables.")
+@click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
+@guarded
+def tables_import(files: Sequence[str], profile_path: str, fmt: str, motor: int | None,
+                  output: str, in_place: bool) -> None:
+    """Read tables into a profile's [[axis_comp]] (replacing those motors' tables)."""
+    from . import tables as tb
+    from .profile import dumps
+
+    _check_output(output, [profile_path], in_place)
+    prof = load_profile(profile_path)
+    new: list[Any] = []
+    for f in files:
+        text = read_text(f, "table file")
+        if fmt == "pmac":
+            # counts per mm of the motor each table names
+            first = tb.read_pmac_comp(text, f, counts_per_mm=1.0)
+            for t in first:
+                cpm = prof.motor(t.motor).counts_per_mm
+                new += [x for x in tb.read_pmac_comp(text, f, counts_per_mm=cpm)
+                        if x.motor == t.motor]
+        else:
+            if motor is None or motor == 4:
+                raise UsageError("--motor is needed for LinuxCNC files",
+                                 expected="--motor 1, 2, 3, 5 or 6")
+            new.append(tb.read_linuxcnc_comp(text, f, file_type=int(fmt[-1]), motor=motor))
+    doc = dict(prof.raw)
+    merged = {c["motor"]: c for c in doc.get("axis_comp", [])}
+    for t in new:
+        merged[t.motor] = {"motor": t.motor, "positions": t.positions.tolist(),
+                           "forward": t.forward.tolist(), "reverse": t.reverse.tolist()}
+    doc["axis_comp"] = [merged[m] for m in sorted(merged)]
+    text = dumps(doc)
+    profile_mod.loads(text, output)
+    out = {Path(output): text}
+    if in_place and Path(output).resolve() == Path(profile_path).resolve():
+        out[Path(output + ".bak")] = read_text(profile_path, "profile")
+    write_atomic(out)
+    click.echo(f"wrote {output} with tables for motors "
+               f"{', '.join(str(t.motor) for t in new)}", err=True)
+
+
 if __name__ == "__main__":  # python -m prsxy_post.cli
     main()
