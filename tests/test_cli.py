@@ -264,3 +264,27 @@ def test_in_place_keeps_a_backup(runner: CliRunner, tmp_path: Path) -> None:
     assert r.exit_code == 0, r.output
     assert (tmp_path / "p.toml.bak").read_text() == original
     assert prof.read_text() != original
+
+
+def _gcode_rejections() -> list[tuple[str, str, str]]:
+    from .test_gcode import REJECT
+
+    return REJECT
+
+
+@pytest.mark.parametrize(("text", "where", "what"), _gcode_rejections(),
+                         ids=[r[2][:30] for r in _gcode_rejections()])
+def test_every_gcode_rejection_through_the_cli(runner: CliRunner, tmp_path: Path, text: str,
+                                               where: str, what: str) -> None:
+    """Each of the reader's rejections, as a user meets it: exit 1, the file, line and
+    column, no traceback, and an existing output left as it was."""
+    prog = tmp_path / "t.ngc"
+    prog.write_text(text)
+    out = tmp_path / "out.pmc"
+    out.write_text("precious\n")
+    r = invoke(runner, "convert", str(prog), "--profile", "tests/data/vectors/nominal.toml",
+               "-o", str(out))
+    assert r.exit_code == 1
+    assert str(prog) + where.removeprefix("t.ngc") in r.output and what in r.output, r.output
+    _no_traceback(r.output)
+    assert out.read_text() == "precious\n"
