@@ -94,9 +94,21 @@ def child_convert(program: str, prof: str, out: str) -> None:
     t0 = time.perf_counter()
     st = convert_file(ConvertJob(program, prof, "pmac", out, None, (True, True, True), "bench"))
     total = time.perf_counter() - t0
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # MB (Linux: KiB)
+    rss = peak_rss_mb()
     print(json.dumps({"total_s": total, "lines": st.lines, "motions": st.motions,
                       "points": st.points, "timings": st.timings, "peak_rss_mb": rss}))
+
+
+def peak_rss_mb() -> float:
+    """This process's own peak resident memory. Not ru_maxrss: Linux carries the
+    parent's high-water mark across fork and exec into it."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 def time_rs274(program: Path) -> float | None:
