@@ -624,7 +624,21 @@ def _print_stage(rep: Any) -> None:
     click.echo(f"  residual max after:  {_fmt_stats(rep.max_after)}")
 
 
-def _check_output(out: str, inputs: Sequence[str], in_place: bool, backup: bool = True) -> None:
+def profile_files(doc: dict[str, Any], output: str, input_path: str, in_place: bool
+                  ) -> dict[Path, str | bytes]:
+    """The profile to write (checked to read back) and, when it replaces its input,
+    a .bak of the input."""
+    from .profile import dumps
+
+    text = dumps(doc)
+    profile_mod.loads(text, output)  # what we write must read back
+    files: dict[Path, str | bytes] = {Path(output): text}
+    if in_place and Path(output).resolve() == Path(input_path).resolve():
+        files[Path(output + ".bak")] = read_text(input_path, "profile")
+    return files
+
+
+def _check_output(out: str, inputs: Sequence[str], in_place: bool) -> None:
     """Never overwrite an input profile unless asked; keep a backup when asked."""
     outp = Path(out).resolve()
     for p in inputs:
@@ -660,7 +674,7 @@ def calibrate(data: Sequence[str], profile_path: str, output: str, commanded_wit
     and the residuals before and after.
     """
     from . import calibrate as cal
-    from .profile import dumps, profile_from_dict
+    from .profile import profile_from_dict
 
     _check_output(output, [profile_path], in_place)
     start = load_profile(profile_path)
@@ -707,12 +721,7 @@ def calibrate(data: Sequence[str], profile_path: str, output: str, commanded_wit
                          "commanded_with": commanded_with or profile_path,
                          "data": list(data), "stages": [r.name for r in reports]}
     doc["provenance"] = prov
-    text = dumps(doc)
-    profile_mod.loads(text, output)  # what we write must read back
-    files = {Path(output): text}
-    if in_place and Path(output).resolve() == Path(profile_path).resolve():
-        files[Path(output + ".bak")] = read_text(profile_path, "profile")
-    write_atomic(files)
+    write_atomic(profile_files(doc, output, profile_path, in_place))
     if as_json:
         click.echo(json.dumps({"stages": [r.to_dict() for r in reports], "output": output},
                               default=_json_default, indent=1))
@@ -748,7 +757,6 @@ def diagnose(data: Sequence[str], profile_path: str, output: str | None,
              in_place: bool) -> None:
     """Find where PROFILE's simulation and the measurements DATA disagree and why."""
     from . import diagnose as dg
-    from .profile import dumps
 
     if output:
         _check_output(output, [profile_path], in_place)
@@ -759,11 +767,7 @@ def diagnose(data: Sequence[str], profile_path: str, output: str | None,
     result = dg.diagnose(current, d, alpha=alpha)
     files: dict[Path, str | bytes] = {}
     if output:
-        text = dumps(result.updated)
-        profile_mod.loads(text, output)
-        files[Path(output)] = text
-        if in_place and Path(output).resolve() == Path(profile_path).resolve():
-            files[Path(output + ".bak")] = read_text(profile_path, "profile")
+        files.update(profile_files(result.updated, output, profile_path, in_place))
     if report_dir:
         from . import report
 
@@ -887,7 +891,6 @@ def tables_import(files: Sequence[str], profile_path: str, fmt: str, motor: int 
                   output: str, in_place: bool) -> None:
     """Read tables into a profile's [[axis_comp]] (replacing those motors' tables)."""
     from . import tables as tb
-    from .profile import dumps
 
     _check_output(output, [profile_path], in_place)
     prof = load_profile(profile_path)
@@ -912,12 +915,7 @@ def tables_import(files: Sequence[str], profile_path: str, fmt: str, motor: int 
         merged[t.motor] = {"motor": t.motor, "positions": t.positions.tolist(),
                            "forward": t.forward.tolist(), "reverse": t.reverse.tolist()}
     doc["axis_comp"] = [merged[m] for m in sorted(merged)]
-    text = dumps(doc)
-    profile_mod.loads(text, output)
-    out = {Path(output): text}
-    if in_place and Path(output).resolve() == Path(profile_path).resolve():
-        out[Path(output + ".bak")] = read_text(profile_path, "profile")
-    write_atomic(out)
+    write_atomic(profile_files(doc, output, profile_path, in_place))
     click.echo(f"wrote {output} with tables for motors "
                f"{', '.join(str(t.motor) for t in new)}", err=True)
 

@@ -184,12 +184,8 @@ def commanded_geometry(commanded: Profile) -> kinematics.Geometry:
                                            commanded.table, commanded.effects)
 
 
-def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -> np.ndarray:
-    """Motor commands for static poses, each approached with every motor moving +.
-
-    The commanding profile's chain: Q' = Q − e(Q), its IK, then for each motor the
-    command p with lo(p) = wanted (the part ends at lo when approached from below).
-    """
+def _wanted_motors(commanded: Profile, q: np.ndarray, tool_length: float) -> np.ndarray:
+    """The commanding profile's virtual-axis map and IK: where the motors must be."""
     from . import chain, errormap
 
     emap = errormap.from_profile(commanded)
@@ -197,7 +193,16 @@ def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -
     ik = kinematics.inverse(commanded_geometry(commanded), qt, tool_length)
     if not np.all(ik.reachable):
         raise ValueError(f"{int(np.sum(~ik.reachable))} poses out of reach")
-    P = ik.P.copy()
+    return ik.P.copy()
+
+
+def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -> np.ndarray:
+    """Motor commands for static poses, each approached with every motor moving +.
+
+    The commanding profile's chain: Q' = Q − e(Q), its IK, then for each motor the
+    command p with lo(p) = wanted (the part ends at lo when approached from below).
+    """
+    P = _wanted_motors(commanded, q, tool_length)
     tables = axiscomp.profile_tables(commanded)
     for col, m in enumerate(MOTOR_ORDER):
         if m in tables:
@@ -208,14 +213,7 @@ def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -
 def motion_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0,
                     t: np.ndarray | None = None) -> np.ndarray:
     """Motor commands for a continuous motion through poses q at times t (time order)."""
-    from . import chain, errormap
-
-    emap = errormap.from_profile(commanded)
-    qt = chain.correct_virtual(q, emap) if emap is not None else q
-    ik = kinematics.inverse(commanded_geometry(commanded), qt, tool_length)
-    if not np.all(ik.reachable):
-        raise ValueError(f"{int(np.sum(~ik.reachable))} poses out of reach")
-    P = ik.P.copy()
+    P = _wanted_motors(commanded, q, tool_length)
     tables = axiscomp.profile_tables(commanded)
     for col, m in enumerate(MOTOR_ORDER):
         if m in tables:
