@@ -312,6 +312,9 @@ _M_GROUP: dict[float, int] = {0: 4, 1: 4, 2: 4, 30: 4, 60: 4, 3: 7, 4: 7, 5: 7, 
                               7: 8, 8: 8, 9: 8,
             48: 9, 49: 9}
 _CYCLES = {73, 81, 82, 83, 84, 85, 86, 89}
+#: canned cycles of one plunge: (dwell at the bottom, retract at feed rate)
+_CYCLE_SHAPE = {81: (False, False), 82: (True, False), 84: (True, True), 86: (True, False),
+                89: (True, True)}
 _AXES = "XYZAB"
 
 
@@ -899,29 +902,19 @@ class Interpreter:
                     depth -= q
                 feed(aa, bb, cc)
                 traverse(aa, bb, clear)
-            elif motion == 81:
-                feed(aa, bb, cc)
-                traverse(aa, bb, clear)
-            elif motion == 82:
-                feed(aa, bb, cc)
-                dwell(st.cycle_p)
-                traverse(aa, bb, clear)
-            elif motion == 84:
-                feed(aa, bb, cc)
-                dwell(st.cycle_p)
-                feed(aa, bb, clear)
             elif motion == 85:
                 feed(aa, bb, cc)
                 feed(aa, bb, r)
                 traverse(aa, bb, clear)
-            elif motion == 86:
+            else:
+                # feed to the bottom, dwell or not, retract at rapid or at feed
+                # (G84 taps out, G89 bores out; G86 stops the spindle, which the
+                # motion does not see)
+                dwells, feed_out = _CYCLE_SHAPE[motion]
                 feed(aa, bb, cc)
-                dwell(st.cycle_p)
-                traverse(aa, bb, clear)
-            elif motion == 89:
-                feed(aa, bb, cc)
-                dwell(st.cycle_p)
-                feed(aa, bb, clear)
+                if dwells:
+                    dwell(st.cycle_p)
+                (feed if feed_out else traverse)(aa, bb, clear)
             current_cc = clear
 
 
