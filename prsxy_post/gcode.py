@@ -923,6 +923,7 @@ _FAST = re.compile(
     r"\s*(?:[Nn]\s*\d+\s*)?(?:[Gg]\s*0*([01])(?![0-9.])\s*)?((?:[XYZABxyzab]\s*[-+]?(?:\d+\.?\d*|\.\d+)\s*)+)"
     r"(?:[Ff]\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*)?")
 _FAST_AXIS = re.compile(r"([XYZABxyzab])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_ZERO5 = (0.0, 0.0, 0.0, 0.0, 0.0)
 _AXIS_INDEX = {"X": 0, "Y": 1, "Z": 2, "A": 3, "B": 4, "x": 0, "y": 1, "z": 2, "a": 3, "b": 4}
 
 
@@ -942,9 +943,10 @@ def _fast(it: Interpreter, raw: str, n: int) -> bool:
     if motion not in (0, 1) or st.ended or st.inverse_time:
         return False
     words = _FAST_AXIS.findall(m.group(2))
-    idx = [_AXIS_INDEX[w[0]] for w in words]
-    if len(set(idx)) != len(idx):
-        return False
+    if len(words) > 1:
+        letters = {w[0].upper() for w in words}
+        if len(letters) != len(words):
+            return False
     f = m.group(3)
     if f is not None:
         fv = float(f)
@@ -956,11 +958,13 @@ def _fast(it: Interpreter, raw: str, n: int) -> bool:
     end = list(start)
     sc = MM_PER_INCH if st.units == "inch" else 1.0
     if st.absolute:
-        off = it.offset()
-        for i, (_, v) in zip(idx, words, strict=True):
+        off = it.cfg.work_offsets.get(st.coord, _ZERO5)
+        for a, v in words:
+            i = _AXIS_INDEX[a]
             end[i] = float(v) * (sc if i < 3 else 1.0) + off[i]
     else:
-        for i, (_, v) in zip(idx, words, strict=True):
+        for a, v in words:
+            i = _AXIS_INDEX[a]
             end[i] = start[i] + float(v) * (sc if i < 3 else 1.0)
     if f is not None:
         st.feed = fv
