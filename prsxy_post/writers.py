@@ -244,11 +244,10 @@ class GcodeWriter:
         self.dec = int(profile.output["decimals"])
         self.cgeo = controller_geometry(profile)
         self.n = 0
-        self.t_acc = 0.0
         self.t_total = 0.0
         self.last_line: int | None = None
         self.last_q: np.ndarray | None = None
-        self.run: list[np.ndarray] = []  # points since the last written one
+        self.run: list[tuple[np.ndarray, float]] = []  # held back: (point, its dt)
         self.look = _Lookahead()
         self.fmt = " ".join(f"{a}%.{self.dec}f" for a in "XYZAB")
 
@@ -295,28 +294,40 @@ class GcodeWriter:
             if chunk.line[k] != self.last_line:
                 lines.append(f"(line {int(chunk.line[k])})")
                 self.last_line = int(chunk.line[k])
-            self.t_acc += float(chunk.dt[k])
-            self.t_total += float(chunk.dt[k])
+            dtk = float(chunk.dt[k])
+            self.t_total += dtk
             standing = self.last_q is not None and np.array_equal(qk, self.last_q) \
-                and chunk.speed[k] == 0
+                and chunk.speed[k] == 0 and not self.run
             if standing:
-                lines.append(f"G4 P{self.t_acc:.4f}")
-                self.t_acc = 0.0
-                self.run = []
+                lines.append(f"G4 P{dtk:.4f}")
                 continue
             if self.tol > 0 and not ends[k] and chunk.speed[k] > 0:
-                if self._within(qk):
-                    self.run.append(qk)
-                    continue
-            lines.append("G1 " + self.fmt % tuple(qk) + f" F{60.0 / self.t_acc:.3f}")
-            self.t_acc = 0.0
+                # a point that may be dropped: keep it back while the chord from the
+                # last written point to it passes all the held-back ones
+                if not self._within(qk):
+                    self._write_held(lines)
+                self.run.append((qk, dtk))
+                continue
+            if self.run and not self._within(qk):
+                self._write_held(lines)
+            t = dtk + sum(d for _, d in self.run)
+            lines.append("G1 " + self.fmt % tuple(qk) + f" F{60.0 / t:.3f}")
             self.last_q = qk
             self.run = []
             self.n += 1
         return [(0, "\n".join(lines) + "\n")] if lines else []
 
+    def _write_held(self, lines: list[str]) -> None:
+        """Write the last held-back point (it becomes the new chord start)."""
+        qh = self.run[-1][0]
+        t = sum(d for _, d in self.run)
+        lines.append("G1 " + self.fmt % tuple(qh) + f" F{60.0 / t:.3f}")
+        self.last_q = qh
+        self.run = []
+        self.n += 1
+
     def _within(self, qk: np.ndarray) -> bool:
-        """Would the chord from the last written point to qk pass the skipped points?"""
+        """Would the chord from the last written point to qk pass the held-back points?"""
         if not self.run or self.last_q is None:
             return True
         a = self.last_q
@@ -324,7 +335,7 @@ class GcodeWriter:
         dd = float(d @ d)
         if dd == 0:
             return False
-        pts = np.array(self.run)
+        pts = np.array([p for p, _ in self.run])
         t = np.clip((pts - a) @ d / dd, 0, 1)
         return float(np.linalg.norm(pts - (a + t[:, None] * d), axis=1).max()) <= self.tol
 

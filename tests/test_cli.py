@@ -288,3 +288,31 @@ def test_every_gcode_rejection_through_the_cli(runner: CliRunner, tmp_path: Path
     assert str(prog) + where.removeprefix("t.ngc") in r.output and what in r.output, r.output
     _no_traceback(r.output)
     assert out.read_text() == "precious\n"
+
+
+def test_gcode_tolerance_reduction_stays_within_it(runner: CliRunner, tmp_path: Path) -> None:
+    """With output.gcode_tolerance_mm every dropped point lies within it of the chord."""
+    import numpy as np
+
+    from .test_tracking import read_gcode_points
+
+    tol = 0.002
+    prof = tmp_path / "tol.toml"
+    prof.write_text((ROOT / SHOP).read_text().replace("gcode_tolerance_mm = 0.0",
+                                                     f"gcode_tolerance_mm = {tol}"))
+    dense, sparse = tmp_path / "d.ngc", tmp_path / "s.ngc"
+    for p, out in ((SHOP, dense), (str(prof), sparse)):
+        r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", p, "--format",
+                   "gcode", "-o", str(out))
+        assert r.exit_code == 0, r.output
+    qd, _, _ = read_gcode_points(dense.read_text())
+    qs, _, _ = read_gcode_points(sparse.read_text())
+    assert len(qs) < 0.8 * len(qd)
+    worst = 0.0
+    a, b = qs[:-1, :3], qs[1:, :3]
+    d = b - a
+    dd = np.maximum(np.einsum("ij,ij->i", d, d), 1e-30)
+    for p in qd[:, :3]:
+        t = np.clip(np.einsum("ij,ij->i", p - a, d) / dd, 0, 1)
+        worst = max(worst, float(np.min(np.linalg.norm(p - (a + t[:, None] * d), axis=1))))
+    assert worst <= tol + 2e-5
