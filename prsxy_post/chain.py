@@ -293,8 +293,12 @@ class Pipeline:
             done, law = res
             if len(done):
                 self.any_motion = True
-            self._check_ends(done)
-            # before any point is made: a block of a billion points must not be tried
+            # before any point is made: a long move to an unreachable place is an
+            # error at its line, and a block of a billion points is never tried
+            steps = steps_per_block(law, self.limits.period_s)
+            long = steps > 256
+            if np.any(long):
+                self._check_ends(done.take(long))
             self._guard(law, done.line)
             s = sample(done, law, self.limits.period_s)
             self.timings["interpolate"] += time.perf_counter() - t0
@@ -314,8 +318,9 @@ class Pipeline:
         return self.feed([], final=True)
 
     def _check_ends(self, b: Blocks) -> None:
-        """Reach and travel at the blocks' end points, before interpolating them: a move
-        to X1e9 is an error at its line, not a billion points."""
+        """Reach and travel at the end points of long blocks, before interpolating them:
+        a move to X1e9 is an error at its line, not a billion points. (Short blocks are
+        checked point by point, as every block is.)"""
         if not len(b):
             return
         ends = b.end
