@@ -276,11 +276,6 @@ def forward_pass(b: Blocks, v_back: np.ndarray, v_start: float = 0.0) -> np.ndar
     return np.array(v, dtype=float)
 
 
-def plan_speeds(b: Blocks, vj: np.ndarray, v_start: float = 0.0) -> np.ndarray:
-    """Junction speeds after look-ahead: v_out[k] = speed at the end of block k."""
-    return forward_pass(b, backward_pass(b, vj), v_start)
-
-
 @dataclass(frozen=True)
 class TimeLaw:
     """Trapezoid per block: entry v0, exit v1, peak vp, accel a, phase times."""
@@ -423,12 +418,3 @@ def _speed(law: TimeLaw, k: np.ndarray, tau: np.ndarray) -> np.ndarray:
     t1, t2 = law.t1[k], law.t2[k]
     return np.where(tau <= t1, v0 + a * tau,
                     np.where(tau <= t1 + t2, vp, np.maximum(vp - a * (tau - t1 - t2), v1)))
-
-
-def interpolate(motions: Sequence[Motion], limits: Limits) -> tuple[Blocks, TimeLaw, Samples]:
-    """Plan and sample a whole program (see module docstring)."""
-    b = blocks_from_motions(motions, limits)
-    vj = junction_limits(b, limits.period_s)
-    v_out = plan_speeds(b, vj)
-    law = time_law(b, v_out)
-    return b, law, sample(b, law, limits.period_s)
