@@ -43,14 +43,14 @@ def test_speed_never_exceeds_feed_and_acceleration_holds() -> None:
 
 
 def test_corner_speed_is_what_one_cycle_can_turn() -> None:
-    b, law, _ = _plan("G21 G1 X20 F3000\nG1 Y20\nM2\n")
+    _, law, _ = _plan("G21 G1 X20 F3000\nG1 Y20\nM2\n")
     # 90° corner: the velocity jump 2 v sin 45° is at most a · period
     assert law.v1[0] * 2 * np.sin(np.pi / 4) <= LIM.accel_mm_s2 * LIM.period_s + 1e-9
     assert law.v1[0] > 0
 
 
 def test_helix_is_exactly_on_its_helix() -> None:
-    b, _, s = _plan("G21 G0 X5 Y0 Z0\nG3 X5 Y0 I-5 J0 Z-3 P2 F600\nM2\n")
+    _, _, s = _plan("G21 G0 X5 Y0 Z0\nG3 X5 Y0 I-5 J0 Z-3 P2 F600\nM2\n")
     arc = s.block == 1
     r = np.hypot(s.q[arc, 0], s.q[arc, 1])
     np.testing.assert_allclose(r, 5.0, atol=1e-12)
