@@ -393,6 +393,52 @@ def _family(name: str) -> str:
     return name.split("@")[0]
 
 
+def _best_pair(cols: dict[str, np.ndarray], X: np.ndarray, r: np.ndarray,
+               skip_families: set[str], alias_corr: float, must: str | None = None
+               ) -> tuple[float, str, str] | None:
+    """The pair of members that together explain most of ``r`` beyond ``X``.
+
+    Every pair of the library, from one Gram matrix of the columns projected off
+    ``X``: SSE(k1, k2) = r'r - b' G^-1 b over the pair's columns. Pairs whose
+    signatures are aliases of each other (|correlation| > ``alias_corr``) are not
+    separable and are skipped. With ``must``, only pairs that contain it.
+    Returns (SSE, k1, k2) or None.
+    """
+    keys = [k for k in cols if _family(k) not in skip_families]
+    if len(keys) < 2:
+        return None
+    A = np.hstack([cols[k] for k in keys])
+    rr = r
+    if X.shape[1]:
+        q, _ = np.linalg.qr(X)
+        A = A - q @ (q.T @ A)
+        rr = r - q @ (q.T @ r)
+    G = A.T @ A
+    bvec = A.T @ rr
+    r2 = float(rr @ rr)
+    start = np.cumsum([0] + [cols[k].shape[1] for k in keys])
+    idx = [np.arange(start[i], start[i + 1]) for i in range(len(keys))]
+    diag = np.sqrt(np.maximum(np.diag(G), 1e-300))
+    best: tuple[float, str, str] | None = None
+    for i in range(len(keys)):
+        for j in range(i + 1, len(keys)):
+            if _family(keys[i]) == _family(keys[j]) or \
+                    (must is not None and must not in (keys[i], keys[j])):
+                continue
+            ii, jj = idx[i], idx[j]
+            if ii.size == 1 and jj.size == 1 and \
+                    abs(G[ii[0], jj[0]]) / (diag[ii[0]] * diag[jj[0]]) > alias_corr:
+                continue
+            sel = np.concatenate([ii, jj])
+            g = G[np.ix_(sel, sel)]
+            bb = bvec[sel]
+            sol = np.linalg.lstsq(g, bb, rcond=1e-12)[0]
+            s = r2 - float(bb @ sol)
+            if best is None or s < best[0]:
+                best = (s, keys[i], keys[j])
+    return best
+
+
 def select_effects(lin: Linearised, resid: np.ndarray, w: np.ndarray, *, alpha: float = 1e-3,
                    alias_corr: float = 0.98, max_effects: int = 6,
                    exclude: Sequence[str] = (), given: Sequence[str] = ()) -> list[Effect]:
@@ -439,6 +485,18 @@ def select_effects(lin: Linearised, resid: np.ndarray, w: np.ndarray, *, alpha: 
         if best is None:
             break
         s_new, k = best
+        if s_new / max(n - X.shape[1] - 1, 1) > 4.0:
+            # the best single member leaves far more than noise: two effects acting
+            # together can look like a third (strut 1 short and guide 2 high tilt the
+            # platform much as guide 3 high does). Look one step ahead over every
+            # pair; when a pair explains clearly more than the greedy first choice
+            # with its best partner, start with that pair's stronger member.
+            fams = {_family(x) for x in chosen}
+            pair = _best_pair(cols, X, r, fams, alias_corr)
+            greedy = _best_pair(cols, X, r, fams, alias_corr, must=k) if pair else None
+            if pair and greedy and k not in pair[1:] and pair[0] < 0.5 * greedy[0]:
+                k = min(pair[1:], key=results.__getitem__)
+                s_new = results[k]
         dof = cols[k].shape[1]
         p = X.shape[1] + dof
         dof_res = max(n - p, 1)
