@@ -39,8 +39,12 @@ ROOT = Path(__file__).resolve().parent.parent
 def generate(n_lines: int, seed: int = 0) -> str:
     """A finishing program: raster passes of short G1 moves, tilted passes, small R arcs."""
     rng = np.random.default_rng(seed)
-    out = ["(generated finishing program)", "G21 G90 G17 G94", "G0 X-60 Y-60 Z5 A0 B0",
-           "G1 Z0 F2000"]
+    out = [
+        "(generated finishing program)",
+        "G21 G90 G17 G94",
+        "G0 X-60 Y-60 Z5 A0 B0",
+        "G1 Z0 F2000",
+    ]
     x, y, a, b = -60.0, -60.0, 0.0, 0.0
     direction = 1.0
     while len(out) < n_lines - 2:
@@ -77,8 +81,13 @@ def bench_profile(path: Path) -> Path:
     nominal = profile.loads((ROOT / "profiles" / "prsxy-nominal.toml").read_text(), "nominal")
     rng = np.random.default_rng(1)
     truth = simulate.random_machine(nominal, rng, axis_errors=True, name="bench machine")
-    q = np.column_stack([rng.uniform(-150, 150, (300, 2)), rng.uniform(-60, 40, 300),
-                         rng.uniform(-25, 25, (300, 2))])
+    q = np.column_stack(
+        [
+            rng.uniform(-150, 150, (300, 2)),
+            rng.uniform(-60, 40, 300),
+            rng.uniform(-25, 25, (300, 2)),
+        ]
+    )
     err = rng.normal(0, 1e-3, q.shape) + 1e-3 * np.sin(q / 50.0)
     emap = errormap.fit(q, err, rng=rng, degrees=(3,), lambdas=[1e-4])
     doc = dict(truth.raw, error_map=emap.to_dict())
@@ -95,8 +104,18 @@ def child_convert(program: str, prof: str, out: str) -> None:
     st = convert_file(ConvertJob(program, prof, "pmac", out, None, (True, True, True), "bench"))
     total = time.perf_counter() - t0
     rss = peak_rss_mb()
-    print(json.dumps({"total_s": total, "lines": st.lines, "motions": st.motions,
-                      "points": st.points, "timings": st.timings, "peak_rss_mb": rss}))
+    print(
+        json.dumps(
+            {
+                "total_s": total,
+                "lines": st.lines,
+                "motions": st.motions,
+                "points": st.points,
+                "timings": st.timings,
+                "peak_rss_mb": rss,
+            }
+        )
+    )
 
 
 def peak_rss_mb() -> float:
@@ -119,8 +138,13 @@ def time_rs274(program: Path) -> float | None:
         tbl = Path(d) / "tool.tbl"
         tbl.write_text("T1 P1 Z0 D6 ;\n")
         t0 = time.perf_counter()
-        subprocess.run([exe, "-t", str(tbl), "-g", str(program)], stdout=subprocess.DEVNULL,
-                       stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, check=False)
+        subprocess.run(
+            [exe, "-t", str(tbl), "-g", str(program)],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            stdin=subprocess.DEVNULL,
+            check=False,
+        )
         return time.perf_counter() - t0
 
 
@@ -149,7 +173,10 @@ def run(sizes: list[int], pygcode_limit: int) -> list[dict]:
             out = Path(d) / f"finish-{n}.pmc"
             proc = subprocess.run(
                 [sys.executable, __file__, "--child", str(prog), str(prof), str(out)],
-                capture_output=True, text=True, check=True)
+                capture_output=True,
+                text=True,
+                check=True,
+            )
             r = json.loads(proc.stdout.strip().splitlines()[-1])
             r["size_lines"] = n
             r["rs274_s"] = time_rs274(prog)
@@ -163,24 +190,40 @@ def run(sizes: list[int], pygcode_limit: int) -> list[dict]:
 
 def report(results: list[dict]) -> str:
     cpu = platform.processor() or platform.machine()
-    lines = [f"Machine: {platform.platform()}, {os.cpu_count()} cores, {cpu}, "
-             f"Python {platform.python_version()}", ""]
-    lines += ["| lines | total s | lines/s | points | points/s | peak RSS MB | rs274 -g s | "
-              "pygcode Machine s | total / rs274 |", "|" + "---:|" * 9]
+    lines = [
+        f"Machine: {platform.platform()}, {os.cpu_count()} cores, {cpu}, "
+        f"Python {platform.python_version()}",
+        "",
+    ]
+    lines += [
+        "| lines | total s | lines/s | points | points/s | peak RSS MB | rs274 -g s | "
+        "pygcode Machine s | total / rs274 |",
+        "|" + "---:|" * 9,
+    ]
     for r in results:
         rs = r["rs274_s"]
         pg = r["pygcode_s"]
         lines.append(
             f"| {r['lines']:,} | {r['total_s']:.2f} | {r['lines'] / r['total_s']:,.0f} | "
             f"{r['points']:,} | {r['points'] / r['total_s']:,.0f} | {r['peak_rss_mb']:.0f} | "
-            + (f"{rs:.2f}" if rs else "-") + " | " + (f"{pg:.1f}" if pg else "-") + " | "
-            + (f"{r['total_s'] / rs:.2f}" if rs else "-") + " |")
-    lines += ["", "Per stage (seconds):", "",
-              "| lines | " + " | ".join(results[0]["timings"]) + " |",
-              "|---:|" + "---:|" * len(results[0]["timings"])]
+            + (f"{rs:.2f}" if rs else "-")
+            + " | "
+            + (f"{pg:.1f}" if pg else "-")
+            + " | "
+            + (f"{r['total_s'] / rs:.2f}" if rs else "-")
+            + " |"
+        )
+    lines += [
+        "",
+        "Per stage (seconds):",
+        "",
+        "| lines | " + " | ".join(results[0]["timings"]) + " |",
+        "|---:|" + "---:|" * len(results[0]["timings"]),
+    ]
     for r in results:
-        lines.append(f"| {r['lines']:,} | " + " | ".join(f"{v:.2f}" for v in r["timings"].values())
-                     + " |")
+        lines.append(
+            f"| {r['lines']:,} | " + " | ".join(f"{v:.2f}" for v in r["timings"].values()) + " |"
+        )
     return "\n".join(lines)
 
 
@@ -188,8 +231,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--lines", type=int, action="append", help="program size (repeatable)")
     ap.add_argument("--json", help="also write the results here")
-    ap.add_argument("--pygcode-limit", type=int, default=250_000,
-                    help="skip pygcode above this many lines (it needs minutes)")
+    ap.add_argument(
+        "--pygcode-limit",
+        type=int,
+        default=250_000,
+        help="skip pygcode above this many lines (it needs minutes)",
+    )
     ap.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:

@@ -31,12 +31,19 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, nargs="+", default=[7, 8, 9])
     args = ap.parse_args()
     nominal = profile.loads((ROOT / "profiles" / "prsxy-nominal.toml").read_text(), "nominal")
-    print("| seed | program | nominal profile: max error µm | calibrated: max error µm | "
-          "calibration s |")
+    print(
+        "| seed | program | nominal profile: max error µm | calibrated: max error µm | "
+        "calibration s |"
+    )
     print("|---:|---|---:|---:|---:|")
     for seed in args.seeds:
-        truth = simulate.random_machine(nominal, np.random.default_rng(seed), axis_errors=True,
-                                        effects=True, name=f"seeded {seed}")
+        truth = simulate.random_machine(
+            nominal,
+            np.random.default_rng(seed),
+            axis_errors=True,
+            effects=True,
+            name=f"seeded {seed}",
+        )
         t0 = time.perf_counter()
         cal = _calibrate(nominal, truth, seed)
         dt = time.perf_counter() - t0

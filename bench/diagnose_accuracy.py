@@ -33,25 +33,44 @@ from prsxy_post import diagnose, profile  # noqa: E402
 from tests.synthetic import campaign  # noqa: E402
 
 SIZES = {
-    "kinematics.legs[1].strut_length": -0.03, "kinematics.legs[2].guide_height": 0.03,
-    "kinematics.legs[3].guide_radius": 0.04, "kinematics.legs[1].guide_angle": 0.03,
-    "kinematics.legs[2].platform_radius": 0.04, "kinematics.legs[3].platform_angle": 0.03,
-    "kinematics.legs[1].guide_tilt_x": 0.02, "kinematics.legs[2].guide_tilt_y": 0.02,
-    "kinematics.legs[3].hinge_twist": 0.03, "kinematics.legs[1].platform_z": 0.04,
-    "kinematics.tool_length": 0.05, "kinematics.tool_offset_x": 0.03,
-    "table.squareness": 1e-4, "table.scale_x": 5e-5, "table.scale_y": -5e-5,
-    "backlash[5]": 0.004, "backlash[6]": 0.004, "backlash[1]": 0.004,
-    "cyclic[5]": 0.003, "cyclic[2]": 0.003, "servo_lag[6]": 1.0,
+    "kinematics.legs[1].strut_length": -0.03,
+    "kinematics.legs[2].guide_height": 0.03,
+    "kinematics.legs[3].guide_radius": 0.04,
+    "kinematics.legs[1].guide_angle": 0.03,
+    "kinematics.legs[2].platform_radius": 0.04,
+    "kinematics.legs[3].platform_angle": 0.03,
+    "kinematics.legs[1].guide_tilt_x": 0.02,
+    "kinematics.legs[2].guide_tilt_y": 0.02,
+    "kinematics.legs[3].hinge_twist": 0.03,
+    "kinematics.legs[1].platform_z": 0.04,
+    "kinematics.tool_length": 0.05,
+    "kinematics.tool_offset_x": 0.03,
+    "table.squareness": 1e-4,
+    "table.scale_x": 5e-5,
+    "table.scale_y": -5e-5,
+    "backlash[5]": 0.004,
+    "backlash[6]": 0.004,
+    "backlash[1]": 0.004,
+    "cyclic[5]": 0.003,
+    "cyclic[2]": 0.003,
+    "servo_lag[6]": 1.0,
     "effects.guide_bow[2]": 0.02,
 }
 
 
 def hide(nominal: profile.Profile, effects: dict[str, float]) -> profile.Profile:
     doc = copy.deepcopy(nominal.raw)
-    es = [diagnose.Effect(n, v, 0.0, diagnose.unit_of(n),
-                          period=10.0 if n.startswith("cyclic") else None,
-                          phase_deg=30.0 if n.startswith("cyclic") else None)
-          for n, v in effects.items()]
+    es = [
+        diagnose.Effect(
+            n,
+            v,
+            0.0,
+            diagnose.unit_of(n),
+            period=10.0 if n.startswith("cyclic") else None,
+            phase_deg=30.0 if n.startswith("cyclic") else None,
+        )
+        for n, v in effects.items()
+    ]
     return profile.profile_from_dict(diagnose.apply_effects(doc, es, nominal))
 
 
@@ -62,19 +81,30 @@ def one(nominal: profile.Profile, effects: dict[str, float], seed: int) -> dict:
     d = diagnose.diagnose(nominal, diagnose.Data.build(nominal, poses, runs, axis))
     found = {e.name for e in d.effects} | {a for e in d.effects for a in e.aliases}
     named = all(n in found for n in effects) if effects else not d.effects
-    first_ok = bool(effects) and bool(d.effects) and (
-        d.effects[0].name in effects or any(n in d.effects[0].aliases for n in effects))
+    first_ok = (
+        bool(effects)
+        and bool(d.effects)
+        and (d.effects[0].name in effects or any(n in d.effects[0].aliases for n in effects))
+    )
     sized = None
     for e in d.effects:
         if e.name in effects:
             sized = abs(e.estimate - effects[e.name]) <= 0.2 * abs(effects[e.name])
     noise = d.noise.get("ballbar", 0.0) * 1000
-    again = diagnose.diagnose(profile.profile_from_dict(d.updated),
-                              diagnose.Data.build(nominal, poses, runs, axis))
-    return {"effects": effects, "seed": seed, "named": named, "first": first_ok,
-            "sized": sized, "rms_after_um": d.rms_after_um, "noise_um": noise,
-            "clean": d.rms_after_um <= 1.2 * max(noise, 0.5) and not again.effects,
-            "found": [e.name for e in d.effects]}
+    again = diagnose.diagnose(
+        profile.profile_from_dict(d.updated), diagnose.Data.build(nominal, poses, runs, axis)
+    )
+    return {
+        "effects": effects,
+        "seed": seed,
+        "named": named,
+        "first": first_ok,
+        "sized": sized,
+        "rms_after_um": d.rms_after_um,
+        "noise_um": noise,
+        "clean": d.rms_after_um <= 1.2 * max(noise, 0.5) and not again.effects,
+        "found": [e.name for e in d.effects],
+    }
 
 
 def main() -> None:
@@ -93,17 +123,24 @@ def main() -> None:
         rng = np.random.default_rng(seed)
         for _ in range(4):
             a, b = rng.choice(len(names), 2, replace=False)
-            out.append(one(nominal, {names[a]: SIZES[names[a]], names[b]: SIZES[names[b]]},
-                           5000 + seed * 10 + len(out)))
+            out.append(
+                one(
+                    nominal,
+                    {names[a]: SIZES[names[a]], names[b]: SIZES[names[b]]},
+                    5000 + seed * 10 + len(out),
+                )
+            )
         print(f"seed {seed}: {len(out)} runs so far", file=sys.stderr)
     single = [r for r in out if len(r["effects"]) == 1]
     none = [r for r in out if not r["effects"]]
     pairs = [r for r in out if len(r["effects"]) == 2]
     sized = [r for r in single if r["sized"] is not None]
-    print(f"single effects: named first {sum(r['first'] for r in single)}/{len(single)}, "
-          f"sized within 20 % {sum(r['sized'] for r in sized)}/{len(sized)}, "
-          f"residual to noise and nothing more on a second pass "
-          f"{sum(r['clean'] for r in single)}/{len(single)}")
+    print(
+        f"single effects: named first {sum(r['first'] for r in single)}/{len(single)}, "
+        f"sized within 20 % {sum(r['sized'] for r in sized)}/{len(sized)}, "
+        f"residual to noise and nothing more on a second pass "
+        f"{sum(r['clean'] for r in single)}/{len(single)}"
+    )
     print(f"no hidden effect: nothing named {sum(r['named'] for r in none)}/{len(none)}")
     print(f"two hidden effects: both found {sum(r['named'] for r in pairs)}/{len(pairs)}")
     for r in single:

@@ -23,9 +23,44 @@ sys.path.insert(0, str(ROOT))
 from prsxy_post import gcode  # noqa: E402
 from prsxy_post.errors import GCodeError  # noqa: E402
 
-FRAGMENTS = ["G2", "G3", "G81", "G83 Q", "R-", "X1e9", "#1", "[", "(", ")", ";", "%", "G20",
-             "G91", "G93", "F0", "P0", "L0", "G43 H1", "G28", "G53", "M2", "N", ".", "-",
-             "G4", "I0 J0", "Z", "\r", "\n", "\t", "\x00", "é", "G18", "G19", "G90.1"]
+FRAGMENTS = [
+    "G2",
+    "G3",
+    "G81",
+    "G83 Q",
+    "R-",
+    "X1e9",
+    "#1",
+    "[",
+    "(",
+    ")",
+    ";",
+    "%",
+    "G20",
+    "G91",
+    "G93",
+    "F0",
+    "P0",
+    "L0",
+    "G43 H1",
+    "G28",
+    "G53",
+    "M2",
+    "N",
+    ".",
+    "-",
+    "G4",
+    "I0 J0",
+    "Z",
+    "\r",
+    "\n",
+    "\t",
+    "\x00",
+    "é",
+    "G18",
+    "G19",
+    "G90.1",
+]
 
 
 def mutate(text: str, rng: random.Random) -> str:
@@ -40,7 +75,7 @@ def mutate(text: str, rng: random.Random) -> str:
         elif op < 0.5 and lines[k]:
             s = lines[k]
             p = rng.randrange(len(s))
-            lines[k] = s[:p] + chr(rng.randint(1, 0x2FF)) + s[p + 1:]
+            lines[k] = s[:p] + chr(rng.randint(1, 0x2FF)) + s[p + 1 :]
         elif op < 0.65 and len(lines) > 1:
             del lines[k]
         elif op < 0.8:
@@ -63,9 +98,11 @@ def main() -> int:
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
-    seeds = [p.read_text(errors="surrogateescape") for p in sorted(
-        (ROOT / "tests" / "data" / "gcode").rglob("*")) if p.suffix in (".ngc", ".nc", ".tap",
-                                                                        ".gcode")]
+    seeds = [
+        p.read_text(errors="surrogateescape")
+        for p in sorted((ROOT / "tests" / "data" / "gcode").rglob("*"))
+        if p.suffix in (".ngc", ".nc", ".tap", ".gcode")
+    ]
     seeds = [s[:20000] for s in seeds]
     rng = random.Random(args.seed)
     signal.signal(signal.SIGALRM, _alarm)
@@ -91,8 +128,9 @@ def main() -> int:
             return 1
         finally:
             signal.alarm(0)
-    print(f"fuzz: {n} mutated programs, {ok} accepted, {rejected} rejected with a location, "
-          "0 crashes")
+    print(
+        f"fuzz: {n} mutated programs, {ok} accepted, {rejected} rejected with a location, 0 crashes"
+    )
     return 0
 
 

@@ -58,8 +58,7 @@ class MotorTable:
 
     @classmethod
     def from_comp(cls, comp: AxisComp) -> MotorTable:
-        p, f, r = (np.asarray(a, dtype=float) for a in (comp.positions, comp.forward,
-                                                       comp.reverse))
+        p, f, r = (np.asarray(a, dtype=float) for a in (comp.positions, comp.forward, comp.reverse))
         diff = f - r
         extra = []
         for j in range(len(p) - 1):
@@ -150,8 +149,9 @@ def _clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return a
 
 
-def play_model(table: MotorTable | None, p: np.ndarray, state: PlayState | None = None
-               ) -> np.ndarray:
+def play_model(
+    table: MotorTable | None, p: np.ndarray, state: PlayState | None = None
+) -> np.ndarray:
     """Where the driven part ends for commanded positions ``p`` (time order).
 
     Parameters
@@ -185,8 +185,9 @@ def approach(table: MotorTable | None, p: np.ndarray, direction: int) -> np.ndar
     return table.lo(p) if direction > 0 else table.hi(p)
 
 
-def compensate(table: MotorTable | None, target: np.ndarray, state: PlayState | None = None
-               ) -> np.ndarray:
+def compensate(
+    table: MotorTable | None, target: np.ndarray, state: PlayState | None = None
+) -> np.ndarray:
     """Commands whose play-model result is ``target`` (time order).
 
     Rising wanted position: lo(p_k) = T_k; falling: hi(p_k) = T_k; standing
@@ -219,14 +220,14 @@ def compensate(table: MotorTable | None, target: np.ndarray, state: PlayState | 
     return cmd
 
 
-def tables_by_motor(comps: tuple[AxisComp, ...], effects: Effects | None = None
-                    ) -> dict[int, MotorTable]:
+def tables_by_motor(
+    comps: tuple[AxisComp, ...], effects: Effects | None = None
+) -> dict[int, MotorTable]:
     """MotorTable for every motor with an ``[[axis_comp]]`` entry or a cyclic error."""
     out = {c.motor: MotorTable.from_comp(c) for c in comps}
     if effects is not None:
         for m in {c.motor for c in effects.cyclic}:
-            terms = tuple((c.amplitude, c.period, c.phase) for c in effects.cyclic
-                          if c.motor == m)
+            terms = tuple((c.amplitude, c.period, c.phase) for c in effects.cyclic if c.motor == m)
             base = out.get(m) or MotorTable(m, np.array([0.0]), np.zeros(1), np.zeros(1))
             out[m] = base.with_cyclic(terms)
     return out

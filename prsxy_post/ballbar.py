@@ -45,8 +45,7 @@ from .errors import MeasurementError
 from .measure import BallbarRun
 
 PLANES = {"XY": (0, 1), "XZ": (0, 2), "YZ": (1, 2)}
-TERMS = ("c0", "c1", "s1", "c2", "s2", "backlash_1", "backlash_2", "straight_1",
-         "straight_2")
+TERMS = ("c0", "c1", "s1", "c2", "s2", "backlash_1", "backlash_2", "straight_1", "straight_2")
 
 
 @dataclass(frozen=True)
@@ -96,8 +95,11 @@ def angles(run: BallbarRun) -> tuple[str, np.ndarray, str]:
     th = np.arctan2(rel[:, j], rel[:, i])
     un = np.unwrap(th)
     if abs(un[-1] - un[0]) < 1e-9:
-        raise MeasurementError("the commanded path does not go round the pivot",
-                               source=run.source, expected="a circle about the pivot")
+        raise MeasurementError(
+            "the commanded path does not go round the pivot",
+            source=run.source,
+            expected="a circle about the pivot",
+        )
     return plane, th, "ccw" if un[-1] > un[0] else "cw"
 
 
@@ -107,11 +109,19 @@ def design(th: np.ndarray, direction: str, r: float) -> np.ndarray:
     v1 = -sgn * np.sin(th)  # direction of motion of the first axis
     v2 = sgn * np.cos(th)
     c, s = np.cos(th), np.sin(th)
-    return np.column_stack([
-        np.ones_like(th), c, s, np.cos(2 * th), np.sin(2 * th),
-        -0.5 * np.sign(v1) * c, -0.5 * np.sign(v2) * s,
-        c**2 * s, s**2 * c,
-    ])
+    return np.column_stack(
+        [
+            np.ones_like(th),
+            c,
+            s,
+            np.cos(2 * th),
+            np.sin(2 * th),
+            -0.5 * np.sign(v1) * c,
+            -0.5 * np.sign(v2) * s,
+            c**2 * s,
+            s**2 * c,
+        ]
+    )
 
 
 def analyse_run(run: BallbarRun) -> BallbarResult:
@@ -151,7 +161,11 @@ def analyse_run(run: BallbarRun) -> BallbarResult:
     dist = np.sum(np.linalg.norm(np.diff(run.commanded[:, :3], axis=0), axis=1))
     feed = float(dist / (run.t[-1] - run.t[0]) * 60.0)
     return BallbarResult(
-        name=run.name, source=run.source, plane=plane, direction=direction, radius=r,
+        name=run.name,
+        source=run.source,
+        plane=plane,
+        direction=direction,
+        radius=r,
         feed_mm_min=feed,
         circular_deviation_um=float(centred.max() - centred.min()),
         centre_offset_um=(float(coef[1]), float(coef[2])),
@@ -160,10 +174,12 @@ def analyse_run(run: BallbarRun) -> BallbarResult:
         scale_mismatch_mm=float(2 * coef[3] / 1000.0),
         backlash_um=(float(coef[5]), float(coef[6])),
         straightness_um=(float(coef[7]), float(coef[8])),
-        cyclic_um=best_amp, cyclic_order=best_k,
+        cyclic_um=best_amp,
+        cyclic_order=best_k,
         reversal_spike_um=max(spike, 0.0),
         residual_rms_um=float(np.sqrt(np.mean(resid**2))),
-        terms=terms)
+        terms=terms,
+    )
 
 
 def _pair_key(r: BallbarResult) -> tuple[str, float, str]:
@@ -188,21 +204,32 @@ def analyse_runs(runs: Sequence[BallbarRun]) -> tuple[list[BallbarResult], list[
         fa = np.interp(grid, np.sort(tha), ra.dev_um[np.argsort(tha)], period=2 * np.pi)
         fb = np.interp(grid, np.sort(thb), rb.dev_um[np.argsort(thb)], period=2 * np.pi)
         omega = (a.feed_mm_min / 60.0) / a.radius  # rad/s
-        servo = (a.terms["s2"] - b.terms["s2"]) / (a.radius * 1000.0 * omega) * 1000.0 \
-            if omega > 0 else math.nan
-        pairs.append(BallbarPair(
-            name=key[0], radius=a.radius, plane=a.plane,
-            circular_hysteresis_um=float(np.max(np.abs(fa - fb))),
-            squareness_mm_per_m=(a.squareness_mm_per_m + b.squareness_mm_per_m) / 2,
-            scale_mismatch_mm=(a.scale_mismatch_mm + b.scale_mismatch_mm) / 2,
-            servo_mismatch_ms=float(servo),
-            backlash_um=((a.backlash_um[0] + b.backlash_um[0]) / 2,
-                         (a.backlash_um[1] + b.backlash_um[1]) / 2)))
+        servo = (
+            (a.terms["s2"] - b.terms["s2"]) / (a.radius * 1000.0 * omega) * 1000.0
+            if omega > 0
+            else math.nan
+        )
+        pairs.append(
+            BallbarPair(
+                name=key[0],
+                radius=a.radius,
+                plane=a.plane,
+                circular_hysteresis_um=float(np.max(np.abs(fa - fb))),
+                squareness_mm_per_m=(a.squareness_mm_per_m + b.squareness_mm_per_m) / 2,
+                scale_mismatch_mm=(a.scale_mismatch_mm + b.scale_mismatch_mm) / 2,
+                servo_mismatch_ms=float(servo),
+                backlash_um=(
+                    (a.backlash_um[0] + b.backlash_um[0]) / 2,
+                    (a.backlash_um[1] + b.backlash_um[1]) / 2,
+                ),
+            )
+        )
     return results, pairs
 
 
-def model_deviation(th: np.ndarray, terms: Mapping[str, float], direction: str,
-                    radius: float) -> np.ndarray:
+def model_deviation(
+    th: np.ndarray, terms: Mapping[str, float], direction: str, radius: float
+) -> np.ndarray:
     """Δr [µm] of the fitted model at angles th."""
     coef = np.array([terms[k] for k in TERMS])
     return design(th, direction, radius) @ coef
@@ -219,9 +246,12 @@ def result_to_json(x: BallbarResult | BallbarPair) -> dict[str, Any]:
     return asdict(x)
 
 
-def plot_runs(results: Sequence[BallbarResult], runs: Sequence[BallbarRun],
-              predicted: Mapping[str, np.ndarray] | None = None,
-              um_per_div: float | None = None) -> bytes:
+def plot_runs(
+    results: Sequence[BallbarResult],
+    runs: Sequence[BallbarRun],
+    predicted: Mapping[str, np.ndarray] | None = None,
+    um_per_div: float | None = None,
+) -> bytes:
     """Polar plots, one per circle: measured deviation around the reference circle,
     magnified, the fitted terms dashed, a simulated prediction dotted. PNG bytes."""
     try:
@@ -232,8 +262,10 @@ def plot_runs(results: Sequence[BallbarResult], runs: Sequence[BallbarRun],
     except ImportError:
         from .errors import UsageError
 
-        raise UsageError("plots need matplotlib, which is not installed",
-                         expected="pip install 'prsxy-post[plot]'") from None
+        raise UsageError(
+            "plots need matplotlib, which is not installed",
+            expected="pip install 'prsxy-post[plot]'",
+        ) from None
     n = len(runs)
     cols = min(3, n)
     rows = (n + cols - 1) // cols
@@ -251,16 +283,18 @@ def plot_runs(results: Sequence[BallbarResult], runs: Sequence[BallbarRun],
         ax.plot(th[order], np.full(len(th), base), color="0.6", lw=0.8, label="reference")
         ax.plot(th, base + dev, lw=1.0, label="measured")
         model = model_deviation(th[order], res.terms, res.direction, res.radius)
-        ax.plot(th[order], base + _centred(th[order], model), ls="--", lw=0.8,
-                label="fitted terms")
+        ax.plot(th[order], base + _centred(th[order], model), ls="--", lw=0.8, label="fitted terms")
         if predicted and run.source in predicted:
-            ax.plot(th, base + _centred(th, predicted[run.source]), ls=":", lw=1.0,
-                    label="simulated")
+            ax.plot(
+                th, base + _centred(th, predicted[run.source]), ls=":", lw=1.0, label="simulated"
+            )
         ax.set_ylim(0, base + 3 * div)
         ax.set_yticks([base - 2 * div, base, base + 2 * div])
         ax.set_yticklabels([])
-        ax.set_title(f"{res.name} ({res.direction})\n{div:g} µm/div, G = "
-                     f"{res.circular_deviation_um:.1f} µm", fontsize=9)
+        ax.set_title(
+            f"{res.name} ({res.direction})\n{div:g} µm/div, G = {res.circular_deviation_um:.1f} µm",
+            fontsize=9,
+        )
         if k == 0:
             ax.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.25, -0.25))
     fig.tight_layout(rect=(0, 0, 1, 0.95))

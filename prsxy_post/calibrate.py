@@ -98,8 +98,14 @@ def params_of(theta: np.ndarray) -> tuple[KinematicParams, TableParams]:
     from .profile import Leg
 
     n = len(LEG_KEYS)
-    legs = tuple(Leg(**dict(zip(LEG_KEYS, (float(x) for x in theta[3 + i * n:3 + (i + 1) * n]),
-                                strict=True))) for i in range(3))
+    legs = tuple(
+        Leg(
+            **dict(
+                zip(LEG_KEYS, (float(x) for x in theta[3 + i * n : 3 + (i + 1) * n]), strict=True)
+            )
+        )
+        for i in range(3)
+    )
     kp = KinematicParams(float(theta[0]), legs, float(theta[1]), float(theta[2]))  # type: ignore[arg-type]
     tb = TableParams(float(theta[-3]), float(theta[-2]), float(theta[-1]))
     return kp, tb
@@ -139,8 +145,9 @@ class Observations:
     sigma_bb_mm: float = 0.5e-3
 
 
-def reached_motors(real_axis: Sequence[Any], P_cmd: np.ndarray, approach: int | None,
-                   effects: Any = None) -> np.ndarray:
+def reached_motors(
+    real_axis: Sequence[Any], P_cmd: np.ndarray, approach: int | None, effects: Any = None
+) -> np.ndarray:
     """Where the parts end for commands, by the given real-axis tables (play model)."""
     tables = axiscomp.tables_by_motor(tuple(real_axis), effects)
     out = P_cmd.copy()
@@ -148,13 +155,21 @@ def reached_motors(real_axis: Sequence[Any], P_cmd: np.ndarray, approach: int | 
         t = tables.get(m)
         if t is None:
             continue
-        out[:, col] = (axiscomp.play_model(t, P_cmd[:, col]) if approach is None
-                       else axiscomp.approach(t, P_cmd[:, col], approach))
+        out[:, col] = (
+            axiscomp.play_model(t, P_cmd[:, col])
+            if approach is None
+            else axiscomp.approach(t, P_cmd[:, col], approach)
+        )
     return out
 
 
-def observations(commanded: Profile, real_axis: Sequence[Any], poses: Sequence[Any],
-                 runs: Sequence[Any], ballbar_points: int = 720) -> Observations:
+def observations(
+    commanded: Profile,
+    real_axis: Sequence[Any],
+    poses: Sequence[Any],
+    runs: Sequence[Any],
+    ballbar_points: int = 720,
+) -> Observations:
     """Model inputs for pose files (measure.PoseData) and ballbar runs (measure.BallbarRun).
 
     ``commanded``: the profile the machine was commanded with (its chain made the
@@ -204,14 +219,23 @@ def _out(geo: kinematics.Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
 
 def default_steps(names: Sequence[str], theta: np.ndarray) -> np.ndarray:
     """Central-difference steps: relative for lengths and angles, absolute for small terms."""
-    return np.array([1e-6 * max(1.0, abs(t)) if n.startswith("kinematics") else 1e-7
-                     for n, t in zip(names, theta, strict=True)])
+    return np.array(
+        [
+            1e-6 * max(1.0, abs(t)) if n.startswith("kinematics") else 1e-7
+            for n, t in zip(names, theta, strict=True)
+        ]
+    )
 
 
-def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
-                     guess: np.ndarray | None = None, want_jac: bool = True,
-                     steps: np.ndarray | None = None, motors: bool = False
-                     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray | None]:
+def fk_with_jacobian(
+    make_geo: Any,
+    theta: np.ndarray,
+    P: np.ndarray,
+    guess: np.ndarray | None = None,
+    want_jac: bool = True,
+    steps: np.ndarray | None = None,
+    motors: bool = False,
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray | None]:
     """Tip and axis y (N, 5) for motor positions P under geometry θ, with derivatives.
 
     Implicit differentiation of the FK constraints F(x, θ, P) = 0 (x: platform pose):
@@ -225,8 +249,10 @@ def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
     geo = make_geo(theta)
     xv, ok = kinematics.forward_platform(geo, P, guess)
     if not np.all(ok):
-        raise FitError(f"forward kinematics failed at {int(np.sum(~ok))} measured points",
-                       expected="measurements of poses this geometry can reach")
+        raise FitError(
+            f"forward kinematics failed at {int(np.sum(~ok))} measured points",
+            expected="measurements of poses this geometry can reach",
+        )
     y = _out(geo, P, xv)
     if not want_jac:
         return y, None, xv, None
@@ -238,8 +264,9 @@ def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
         xp, xm = xv.copy(), xv.copy()
         xp[:, j] += hx[j]
         xm[:, j] -= hx[j]
-        Fx[:, :, j] = (kinematics._fk_residual(geo, P, xp)
-                       - kinematics._fk_residual(geo, P, xm)) / (2 * hx[j])
+        Fx[:, :, j] = (
+            kinematics._fk_residual(geo, P, xp) - kinematics._fk_residual(geo, P, xm)
+        ) / (2 * hx[j])
         Gx[:, :, j] = (_out(geo, P, xp) - _out(geo, P, xm)) / (2 * hx[j])
     h_all = steps if steps is not None else default_steps(PARAMS, theta)
     Ft = np.empty((n, 6, m))
@@ -250,8 +277,9 @@ def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
         tp[j] += h
         tm[j] -= h
         gp, gm = make_geo(tp), make_geo(tm)
-        Ft[:, :, j] = (kinematics._fk_residual(gp, P, xv)
-                       - kinematics._fk_residual(gm, P, xv)) / (2 * h)
+        Ft[:, :, j] = (kinematics._fk_residual(gp, P, xv) - kinematics._fk_residual(gm, P, xv)) / (
+            2 * h
+        )
         Gt[:, :, j] = (_out(gp, P, xv) - _out(gm, P, xv)) / (2 * h)
     lu = np.linalg.inv(Fx)
     J = np.einsum("nij,njm->nim", Gx, -lu @ Ft) + Gt
@@ -263,8 +291,9 @@ def fk_with_jacobian(make_geo: Any, theta: np.ndarray, P: np.ndarray,
             Pp, Pm = P.copy(), P.copy()
             Pp[:, j] += 1e-6
             Pm[:, j] -= 1e-6
-            FP[:, :, j] = (kinematics._fk_residual(geo, Pp, xv)
-                           - kinematics._fk_residual(geo, Pm, xv)) / 2e-6
+            FP[:, :, j] = (
+                kinematics._fk_residual(geo, Pp, xv) - kinematics._fk_residual(geo, Pm, xv)
+            ) / 2e-6
             GP[:, :, j] = (_out(geo, Pp, xv) - _out(geo, Pm, xv)) / 2e-6
         JP = np.einsum("nij,njm->nim", Gx, -lu @ FP) + GP
     return y, J, xv, JP
@@ -277,9 +306,15 @@ class ModelEval:
     raw: dict[str, np.ndarray]  # unwhitened residuals per data type [mm, deg]
 
 
-def evaluate(profile: Profile, theta: np.ndarray, obs: Observations, want_jac: bool = True,
-             guesses: dict[str, np.ndarray] | None = None) -> ModelEval:
+def evaluate(
+    profile: Profile,
+    theta: np.ndarray,
+    obs: Observations,
+    want_jac: bool = True,
+    guesses: dict[str, np.ndarray] | None = None,
+) -> ModelEval:
     """Whitened residuals (and Jacobian) of all observations under θ."""
+
     def make_geo(t: np.ndarray) -> kinematics.Geometry:
         return geometry_of(profile, t)
 
@@ -308,8 +343,9 @@ def evaluate(profile: Profile, theta: np.ndarray, obs: Observations, want_jac: b
         if J is not None:
             Js.append(np.einsum("ni,nim->nm", vec / d[:, None], J[:, :3, :]) / obs.sigma_bb_mm)
     if not rs:
-        raise FitError("no pose or ballbar measurements to calibrate from",
-                       expected="pose or ballbar files")
+        raise FitError(
+            "no pose or ballbar measurements to calibrate from", expected="pose or ballbar files"
+        )
     r = np.concatenate(rs)
     Jall = np.vstack(Js) if want_jac else None
     return ModelEval(r, Jall, raw)
@@ -342,8 +378,14 @@ def _stats(raw: dict[str, np.ndarray]) -> tuple[dict[str, float], dict[str, floa
     return rms, mx
 
 
-def fit_kinematics(profile: Profile, obs: Observations, *, max_rel_stderr: float = 0.25,
-                   max_iter: int = 12, only: Sequence[str] | None = None) -> KinematicFit:
+def fit_kinematics(
+    profile: Profile,
+    obs: Observations,
+    *,
+    max_rel_stderr: float = 0.25,
+    max_iter: int = 12,
+    only: Sequence[str] | None = None,
+) -> KinematicFit:
     """Stage 2: Gauss–Newton in the identified subspace (see module docstring).
 
     Parameters
@@ -356,8 +398,11 @@ def fit_kinematics(profile: Profile, obs: Observations, *, max_rel_stderr: float
     """
     theta0 = theta_of(profile)
     theta = theta0.copy()
-    mask = np.ones(len(PARAMS), dtype=bool) if only is None else np.array(
-        [n in set(only) for n in PARAMS])
+    mask = (
+        np.ones(len(PARAMS), dtype=bool)
+        if only is None
+        else np.array([n in set(only) for n in PARAMS])
+    )
     guesses: dict[str, np.ndarray] = {}
     ev = evaluate(profile, theta, obs, True, guesses)
     rms_b, max_b = _stats(ev.raw)
@@ -367,8 +412,10 @@ def fit_kinematics(profile: Profile, obs: Observations, *, max_rel_stderr: float
     _, S, Vt = np.linalg.svd(Js, full_matrices=False)
     keep = (S > 0) & (1.0 / np.maximum(S, 1e-300) < max_rel_stderr)
     if not np.any(keep):
-        raise FitError("these measurements identify no kinematic parameter",
-                       expected="poses or ballbar runs that move the tip measurably")
+        raise FitError(
+            "these measurements identify no kinematic parameter",
+            expected="poses or ballbar runs that move the tip measurably",
+        )
     V = Vt[keep].T  # (m, k) identified directions, scaled space
     cost = float(ev.r @ ev.r)
     iterations = 0
@@ -420,9 +467,21 @@ def fit_kinematics(profile: Profile, obs: Observations, *, max_rel_stderr: float
             groups.append([(PARAMS[j], float(v[j])) for j in big if mask[j]])
     smax = S[0] if S.size else 0.0
     smin = S[-1] if S.size else 0.0
-    return KinematicFit(theta0, theta, se, identified, S,
-                        float(smax / smin) if smin > 0 else float("inf"), groups, rms_b, rms_a,
-                        max_b, max_a, iterations, noise_scale)
+    return KinematicFit(
+        theta0,
+        theta,
+        se,
+        identified,
+        S,
+        float(smax / smin) if smin > 0 else float("inf"),
+        groups,
+        rms_b,
+        rms_a,
+        max_b,
+        max_a,
+        iterations,
+        noise_scale,
+    )
 
 
 def apply_theta(profile_doc: dict[str, Any], theta: np.ndarray) -> dict[str, Any]:
@@ -479,8 +538,10 @@ def stage_tables(start: Profile, axis: Sequence[Any]) -> tuple[list[Any], StageR
     measured = np.concatenate([a.measured for a in axis])
     direction = np.concatenate([a.direction for a in axis])
     run = np.concatenate([a.run for a in axis])
-    new = [AxisComp(t.motor, t.positions, t.forward, t.reverse)
-           for t in tables_mod.tables_from_axis(motor, target, measured, direction, run)]
+    new = [
+        AxisComp(t.motor, t.positions, t.forward, t.reverse)
+        for t in tables_mod.tables_from_axis(motor, target, measured, direction, run)
+    ]
     figures = tables_mod.iso230_2(motor, target, measured, direction, run)
     merged = {c.motor: c for c in start.axis_comp}
     merged.update({c.motor: c for c in new})
@@ -492,13 +553,19 @@ def stage_tables(start: Profile, axis: Sequence[Any]) -> tuple[list[Any], StageR
     changed = []
     for c in new:
         f = figures[c.motor]
-        changed.append({
-            "name": f"axis_comp[motor={c.motor}]", "points": len(c.positions),
-            "from": float(c.positions[0]), "to": float(c.positions[-1]),
-            "iso230_2": {k: _jsonable(getattr(f, k)) for k in
-                         ("systematic_E", "reversal_B", "repeatability_R", "accuracy_A")
-                         if hasattr(f, k)},
-        })
+        changed.append(
+            {
+                "name": f"axis_comp[motor={c.motor}]",
+                "points": len(c.positions),
+                "from": float(c.positions[0]),
+                "to": float(c.positions[-1]),
+                "iso230_2": {
+                    k: _jsonable(getattr(f, k))
+                    for k in ("systematic_E", "reversal_B", "repeatability_R", "accuracy_A")
+                    if hasattr(f, k)
+                },
+            }
+        )
     return tabs, StageReport("real-axis tables (ISO 230-2)", changed, rb, ra, mb, ma)
 
 
@@ -510,9 +577,14 @@ def _jsonable(x: Any) -> Any:
     return x
 
 
-def stage_kinematics(start: Profile, commanded: Profile, real_axis: Sequence[Any],
-                     poses: Sequence[Any], runs: Sequence[Any], **kw: Any
-                     ) -> tuple[np.ndarray, KinematicFit, Observations, StageReport]:
+def stage_kinematics(
+    start: Profile,
+    commanded: Profile,
+    real_axis: Sequence[Any],
+    poses: Sequence[Any],
+    runs: Sequence[Any],
+    **kw: Any,
+) -> tuple[np.ndarray, KinematicFit, Observations, StageReport]:
     """Stage 2: contract parameters from poses and ballbar runs."""
     obs = observations(commanded, real_axis, poses, runs)
     fit = fit_kinematics(start, obs, **kw)
@@ -520,39 +592,70 @@ def stage_kinematics(start: Profile, commanded: Profile, real_axis: Sequence[Any
     for j, name in enumerate(PARAMS):
         d = fit.theta[j] - fit.theta0[j]
         if fit.identified[j] and abs(d) > 0:
-            changed.append({"name": name, "from": float(fit.theta0[j]),
-                            "to": float(fit.theta[j]), "change": float(d),
-                            "stderr": float(fit.stderr[j]), "unit": units(name)})
-    notes = [f"condition number of the scaled Jacobian: {fit.condition:.3g}",
-             f"{int(fit.identified.sum())} of {len(PARAMS)} parameters identified to "
-             f"{kw.get('max_rel_stderr', 0.25):.0%} of their prior size"]
+            changed.append(
+                {
+                    "name": name,
+                    "from": float(fit.theta0[j]),
+                    "to": float(fit.theta[j]),
+                    "change": float(d),
+                    "stderr": float(fit.stderr[j]),
+                    "unit": units(name),
+                }
+            )
+    notes = [
+        f"condition number of the scaled Jacobian: {fit.condition:.3g}",
+        f"{int(fit.identified.sum())} of {len(PARAMS)} parameters identified to "
+        f"{kw.get('max_rel_stderr', 0.25):.0%} of their prior size",
+    ]
     for g in fit.unidentified_groups:
         txt = " ".join(f"{w:+.2f}·{n}" for n, w in g)
         notes.append(f"not separable by these data (left as they were): {txt}")
-    rep = StageReport("kinematic and table parameters", changed, fit.rms_before,
-                      fit.rms_after, fit.max_before, fit.max_after, notes,
-                      {"iterations": fit.iterations, "noise_scale": fit.noise_scale})
+    rep = StageReport(
+        "kinematic and table parameters",
+        changed,
+        fit.rms_before,
+        fit.rms_after,
+        fit.max_before,
+        fit.max_after,
+        notes,
+        {"iterations": fit.iterations, "noise_scale": fit.noise_scale},
+    )
     return fit.theta, fit, obs, rep
 
 
-def stage_error_map(calibrated: Profile, theta: np.ndarray, obs: Observations,
-                    rng: np.random.Generator, provenance: dict[str, Any]
-                    ) -> tuple[Any, StageReport]:
+def stage_error_map(
+    calibrated: Profile,
+    theta: np.ndarray,
+    obs: Observations,
+    rng: np.random.Generator,
+    provenance: dict[str, Any],
+) -> tuple[Any, StageReport]:
     """Stage 3: the Eq. 5 error map from the pose residuals the calibrated model leaves."""
     from . import errormap
 
     if not len(obs.P_pose):
-        raise FitError("the error map needs pose measurements",
-                       expected="a pose file (kind: poses)")
+        raise FitError(
+            "the error map needs pose measurements", expected="a pose file (kind: poses)"
+        )
     ev = evaluate(calibrated, theta, obs, want_jac=False)
     resid = np.column_stack([ev.raw["pose_tip"], ev.raw["pose_axis"]])
     emap = errormap.fit(obs.q_pose, resid, rng=rng, provenance=provenance)
     after = resid - emap(obs.q_pose)
     rb, mb = _stats({"pose_tip": resid[:, :3], "pose_axis": resid[:, 3:]})
     ra, ma = _stats({"pose_tip": after[:, :3], "pose_axis": after[:, 3:]})
-    changed = [{"name": f"error_map.{c}", "degree": emap.degree[c], "lambda": emap.lam[c],
-                "cv_rms": emap.cv_rms[c], "fit_rms": emap.fit_rms[c],
-                "unit": errormap.UNITS[c]} for c in emap.coef]
-    notes = ["cv_rms: cross-validated prediction error on poses left out of the fit; "
-             "fit_rms below it by much would mean the map follows noise"]
+    changed = [
+        {
+            "name": f"error_map.{c}",
+            "degree": emap.degree[c],
+            "lambda": emap.lam[c],
+            "cv_rms": emap.cv_rms[c],
+            "fit_rms": emap.fit_rms[c],
+            "unit": errormap.UNITS[c],
+        }
+        for c in emap.coef
+    ]
+    notes = [
+        "cv_rms: cross-validated prediction error on poses left out of the fit; "
+        "fit_rms below it by much would mean the map follows noise"
+    ]
     return emap, StageReport("virtual-axis error map (Eq. 5)", changed, rb, ra, mb, ma, notes)

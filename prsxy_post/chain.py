@@ -59,8 +59,9 @@ class Stages:
     def describe(self) -> str:
         on = [n for n in ("error_map", "calibrated", "axis_comp") if getattr(self, n)]
         off = [n for n in ("error_map", "calibrated", "axis_comp") if not getattr(self, n)]
-        return "stages on: " + (", ".join(on) or "none") + (
-            "; off: " + ", ".join(off) if off else "")
+        return (
+            "stages on: " + (", ".join(on) or "none") + ("; off: " + ", ".join(off) if off else "")
+        )
 
 
 @dataclass
@@ -82,8 +83,7 @@ class ChainResult:
     t: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
-def interpreter_config(profile: Profile, start: Sequence[float] | None = None
-                       ) -> InterpreterConfig:
+def interpreter_config(profile: Profile, start: Sequence[float] | None = None) -> InterpreterConfig:
     """The G-code interpreter's settings from a profile (offsets, tools, G28/G30, start)."""
     from .gcode import InterpreterConfig, ToolEntry
 
@@ -111,8 +111,9 @@ def limits_of(profile: Profile) -> Limits:
 def geometry_of(profile: Profile, stages: Stages) -> kinematics.Geometry:
     """The geometry the IK uses: calibrated, or the contract's nominal design."""
     if stages.calibrated:
-        return kinematics.Geometry.from_params(profile.kinematics, profile.origin, profile.table,
-                                              profile.effects)
+        return kinematics.Geometry.from_params(
+            profile.kinematics, profile.origin, profile.table, profile.effects
+        )
     return kinematics.Geometry.from_params(nominal_kinematics(), profile.origin)
 
 
@@ -131,9 +132,13 @@ def check_motions(motions: Sequence[Motion], profile: Profile) -> list[PrsxyErro
     fmax = profile.limits["max_feed_mm_min"]
     for m in motions:
         if m.kind in ("feed", "arc") and m.feed > fmax:
-            out.append(LimitError(f"feed F{m.feed:g} mm/min is above the machine's maximum",
-                                  line=m.line, expected=f"at most {fmax:g} mm/min "
-                                  "(limits.max_feed_mm_min)"))
+            out.append(
+                LimitError(
+                    f"feed F{m.feed:g} mm/min is above the machine's maximum",
+                    line=m.line,
+                    expected=f"at most {fmax:g} mm/min (limits.max_feed_mm_min)",
+                )
+            )
     return out
 
 
@@ -173,8 +178,12 @@ class PointChunk:
 
     @staticmethod
     def concat(chunks: Sequence[PointChunk]) -> PointChunk:
-        return PointChunk(**{k: np.concatenate([getattr(c, k) for c in chunks])
-                             for k in PointChunk.__dataclass_fields__})
+        return PointChunk(
+            **{
+                k: np.concatenate([getattr(c, k) for c in chunks])
+                for k in PointChunk.__dataclass_fields__
+            }
+        )
 
 
 class Planner:
@@ -197,8 +206,12 @@ class Planner:
         elif len(new) == 0:
             b = self.pending
         else:
-            b = Blocks(**{k: np.concatenate([getattr(self.pending, k), getattr(new, k)])
-                          for k in Blocks.__dataclass_fields__})
+            b = Blocks(
+                **{
+                    k: np.concatenate([getattr(self.pending, k), getattr(new, k)])
+                    for k in Blocks.__dataclass_fields__
+                }
+            )
         n = len(b)
         if n == 0:
             self.pending = b
@@ -241,9 +254,15 @@ class Pipeline:
     servo lead), the clock, and the counters of the work guard.
     """
 
-    def __init__(self, profile: Profile, stages: Stages = Stages(),
-                 error_map: ErrorMap | None = None, *, start: Sequence[float] | None = None,
-                 collect: bool = False) -> None:
+    def __init__(
+        self,
+        profile: Profile,
+        stages: Stages = Stages(),
+        error_map: ErrorMap | None = None,
+        *,
+        start: Sequence[float] | None = None,
+        collect: bool = False,
+    ) -> None:
         self.profile = profile
         self.stages = stages
         self.error_map = error_map if stages.error_map else None
@@ -254,8 +273,9 @@ class Pipeline:
         self.geo = geometry_of(profile, stages)
         self.tables = axiscomp.profile_tables(profile) if stages.axis_comp else {}
         self.states = {m: axiscomp.PlayState() for m in self.tables}
-        self.lag = (np.asarray(profile.effects.servo_lag_ms) / 1000.0
-                    if stages.axis_comp else np.zeros(5))
+        self.lag = (
+            np.asarray(profile.effects.servo_lag_ms) / 1000.0 if stages.axis_comp else np.zeros(5)
+        )
         self.held: PointChunk | None = None  # points waiting for the servo lead
         self.prev: tuple[np.ndarray, float] | None = None  # last released (P, t)
         self.problems: list[PrsxyError] = []
@@ -264,8 +284,7 @@ class Pipeline:
         self.started = False
         self.any_motion = False
         #: seconds spent per stage (for the benchmark and profiling)
-        self.timings = {"interpolate": 0.0, "error_map": 0.0, "kinematics": 0.0,
-                        "axis_tables": 0.0}
+        self.timings = {"interpolate": 0.0, "error_map": 0.0, "kinematics": 0.0, "axis_tables": 0.0}
 
     # -- problems
     def _problem(self, errs: list[PrsxyError]) -> None:
@@ -283,8 +302,14 @@ class Pipeline:
         if not self.started:
             line0 = int(b.line[0]) if len(b) else (motions[0].line if motions else 0)
             tl0 = 0.0  # the program starts with no tool length offset in effect
-            first = self._points(self.start[None, :], np.zeros(1), np.array([line0]),
-                                 np.array([False]), np.array([tl0]), np.zeros(1))
+            first = self._points(
+                self.start[None, :],
+                np.zeros(1),
+                np.array([line0]),
+                np.array([False]),
+                np.array([tl0]),
+                np.zeros(1),
+            )
             if first is not None:
                 out.append(first)
             self.started = True
@@ -307,8 +332,10 @@ class Pipeline:
                 out.append(pc)
         if final:
             if not self.any_motion:
-                raise LimitError("the program moves nothing", expected="at least one move "
-                                 "(G0, G1, G2, G3) or dwell")
+                raise LimitError(
+                    "the program moves nothing",
+                    expected="at least one move (G0, G1, G2, G3) or dwell",
+                )
             tail = self._release(final=True)
             if tail is not None:
                 out.append(tail)
@@ -343,11 +370,20 @@ class Pipeline:
             k = int(over[0])
             raise LimitError(
                 f"the program would interpolate to more than {int(lim['max_points'])} points or "
-                f"run longer than {lim['max_time_s']:g} s (reached here)", line=int(line[k]),
-                expected="a shorter program, or larger limits.max_points / limits.max_time_s")
+                f"run longer than {lim['max_time_s']:g} s (reached here)",
+                line=int(line[k]),
+                expected="a shorter program, or larger limits.max_points / limits.max_time_s",
+            )
 
-    def _points(self, q: np.ndarray, dt: np.ndarray, line: np.ndarray, first: np.ndarray,
-                tool: np.ndarray, speed: np.ndarray) -> PointChunk | None:
+    def _points(
+        self,
+        q: np.ndarray,
+        dt: np.ndarray,
+        line: np.ndarray,
+        first: np.ndarray,
+        tool: np.ndarray,
+        speed: np.ndarray,
+    ) -> PointChunk | None:
         # a running sum continued across chunks (not chunk offset + cumsum), so the
         # clock is the same bit for bit however the program was cut
         t = np.cumsum(np.concatenate([[self.t], dt]))[1:]
@@ -364,8 +400,9 @@ class Pipeline:
         if np.all(ik.reachable):
             for col, m in enumerate(MOTOR_ORDER):
                 if m in self.tables:
-                    P_comp[:, col] = axiscomp.compensate(self.tables[m], ik.P[:, col],
-                                                         self.states[m])
+                    P_comp[:, col] = axiscomp.compensate(
+                        self.tables[m], ik.P[:, col], self.states[m]
+                    )
         self.timings["error_map"] += t1 - t0
         self.timings["kinematics"] += t2 - t1
         self.timings["axis_tables"] += time.perf_counter() - t2
@@ -397,8 +434,8 @@ class Pipeline:
             if final:
                 P_all = np.vstack([P_all, h.P_cmd[-1:]])
                 t_all = np.concatenate([t_all, h.t[-1:]])
-            span = np.maximum(t_all[2:k + 2] - t_all[:k], 1e-9)
-            v = (P_all[2:k + 2] - P_all[:k]) / span[:, None]
+            span = np.maximum(t_all[2 : k + 2] - t_all[:k], 1e-9)
+            v = (P_all[2 : k + 2] - P_all[:k]) / span[:, None]
             if prev is None:
                 v[0] = 0.0
             if final:
@@ -410,23 +447,32 @@ class Pipeline:
         return ready
 
 
-def check_pose_problems(profile: Profile, q: np.ndarray, line: np.ndarray,
-                        reachable: np.ndarray) -> list[PrsxyError]:
+def check_pose_problems(
+    profile: Profile, q: np.ndarray, line: np.ndarray, reachable: np.ndarray
+) -> list[PrsxyError]:
     """Tilt beyond the limit and poses out of reach, one per G-code line and kind."""
     out: list[PrsxyError] = []
     max_tilt = profile.limits["max_tilt_deg"]
     cos_tilt = np.cos(np.radians(q[:, 3])) * np.cos(np.radians(q[:, 4]))
     tilt = np.degrees(np.arccos(np.clip(cos_tilt, -1.0, 1.0)))
     for i in _first_per_line(tilt > max_tilt + 1e-9, line):
-        out.append(LimitError(
-            f"tool axis tilted {tilt[i]:.3f}° at A{q[i, 3]:.4f} B{q[i, 4]:.4f}",
-            line=int(line[i]), expected=f"at most {max_tilt:g}° (limits.max_tilt_deg)"))
+        out.append(
+            LimitError(
+                f"tool axis tilted {tilt[i]:.3f}° at A{q[i, 3]:.4f} B{q[i, 4]:.4f}",
+                line=int(line[i]),
+                expected=f"at most {max_tilt:g}° (limits.max_tilt_deg)",
+            )
+        )
     for i in _first_per_line(~reachable, line):
-        out.append(ReachError(
-            "pose out of the machine's reach at X{:.4f} Y{:.4f} Z{:.4f} A{:.4f} B{:.4f}".format(
-                *q[i]),
-            line=int(line[i]),
-            expected="a pose the struts can reach (see the profile's [kinematics])"))
+        out.append(
+            ReachError(
+                "pose out of the machine's reach at X{:.4f} Y{:.4f} Z{:.4f} A{:.4f} B{:.4f}".format(
+                    *q[i]
+                ),
+                line=int(line[i]),
+                expected="a pose the struts can reach (see the profile's [kinematics])",
+            )
+        )
     return out
 
 
@@ -439,16 +485,26 @@ def check_travel(profile: Profile, P_cmd: np.ndarray, line: np.ndarray) -> list[
         p = P_cmd[:, col]
         bad = ok & ((p < mc.min - 1e-9) | (p > mc.max + 1e-9))
         for i in _first_per_line(bad, line):
-            out.append(ReachError(
-                f"motor {m} ({mc.axis}) commanded to {p[i]:.4f} mm, beyond its travel",
-                line=int(line[i]),
-                expected=f"{mc.min:g} to {mc.max:g} mm (motors[{m}].min/max)"))
+            out.append(
+                ReachError(
+                    f"motor {m} ({mc.axis}) commanded to {p[i]:.4f} mm, beyond its travel",
+                    line=int(line[i]),
+                    expected=f"{mc.min:g} to {mc.max:g} mm (motors[{m}].min/max)",
+                )
+            )
     return out
 
 
-def run_chain(motions: Sequence[Motion], profile: Profile, stages: Stages = Stages(),
-              error_map: ErrorMap | None = None, *, start: Sequence[float] | None = None,
-              collect: bool = False, chunk: int = 0) -> ChainResult:
+def run_chain(
+    motions: Sequence[Motion],
+    profile: Profile,
+    stages: Stages = Stages(),
+    error_map: ErrorMap | None = None,
+    *,
+    start: Sequence[float] | None = None,
+    collect: bool = False,
+    chunk: int = 0,
+) -> ChainResult:
     """Interpolate, correct, solve and compensate a whole program in memory.
 
     Parameters
@@ -474,13 +530,19 @@ def run_chain(motions: Sequence[Motion], profile: Profile, stages: Stages = Stag
     parts: list[PointChunk] = []
     step = chunk if chunk > 0 else max(len(motions), 1)
     for i in range(0, len(motions), step):
-        parts += pipe.feed(motions[i:i + step])
+        parts += pipe.feed(motions[i : i + step])
     parts += pipe.finish()
     pc = PointChunk.concat(parts)
-    samples = Samples(q=pc.q, dt=pc.dt, line=pc.line, block=np.zeros(len(pc), dtype=int),
-                      first=pc.first, tool_length=pc.tool_length, speed=pc.speed)
-    return ChainResult(samples, pc.q_target, pc.P_ideal, pc.P_cmd, pipe.geo, pipe.problems,
-                       pc.t)
+    samples = Samples(
+        q=pc.q,
+        dt=pc.dt,
+        line=pc.line,
+        block=np.zeros(len(pc), dtype=int),
+        first=pc.first,
+        tool_length=pc.tool_length,
+        speed=pc.speed,
+    )
+    return ChainResult(samples, pc.q_target, pc.P_ideal, pc.P_cmd, pipe.geo, pipe.problems, pc.t)
 
 
 def correct_virtual(q: np.ndarray, error_map: ErrorMap, iterations: int = 3) -> np.ndarray:

@@ -40,12 +40,17 @@ def read_text(path: str, kind: str = "file") -> str:
     try:
         data = Path(path).read_bytes() if path != "-" else sys.stdin.buffer.read()
     except OSError as exc:
-        raise PrsxyError(f"cannot read {kind}: {exc.strerror}", source=path,
-                         expected=f"a readable {kind}") from None
+        raise PrsxyError(
+            f"cannot read {kind}: {exc.strerror}", source=path, expected=f"a readable {kind}"
+        ) from None
     if b"\0" in data:
         line = data[: data.index(b"\0")].count(b"\n") + 1
-        raise PrsxyError(f"binary data (a NUL byte) in the {kind}", source=path, line=line,
-                         expected=f"a text {kind}")
+        raise PrsxyError(
+            f"binary data (a NUL byte) in the {kind}",
+            source=path,
+            line=line,
+            expected=f"a text {kind}",
+        )
     if data.startswith(b"\xef\xbb\xbf"):
         data = data[3:]
     try:
@@ -58,8 +63,7 @@ def sha256_of(path: str) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]
-                 ) -> None:
+def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:
     """Write every file or none: temp files beside the targets, then renames.
 
     An existing output is replaced only once every new file is complete on disk.
@@ -81,8 +85,11 @@ def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | b
         for tmp, _ in temps:
             if os.path.exists(tmp):
                 os.unlink(tmp)
-        raise PrsxyError(f"cannot write output: {exc.strerror}", source=str(exc.filename or ""),
-                         expected="a writable location") from None
+        raise PrsxyError(
+            f"cannot write output: {exc.strerror}",
+            source=str(exc.filename or ""),
+            expected="a writable location",
+        ) from None
 
 
 def load_profile(path: str) -> profile_mod.Profile:
@@ -94,11 +101,13 @@ def parse_pose(text: str, option: str) -> tuple[float, ...]:
     try:
         vals = tuple(float(p) for p in parts)
     except ValueError:
-        raise UsageError(f"{option} {text!r} is not five numbers",
-                         expected="x,y,z,a,b in mm and degrees") from None
+        raise UsageError(
+            f"{option} {text!r} is not five numbers", expected="x,y,z,a,b in mm and degrees"
+        ) from None
     if len(vals) != 5 or not all(np.isfinite(vals)):
-        raise UsageError(f"{option} {text!r} is not five finite numbers",
-                         expected="x,y,z,a,b in mm and degrees")
+        raise UsageError(
+            f"{option} {text!r} is not five finite numbers", expected="x,y,z,a,b in mm and degrees"
+        )
     return vals
 
 
@@ -136,8 +145,11 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
         except Exception as exc:  # a bug: say so plainly
             if ctx.debug:
                 traceback.print_exc()
-            click.echo(f"internal error: {type(exc).__name__}: {exc} (this is a bug in "
-                       f"prsxy-post {__version__}; rerun with --debug and report it)", err=True)
+            click.echo(
+                f"internal error: {type(exc).__name__}: {exc} (this is a bug in "
+                f"prsxy-post {__version__}; rerun with --debug and report it)",
+                err=True,
+            )
             sys.exit(EXIT_INTERNAL)
 
     return wrapper
@@ -159,10 +171,18 @@ def main(ctx: click.Context, debug: bool) -> None:
 
 
 profile_option = click.option(
-    "--profile", "profile_path", required=True, type=click.Path(dir_okay=False),
-    help="Machine profile (TOML).")
-start_option = click.option("--start", default=None, metavar="X,Y,Z,A,B",
-                            help="Start pose (workpiece frame); default the profile's.")
+    "--profile",
+    "profile_path",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Machine profile (TOML).",
+)
+start_option = click.option(
+    "--start",
+    default=None,
+    metavar="X,Y,Z,A,B",
+    help="Start pose (workpiece frame); default the profile's.",
+)
 
 
 # ------------------------------------------------------------------ inspect
@@ -170,8 +190,13 @@ start_option = click.option("--start", default=None, metavar="X,Y,Z,A,B",
 
 @main.command()
 @click.argument("program", type=click.Path(dir_okay=False, allow_dash=True))
-@click.option("--profile", "profile_path", default=None, type=click.Path(dir_okay=False),
-              help="Profile for work offsets, tools, G28/G30 and start pose.")
+@click.option(
+    "--profile",
+    "profile_path",
+    default=None,
+    type=click.Path(dir_okay=False),
+    help="Profile for work offsets, tools, G28/G30 and start pose.",
+)
 @start_option
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per motion and line.")
 @guarded
@@ -184,8 +209,11 @@ def inspect(program: str, profile_path: str | None, start: str | None, as_json: 
         prof = load_profile(profile_path)
         cfg = chain.interpreter_config(prof, parse_pose(start, "--start") if start else None)
     else:
-        cfg = gcode.InterpreterConfig(start=parse_pose(start, "--start")) if start else \
-            gcode.InterpreterConfig()
+        cfg = (
+            gcode.InterpreterConfig(start=parse_pose(start, "--start"))
+            if start
+            else gcode.InterpreterConfig()
+        )
     out = sys.stdout
     for m in gcode.iter_motions(gcode.split_lines(text), cfg, program):
         d = gcode.motion_to_json(m)
@@ -225,18 +253,22 @@ def inspect_source(path: str) -> str:
             while block := fh.read(1 << 20):
                 if b"\0" in block:
                     line += block[: block.index(b"\0")].count(b"\n")
-                    raise PrsxyError("binary data (a NUL byte) in the G-code program",
-                                     source=path, line=line, expected="a text file")
+                    raise PrsxyError(
+                        "binary data (a NUL byte) in the G-code program",
+                        source=path,
+                        line=line,
+                        expected="a text file",
+                    )
                 line += block.count(b"\n")
                 h.update(block)
     except OSError as exc:
-        raise PrsxyError(f"cannot read G-code program: {exc.strerror}", source=path,
-                         expected="a readable file") from None
+        raise PrsxyError(
+            f"cannot read G-code program: {exc.strerror}", source=path, expected="a readable file"
+        ) from None
     return h.hexdigest()
 
 
-def iter_program_lines(path: str, progress: Callable[[int], None] | None = None
-                       ) -> Iterator[str]:
+def iter_program_lines(path: str, progress: Callable[[int], None] | None = None) -> Iterator[str]:
     """The program's lines without their ends (CR, LF or CRLF), read as a stream.
 
     Bytes that are not UTF-8 become lone surrogates: harmless in comments, and
@@ -306,9 +338,13 @@ def convert_file(job: ConvertJob) -> ConvertStats:
     stages = chain.Stages(*job.stages)
     emap = errormap.from_profile(prof) if stages.error_map else None
     prov = writers.Provenance(
-        source=job.program, source_sha256=sha, profile_name=prof.name,
-        profile_source=job.profile_path, profile_sha256=sha256_of(job.profile_path),
-        options=job.options)
+        source=job.program,
+        source_sha256=sha,
+        profile_name=prof.name,
+        profile_source=job.profile_path,
+        profile_sha256=sha256_of(job.profile_path),
+        options=job.options,
+    )
     writer: writers.PmacWriter | writers.GcodeWriter
     if job.fmt == "pmac":
         writer = writers.PmacWriter(prof, prov)
@@ -331,8 +367,9 @@ def convert_file(job: ConvertJob) -> ConvertStats:
             if part not in sinks:
                 target = Path(_part_path(job.output, part, split))
                 target.parent.mkdir(parents=True, exist_ok=True)
-                fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp",
-                                           dir=target.parent)
+                fd, tmp = tempfile.mkstemp(
+                    prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
+                )
                 temps[part] = tmp
                 sinks[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
             sinks[part].write(text)
@@ -353,8 +390,11 @@ def convert_file(job: ConvertJob) -> ConvertStats:
         t_write += time.perf_counter() - t0
 
     try:
-        lines = (iter_program_lines(job.program, bar) if job.program != "-"
-                 else iter(gcode.split_lines(read_text("-", "G-code program"))))
+        lines = (
+            iter_program_lines(job.program, bar)
+            if job.program != "-"
+            else iter(gcode.split_lines(read_text("-", "G-code program")))
+        )
         motions = gcode.iter_motions(counted(lines), cfg, job.program)
         pipe = chain.Pipeline(prof, stages, emap, start=job.start)
         write(writer.begin)
@@ -390,8 +430,11 @@ def convert_file(job: ConvertJob) -> ConvertStats:
     except PrsxyError as err:
         raise err.located(source=job.program) from None
     except OSError as exc:
-        raise PrsxyError(f"cannot write output: {exc.strerror}", source=job.output,
-                         expected="a writable location") from None
+        raise PrsxyError(
+            f"cannot write output: {exc.strerror}",
+            source=job.output,
+            expected="a writable location",
+        ) from None
     finally:
         if bar is not None:
             bar.close()
@@ -411,27 +454,58 @@ def _run_job(job: ConvertJob) -> tuple[list[str] | None, str | None, int]:
 
 
 @main.command()
-@click.argument("programs", nargs=-1, required=True,
-                type=click.Path(dir_okay=False, allow_dash=True))
+@click.argument(
+    "programs", nargs=-1, required=True, type=click.Path(dir_okay=False, allow_dash=True)
+)
 @profile_option
-@click.option("--format", "fmt", type=click.Choice(["pmac", "gcode"]), default="pmac",
-              show_default=True, help="Motor-space PMAC program or corrected Cartesian G-code.")
-@click.option("-o", "--output", default=None,
-              help="Output file for one program ('-' for standard output).")
-@click.option("--out-dir", default=None, type=click.Path(file_okay=False),
-              help="Directory for the outputs (one per program, named after it).")
-@click.option("--jobs", "-j", default=1, show_default=True, type=click.IntRange(1, 64),
-              help="Programs converted in parallel processes.")
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["pmac", "gcode"]),
+    default="pmac",
+    show_default=True,
+    help="Motor-space PMAC program or corrected Cartesian G-code.",
+)
+@click.option(
+    "-o", "--output", default=None, help="Output file for one program ('-' for standard output)."
+)
+@click.option(
+    "--out-dir",
+    default=None,
+    type=click.Path(file_okay=False),
+    help="Directory for the outputs (one per program, named after it).",
+)
+@click.option(
+    "--jobs",
+    "-j",
+    default=1,
+    show_default=True,
+    type=click.IntRange(1, 64),
+    help="Programs converted in parallel processes.",
+)
 @start_option
 @click.option("--no-error-map", is_flag=True, help="Skip the virtual-axis error map stage.")
 @click.option("--no-axis-comp", is_flag=True, help="Skip the real-axis tables stage.")
-@click.option("--nominal-kinematics", is_flag=True,
-              help="Use the nominal design in the IK instead of the calibrated geometry.")
+@click.option(
+    "--nominal-kinematics",
+    is_flag=True,
+    help="Use the nominal design in the IK instead of the calibrated geometry.",
+)
 @click.option("--quiet", "-q", is_flag=True, help="Print nothing but errors.")
 @guarded
-def convert(programs: Sequence[str], profile_path: str, fmt: str, output: str | None,
-            out_dir: str | None, jobs: int, start: str | None, no_error_map: bool,
-            no_axis_comp: bool, nominal_kinematics: bool, quiet: bool) -> None:
+def convert(
+    programs: Sequence[str],
+    profile_path: str,
+    fmt: str,
+    output: str | None,
+    out_dir: str | None,
+    jobs: int,
+    start: str | None,
+    no_error_map: bool,
+    no_axis_comp: bool,
+    nominal_kinematics: bool,
+    quiet: bool,
+) -> None:
     """Convert G-code PROGRAMS into compensated motor programs (or corrected G-code).
 
     Outputs are written atomically: a failed conversion leaves no partial file and
@@ -440,17 +514,27 @@ def convert(programs: Sequence[str], profile_path: str, fmt: str, output: str | 
     if output and out_dir:
         raise UsageError("-o and --out-dir given together", expected="one of them")
     if output and len(programs) > 1:
-        raise UsageError(f"-o names one output but {len(programs)} programs were given",
-                         expected="--out-dir DIR for several programs")
+        raise UsageError(
+            f"-o names one output but {len(programs)} programs were given",
+            expected="--out-dir DIR for several programs",
+        )
     if not output and not out_dir and len(programs) > 1:
-        raise UsageError("several programs and no --out-dir",
-                         expected="--out-dir DIR for several programs")
+        raise UsageError(
+            "several programs and no --out-dir", expected="--out-dir DIR for several programs"
+        )
     load_profile(profile_path)  # fail once, early, on a bad profile
     st = parse_pose(start, "--start") if start else None
     stages = (not no_error_map, not nominal_kinematics, not no_axis_comp)
     opts = [f"--format {fmt}"]
-    opts += [f for f, on in (("--no-error-map", no_error_map), ("--no-axis-comp", no_axis_comp),
-                             ("--nominal-kinematics", nominal_kinematics)) if on]
+    opts += [
+        f
+        for f, on in (
+            ("--no-error-map", no_error_map),
+            ("--no-axis-comp", no_axis_comp),
+            ("--nominal-kinematics", nominal_kinematics),
+        )
+        if on
+    ]
     if start:
         opts.append(f"--start {start}")
     ext = ".pmc" if fmt == "pmac" else ".ngc"
@@ -461,8 +545,11 @@ def convert(programs: Sequence[str], profile_path: str, fmt: str, output: str | 
             out = str(Path(out_dir) / (Path(prog).stem + ext))
         else:
             out = output or "-"
-        jobs_list.append(ConvertJob(prog, profile_path, fmt, out, st, stages, " ".join(opts),
-                                    progress=show_progress))
+        jobs_list.append(
+            ConvertJob(
+                prog, profile_path, fmt, out, st, stages, " ".join(opts), progress=show_progress
+            )
+        )
     if jobs > 1 and len(jobs_list) > 1:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
             results = list(pool.map(_run_job, jobs_list))
@@ -491,8 +578,14 @@ def convert(programs: Sequence[str], profile_path: str, fmt: str, output: str | 
 @click.option("--no-axis-comp", is_flag=True)
 @click.option("--nominal-kinematics", is_flag=True)
 @guarded
-def check(program: str, profile_path: str, start: str | None, no_error_map: bool,
-          no_axis_comp: bool, nominal_kinematics: bool) -> None:
+def check(
+    program: str,
+    profile_path: str,
+    start: str | None,
+    no_error_map: bool,
+    no_axis_comp: bool,
+    nominal_kinematics: bool,
+) -> None:
     """Run the whole chain without writing and list every problem with its line."""
     from . import chain, errormap, gcode
 
@@ -511,8 +604,10 @@ def check(program: str, profile_path: str, start: str | None, no_error_map: bool
     if n:
         click.echo(f"{program}: {n} problem{'s' * (n != 1)}", err=True)
         sys.exit(1)
-    click.echo(f"{program}: ok ({len(motions)} motions, {len(s)} points, "
-               f"{float(np.sum(s.dt)):.2f} s)", err=True)
+    click.echo(
+        f"{program}: ok ({len(motions)} motions, {len(s)} points, {float(np.sum(s.dt)):.2f} s)",
+        err=True,
+    )
 
 
 # ------------------------------------------------------------------ measurements
@@ -539,32 +634,82 @@ def _out_dir_files(out_dir: str, files: dict[str, str]) -> None:
 
 
 @main.command()
-@click.option("--truth", "truth_path", required=True, type=click.Path(dir_okay=False),
-              help="Profile of the machine as it really is (may hold [effects]).")
+@click.option(
+    "--truth",
+    "truth_path",
+    required=True,
+    type=click.Path(dir_okay=False),
+    help="Profile of the machine as it really is (may hold [effects]).",
+)
 @profile_option
-@click.option("-o", "--out-dir", required=True, type=click.Path(file_okay=False),
-              help="Directory for the measurement files.")
+@click.option(
+    "-o",
+    "--out-dir",
+    required=True,
+    type=click.Path(file_okay=False),
+    help="Directory for the measurement files.",
+)
 @click.option("--seed", default=0, show_default=True, type=int, help="Noise seed.")
-@click.option("--noise-um", default=0.5, show_default=True, type=click.FloatRange(0),
-              help="Ballbar noise (1 sigma) [um].")
-@click.option("--pose-noise-um", default=1.0, show_default=True, type=click.FloatRange(0),
-              help="Pose (laser tracker) noise [um].")
-@click.option("--laser-noise-um", default=0.3, show_default=True, type=click.FloatRange(0),
-              help="Laser interferometer noise [um].")
-@click.option("--radii", default="50,100", show_default=True,
-              help="X-Y ballbar radii [mm], comma separated.")
-@click.option("--tilts", default="5,15", show_default=True,
-              help="Cone test tilts [deg], comma separated.")
-@click.option("--poses", "n_poses", default=300, show_default=True, type=click.IntRange(0),
-              help="Number of poses in the pose grid.")
-@click.option("--feed", default=1000.0, show_default=True, type=click.FloatRange(min=1),
-              help="Ballbar feed [mm/min].")
+@click.option(
+    "--noise-um",
+    default=0.5,
+    show_default=True,
+    type=click.FloatRange(0),
+    help="Ballbar noise (1 sigma) [um].",
+)
+@click.option(
+    "--pose-noise-um",
+    default=1.0,
+    show_default=True,
+    type=click.FloatRange(0),
+    help="Pose (laser tracker) noise [um].",
+)
+@click.option(
+    "--laser-noise-um",
+    default=0.3,
+    show_default=True,
+    type=click.FloatRange(0),
+    help="Laser interferometer noise [um].",
+)
+@click.option(
+    "--radii", default="50,100", show_default=True, help="X-Y ballbar radii [mm], comma separated."
+)
+@click.option(
+    "--tilts", default="5,15", show_default=True, help="Cone test tilts [deg], comma separated."
+)
+@click.option(
+    "--poses",
+    "n_poses",
+    default=300,
+    show_default=True,
+    type=click.IntRange(0),
+    help="Number of poses in the pose grid.",
+)
+@click.option(
+    "--feed",
+    default=1000.0,
+    show_default=True,
+    type=click.FloatRange(min=1),
+    help="Ballbar feed [mm/min].",
+)
 @click.option("--no-axis-runs", is_flag=True, help="Write no laser (axis) runs.")
 @click.option("--only-xy", is_flag=True, help="Only X-Y ballbar circles (no cones, X-Z, Y-Z).")
 @guarded
-def simulate(truth_path: str, profile_path: str, out_dir: str, seed: int, noise_um: float,
-             pose_noise_um: float, laser_noise_um: float, radii: str, tilts: str, n_poses: int,
-             feed: float, no_axis_runs: bool, only_xy: bool) -> None:
+def simulate(
+    truth_path: str,
+    profile_path: str,
+    out_dir: str,
+    seed: int,
+    noise_um: float,
+    pose_noise_um: float,
+    laser_noise_um: float,
+    radii: str,
+    tilts: str,
+    n_poses: int,
+    feed: float,
+    no_axis_runs: bool,
+    only_xy: bool,
+) -> None:
     """What the machine TRUTH measures when commanded with PROFILE.
 
     Writes contract measurement files into OUT_DIR: ballbar runs (X-Y circles,
@@ -579,14 +724,24 @@ def simulate(truth_path: str, profile_path: str, out_dir: str, seed: int, noise_
         r_list = [float(x) for x in radii.split(",") if x.strip()]
         t_list = [float(x) for x in tilts.split(",") if x.strip()]
     except ValueError:
-        raise UsageError("--radii and --tilts take numbers separated by commas",
-                         expected="e.g. --radii 40,50,60") from None
+        raise UsageError(
+            "--radii and --tilts take numbers separated by commas", expected="e.g. --radii 40,50,60"
+        ) from None
     rng = np.random.default_rng(seed)
     files = experiments.measurement_files(
-        truth, commanded, rng, radii=r_list, tilts=[] if only_xy else t_list,
-        planes=["XY"] if only_xy else ["XY", "XZ", "YZ"], n_poses=n_poses, feed=feed,
-        noise_um=noise_um, pose_noise_um=pose_noise_um, laser_noise_um=laser_noise_um,
-        axis_runs=not no_axis_runs)
+        truth,
+        commanded,
+        rng,
+        radii=r_list,
+        tilts=[] if only_xy else t_list,
+        planes=["XY"] if only_xy else ["XY", "XZ", "YZ"],
+        n_poses=n_poses,
+        feed=feed,
+        noise_um=noise_um,
+        pose_noise_um=pose_noise_um,
+        laser_noise_um=laser_noise_um,
+        axis_runs=not no_axis_runs,
+    )
     _out_dir_files(out_dir, files)
     click.echo(f"wrote {len(files)} files to {out_dir}", err=True)
 
@@ -603,19 +758,26 @@ def _print_stage(rep: Any) -> None:
     click.echo(f"== {rep.name}")
     for c in rep.changed:
         if "change" in c:
-            click.echo(f"  {c['name']}: {c['from']:.6g} -> {c['to']:.6g} "
-                       f"({c['change']:+.3g} ± {c['stderr']:.2g} {c['unit']})")
+            click.echo(
+                f"  {c['name']}: {c['from']:.6g} -> {c['to']:.6g} "
+                f"({c['change']:+.3g} ± {c['stderr']:.2g} {c['unit']})"
+            )
         elif "cv_rms" in c:
             scale = 3600.0 if c["unit"] == "deg" else 1000.0
             u = "arcsec" if c["unit"] == "deg" else "um"
-            click.echo(f"  {c['name']}: degree {c['degree']}, cross-validated RMS "
-                       f"{c['cv_rms'] * scale:.3f} {u}")
+            click.echo(
+                f"  {c['name']}: degree {c['degree']}, cross-validated RMS "
+                f"{c['cv_rms'] * scale:.3f} {u}"
+            )
         else:
             iso = c.get("iso230_2", {})
-            figs = ", ".join(f"{k.split('_')[-1]} {np.max(np.abs(v)) * 1000:.2f} um"
-                             for k, v in iso.items())
-            click.echo(f"  {c['name']}: {c['points']} points {c['from']:g}..{c['to']:g} mm"
-                       + (f"; ISO 230-2 {figs}" if figs else ""))
+            figs = ", ".join(
+                f"{k.split('_')[-1]} {np.max(np.abs(v)) * 1000:.2f} um" for k, v in iso.items()
+            )
+            click.echo(
+                f"  {c['name']}: {c['points']} points {c['from']:g}..{c['to']:g} mm"
+                + (f"; ISO 230-2 {figs}" if figs else "")
+            )
     for n in rep.notes:
         click.echo(f"  note: {n}")
     click.echo(f"  residual RMS before: {_fmt_stats(rep.rms_before)}")
@@ -624,8 +786,9 @@ def _print_stage(rep: Any) -> None:
     click.echo(f"  residual max after:  {_fmt_stats(rep.max_after)}")
 
 
-def profile_files(doc: dict[str, Any], output: str, input_path: str, in_place: bool
-                  ) -> dict[Path, str | bytes]:
+def profile_files(
+    doc: dict[str, Any], output: str, input_path: str, in_place: bool
+) -> dict[Path, str | bytes]:
     """The profile to write (checked to read back) and, when it replaces its input,
     a .bak of the input."""
     from .profile import dumps
@@ -643,29 +806,53 @@ def _check_output(out: str, inputs: Sequence[str], in_place: bool) -> None:
     outp = Path(out).resolve()
     for p in inputs:
         if Path(p).resolve() == outp and not in_place:
-            raise UsageError(f"-o {out} would overwrite the input profile {p}",
-                             expected="another output file, or --in-place")
+            raise UsageError(
+                f"-o {out} would overwrite the input profile {p}",
+                expected="another output file, or --in-place",
+            )
 
 
 @main.command()
 @click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @profile_option
 @click.option("-o", "--output", required=True, help="Calibrated profile to write (TOML).")
-@click.option("--commanded-with", default=None, type=click.Path(dir_okay=False),
-              help="Profile the machine was commanded with when measured (default: --profile).")
-@click.option("--stages", default="tables,kinematics,map", show_default=True,
-              help="Which stages to run (comma separated).")
-@click.option("--max-rel-stderr", default=0.25, show_default=True, type=click.FloatRange(0.001),
-              help="Leave a parameter combination alone when the data know it worse than "
-                   "this fraction of its typical size.")
-@click.option("--seed", default=0, show_default=True, type=int,
-              help="Seed of the cross-validation split.")
+@click.option(
+    "--commanded-with",
+    default=None,
+    type=click.Path(dir_okay=False),
+    help="Profile the machine was commanded with when measured (default: --profile).",
+)
+@click.option(
+    "--stages",
+    default="tables,kinematics,map",
+    show_default=True,
+    help="Which stages to run (comma separated).",
+)
+@click.option(
+    "--max-rel-stderr",
+    default=0.25,
+    show_default=True,
+    type=click.FloatRange(0.001),
+    help="Leave a parameter combination alone when the data know it worse than "
+    "this fraction of its typical size.",
+)
+@click.option(
+    "--seed", default=0, show_default=True, type=int, help="Seed of the cross-validation split."
+)
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
 @click.option("--json", "as_json", is_flag=True, help="Print the stage reports as JSON.")
 @guarded
-def calibrate(data: Sequence[str], profile_path: str, output: str, commanded_with: str | None,
-              stages: str, max_rel_stderr: float, seed: int, in_place: bool,
-              as_json: bool) -> None:
+def calibrate(
+    data: Sequence[str],
+    profile_path: str,
+    output: str,
+    commanded_with: str | None,
+    stages: str,
+    max_rel_stderr: float,
+    seed: int,
+    in_place: bool,
+    as_json: bool,
+) -> None:
     """Calibrate PROFILE from measurement files DATA (axis, poses, ballbar).
 
     Stage 1 fits real-axis tables from laser runs (ISO 230-2 figures), stage 2 the
@@ -682,8 +869,9 @@ def calibrate(data: Sequence[str], profile_path: str, output: str, commanded_wit
     want = {s.strip() for s in stages.split(",") if s.strip()}
     unknown = want - {"tables", "kinematics", "map"}
     if unknown:
-        raise UsageError(f"unknown stage {sorted(unknown)[0]!r}",
-                         expected="tables, kinematics, map")
+        raise UsageError(
+            f"unknown stage {sorted(unknown)[0]!r}", expected="tables, kinematics, map"
+        )
     poses, runs, axis = read_measurements(data)
     reports = []
     doc = dict(start.raw)
@@ -691,13 +879,20 @@ def calibrate(data: Sequence[str], profile_path: str, output: str, commanded_wit
     if "tables" in want and axis:
         real_axis, rep = cal.stage_tables(start, axis)
         reports.append(rep)
-        doc["axis_comp"] = [{"motor": c.motor, "positions": c.positions.tolist(),
-                             "forward": c.forward.tolist(), "reverse": c.reverse.tolist()}
-                            for c in real_axis]
+        doc["axis_comp"] = [
+            {
+                "motor": c.motor,
+                "positions": c.positions.tolist(),
+                "forward": c.forward.tolist(),
+                "reverse": c.reverse.tolist(),
+            }
+            for c in real_axis
+        ]
     fitted = None
     if "kinematics" in want and (poses or runs):
-        theta, _, obs, rep = cal.stage_kinematics(start, commanded, real_axis, poses, runs,
-                                                  max_rel_stderr=max_rel_stderr)
+        theta, _, obs, rep = cal.stage_kinematics(
+            start, commanded, real_axis, poses, runs, max_rel_stderr=max_rel_stderr
+        )
         reports.append(rep)
         doc = cal.apply_theta(doc, theta)
         fitted = (theta, obs)
@@ -708,23 +903,35 @@ def calibrate(data: Sequence[str], profile_path: str, output: str, commanded_wit
             theta = cal.theta_of(prof_now)
         else:
             theta, obs = fitted
-        emap, rep = cal.stage_error_map(prof_now, theta, obs, np.random.default_rng(seed),
-                                        {"from": [p.source for p in poses]})
+        emap, rep = cal.stage_error_map(
+            prof_now, theta, obs, np.random.default_rng(seed), {"from": [p.source for p in poses]}
+        )
         reports.append(rep)
         doc["error_map"] = emap.to_dict()
     if not reports:
-        raise UsageError("no stage had data to work on",
-                         expected="axis files for tables, pose or ballbar files for the "
-                                  "kinematics, pose files for the map")
+        raise UsageError(
+            "no stage had data to work on",
+            expected="axis files for tables, pose or ballbar files for the "
+            "kinematics, pose files for the map",
+        )
     prov = dict(doc.get("provenance", {}))
-    prov["calibrate"] = {"by": f"prsxy-post {__version__}", "start": profile_path,
-                         "commanded_with": commanded_with or profile_path,
-                         "data": list(data), "stages": [r.name for r in reports]}
+    prov["calibrate"] = {
+        "by": f"prsxy-post {__version__}",
+        "start": profile_path,
+        "commanded_with": commanded_with or profile_path,
+        "data": list(data),
+        "stages": [r.name for r in reports],
+    }
     doc["provenance"] = prov
     write_atomic(profile_files(doc, output, profile_path, in_place))
     if as_json:
-        click.echo(json.dumps({"stages": [r.to_dict() for r in reports], "output": output},
-                              default=_json_default, indent=1))
+        click.echo(
+            json.dumps(
+                {"stages": [r.to_dict() for r in reports], "output": output},
+                default=_json_default,
+                indent=1,
+            )
+        )
     else:
         for r in reports:
             _print_stage(r)
@@ -743,18 +950,39 @@ def _json_default(x: Any) -> Any:
 @click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @profile_option
 @click.option("-o", "--output", default=None, help="Write the updated profile here.")
-@click.option("--commanded-with", default=None, type=click.Path(dir_okay=False),
-              help="Profile the machine was commanded with (default: --profile).")
+@click.option(
+    "--commanded-with",
+    default=None,
+    type=click.Path(dir_okay=False),
+    help="Profile the machine was commanded with (default: --profile).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the diagnosis as JSON.")
-@click.option("--report", "report_dir", default=None, type=click.Path(file_okay=False),
-              help="Write report.md and plots into this directory.")
-@click.option("--alpha", default=1e-3, show_default=True, type=click.FloatRange(1e-12, 0.5),
-              help="Significance level of the F-test for each new effect.")
+@click.option(
+    "--report",
+    "report_dir",
+    default=None,
+    type=click.Path(file_okay=False),
+    help="Write report.md and plots into this directory.",
+)
+@click.option(
+    "--alpha",
+    default=1e-3,
+    show_default=True,
+    type=click.FloatRange(1e-12, 0.5),
+    help="Significance level of the F-test for each new effect.",
+)
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
 @guarded
-def diagnose(data: Sequence[str], profile_path: str, output: str | None,
-             commanded_with: str | None, as_json: bool, report_dir: str | None, alpha: float,
-             in_place: bool) -> None:
+def diagnose(
+    data: Sequence[str],
+    profile_path: str,
+    output: str | None,
+    commanded_with: str | None,
+    as_json: bool,
+    report_dir: str | None,
+    alpha: float,
+    in_place: bool,
+) -> None:
     """Find where PROFILE's simulation and the measurements DATA disagree and why."""
     from . import diagnose as dg
 
@@ -771,8 +999,9 @@ def diagnose(data: Sequence[str], profile_path: str, output: str | None,
     if report_dir:
         from . import report
 
-        files.update({Path(report_dir) / k: v for k, v in
-                      report.diagnose_report(result, current, d).items()})
+        files.update(
+            {Path(report_dir) / k: v for k, v in report.diagnose_report(result, current, d).items()}
+        )
     if files:
         write_atomic(files)
     if as_json:
@@ -781,8 +1010,10 @@ def diagnose(data: Sequence[str], profile_path: str, output: str | None,
     click.echo(f"noise: {', '.join(f'{k} {v:.3f}' for k, v in result.to_json()['noise'].items())}")
     for r in result.regions[:5]:
         unit = "arcsec" if r["kind"] == "pose_axis" else "um"
-        click.echo(f"disagreement: {r['source']} {r['region']}: rms {r[f'rms_{unit}']:.3f} "
-                   f"{unit} ({r['ratio']:.1f} x noise)")
+        click.echo(
+            f"disagreement: {r['source']} {r['region']}: rms {r[f'rms_{unit}']:.3f} "
+            f"{unit} ({r['ratio']:.1f} x noise)"
+        )
     if not result.effects:
         click.echo("no missing effect found: the model explains the data to their noise")
     for e in result.effects:
@@ -799,13 +1030,27 @@ def diagnose(data: Sequence[str], profile_path: str, output: str | None,
 @click.argument("runs", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print the figures as JSON.")
 @click.option("--plot", "plot_path", default=None, help="Write polar plots to this PNG.")
-@click.option("--profile", "profile_path", default=None, type=click.Path(dir_okay=False),
-              help="A model of the machine: adds its simulated prediction to the plot.")
-@click.option("--commanded-with", default=None, type=click.Path(dir_okay=False),
-              help="Profile the machine was commanded with (default: --profile).")
+@click.option(
+    "--profile",
+    "profile_path",
+    default=None,
+    type=click.Path(dir_okay=False),
+    help="A model of the machine: adds its simulated prediction to the plot.",
+)
+@click.option(
+    "--commanded-with",
+    default=None,
+    type=click.Path(dir_okay=False),
+    help="Profile the machine was commanded with (default: --profile).",
+)
 @guarded
-def ballbar(runs: Sequence[str], as_json: bool, plot_path: str | None,
-            profile_path: str | None, commanded_with: str | None) -> None:
+def ballbar(
+    runs: Sequence[str],
+    as_json: bool,
+    plot_path: str | None,
+    profile_path: str | None,
+    commanded_with: str | None,
+) -> None:
     """ISO 230-4 circular deviation and ballbar diagnostics of ballbar RUNS."""
     from . import ballbar as bb
     from . import diagnose as dg
@@ -821,25 +1066,35 @@ def ballbar(runs: Sequence[str], as_json: bool, plot_path: str | None,
             d = dg.Data.build(commanded, [], data, [])
             pred = dg.predict(model, d, want_columns=False).pred
             _, segs = d.measured()
-            predicted = {s.source: pred[s.start:s.stop] * 1000.0 for s in segs}
+            predicted = {s.source: pred[s.start : s.stop] * 1000.0 for s in segs}
         write_atomic({Path(plot_path): bb.plot_runs(results, data, predicted)})
     if as_json:
-        click.echo(json.dumps({"runs": [bb.result_to_json(r) for r in results],
-                               "pairs": [bb.result_to_json(p) for p in pairs]}, indent=1))
+        click.echo(
+            json.dumps(
+                {
+                    "runs": [bb.result_to_json(r) for r in results],
+                    "pairs": [bb.result_to_json(p) for p in pairs],
+                },
+                indent=1,
+            )
+        )
         return
     for r in results:
-        click.echo(f"{r.source}: {r.plane} r{r.radius:g} {r.direction} F{r.feed_mm_min:.0f}: "
-                   f"circular deviation {r.circular_deviation_um:.2f} um, squareness "
-                   f"{r.squareness_mm_per_m:+.4f} mm/m, scale mismatch "
-                   f"{r.scale_mismatch_mm:+.4f} mm, backlash X {r.backlash_um[0]:+.2f} "
-                   f"Y {r.backlash_um[1]:+.2f} um, cyclic {r.cyclic_um:.2f} um "
-                   f"(order {r.cyclic_order}), reversal spike {r.reversal_spike_um:.2f} um, "
-                   f"straightness {r.straightness_um[0]:+.2f} / {r.straightness_um[1]:+.2f} um")
+        click.echo(
+            f"{r.source}: {r.plane} r{r.radius:g} {r.direction} F{r.feed_mm_min:.0f}: "
+            f"circular deviation {r.circular_deviation_um:.2f} um, squareness "
+            f"{r.squareness_mm_per_m:+.4f} mm/m, scale mismatch "
+            f"{r.scale_mismatch_mm:+.4f} mm, backlash X {r.backlash_um[0]:+.2f} "
+            f"Y {r.backlash_um[1]:+.2f} um, cyclic {r.cyclic_um:.2f} um "
+            f"(order {r.cyclic_order}), reversal spike {r.reversal_spike_um:.2f} um, "
+            f"straightness {r.straightness_um[0]:+.2f} / {r.straightness_um[1]:+.2f} um"
+        )
     for p in pairs:
-        click.echo(f"pair {p.name} r{p.radius:g}: squareness {p.squareness_mm_per_m:+.4f} mm/m, "
-                   f"scale mismatch {p.scale_mismatch_mm:+.4f} mm, servo mismatch "
-                   f"{p.servo_mismatch_ms:+.3f} ms, hysteresis {p.circular_hysteresis_um:.2f} um")
-
+        click.echo(
+            f"pair {p.name} r{p.radius:g}: squareness {p.squareness_mm_per_m:+.4f} mm/m, "
+            f"scale mismatch {p.scale_mismatch_mm:+.4f} mm, servo mismatch "
+            f"{p.servo_mismatch_ms:+.3f} ms, hysteresis {p.circular_hysteresis_um:.2f} um"
+        )
 
 
 @main.group()
@@ -852,8 +1107,13 @@ TABLE_FORMATS = click.Choice(["linuxcnc0", "linuxcnc1", "pmac"])
 
 @tables.command("export")
 @profile_option
-@click.option("--format", "fmt", type=TABLE_FORMATS, required=True,
-              help="linuxcnc0/linuxcnc1: COMP_FILE_TYPE 0/1; pmac: DEFINE COMP + backlash.")
+@click.option(
+    "--format",
+    "fmt",
+    type=TABLE_FORMATS,
+    required=True,
+    help="linuxcnc0/linuxcnc1: COMP_FILE_TYPE 0/1; pmac: DEFINE COMP + backlash.",
+)
 @click.option("--out-dir", required=True, type=click.Path(file_okay=False))
 @guarded
 def tables_export(profile_path: str, fmt: str, out_dir: str) -> None:
@@ -862,18 +1122,24 @@ def tables_export(profile_path: str, fmt: str, out_dir: str) -> None:
 
     prof = load_profile(profile_path)
     if not prof.axis_comp:
-        raise PrsxyError("the profile has no [[axis_comp]] tables", source=profile_path,
-                         key="axis_comp", expected="tables to export")
+        raise PrsxyError(
+            "the profile has no [[axis_comp]] tables",
+            source=profile_path,
+            key="axis_comp",
+            expected="tables to export",
+        )
     files: dict[Path, str] = {}
     for c in prof.axis_comp:
         t = tb.AxisTable(c.motor, c.positions, c.forward, c.reverse)
         if fmt == "pmac":
-            text = tb.format_pmac_comp(t, motor=c.motor,
-                                       counts_per_mm=prof.motor(c.motor).counts_per_mm)
+            text = tb.format_pmac_comp(
+                t, motor=c.motor, counts_per_mm=prof.motor(c.motor).counts_per_mm
+            )
             files[Path(out_dir) / f"motor{c.motor}.pmc"] = text
         else:
             files[Path(out_dir) / f"motor{c.motor}.comp"] = tb.format_linuxcnc_comp(
-                t, file_type=int(fmt[-1]))
+                t, file_type=int(fmt[-1])
+            )
     write_atomic(files)
     click.echo(f"wrote {len(files)} files to {out_dir}", err=True)
 
@@ -882,13 +1148,23 @@ def tables_export(profile_path: str, fmt: str, out_dir: str) -> None:
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @profile_option
 @click.option("--format", "fmt", type=TABLE_FORMATS, required=True)
-@click.option("--motor", type=click.IntRange(1, 6), default=None,
-              help="Motor of a LinuxCNC file (PMAC tables name their motor).")
+@click.option(
+    "--motor",
+    type=click.IntRange(1, 6),
+    default=None,
+    help="Motor of a LinuxCNC file (PMAC tables name their motor).",
+)
 @click.option("-o", "--output", required=True, help="Profile to write with the tables.")
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
 @guarded
-def tables_import(files: Sequence[str], profile_path: str, fmt: str, motor: int | None,
-                  output: str, in_place: bool) -> None:
+def tables_import(
+    files: Sequence[str],
+    profile_path: str,
+    fmt: str,
+    motor: int | None,
+    output: str,
+    in_place: bool,
+) -> None:
     """Read tables into a profile's [[axis_comp]] (replacing those motors' tables)."""
     from . import tables as tb
 
@@ -902,22 +1178,29 @@ def tables_import(files: Sequence[str], profile_path: str, fmt: str, motor: int 
             first = tb.read_pmac_comp(text, f, counts_per_mm=1.0)
             for t in first:
                 cpm = prof.motor(t.motor).counts_per_mm
-                new += [x for x in tb.read_pmac_comp(text, f, counts_per_mm=cpm)
-                        if x.motor == t.motor]
+                new += [
+                    x for x in tb.read_pmac_comp(text, f, counts_per_mm=cpm) if x.motor == t.motor
+                ]
         else:
             if motor is None or motor == 4:
-                raise UsageError("--motor is needed for LinuxCNC files",
-                                 expected="--motor 1, 2, 3, 5 or 6")
+                raise UsageError(
+                    "--motor is needed for LinuxCNC files", expected="--motor 1, 2, 3, 5 or 6"
+                )
             new.append(tb.read_linuxcnc_comp(text, f, file_type=int(fmt[-1]), motor=motor))
     doc = dict(prof.raw)
     merged = {c["motor"]: c for c in doc.get("axis_comp", [])}
     for t in new:
-        merged[t.motor] = {"motor": t.motor, "positions": t.positions.tolist(),
-                           "forward": t.forward.tolist(), "reverse": t.reverse.tolist()}
+        merged[t.motor] = {
+            "motor": t.motor,
+            "positions": t.positions.tolist(),
+            "forward": t.forward.tolist(),
+            "reverse": t.reverse.tolist(),
+        }
     doc["axis_comp"] = [merged[m] for m in sorted(merged)]
     write_atomic(profile_files(doc, output, profile_path, in_place))
-    click.echo(f"wrote {output} with tables for motors "
-               f"{', '.join(str(t.motor) for t in new)}", err=True)
+    click.echo(
+        f"wrote {output} with tables for motors {', '.join(str(t.motor) for t in new)}", err=True
+    )
 
 
 if __name__ == "__main__":  # python -m prsxy_post.cli

@@ -46,13 +46,14 @@ from .errors import FitError
 from .profile import MOTORS, Profile, profile_from_dict
 
 EXTRA_PARAMS = [f"effects.guide_bow[{i}]" for i in (1, 2, 3)] + [
-    "effects.table_straightness[1]", "effects.table_straightness[2]"]
+    "effects.table_straightness[1]",
+    "effects.table_straightness[2]",
+]
 GEOM_PARAMS = calibrate.PARAMS + EXTRA_PARAMS
 #: Typical size of each library member (its prior scale), for reporting and steps.
 PRIOR = np.concatenate([calibrate.PRIOR, [0.01] * 3 + [0.05] * 2])
 #: Pitches scanned for cyclic errors [mm]: ball screws, encoders, linear-motor poles.
-CYCLIC_PERIODS = (1.0, 2.0, 2.5, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 25.0, 32.0, 40.0,
-                  50.0)
+CYCLIC_PERIODS = (1.0, 2.0, 2.5, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 25.0, 32.0, 40.0, 50.0)
 MOTOR_INDEX = {m: i for i, m in enumerate(MOTORS)}
 
 
@@ -78,9 +79,10 @@ def _geo_ext(profile: Profile, theta: np.ndarray) -> kinematics.Geometry:
     from .profile import Effects
 
     kp, tb = calibrate.params_of(theta[: len(calibrate.PARAMS)])
-    ex = theta[len(calibrate.PARAMS):]
-    eff = Effects((ex[0], ex[1], ex[2]), (ex[3], ex[4]), profile.effects.servo_lag_ms,
-                  profile.effects.cyclic)
+    ex = theta[len(calibrate.PARAMS) :]
+    eff = Effects(
+        (ex[0], ex[1], ex[2]), (ex[3], ex[4]), profile.effects.servo_lag_ms, profile.effects.cyclic
+    )
     return kinematics.Geometry.from_params(kp, profile.origin, tb, eff)
 
 
@@ -110,8 +112,9 @@ class Data:
     dir_run: list[np.ndarray] = field(default_factory=list)  # last motion direction ±1
 
     @classmethod
-    def build(cls, commanded: Profile, poses: Sequence[Any], runs: Sequence[Any],
-              axis: Sequence[Any]) -> Data:
+    def build(
+        cls, commanded: Profile, poses: Sequence[Any], runs: Sequence[Any], axis: Sequence[Any]
+    ) -> Data:
         d = cls(list(poses), list(runs), list(axis), commanded)
         for p in poses:
             d.P_pose.append(simulate.pose_commands(commanded, p.commanded))
@@ -162,14 +165,21 @@ class Linearised:
     segments: list[Segment]
 
 
-def predict(model: Profile, data: Data, want_columns: bool = True,
-            geo_guess: dict[str, list[np.ndarray | None]] | None = None) -> Linearised:
+def predict(
+    model: Profile,
+    data: Data,
+    want_columns: bool = True,
+    geo_guess: dict[str, list[np.ndarray | None]] | None = None,
+) -> Linearised:
     """Simulate every measurement with ``model``; optionally each effect's signature."""
     tables = axiscomp.profile_tables(model)
     theta = _theta_ext(model)
-    steps = np.concatenate([calibrate.default_steps(calibrate.PARAMS,
-                                                    theta[: len(calibrate.PARAMS)]),
-                            [1e-6] * len(EXTRA_PARAMS)])
+    steps = np.concatenate(
+        [
+            calibrate.default_steps(calibrate.PARAMS, theta[: len(calibrate.PARAMS)]),
+            [1e-6] * len(EXTRA_PARAMS),
+        ]
+    )
 
     def make_geo(t: np.ndarray) -> kinematics.Geometry:
         return _geo_ext(model, t)
@@ -182,8 +192,13 @@ def predict(model: Profile, data: Data, want_columns: bool = True,
     def push(name: str, v: np.ndarray) -> None:
         cols.setdefault(name, []).append(v)
 
-    def motor_effects(JP: np.ndarray, Pm: np.ndarray, direction: np.ndarray | None,
-                      vel: np.ndarray | None, reduce: Any) -> None:
+    def motor_effects(
+        JP: np.ndarray,
+        Pm: np.ndarray,
+        direction: np.ndarray | None,
+        vel: np.ndarray | None,
+        reduce: Any,
+    ) -> None:
         """Columns of the motor-space effects through the motor sensitivities JP."""
         for m in MOTORS:
             i = MOTOR_INDEX[m]
@@ -192,9 +207,12 @@ def predict(model: Profile, data: Data, want_columns: bool = True,
             push(f"backlash[{m}]", reduce(sens * (-0.5 * sign)[:, None]))
             for per in CYCLIC_PERIODS:
                 ph = 2 * np.pi * Pm[:, i] / per
-                push(f"cyclic[{m}]@{per:g}",
-                     np.stack([reduce(sens * np.sin(ph)[:, None]),
-                               reduce(sens * np.cos(ph)[:, None])], -1))
+                push(
+                    f"cyclic[{m}]@{per:g}",
+                    np.stack(
+                        [reduce(sens * np.sin(ph)[:, None]), reduce(sens * np.cos(ph)[:, None])], -1
+                    ),
+                )
             lag = -(vel[:, i] * 1e-3) if vel is not None else np.zeros(len(Pm))
             push(f"servo_lag[{m}]", reduce(sens * lag[:, None]))
 
@@ -202,8 +220,9 @@ def predict(model: Profile, data: Data, want_columns: bool = True,
     for k, P_cmd in enumerate(data.P_pose):
         Pm = simulate.actual_motors(model, P_cmd, approach=+1)
         g = guesses.get("pose", [None] * len(data.poses))[k]
-        y, J, xv, JP = calibrate.fk_with_jacobian(make_geo, theta, Pm, g, want_columns, steps,
-                                                  motors=want_columns)
+        y, J, xv, JP = calibrate.fk_with_jacobian(
+            make_geo, theta, Pm, g, want_columns, steps, motors=want_columns
+        )
         guesses.setdefault("pose", [None] * len(data.poses))[k] = xv
         preds += [y[:, :3].ravel(), y[:, 3:].ravel()]
         if J is not None and JP is not None:
@@ -217,8 +236,9 @@ def predict(model: Profile, data: Data, want_columns: bool = True,
     for k, (r, P_cmd) in enumerate(zip(data.runs, data.P_run, strict=True)):
         Pm = simulate.actual_motors(model, P_cmd, t=r.t)
         g = guesses.get("run", [None] * len(data.runs))[k]
-        y, J, xv, JP = calibrate.fk_with_jacobian(make_geo, theta, Pm, g, want_columns, steps,
-                                                  motors=want_columns)
+        y, J, xv, JP = calibrate.fk_with_jacobian(
+            make_geo, theta, Pm, g, want_columns, steps, motors=want_columns
+        )
         guesses.setdefault("run", [None] * len(data.runs))[k] = xv
         vec = y[:, :3] - r.pivot
         dist = np.linalg.norm(vec, axis=1)
@@ -247,16 +267,14 @@ def predict(model: Profile, data: Data, want_columns: bool = True,
                 push(f"backlash[{m}]", -0.5 * a.direction * sel)
                 for per in CYCLIC_PERIODS:
                     ph = 2 * np.pi * a.target / per
-                    push(f"cyclic[{m}]@{per:g}", np.stack([np.sin(ph) * sel, np.cos(ph) * sel],
-                                                          -1))
+                    push(f"cyclic[{m}]@{per:g}", np.stack([np.sin(ph) * sel, np.cos(ph) * sel], -1))
                 push(f"servo_lag[{m}]", np.zeros(len(pa)))
     _, segs = data.measured()
     columns = {k: np.concatenate(v) for k, v in cols.items()} if want_columns else {}
     for key in columns:
         if key.startswith("cyclic"):
             cyc_period[key] = float(key.split("@")[1])
-    return Linearised(np.concatenate(preds) if preds else np.zeros(0), columns, cyc_period,
-                      segs)
+    return Linearised(np.concatenate(preds) if preds else np.zeros(0), columns, cyc_period, segs)
 
 
 # ---------------------------------------------------------------- noise and regions
@@ -288,16 +306,18 @@ def estimate_noise(data: Data, resid: np.ndarray, segs: list[Segment]) -> dict[s
         if dof:
             out["axis"] = math.sqrt(dev / dof)
     for kind in ("pose_tip", "pose_axis"):
-        v = np.concatenate([resid[s.start:s.stop] for s in segs if s.kind == kind] or
-                           [np.zeros(0)])
+        v = np.concatenate(
+            [resid[s.start : s.stop] for s in segs if s.kind == kind] or [np.zeros(0)]
+        )
         v = v[np.isfinite(v)]
         if v.size:
             out[kind] = float(np.sqrt(np.mean(v**2)))
     return out
 
 
-def regions(data: Data, resid: np.ndarray, segs: list[Segment], noise: dict[str, float]
-            ) -> list[dict[str, Any]]:
+def regions(
+    data: Data, resid: np.ndarray, segs: list[Segment], noise: dict[str, float]
+) -> list[dict[str, Any]]:
     """Residual per run and per region, largest against the noise first."""
     out: list[dict[str, Any]] = []
 
@@ -307,14 +327,23 @@ def regions(data: Data, resid: np.ndarray, segs: list[Segment], noise: dict[str,
             return
         rms = float(np.sqrt(np.mean(v**2))) * scale
         nz = noise.get(seg.kind, float("nan")) * scale
-        out.append({"source": seg.source, "kind": seg.kind, "region": region, "n": int(v.size),
-                    f"rms_{unit}": rms, f"max_{unit}": float(np.max(np.abs(v))) * scale,
-                    f"noise_{unit}": nz, "ratio": rms / nz if nz > 0 else float("inf")})
+        out.append(
+            {
+                "source": seg.source,
+                "kind": seg.kind,
+                "region": region,
+                "n": int(v.size),
+                f"rms_{unit}": rms,
+                f"max_{unit}": float(np.max(np.abs(v))) * scale,
+                f"noise_{unit}": nz,
+                "ratio": rms / nz if nz > 0 else float("inf"),
+            }
+        )
 
     ri = 0
     pi = 0
     for seg in segs:
-        v = resid[seg.start:seg.stop]
+        v = resid[seg.start : seg.stop]
         if seg.kind == "ballbar":
             r = data.runs[ri]
             ri += 1
@@ -326,10 +355,15 @@ def regions(data: Data, resid: np.ndarray, segs: list[Segment], noise: dict[str,
             a0, a1 = min(a0, a1), max(a0, a1)
             ang = np.degrees(np.arctan2(rel[:, a1], rel[:, a0])) % 360
             for lo in range(0, 360, 45):
-                add(seg, f"angle {lo}-{lo + 45} deg", v[(ang >= lo) & (ang < lo + 45)], 1000.0,
-                    "um")
-            near = np.min(np.abs(((ang[:, None] - np.array([0, 90, 180, 270])) + 180) % 360
-                                 - 180), axis=1) < 5
+                add(
+                    seg, f"angle {lo}-{lo + 45} deg", v[(ang >= lo) & (ang < lo + 45)], 1000.0, "um"
+                )
+            near = (
+                np.min(
+                    np.abs(((ang[:, None] - np.array([0, 90, 180, 270])) + 180) % 360 - 180), axis=1
+                )
+                < 5
+            )
             add(seg, "axis reversals (within 5 deg)", v[near], 1000.0, "um")
         elif seg.kind == "pose_tip":
             p = data.poses[pi]
@@ -339,8 +373,9 @@ def regions(data: Data, resid: np.ndarray, segs: list[Segment], noise: dict[str,
             add(seg, "all poses", v, 1000.0, "um")
             tilt = np.degrees(np.arccos(np.cos(np.radians(q[:, 3])) * np.cos(np.radians(q[:, 4]))))
             for lo, hi in ((0, 5), (5, 15), (15, 90)):
-                add(seg, f"tilt {lo}-{hi} deg", v3[(tilt >= lo) & (tilt < hi)].ravel(), 1000.0,
-                    "um")
+                add(
+                    seg, f"tilt {lo}-{hi} deg", v3[(tilt >= lo) & (tilt < hi)].ravel(), 1000.0, "um"
+                )
             for ax, nm in ((0, "x"), (1, "y"), (2, "z")):
                 mid = np.median(q[:, ax])
                 add(seg, f"{nm} < {mid:.0f}", v3[q[:, ax] < mid].ravel(), 1000.0, "um")
@@ -371,8 +406,12 @@ class Effect:
     p_value: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
-        d: dict[str, Any] = {"name": self.name, "estimate": self.estimate,
-                             "stderr": self.stderr, "unit": self.unit}
+        d: dict[str, Any] = {
+            "name": self.name,
+            "estimate": self.estimate,
+            "stderr": self.stderr,
+            "unit": self.unit,
+        }
         if self.aliases:
             d["aliases"] = self.aliases
         if self.period is not None:
@@ -385,7 +424,7 @@ class Effect:
 def _whiten(segs: list[Segment], noise: dict[str, float], n: int) -> np.ndarray:
     w = np.ones(n)
     for s in segs:
-        w[s.start:s.stop] = 1.0 / max(noise.get(s.kind, 1e-3), 1e-12)
+        w[s.start : s.stop] = 1.0 / max(noise.get(s.kind, 1e-3), 1e-12)
     return w
 
 
@@ -393,9 +432,14 @@ def _family(name: str) -> str:
     return name.split("@")[0]
 
 
-def _best_pair(cols: dict[str, np.ndarray], X: np.ndarray, r: np.ndarray,
-               skip_families: set[str], alias_corr: float, must: str | None = None
-               ) -> tuple[float, str, str] | None:
+def _best_pair(
+    cols: dict[str, np.ndarray],
+    X: np.ndarray,
+    r: np.ndarray,
+    skip_families: set[str],
+    alias_corr: float,
+    must: str | None = None,
+) -> tuple[float, str, str] | None:
     """The pair of members that together explain most of ``r`` beyond ``X``.
 
     Every pair of the library, from one Gram matrix of the columns projected off
@@ -422,12 +466,16 @@ def _best_pair(cols: dict[str, np.ndarray], X: np.ndarray, r: np.ndarray,
     best: tuple[float, str, str] | None = None
     for i in range(len(keys)):
         for j in range(i + 1, len(keys)):
-            if _family(keys[i]) == _family(keys[j]) or \
-                    (must is not None and must not in (keys[i], keys[j])):
+            if _family(keys[i]) == _family(keys[j]) or (
+                must is not None and must not in (keys[i], keys[j])
+            ):
                 continue
             ii, jj = idx[i], idx[j]
-            if ii.size == 1 and jj.size == 1 and \
-                    abs(G[ii[0], jj[0]]) / (diag[ii[0]] * diag[jj[0]]) > alias_corr:
+            if (
+                ii.size == 1
+                and jj.size == 1
+                and abs(G[ii[0], jj[0]]) / (diag[ii[0]] * diag[jj[0]]) > alias_corr
+            ):
                 continue
             sel = np.concatenate([ii, jj])
             g = G[np.ix_(sel, sel)]
@@ -439,9 +487,17 @@ def _best_pair(cols: dict[str, np.ndarray], X: np.ndarray, r: np.ndarray,
     return best
 
 
-def select_effects(lin: Linearised, resid: np.ndarray, w: np.ndarray, *, alpha: float = 1e-3,
-                   alias_corr: float = 0.98, max_effects: int = 6,
-                   exclude: Sequence[str] = (), given: Sequence[str] = ()) -> list[Effect]:
+def select_effects(
+    lin: Linearised,
+    resid: np.ndarray,
+    w: np.ndarray,
+    *,
+    alpha: float = 1e-3,
+    alias_corr: float = 0.98,
+    max_effects: int = 6,
+    exclude: Sequence[str] = (),
+    given: Sequence[str] = (),
+) -> list[Effect]:
     """Forward selection over the library (module docstring, step 3).
 
     ``given``: column keys already in the model (their signatures are part of the
@@ -509,8 +565,7 @@ def select_effects(lin: Linearised, resid: np.ndarray, w: np.ndarray, *, alpha: 
             break
         # aliases: other members whose signature, after what is already explained,
         # is nearly the same as the chosen one's
-        base = cols[k] - X @ np.linalg.lstsq(X, cols[k], rcond=None)[0] if X.shape[1] else \
-            cols[k]
+        base = cols[k] - X @ np.linalg.lstsq(X, cols[k], rcond=None)[0] if X.shape[1] else cols[k]
         aliases = []
         for k2, c2 in cols.items():
             if k2 == k or _family(k2) == _family(k) or c2.shape[1] != 1 or base.shape[1] != 1:
@@ -521,8 +576,19 @@ def select_effects(lin: Linearised, resid: np.ndarray, w: np.ndarray, *, alpha: 
                 aliases.append(k2)
         chosen.append(k)
         X = np.hstack([X, cols[k]])
-        out.append(Effect(_family(k), 0.0, 0.0, unit_of(k), aliases, lin.cyclic_period.get(k),
-                          None, sse - s_new, pval))
+        out.append(
+            Effect(
+                _family(k),
+                0.0,
+                0.0,
+                unit_of(k),
+                aliases,
+                lin.cyclic_period.get(k),
+                None,
+                sse - s_new,
+                pval,
+            )
+        )
         sse = s_new
     # sizes and standard errors from the joint fit of everything chosen
     if out:
@@ -550,8 +616,9 @@ def select_effects(lin: Linearised, resid: np.ndarray, w: np.ndarray, *, alpha: 
 # ---------------------------------------------------------------- applying effects
 
 
-def apply_effects(doc: dict[str, Any], effects: Sequence[Effect], profile: Profile
-                  ) -> dict[str, Any]:
+def apply_effects(
+    doc: dict[str, Any], effects: Sequence[Effect], profile: Profile
+) -> dict[str, Any]:
     """A profile document with the effects added (estimates are changes to add)."""
     doc = copy.deepcopy(doc)
     theta_names = calibrate.PARAMS
@@ -582,17 +649,26 @@ def apply_effects(doc: dict[str, Any], effects: Sequence[Effect], profile: Profi
             eff["servo_lag_ms"] = v
         elif e.name.startswith("cyclic["):
             m = int(e.name[7:-1])
-            eff.setdefault("cyclic", []).append({
-                "motor": m, "amplitude": e.estimate, "period": e.period,
-                "phase": e.phase_deg or 0.0})
+            eff.setdefault("cyclic", []).append(
+                {
+                    "motor": m,
+                    "amplitude": e.estimate,
+                    "period": e.period,
+                    "phase": e.phase_deg or 0.0,
+                }
+            )
         elif e.name.startswith("backlash["):
             m = int(e.name[9:-1])
             comps = doc.setdefault("axis_comp", [])
             entry = next((c for c in comps if c["motor"] == m), None)
             if entry is None:
                 mc = profile.motor(m)
-                entry = {"motor": m, "positions": [mc.min, mc.max], "forward": [0.0, 0.0],
-                         "reverse": [0.0, 0.0]}
+                entry = {
+                    "motor": m,
+                    "positions": [mc.min, mc.max],
+                    "forward": [0.0, 0.0],
+                    "reverse": [0.0, 0.0],
+                }
                 comps.append(entry)
                 comps.sort(key=lambda c: c["motor"])
             entry["forward"] = [float(x) - e.estimate / 2 for x in entry["forward"]]
@@ -617,14 +693,19 @@ class Diagnosis:
     summary: str
 
     def to_json(self) -> dict[str, Any]:
-        noise_um = self.noise.get("ballbar", self.noise.get("pose_tip", self.noise.get(
-            "axis", float("nan")))) * 1000.0
+        noise_um = (
+            self.noise.get(
+                "ballbar", self.noise.get("pose_tip", self.noise.get("axis", float("nan")))
+            )
+            * 1000.0
+        )
         return {
             "rms_before_um": self.rms_before_um,
             "rms_after_um": self.rms_after_um,
             "noise_um": noise_um,
-            "noise": {k: v * (3600.0 if k == "pose_axis" else 1000.0)
-                      for k, v in self.noise.items()},
+            "noise": {
+                k: v * (3600.0 if k == "pose_axis" else 1000.0) for k, v in self.noise.items()
+            },
             "noise_units": {k: ("arcsec" if k == "pose_axis" else "um") for k in self.noise},
             "effects": [e.to_dict() for e in self.effects],
             "regions": self.regions,
@@ -634,8 +715,7 @@ class Diagnosis:
 
 
 def _rms_um(resid: np.ndarray, segs: list[Segment]) -> float:
-    v = np.concatenate([resid[s.start:s.stop] for s in segs if s.unit == "mm"] or
-                       [np.zeros(0)])
+    v = np.concatenate([resid[s.start : s.stop] for s in segs if s.unit == "mm"] or [np.zeros(0)])
     v = v[np.isfinite(v)]
     return float(np.sqrt(np.mean(v**2)) * 1000.0) if v.size else float("nan")
 
@@ -644,15 +724,22 @@ def _per_run(before: np.ndarray, after: np.ndarray, segs: list[Segment]) -> list
     out = []
     for s in segs:
         scale, unit = (3600.0, "arcsec") if s.unit == "deg" else (1000.0, "um")
-        b, a = before[s.start:s.stop], after[s.start:s.stop]
+        b, a = before[s.start : s.stop], after[s.start : s.stop]
         b, a = b[np.isfinite(b)], a[np.isfinite(a)]
         if not b.size:
             continue
-        out.append({"source": s.source, "kind": s.kind, "name": s.name, "unit": unit,
-                    "rms_before": float(np.sqrt(np.mean(b**2)) * scale),
-                    "rms_after": float(np.sqrt(np.mean(a**2)) * scale),
-                    "max_before": float(np.max(np.abs(b)) * scale),
-                    "max_after": float(np.max(np.abs(a)) * scale)})
+        out.append(
+            {
+                "source": s.source,
+                "kind": s.kind,
+                "name": s.name,
+                "unit": unit,
+                "rms_before": float(np.sqrt(np.mean(b**2)) * scale),
+                "rms_after": float(np.sqrt(np.mean(a**2)) * scale),
+                "max_before": float(np.max(np.abs(b)) * scale),
+                "max_after": float(np.max(np.abs(a)) * scale),
+            }
+        )
     return out
 
 
@@ -665,22 +752,30 @@ def sentence(e: Effect) -> str:
         key = n.split(".")[-1].replace("_", " ")
         u = unit_of(n)
         if key == "strut length":
-            return (f"Strut {leg} is {abs(size) * 1000:.1f} µm "
-                    f"{'longer' if size > 0 else 'shorter'} than the profile says.")
+            return (
+                f"Strut {leg} is {abs(size) * 1000:.1f} µm "
+                f"{'longer' if size > 0 else 'shorter'} than the profile says."
+            )
         return f"Leg {leg}: the {key} is off by {size:+.4g} {u} from the profile."
     if n == "table.squareness":
-        return (f"The X-Y table is out of square by {size * 1000:+.4f} mm/m "
-                "(positive: the Y motion leans towards +X).")
+        return (
+            f"The X-Y table is out of square by {size * 1000:+.4f} mm/m "
+            "(positive: the Y motion leans towards +X)."
+        )
     if n in ("table.scale_x", "table.scale_y"):
         return f"The table's {n[-1].upper()} axis scale is off by {size * 1e6:+.2f} µm/m."
     if n.startswith("backlash["):
         return f"Motor {n[9:-1]} has {size * 1000:.2f} µm more backlash than its table holds."
     if n.startswith("cyclic["):
-        return (f"Motor {n[7:-1]} has a periodic error of {size * 1000:.2f} µm amplitude with "
-                f"a {e.period:g} mm pitch.")
+        return (
+            f"Motor {n[7:-1]} has a periodic error of {size * 1000:.2f} µm amplitude with "
+            f"a {e.period:g} mm pitch."
+        )
     if n.startswith("servo_lag["):
-        return (f"Motor {n[10:-1]} lags its command by {size:+.3f} ms more than the others "
-                "(servo mismatch).")
+        return (
+            f"Motor {n[10:-1]} lags its command by {size:+.3f} ms more than the others "
+            "(servo mismatch)."
+        )
     if "guide_bow" in n:
         return f"Guide {n[-2]} is bowed by {size * 1000:+.2f} µm at 100 mm of travel."
     if "table_straightness" in n:
@@ -691,8 +786,14 @@ def sentence(e: Effect) -> str:
     return f"{n} differs from the profile by {size:+.4g} {e.unit}."
 
 
-def _refine(current: Profile, data: Data, measured: np.ndarray, w: np.ndarray,
-            total: list[Effect], iterations: int) -> tuple[Profile, np.ndarray, Linearised]:
+def _refine(
+    current: Profile,
+    data: Data,
+    measured: np.ndarray,
+    w: np.ndarray,
+    total: list[Effect],
+    iterations: int,
+) -> tuple[Profile, np.ndarray, Linearised]:
     """Gauss–Newton on the sizes of the chosen effects through the nonlinear model.
 
     Updates the estimates and standard errors in place; returns the updated
@@ -727,8 +828,7 @@ def _refine(current: Profile, data: Data, measured: np.ndarray, w: np.ndarray,
                 a = e.estimate * math.cos(math.radians(e.phase_deg or 0.0)) + d[j]
                 b = e.estimate * math.sin(math.radians(e.phase_deg or 0.0)) + d[j + 1]
                 if it < iterations:
-                    biggest = max(biggest, float(math.hypot(d[j], d[j + 1]))
-                                  / max(e.stderr, 1e-12))
+                    biggest = max(biggest, float(math.hypot(d[j], d[j + 1])) / max(e.stderr, 1e-12))
                     e.estimate = float(math.hypot(a, b))
                     e.phase_deg = float(math.degrees(math.atan2(b, a)))
                 e.stderr = float(math.sqrt(max(cov[j, j], cov[j + 1, j + 1], 0.0)))
@@ -740,8 +840,9 @@ def _refine(current: Profile, data: Data, measured: np.ndarray, w: np.ndarray,
     return updated, measured - lin.pred, lin
 
 
-def diagnose(current: Profile, data: Data, *, alpha: float = 1e-3, refine: int = 3,
-             max_effects: int = 6) -> Diagnosis:
+def diagnose(
+    current: Profile, data: Data, *, alpha: float = 1e-3, refine: int = 3, max_effects: int = 6
+) -> Diagnosis:
     """The whole loop (module docstring); ``data`` was commanded by ``data.commanded``."""
     measured, segs = data.measured()
     if not segs:
@@ -761,12 +862,11 @@ def diagnose(current: Profile, data: Data, *, alpha: float = 1e-3, refine: int =
         full[ok] = resid[ok] - X[ok] @ coef
         rank = np.linalg.matrix_rank(Xw, tol=1e-8 * np.linalg.norm(Xw, 2))
         for kind in ("pose_tip", "pose_axis"):
-            v = np.concatenate([full[s.start:s.stop] for s in segs if s.kind == kind])
+            v = np.concatenate([full[s.start : s.stop] for s in segs if s.kind == kind])
             v = v[np.isfinite(v)]
-            n_all = int(np.sum([np.isfinite(resid[s.start:s.stop]).sum() for s in segs]))
+            n_all = int(np.sum([np.isfinite(resid[s.start : s.stop]).sum() for s in segs]))
             if v.size:
-                noise[kind] = float(np.sqrt(np.sum(v**2) / max(v.size * (1 - rank / n_all),
-                                                               1.0)))
+                noise[kind] = float(np.sqrt(np.sum(v**2) / max(v.size * (1 - rank / n_all), 1.0)))
     w = _whiten(segs, noise, len(resid))
     regs = regions(data, resid, segs, noise)
     # one effect at a time: select on the true (nonlinear) residual of the model
@@ -777,8 +877,15 @@ def diagnose(current: Profile, data: Data, *, alpha: float = 1e-3, refine: int =
     lin_now = lin
     for _ in range(max_effects):
         keys = [e.name if e.period is None else f"{e.name}@{e.period:g}" for e in total]
-        new = select_effects(lin_now, after, w, alpha=alpha, max_effects=1,
-                             exclude=[e.name for e in total], given=keys)
+        new = select_effects(
+            lin_now,
+            after,
+            w,
+            alpha=alpha,
+            max_effects=1,
+            exclude=[e.name for e in total],
+            given=keys,
+        )
         if not new:
             break
         total.append(new[0])
@@ -798,14 +905,19 @@ def diagnose(current: Profile, data: Data, *, alpha: float = 1e-3, refine: int =
         "by": "prsxy-post diagnose",
         "sources": sorted({s.source for s in segs}),
         "effects": [f"{e.name} {e.estimate:+.6g} {e.unit} ± {e.stderr:.2g}" for e in effects],
-        "rms_before_um": rms_b, "rms_after_um": rms_a,
+        "rms_before_um": rms_b,
+        "rms_after_um": rms_a,
     }
     udoc = copy.deepcopy(updated.raw)
     udoc.setdefault("provenance", {})
     prov = udoc["provenance"]
     prov.setdefault("diagnose", [])
     prov["diagnose"] = [*list(prov["diagnose"]), note]
-    summary = " ".join(sentence(e) for e in effects) if effects else \
-        "The model explains the measurements to their noise: no effect is missing."
-    return Diagnosis(effects, noise, rms_b, rms_a, _per_run(resid, after, segs), regs, udoc,
-                     summary)
+    summary = (
+        " ".join(sentence(e) for e in effects)
+        if effects
+        else "The model explains the measurements to their noise: no effect is missing."
+    )
+    return Diagnosis(
+        effects, noise, rms_b, rms_a, _per_run(resid, after, segs), regs, udoc, summary
+    )

@@ -65,8 +65,7 @@ UNITS = {"x": "mm", "y": "mm", "z": "mm", "a": "deg", "b": "deg"}
 
 def _exponents(nvar: int, degree: int) -> list[tuple[int, ...]]:
     """Multi-indices of total degree 1..degree (the constant is shared)."""
-    out = [e for e in itertools.product(range(degree + 1), repeat=nvar)
-           if 0 < sum(e) <= degree]
+    out = [e for e in itertools.product(range(degree + 1), repeat=nvar) if 0 < sum(e) <= degree]
     return sorted(out, key=lambda e: (sum(e), e))
 
 
@@ -75,17 +74,24 @@ def _legendre_table(u: np.ndarray, degree: int) -> np.ndarray:
     return legendre.legvander(u, degree)
 
 
-def legendre_tables(q: np.ndarray, lo: np.ndarray, hi: np.ndarray, degree: int
-                    ) -> dict[int, np.ndarray]:
+def legendre_tables(
+    q: np.ndarray, lo: np.ndarray, hi: np.ndarray, degree: int
+) -> dict[int, np.ndarray]:
     """P_0..P_degree of every coordinate scaled to [−1, 1] (clamped outside)."""
     span = np.where(hi > lo, hi - lo, 1.0)
     u = np.clip(2.0 * (q - lo) / span - 1.0, -1.0, 1.0)
     return {v: _legendre_table(u[:, v], max(degree, 2)) for v in range(5)}
 
 
-def design(q: np.ndarray, comp: str, degree: int, lo: np.ndarray, hi: np.ndarray,
-           structure: str = "eq5", tables: dict[int, np.ndarray] | None = None
-           ) -> tuple[np.ndarray, list[tuple[tuple[int, ...], ...]]]:
+def design(
+    q: np.ndarray,
+    comp: str,
+    degree: int,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    structure: str = "eq5",
+    tables: dict[int, np.ndarray] | None = None,
+) -> tuple[np.ndarray, list[tuple[tuple[int, ...], ...]]]:
     """Design matrix of one component: a constant, then every group's terms.
 
     A group of one variable set holds every Legendre product of total degree
@@ -202,13 +208,19 @@ class ErrorMap:
                 raise bad(f"components.{c}.degree", f"is {deg!r}", "an integer 0..8")
             st = v.get("structure", "eq5")
             if st not in STRUCTURES:
-                raise bad(f"components.{c}.structure", f"is {st!r}",
-                          " or ".join(repr(k) for k in STRUCTURES))
+                raise bad(
+                    f"components.{c}.structure",
+                    f"is {st!r}",
+                    " or ".join(repr(k) for k in STRUCTURES),
+                )
             co = np.asarray(v.get("coef", []), dtype=float)
             X, _ = design(np.zeros((1, 5)), c, deg, lo, hi, st)
             if co.shape != (X.shape[1],) or not np.all(np.isfinite(co)):
-                raise bad(f"components.{c}.coef", f"has {co.size} values",
-                          f"{X.shape[1]} finite coefficients for degree {deg}")
+                raise bad(
+                    f"components.{c}.coef",
+                    f"has {co.size} values",
+                    f"{X.shape[1]} finite coefficients for degree {deg}",
+                )
             degree[c], coef[c], struct[c] = deg, co, st
             cv[c] = float(v.get("cv_rms", np.nan))
             fit[c] = float(v.get("fit_rms", np.nan))
@@ -238,10 +250,17 @@ def _ridge(X: np.ndarray, y: np.ndarray, lam: float) -> np.ndarray:
     return sol / scale
 
 
-def fit(q: np.ndarray, err: np.ndarray, *, rng: np.random.Generator,
-        degrees: Sequence[int] = (1, 2, 3, 4), lambdas: Sequence[float] | None = None,
-        structures: Sequence[str] = ("eq5", "eq5-coupled"), folds: int = 5,
-        provenance: dict[str, Any] | None = None) -> ErrorMap:
+def fit(
+    q: np.ndarray,
+    err: np.ndarray,
+    *,
+    rng: np.random.Generator,
+    degrees: Sequence[int] = (1, 2, 3, 4),
+    lambdas: Sequence[float] | None = None,
+    structures: Sequence[str] = ("eq5", "eq5-coupled"),
+    folds: int = 5,
+    provenance: dict[str, Any] | None = None,
+) -> ErrorMap:
     """Fit the Eq. 5 map to errors measured at commanded poses.
 
     Parameters
@@ -260,8 +279,7 @@ def fit(q: np.ndarray, err: np.ndarray, *, rng: np.random.Generator,
     q = np.asarray(q, dtype=float)
     err = np.asarray(err, dtype=float)
     if q.ndim != 2 or q.shape[1] != 5 or err.shape != q.shape:
-        raise FitError("error map data must be (N, 5) poses and errors",
-                       expected="matching arrays")
+        raise FitError("error map data must be (N, 5) poses and errors", expected="matching arrays")
     lam_grid = list(lambdas) if lambdas is not None else list(np.logspace(-8, 2, 11))
     lo, hi = q.min(axis=0), q.max(axis=0)
     degree, coef, cv_rms, fit_rms, lam_best, struct = {}, {}, {}, {}, {}, {}
@@ -298,7 +316,8 @@ def fit(q: np.ndarray, err: np.ndarray, *, rng: np.random.Generator,
         cv_rms[c] = float(best[0])
         fit_rms[c] = float(np.sqrt(np.mean((X @ w - yi) ** 2)))
     if not coef:
-        raise FitError(f"too few points for an error map ({len(q)})",
-                       expected=f"at least {2 * folds} measured poses")
-    return ErrorMap(lo, hi, degree, struct, coef, cv_rms, fit_rms, lam_best,
-                    dict(provenance or {}))
+        raise FitError(
+            f"too few points for an error map ({len(q)})",
+            expected=f"at least {2 * folds} measured poses",
+        )
+    return ErrorMap(lo, hi, degree, struct, coef, cv_rms, fit_rms, lam_best, dict(provenance or {}))

@@ -17,33 +17,62 @@ from . import chain, gcode, measure, simulate
 from .profile import MOTORS, Profile
 
 
-def ballbar_run(truth: Profile, commanded: Profile, rng: np.random.Generator, *, radius: float,
-                plane: str = "XY", ccw: bool = True, tilt: float = 0.0, feed: float = 1000.0,
-                pivot: Sequence[float] = (0.0, 0.0, 0.0), noise_um: float = 0.5,
-                name: str | None = None) -> measure.BallbarRun:
+def ballbar_run(
+    truth: Profile,
+    commanded: Profile,
+    rng: np.random.Generator,
+    *,
+    radius: float,
+    plane: str = "XY",
+    ccw: bool = True,
+    tilt: float = 0.0,
+    feed: float = 1000.0,
+    pivot: Sequence[float] = (0.0, 0.0, 0.0),
+    noise_um: float = 0.5,
+    name: str | None = None,
+) -> measure.BallbarRun:
     """One ballbar run: the circle program, commanded, executed and read by the ballbar."""
-    text = simulate.ballbar_gcode(radius, plane=plane, ccw=ccw, tilt_deg=tilt, feed=feed,
-                                  pivot=(pivot[0], pivot[1], pivot[2]))
+    text = simulate.ballbar_gcode(
+        radius, plane=plane, ccw=ccw, tilt_deg=tilt, feed=feed, pivot=(pivot[0], pivot[1], pivot[2])
+    )
     motions = gcode.interpret(text, chain.interpreter_config(commanded), "<ballbar>")
     first_cut = next(i for i, m in enumerate(motions) if m.kind != "rapid")
     circle = motions[first_cut:]
     start = np.array(circle[0].start, dtype=float)
-    res = chain.run_chain(circle, commanded, chain.Stages(error_map=False, axis_comp=False),
-                          start=start.tolist())
+    res = chain.run_chain(
+        circle, commanded, chain.Stages(error_map=False, axis_comp=False), start=start.tolist()
+    )
     q = res.samples.q
     t = np.cumsum(res.samples.dt)
     piv = np.asarray(pivot, dtype=float)
     dev = simulate.measure_ballbar(truth, commanded, q, t, piv, radius, rng, noise_um)
     direction = "ccw" if ccw else "cw"
-    label = name or (f"{plane.lower()} r{radius:g} {direction}" if not tilt
-                     else f"cone {tilt:g} r{radius:g} {direction}")
-    return measure.BallbarRun(source=f"{label}.csv", name=label, pivot=piv,
-                              length=float(radius), t=t, commanded=q, dev_um=dev,
-                              rows=np.arange(len(t)) + 1, meta={})
+    label = name or (
+        f"{plane.lower()} r{radius:g} {direction}"
+        if not tilt
+        else f"cone {tilt:g} r{radius:g} {direction}"
+    )
+    return measure.BallbarRun(
+        source=f"{label}.csv",
+        name=label,
+        pivot=piv,
+        length=float(radius),
+        t=t,
+        commanded=q,
+        dev_um=dev,
+        rows=np.arange(len(t)) + 1,
+        meta={},
+    )
 
 
-def pose_grid(rng: np.random.Generator, n: int, *, xy: float = 150.0,
-              z: tuple[float, float] = (-60.0, 40.0), tilt: float = 25.0) -> np.ndarray:
+def pose_grid(
+    rng: np.random.Generator,
+    n: int,
+    *,
+    xy: float = 150.0,
+    z: tuple[float, float] = (-60.0, 40.0),
+    tilt: float = 25.0,
+) -> np.ndarray:
     """n poses spread over the workspace (Latin-hypercube-like stratified draws)."""
     cols = []
     for lo, hi in ((-xy, xy), (-xy, xy), z, (-tilt, tilt), (-tilt, tilt)):
@@ -52,38 +81,78 @@ def pose_grid(rng: np.random.Generator, n: int, *, xy: float = 150.0,
     return np.column_stack(cols)
 
 
-def measurement_files(truth: Profile, commanded: Profile, rng: np.random.Generator, *,
-                      radii: Sequence[float] = (50.0, 100.0), tilts: Sequence[float] = (5, 15),
-                      planes: Sequence[str] = ("XY", "XZ", "YZ"), n_poses: int = 300,
-                      feed: float = 1000.0, noise_um: float = 0.5, pose_noise_um: float = 1.0,
-                      laser_noise_um: float = 0.3, axis_runs: bool = True) -> dict[str, str]:
+def measurement_files(
+    truth: Profile,
+    commanded: Profile,
+    rng: np.random.Generator,
+    *,
+    radii: Sequence[float] = (50.0, 100.0),
+    tilts: Sequence[float] = (5, 15),
+    planes: Sequence[str] = ("XY", "XZ", "YZ"),
+    n_poses: int = 300,
+    feed: float = 1000.0,
+    noise_um: float = 0.5,
+    pose_noise_um: float = 1.0,
+    laser_noise_um: float = 0.3,
+    axis_runs: bool = True,
+) -> dict[str, str]:
     """Every file of a measurement campaign, as {file name: text}."""
     files: dict[str, str] = {}
     runs: list[Any] = []
     for r in radii:
         for ccw in (True, False):
             if "XY" in planes:
-                runs.append(ballbar_run(truth, commanded, rng, radius=r, ccw=ccw, feed=feed,
-                                        noise_um=noise_um))
+                runs.append(
+                    ballbar_run(
+                        truth, commanded, rng, radius=r, ccw=ccw, feed=feed, noise_um=noise_um
+                    )
+                )
             for t in tilts:
-                runs.append(ballbar_run(truth, commanded, rng, radius=r, ccw=ccw, tilt=t,
-                                        feed=feed, noise_um=noise_um))
+                runs.append(
+                    ballbar_run(
+                        truth,
+                        commanded,
+                        rng,
+                        radius=r,
+                        ccw=ccw,
+                        tilt=t,
+                        feed=feed,
+                        noise_um=noise_um,
+                    )
+                )
     for plane in planes:
         if plane == "XY":
             continue
         r = min(radii)
         for ccw in (True, False):
-            runs.append(ballbar_run(truth, commanded, rng, radius=r, plane=plane, ccw=ccw,
-                                    feed=feed, noise_um=noise_um))
+            runs.append(
+                ballbar_run(
+                    truth,
+                    commanded,
+                    rng,
+                    radius=r,
+                    plane=plane,
+                    ccw=ccw,
+                    feed=feed,
+                    noise_um=noise_um,
+                )
+            )
     for run in runs:
         name = "ballbar-" + run.name.replace(" ", "-") + ".csv"
         files[name] = measure.format_ballbar(run)
     if n_poses:
         q = pose_grid(rng, n_poses)
         meas = simulate.measure_poses(truth, commanded, q, rng, pose_noise_um)
-        files["poses.csv"] = measure.format_poses(measure.PoseData(
-            source="poses.csv", commanded=q, tip=meas[:, :3], axis=meas[:, 3:],
-            rows=np.arange(n_poses) + 1, meta={}))
+        files["poses.csv"] = measure.format_poses(
+            measure.PoseData(
+                source="poses.csv",
+                commanded=q,
+                tip=meas[:, :3],
+                axis=meas[:, 3:],
+                rows=np.arange(n_poses) + 1,
+                meta={},
+            )
+        )
     if axis_runs:
         rows = []
         for m in MOTORS:
@@ -92,8 +161,16 @@ def measurement_files(truth: Profile, commanded: Profile, rng: np.random.Generat
             targets = np.round(np.linspace(lo, hi, 21), 4)
             rows.append(simulate.measure_axis(truth, m, targets, 5, rng, laser_noise_um))
         a = np.vstack(rows)
-        files["axis.csv"] = measure.format_axis(measure.AxisData(
-            source="axis.csv", motor=a[:, 0].astype(int), target=a[:, 1], measured=a[:, 2],
-            direction=a[:, 3].astype(int), run=a[:, 4].astype(int),
-            rows=np.arange(len(a)) + 1, meta={}))
+        files["axis.csv"] = measure.format_axis(
+            measure.AxisData(
+                source="axis.csv",
+                motor=a[:, 0].astype(int),
+                target=a[:, 1],
+                measured=a[:, 2],
+                direction=a[:, 3].astype(int),
+                run=a[:, 4].astype(int),
+                rows=np.arange(len(a)) + 1,
+                meta={},
+            )
+        )
     return files

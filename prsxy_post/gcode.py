@@ -99,8 +99,11 @@ class Motion(NamedTuple):
 
 def motion_to_json(m: Motion) -> dict[str, object]:
     """The ``inspect --json`` object of a motion."""
-    d: dict[str, object] = {"line": m.line, "kind": m.kind,
-                            "end": [round(v, 9) + 0.0 for v in m.end]}
+    d: dict[str, object] = {
+        "line": m.line,
+        "kind": m.kind,
+        "end": [round(v, 9) + 0.0 for v in m.end],
+    }
     d["feed"] = None if m.kind in ("rapid", "dwell") else round(m.feed, 9)
     if m.kind == "arc":
         assert m.center is not None
@@ -142,8 +145,9 @@ def split_lines(text: str) -> list[str]:
     return text.replace("\r\n", "\n").replace("\r", "\n").split("\n") if text else []
 
 
-def _fail(msg: str, source: str, line: int, column: int | None, expected: str | None = None
-          ) -> GCodeError:
+def _fail(
+    msg: str, source: str, line: int, column: int | None, expected: str | None = None
+) -> GCodeError:
     return GCodeError(msg, source=source, line=line, column=column, expected=expected)
 
 
@@ -157,8 +161,13 @@ def _strip_comments(raw: str, source: str, lineno: int) -> tuple[str, list[int]]
             if ch == ")":
                 depth_start = -1
             elif ch == "(":
-                raise _fail("nested comment", source, lineno, i + 1,
-                            "a ')' before another '(' (LinuxCNC does not nest comments)")
+                raise _fail(
+                    "nested comment",
+                    source,
+                    lineno,
+                    i + 1,
+                    "a ')' before another '(' (LinuxCNC does not nest comments)",
+                )
             continue
         if ch == "(":
             depth_start = i
@@ -199,8 +208,9 @@ def parse_line(raw: str, lineno: int, source: str = "<string>") -> Block:
     s = raw.strip()
     if s.startswith("%"):
         if s.strip("% \t"):
-            raise _fail("text after '%'", source, lineno, raw.index("%") + 2,
-                        "'%' alone on its line")
+            raise _fail(
+                "text after '%'", source, lineno, raw.index("%") + 2, "'%' alone on its line"
+            )
         return Block(lineno, (), percent=True)
     if "(" in raw or ";" in raw:
         text, cols = _strip_comments(raw, source, lineno)
@@ -222,40 +232,80 @@ def parse_line(raw: str, lineno: int, source: str = "<string>") -> Block:
             if wm.start() != pos:
                 break
             if wm.group(1) in _REJECT_CHAR:
-                raise _fail(_REJECT_CHAR[wm.group(1)], source, lineno, cols[pos],
-                            "plain words like G1 X10 (the milling subset)")
+                raise _fail(
+                    _REJECT_CHAR[wm.group(1)],
+                    source,
+                    lineno,
+                    cols[pos],
+                    "plain words like G1 X10 (the milling subset)",
+                )
             pos = wm.end()
         ch = up[pos] if pos < len(up) else ""
         col = cols[pos] if pos < len(cols) else (cols[-1] + 1 if cols else 1)
         for special in "#[":
             k = up.find(special, pos)
             if k >= 0 and (ch in _REJECT_CHAR or ch.isalpha() or ch in "+-."):
-                raise _fail(_REJECT_CHAR[special], source, lineno, cols[k],
-                            "plain words like G1 X10 (the milling subset)")
+                raise _fail(
+                    _REJECT_CHAR[special],
+                    source,
+                    lineno,
+                    cols[k],
+                    "plain words like G1 X10 (the milling subset)",
+                )
         if ch in _REJECT_CHAR:
-            raise _fail(_REJECT_CHAR[ch], source, lineno, col,
-                        "plain words like G1 X10 (the milling subset)")
+            raise _fail(
+                _REJECT_CHAR[ch],
+                source,
+                lineno,
+                col,
+                "plain words like G1 X10 (the milling subset)",
+            )
         if ch.isalpha():
             if ch not in _LETTERS:
-                raise _fail(f"unknown word letter '{ch}'", source, lineno, col,
-                            "one of A B D F G H I J K L M N P Q R S T X Y Z")
-            raise _fail(f"word '{ch}' has no number", source, lineno, col,
-                        f"a number after {ch}, e.g. {ch}10.5")
+                raise _fail(
+                    f"unknown word letter '{ch}'",
+                    source,
+                    lineno,
+                    col,
+                    "one of A B D F G H I J K L M N P Q R S T X Y Z",
+                )
+            raise _fail(
+                f"word '{ch}' has no number",
+                source,
+                lineno,
+                col,
+                f"a number after {ch}, e.g. {ch}10.5",
+            )
         if ch == "/":
             raise _fail("'/' (block delete) only at the start of a line", source, lineno, col)
-        raise _fail(f"unexpected character {ch!r}", source, lineno, col,
-                    "a word: a letter followed by a number")
+        raise _fail(
+            f"unexpected character {ch!r}",
+            source,
+            lineno,
+            col,
+            "a word: a letter followed by a number",
+        )
     words = []
     pos = 0
     for wm in _WORD.finditer(up):
         letter = wm.group(1)
         col = cols[wm.start()]
         if letter in _REJECT_CHAR:
-            raise _fail(_REJECT_CHAR[letter], source, lineno, col,
-                        "plain words like G1 X10 (the milling subset)")
+            raise _fail(
+                _REJECT_CHAR[letter],
+                source,
+                lineno,
+                col,
+                "plain words like G1 X10 (the milling subset)",
+            )
         if letter not in _LETTERS:
-            raise _fail(f"unknown word letter '{letter}'", source, lineno, col,
-                        "one of A B D F G H I J K L M N P Q R S T X Y Z")
+            raise _fail(
+                f"unknown word letter '{letter}'",
+                source,
+                lineno,
+                col,
+                "one of A B D F G H I J K L M N P Q R S T X Y Z",
+            )
         words.append(Word(letter, float(wm.group(2)), wm.group(0), col))
         pos = wm.end()
     return Block(lineno, tuple(words), has_text=True)
@@ -264,57 +314,119 @@ def parse_line(raw: str, lineno: int, source: str = "<string>") -> Block:
 # ---------------------------------------------------------------- modal groups
 
 _G_GROUP = {
-    0: 1, 1: 1, 2: 1, 3: 1, 73: 1, 80: 1, 81: 1, 82: 1, 83: 1, 84: 1, 85: 1, 86: 1, 89: 1,
-    17: 2, 18: 2, 19: 2,
-    90: 3, 91: 3,
-    90.1: 4, 91.1: 4,
-    93: 5, 94: 5,
-    20: 6, 21: 6,
+    0: 1,
+    1: 1,
+    2: 1,
+    3: 1,
+    73: 1,
+    80: 1,
+    81: 1,
+    82: 1,
+    83: 1,
+    84: 1,
+    85: 1,
+    86: 1,
+    89: 1,
+    17: 2,
+    18: 2,
+    19: 2,
+    90: 3,
+    91: 3,
+    90.1: 4,
+    91.1: 4,
+    93: 5,
+    94: 5,
+    20: 6,
+    21: 6,
     40: 7,
-    43: 8, 43.1: 8, 49: 8,
-    98: 10, 99: 10,
-    54: 12, 55: 12, 56: 12, 57: 12, 58: 12, 59: 12,
-    61: 13, 61.1: 13, 64: 13,
-    4: 0, 28: 0, 30: 0, 53: 0,
+    43: 8,
+    43.1: 8,
+    49: 8,
+    98: 10,
+    99: 10,
+    54: 12,
+    55: 12,
+    56: 12,
+    57: 12,
+    58: 12,
+    59: 12,
+    61: 13,
+    61.1: 13,
+    64: 13,
+    4: 0,
+    28: 0,
+    30: 0,
+    53: 0,
 }
 _G_REJECT = {
     41: "cutter compensation (G41/G42) is not supported",
     42: "cutter compensation (G41/G42) is not supported",
     41.1: "cutter compensation (G41/G42) is not supported",
     42.1: "cutter compensation (G41/G42) is not supported",
-    92: "G92 offsets are not supported", 92.1: "G92 offsets are not supported",
-    92.2: "G92 offsets are not supported", 92.3: "G92 offsets are not supported",
+    92: "G92 offsets are not supported",
+    92.1: "G92 offsets are not supported",
+    92.2: "G92 offsets are not supported",
+    92.3: "G92 offsets are not supported",
     10: "G10 (setting offsets from the program) is not supported",
-    5: "splines (G5) are not supported", 5.1: "splines (G5.1) are not supported",
-    5.2: "NURBS (G5.2) are not supported", 5.3: "NURBS (G5.3) are not supported",
+    5: "splines (G5) are not supported",
+    5.1: "splines (G5.1) are not supported",
+    5.2: "NURBS (G5.2) are not supported",
+    5.3: "NURBS (G5.3) are not supported",
     15: "polar coordinates (G15/G16) are not supported",
     16: "polar coordinates (G15/G16) are not supported",
-    87: "G87 back boring is not supported", 88: "G88 (manual retract) is not supported",
-    74: "G74 left-hand tapping is not supported", 76: "G76 threading is not supported",
+    87: "G87 back boring is not supported",
+    88: "G88 (manual retract) is not supported",
+    74: "G74 left-hand tapping is not supported",
+    76: "G76 threading is not supported",
     33: "G33 spindle-synchronised motion is not supported",
     33.1: "G33.1 rigid tapping is not supported",
-    38.2: "probing (G38.x) is not supported", 38.3: "probing (G38.x) is not supported",
-    38.4: "probing (G38.x) is not supported", 38.5: "probing (G38.x) is not supported",
+    38.2: "probing (G38.x) is not supported",
+    38.3: "probing (G38.x) is not supported",
+    38.4: "probing (G38.x) is not supported",
+    38.5: "probing (G38.x) is not supported",
     28.1: "G28.1 (storing the home position) is not supported",
     30.1: "G30.1 (storing the home position) is not supported",
     95: "G95 feed per revolution is not supported",
     96: "G96 constant surface speed is not supported",
     97: "G96/G97 spindle modes are not supported",
-    7: "lathe diameter mode (G7) is not supported", 8: "lathe radius mode (G8) is not supported",
-    17.1: "U-V planes are not supported", 18.1: "U-W planes are not supported",
+    7: "lathe diameter mode (G7) is not supported",
+    8: "lathe radius mode (G8) is not supported",
+    17.1: "U-V planes are not supported",
+    18.1: "U-W planes are not supported",
     19.1: "V-W planes are not supported",
-    59.1: "G59.1 is not supported (G54 to G59)", 59.2: "G59.2 is not supported (G54 to G59)",
+    59.1: "G59.1 is not supported (G54 to G59)",
+    59.2: "G59.2 is not supported (G54 to G59)",
     59.3: "G59.3 is not supported (G54 to G59)",
-    43.2: "G43.2 (additional offsets) is not supported", 52: "G52 is not supported",
-    64.1: "G64 variants are not supported", 90.2: "unknown G code",
+    43.2: "G43.2 (additional offsets) is not supported",
+    52: "G52 is not supported",
+    64.1: "G64 variants are not supported",
+    90.2: "unknown G code",
 }
-_M_GROUP: dict[float, int] = {0: 4, 1: 4, 2: 4, 30: 4, 60: 4, 3: 7, 4: 7, 5: 7, 6: 6,
-                              7: 8, 8: 8, 9: 8,
-            48: 9, 49: 9}
+_M_GROUP: dict[float, int] = {
+    0: 4,
+    1: 4,
+    2: 4,
+    30: 4,
+    60: 4,
+    3: 7,
+    4: 7,
+    5: 7,
+    6: 6,
+    7: 8,
+    8: 8,
+    9: 8,
+    48: 9,
+    49: 9,
+}
 _CYCLES = {73, 81, 82, 83, 84, 85, 86, 89}
 #: canned cycles of one plunge: (dwell at the bottom, retract at feed rate)
-_CYCLE_SHAPE = {81: (False, False), 82: (True, False), 84: (True, True), 86: (True, False),
-                89: (True, True)}
+_CYCLE_SHAPE = {
+    81: (False, False),
+    82: (True, False),
+    84: (True, True),
+    86: (True, False),
+    89: (True, True),
+}
 _AXES = "XYZAB"
 
 
@@ -356,8 +468,7 @@ class _State:
 class Interpreter:
     """The modal state machine: feed it blocks, collect motions."""
 
-    def __init__(self, config: InterpreterConfig | None = None, source: str = "<string>"
-                 ) -> None:
+    def __init__(self, config: InterpreterConfig | None = None, source: str = "<string>") -> None:
         self.cfg = config or InterpreterConfig()
         self.source = source
         self.st = _State(pos=list(self.cfg.start))
@@ -369,8 +480,9 @@ class Interpreter:
     def offset(self, code: int | None = None) -> tuple[float, ...]:
         return tuple(self.cfg.work_offsets.get(code or self.st.coord, (0.0,) * 5))
 
-    def err(self, msg: str, line: int, word: Word | None = None, expected: str | None = None
-            ) -> GCodeError:
+    def err(
+        self, msg: str, line: int, word: Word | None = None, expected: str | None = None
+    ) -> GCodeError:
         text = f"{msg} ('{word.text}')" if word is not None else msg
         return _fail(text, self.source, line, word.column if word else None, expected)
 
@@ -395,8 +507,13 @@ class Interpreter:
                 st.ended = True
                 return
             if self.started:
-                raise _fail("'%' after the start of the program", self.source, blk.line, 1,
-                            "'%' only on the first line and to end the program")
+                raise _fail(
+                    "'%' after the start of the program",
+                    self.source,
+                    blk.line,
+                    1,
+                    "'%' only on the first line and to end the program",
+                )
             self.percent_seen = True
             self.started = True
             return
@@ -415,13 +532,15 @@ class Interpreter:
                 ms.append(w)
             elif w.letter == "N":
                 if w is not blk.words[0]:
-                    raise self.err("N word not at the start of the line", line, w,
-                                   "the line number first")
+                    raise self.err(
+                        "N word not at the start of the line", line, w, "the line number first"
+                    )
                 continue
             else:
                 if w.letter in seen:
-                    raise self.err(f"{w.letter} word repeated", line, w,
-                                   f"one {w.letter} word per block")
+                    raise self.err(
+                        f"{w.letter} word repeated", line, w, f"one {w.letter} word per block"
+                    )
                 seen[w.letter] = w
         groups: dict[int, tuple[float, Word]] = {}
         nonmodal: list[tuple[float, Word]] = []
@@ -440,30 +559,47 @@ class Interpreter:
                 continue
             if grp == 0:
                 if nonmodal:
-                    raise self.err("two G codes of the non-modal group in one block", line, w,
-                                   "one of G4, G28, G30, G53 per block")
+                    raise self.err(
+                        "two G codes of the non-modal group in one block",
+                        line,
+                        w,
+                        "one of G4, G28, G30, G53 per block",
+                    )
                 nonmodal.append((code, w))
                 continue
             if grp in groups:
-                raise self.err("two G codes of the same modal group", line, w,
-                               f"one of them (already {groups[grp][1].text})")
+                raise self.err(
+                    "two G codes of the same modal group",
+                    line,
+                    w,
+                    f"one of them (already {groups[grp][1].text})",
+                )
             groups[grp] = (code, w)
         mgroups: dict[int, tuple[float, Word]] = {}
         for w in ms:
             code = _code(w.value)
             if code not in _M_GROUP:
-                raise self.err("unsupported M code", line, w,
-                               "M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30 M48 M49 M60")
+                raise self.err(
+                    "unsupported M code", line, w, "M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30 M48 M49 M60"
+                )
             grp = _M_GROUP[int(code)]
             if grp in mgroups:
-                raise self.err("two M codes of the same modal group", line, w,
-                               f"one of them (already {mgroups[grp][1].text})")
+                raise self.err(
+                    "two M codes of the same modal group",
+                    line,
+                    w,
+                    f"one of them (already {mgroups[grp][1].text})",
+                )
             mgroups[grp] = (code, w)
         if len(ms) > 4:
             raise self.err("too many M codes in one block", line, ms[4], "at most four")
         if "D" in seen:
-            raise self.err("D words (cutter radius) are not supported", line, seen["D"],
-                           "no cutter compensation")
+            raise self.err(
+                "D words (cutter radius) are not supported",
+                line,
+                seen["D"],
+                "no cutter compensation",
+            )
         for key in ("F", "S", "T", "P", "Q", "R", "L", "H"):
             if key in seen and seen[key].value < 0:
                 if key in ("R",):
@@ -493,8 +629,7 @@ class Interpreter:
         # dwell
         if nonmodal and nonmodal[0][0] == 4:
             if "P" not in seen:
-                raise self.err("G4 without a dwell time", line, nonmodal[0][1],
-                               "G4 P<seconds>")
+                raise self.err("G4 without a dwell time", line, nonmodal[0][1], "G4 P<seconds>")
             p = tuple(st.pos)
             self.emit(line=line, kind="dwell", start=p, end=p, duration=seen["P"].value)
         # plane, units
@@ -519,14 +654,22 @@ class Interpreter:
         motion = groups[1][0] if 1 in groups else None
         if nm in (28, 30):
             if motion is not None and motion != 80 and axis_words:
-                raise self.err("two G codes that both use axis words", line, groups[1][1],
-                               f"G{nm} or a motion, not both")
+                raise self.err(
+                    "two G codes that both use axis words",
+                    line,
+                    groups[1][1],
+                    f"G{nm} or a motion, not both",
+                )
             self._home(nm, axis_words, line)
         elif nm == 53:
             mode = motion if motion is not None else st.motion
             if mode not in (0, 1):
-                raise self.err("G53 with a motion other than G0 or G1", line, nonmodal[0][1],
-                               "G53 G0 or G53 G1")
+                raise self.err(
+                    "G53 with a motion other than G0 or G1",
+                    line,
+                    nonmodal[0][1],
+                    "G53 G0 or G53 G1",
+                )
             if not st.absolute:
                 raise self.err("G53 in incremental mode", line, nonmodal[0][1], "G90 with G53")
             if motion is not None:
@@ -537,8 +680,9 @@ class Interpreter:
                 if motion == 80:
                     if axis_words:
                         w = next(iter(axis_words.values()))
-                        raise self.err("axis words with G80", line, w,
-                                       "no X Y Z A B with G80 (motion off)")
+                        raise self.err(
+                            "axis words with G80", line, w, "no X Y Z A B with G80 (motion off)"
+                        )
                     st.motion = None
                     st.cycle_il = None
                 else:
@@ -548,8 +692,12 @@ class Interpreter:
             elif axis_words:
                 if st.motion is None:
                     w = next(iter(axis_words.values()))
-                    raise self.err("axis words with no motion mode", line, w,
-                                   "a G0, G1, G2, G3 or canned cycle in effect (not G80)")
+                    raise self.err(
+                        "axis words with no motion mode",
+                        line,
+                        w,
+                        "a G0, G1, G2, G3 or canned cycle in effect (not G80)",
+                    )
                 self._motion(st.motion, axis_words, seen, line, new=False)
             else:
                 self._check_unused(seen, line, st.motion if motion is None else motion)
@@ -561,11 +709,19 @@ class Interpreter:
     def _check_unused(self, seen: dict[str, Word], line: int, motion: float | None) -> None:
         for letter in ("I", "J", "K"):
             if letter in seen:
-                raise self.err(f"{letter} word with no arc to use it", line, seen[letter],
-                               "I, J, K only with G2/G3")
+                raise self.err(
+                    f"{letter} word with no arc to use it",
+                    line,
+                    seen[letter],
+                    "I, J, K only with G2/G3",
+                )
         if "R" in seen and motion not in _CYCLES:
-            raise self.err("R word with no arc or canned cycle to use it", line, seen["R"],
-                           "R only with G2/G3 or a canned cycle")
+            raise self.err(
+                "R word with no arc or canned cycle to use it",
+                line,
+                seen["R"],
+                "R only with G2/G3 or a canned cycle",
+            )
 
     def _tool_length(self, g: tuple[float, Word], seen: dict[str, Word], line: int) -> None:
         """G43/G43.1/G49. The spindle does not move when the offset changes, so the
@@ -575,8 +731,7 @@ class Interpreter:
         self._set_tool_length(g, seen, line)
         st.pos[2] += old - st.tool_length
 
-    def _set_tool_length(self, g: tuple[float, Word], seen: dict[str, Word], line: int
-                         ) -> None:
+    def _set_tool_length(self, g: tuple[float, Word], seen: dict[str, Word], line: int) -> None:
         st = self.st
         code, w = g
         if code == 49:
@@ -588,8 +743,12 @@ class Interpreter:
             if n == 0:
                 st.tool_length = 0.0
             elif n not in self.cfg.tool_table:
-                raise self.err(f"tool {n} is not in the profile's tool table", line,
-                               seen.get("H", w), "a [[tools]] entry for it")
+                raise self.err(
+                    f"tool {n} is not in the profile's tool table",
+                    line,
+                    seen.get("H", w),
+                    "a [[tools]] entry for it",
+                )
             else:
                 st.tool_length = self.cfg.tool_table[n].length
         else:  # G43.1
@@ -611,29 +770,49 @@ class Interpreter:
                 out[i] = (v + off[i]) if (st.absolute or machine) else st.pos[i] + v
         return out
 
-    def _feed_rate(self, start: list[float], end: list[float], length: float | None,
-                   line: int, word: Word | None) -> float:
+    def _feed_rate(
+        self,
+        start: list[float],
+        end: list[float],
+        length: float | None,
+        line: int,
+        word: Word | None,
+    ) -> float:
         """Feed in mm/min (deg/min for rotary-only moves), as LinuxCNC derives it."""
         st = self.st
         lin = math.dist(start[:3], end[:3]) if length is None else length
         if st.inverse_time:
             if "F" not in self._seen:
-                raise self.err("feed move without F in inverse time mode (G93)", line, word,
-                               "an F word on every G1/G2/G3 block in G93")
+                raise self.err(
+                    "feed move without F in inverse time mode (G93)",
+                    line,
+                    word,
+                    "an F word on every G1/G2/G3 block in G93",
+                )
             if st.feed <= 0:
                 raise self.err("zero feed rate", line, self._seen["F"], "F > 0")
             if lin > 1e-12:
                 return st.feed * lin
             return st.feed * math.dist(start[3:], end[3:])
         if st.feed <= 0:
-            raise self.err("feed move with no feed rate", line, word,
-                           "an F word before (or on) the first G1/G2/G3")
+            raise self.err(
+                "feed move with no feed rate",
+                line,
+                word,
+                "an F word before (or on) the first G1/G2/G3",
+            )
         if lin > 1e-12 or math.dist(start[3:], end[3:]) == 0:
             return st.feed * (MM_PER_INCH if st.units == "inch" else 1.0)
         return st.feed  # rotary-only: degrees per minute in either unit system
 
-    def _motion(self, motion: float, axis_words: dict[str, Word], seen: dict[str, Word],
-                line: int, new: bool) -> None:
+    def _motion(
+        self,
+        motion: float,
+        axis_words: dict[str, Word],
+        seen: dict[str, Word],
+        line: int,
+        new: bool,
+    ) -> None:
         st = self.st
         self._seen = seen
         if motion in _CYCLES:
@@ -644,14 +823,24 @@ class Interpreter:
         if motion in (0, 1):
             for letter in ("I", "J", "K", "R"):
                 if letter in seen:
-                    raise self.err(f"{letter} word with G{int(motion)}", line, seen[letter],
-                                   "I, J, K, R only with arcs or canned cycles")
+                    raise self.err(
+                        f"{letter} word with G{int(motion)}",
+                        line,
+                        seen[letter],
+                        "I, J, K, R only with arcs or canned cycles",
+                    )
             self._linear(int(motion), axis_words, seen, line)
         else:
             self._arc(int(motion), axis_words, seen, line)
 
-    def _linear(self, motion: int, axis_words: dict[str, Word], seen: dict[str, Word],
-                line: int, machine: bool = False) -> None:
+    def _linear(
+        self,
+        motion: int,
+        axis_words: dict[str, Word],
+        seen: dict[str, Word],
+        line: int,
+        machine: bool = False,
+    ) -> None:
         st = self.st
         self._seen = seen
         start = list(st.pos)
@@ -664,8 +853,9 @@ class Interpreter:
             self.emit(line=line, kind="feed", start=tuple(start), end=tuple(end), feed=f)
         st.pos = end
 
-    def _arc(self, motion: int, axis_words: dict[str, Word], seen: dict[str, Word],
-             line: int) -> None:
+    def _arc(
+        self, motion: int, axis_words: dict[str, Word], seen: dict[str, Word], line: int
+    ) -> None:
         st = self.st
         gw = next(iter(axis_words.values()), None)
         iu, iv, iw = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[st.plane]
@@ -677,8 +867,9 @@ class Interpreter:
         if "P" in seen:
             p = seen["P"].value
             if p != int(p) or p < 1:
-                raise self.err("P (turns) must be a positive integer", line, seen["P"],
-                               "P1, P2, ...")
+                raise self.err(
+                    "P (turns) must be a positive integer", line, seen["P"], "P1, P2, ..."
+                )
             turns = int(p)
         unit = st.units
         u0, v0 = start[iu] / sc, start[iv] / sc
@@ -686,18 +877,30 @@ class Interpreter:
         if "R" in seen:
             for letter in ("I", "J", "K"):
                 if letter in seen:
-                    raise self.err("R and I/J/K in one arc", line, seen[letter],
-                                   "either R or the centre offsets")
+                    raise self.err(
+                        "R and I/J/K in one arc",
+                        line,
+                        seen[letter],
+                        "either R or the centre offsets",
+                    )
             r = seen["R"].value
             if u0 == u1 and v0 == v1:
-                raise self.err("R arc whose end point is its start point", line, seen["R"],
-                               "a different end point (a full circle needs I/J/K)")
+                raise self.err(
+                    "R arc whose end point is its start point",
+                    line,
+                    seen["R"],
+                    "a different end point (a full circle needs I/J/K)",
+                )
             mu, mv = (u0 + u1) / 2.0, (v0 + v1) / 2.0
             half = math.hypot(mu - u1, mv - v1)
             ar = abs(r)
             if half - ar > RADIUS_TOLERANCE[unit]:
-                raise self.err("arc radius too small to reach the end point", line, seen["R"],
-                               f"|R| >= {half:.4f} (half the chord)")
+                raise self.err(
+                    "arc radius too small to reach the end point",
+                    line,
+                    seen["R"],
+                    f"|R| >= {half:.4f} (half the chord)",
+                )
             if ar == 0 or half / ar > 1 - 1e-12:
                 half = ar
             if (motion == 2 and r > 0) or (motion == 3 and r < 0):
@@ -710,13 +913,21 @@ class Interpreter:
         else:
             la, lb = off_letters
             if la not in seen and lb not in seen:
-                raise self.err("arc with neither R nor centre offsets", line, gw,
-                               f"{la} and/or {lb} (or R) with G{motion} in G{st.plane}")
+                raise self.err(
+                    "arc with neither R nor centre offsets",
+                    line,
+                    gw,
+                    f"{la} and/or {lb} (or R) with G{motion} in G{st.plane}",
+                )
             third = {"I", "J", "K"} - {la, lb}
             for letter in third:
                 if letter in seen:
-                    raise self.err(f"{letter} word in a G{st.plane} arc", line, seen[letter],
-                                   f"{la} and {lb} in G{st.plane}")
+                    raise self.err(
+                        f"{letter} word in a G{st.plane} arc",
+                        line,
+                        seen[letter],
+                        f"{la} and {lb} in G{st.plane}",
+                    )
             a = seen[la].value if la in seen else 0.0
             b = seen[lb].value if lb in seen else 0.0
             if st.arc_absolute:
@@ -729,16 +940,23 @@ class Interpreter:
             r2 = math.hypot(cu - u1, cv - v1)
             rt = RADIUS_TOLERANCE[unit]
             if r1 < rt or r2 < rt:
-                raise self.err("zero-radius arc", line, seen.get(la) or seen.get(lb),
-                               "a centre away from the start and end points")
+                raise self.err(
+                    "zero-radius arc",
+                    line,
+                    seen.get(la) or seen.get(lb),
+                    "a centre away from the start and end points",
+                )
             ae = abs(r1 - r2)
             re_ = ae / max(r1, r2)
             sa = SPIRAL_ABS_TOLERANCE[unit]
             if ae > sa * 100.0 or (re_ > SPIRAL_REL_TOLERANCE and ae > sa):
                 raise self.err(
                     f"the end point is not on the arc's circle (radius {r1:.4f} at the start, "
-                    f"{r2:.4f} at the end)", line, seen.get(la) or seen.get(lb),
-                    f"radii equal within {sa:.4f} {'mm' if unit == 'mm' else 'in'}")
+                    f"{r2:.4f} at the end)",
+                    line,
+                    seen.get(la) or seen.get(lb),
+                    f"radii equal within {sa:.4f} {'mm' if unit == 'mm' else 'in'}",
+                )
         center = [0.0, 0.0, 0.0]
         center[iu], center[iv] = cu * sc, cv * sc
         center[iw] = end[iw]
@@ -756,8 +974,16 @@ class Interpreter:
         rad = math.hypot(u0 - cu, v0 - cv) * sc
         length = math.hypot(rad * sweep, end[iw] - start[iw])
         f = self._feed_rate(start, end, length, line, gw)
-        self.emit(line=line, kind="arc", start=tuple(start), end=tuple(end), feed=f,
-                  plane=st.plane, center=tuple(center), rotation=rotation)
+        self.emit(
+            line=line,
+            kind="arc",
+            start=tuple(start),
+            end=tuple(end),
+            feed=f,
+            plane=st.plane,
+            center=tuple(center),
+            rotation=rotation,
+        )
         st.pos = end
 
     def _home(self, code: float, axis_words: dict[str, Word], line: int) -> None:
@@ -774,30 +1000,44 @@ class Interpreter:
         self.emit(line=line, kind="rapid", start=tuple(st.pos), end=tuple(end))
         st.pos = end
 
-    def _cycle(self, motion: int, axis_words: dict[str, Word], seen: dict[str, Word],
-               line: int, new: bool) -> None:
+    def _cycle(
+        self, motion: int, axis_words: dict[str, Word], seen: dict[str, Word], line: int, new: bool
+    ) -> None:
         st = self.st
         gw = next(iter(axis_words.values()), None)
         if st.inverse_time:
             raise self.err("canned cycle in inverse time mode (G93)", line, gw, "G94")
         if st.feed <= 0:
-            raise self.err("canned cycle with no feed rate", line, gw or seen.get("R"),
-                           "an F word before the cycle")
+            raise self.err(
+                "canned cycle with no feed rate",
+                line,
+                gw or seen.get("R"),
+                "an F word before the cycle",
+            )
         for a in ("A", "B"):
             if a in axis_words:
-                raise self.err("A/B words in a canned cycle", line, axis_words[a],
-                               "X Y Z R only: rotary axes may not move in a cycle")
+                raise self.err(
+                    "A/B words in a canned cycle",
+                    line,
+                    axis_words[a],
+                    "X Y Z R only: rotary axes may not move in a cycle",
+                )
         first = st.motion != motion
         sc = self.scale()
         iu, iv, iw = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[st.plane]
         ax = "XYZ"
         name_w = ax[iw]
         if first and name_w not in axis_words:
-            raise self.err(f"{name_w} missing in the first block of a canned cycle", line,
-                           gw, f"{name_w}<bottom> with G{motion} in G{st.plane}")
+            raise self.err(
+                f"{name_w} missing in the first block of a canned cycle",
+                line,
+                gw,
+                f"{name_w}<bottom> with G{motion} in G{st.plane}",
+            )
         if "R" not in seen and first:
-            raise self.err("R missing in the first block of a canned cycle", line, gw,
-                           "R<retract plane>")
+            raise self.err(
+                "R missing in the first block of a canned cycle", line, gw, "R<retract plane>"
+            )
         if "L" in seen:
             lv = seen["L"].value
             if lv != int(lv) or lv < 1:
@@ -837,10 +1077,8 @@ class Interpreter:
         if st.absolute:
             r = st.cycle_r
             cc = z_num
-            aa = (axis_words[ax[iu]].value if ax[iu] in axis_words
-                  else (cur[iu] - off[iu]) / sc)
-            bb = (axis_words[ax[iv]].value if ax[iv] in axis_words
-                  else (cur[iv] - off[iv]) / sc)
+            aa = axis_words[ax[iu]].value if ax[iu] in axis_words else (cur[iu] - off[iu]) / sc
+            bb = axis_words[ax[iv]].value if ax[iv] in axis_words else (cur[iv] - off[iv]) / sc
             inc_a = inc_b = 0.0
         else:
             inc_a = axis_words[ax[iu]].value if ax[iu] in axis_words else 0.0
@@ -850,9 +1088,12 @@ class Interpreter:
             aa = (cur[iu] - off[iu]) / sc
             bb = (cur[iv] - off[iv]) / sc
         if r < cc:
-            raise self.err(f"R below the bottom of the cycle in G{st.plane}", line,
-                           seen.get("R") or axis_words.get(name_w),
-                           f"R >= {name_w} (the retract plane above the bottom)")
+            raise self.err(
+                f"R below the bottom of the cycle in G{st.plane}",
+                line,
+                seen.get("R") or axis_words.get(name_w),
+                f"R >= {name_w} (the retract plane above the bottom)",
+            )
 
         def pt(a: float, b: float, w: float) -> list[float]:
             p = list(st.pos)
@@ -921,7 +1162,8 @@ class Interpreter:
 #: The common CAM block: an optional G0/G1, axis words, an optional F, nothing else.
 _FAST = re.compile(
     r"\s*(?:[Nn]\s*\d+\s*)?(?:[Gg]\s*0*([01])(?![0-9.])\s*)?((?:[XYZABxyzab]\s*[-+]?(?:\d+\.?\d*|\.\d+)\s*)+)"
-    r"(?:[Ff]\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*)?")
+    r"(?:[Ff]\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*)?"
+)
 _FAST_AXIS = re.compile(r"([XYZABxyzab])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 _ZERO5 = (0.0, 0.0, 0.0, 0.0, 0.0)
 _AXIS_INDEX = {"X": 0, "Y": 1, "Z": 2, "A": 3, "B": 4, "x": 0, "y": 1, "z": 2, "a": 3, "b": 4}
@@ -977,19 +1219,50 @@ def _fast(it: Interpreter, raw: str, n: int) -> bool:
     it.started = True
     ts, te = tuple(start), tuple(end)
     if motion == 0:
-        it.out.append(Motion(n, "rapid", ts, te, math.nan, 0, None, 0, 0.0, st.tool_length,
-                             st.tool, st.spindle * st.spindle_dir, False))
+        it.out.append(
+            Motion(
+                n,
+                "rapid",
+                ts,
+                te,
+                math.nan,
+                0,
+                None,
+                0,
+                0.0,
+                st.tool_length,
+                st.tool,
+                st.spindle * st.spindle_dir,
+                False,
+            )
+        )
     else:
         moved = (te[0] - ts[0]) ** 2 + (te[1] - ts[1]) ** 2 + (te[2] - ts[2]) ** 2 > 1e-24
         rate = st.feed * sc if (moved or te[3:] == ts[3:]) else st.feed
-        it.out.append(Motion(n, "feed", ts, te, rate, 0, None, 0, 0.0, st.tool_length,
-                             st.tool, st.spindle * st.spindle_dir, False))
+        it.out.append(
+            Motion(
+                n,
+                "feed",
+                ts,
+                te,
+                rate,
+                0,
+                None,
+                0,
+                0.0,
+                st.tool_length,
+                st.tool,
+                st.spindle * st.spindle_dir,
+                False,
+            )
+        )
     st.pos = end
     return True
 
 
-def iter_motions(lines: Iterable[str], config: InterpreterConfig | None = None,
-                 source: str = "<string>") -> Iterator[Motion]:
+def iter_motions(
+    lines: Iterable[str], config: InterpreterConfig | None = None, source: str = "<string>"
+) -> Iterator[Motion]:
     """Interpret lines (without their line ends) and yield motions as they come.
 
     Raises
@@ -1012,8 +1285,9 @@ def iter_motions(lines: Iterable[str], config: InterpreterConfig | None = None,
         except GCodeError:
             raise
         except (ValueError, OverflowError, ZeroDivisionError) as exc:
-            raise _fail(f"cannot interpret this block ({exc})", source, n, None,
-                        "numbers within range") from None
+            raise _fail(
+                f"cannot interpret this block ({exc})", source, n, None, "numbers within range"
+            ) from None
         if it.out:
             yield from it.out
             it.out.clear()
@@ -1021,11 +1295,17 @@ def iter_motions(lines: Iterable[str], config: InterpreterConfig | None = None,
             return
         if blk.has_text or blk.percent:
             last_text = n
-    raise _fail("the program ends without M2, M30 or a closing '%'", source,
-                max(last_text, 1), None, "M2 or M30 at the end (LinuxCNC rejects it too)")
+    raise _fail(
+        "the program ends without M2, M30 or a closing '%'",
+        source,
+        max(last_text, 1),
+        None,
+        "M2 or M30 at the end (LinuxCNC rejects it too)",
+    )
 
 
-def interpret(text: str, config: InterpreterConfig | None = None, source: str = "<string>"
-              ) -> list[Motion]:
+def interpret(
+    text: str, config: InterpreterConfig | None = None, source: str = "<string>"
+) -> list[Motion]:
     """All motions of a program text."""
     return list(iter_motions(split_lines(text), config, source))

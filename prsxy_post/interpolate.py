@@ -101,8 +101,9 @@ class Blocks:
         return Blocks(**{k: getattr(self, k)[sl] for k in self.__dataclass_fields__})
 
 
-def _arc_geometry(start: np.ndarray, end: np.ndarray, center: np.ndarray, plane: np.ndarray,
-                  rotation: np.ndarray) -> dict[str, np.ndarray]:
+def _arc_geometry(
+    start: np.ndarray, end: np.ndarray, center: np.ndarray, plane: np.ndarray, rotation: np.ndarray
+) -> dict[str, np.ndarray]:
     """Sweep, radii, start angle, XYZ length and end tangents of arcs (vectorised).
 
     The sweep follows LinuxCNC's ARC_FEED rotation: sign = direction (+ counter-
@@ -142,8 +143,16 @@ def _arc_geometry(start: np.ndarray, end: np.ndarray, center: np.ndarray, plane:
     t_out[r, iu] = -np.sin(th_e) * sgn * k
     t_out[r, iv] = np.cos(th_e) * sgn * k
     t_out[r, iw] = kw
-    return {"sweep": sweep, "r0": r0, "r1": r1, "theta0": th0, "length": length, "rm": rm,
-            "t_in": t_in, "t_out": t_out}
+    return {
+        "sweep": sweep,
+        "r0": r0,
+        "r1": r1,
+        "theta0": th0,
+        "length": length,
+        "rm": rm,
+        "t_in": t_in,
+        "t_out": t_out,
+    }
 
 
 def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
@@ -185,8 +194,9 @@ def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
     theta0 = np.zeros(n)
     rm = np.full(n, np.inf)
     if arcs:
-        g = _arc_geometry(start[is_arc], end[is_arc], center[is_arc], plane[is_arc],
-                          rotation[is_arc])
+        g = _arc_geometry(
+            start[is_arc], end[is_arc], center[is_arc], plane[is_arc], rotation[is_arc]
+        )
         sweep[is_arc], r0[is_arc], r1[is_arc] = g["sweep"], g["r0"], g["r1"]
         theta0[is_arc], length[is_arc], rm[is_arc] = g["theta0"], g["length"], g["rm"]
         t_in[is_arc], t_out[is_arc] = g["t_in"], g["t_out"]
@@ -209,10 +219,26 @@ def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
         v_lin = np.where(is_arc & (rm > 0), np.minimum(v_lin, np.sqrt(a_lin * rm)), v_lin)
     vmax = np.where(dwell, 1.0, np.where(angular, v_ang, v_lin))
     accel = np.where(dwell, 1.0, np.where(angular, limits.accel_deg_s2, a_lin))
-    b = Blocks(kind=kind, start=start, end=end, line=line, tool_length=tool_length,
-               length=length, angular=angular, vmax=vmax, accel=accel,
-               duration=np.where(dwell, duration, 0.0), plane=plane, center=center,
-               sweep=sweep, r0=r0, r1=r1, theta0=theta0, t_in=t_in, t_out=t_out)
+    b = Blocks(
+        kind=kind,
+        start=start,
+        end=end,
+        line=line,
+        tool_length=tool_length,
+        length=length,
+        angular=angular,
+        vmax=vmax,
+        accel=accel,
+        duration=np.where(dwell, duration, 0.0),
+        plane=plane,
+        center=center,
+        sweep=sweep,
+        r0=r0,
+        r1=r1,
+        theta0=theta0,
+        t_in=t_in,
+        t_out=t_out,
+    )
     return b if keep.all() else b.take(keep)
 
 
@@ -235,8 +261,10 @@ def junction_limits(b: Blocks, period_s: float) -> np.ndarray:
         corner = np.where(half > 1e-12, a * period_s / (2 * np.maximum(half, 1e-300)), np.inf)
     v = np.minimum(np.minimum(b.vmax[:-1], b.vmax[1:]), corner)
     stop = (
-        (b.kind[:-1] == KIND_DWELL) | (b.kind[1:] == KIND_DWELL)
-        | b.angular[:-1] | b.angular[1:]
+        (b.kind[:-1] == KIND_DWELL)
+        | (b.kind[1:] == KIND_DWELL)
+        | b.angular[:-1]
+        | b.angular[1:]
         | (b.tool_length[:-1] != b.tool_length[1:])
     )
     vj[:-1] = np.where(stop, 0.0, v)
@@ -327,7 +355,8 @@ def _distance(law: TimeLaw, k: np.ndarray, tau: np.ndarray, L: np.ndarray) -> np
     in2 = (~in1) & (tc <= t1 + t2)
     td = np.clip(tc - t1 - t2, 0.0, t3)
     s = np.where(
-        in1, v0 * tc + 0.5 * a * tc**2,
+        in1,
+        v0 * tc + 0.5 * a * tc**2,
         np.where(in2, s1 + vp * (tc - t1), s1 + s2 + vp * td - 0.5 * a * td**2),
     )
     return np.minimum(s, L)
@@ -409,12 +438,22 @@ def sample(b: Blocks, law: TimeLaw, period_s: float) -> Samples:
     # speed at the point (for PVT velocities): derivative of the trapezoid law
     v = _speed(law, k, tau)
     v[dwell | last] = np.where(dwell[dwell | last], 0.0, law.v1[k[dwell | last]])
-    return Samples(q=q, dt=step[k], line=b.line[k], block=k, first=j == 1,
-                   tool_length=b.tool_length[k], speed=v)
+    return Samples(
+        q=q,
+        dt=step[k],
+        line=b.line[k],
+        block=k,
+        first=j == 1,
+        tool_length=b.tool_length[k],
+        speed=v,
+    )
 
 
 def _speed(law: TimeLaw, k: np.ndarray, tau: np.ndarray) -> np.ndarray:
     v0, vp, v1, a = law.v0[k], law.vp[k], law.v1[k], law.a[k]
     t1, t2 = law.t1[k], law.t2[k]
-    return np.where(tau <= t1, v0 + a * tau,
-                    np.where(tau <= t1 + t2, vp, np.maximum(vp - a * (tau - t1 - t2), v1)))
+    return np.where(
+        tau <= t1,
+        v0 + a * tau,
+        np.where(tau <= t1 + t2, vp, np.maximum(vp - a * (tau - t1 - t2), v1)),
+    )

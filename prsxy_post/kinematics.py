@@ -41,24 +41,27 @@ def rot_x(a: np.ndarray) -> np.ndarray:
     """Right-handed rotation matrices about x, shape (..., 3, 3); ``a`` in rad."""
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1),
-                     np.stack([z, s, c], -1)], -2)
+    return np.stack(
+        [np.stack([o, z, z], -1), np.stack([z, c, -s], -1), np.stack([z, s, c], -1)], -2
+    )
 
 
 def rot_y(a: np.ndarray) -> np.ndarray:
     """Right-handed rotation matrices about y, shape (..., 3, 3); ``a`` in rad."""
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1),
-                     np.stack([-s, z, c], -1)], -2)
+    return np.stack(
+        [np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2
+    )
 
 
 def rot_z(a: np.ndarray) -> np.ndarray:
     """Right-handed rotation matrices about z, shape (..., 3, 3); ``a`` in rad."""
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1),
-                     np.stack([z, z, o], -1)], -2)
+    return np.stack(
+        [np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2
+    )
 
 
 def tool_axis(a_deg: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
@@ -70,8 +73,10 @@ def tool_axis(a_deg: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
 def angles_from_axis(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A = asin(−a_y), B = atan2(a_x, a_z) in degrees (contract)."""
     axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
-    return (np.degrees(np.arcsin(np.clip(-axis[..., 1], -1.0, 1.0))),
-            np.degrees(np.arctan2(axis[..., 0], axis[..., 2])))
+    return (
+        np.degrees(np.arcsin(np.clip(-axis[..., 1], -1.0, 1.0))),
+        np.degrees(np.arctan2(axis[..., 0], axis[..., 2])),
+    )
 
 
 @dataclass(frozen=True)
@@ -117,23 +122,34 @@ class Geometry:
         """
         off = P[:, :, None] * self.d[None]
         if self.guide_bow is not None:
-            off = off + (self.guide_bow[None, :, None] * (P[:, :, None] / BOW_REF_MM) ** 2
-                         * self.radial[None])
+            off = off + (
+                self.guide_bow[None, :, None]
+                * (P[:, :, None] / BOW_REF_MM) ** 2
+                * self.radial[None]
+            )
         return off
 
     @classmethod
-    def from_params(cls, kp: KinematicParams, origin: np.ndarray,
-                    table: TableParams | None = None,
-                    effects: Effects | None = None) -> Geometry:
+    def from_params(
+        cls,
+        kp: KinematicParams,
+        origin: np.ndarray,
+        table: TableParams | None = None,
+        effects: Effects | None = None,
+    ) -> Geometry:
         """Build the arrays of machine-model.md "Geometry of leg i" from profile values."""
         table = table or TableParams()
         g, d, u, b, L = [], [], [], [], []
         for leg in kp.legs:
             th = np.radians(leg.guide_angle)
-            g.append([leg.guide_radius * np.cos(th), leg.guide_radius * np.sin(th),
-                      leg.guide_height])
-            di = rot_x(np.radians(leg.guide_tilt_x)) @ rot_y(np.radians(leg.guide_tilt_y)) \
+            g.append(
+                [leg.guide_radius * np.cos(th), leg.guide_radius * np.sin(th), leg.guide_height]
+            )
+            di = (
+                rot_x(np.radians(leg.guide_tilt_x))
+                @ rot_y(np.radians(leg.guide_tilt_y))
                 @ np.array([0.0, 0.0, 1.0])
+            )
             tangent = np.array([-np.sin(th), np.cos(th), 0.0])
             radial = np.array([np.cos(th), np.sin(th), 0.0])
             k = np.radians(leg.hinge_twist)
@@ -142,18 +158,29 @@ class Geometry:
             u.append(ui / np.linalg.norm(ui))
             d.append(di)
             ph = np.radians(leg.platform_angle)
-            b.append([leg.platform_radius * np.cos(ph), leg.platform_radius * np.sin(ph),
-                      leg.platform_z])
+            b.append(
+                [leg.platform_radius * np.cos(ph), leg.platform_radius * np.sin(ph), leg.platform_z]
+            )
             L.append(leg.strut_length)
         bow = straight = None
         if effects is not None and any(effects.guide_bow):
             bow = np.array(effects.guide_bow, dtype=float)
         if effects is not None and any(effects.table_straightness):
             straight = np.array(effects.table_straightness, dtype=float)
-        return cls(np.array(g), np.array(d), np.array(u), np.array(b), np.array(L),
-                   np.array([kp.tool_offset_x, kp.tool_offset_y, -kp.tool_length]),
-                   np.asarray(origin, dtype=float).copy(),
-                   table.scale_x, table.scale_y, table.squareness, bow, straight)
+        return cls(
+            np.array(g),
+            np.array(d),
+            np.array(u),
+            np.array(b),
+            np.array(L),
+            np.array([kp.tool_offset_x, kp.tool_offset_y, -kp.tool_length]),
+            np.asarray(origin, dtype=float).copy(),
+            table.scale_x,
+            table.scale_y,
+            table.squareness,
+            bow,
+            straight,
+        )
 
     # Precomputed linear algebra of the closed-form IK.
     @property
@@ -172,16 +199,18 @@ class PlatformPose:
     R: np.ndarray
 
 
-def _tool_vectors(geo: Geometry, n: int, tool_length_offset: np.ndarray | float | None
-                  ) -> np.ndarray:
+def _tool_vectors(
+    geo: Geometry, n: int, tool_length_offset: np.ndarray | float | None
+) -> np.ndarray:
     t = np.broadcast_to(geo.tool, (n, 3)).copy()
     if tool_length_offset is not None:
         t[:, 2] -= tool_length_offset
     return t
 
 
-def solve_platform(geo: Geometry, q: np.ndarray,
-                   tool_length_offset: np.ndarray | float | None = None) -> PlatformPose:
+def solve_platform(
+    geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float | None = None
+) -> PlatformPose:
     """Platform centre and spin for tool poses ``q`` (step 1 of the contract's IK).
 
     Parameters
@@ -264,8 +293,9 @@ class IKResult:
     reachable: np.ndarray
 
 
-def inverse(geo: Geometry, q: np.ndarray,
-            tool_length_offset: np.ndarray | float | None = None) -> IKResult:
+def inverse(
+    geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float | None = None
+) -> IKResult:
     """Virtual → real: motor positions for tool poses (contract "Inverse kinematics").
 
     P_i = d_i·v_i + sqrt((d_i·v_i)² − |v_i|² + L_i²),  v_i = c + R b_i − g_i
@@ -309,8 +339,9 @@ def _bowed_guides(geo: Geometry, v: np.ndarray, p: np.ndarray) -> np.ndarray:
     bow = geo.guide_bow
     for _ in range(6):
         w = v - geo.hinge_offset(p)
-        da = geo.d[None] + (2 * bow[None, :, None] * p[:, :, None]
-                            / BOW_REF_MM**2 * geo.radial[None])
+        da = geo.d[None] + (
+            2 * bow[None, :, None] * p[:, :, None] / BOW_REF_MM**2 * geo.radial[None]
+        )
         f = np.einsum("nki,nki->nk", w, w) - geo.L[None] ** 2
         fp = -2 * np.einsum("nki,nki->nk", w, da)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -369,14 +400,24 @@ def _fk_guess(geo: Geometry, P: np.ndarray) -> np.ndarray:
     nrm *= np.sign(nrm[:, 2:3])
     A = np.arcsin(np.clip(-nrm[:, 1], -1, 1))
     B = np.arctan2(nrm[:, 0], nrm[:, 2])
-    drop = np.sqrt(np.maximum(geo.L**2 - (np.linalg.norm(geo.g[:, :2], axis=1)
-                                          - np.linalg.norm(geo.b[:, :2], axis=1)) ** 2, 0.0))
+    drop = np.sqrt(
+        np.maximum(
+            geo.L**2
+            - (np.linalg.norm(geo.g[:, :2], axis=1) - np.linalg.norm(geo.b[:, :2], axis=1)) ** 2,
+            0.0,
+        )
+    )
     c = a.mean(axis=1) - nrm * drop.mean()
     return np.column_stack([c, A, B, np.zeros(len(P))])
 
 
-def forward_platform(geo: Geometry, P: np.ndarray, guess: np.ndarray | None = None,
-                     tol: float = 1e-12, max_iter: int = 30) -> tuple[np.ndarray, np.ndarray]:
+def forward_platform(
+    geo: Geometry,
+    P: np.ndarray,
+    guess: np.ndarray | None = None,
+    tol: float = 1e-12,
+    max_iter: int = 30,
+) -> tuple[np.ndarray, np.ndarray]:
     """Solve the six constraint equations for (c, A, B, γ) by batched Newton.
 
     Parameters
@@ -427,8 +468,12 @@ def forward_platform(geo: Geometry, P: np.ndarray, guess: np.ndarray | None = No
     return xv, converged
 
 
-def forward(geo: Geometry, P: np.ndarray, tool_length_offset: np.ndarray | float | None = None,
-            guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def forward(
+    geo: Geometry,
+    P: np.ndarray,
+    tool_length_offset: np.ndarray | float | None = None,
+    guess: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Real → virtual (contract "Forward kinematics").
 
     Returns

@@ -213,8 +213,16 @@ class _Checker:
             raise self.fail(_join(path, name), f"is a {_tname(value)}", "a TOML table")
         return value
 
-    def number(self, doc: Mapping[str, Any], name: str, path: str, default: float | None = None,
-               lo: float | None = None, hi: float | None = None, positive: bool = False) -> float:
+    def number(
+        self,
+        doc: Mapping[str, Any],
+        name: str,
+        path: str,
+        default: float | None = None,
+        lo: float | None = None,
+        hi: float | None = None,
+        positive: bool = False,
+    ) -> float:
         key = _join(path, name)
         if name not in doc:
             if default is None:
@@ -232,8 +240,14 @@ class _Checker:
             raise self.fail(key, f"is {x:g}", f"a number in [{lo}, {hi}]")
         return x
 
-    def integer(self, doc: Mapping[str, Any], name: str, path: str, default: int | None = None,
-                lo: int | None = None) -> int:
+    def integer(
+        self,
+        doc: Mapping[str, Any],
+        name: str,
+        path: str,
+        default: int | None = None,
+        lo: int | None = None,
+    ) -> int:
         key = _join(path, name)
         if name not in doc:
             if default is None:
@@ -246,8 +260,9 @@ class _Checker:
             raise self.fail(key, f"is {value}", f"an integer >= {lo}")
         return value
 
-    def string(self, doc: Mapping[str, Any], name: str, path: str,
-               default: str | None = None) -> str:
+    def string(
+        self, doc: Mapping[str, Any], name: str, path: str, default: str | None = None
+    ) -> str:
         key = _join(path, name)
         if name not in doc:
             if default is None:
@@ -258,8 +273,9 @@ class _Checker:
             raise self.fail(key, f"is a {_tname(value)}", "a string")
         return value
 
-    def vector(self, doc: Mapping[str, Any], name: str, path: str, n: int | None,
-               default: Any = None) -> np.ndarray:
+    def vector(
+        self, doc: Mapping[str, Any], name: str, path: str, n: int | None, default: Any = None
+    ) -> np.ndarray:
         key = _join(path, name)
         if name not in doc:
             if default is None:
@@ -279,8 +295,9 @@ class _Checker:
     def unknown(self, doc: Mapping[str, Any], allowed: set[str], path: str) -> None:
         for k in doc:
             if k not in allowed:
-                raise self.fail(_join(path, k), "unknown key",
-                                "one of " + ", ".join(sorted(allowed)))
+                raise self.fail(
+                    _join(path, k), "unknown key", "one of " + ", ".join(sorted(allowed))
+                )
 
 
 def _join(path: str, name: str) -> str:
@@ -300,11 +317,15 @@ def _kinematics(c: _Checker, sec: dict, path: str) -> KinematicParams:
     oy = c.number(sec, "tool_offset_y", path, 0.0)
     legs_raw = sec.get("legs")
     if not isinstance(legs_raw, list) or not all(isinstance(x, dict) for x in legs_raw):
-        raise c.fail(f"{path}.legs", "missing or not an array of tables",
-                     "three [[" + path + ".legs]] tables, for motors 1, 2, 3")
+        raise c.fail(
+            f"{path}.legs",
+            "missing or not an array of tables",
+            "three [[" + path + ".legs]] tables, for motors 1, 2, 3",
+        )
     if len(legs_raw) != 3:
-        raise c.fail(f"{path}.legs", f"has {len(legs_raw)} legs",
-                     "exactly three, for motors 1, 2, 3")
+        raise c.fail(
+            f"{path}.legs", f"has {len(legs_raw)} legs", "exactly three, for motors 1, 2, 3"
+        )
     legs = []
     for i, leg in enumerate(legs_raw):
         lp = f"{path}.legs[{i + 1}]"
@@ -313,8 +334,14 @@ def _kinematics(c: _Checker, sec: dict, path: str) -> KinematicParams:
         for k in ("guide_radius", "strut_length", "platform_radius"):
             if vals[k] <= 0:
                 raise c.fail(f"{lp}.{k}", f"is {vals[k]:g}", "a length > 0")
-        vals.update({k: c.number(leg, k, lp, 0.0, lo=-45.0, hi=45.0)
-                     if k != "platform_z" else c.number(leg, k, lp, 0.0) for k in LEG_OPTIONAL})
+        vals.update(
+            {
+                k: c.number(leg, k, lp, 0.0, lo=-45.0, hi=45.0)
+                if k != "platform_z"
+                else c.number(leg, k, lp, 0.0)
+                for k in LEG_OPTIONAL
+            }
+        )
         legs.append(Leg(**vals))
     return KinematicParams(tool_length, (legs[0], legs[1], legs[2]), ox, oy)
 
@@ -345,8 +372,11 @@ def _axis_comp(c: _Checker, entries: Any) -> tuple[AxisComp, ...]:
         # moves backwards when commanded forwards.
         for name, err in (("forward", fwd), ("reverse", rev)):
             if len(pos) > 1 and np.any(np.diff(err) / np.diff(pos) <= -0.5):
-                raise c.fail(f"{p}.{name}", "changes faster than -0.5 mm per mm",
-                             "a positioning error table (small, slowly varying)")
+                raise c.fail(
+                    f"{p}.{name}",
+                    "changes faster than -0.5 mm per mm",
+                    "a positioning error table (small, slowly varying)",
+                )
         out.append(AxisComp(m, pos, fwd, rev))
     return tuple(sorted(out, key=lambda a: a.motor))
 
@@ -411,8 +441,20 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         was expected.
     """
     c = _Checker(source)
-    known = {"machine", "work", "kinematics", "table", "axis_comp", "controller_kinematics",
-             "motors", "tools", "error_map", "provenance", "effects", *DEFAULTS}
+    known = {
+        "machine",
+        "work",
+        "kinematics",
+        "table",
+        "axis_comp",
+        "controller_kinematics",
+        "motors",
+        "tools",
+        "error_map",
+        "provenance",
+        "effects",
+        *DEFAULTS,
+    }
     c.unknown(doc, known, "")
     machine = c.table(doc, "machine", "", False) or {}
     name = c.string(machine, "name", "machine", "unnamed machine")
@@ -440,8 +482,11 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     bow = c.vector(esec, "guide_bow", "effects", 3, [0.0, 0.0, 0.0])
     straight = c.vector(esec, "table_straightness", "effects", 2, [0.0, 0.0])
     lag = c.vector(esec, "servo_lag_ms", "effects", 5, [0.0] * 5)
-    for key, vals, lim in (("guide_bow", bow, 1.0), ("table_straightness", straight, 1.0),
-                           ("servo_lag_ms", lag, 100.0)):
+    for key, vals, lim in (
+        ("guide_bow", bow, 1.0),
+        ("table_straightness", straight, 1.0),
+        ("servo_lag_ms", lag, 100.0),
+    ):
         if np.any(np.abs(vals) > lim):
             raise c.fail(f"effects.{key}", f"is {vals.tolist()}", f"values within ±{lim:g}")
     cyc_raw = esec.get("cyclic", [])
@@ -454,17 +499,32 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         m = c.integer(e, "motor", p)
         if m not in MOTORS:
             raise c.fail(f"{p}.motor", f"is {m}", "one of 1, 2, 3, 5, 6")
-        cyclic.append(Cyclic(m, c.number(e, "amplitude", p, lo=-1.0, hi=1.0),
-                             c.number(e, "period", p, positive=True),
-                             c.number(e, "phase", p, 0.0)))
-    effects = Effects((bow[0], bow[1], bow[2]), (straight[0], straight[1]),
-                      (lag[0], lag[1], lag[2], lag[3], lag[4]), tuple(cyclic))
+        cyclic.append(
+            Cyclic(
+                m,
+                c.number(e, "amplitude", p, lo=-1.0, hi=1.0),
+                c.number(e, "period", p, positive=True),
+                c.number(e, "phase", p, 0.0),
+            )
+        )
+    effects = Effects(
+        (bow[0], bow[1], bow[2]),
+        (straight[0], straight[1]),
+        (lag[0], lag[1], lag[2], lag[3], lag[4]),
+        tuple(cyclic),
+    )
     motors = _motors(c, doc.get("motors"))
 
     sections = {name_: _section_with_defaults(c, doc, name_) for name_ in DEFAULTS}
     limits = sections["limits"]
-    for k in ("max_feed_mm_min", "rapid_mm_min", "rapid_deg_min", "max_accel_mm_s2",
-              "max_accel_deg_s2", "max_time_s"):
+    for k in (
+        "max_feed_mm_min",
+        "rapid_mm_min",
+        "rapid_deg_min",
+        "max_accel_mm_s2",
+        "max_accel_deg_s2",
+        "max_time_s",
+    ):
         if limits[k] <= 0:
             raise c.fail(f"limits.{k}", f"is {limits[k]:g}", "a number > 0")
     period = sections["interpolation"]["period_ms"]
@@ -519,19 +579,27 @@ def _check_reach(prof: Profile) -> None:
     """A geometry whose struts cannot reach the start pose is an error naming the leg."""
     from . import kinematics  # local: kinematics imports this module's types
 
-    for section, kp in (("kinematics", prof.kinematics),
-                        ("controller_kinematics", prof.controller_kinematics)):
+    for section, kp in (
+        ("kinematics", prof.kinematics),
+        ("controller_kinematics", prof.controller_kinematics),
+    ):
         if kp is None:
             continue
-        geo = (kinematics.Geometry.from_params(kp, prof.origin, prof.table, prof.effects)
-               if section == "kinematics" else kinematics.Geometry.from_params(kp, prof.origin))
+        geo = (
+            kinematics.Geometry.from_params(kp, prof.origin, prof.table, prof.effects)
+            if section == "kinematics"
+            else kinematics.Geometry.from_params(kp, prof.origin)
+        )
         q = prof.start[None, :]
         try:
             sol = kinematics.solve_platform(geo, q)
         except Exception as exc:  # degenerate geometry: no solution at all
-            raise ProfileError(f"the platform cannot be placed at the start pose ({exc})",
-                               source=prof.source, key=section,
-                               expected="a 3-PRS geometry close to the nominal design") from None
+            raise ProfileError(
+                f"the platform cannot be placed at the start pose ({exc})",
+                source=prof.source,
+                key=section,
+                expected="a 3-PRS geometry close to the nominal design",
+            ) from None
         disc = kinematics.strut_discriminant(geo, sol)
         for i in range(3):
             if not disc[0, i] >= 0:
@@ -539,8 +607,10 @@ def _check_reach(prof: Profile) -> None:
                 raise ProfileError(
                     f"strut {i + 1} cannot reach the platform at the start pose "
                     f"(it falls short by {short:.3f} mm across the guide)",
-                    source=prof.source, key=f"{section}.legs[{i + 1}].strut_length",
-                    expected="a strut longer than the hinge-to-ball distance across the guide")
+                    source=prof.source,
+                    key=f"{section}.legs[{i + 1}].strut_length",
+                    expected="a strut longer than the hinge-to-ball distance across the guide",
+                )
 
 
 def loads(text: str, source: str = "<profile>") -> Profile:
@@ -557,8 +627,13 @@ def loads(text: str, source: str = "<profile>") -> Profile:
         if m:
             line, col = int(m.group(1)), int(m.group(2))
             msg = msg[: m.start()].strip()
-        raise ProfileError(f"not valid TOML: {msg}", source=source, line=line, column=col,
-                           expected="a TOML profile") from None
+        raise ProfileError(
+            f"not valid TOML: {msg}",
+            source=source,
+            line=line,
+            column=col,
+            expected="a TOML profile",
+        ) from None
     return profile_from_dict(doc, source)
 
 
@@ -589,9 +664,7 @@ def kinematics_to_dict(kp: KinematicParams) -> dict[str, Any]:
         "tool_length": kp.tool_length,
         "tool_offset_x": kp.tool_offset_x,
         "tool_offset_y": kp.tool_offset_y,
-        "legs": [
-            {k: getattr(leg, k) for k in LEG_REQUIRED + LEG_OPTIONAL} for leg in kp.legs
-        ],
+        "legs": [{k: getattr(leg, k) for k in LEG_REQUIRED + LEG_OPTIONAL} for leg in kp.legs],
     }
 
 

@@ -17,8 +17,10 @@ def _mpl() -> Any:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise UsageError("plots need matplotlib, which is not installed",
-                         expected="pip install 'prsxy-post[plot]'") from None
+        raise UsageError(
+            "plots need matplotlib, which is not installed",
+            expected="pip install 'prsxy-post[plot]'",
+        ) from None
     return plt
 
 
@@ -53,9 +55,9 @@ def _ballbar_figure(result: Any, current: Any, data: Any) -> bytes | None:
         ext = np.ptp(rel, axis=0)
         a0, a1 = sorted(np.argsort(ext)[::-1][:2])
         th = np.arctan2(rel[:, a1], rel[:, a0])
-        m = measured[seg.start:seg.stop] * 1000
-        b = before[seg.start:seg.stop] * 1000
-        a = after[seg.start:seg.stop] * 1000
+        m = measured[seg.start : seg.stop] * 1000
+        b = before[seg.start : seg.stop] * 1000
+        a = after[seg.start : seg.stop] * 1000
         span = max(np.ptp(np.concatenate([m, b, a])), 1.0)
         base = span * 1.5  # reference circle radius on the plot [µm]
         ax.plot(th, np.full_like(th, base), color="0.7", lw=0.8, label="reference")
@@ -79,12 +81,11 @@ def _pose_figure(result: Any, current: Any, data: Any) -> bytes | None:
     plt = _mpl()
     measured, segs = data.measured()
     before = measured - dg.predict(current, data, want_columns=False).pred
-    after = measured - dg.predict(profile_from_dict(result.updated), data,
-                                  want_columns=False).pred
+    after = measured - dg.predict(profile_from_dict(result.updated), data, want_columns=False).pred
     seg = next(s for s in segs if s.kind == "pose_tip")
     q = data.poses[0].commanded
-    eb = np.linalg.norm(before[seg.start:seg.stop].reshape(-1, 3), axis=1) * 1000
-    ea = np.linalg.norm(after[seg.start:seg.stop].reshape(-1, 3), axis=1) * 1000
+    eb = np.linalg.norm(before[seg.start : seg.stop].reshape(-1, 3), axis=1) * 1000
+    ea = np.linalg.norm(after[seg.start : seg.stop].reshape(-1, 3), axis=1) * 1000
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.5), sharex=True, sharey=True)
     vmax = float(np.nanmax(eb)) if np.isfinite(eb).any() else 1.0
     for ax, e, title in ((axes[0], eb, "before"), (axes[1], ea, "after")):
@@ -108,29 +109,48 @@ def diagnose_report(result: Any, current: Any, data: Any) -> dict[str, str | byt
         files["poses.png"] = pz
     lines = ["# Diagnosis", "", result.summary, ""]
     j = result.to_json()
-    lines += [f"Residual RMS: {j['rms_before_um']:.3f} µm before, {j['rms_after_um']:.3f} µm "
-              "after; estimated noise: "
-              + ", ".join(f"{k} {v:.3f} {j['noise_units'][k]}" for k, v in j["noise"].items()),
-              ""]
+    lines += [
+        f"Residual RMS: {j['rms_before_um']:.3f} µm before, {j['rms_after_um']:.3f} µm "
+        "after; estimated noise: "
+        + ", ".join(f"{k} {v:.3f} {j['noise_units'][k]}" for k, v in j["noise"].items()),
+        "",
+    ]
     if result.effects:
-        lines += ["| effect | estimate | std. error | unit | cannot be told apart from |",
-                  "|---|---:|---:|---|---|"]
+        lines += [
+            "| effect | estimate | std. error | unit | cannot be told apart from |",
+            "|---|---:|---:|---|---|",
+        ]
         for e in result.effects:
-            lines.append(f"| `{e.name}` | {e.estimate:+.6g} | {e.stderr:.2g} | {e.unit} | "
-                         + (", ".join(f"`{a}`" for a in e.aliases) or "-") + " |")
+            lines.append(
+                f"| `{e.name}` | {e.estimate:+.6g} | {e.stderr:.2g} | {e.unit} | "
+                + (", ".join(f"`{a}`" for a in e.aliases) or "-")
+                + " |"
+            )
         lines.append("")
-    lines += ["## Per run", "", "| file | kind | RMS before | RMS after | max before | max after |",
-              "|---|---|---:|---:|---:|---:|"]
+    lines += [
+        "## Per run",
+        "",
+        "| file | kind | RMS before | RMS after | max before | max after |",
+        "|---|---|---:|---:|---:|---:|",
+    ]
     for r in result.per_run:
-        lines.append(f"| {r['source']} | {r['kind']} | {r['rms_before']:.3f} {r['unit']} | "
-                     f"{r['rms_after']:.3f} {r['unit']} | {r['max_before']:.3f} | "
-                     f"{r['max_after']:.3f} |")
-    lines += ["", "## Where they disagreed most (before)", "",
-              "| file | region | RMS | × noise |", "|---|---|---:|---:|"]
+        lines.append(
+            f"| {r['source']} | {r['kind']} | {r['rms_before']:.3f} {r['unit']} | "
+            f"{r['rms_after']:.3f} {r['unit']} | {r['max_before']:.3f} | "
+            f"{r['max_after']:.3f} |"
+        )
+    lines += [
+        "",
+        "## Where they disagreed most (before)",
+        "",
+        "| file | region | RMS | × noise |",
+        "|---|---|---:|---:|",
+    ]
     for r in result.regions[:12]:
         unit = "arcsec" if r["kind"] == "pose_axis" else "um"
-        lines.append(f"| {r['source']} | {r['region']} | {r[f'rms_{unit}']:.3f} {unit} | "
-                     f"{r['ratio']:.1f} |")
+        lines.append(
+            f"| {r['source']} | {r['region']} | {r[f'rms_{unit}']:.3f} {unit} | {r['ratio']:.1f} |"
+        )
     if "ballbar.png" in files:
         lines += ["", "![ballbar runs: measured and simulated](ballbar.png)"]
     if "poses.png" in files:

@@ -19,8 +19,9 @@ from .profile import Profile
 
 
 def truth_geometry(truth: Profile) -> kinematics.Geometry:
-    return kinematics.Geometry.from_params(truth.kinematics, truth.origin, truth.table,
-                                              truth.effects)
+    return kinematics.Geometry.from_params(
+        truth.kinematics, truth.origin, truth.table, truth.effects
+    )
 
 
 def servo_velocity(P: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -65,8 +66,9 @@ def servo_follow(profile: Profile, c: np.ndarray, t: np.ndarray | None) -> np.nd
     return out
 
 
-def actual_motors(truth: Profile, P_cmd: np.ndarray, *, approach: int | None = None,
-                  t: np.ndarray | None = None) -> np.ndarray:
+def actual_motors(
+    truth: Profile, P_cmd: np.ndarray, *, approach: int | None = None, t: np.ndarray | None = None
+) -> np.ndarray:
     """Where the driven parts end for commands ``P_cmd`` (N, 5) in time order.
 
     approach : None for a continuous motion (play model); +1 or −1 for points
@@ -88,9 +90,15 @@ def actual_motors(truth: Profile, P_cmd: np.ndarray, *, approach: int | None = N
     return out
 
 
-def execute(truth: Profile, P_cmd: np.ndarray, tool_length: np.ndarray | float | None = None,
-            *, approach: int | None = None, guess: np.ndarray | None = None,
-            t: np.ndarray | None = None) -> np.ndarray:
+def execute(
+    truth: Profile,
+    P_cmd: np.ndarray,
+    tool_length: np.ndarray | float | None = None,
+    *,
+    approach: int | None = None,
+    guess: np.ndarray | None = None,
+    t: np.ndarray | None = None,
+) -> np.ndarray:
     """Tool poses q (N, 5) [mm, deg] the truth machine reaches for motor commands.
 
     Raises
@@ -109,17 +117,35 @@ def execute(truth: Profile, P_cmd: np.ndarray, tool_length: np.ndarray | float |
 
 #: Typical manufacturing errors (1 σ) of each contract term, for random machines.
 ERROR_SIGMA = {
-    "guide_radius": 0.05, "guide_angle": 0.02, "guide_height": 0.05, "strut_length": 0.05,
-    "platform_radius": 0.05, "platform_angle": 0.02, "guide_tilt_x": 0.01,
-    "guide_tilt_y": 0.01, "hinge_twist": 0.03, "platform_z": 0.04,
-    "tool_length": 0.04, "tool_offset_x": 0.02, "tool_offset_y": 0.02,
-    "scale_x": 4e-5, "scale_y": 4e-5, "squareness": 1e-4,
+    "guide_radius": 0.05,
+    "guide_angle": 0.02,
+    "guide_height": 0.05,
+    "strut_length": 0.05,
+    "platform_radius": 0.05,
+    "platform_angle": 0.02,
+    "guide_tilt_x": 0.01,
+    "guide_tilt_y": 0.01,
+    "hinge_twist": 0.03,
+    "platform_z": 0.04,
+    "tool_length": 0.04,
+    "tool_offset_x": 0.02,
+    "tool_offset_y": 0.02,
+    "scale_x": 4e-5,
+    "scale_y": 4e-5,
+    "squareness": 1e-4,
 }
 
 
-def random_axis_table(motor: int, rng: np.random.Generator, *, lo: float = -250.0,
-                      hi: float = 250.0, step: float = 10.0, backlash: float = 0.004,
-                      amplitude: float = 0.004) -> dict:
+def random_axis_table(
+    motor: int,
+    rng: np.random.Generator,
+    *,
+    lo: float = -250.0,
+    hi: float = 250.0,
+    step: float = 10.0,
+    backlash: float = 0.004,
+    amplitude: float = 0.004,
+) -> dict:
     """A smooth positioning error with backlash, as a contract [[axis_comp]] entry."""
     pos = np.arange(lo, hi + step / 2, step)
     x = (pos - lo) / (hi - lo)
@@ -131,13 +157,23 @@ def random_axis_table(motor: int, rng: np.random.Generator, *, lo: float = -250.
     bl = abs(rng.normal(backlash, backlash / 4))
     fwd = smooth - bl / 2
     rev = smooth + bl / 2
-    return {"motor": motor, "positions": pos.tolist(), "forward": fwd.tolist(),
-            "reverse": rev.tolist()}
+    return {
+        "motor": motor,
+        "positions": pos.tolist(),
+        "forward": fwd.tolist(),
+        "reverse": rev.tolist(),
+    }
 
 
-def random_machine(base: Profile, rng: np.random.Generator, *, scale: float = 1.0,
-                   axis_errors: bool = False, effects: bool = False,
-                   name: str = "random machine") -> Profile:
+def random_machine(
+    base: Profile,
+    rng: np.random.Generator,
+    *,
+    scale: float = 1.0,
+    axis_errors: bool = False,
+    effects: bool = False,
+    name: str = "random machine",
+) -> Profile:
     """A machine whose every contract term differs from ``base`` by a random error.
 
     Parameters
@@ -151,8 +187,11 @@ def random_machine(base: Profile, rng: np.random.Generator, *, scale: float = 1.
     """
     from .profile import kinematics_to_dict, profile_from_dict
 
-    doc = {k: v for k, v in base.raw.items() if k not in ("kinematics", "table", "axis_comp",
-                                                            "error_map")}
+    doc = {
+        k: v
+        for k, v in base.raw.items()
+        if k not in ("kinematics", "table", "axis_comp", "error_map")
+    }
     kin = kinematics_to_dict(base.kinematics)
     for key in ("tool_length", "tool_offset_x", "tool_offset_y"):
         kin[key] = kin[key] + rng.normal(0, ERROR_SIGMA[key] * scale)
@@ -160,13 +199,17 @@ def random_machine(base: Profile, rng: np.random.Generator, *, scale: float = 1.
         for key in leg:
             leg[key] = leg[key] + rng.normal(0, ERROR_SIGMA[key] * scale)
     doc["kinematics"] = kin
-    doc["table"] = {k: getattr(base.table, k) + rng.normal(0, ERROR_SIGMA[k] * scale)
-                    for k in ("scale_x", "scale_y", "squareness")}
+    doc["table"] = {
+        k: getattr(base.table, k) + rng.normal(0, ERROR_SIGMA[k] * scale)
+        for k in ("scale_x", "scale_y", "squareness")
+    }
     if axis_errors:
         doc["axis_comp"] = [random_axis_table(m, rng) for m in MOTOR_ORDER]
     if effects:
-        doc["effects"] = {"guide_bow": rng.normal(0, 0.01, 3).tolist(),
-                          "table_straightness": rng.normal(0, 0.05, 2).tolist()}
+        doc["effects"] = {
+            "guide_bow": rng.normal(0, 0.01, 3).tolist(),
+            "table_straightness": rng.normal(0, 0.05, 2).tolist(),
+        }
     doc["machine"] = {"name": name}
     return profile_from_dict(doc, f"<{name}>")
 
@@ -180,8 +223,9 @@ def random_machine(base: Profile, rng: np.random.Generator, *, scale: float = 1.
 
 
 def commanded_geometry(commanded: Profile) -> kinematics.Geometry:
-    return kinematics.Geometry.from_params(commanded.kinematics, commanded.origin,
-                                           commanded.table, commanded.effects)
+    return kinematics.Geometry.from_params(
+        commanded.kinematics, commanded.origin, commanded.table, commanded.effects
+    )
 
 
 def _wanted_motors(commanded: Profile, q: np.ndarray, tool_length: float) -> np.ndarray:
@@ -210,8 +254,9 @@ def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -
     return P
 
 
-def motion_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0,
-                    t: np.ndarray | None = None) -> np.ndarray:
+def motion_commands(
+    commanded: Profile, q: np.ndarray, tool_length: float = 0.0, t: np.ndarray | None = None
+) -> np.ndarray:
     """Motor commands for a continuous motion through poses q at times t (time order)."""
     P = _wanted_motors(commanded, q, tool_length)
     tables = axiscomp.profile_tables(commanded)
@@ -221,8 +266,14 @@ def motion_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0,
     return servo_lead(commanded, P, t)
 
 
-def measure_poses(truth: Profile, commanded: Profile, q: np.ndarray, rng: np.random.Generator,
-                  noise_um: float = 1.0, noise_deg: float = 0.0003) -> np.ndarray:
+def measure_poses(
+    truth: Profile,
+    commanded: Profile,
+    q: np.ndarray,
+    rng: np.random.Generator,
+    noise_um: float = 1.0,
+    noise_deg: float = 0.0003,
+) -> np.ndarray:
     """Measured tip and axis (N, 5) [mm, deg] at commanded poses q (N, 5)."""
     P = pose_commands(commanded, q)
     meas = execute(truth, P, approach=+1)
@@ -231,9 +282,16 @@ def measure_poses(truth: Profile, commanded: Profile, q: np.ndarray, rng: np.ran
     return meas
 
 
-def measure_ballbar(truth: Profile, commanded: Profile, q: np.ndarray, t: np.ndarray,
-                    pivot: np.ndarray, length: float, rng: np.random.Generator,
-                    noise_um: float = 0.5) -> np.ndarray:
+def measure_ballbar(
+    truth: Profile,
+    commanded: Profile,
+    q: np.ndarray,
+    t: np.ndarray,
+    pivot: np.ndarray,
+    length: float,
+    rng: np.random.Generator,
+    noise_um: float = 0.5,
+) -> np.ndarray:
     """Ballbar reading dev_um (N,) along a commanded motion q (N, 5) at times t."""
     P = motion_commands(commanded, q, t=t)
     tip = execute(truth, P, t=t)[:, :3]
@@ -241,8 +299,14 @@ def measure_ballbar(truth: Profile, commanded: Profile, q: np.ndarray, t: np.nda
     return dev + rng.normal(0, noise_um, len(dev))
 
 
-def measure_axis(truth: Profile, motor: int, targets: np.ndarray, runs: int,
-                 rng: np.random.Generator, noise_um: float = 0.3) -> np.ndarray:
+def measure_axis(
+    truth: Profile,
+    motor: int,
+    targets: np.ndarray,
+    runs: int,
+    rng: np.random.Generator,
+    noise_um: float = 0.3,
+) -> np.ndarray:
     """Laser runs per ISO 230-2: rows (motor, target, measured, direction, run).
 
     Each run goes up through the targets then down, no compensation active: the
@@ -255,14 +319,23 @@ def measure_axis(truth: Profile, motor: int, targets: np.ndarray, runs: int,
         for direction, seq in ((1, targets), (-1, targets[::-1])):
             reached = axiscomp.approach(t, seq, direction)
             reached = reached + rng.normal(0, noise_um * 1e-3, len(seq))
-            rows += [(motor, float(a), float(b), direction, run)
-                     for a, b in zip(seq, reached, strict=True)]
+            rows += [
+                (motor, float(a), float(b), direction, run)
+                for a, b in zip(seq, reached, strict=True)
+            ]
     return np.array(rows, dtype=float)
 
 
-def ballbar_gcode(radius: float, *, plane: str = "XY", ccw: bool = True, tilt_deg: float = 0.0,
-                  feed: float = 1000.0, pivot: tuple[float, float, float] = (0.0, 0.0, 0.0),
-                  chord_tol_mm: float = 2e-5) -> str:
+def ballbar_gcode(
+    radius: float,
+    *,
+    plane: str = "XY",
+    ccw: bool = True,
+    tilt_deg: float = 0.0,
+    feed: float = 1000.0,
+    pivot: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    chord_tol_mm: float = 2e-5,
+) -> str:
     """A ballbar test program: a full circle about the pivot, from and back to rest.
 
     XY circles without tilt are one G2/G3; tilted ("cone") circles keep the tool
@@ -272,34 +345,46 @@ def ballbar_gcode(radius: float, *, plane: str = "XY", ccw: bool = True, tilt_de
     """
     px, py, pz = pivot
     d = "G3" if ccw else "G2"
-    out = [f"(ballbar {plane} r{radius:g} {'ccw' if ccw else 'cw'} tilt {tilt_deg:g})",
-           "G21 G90 G94"]
+    out = [
+        f"(ballbar {plane} r{radius:g} {'ccw' if ccw else 'cw'} tilt {tilt_deg:g})",
+        "G21 G90 G94",
+    ]
     if plane == "XY" and tilt_deg == 0.0:
-        out += ["G17", f"G0 X{px + radius:.6f} Y{py:.6f} Z{pz:.6f} A0 B0",
-                f"{d} X{px + radius:.6f} Y{py:.6f} I{-radius:.6f} J0 F{feed:g}"]
+        out += [
+            "G17",
+            f"G0 X{px + radius:.6f} Y{py:.6f} Z{pz:.6f} A0 B0",
+            f"{d} X{px + radius:.6f} Y{py:.6f} I{-radius:.6f} J0 F{feed:g}",
+        ]
     elif plane == "XY":
         sgn = 1 if ccw else -1
         segments = int(np.ceil(np.pi / np.arccos(1.0 - chord_tol_mm / radius)))
         th = sgn * np.linspace(0, 2 * np.pi, segments + 1)
-        ax = np.stack([np.sin(np.radians(tilt_deg)) * np.cos(th),
-                       np.sin(np.radians(tilt_deg)) * np.sin(th),
-                       np.full_like(th, np.cos(np.radians(tilt_deg)))], -1)
+        ax = np.stack(
+            [
+                np.sin(np.radians(tilt_deg)) * np.cos(th),
+                np.sin(np.radians(tilt_deg)) * np.sin(th),
+                np.full_like(th, np.cos(np.radians(tilt_deg))),
+            ],
+            -1,
+        )
         a, b = kinematics.angles_from_axis(ax)
         a, b = np.round(a, 6) + 0.0, np.round(b, 6) + 0.0
         x = px + radius * np.cos(th)
         y = py + radius * np.sin(th)
         out.append(f"G0 X{x[0]:.6f} Y{y[0]:.6f} Z{pz:.6f} A{a[0]:.6f} B{b[0]:.6f}")
         out.append(f"F{feed:g}")
-        out += [f"G1 X{x[k]:.6f} Y{y[k]:.6f} A{a[k]:.6f} B{b[k]:.6f}"
-                for k in range(1, len(th))]
+        out += [f"G1 X{x[k]:.6f} Y{y[k]:.6f} A{a[k]:.6f} B{b[k]:.6f}" for k in range(1, len(th))]
     elif plane in ("XZ", "YZ"):
         code, first = ("G18", "X") if plane == "XZ" else ("G19", "Y")
         c0 = px if plane == "XZ" else py
         off = "I" if plane == "XZ" else "J"
         # G18: positive rotation is counter-clockwise seen from +Y (Z towards X)
-        out += [code, f"G0 {first}{c0 + radius:.6f} {'Y' if plane == 'XZ' else 'X'}"
-                f"{(py if plane == 'XZ' else px):.6f} Z{pz:.6f} A0 B0",
-                f"{d} {first}{c0 + radius:.6f} Z{pz:.6f} {off}{-radius:.6f} K0 F{feed:g}"]
+        out += [
+            code,
+            f"G0 {first}{c0 + radius:.6f} {'Y' if plane == 'XZ' else 'X'}"
+            f"{(py if plane == 'XZ' else px):.6f} Z{pz:.6f} A0 B0",
+            f"{d} {first}{c0 + radius:.6f} Z{pz:.6f} {off}{-radius:.6f} K0 F{feed:g}",
+        ]
     else:
         raise ValueError(f"unknown ballbar plane {plane!r}")
     out.append("M2")

@@ -50,9 +50,14 @@ class Iso2302Figures:
     accuracy_A: float
 
 
-def _per_target(motor: np.ndarray, target: np.ndarray, measured: np.ndarray,
-                direction: np.ndarray, run: np.ndarray, m: int
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+def _per_target(
+    motor: np.ndarray,
+    target: np.ndarray,
+    measured: np.ndarray,
+    direction: np.ndarray,
+    run: np.ndarray,
+    m: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
     sel = motor == m
     t = target[sel]
     dev = measured[sel] - t
@@ -66,8 +71,9 @@ def _per_target(motor: np.ndarray, target: np.ndarray, measured: np.ndarray,
         if len(up) < 2 or len(dn) < 2:
             raise MeasurementError(
                 f"motor {m} at {x:g} mm has {len(up)} + and {len(dn)} − approaches",
-                key=f"motor {m}", expected="at least 2 runs in each direction (ISO 230-2 "
-                "asks for 5)")
+                key=f"motor {m}",
+                expected="at least 2 runs in each direction (ISO 230-2 asks for 5)",
+            )
         mf.append(up.mean())
         mr.append(dn.mean())
         sf.append(up.std(ddof=1))
@@ -75,8 +81,13 @@ def _per_target(motor: np.ndarray, target: np.ndarray, measured: np.ndarray,
     return targets, np.array(mf), np.array(mr), np.array(sf), np.array(sr), runs
 
 
-def tables_from_axis(motor: np.ndarray, target: np.ndarray, measured: np.ndarray,
-                     direction: np.ndarray, run: np.ndarray) -> list[AxisTable]:
+def tables_from_axis(
+    motor: np.ndarray,
+    target: np.ndarray,
+    measured: np.ndarray,
+    direction: np.ndarray,
+    run: np.ndarray,
+) -> list[AxisTable]:
     """The contract's [[axis_comp]] table of every motor in the runs."""
     out = []
     for m in sorted({int(x) for x in np.unique(motor)}):
@@ -85,24 +96,36 @@ def tables_from_axis(motor: np.ndarray, target: np.ndarray, measured: np.ndarray
     return out
 
 
-def iso230_2(motor: np.ndarray, target: np.ndarray, measured: np.ndarray,
-             direction: np.ndarray, run: np.ndarray) -> dict[int, Iso2302Figures]:
+def iso230_2(
+    motor: np.ndarray,
+    target: np.ndarray,
+    measured: np.ndarray,
+    direction: np.ndarray,
+    run: np.ndarray,
+) -> dict[int, Iso2302Figures]:
     """ISO 230-2 bidirectional figures per motor (module docstring)."""
     out = {}
     for m in sorted({int(x) for x in np.unique(motor)}):
-        targets, mf, mr, sf, sr, runs = _per_target(motor, target, measured, direction,
-                                                    run, m)
+        targets, mf, mr, sf, sr, runs = _per_target(motor, target, measured, direction, run, m)
         b = mf - mr
         mean_bi = (mf + mr) / 2
         r_i = np.maximum(2 * sf + 2 * sr + np.abs(b), np.maximum(4 * sf, 4 * sr))
         out[m] = Iso2302Figures(
-            motor=m, n_runs=runs, targets=targets, mean_forward=mf, mean_reverse=mr,
-            reversal_B=float(np.max(np.abs(b))), mean_reversal=float(np.mean(b)),
+            motor=m,
+            n_runs=runs,
+            targets=targets,
+            mean_forward=mf,
+            mean_reverse=mr,
+            reversal_B=float(np.max(np.abs(b))),
+            mean_reversal=float(np.mean(b)),
             systematic_E=float(max(mf.max(), mr.max()) - min(mf.min(), mr.min())),
             range_M=float(mean_bi.max() - mean_bi.min()),
             repeatability_R=float(r_i.max()),
-            accuracy_A=float(max((mf + 2 * sf).max(), (mr + 2 * sr).max())
-                             - min((mf - 2 * sf).min(), (mr - 2 * sr).min())))
+            accuracy_A=float(
+                max((mf + 2 * sf).max(), (mr + 2 * sr).max())
+                - min((mf - 2 * sf).min(), (mr - 2 * sr).min())
+            ),
+        )
     return out
 
 
@@ -131,24 +154,35 @@ def _comp_rows(text: str, source: str) -> list[tuple[int, list[float]]]:
             continue
         parts = s.split()
         if len(parts) != 3:
-            raise MeasurementError(f"{len(parts)} numbers on the line", source=source, line=n,
-                                   expected="three numbers: nominal, forward, reverse")
+            raise MeasurementError(
+                f"{len(parts)} numbers on the line",
+                source=source,
+                line=n,
+                expected="three numbers: nominal, forward, reverse",
+            )
         try:
             vals = [float(p) for p in parts]
         except ValueError:
-            raise MeasurementError(f"not a number in {s!r}", source=source, line=n,
-                                   expected="three numbers") from None
+            raise MeasurementError(
+                f"not a number in {s!r}", source=source, line=n, expected="three numbers"
+            ) from None
         if not all(np.isfinite(vals)):
-            raise MeasurementError("a value is not finite", source=source, line=n,
-                                   expected="finite numbers")
+            raise MeasurementError(
+                "a value is not finite", source=source, line=n, expected="finite numbers"
+            )
         rows.append((n, vals))
     if len(rows) < 2:
-        raise MeasurementError(f"{len(rows)} table rows", source=source,
-                               expected="at least two rows")
+        raise MeasurementError(
+            f"{len(rows)} table rows", source=source, expected="at least two rows"
+        )
     for (_, a), (n1, b) in itertools.pairwise(rows):
         if b[0] <= a[0]:
-            raise MeasurementError("nominal positions do not ascend", source=source, line=n1,
-                                   expected="ascending nominal positions")
+            raise MeasurementError(
+                "nominal positions do not ascend",
+                source=source,
+                line=n1,
+                expected="ascending nominal positions",
+            )
     return rows
 
 
@@ -174,8 +208,9 @@ def format_linuxcnc_comp(table: AxisTable, *, file_type: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-def format_pmac_comp(table: AxisTable, *, motor: int, counts_per_mm: float,
-                     entries: int | None = None) -> str:
+def format_pmac_comp(
+    table: AxisTable, *, motor: int, counts_per_mm: float, entries: int | None = None
+) -> str:
     """A Turbo PMAC leadscrew table (and backlash size) for one motor (see above).
 
     A PMAC table covers 0 .. L and rolls over, so a table over [p_min, p_max] with
@@ -185,8 +220,9 @@ def format_pmac_comp(table: AxisTable, *, motor: int, counts_per_mm: float,
     p_min, p_max = float(min(table.positions[0], 0.0)), float(table.positions[-1])
     span = p_max - p_min
     if span <= 0:
-        raise MeasurementError(f"motor {motor}: table ends at {p_max:g} mm",
-                               expected="positions reaching above 0 mm")
+        raise MeasurementError(
+            f"motor {motor}: table ends at {p_max:g} mm", expected="positions reaching above 0 mm"
+        )
     n = entries or (len(table.positions) - 1)
     s = np.arange(1, n + 1) * span / n
     pos = np.where(s <= p_max + 1e-9, s, s - span)
@@ -194,15 +230,18 @@ def format_pmac_comp(table: AxisTable, *, motor: int, counts_per_mm: float,
     back = float(np.mean(table.reverse - table.forward))
     corr = np.round(-mean * counts_per_mm * 16).astype(int)
     length = round(span * counts_per_mm)
-    lines = [f"; motor {motor}: leadscrew compensation, 1/16 count, written by prsxy-post",
-             f"DEFINE COMP {n},#{motor},#{motor},{length}"]
-    lines += [" ".join(str(c) for c in corr[i:i + 8]) for i in range(0, n, 8)]
+    lines = [
+        f"; motor {motor}: leadscrew compensation, 1/16 count, written by prsxy-post",
+        f"DEFINE COMP {n},#{motor},#{motor},{length}",
+    ]
+    lines += [" ".join(str(c) for c in corr[i : i + 8]) for i in range(0, n, 8)]
     lines.append(f"I{motor}86={round(back * counts_per_mm * 16)} ; backlash size, 1/16 count")
     return "\n".join(lines) + "\n"
 
 
-def read_pmac_comp(text: str, source: str, *, counts_per_mm: float,
-                   max_position: float | None = None) -> list[AxisTable]:
+def read_pmac_comp(
+    text: str, source: str, *, counts_per_mm: float, max_position: float | None = None
+) -> list[AxisTable]:
     """Tables written by :func:`format_pmac_comp` (or by hand in that form) read back.
 
     ``max_position``: the highest motor position the table serves [mm]; entries past
@@ -220,8 +259,9 @@ def read_pmac_comp(text: str, source: str, *, counts_per_mm: float,
             backlash[int(m.group(1))] = int(m.group(2)) / 16 / counts_per_mm
     k = 0
     while k < len(lines):
-        m = re.match(r"\s*DEFINE\s+COMP\s+(\d+)\s*,\s*#(\d+)\s*,\s*#(\d+)\s*,\s*(\d+)",
-                     lines[k], re.I)
+        m = re.match(
+            r"\s*DEFINE\s+COMP\s+(\d+)\s*,\s*#(\d+)\s*,\s*#(\d+)\s*,\s*(\d+)", lines[k], re.I
+        )
         if not m:
             k += 1
             continue
@@ -233,20 +273,26 @@ def read_pmac_comp(text: str, source: str, *, counts_per_mm: float,
             try:
                 vals += [int(v) for v in body]
             except ValueError:
-                raise MeasurementError("not a whole number in a DEFINE COMP table",
-                                       source=source, line=k + 1,
-                                       expected="entries in 1/16 count") from None
+                raise MeasurementError(
+                    "not a whole number in a DEFINE COMP table",
+                    source=source,
+                    line=k + 1,
+                    expected="entries in 1/16 count",
+                ) from None
             k += 1
         if len(vals) != n_entries:
-            raise MeasurementError(f"{len(vals)} entries", source=source, line=k,
-                                   expected=f"{n_entries} entries after DEFINE COMP")
+            raise MeasurementError(
+                f"{len(vals)} entries",
+                source=source,
+                line=k,
+                expected=f"{n_entries} entries after DEFINE COMP",
+            )
         span = length / counts_per_mm
         s = np.arange(1, n_entries + 1) * span / n_entries
         corr = np.array(vals, dtype=float) / 16 / counts_per_mm
         # the last entry also stands for zero (the table rolls over); a table written
         # for a travel below zero holds the negative positions past its middle
-        p_max = float(np.max(s[s <= span / 2 + 1e-9])) if max_position is None \
-            else max_position
+        p_max = float(np.max(s[s <= span / 2 + 1e-9])) if max_position is None else max_position
         pos = np.where(s <= p_max + 1e-9, s, s - span)
         pos = np.concatenate([[0.0], pos])
         mean = -np.concatenate([[corr[-1]], corr])
@@ -257,6 +303,7 @@ def read_pmac_comp(text: str, source: str, *, counts_per_mm: float,
         b = backlash.get(motor, 0.0)
         out.append(AxisTable(motor, pos, mean - b / 2, mean + b / 2))
     if not out:
-        raise MeasurementError("no DEFINE COMP table", source=source,
-                               expected="DEFINE COMP n,#m,#m,L and its entries")
+        raise MeasurementError(
+            "no DEFINE COMP table", source=source, expected="DEFINE COMP n,#m,#m,L and its entries"
+        )
     return out

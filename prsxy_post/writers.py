@@ -61,9 +61,16 @@ def _header(prov: Provenance, profile: Profile, extra: Sequence[str]) -> list[st
 
 
 def _empty_chunk() -> PointChunk:
-    return PointChunk(*(np.zeros((0, 5)) if f in ("q", "q_target", "P_ideal", "P_cmd")
-                        else np.zeros(0, dtype=bool) if f == "first" else np.zeros(0)
-                        for f in PointChunk.__dataclass_fields__))
+    return PointChunk(
+        *(
+            np.zeros((0, 5))
+            if f in ("q", "q_target", "P_ideal", "P_cmd")
+            else np.zeros(0, dtype=bool)
+            if f == "first"
+            else np.zeros(0)
+            for f in PointChunk.__dataclass_fields__
+        )
+    )
 
 
 class _Lookahead:
@@ -73,8 +80,9 @@ class _Lookahead:
         self.buf: PointChunk | None = None
         self.prev: tuple[np.ndarray, float] | None = None  # (P, dt) of the last point out
 
-    def push(self, chunk: PointChunk, final: bool
-             ) -> tuple[PointChunk, np.ndarray, np.ndarray] | None:
+    def push(
+        self, chunk: PointChunk, final: bool
+    ) -> tuple[PointChunk, np.ndarray, np.ndarray] | None:
         """Points now complete, their PVT velocities, and whether each ends its block."""
         buf = chunk if self.buf is None else PointChunk.concat([self.buf, chunk])
         n = len(buf)
@@ -144,15 +152,22 @@ class PmacWriter:
         ]
         lines = ["; " + x for x in _header(self.prov, self.profile, setup)]
         if self.max_pts:
-            lines.append(f"; part {self.part + 1}: run the parts in order; each starts where "
-                         "the previous one ended")
+            lines.append(
+                f"; part {self.part + 1}: run the parts in order; each starts where "
+                "the previous one ended"
+            )
         lines += ["CLOSE", f"&{self.cs}"]
-        lines += [f"#{m}->{self.profile.motor(m).counts_per_mm:g}{self.profile.motor(m).axis}"
-                  for m in MOTOR_ORDER]
+        lines += [
+            f"#{m}->{self.profile.motor(m).counts_per_mm:g}{self.profile.motor(m).axis}"
+            for m in MOTOR_ORDER
+        ]
         if self.rot:
-            lines += [f"DEFINE ROT {self.rot}",
-                      f"; stream the lines below into the rotary buffer (B0 R), at most "
-                      f"{self.rot} points ahead", "OPEN ROT"]
+            lines += [
+                f"DEFINE ROT {self.rot}",
+                f"; stream the lines below into the rotary buffer (B0 R), at most "
+                f"{self.rot} points ahead",
+                "OPEN ROT",
+            ]
         else:
             lines.append(f"OPEN PROG {self.prog + self.part} CLEAR")
         lines += ["ABS", "RAPID " + self.pos_fmt % tuple(_round(P0, self.dec)), "DWELL0"]
@@ -252,13 +267,20 @@ class GcodeWriter:
         self.fmt = " ".join(f"{a}%.{self.dec}f" for a in "XYZAB")
 
     def begin(self) -> list[Piece]:
-        ck = ("profile [controller_kinematics]" if self.profile.controller_kinematics
-              else "the nominal design")
-        extra = [f"For a controller whose inverse kinematics is {ck}, with an ideal table.",
-                 "Run with no tool length offset (G49) and no work offset: tool lengths and",
-                 "offsets are in the points. Timing is G93 inverse time per segment."]
-        lines = ["%"] + ["(" + x.replace("(", "[").replace(")", "]") + ")"
-                         for x in _header(self.prov, self.profile, extra)]
+        ck = (
+            "profile [controller_kinematics]"
+            if self.profile.controller_kinematics
+            else "the nominal design"
+        )
+        extra = [
+            f"For a controller whose inverse kinematics is {ck}, with an ideal table.",
+            "Run with no tool length offset (G49) and no work offset: tool lengths and",
+            "offsets are in the points. Timing is G93 inverse time per segment.",
+        ]
+        lines = ["%"] + [
+            "(" + x.replace("(", "[").replace(")", "]") + ")"
+            for x in _header(self.prov, self.profile, extra)
+        ]
         lines.append("G21 G90 G17 G40 G49 G94")
         return [(0, "\n".join(lines) + "\n")]
 
@@ -266,14 +288,17 @@ class GcodeWriter:
         """FK of the controller's geometry at the motor commands, warm-started."""
         from .errors import ReachError
 
-        guess = kinematics.platform_guess(kinematics.solve_platform(self.cgeo, chunk.q_target),
-                                          chunk.q_target)
+        guess = kinematics.platform_guess(
+            kinematics.solve_platform(self.cgeo, chunk.q_target), chunk.q_target
+        )
         q, ok = kinematics.forward(self.cgeo, chunk.P_cmd, guess=guess)
         if not np.all(ok):
             k = int(np.argmin(ok))
-            raise ReachError("the controller's kinematics cannot express this point",
-                             line=int(chunk.line[k]),
-                             expected="a pose within reach of [controller_kinematics]")
+            raise ReachError(
+                "the controller's kinematics cannot express this point",
+                line=int(chunk.line[k]),
+                expected="a pose within reach of [controller_kinematics]",
+            )
         return q
 
     def feed(self, chunk: PointChunk, final: bool = False) -> list[Piece]:
@@ -296,8 +321,12 @@ class GcodeWriter:
                 self.last_line = int(chunk.line[k])
             dtk = float(chunk.dt[k])
             self.t_total += dtk
-            standing = self.last_q is not None and np.array_equal(qk, self.last_q) \
-                and chunk.speed[k] == 0 and not self.run
+            standing = (
+                self.last_q is not None
+                and np.array_equal(qk, self.last_q)
+                and chunk.speed[k] == 0
+                and not self.run
+            )
             if standing:
                 lines.append(f"G4 P{dtk:.4f}")
                 continue
@@ -355,8 +384,18 @@ def _collect(writer: PmacWriter | GcodeWriter, chunk: PointChunk) -> list[str]:
 def _chunk_of(result: ChainResult) -> PointChunk:
     s = result.samples
     t = result.t if len(result.t) == len(s) else np.cumsum(s.dt)
-    return PointChunk(s.q, s.dt, t, s.line, s.first, s.tool_length, s.speed, result.q_target,
-                      result.P_ideal, result.P_cmd)
+    return PointChunk(
+        s.q,
+        s.dt,
+        t,
+        s.line,
+        s.first,
+        s.tool_length,
+        s.speed,
+        result.q_target,
+        result.P_ideal,
+        result.P_cmd,
+    )
 
 
 def write_pmac(result: ChainResult, profile: Profile, prov: Provenance) -> list[str]:
@@ -364,7 +403,8 @@ def write_pmac(result: ChainResult, profile: Profile, prov: Provenance) -> list[
     return _collect(PmacWriter(profile, prov), _chunk_of(result))
 
 
-def write_gcode(result: ChainResult, profile: Profile, prov: Provenance,
-                tolerance_mm: float = 0.0) -> str:
+def write_gcode(
+    result: ChainResult, profile: Profile, prov: Provenance, tolerance_mm: float = 0.0
+) -> str:
     """Whole corrected G-code in memory."""
     return _collect(GcodeWriter(profile, prov, tolerance_mm), _chunk_of(result))[0]

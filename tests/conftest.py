@@ -24,8 +24,9 @@ def read_vector_csv(path: Path) -> dict[str, np.ndarray]:
 
 @pytest.fixture(scope="session")
 def nominal() -> profile_mod.Profile:
-    return profile_mod.loads((ROOT / "profiles" / "prsxy-nominal.toml").read_text(),
-                             "prsxy-nominal.toml")
+    return profile_mod.loads(
+        (ROOT / "profiles" / "prsxy-nominal.toml").read_text(), "prsxy-nominal.toml"
+    )
 
 
 @pytest.fixture(scope="session")

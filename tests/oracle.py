@@ -39,9 +39,14 @@ class OracleResult:
     error: str | None
 
 
-def run(program_text: str, offsets: dict[int, tuple[float, ...]] | None = None,
-        g28: tuple[float, ...] = (0, 0, 0, 0, 0), g30: tuple[float, ...] = (0, 0, 0, 0, 0),
-        tools: dict[int, float] | None = None, timeout: float = 60.0) -> OracleResult:
+def run(
+    program_text: str,
+    offsets: dict[int, tuple[float, ...]] | None = None,
+    g28: tuple[float, ...] = (0, 0, 0, 0, 0),
+    g30: tuple[float, ...] = (0, 0, 0, 0, 0),
+    tools: dict[int, float] | None = None,
+    timeout: float = 60.0,
+) -> OracleResult:
     """Interpret a program with rs274; offsets/positions in mm (converted to its inches)."""
     assert RS274 is not None
     with tempfile.TemporaryDirectory() as d:
@@ -63,8 +68,13 @@ def run(program_text: str, offsets: dict[int, tuple[float, ...]] | None = None,
         with open(tbl, "w") as fh:
             for n, length in (tools or {}).items():
                 fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D0 ;\n")
-        proc = subprocess.run([RS274, "-t", tbl, "-v", var, "-g", prog], capture_output=True,
-                              text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+        proc = subprocess.run(
+            [RS274, "-t", tbl, "-v", var, "-g", prog],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            stdin=subprocess.DEVNULL,
+        )
     return parse(proc.stdout + proc.stderr)
 
 
@@ -98,14 +108,18 @@ def parse(out: str) -> OracleResult:
             feed = vals[0]
         elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
             x, y, z, a, b = vals[:5]
-            end = (x * scale + offset[0], y * scale + offset[1], z * scale + offset[2],
-                   a + offset[3], b + offset[4])
+            end = (
+                x * scale + offset[0],
+                y * scale + offset[1],
+                z * scale + offset[2],
+                a + offset[3],
+                b + offset[4],
+            )
             kind = "rapid" if name == "STRAIGHT_TRAVERSE" else "feed"
             # the feed is in length units per minute when X, Y or Z move, else deg/min
             moved = math.dist(end[:3], last[:3]) > 1e-9 or end[3:] == last[3:]
             f = feed * (scale if moved else 1.0)
-            motions.append(OracleMotion(i, kind, end, None if kind == "rapid" else f,
-                                        scale=scale))
+            motions.append(OracleMotion(i, kind, end, None if kind == "rapid" else f, scale=scale))
             last = end
         elif name == "ARC_FEED":
             e1, e2, c1, c2, rot, ax, a, b = vals[:8]
@@ -115,11 +129,11 @@ def parse(out: str) -> OracleResult:
             cen = [0.0] * 3
             end[idx[0]], end[idx[1]], end[idx[2]] = e1, e2, ax
             cen[idx[0]], cen[idx[1]], cen[idx[2]] = c1, c2, ax
-            end5 = (*(end[k] * scale + offset[k] for k in range(3)), a + offset[3],
-                    b + offset[4])
+            end5 = (*(end[k] * scale + offset[k] for k in range(3)), a + offset[3], b + offset[4])
             center = tuple(cen[k] * scale + offset[k] for k in range(3))
-            motions.append(OracleMotion(i, "arc", end5, feed * scale, plane, center, int(rot),
-                                        scale=scale))
+            motions.append(
+                OracleMotion(i, "arc", end5, feed * scale, plane, center, int(rot), scale=scale)
+            )
             last = end5
         elif name == "DWELL":
             p = motions[-1].end if motions else None

@@ -11,35 +11,50 @@ from prsxy_post import kinematics, simulate
 from prsxy_post.profile import MOTORS, Profile
 
 
-def circle(radius: float, tilt: float, sign: int, feed: float = 1000.0) -> tuple[np.ndarray,
-                                                                                  np.ndarray]:
+def circle(
+    radius: float, tilt: float, sign: int, feed: float = 1000.0
+) -> tuple[np.ndarray, np.ndarray]:
     """A full circle about the origin at constant feed, tool tilted outward by ``tilt``."""
     period = 2 * np.pi * radius / (feed / 60.0)
     t = np.arange(0.0, period + 1e-9, 0.01)
     th = sign * 2 * np.pi * t / period
-    ax = np.stack([np.sin(np.radians(tilt)) * np.cos(th), np.sin(np.radians(tilt)) * np.sin(th),
-                   np.full_like(th, np.cos(np.radians(tilt)))], -1)
+    ax = np.stack(
+        [
+            np.sin(np.radians(tilt)) * np.cos(th),
+            np.sin(np.radians(tilt)) * np.sin(th),
+            np.full_like(th, np.cos(np.radians(tilt))),
+        ],
+        -1,
+    )
     a, b = kinematics.angles_from_axis(ax)
     q = np.column_stack([radius * np.cos(th), radius * np.sin(th), np.zeros_like(th), a, b])
     return q, t
 
 
 def random_poses(rng: np.random.Generator, n: int) -> np.ndarray:
-    return np.column_stack([rng.uniform(-150, 150, (n, 2)), rng.uniform(-60, 40, n),
-                            rng.uniform(-25, 25, (n, 2))])
+    return np.column_stack(
+        [rng.uniform(-150, 150, (n, 2)), rng.uniform(-60, 40, n), rng.uniform(-25, 25, (n, 2))]
+    )
 
 
-def campaign(truth: Profile, commanded: Profile, rng: np.random.Generator, *,
-             n_poses: int = 200, radii: tuple[float, ...] = (50.0, 100.0),
-             tilts: tuple[float, ...] = (0.0, 5.0, 15.0), axis: bool = False,
-             bb_noise: float = 0.5, pose_noise: float = 1.0) -> tuple[list, list, list]:
+def campaign(
+    truth: Profile,
+    commanded: Profile,
+    rng: np.random.Generator,
+    *,
+    n_poses: int = 200,
+    radii: tuple[float, ...] = (50.0, 100.0),
+    tilts: tuple[float, ...] = (0.0, 5.0, 15.0),
+    axis: bool = False,
+    bb_noise: float = 0.5,
+    pose_noise: float = 1.0,
+) -> tuple[list, list, list]:
     """Poses, ballbar runs and (optionally) laser runs, as measure-like objects."""
     poses = []
     if n_poses:
         q = random_poses(rng, n_poses)
         m = simulate.measure_poses(truth, commanded, q, rng, pose_noise)
-        poses.append(SimpleNamespace(source="poses.csv", commanded=q, tip=m[:, :3],
-                                     axis=m[:, 3:]))
+        poses.append(SimpleNamespace(source="poses.csv", commanded=q, tip=m[:, :3], axis=m[:, 3:]))
     runs = []
     for r in radii:
         for tilt in tilts:
@@ -47,16 +62,34 @@ def campaign(truth: Profile, commanded: Profile, rng: np.random.Generator, *,
                 continue
             for sign in (1, -1):
                 q, t = circle(r, tilt, sign)
-                dev = simulate.measure_ballbar(truth, commanded, q, t, np.zeros(3), r, rng,
-                                               bb_noise)
+                dev = simulate.measure_ballbar(
+                    truth, commanded, q, t, np.zeros(3), r, rng, bb_noise
+                )
                 name = f"r{r:g} tilt{tilt:g} {'ccw' if sign > 0 else 'cw'}"
-                runs.append(SimpleNamespace(source=name + ".csv", name=name, t=t, commanded=q,
-                                            pivot=np.zeros(3), length=r, dev_um=dev))
+                runs.append(
+                    SimpleNamespace(
+                        source=name + ".csv",
+                        name=name,
+                        t=t,
+                        commanded=q,
+                        pivot=np.zeros(3),
+                        length=r,
+                        dev_um=dev,
+                    )
+                )
     laser = []
     if axis:
-        rows = np.vstack([simulate.measure_axis(truth, m, np.linspace(-200, 200, 21), 5, rng)
-                          for m in MOTORS])
-        laser.append(SimpleNamespace(source="axis.csv", motor=rows[:, 0].astype(int),
-                                     target=rows[:, 1], measured=rows[:, 2],
-                                     direction=rows[:, 3].astype(int), run=rows[:, 4].astype(int)))
+        rows = np.vstack(
+            [simulate.measure_axis(truth, m, np.linspace(-200, 200, 21), 5, rng) for m in MOTORS]
+        )
+        laser.append(
+            SimpleNamespace(
+                source="axis.csv",
+                motor=rows[:, 0].astype(int),
+                target=rows[:, 1],
+                measured=rows[:, 2],
+                direction=rows[:, 3].astype(int),
+                run=rows[:, 4].astype(int),
+            )
+        )
     return poses, runs, laser

@@ -44,8 +44,9 @@ def _play_loop(t: AC.MotorTable, p: np.ndarray) -> np.ndarray:
 def test_scan_equals_recursion_and_compensation_inverts_it(seed: int, n: int) -> None:
     rng = np.random.default_rng(seed)
     comp = simulate.random_axis_table(5, rng, backlash=0.01)
-    t = AC.MotorTable.from_comp(profile_mod.AxisComp(5, *(np.array(comp[k]) for k in (
-        "positions", "forward", "reverse"))))
+    t = AC.MotorTable.from_comp(
+        profile_mod.AxisComp(5, *(np.array(comp[k]) for k in ("positions", "forward", "reverse")))
+    )
     # a motion with reversals, stops and excursions beyond the table
     wanted = np.cumsum(rng.normal(0, 20, n) * (rng.random(n) > 0.2))
     y = AC.play_model(t, wanted)

@@ -11,10 +11,21 @@ from prsxy_post import measure
 from .conftest import DATA
 
 
-def run(r: float, ccw: bool, rng: np.random.Generator, *, sx: float = 0.0, sy: float = 0.0,
-        sq: float = 0.0, backlash: tuple[float, float] = (0.0, 0.0), lag_ms: float = 0.0,
-        cyc: tuple[float, int] = (0.0, 0), noise: float = 0.3, feed: float = 1000.0,
-        centre: tuple[float, float] = (0.0, 0.0)) -> measure.BallbarRun:
+def run(
+    r: float,
+    ccw: bool,
+    rng: np.random.Generator,
+    *,
+    sx: float = 0.0,
+    sy: float = 0.0,
+    sq: float = 0.0,
+    backlash: tuple[float, float] = (0.0, 0.0),
+    lag_ms: float = 0.0,
+    cyc: tuple[float, int] = (0.0, 0),
+    noise: float = 0.3,
+    feed: float = 1000.0,
+    centre: tuple[float, float] = (0.0, 0.0),
+) -> measure.BallbarRun:
     """A circle on an X-Y table with the contract's table errors, measured exactly."""
     omega = feed / 60.0 / r
     t = np.arange(0, 2 * np.pi / omega, 0.01)
@@ -29,8 +40,7 @@ def run(r: float, ccw: bool, rng: np.random.Generator, *, sx: float = 0.0, sy: f
     dev += cyc[0] * np.sin(cyc[1] * th) + rng.normal(0, noise, len(t))
     q = np.column_stack([x, y, np.zeros((len(t), 3))])
     name = f"xy r{r:g} {'ccw' if ccw else 'cw'}"
-    return measure.BallbarRun(name + ".csv", name, np.zeros(3), r, t, q, dev,
-                              np.arange(len(t)), {})
+    return measure.BallbarRun(name + ".csv", name, np.zeros(3), r, t, q, dev, np.arange(len(t)), {})
 
 
 def test_squareness_and_scale_mismatch_are_recovered() -> None:
@@ -54,8 +64,9 @@ def test_clean_run_reports_nothing_beyond_noise() -> None:
 
 def test_backlash_centre_and_cyclic() -> None:
     rng = np.random.default_rng(3)
-    res = bb.analyse_run(run(50.0, True, rng, backlash=(6.0, 3.0), cyc=(1.5, 12),
-                             centre=(20.0, -10.0)))
+    res = bb.analyse_run(
+        run(50.0, True, rng, backlash=(6.0, 3.0), cyc=(1.5, 12), centre=(20.0, -10.0))
+    )
     assert res.backlash_um == pytest.approx((6.0, 3.0), abs=0.3)
     assert res.cyclic_order == 12 and res.cyclic_um == pytest.approx(1.5, abs=0.2)
     assert res.centre_offset_um == pytest.approx((-20.0, 10.0), abs=0.5)
@@ -65,8 +76,7 @@ def test_servo_mismatch_flips_with_direction_and_the_pair_separates_it() -> None
     rng = np.random.default_rng(4)
     runs = [run(100.0, ccw, rng, sq=1e-4, lag_ms=2.0, feed=2000.0) for ccw in (True, False)]
     results, pairs = bb.analyse_runs(runs)
-    assert results[0].squareness_mm_per_m != pytest.approx(results[1].squareness_mm_per_m,
-                                                           abs=0.01)
+    assert results[0].squareness_mm_per_m != pytest.approx(results[1].squareness_mm_per_m, abs=0.01)
     (p,) = pairs
     assert p.squareness_mm_per_m == pytest.approx(0.1, abs=0.003)
     assert abs(p.servo_mismatch_ms) == pytest.approx(2.0, rel=0.1)

@@ -11,8 +11,7 @@ from prsxy_post import profile as profile_mod
 from .synthetic import campaign, random_poses
 
 
-def _tip_error(truth: profile_mod.Profile, prof: profile_mod.Profile, q: np.ndarray
-               ) -> np.ndarray:
+def _tip_error(truth: profile_mod.Profile, prof: profile_mod.Profile, q: np.ndarray) -> np.ndarray:
     """|tip − wanted| [mm] when the truth machine is commanded by ``prof`` (each pose
     approached from +, as the contract's pose measurement)."""
     qa = simulate.execute(truth, simulate.pose_commands(prof, q), approach=+1)
@@ -47,15 +46,17 @@ def test_kinematic_parameters_recovered(nominal: profile_mod.Profile, seed: int)
 
 def test_ballbar_alone_calibrates_the_table(nominal: profile_mod.Profile) -> None:
     """The paper's X-Y table case: X-Y circles only identify squareness and scales."""
-    doc = dict(nominal.raw, table={"scale_x": 3e-4, "scale_y": -3.4e-4,
-                                   "squareness": 1.349e-4})
+    doc = dict(nominal.raw, table={"scale_x": 3e-4, "scale_y": -3.4e-4, "squareness": 1.349e-4})
     truth = profile_mod.profile_from_dict(doc)
     rng = np.random.default_rng(4)
     _, runs, _ = campaign(truth, nominal, rng, n_poses=0, radii=(40.0, 90.0), tilts=(0.0,))
     theta, fit, _, _ = calibrate.stage_kinematics(nominal, nominal, [], [], runs)
     names = calibrate.PARAMS
-    for key, want in (("table.squareness", 1.349e-4), ("table.scale_x", 3e-4),
-                      ("table.scale_y", -3.4e-4)):
+    for key, want in (
+        ("table.squareness", 1.349e-4),
+        ("table.scale_x", 3e-4),
+        ("table.scale_y", -3.4e-4),
+    ):
         j = names.index(key)
         assert fit.identified[j], key
         assert theta[j] == pytest.approx(want, abs=1e-6), key  # 0.001 mm/m

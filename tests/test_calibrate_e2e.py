@@ -20,8 +20,9 @@ from prsxy_post import profile as profile_mod
 from .conftest import ROOT
 
 
-def _calibrate(nominal: profile_mod.Profile, truth: profile_mod.Profile, seed: int
-               ) -> profile_mod.Profile:
+def _calibrate(
+    nominal: profile_mod.Profile, truth: profile_mod.Profile, seed: int
+) -> profile_mod.Profile:
     rng = np.random.default_rng(seed)
     files = experiments.measurement_files(truth, nominal, rng, n_poses=400)
     data = [measure.read_measurement(text, name) for name, text in files.items()]
@@ -31,17 +32,22 @@ def _calibrate(nominal: profile_mod.Profile, truth: profile_mod.Profile, seed: i
     tables, _ = calibrate.stage_tables(nominal, axis)
     theta, _, obs, _ = calibrate.stage_kinematics(nominal, nominal, tables, poses, runs)
     doc = calibrate.apply_theta(nominal.raw, theta)
-    doc["axis_comp"] = [{"motor": t.motor, "positions": t.positions.tolist(),
-                         "forward": t.forward.tolist(), "reverse": t.reverse.tolist()}
-                        for t in tables]
+    doc["axis_comp"] = [
+        {
+            "motor": t.motor,
+            "positions": t.positions.tolist(),
+            "forward": t.forward.tolist(),
+            "reverse": t.reverse.tolist(),
+        }
+        for t in tables
+    ]
     cal = profile_mod.profile_from_dict(doc)
     emap, _ = calibrate.stage_error_map(cal, theta, obs, rng, {})
     doc["error_map"] = emap.to_dict()
     return profile_mod.profile_from_dict(doc)
 
 
-def _trace_error(truth: profile_mod.Profile, prof: profile_mod.Profile, program: str
-                 ) -> float:
+def _trace_error(truth: profile_mod.Profile, prof: profile_mod.Profile, program: str) -> float:
     text = (ROOT / "samples" / program).read_text()
     ms = gcode.interpret(text, chain.interpreter_config(prof))
     res = chain.run_chain(ms, prof, error_map=errormap.from_profile(prof))
@@ -51,10 +57,10 @@ def _trace_error(truth: profile_mod.Profile, prof: profile_mod.Profile, program:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [7, 8, 9])
-def test_calibrated_profile_traces_within_2_5_um(nominal: profile_mod.Profile,
-                                                 seed: int) -> None:
-    truth = simulate.random_machine(nominal, np.random.default_rng(seed), axis_errors=True,
-                                    effects=True, name=f"seeded {seed}")
+def test_calibrated_profile_traces_within_2_5_um(nominal: profile_mod.Profile, seed: int) -> None:
+    truth = simulate.random_machine(
+        nominal, np.random.default_rng(seed), axis_errors=True, effects=True, name=f"seeded {seed}"
+    )
     cal = _calibrate(nominal, truth, seed)
     for program in ("pocket.ngc", "five-axis.ngc"):
         before = _trace_error(truth, nominal, program)

@@ -39,13 +39,25 @@ CASES = [(s, fmt, SHOP) for s in SAMPLES for fmt in ("pmac", "gcode")]
 CASES += [(s, "pmac", PERTURBED) for s in ("pocket.ngc", "five-axis.ngc")]
 
 
-@pytest.mark.parametrize(("sample", "fmt", "prof"), CASES,
-                         ids=[f"{s}-{f}-{Path(p).stem}" for s, f, p in CASES])
-def test_golden_outputs(runner: CliRunner, tmp_path: Path, sample: str, fmt: str,
-                        prof: str) -> None:
+@pytest.mark.parametrize(
+    ("sample", "fmt", "prof"), CASES, ids=[f"{s}-{f}-{Path(p).stem}" for s, f, p in CASES]
+)
+def test_golden_outputs(
+    runner: CliRunner, tmp_path: Path, sample: str, fmt: str, prof: str
+) -> None:
     out = tmp_path / "out.txt"
-    r = invoke(runner, "convert", f"samples/{sample}", "--profile", prof, "--format", fmt,
-               "-o", str(out), "--quiet")
+    r = invoke(
+        runner,
+        "convert",
+        f"samples/{sample}",
+        "--profile",
+        prof,
+        "--format",
+        fmt,
+        "-o",
+        str(out),
+        "--quiet",
+    )
     assert r.exit_code == 0, r.output
     golden = GOLDEN / f"{Path(sample).stem}.{Path(prof).stem}.{fmt}"
     got = out.read_text()
@@ -71,16 +83,35 @@ def test_streamed_output_equals_one_shot(tmp_path: Path) -> None:
         outs = []
         for chunk in (3, 1_000_000):
             out = tmp_path / f"{sample}.{chunk}.pmc"
-            convert_file(ConvertJob(f"samples/{sample}", SHOP if "drill" in sample else
-                                    PERTURBED, "pmac", str(out), None, (True, True, True), "",
-                                    chunk=chunk))
+            convert_file(
+                ConvertJob(
+                    f"samples/{sample}",
+                    SHOP if "drill" in sample else PERTURBED,
+                    "pmac",
+                    str(out),
+                    None,
+                    (True, True, True),
+                    "",
+                    chunk=chunk,
+                )
+            )
             outs.append(out.read_bytes())
         assert outs[0] == outs[1], sample
 
 
 def test_batch_with_jobs(runner: CliRunner, tmp_path: Path) -> None:
-    r = invoke(runner, "convert", *[f"samples/{s}" for s in SAMPLES], "--profile", SHOP,
-               "--out-dir", str(tmp_path), "--jobs", "2", "--quiet")
+    r = invoke(
+        runner,
+        "convert",
+        *[f"samples/{s}" for s in SAMPLES],
+        "--profile",
+        SHOP,
+        "--out-dir",
+        str(tmp_path),
+        "--jobs",
+        "2",
+        "--quiet",
+    )
     assert r.exit_code == 0, r.output
     for s in SAMPLES:
         got = (tmp_path / f"{Path(s).stem}.pmc").read_text()
@@ -91,10 +122,20 @@ def test_stdout_and_split_programs(runner: CliRunner, tmp_path: Path) -> None:
     r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP)
     assert r.exit_code == 0 and "OPEN PROG 1 CLEAR" in r.output
     prof = tmp_path / "split.toml"
-    prof.write_text((ROOT / SHOP).read_text().replace("max_points_per_program = 0",
-                                                     "max_points_per_program = 500"))
-    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", str(prof), "-o",
-               str(tmp_path / "p.pmc"))
+    prof.write_text(
+        (ROOT / SHOP)
+        .read_text()
+        .replace("max_points_per_program = 0", "max_points_per_program = 500")
+    )
+    r = invoke(
+        runner,
+        "convert",
+        "samples/pocket.ngc",
+        "--profile",
+        str(prof),
+        "-o",
+        str(tmp_path / "p.pmc"),
+    )
     assert r.exit_code == 0, r.output
     parts = sorted(tmp_path.glob("p.part*.pmc"))
     assert len(parts) >= 3
@@ -149,10 +190,10 @@ BAD_PROGRAMS = [
 ]
 
 
-@pytest.mark.parametrize(("text", "where", "what"), BAD_PROGRAMS,
-                         ids=[b[2] for b in BAD_PROGRAMS])
+@pytest.mark.parametrize(("text", "where", "what"), BAD_PROGRAMS, ids=[b[2] for b in BAD_PROGRAMS])
 def test_bad_programs_fail_cleanly_and_keep_the_old_output(
-        runner: CliRunner, tmp_path: Path, text: str, where: str, what: str) -> None:
+    runner: CliRunner, tmp_path: Path, text: str, where: str, what: str
+) -> None:
     prog = tmp_path / "bad.ngc"
     prog.write_text(text)
     out = tmp_path / "out.pmc"
@@ -174,21 +215,32 @@ def test_binary_file(runner: CliRunner, tmp_path: Path) -> None:
 
 def test_bad_profile_names_the_key(runner: CliRunner, tmp_path: Path) -> None:
     prof = tmp_path / "p.toml"
-    prof.write_text((ROOT / SHOP).read_text().replace("strut_length = 400.0", "strut_length = -1",
-                                                      1))
-    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", str(prof), "-o",
-               str(tmp_path / "o.pmc"))
+    prof.write_text(
+        (ROOT / SHOP).read_text().replace("strut_length = 400.0", "strut_length = -1", 1)
+    )
+    r = invoke(
+        runner,
+        "convert",
+        "samples/pocket.ngc",
+        "--profile",
+        str(prof),
+        "-o",
+        str(tmp_path / "o.pmc"),
+    )
     assert r.exit_code == 1
     assert "kinematics.legs[1].strut_length" in r.output
     _no_traceback(r.output)
 
 
-@pytest.mark.parametrize("args", [
-    ["convert", "samples/pocket.ngc", "samples/drill.ngc", "--profile", SHOP, "-o", "x"],
-    ["convert", "samples/pocket.ngc", "--profile", SHOP, "--start", "1,2"],
-    ["convert", "samples/pocket.ngc", "--profile", SHOP, "--format", "dxf"],
-    ["convert", "samples/pocket.ngc"],
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["convert", "samples/pocket.ngc", "samples/drill.ngc", "--profile", SHOP, "-o", "x"],
+        ["convert", "samples/pocket.ngc", "--profile", SHOP, "--start", "1,2"],
+        ["convert", "samples/pocket.ngc", "--profile", SHOP, "--format", "dxf"],
+        ["convert", "samples/pocket.ngc"],
+    ],
+)
 def test_usage_errors_exit_2(runner: CliRunner, args: list[str]) -> None:
     r = runner.invoke(main, args)
     assert r.exit_code == 2, r.output
@@ -203,8 +255,9 @@ def test_missing_file(runner: CliRunner) -> None:
 def test_calibrate_refuses_to_overwrite_its_input(runner: CliRunner, tmp_path: Path) -> None:
     prof = tmp_path / "p.toml"
     prof.write_text((ROOT / SHOP).read_text())
-    r = invoke(runner, "calibrate", "tests/data/spec/poses.csv", "--profile", str(prof), "-o",
-               str(prof))
+    r = invoke(
+        runner, "calibrate", "tests/data/spec/poses.csv", "--profile", str(prof), "-o", str(prof)
+    )
     assert r.exit_code == 2 and "--in-place" in r.output
     assert prof.read_text() == (ROOT / SHOP).read_text()
 
@@ -233,8 +286,9 @@ NUMERIC = [
 
 
 @pytest.mark.parametrize(("text", "where", "what"), NUMERIC, ids=[n[2] for n in NUMERIC])
-def test_numeric_hygiene(runner: CliRunner, tmp_path: Path, text: str, where: str,
-                         what: str) -> None:
+def test_numeric_hygiene(
+    runner: CliRunner, tmp_path: Path, text: str, where: str, what: str
+) -> None:
     prog = tmp_path / "n.ngc"
     prog.write_text(text)
     out = tmp_path / "o.pmc"
@@ -258,9 +312,18 @@ def test_in_place_keeps_a_backup(runner: CliRunner, tmp_path: Path) -> None:
     prof = tmp_path / "p.toml"
     original = (ROOT / SHOP).read_text()
     prof.write_text(original)
-    r = invoke(runner, "calibrate", *sorted(str(p) for p in (ROOT / "tests/data/spec").glob(
-        "*.csv")), "--profile", str(prof), "-o", str(prof), "--in-place",
-        "--commanded-with", "tests/data/vectors/nominal.toml")
+    r = invoke(
+        runner,
+        "calibrate",
+        *sorted(str(p) for p in (ROOT / "tests/data/spec").glob("*.csv")),
+        "--profile",
+        str(prof),
+        "-o",
+        str(prof),
+        "--in-place",
+        "--commanded-with",
+        "tests/data/vectors/nominal.toml",
+    )
     assert r.exit_code == 0, r.output
     assert (tmp_path / "p.toml.bak").read_text() == original
     assert prof.read_text() != original
@@ -272,18 +335,21 @@ def _gcode_rejections() -> list[tuple[str, str, str]]:
     return REJECT
 
 
-@pytest.mark.parametrize(("text", "where", "what"), _gcode_rejections(),
-                         ids=[r[2][:30] for r in _gcode_rejections()])
-def test_every_gcode_rejection_through_the_cli(runner: CliRunner, tmp_path: Path, text: str,
-                                               where: str, what: str) -> None:
+@pytest.mark.parametrize(
+    ("text", "where", "what"), _gcode_rejections(), ids=[r[2][:30] for r in _gcode_rejections()]
+)
+def test_every_gcode_rejection_through_the_cli(
+    runner: CliRunner, tmp_path: Path, text: str, where: str, what: str
+) -> None:
     """Each of the reader's rejections, as a user meets it: exit 1, the file, line and
     column, no traceback, and an existing output left as it was."""
     prog = tmp_path / "t.ngc"
     prog.write_text(text)
     out = tmp_path / "out.pmc"
     out.write_text("precious\n")
-    r = invoke(runner, "convert", str(prog), "--profile", "tests/data/vectors/nominal.toml",
-               "-o", str(out))
+    r = invoke(
+        runner, "convert", str(prog), "--profile", "tests/data/vectors/nominal.toml", "-o", str(out)
+    )
     assert r.exit_code == 1
     assert str(prog) + where.removeprefix("t.ngc") in r.output and what in r.output, r.output
     _no_traceback(r.output)
@@ -298,12 +364,22 @@ def test_gcode_tolerance_reduction_stays_within_it(runner: CliRunner, tmp_path: 
 
     tol = 0.002
     prof = tmp_path / "tol.toml"
-    prof.write_text((ROOT / SHOP).read_text().replace("gcode_tolerance_mm = 0.0",
-                                                     f"gcode_tolerance_mm = {tol}"))
+    prof.write_text(
+        (ROOT / SHOP).read_text().replace("gcode_tolerance_mm = 0.0", f"gcode_tolerance_mm = {tol}")
+    )
     dense, sparse = tmp_path / "d.ngc", tmp_path / "s.ngc"
     for p, out in ((SHOP, dense), (str(prof), sparse)):
-        r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", p, "--format",
-                   "gcode", "-o", str(out))
+        r = invoke(
+            runner,
+            "convert",
+            "samples/pocket.ngc",
+            "--profile",
+            p,
+            "--format",
+            "gcode",
+            "-o",
+            str(out),
+        )
         assert r.exit_code == 0, r.output
     qd, _, _ = read_gcode_points(dense.read_text())
     qs, _, _ = read_gcode_points(sparse.read_text())

@@ -16,9 +16,14 @@ from .synthetic import campaign
 def hide(nominal: profile_mod.Profile, name: str, size: float) -> profile_mod.Profile:
     """The nominal machine with one library member changed by ``size``."""
     doc = copy.deepcopy(nominal.raw)
-    e = diagnose.Effect(name, size, 0.0, diagnose.unit_of(name),
-                        period=10.0 if name.startswith("cyclic") else None,
-                        phase_deg=30.0 if name.startswith("cyclic") else None)
+    e = diagnose.Effect(
+        name,
+        size,
+        0.0,
+        diagnose.unit_of(name),
+        period=10.0 if name.startswith("cyclic") else None,
+        phase_deg=30.0 if name.startswith("cyclic") else None,
+    )
     return profile_mod.profile_from_dict(diagnose.apply_effects(doc, [e], nominal))
 
 
@@ -37,16 +42,18 @@ CASES = [
 ]
 
 
-def _run(current: profile_mod.Profile, truth: profile_mod.Profile, seed: int,
-         axis: bool = False) -> diagnose.Diagnosis:
+def _run(
+    current: profile_mod.Profile, truth: profile_mod.Profile, seed: int, axis: bool = False
+) -> diagnose.Diagnosis:
     rng = np.random.default_rng(seed)
     poses, runs, laser = campaign(truth, current, rng, axis=axis)
     return diagnose.diagnose(current, diagnose.Data.build(current, poses, runs, laser))
 
 
 @pytest.mark.parametrize(("name", "size"), CASES)
-def test_hidden_effect_is_named_sized_and_removed(nominal: profile_mod.Profile, name: str,
-                                                  size: float) -> None:
+def test_hidden_effect_is_named_sized_and_removed(
+    nominal: profile_mod.Profile, name: str, size: float
+) -> None:
     truth = hide(nominal, name, size)
     d = _run(nominal, truth, seed=7)
     assert d.effects, "nothing found"
@@ -56,9 +63,10 @@ def test_hidden_effect_is_named_sized_and_removed(nominal: profile_mod.Profile, 
         assert first.estimate == pytest.approx(size, rel=0.2)
     # the residual comes down to the noise, and a second pass finds nothing more
     assert d.rms_after_um < 1.2 * max(d.noise.get("ballbar", 0), 1e-9) * 1000 + 0.5
-    again = diagnose.diagnose(profile_mod.profile_from_dict(d.updated),
-                              diagnose.Data.build(nominal, *campaign(
-                                  truth, nominal, np.random.default_rng(7))))
+    again = diagnose.diagnose(
+        profile_mod.profile_from_dict(d.updated),
+        diagnose.Data.build(nominal, *campaign(truth, nominal, np.random.default_rng(7))),
+    )
     assert again.effects == []
 
 
@@ -68,15 +76,22 @@ def test_nothing_hidden_names_nothing(nominal: profile_mod.Profile) -> None:
     assert d.rms_after_um == d.rms_before_um
 
 
-@pytest.mark.parametrize(("a", "b", "seed"), [
-    (("kinematics.legs[1].strut_length", -0.03), ("backlash[6]", 0.004), 11),
-    # two legs off in opposite senses tilt the platform much as a third leg off
-    # does: greedy forward selection took that third leg first and never recovered
-    (("kinematics.legs[1].strut_length", -0.03), ("kinematics.legs[2].guide_height", 0.03),
-     5061),
-])
-def test_two_effects_are_both_found(nominal: profile_mod.Profile, a: tuple[str, float],
-                                    b: tuple[str, float], seed: int) -> None:
+@pytest.mark.parametrize(
+    ("a", "b", "seed"),
+    [
+        (("kinematics.legs[1].strut_length", -0.03), ("backlash[6]", 0.004), 11),
+        # two legs off in opposite senses tilt the platform much as a third leg off
+        # does: greedy forward selection took that third leg first and never recovered
+        (
+            ("kinematics.legs[1].strut_length", -0.03),
+            ("kinematics.legs[2].guide_height", 0.03),
+            5061,
+        ),
+    ],
+)
+def test_two_effects_are_both_found(
+    nominal: profile_mod.Profile, a: tuple[str, float], b: tuple[str, float], seed: int
+) -> None:
     truth = hide(hide(nominal, *a), *b)
     d = _run(nominal, truth, seed=seed)
     names = {e.name for e in d.effects} | {x for e in d.effects for x in e.aliases}

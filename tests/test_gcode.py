@@ -79,8 +79,10 @@ def test_inverse_time_feed_is_length_times_f() -> None:
 
 
 def test_arc_ijk_r_turns_and_planes() -> None:
-    ms = run("G21 G17 G0 X10 Y0\nG3 X-10 Y0 I-10 J0 F100\nG2 X10 Y0 R10\n"
-             "G3 X10 Y0 I-10 J0 Z-3 P2\nG18 G2 X20 Z-3 I5 K0\nM2\n")
+    ms = run(
+        "G21 G17 G0 X10 Y0\nG3 X-10 Y0 I-10 J0 F100\nG2 X10 Y0 R10\n"
+        "G3 X10 Y0 I-10 J0 Z-3 P2\nG18 G2 X20 Z-3 I5 K0\nM2\n"
+    )
     a = ms[1]
     assert (a.kind, a.plane, a.rotation) == ("arc", 17, 1)
     assert a.center == pytest.approx((0.0, 0.0, 0.0))
@@ -114,8 +116,12 @@ def test_tool_length_offsets() -> None:
 def test_canned_cycle_expands_like_linuxcnc() -> None:
     ms = run("G21 G0 X0 Y0 Z10\nG99 G81 X5 Y5 Z-2 R1 F100\nM2\n")
     kinds = [(m.kind, m.end[:3]) for m in ms[1:]]
-    assert kinds == [("rapid", (5.0, 5.0, 10.0)), ("rapid", (5.0, 5.0, 1.0)),
-                     ("feed", (5.0, 5.0, -2.0)), ("rapid", (5.0, 5.0, 1.0))]
+    assert kinds == [
+        ("rapid", (5.0, 5.0, 10.0)),
+        ("rapid", (5.0, 5.0, 1.0)),
+        ("feed", (5.0, 5.0, -2.0)),
+        ("rapid", (5.0, 5.0, 1.0)),
+    ]
 
 
 def test_dwell() -> None:
@@ -177,10 +183,55 @@ def test_rejections_name_file_line_column_and_word(text: str, where: str, what: 
 
 # ---------------------------------------------------------------- robustness
 
-WORDS = st.sampled_from(["G0", "G1", "G2", "G3", "G17", "G18", "G19", "G90", "G91", "G20",
-                         "G21", "G81", "G80", "G4", "M3", "M5", "F", "X", "Y", "Z", "A", "B",
-                         "I", "J", "K", "R", "P", "Q", "#", "[", "(", ")", ";", "%", "/", " ",
-                         "\t", "1", "-", ".", "5", "e", "N", "H", "T"])
+WORDS = st.sampled_from(
+    [
+        "G0",
+        "G1",
+        "G2",
+        "G3",
+        "G17",
+        "G18",
+        "G19",
+        "G90",
+        "G91",
+        "G20",
+        "G21",
+        "G81",
+        "G80",
+        "G4",
+        "M3",
+        "M5",
+        "F",
+        "X",
+        "Y",
+        "Z",
+        "A",
+        "B",
+        "I",
+        "J",
+        "K",
+        "R",
+        "P",
+        "Q",
+        "#",
+        "[",
+        "(",
+        ")",
+        ";",
+        "%",
+        "/",
+        " ",
+        "\t",
+        "1",
+        "-",
+        ".",
+        "5",
+        "e",
+        "N",
+        "H",
+        "T",
+    ]
+)
 
 
 @settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -214,8 +265,11 @@ def test_speed_of_the_interpreter() -> None:
     under a second on any machine that runs the suite."""
     import time
 
-    lines = ["G21 G90 G1 F2000"] + [f"G1 X{i * 0.1:.3f} Y{(i % 7) * 0.1:.3f}"
-                                    for i in range(20000)] + ["M2"]
+    lines = (
+        ["G21 G90 G1 F2000"]
+        + [f"G1 X{i * 0.1:.3f} Y{(i % 7) * 0.1:.3f}" for i in range(20000)]
+        + ["M2"]
+    )
     t0 = time.perf_counter()
     n = sum(1 for _ in gcode.iter_motions(lines, CFG))
     assert n == 20001  # "G1 F2000" alone is a zero-length move, as in LinuxCNC

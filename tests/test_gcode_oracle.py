@@ -34,9 +34,13 @@ def _programs() -> list[Path]:
     shared = ROOT.parent / "shared" / "corpus"
     if shared.is_dir():
         # GPL-2.0-only programs stay in ../shared; read them there when it is present
-        files += sorted(p for p in shared.rglob("*") if p.is_file()
-                        and p.suffix.lower() in (".ngc", ".nc", ".gcode", ".tap")
-                        and p.relative_to(shared).parts[0] in ("linuxcnc", "bCNC"))
+        files += sorted(
+            p
+            for p in shared.rglob("*")
+            if p.is_file()
+            and p.suffix.lower() in (".ngc", ".nc", ".gcode", ".tap")
+            and p.relative_to(shared).parts[0] in ("linuxcnc", "bCNC")
+        )
     return files
 
 
@@ -48,8 +52,12 @@ def _require_rs274() -> None:
 
 
 def _ours(text: str) -> tuple[list[gcode.Motion], GCodeError | None]:
-    cfg = gcode.InterpreterConfig(work_offsets=OFFSETS, g28_position=G28, g30_position=G30,
-                                  tool_table={n: gcode.ToolEntry(v) for n, v in TOOLS.items()})
+    cfg = gcode.InterpreterConfig(
+        work_offsets=OFFSETS,
+        g28_position=G28,
+        g30_position=G30,
+        tool_table={n: gcode.ToolEntry(v) for n, v in TOOLS.items()},
+    )
     out: list[gcode.Motion] = []
     try:
         for m in gcode.iter_motions(gcode.split_lines(text), cfg, "p.ngc"):

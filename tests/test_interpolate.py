@@ -61,8 +61,9 @@ def test_helix_is_exactly_on_its_helix() -> None:
 @pytest.mark.parametrize("chunk", [1, 2, 5, 17])
 def test_planner_streams_like_one_shot(chunk: int) -> None:
     prof = profile_mod.loads((ROOT / "profiles" / "prsxy-shop.toml").read_text(), "shop")
-    ms = gcode.interpret((ROOT / "samples" / "pocket.ngc").read_text(),
-                         chain.interpreter_config(prof))
+    ms = gcode.interpret(
+        (ROOT / "samples" / "pocket.ngc").read_text(), chain.interpreter_config(prof)
+    )
     one = chain.run_chain(ms, prof)
     streamed = chain.run_chain(ms, prof, chunk=chunk)
     assert np.array_equal(one.samples.q, streamed.samples.q)

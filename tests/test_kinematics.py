@@ -27,8 +27,9 @@ def test_inverse_matches_contract_vectors(name: str) -> None:
     r = K.inverse(_geo(prof), q)
     P = np.column_stack([d["p1"], d["p2"], d["p3"], d["p5"], d["p6"]])
     np.testing.assert_allclose(r.P, P, atol=1e-6, rtol=0)
-    np.testing.assert_allclose(r.pose.c, np.column_stack([d["cx"], d["cy"], d["cz"]]),
-                               atol=1e-6, rtol=0)
+    np.testing.assert_allclose(
+        r.pose.c, np.column_stack([d["cx"], d["cy"], d["cz"]]), atol=1e-6, rtol=0
+    )
     np.testing.assert_allclose(np.degrees(r.pose.gamma), d["gamma"], atol=1e-6, rtol=0)
 
 
@@ -53,8 +54,9 @@ def _contract_ik_newton(geo: K.Geometry, q: np.ndarray) -> np.ndarray:
             R = Rab @ K.rot_z(np.array(g))
             s = c + (R @ geo.b.T).T
             T = c + R @ geo.tool
-            return np.concatenate([np.einsum("ij,ij->i", s - geo.g, geo.u),
-                                   [T[2] - geo.origin[2] - z]])
+            return np.concatenate(
+                [np.einsum("ij,ij->i", s - geo.g, geo.u), [T[2] - geo.origin[2] - z]]
+            )
 
         sol = optimize.root(f, np.zeros(4), method="lm", options={"xtol": 1e-14})
         assert np.max(np.abs(f(sol.x))) < 1e-10
@@ -74,21 +76,24 @@ def _contract_ik_newton(geo: K.Geometry, q: np.ndarray) -> np.ndarray:
 
 def test_closed_form_equals_contract_newton(perturbed: profile_mod.Profile) -> None:
     rng = np.random.default_rng(1)
-    q = np.column_stack([rng.uniform(-150, 150, (30, 2)), rng.uniform(-60, 40, 30),
-                         rng.uniform(-25, 25, (30, 2))])
+    q = np.column_stack(
+        [rng.uniform(-150, 150, (30, 2)), rng.uniform(-60, 40, 30), rng.uniform(-25, 25, (30, 2))]
+    )
     geo = _geo(perturbed)
     np.testing.assert_allclose(K.inverse(geo, q).P, _contract_ik_newton(geo, q), atol=1e-8)
 
 
 def _fk_oracle(geo: K.Geometry, P: np.ndarray, guess: np.ndarray) -> np.ndarray:
     """Forward kinematics straight from the contract's six equations, by least squares."""
+
     def res(v: np.ndarray, p: np.ndarray) -> np.ndarray:
         c, A, B, g = v[:3], v[3], v[4], v[5]
         R = K.rot_y(np.array(B)) @ K.rot_x(np.array(A)) @ K.rot_z(np.array(g))
         s = c + (R @ geo.b.T).T
         a = geo.g + p[:3, None] * geo.d
-        return np.concatenate([np.einsum("ij,ij->i", s - geo.g, geo.u),
-                               np.linalg.norm(s - a, axis=1) - geo.L])
+        return np.concatenate(
+            [np.einsum("ij,ij->i", s - geo.g, geo.u), np.linalg.norm(s - a, axis=1) - geo.L]
+        )
 
     out = []
     for p, g0 in zip(P, guess, strict=True):
@@ -106,8 +111,9 @@ def _fk_oracle(geo: K.Geometry, P: np.ndarray, guess: np.ndarray) -> np.ndarray:
 
 def test_forward_matches_independent_solver(perturbed: profile_mod.Profile) -> None:
     rng = np.random.default_rng(2)
-    q = np.column_stack([rng.uniform(-150, 150, (20, 2)), rng.uniform(-60, 40, 20),
-                         rng.uniform(-25, 25, (20, 2))])
+    q = np.column_stack(
+        [rng.uniform(-150, 150, (20, 2)), rng.uniform(-60, 40, 20), rng.uniform(-25, 25, (20, 2))]
+    )
     geo = _geo(perturbed)
     P = K.inverse(geo, q).P
     guess = np.zeros((20, 6))
@@ -119,8 +125,13 @@ def test_forward_matches_independent_solver(perturbed: profile_mod.Profile) -> N
     np.testing.assert_allclose(q_fk, q, atol=1e-9)
 
 
-pose = st.tuples(st.floats(-200, 200), st.floats(-200, 200), st.floats(-80, 60),
-                 st.floats(-30, 30), st.floats(-30, 30))
+pose = st.tuples(
+    st.floats(-200, 200),
+    st.floats(-200, 200),
+    st.floats(-80, 60),
+    st.floats(-30, 30),
+    st.floats(-30, 30),
+)
 
 
 @settings(max_examples=200, deadline=None)
@@ -180,8 +191,9 @@ def test_round_trip_with_effects_beyond_the_contract(qv: tuple[float, ...], seed
 
 
 def test_effects_move_the_tip(nominal: profile_mod.Profile) -> None:
-    doc = dict(nominal.raw, effects={"guide_bow": [0.01, 0.0, 0.0],
-                                     "table_straightness": [0.0, 0.0]})
+    doc = dict(
+        nominal.raw, effects={"guide_bow": [0.01, 0.0, 0.0], "table_straightness": [0.0, 0.0]}
+    )
     bowed = profile_mod.profile_from_dict(doc)
     geo_b = K.Geometry.from_params(bowed.kinematics, bowed.origin, bowed.table, bowed.effects)
     q = np.array([[0.0, 0.0, -100.0, 0.0, 0.0]])

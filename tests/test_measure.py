@@ -18,8 +18,11 @@ EXAMPLES = {p.name: p.read_text() for p in (DATA / "spec").glob("*.csv")}
 @pytest.mark.parametrize("name", sorted(EXAMPLES))
 def test_spec_examples_read_and_round_trip(name: str) -> None:
     m = measure.read_measurement(EXAMPLES[name], name)
-    fmt = {measure.PoseData: measure.format_poses, measure.BallbarRun: measure.format_ballbar,
-           measure.AxisData: measure.format_axis}[type(m)]
+    fmt = {
+        measure.PoseData: measure.format_poses,
+        measure.BallbarRun: measure.format_ballbar,
+        measure.AxisData: measure.format_axis,
+    }[type(m)]
     again = measure.read_measurement(fmt(m), name)
     for field in ("commanded", "tip", "measured", "dev_um", "target"):
         if hasattr(m, field):
@@ -36,21 +39,27 @@ BAD = [
     ("x,y\n1,2\n", "p.csv:1", "no '# kind:' line"),
     ("# kind: laser\nx\n1\n", "p.csv:1", "unknown kind"),
     ("# kind: poses\nx,y,z,a,b,mx,my,mz,ma\n1,2,3,4,5,6,7,8,9\n", "p.csv:2", "missing column 'mb'"),
-    ("# kind: poses\nx,y,z,a,b,mx,my,mz,ma,mb\n1,2,3,4,5,6,7,x,9,9\n", "p.csv:3:8",
-     "mz is 'x'"),
-    ("# kind: poses\nx,y,z,a,b,mx,my,mz,ma,mb\n1,2,3,4,5,6,7,nan,9,9\n", "p.csv:3:8",
-     "mz is nan"),
-    ("# kind: poses\nx,y,z,a,b,mx,my,mz,ma,mb\n1,2,3,4,5,6,7,8,9,\n", "p.csv:3:9",
-     "both be given"),
+    ("# kind: poses\nx,y,z,a,b,mx,my,mz,ma,mb\n1,2,3,4,5,6,7,x,9,9\n", "p.csv:3:8", "mz is 'x'"),
+    ("# kind: poses\nx,y,z,a,b,mx,my,mz,ma,mb\n1,2,3,4,5,6,7,nan,9,9\n", "p.csv:3:8", "mz is nan"),
+    ("# kind: poses\nx,y,z,a,b,mx,my,mz,ma,mb\n1,2,3,4,5,6,7,8,9,\n", "p.csv:3:9", "both be given"),
     ("# kind: poses\nx,y,z,a,b,mx,my,mz,ma,mb\n1,2,3\n", "p.csv:3", "row has 3 cells"),
     ("# kind: poses\nx,y,z,a,b,mx,my,mz,ma,mb\n", "p.csv:2", "0 data rows"),
-    ("# kind: axis\nmotor,target,measured,direction,run\n4,0,0,1,1\n5,0,0,1,1\n",
-     "p.csv:3:1", "motor is 4"),
-    ("# kind: axis\nmotor,target,measured,direction,run\n5,0,0,2,1\n5,0,0,1,1\n",
-     "p.csv:3:4", "direction is 2"),
+    (
+        "# kind: axis\nmotor,target,measured,direction,run\n4,0,0,1,1\n5,0,0,1,1\n",
+        "p.csv:3:1",
+        "motor is 4",
+    ),
+    (
+        "# kind: axis\nmotor,target,measured,direction,run\n5,0,0,2,1\n5,0,0,1,1\n",
+        "p.csv:3:4",
+        "direction is 2",
+    ),
     ("# kind: ballbar\n# length: 50\nt,x,y,z,a,b,dev_um\n", "p.csv:1", "no '# pivot:' line"),
-    ("# kind: ballbar\n# pivot: 0,0,0\n# length: -5\nt,x,y,z,a,b,dev_um\n", "p.csv:3",
-     "length is -5"),
+    (
+        "# kind: ballbar\n# pivot: 0,0,0\n# length: -5\nt,x,y,z,a,b,dev_um\n",
+        "p.csv:3",
+        "length is -5",
+    ),
 ]
 
 
@@ -83,6 +92,6 @@ def test_mutated_files_never_crash(name: str, pos: int, junk: str) -> None:
     text = EXAMPLES[name][:4000]
     pos = min(pos, len(text))
     try:
-        measure.read_measurement(text[:pos] + junk + text[pos + 1:], name)
+        measure.read_measurement(text[:pos] + junk + text[pos + 1 :], name)
     except MeasurementError as exc:
         assert str(exc).startswith(name)

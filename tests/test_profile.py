@@ -52,20 +52,30 @@ def _err(text: str) -> str:
 @pytest.mark.parametrize(
     ("old", "new", "expect"),
     [
-        ("tool_length = 150.0", "tool_lenght = 150.0",
-         "bad.toml: kinematics.tool_lenght: unknown key"),
+        (
+            "tool_length = 150.0",
+            "tool_lenght = 150.0",
+            "bad.toml: kinematics.tool_lenght: unknown key",
+        ),
         ("tool_length = 150.0", 'tool_length = "150"', "kinematics.tool_length: is a string"),
-        ("strut_length = 400.0\nplatform_radius = 100.0\nplatform_angle = 210.0",
-         "strut_length = 100.0\nplatform_radius = 100.0\nplatform_angle = 210.0",
-         "kinematics.legs[2].strut_length: strut 2 cannot reach"),
+        (
+            "strut_length = 400.0\nplatform_radius = 100.0\nplatform_angle = 210.0",
+            "strut_length = 100.0\nplatform_radius = 100.0\nplatform_angle = 210.0",
+            "kinematics.legs[2].strut_length: strut 2 cannot reach",
+        ),
         ("squareness = 0.0", "squareness = nan", "table.squareness: is nan (expected a finite"),
         ("origin = [0.0, 0.0, -150.0]", "origin = [0.0, -150.0]", "work.origin: has 2 values"),
-        ("[machine]", "[limits]\nmax_tilt_deg = -1.0\n[machine]",
-         "limits.max_tilt_deg: is -1"),
-        ("[machine]", "[interpolation]\nperiod_ms = 0.0\n[machine]",
-         "interpolation.period_ms: is 0"),
-        ("guide_radius = 250.0\nguide_angle = 330.0", "guide_angle = 330.0",
-         "kinematics.legs[3].guide_radius: missing key"),
+        ("[machine]", "[limits]\nmax_tilt_deg = -1.0\n[machine]", "limits.max_tilt_deg: is -1"),
+        (
+            "[machine]",
+            "[interpolation]\nperiod_ms = 0.0\n[machine]",
+            "interpolation.period_ms: is 0",
+        ),
+        (
+            "guide_radius = 250.0\nguide_angle = 330.0",
+            "guide_angle = 330.0",
+            "kinematics.legs[3].guide_radius: missing key",
+        ),
     ],
 )
 def test_bad_profiles_name_the_key(old: str, new: str, expect: str) -> None:
@@ -89,8 +99,10 @@ def test_toml_syntax_error_is_located() -> None:
 
 
 def test_axis_comp_must_ascend() -> None:
-    text = NOMINAL_TEXT + "\n[[axis_comp]]\nmotor = 5\npositions = [0.0, -1.0]\n" \
+    text = (
+        NOMINAL_TEXT + "\n[[axis_comp]]\nmotor = 5\npositions = [0.0, -1.0]\n"
         "forward = [0.0, 0.0]\nreverse = [0.0, 0.0]\n"
+    )
     assert "axis_comp[1].positions: is not strictly ascending" in _err(text)
 
 

@@ -15,9 +15,14 @@ from .conftest import ROOT
 TEXT = (ROOT / "profiles" / "prsxy-shop.toml").read_text()
 DOC = tomllib.loads(TEXT)
 
-values = st.one_of(st.none(), st.booleans(), st.integers(-10**6, 10**6),
-                   st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=5),
-                   st.lists(st.floats(-1e3, 1e3), max_size=6))
+values = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(-(10**6), 10**6),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.text(max_size=5),
+    st.lists(st.floats(-1e3, 1e3), max_size=6),
+)
 
 
 def _paths(doc: object, prefix: tuple = ()) -> list[tuple]:
@@ -68,7 +73,7 @@ def test_mutated_documents_give_a_profile_or_a_keyed_error(edits: list) -> None:
 @settings(max_examples=300, deadline=None)
 @given(st.integers(0, len(TEXT) - 1), st.text(max_size=4))
 def test_mutated_text_gives_a_profile_or_a_located_error(pos: int, junk: str) -> None:
-    text = TEXT[:pos] + junk + TEXT[pos + 1:]
+    text = TEXT[:pos] + junk + TEXT[pos + 1 :]
     try:
         profile_mod.loads(text, "fuzz.toml")
     except ProfileError as err:

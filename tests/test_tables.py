@@ -22,21 +22,25 @@ def test_iso230_2_by_hand() -> None:
             rows.append((5, t, t + up[t][run], 1, run + 1))
             rows.append((5, t, t + dn[t][run], -1, run + 1))
     a = np.array(rows)
-    f = tables.iso230_2(a[:, 0].astype(int), a[:, 1], a[:, 2], a[:, 3].astype(int),
-                        a[:, 4].astype(int))[5]
+    f = tables.iso230_2(
+        a[:, 0].astype(int), a[:, 1], a[:, 2], a[:, 3].astype(int), a[:, 4].astype(int)
+    )[5]
     mu = {t: np.mean(up[t]) for t in up}
     md = {t: np.mean(dn[t]) for t in dn}
     su = {t: np.std(up[t], ddof=1) for t in up}
     sd = {t: np.std(dn[t], ddof=1) for t in dn}
     b = {t: mu[t] - md[t] for t in up}
     assert f.reversal_B == pytest.approx(max(abs(v) for v in b.values()))
-    assert f.systematic_E == pytest.approx(max(*mu.values(), *md.values())
-                                           - min(*mu.values(), *md.values()))
-    assert f.repeatability_R == pytest.approx(max(max(2 * su[t] + 2 * sd[t] + abs(b[t]),
-                                                      4 * su[t], 4 * sd[t]) for t in up))
+    assert f.systematic_E == pytest.approx(
+        max(*mu.values(), *md.values()) - min(*mu.values(), *md.values())
+    )
+    assert f.repeatability_R == pytest.approx(
+        max(max(2 * su[t] + 2 * sd[t] + abs(b[t]), 4 * su[t], 4 * sd[t]) for t in up)
+    )
     assert f.accuracy_A == pytest.approx(
         max(max(mu[t] + 2 * su[t], md[t] + 2 * sd[t]) for t in up)
-        - min(min(mu[t] - 2 * su[t], md[t] - 2 * sd[t]) for t in up))
+        - min(min(mu[t] - 2 * su[t], md[t] - 2 * sd[t]) for t in up)
+    )
 
 
 def test_tables_from_the_spec_example_match_the_machine() -> None:
@@ -62,8 +66,9 @@ def _table() -> tables.AxisTable:
 @pytest.mark.parametrize("file_type", [0, 1])
 def test_linuxcnc_round_trip(file_type: int) -> None:
     t = _table()
-    back = tables.read_linuxcnc_comp(tables.format_linuxcnc_comp(t, file_type=file_type),
-                                     "x.comp", file_type=file_type, motor=5)
+    back = tables.read_linuxcnc_comp(
+        tables.format_linuxcnc_comp(t, file_type=file_type), "x.comp", file_type=file_type, motor=5
+    )
     np.testing.assert_allclose(back.positions, t.positions)
     np.testing.assert_allclose(back.forward, t.forward, atol=2e-9)
     np.testing.assert_allclose(back.reverse, t.reverse, atol=2e-9)
@@ -75,10 +80,11 @@ def test_pmac_round_trip_to_the_count() -> None:
     text = tables.format_pmac_comp(t, motor=5, counts_per_mm=10000.0)
     assert "DEFINE COMP 20,#5,#5,4000000" in text and "I586=" in text
     back = tables.read_pmac_comp(text, "x.pmc", counts_per_mm=10000.0)[0]
-    inner = (t.positions > -200)
+    inner = t.positions > -200
     for a, b in ((back.forward, t.forward), (back.reverse, t.reverse)):
-        np.testing.assert_allclose(np.interp(t.positions[inner], back.positions, a), b[inner],
-                                   atol=1 / 16 / 10000 + 1e-12)
+        np.testing.assert_allclose(
+            np.interp(t.positions[inner], back.positions, a), b[inner], atol=1 / 16 / 10000 + 1e-12
+        )
 
 
 def test_bad_table_files_are_located() -> None:

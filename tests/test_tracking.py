@@ -139,8 +139,14 @@ def _moves(m: gcode.Motion) -> bool:
     return m.kind in ("dwell", "arc") or m.start != m.end
 
 
-def check_trace(motions: list[gcode.Motion], q_exec: np.ndarray, dt: np.ndarray,
-                lines: np.ndarray, tool: np.ndarray, rapid_mm_min: float = 10000.0) -> None:
+def check_trace(
+    motions: list[gcode.Motion],
+    q_exec: np.ndarray,
+    dt: np.ndarray,
+    lines: np.ndarray,
+    tool: np.ndarray,
+    rapid_mm_min: float = 10000.0,
+) -> None:
     """Every point on its block's path, every block end reached, speed ≤ F.
 
     Points are matched to the motions of their line in time order: a point belongs
@@ -161,18 +167,25 @@ def check_trace(motions: list[gcode.Motion], q_exec: np.ndarray, dt: np.ndarray,
         j = 0
         for k in sel:
             m = ms[j]
-            d, a = path_distance(m, q_exec[k:k + 1])
+            d, a = path_distance(m, q_exec[k : k + 1])
             worst = max(worst, float(d[0]))
             worst_ab = max(worst_ab, float(a[0]))
-            xyz = np.linalg.norm(np.array(m.end[:3]) - np.array(m.start[:3])) > 1e-9 \
+            xyz = (
+                np.linalg.norm(np.array(m.end[:3]) - np.array(m.start[:3])) > 1e-9
                 or m.kind == "arc"
+            )
             if xyz and m.kind != "dwell":
                 limit[k] = rapid_mm_min if m.kind == "rapid" else m.feed
-            at_end = (np.linalg.norm(q_exec[k, :3] - np.array(m.end[:3])) <= 2 * TOL_MM
-                      and np.abs(q_exec[k, 3:] - np.array(m.end[3:])).max() <= 2 * TOL_DEG)
+            at_end = (
+                np.linalg.norm(q_exec[k, :3] - np.array(m.end[:3])) <= 2 * TOL_MM
+                and np.abs(q_exec[k, 3:] - np.array(m.end[3:])).max() <= 2 * TOL_DEG
+            )
             if m.kind == "dwell":
-                at_end = k + 1 >= len(lines) or lines[k + 1] != ln or \
-                    not np.array_equal(q_exec[k + 1], q_exec[k])
+                at_end = (
+                    k + 1 >= len(lines)
+                    or lines[k + 1] != ln
+                    or not np.array_equal(q_exec[k + 1], q_exec[k])
+                )
             if at_end and j + 1 < len(ms):
                 j += 1
         assert j == len(ms) - 1, f"line {ln}: not every block's end point was reached"
@@ -197,8 +210,9 @@ def _truth(kind: str, seed: int | None) -> profile_mod.Profile:
     nominal = profile_mod.loads((ROOT / "profiles" / "prsxy-shop.toml").read_text(), "shop")
     if seed is None:
         return nominal
-    return simulate.random_machine(nominal, np.random.default_rng(seed), axis_errors=True,
-                                   name=f"random {seed}")
+    return simulate.random_machine(
+        nominal, np.random.default_rng(seed), axis_errors=True, name=f"random {seed}"
+    )
 
 
 def _convert(truth: profile_mod.Profile, path) -> tuple[list[gcode.Motion], chain.ChainResult]:
@@ -225,8 +239,7 @@ def test_pmac_program_traces_the_path(kind: str, seed: int | None, path) -> None
 
 @pytest.mark.parametrize(("kind", "seed"), machines()[:3])
 @pytest.mark.parametrize("path", PROGRAMS, ids=lambda p: p.name)
-def test_gcode_output_through_controller_traces_the_path(kind: str, seed: int | None,
-                                                        path) -> None:
+def test_gcode_output_through_controller_traces_the_path(kind: str, seed: int | None, path) -> None:
     """The controller runs its own IK (here the nominal design) on the written points;
     the true machine executes the resulting motor commands."""
     truth = _truth(kind, seed)

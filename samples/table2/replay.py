@@ -29,9 +29,13 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 RADII = (40, 50, 60, 80, 90)
 # the paper's Table 2: (squareness mm/m, scale mismatch mm) before and after
-PAPER = {40: ((0.1349, 0.0256), (0.0099, 0.0032)), 50: ((0.1295, 0.0320), (0.0099, 0.0028)),
-         60: ((0.1323, 0.0414), (0.0100, 0.00334)), 80: ((0.1334, 0.0630), (0.0102, 0.0038)),
-         90: ((0.1342, 0.0773), (0.0097, 0.0024))}
+PAPER = {
+    40: ((0.1349, 0.0256), (0.0099, 0.0032)),
+    50: ((0.1295, 0.0320), (0.0099, 0.0028)),
+    60: ((0.1323, 0.0414), (0.0100, 0.00334)),
+    80: ((0.1334, 0.0630), (0.0102, 0.0038)),
+    90: ((0.1342, 0.0773), (0.0097, 0.0024)),
+}
 
 
 def cli(*args: str) -> str:
@@ -56,24 +60,56 @@ def main() -> dict[int, tuple[dict, dict]]:
     nominal = str(ROOT / "profiles" / "prsxy-nominal.toml")
     truth = str(HERE / "truth.toml")
     common = ["--radii", radii, "--only-xy", "--poses", "0", "--no-axis-runs"]
-    cli("simulate", "--truth", truth, "--profile", nominal, "-o", str(work / "before"),
-        "--seed", "1", *common)
+    cli(
+        "simulate",
+        "--truth",
+        truth,
+        "--profile",
+        nominal,
+        "-o",
+        str(work / "before"),
+        "--seed",
+        "1",
+        *common,
+    )
     before = pairs(work / "before")
     cal = str(work / "calibrated.toml")
-    cli("calibrate", *sorted(str(p) for p in (work / "before").glob("*.csv")), "--profile",
-        nominal, "-o", cal, "--stages", "kinematics")
-    cli("simulate", "--truth", truth, "--profile", cal, "-o", str(work / "after"), "--seed", "2",
-        *common)
+    cli(
+        "calibrate",
+        *sorted(str(p) for p in (work / "before").glob("*.csv")),
+        "--profile",
+        nominal,
+        "-o",
+        cal,
+        "--stages",
+        "kinematics",
+    )
+    cli(
+        "simulate",
+        "--truth",
+        truth,
+        "--profile",
+        cal,
+        "-o",
+        str(work / "after"),
+        "--seed",
+        "2",
+        *common,
+    )
     after = pairs(work / "after")
-    print("| radius mm | squareness mm/m: paper before | ours before | paper after | ours after "
-          "| scale mismatch mm: paper before | ours before | paper after | ours after |")
+    print(
+        "| radius mm | squareness mm/m: paper before | ours before | paper after | ours after "
+        "| scale mismatch mm: paper before | ours before | paper after | ours after |"
+    )
     print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in RADII:
         (pb, pa) = PAPER[r]
         b, a = before[r], after[r]
-        print(f"| {r} | {pb[0]:.4f} | {b['squareness_mm_per_m']:.4f} | {pa[0]:.4f} | "
-              f"{a['squareness_mm_per_m']:.4f} | {pb[1]:.4f} | {b['scale_mismatch_mm']:.4f} | "
-              f"{pa[1]:.4f} | {a['scale_mismatch_mm']:.5f} |")
+        print(
+            f"| {r} | {pb[0]:.4f} | {b['squareness_mm_per_m']:.4f} | {pa[0]:.4f} | "
+            f"{a['squareness_mm_per_m']:.4f} | {pb[1]:.4f} | {b['scale_mismatch_mm']:.4f} | "
+            f"{pa[1]:.4f} | {a['scale_mismatch_mm']:.5f} |"
+        )
     print(f"\n(files in {work})", file=sys.stderr)
     return {r: (before[r], after[r]) for r in RADII}
 
