@@ -274,16 +274,21 @@ def iter_program_lines(path: str, progress: Callable[[int], None] | None = None)
     Bytes that are not UTF-8 become lone surrogates: harmless in comments, and
     rejected by the parser anywhere else.
     """
+    from . import gcode
+
     with open(path, encoding="utf-8", errors="surrogateescape", newline="") as fh:
         if fh.read(1) != "\ufeff":
             fh.seek(0)
-        n = chars = 0
-        for raw in fh:
-            n += 1
-            chars += len(raw)
-            if progress is not None and n % 20000 == 0:
-                progress(chars)
-            yield raw.rstrip("\r\n")
+
+        def pieces() -> Iterator[str]:
+            chars = 0
+            while piece := fh.read(1 << 18):
+                chars += len(piece)
+                yield piece
+                if progress is not None:
+                    progress(chars)
+
+        yield from gcode.iter_lines(pieces())
 
 
 class _Progress:

@@ -145,6 +145,30 @@ def split_lines(text: str) -> list[str]:
     return text.replace("\r\n", "\n").replace("\r", "\n").split("\n") if text else []
 
 
+def iter_lines(pieces: Iterable[str]) -> Iterator[str]:
+    """Lines without their ends from text that arrives in pieces (a file read in
+    blocks): the same lines as :func:`split_lines` of the whole text, except that a
+    final line end does not start an empty line (as a file's lines are counted).
+    A CR at the end of a piece waits for the next one, which may start with LF.
+    """
+    tail = ""
+    for piece in pieces:
+        text = tail + piece
+        cut = max(text.rfind("\n"), text.rfind("\r", 0, len(text) - 1))
+        if cut < 0:
+            tail = text
+            continue
+        lines = split_lines(text[: cut + 1])
+        lines.pop()  # the empty string after the last line end
+        yield from lines
+        tail = text[cut + 1 :]
+    if tail:
+        lines = split_lines(tail)
+        if lines[-1] == "":
+            lines.pop()
+        yield from lines
+
+
 def _fail(
     msg: str, source: str, line: int, column: int | None, expected: str | None = None
 ) -> GCodeError:
@@ -1159,111 +1183,123 @@ class Interpreter:
             current_cc = clear
 
 
-#: The common CAM block: an optional G0/G1, axis words, an optional F, nothing else.
-_FAST = re.compile(
-    r"\s*(?:[Nn]\s*\d+\s*)?(?:[Gg]\s*0*([01])(?![0-9.])\s*)?((?:[XYZABxyzab]\s*[-+]?(?:\d+\.?\d*|\.\d+)\s*)+)"
-    r"(?:[Ff]\s*([-+]?(?:\d+\.?\d*|\.\d+))\s*)?"
+#: The common CAM block: an optional N, an optional G0/G1, axis words in the order
+#: X Y Z A B (each at most once), an optional F, nothing else. Matched over a whole
+#: batch of lines at once (one match per line: the last group takes any other line).
+_NUM = r"[ \t]*([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))[ \t]*"
+_FAST_LINE = re.compile(
+    r"^[ \t]*(?:[Nn][ \t]*[0-9]+[ \t]*)?(?:[Gg][ \t]*0*([01])(?![0-9.])[ \t]*)?"
+    + "".join(f"(?:[{c}{c.lower()}]{_NUM})?" for c in "XYZABF")
+    + r"($|.*)",
+    re.M,
 )
-_FAST_AXIS = re.compile(r"([XYZABxyzab])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 _ZERO5 = (0.0, 0.0, 0.0, 0.0, 0.0)
-_AXIS_INDEX = {"X": 0, "Y": 1, "Z": 2, "A": 3, "B": 4, "x": 0, "y": 1, "z": 2, "a": 3, "b": 4}
+#: lines matched at once: large enough that the regex runs in C for most of the
+#: time, small enough that a batch is a few hundred kilobytes at most
+_BATCH = 1024
 
 
-def _fast(it: Interpreter, raw: str, n: int) -> bool:
-    """Interpret the common straight-move block without building a Block.
+def _fast(it: Interpreter, words: tuple[str, ...], n: int) -> bool:
+    """Interpret a straight-move block from its matched words, without building a Block.
 
-    Only blocks the full path would accept the same way take it: G0/G1 (or
-    none, with G0/G1 in effect), each axis once, F only in G94; anything else
+    ``words``: the groups of :data:`_FAST_LINE` (G, X, Y, Z, A, B, F, rest). Only
+    blocks the full path would accept the same way take it: G0/G1 (or none, with
+    G0/G1 in effect), F only in G94 and positive for a feed move; anything else
     (and every error) goes the full way, which reports it with its column.
     """
-    m = _FAST.fullmatch(raw)
-    if m is None:
+    g, xs, ys, zs, as_, bs, fs, rest = words
+    if rest or not (xs or ys or zs or as_ or bs):
         return False
     st = it.st
-    g = m.group(1)
-    motion = int(g) if g is not None else st.motion
+    motion = (1 if g == "1" else 0) if g else st.motion
     if motion not in (0, 1) or st.ended or st.inverse_time:
         return False
-    words = _FAST_AXIS.findall(m.group(2))
-    if len(words) > 1:
-        letters = {w[0].upper() for w in words}
-        if len(letters) != len(words):
-            return False
-    f = m.group(3)
-    if f is not None:
-        fv = float(f)
-        if fv < 0:
+    if fs:
+        feed = float(fs)
+        if feed < 0 or (feed == 0 and motion == 1):
             return False
     elif motion == 1 and st.feed <= 0:
         return False
+    else:
+        feed = st.feed
     start = st.pos
-    end = list(start)
     sc = MM_PER_INCH if st.units == "inch" else 1.0
     if st.absolute:
         off = it.cfg.work_offsets.get(st.coord, _ZERO5)
-        for a, v in words:
-            i = _AXIS_INDEX[a]
-            end[i] = float(v) * (sc if i < 3 else 1.0) + off[i]
+        end = (
+            float(xs) * sc + off[0] if xs else start[0],
+            float(ys) * sc + off[1] if ys else start[1],
+            float(zs) * sc + off[2] if zs else start[2],
+            float(as_) + off[3] if as_ else start[3],
+            float(bs) + off[4] if bs else start[4],
+        )
     else:
-        for a, v in words:
-            i = _AXIS_INDEX[a]
-            end[i] = start[i] + float(v) * (sc if i < 3 else 1.0)
-    if f is not None:
-        st.feed = fv
+        end = (
+            start[0] + float(xs) * sc if xs else start[0],
+            start[1] + float(ys) * sc if ys else start[1],
+            start[2] + float(zs) * sc if zs else start[2],
+            start[3] + float(as_) if as_ else start[3],
+            start[4] + float(bs) if bs else start[4],
+        )
+    if fs:
+        st.feed = feed
         st.feed_units = st.units
-        if st.feed <= 0 and motion == 1:
-            return False
-    if g is not None:
+    if g:
         st.motion = motion
         st.cycle_il = None
     it.started = True
-    ts, te = tuple(start), tuple(end)
+    ts = tuple(start)
     if motion == 0:
-        it.out.append(
-            Motion(
-                n,
-                "rapid",
-                ts,
-                te,
-                math.nan,
-                0,
-                None,
-                0,
-                0.0,
-                st.tool_length,
-                st.tool,
-                st.spindle * st.spindle_dir,
-                False,
-            )
-        )
+        rate = math.nan
+        kind = "rapid"
     else:
-        moved = (te[0] - ts[0]) ** 2 + (te[1] - ts[1]) ** 2 + (te[2] - ts[2]) ** 2 > 1e-24
-        rate = st.feed * sc if (moved or te[3:] == ts[3:]) else st.feed
-        it.out.append(
-            Motion(
-                n,
-                "feed",
-                ts,
-                te,
-                rate,
-                0,
-                None,
-                0,
-                0.0,
-                st.tool_length,
-                st.tool,
-                st.spindle * st.spindle_dir,
-                False,
-            )
+        moved = (end[0] - ts[0]) ** 2 + (end[1] - ts[1]) ** 2 + (end[2] - ts[2]) ** 2 > 1e-24
+        rate = feed * sc if (moved or end[3:] == ts[3:]) else feed
+        kind = "feed"
+    it.out.append(
+        Motion(
+            n,
+            kind,
+            ts,
+            end,
+            rate,
+            0,
+            None,
+            0,
+            0.0,
+            st.tool_length,
+            st.tool,
+            st.spindle * st.spindle_dir,
+            False,
         )
-    st.pos = end
+    )
+    st.pos = list(end)
     return True
 
 
+def _batches(lines: Iterable[str]) -> Iterator[list[str]]:
+    batch: list[str] = []
+    for raw in lines:
+        batch.append(raw)
+        if len(batch) == _BATCH:
+            yield batch
+            batch = []
+    if batch:
+        yield batch
+
+
 def iter_motions(
-    lines: Iterable[str], config: InterpreterConfig | None = None, source: str = "<string>"
+    lines: Iterable[str],
+    config: InterpreterConfig | None = None,
+    source: str = "<string>",
+    fast: bool = True,
 ) -> Iterator[Motion]:
     """Interpret lines (without their line ends) and yield motions as they come.
+
+    Lines are read in batches; the common straight-move block takes a fast path
+    (``fast=False`` turns it off: the tests check both give the same motions and
+    errors). Motions of a batch are yielded when the batch is done, or before
+    the error a line of it raises.
 
     Raises
     ------
@@ -1271,30 +1307,39 @@ def iter_motions(
         Located at ``source:line:column`` with the offending word.
     """
     it = Interpreter(config, source)
+    out = it.out
     n = 0
     last_text = 0
-    for n, raw in enumerate(lines, 1):
-        if _fast(it, raw, n):
-            yield from it.out
-            it.out.clear()
-            last_text = n
-            continue
-        try:
-            blk = parse_line(raw, n, source)
-            it.run(blk)
-        except GCodeError:
-            raise
-        except (ValueError, OverflowError, ZeroDivisionError) as exc:
-            raise _fail(
-                f"cannot interpret this block ({exc})", source, n, None, "numbers within range"
-            ) from None
-        if it.out:
-            yield from it.out
-            it.out.clear()
-        if it.st.ended:
-            return
-        if blk.has_text or blk.percent:
-            last_text = n
+    for batch in _batches(lines):
+        matches = _FAST_LINE.findall("\n".join(batch)) if fast else []
+        if len(matches) != len(batch):  # a line with a character that ends lines
+            matches = [("", "", "", "", "", "", "", "-")] * len(batch)
+        for raw, words in zip(batch, matches):  # noqa: B905 (equal lengths by construction)
+            n += 1
+            if _fast(it, words, n):
+                last_text = n
+                continue
+            mark = len(out)
+            try:
+                blk = parse_line(raw, n, source)
+                it.run(blk)
+            except GCodeError as exc:
+                del out[mark:]
+                yield from out
+                raise exc from None
+            except (ValueError, OverflowError, ZeroDivisionError) as exc:
+                del out[mark:]
+                yield from out
+                raise _fail(
+                    f"cannot interpret this block ({exc})", source, n, None, "numbers within range"
+                ) from None
+            if it.st.ended:
+                yield from out
+                return
+            if blk.has_text or blk.percent:
+                last_text = n
+        yield from out
+        out.clear()
     raise _fail(
         "the program ends without M2, M30 or a closing '%'",
         source,

@@ -47,6 +47,70 @@ def _round(x: np.ndarray, decimals: int) -> np.ndarray:
     return np.round(x, decimals) + 0.0
 
 
+#: integer digits the vectorised formatter writes; larger values take Python's %
+_INT_DIGITS = 9
+
+
+def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str = "\n") -> list[str]:
+    """Rows of text, ``prefix value prefix value ...``, each value in fixed point.
+
+    The same text as ``"%s%.{d}f" % (prefix, value)`` per column, for values that
+    are already rounded to their ``d`` decimals (:func:`_round`), but built for
+    all rows at once: digits as bytes in an (N, width) array, unused places
+    dropped. Python formats each value only when one is too large for
+    :data:`_INT_DIGITS`.
+
+    Parameters
+    ----------
+    columns : (prefix, values (N,), decimals) per column
+    end : text after each row (kept on the returned rows)
+    """
+    n = len(columns[0][1]) if columns else 0
+    if n == 0:
+        return []
+    parts: list[np.ndarray] = []
+    for prefix, values, d in columns:
+        if prefix:
+            parts.append(np.tile(np.frombuffer(prefix.encode("ascii"), np.uint8), (n, 1)))
+        v = np.asarray(values, dtype=float)
+        if not np.all(np.abs(v) < min(10.0**_INT_DIGITS, 2.0**52 / 10.0**d)):
+            text = "".join(
+                "".join(
+                    f"{p}{x:.{dd}f}"
+                    for p, x, dd in zip(
+                        [c[0] for c in columns], row, [c[2] for c in columns], strict=True
+                    )
+                )
+                + end
+                for row in np.column_stack([c[1] for c in columns]).tolist()
+            )
+            return text.splitlines(keepends=True)
+        k = np.rint(np.abs(v) * 10.0**d).astype(np.int64)
+        width = max(len(str(int(k.max()))), d + 1)  # at least the units digit
+        digits = np.empty((n, width), np.uint8)
+        x = k
+        for j in range(width - 1, -1, -1):
+            q = x // 10
+            digits[:, j] = x - q * 10
+            x = q
+        int_w = width - d
+        chars = digits + np.uint8(48)
+        # leading zeros of the integer part go, the units digit stays
+        lead = np.cumsum(digits[:, : int_w - 1] != 0, axis=1) == 0
+        chars[:, : int_w - 1][lead] = 0
+        sign = np.where((v < 0) & (k > 0), ord("-"), 0).astype(np.uint8)
+        block = np.zeros((n, width + 2), np.uint8)
+        block[:, 0] = sign
+        block[:, 1 : int_w + 1] = chars[:, :int_w]
+        if d:
+            block[:, int_w + 1] = ord(".")
+            block[:, int_w + 2 :] = chars[:, int_w:]
+        parts.append(block)
+    parts.append(np.tile(np.frombuffer(end.encode("ascii"), np.uint8), (n, 1)))
+    flat = np.hstack(parts).ravel()
+    return flat[flat != 0].tobytes().decode("ascii").splitlines(keepends=True)
+
+
 def _header(prov: Provenance, profile: Profile, extra: Sequence[str]) -> list[str]:
     return [
         f"prsxy-post {__version__}",
@@ -185,53 +249,80 @@ class PmacWriter:
         pts, vel, _ = got
         n = len(pts)
         P = _round(pts.P_cmd, self.dec)
-        PV = np.empty((n, 10))
-        PV[:, 0::2] = P
-        PV[:, 1::2] = _round(vel, 4)
-        # everything per point that can be decided on arrays is decided here; the
-        # loop below only assembles text
-        rows = [self.row_fmt % tuple(r) for r in PV.tolist()]
-        dts = pts.dt.tolist()
-        ms_txt = ["%.4f" % (x * 1000.0) for x in dts]
+        V = _round(vel, 4)
+        # all text that can be made for the whole chunk at once is made here; the
+        # loop below runs once per part
+        rows = format_fixed_rows(
+            [
+                col
+                for i, a in enumerate(self.names)
+                for col in ((f"{' ' if i else ''}{a}", P[:, i], self.dec), (":", V[:, i], 4))
+            ]
+        )
         prev = np.vstack([self.last_P[None, :] if self.last_P is not None else P[:1], P[:-1]])
-        standing = (np.all(P == prev, axis=1) & (pts.speed == 0) & (pts.dt > 0)).tolist()
-        lines_ = pts.line.tolist()
+        standing = np.all(P == prev, axis=1) & (pts.speed == 0) & (pts.dt > 0)
         pieces: list[Piece] = []
         out: list[str] = []
-        for k in range(n):
+        k = 0
+        while k < n:
             if self.n == 0 or (self.max_pts and self.in_part >= self.max_pts):
                 if out:
-                    pieces.append((self.part, "\n".join(out) + "\n"))
+                    pieces.append((self.part, "".join(out)))
                     out = []
                 if self.n:
                     pieces.append((self.part, "CLOSE\n"))
                     self.part += 1
                     self.in_part = 0
-                out += self._open_part(P[k])
+                out += [x + "\n" for x in self._open_part(P[k])]
                 if self.n == 0:
                     self.n = 1
                     self.in_part = 1
+                    k += 1
                     continue
-            ln = lines_[k]
-            if ln != self.last_line:
-                out.append(f"; line {ln}")
-                self.last_line = ln
-            self.t_total += dts[k]
-            if standing[k]:
-                # the path stands (dwell): a DWELL holds it for any length
-                out.append("DWELL" + ms_txt[k])
-            else:
-                if ms_txt[k] != self.tm_cur:
-                    out.append("PVT" + ms_txt[k])
-                    self.tm_cur = ms_txt[k]
-                out.append(rows[k])
-            self.n += 1
-            self.in_part += 1
+            stop = n if not self.max_pts else min(n, k + self.max_pts - self.in_part)
+            out.append(self._segment(pts, rows, standing, k, stop))
+            self.n += stop - k
+            self.in_part += stop - k
+            k = stop
         if n:
             self.last_P = P[-1]
         if out:
-            pieces.append((self.part, "\n".join(out) + "\n"))
+            pieces.append((self.part, "".join(out)))
         return pieces
+
+    def _segment(
+        self, pts: PointChunk, rows: list[str], standing: np.ndarray, k0: int, k1: int
+    ) -> str:
+        """Points k0..k1 of one part: each with its line comment when the G-code line
+        changes, a PVT time when the segment time changes, and its row (or a DWELL
+        where the path stands)."""
+        m = k1 - k0
+        line = pts.line[k0:k1]
+        dts = pts.dt[k0:k1].tolist()
+        t = self.t_total
+        for x in dts:  # in order, as one running sum: the same bits however chunked
+            t += x
+        self.t_total = t
+        text = np.empty((m, 3), dtype=object)
+        text[:] = ""
+        prev_line = np.concatenate([[-1 if self.last_line is None else self.last_line], line[:-1]])
+        changed = np.flatnonzero(line != prev_line)
+        text[changed, 0] = [f"; line {ln}\n" for ln in line[changed].tolist()]
+        self.last_line = int(line[-1])
+        stand = standing[k0:k1]
+        ms = ["%.4f" % (x * 1000.0) for x in dts]
+        moving = np.flatnonzero(~stand).tolist()
+        cur = self.tm_cur
+        for i in moving:
+            if ms[i] != cur:
+                text[i, 1] = "PVT" + ms[i] + "\n"
+                cur = ms[i]
+        self.tm_cur = cur
+        text[:, 2] = rows[k0:k1]
+        for i in np.flatnonzero(stand).tolist():
+            # the path stands (dwell): a DWELL holds it for any length
+            text[i, 2] = "DWELL" + ms[i] + "\n"
+        return "".join(text.ravel().tolist())
 
     def finish(self, chunk: PointChunk | None = None) -> list[Piece]:
         pieces = self.feed(chunk if chunk is not None else _empty_chunk(), final=True)

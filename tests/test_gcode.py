@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
@@ -274,3 +275,88 @@ def test_speed_of_the_interpreter() -> None:
     n = sum(1 for _ in gcode.iter_motions(lines, CFG))
     assert n == 20001  # "G1 F2000" alone is a zero-length move, as in LinuxCNC
     assert time.perf_counter() - t0 < 5.0
+
+
+# ------------------------------------------------- the fast path and the line reader
+
+STRAIGHT = st.sampled_from(
+    [
+        "G0", "G1", "g01", "G2", "G91", "G90", "G20", "G21", "G55", "G93", "G94", "N10", "n 7",
+        "X1.5", "x-2", "Y.5", "Y3.", "Z-0.25", "Z 1", "A10", "a-5", "B2.5", "F100", "f0",
+        "F-1", "F 250.", "X1X2", "R1", "I1", "M2", " ", "\t", "\u00a0", "X\u0661", "(c)", ";c",
+    ]
+)  # fmt: skip
+
+
+def _outcome(lines: list[str], fast: bool) -> tuple[list[gcode.Motion], str | None]:
+    got: list[gcode.Motion] = []
+    try:
+        for m in gcode.iter_motions(lines, CFG, "t.ngc", fast=fast):
+            got.append(m)
+    except GCodeError as exc:
+        return got, str(exc)
+    return got, None
+
+
+NUMBER = st.sampled_from(["1.5", "-2", ".5", "3.", "-0.25", " 1", "0", "10", "-7.125"])
+WELL_FORMED = st.builds(
+    lambda n, g, axes, f, sep: sep.join(
+        [x for x in (n, g) if x] + [a + v for a, v in axes] + ([f] if f else [])
+    ),
+    st.sampled_from(["", "N10", "n 7"]),
+    st.sampled_from(["", "", "G0", "G1", "g01", "G90", "G91", "G20", "G21", "G55", "G54", "G2"]),
+    st.lists(st.tuples(st.sampled_from("XYZABxyzab"), NUMBER), max_size=4),
+    st.sampled_from(["", "", "F100", "f0", "F-1", "F 250."]),
+    st.sampled_from(["", " ", "\t"]),
+)
+
+
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    st.lists(
+        st.one_of(
+            WELL_FORMED, WELL_FORMED, WELL_FORMED, st.lists(STRAIGHT, max_size=7).map("".join)
+        ),
+        max_size=25,
+    )
+)
+def test_fast_path_gives_what_the_full_interpreter_gives(body: list[str]) -> None:
+    """Straight moves skip building a Block; the motions, and every error with the
+    motions before it, must be the full interpreter's."""
+    lines = ["G21 G90 G17 G1 F500", *body, "M2"]
+    assert _outcome(lines, fast=True) == _outcome(lines, fast=False)
+
+
+@pytest.mark.parametrize("units", ["G20", "G21"])
+@pytest.mark.parametrize("mode", ["G90", "G91"])
+@pytest.mark.parametrize("coord", ["G54", "G55"])
+def test_fast_path_in_every_modal_state(units: str, mode: str, coord: str) -> None:
+    body = ["G1 X1 F200", "Y2", "Z-1", "A5", "B-3 F50", "G0 X2 Y1 Z1 A1 B1", "X3", "G1 A2"]
+    lines = [f"{units} {mode} {coord} G17", *body, "Z.5", "M2"]
+    fast, slow = _outcome(lines, True), _outcome(lines, False)
+    assert slow[1] is None
+    assert fast == slow
+
+
+def test_fast_path_crosses_batches() -> None:
+    lines = ["G21 G90 G1 F1000"] + [f"X{i}" for i in range(2500)] + ["G0 Z1", "M2"]
+    fast, slow = _outcome(lines, True), _outcome(lines, False)
+    assert fast == slow
+    assert len(fast[0]) == 2502
+    # an error in the third batch: every motion before it, none after
+    bad = [*lines[:2100], "G1 X1 X2", *lines[2100:]]
+    got, msg = _outcome(bad, True)
+    assert msg is not None and msg.startswith("t.ngc:2101:")
+    assert got == _outcome(bad, False)[0]
+    assert got[-1].line == 2100
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.text(alphabet="ab\r\n", max_size=40), st.lists(st.integers(0, 40), max_size=6))
+def test_lines_read_in_pieces_are_the_lines_of_the_file(text: str, cuts: list[int]) -> None:
+    import io
+
+    bounds = sorted({0, len(text), *(c for c in cuts if c <= len(text))})
+    pieces = [text[a:b] for a, b in itertools.pairwise(bounds)]
+    want = [x.rstrip("\r\n") for x in io.StringIO(text, newline="")]
+    assert list(gcode.iter_lines(pieces)) == want
