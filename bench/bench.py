@@ -101,7 +101,9 @@ def child_convert(program: str, prof: str, out: str) -> None:
     from prsxy_post.cli import ConvertJob, convert_file
 
     t0 = time.perf_counter()
-    st = convert_file(ConvertJob(program, prof, "pmac", out, None, (True, True, True), "bench"))
+    st = convert_file(
+        ConvertJob(program, prof, "pmac", out, None, (True, True, True), "bench", parallel=True)
+    )
     total = time.perf_counter() - t0
     rss = peak_rss_mb()
     print(

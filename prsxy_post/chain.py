@@ -186,6 +186,33 @@ class PointChunk:
         )
 
 
+@dataclass
+class Prepared:
+    """A chunk of motions made ready for planning: the part of the chain that needs
+    nothing from earlier chunks, so it may run ahead (in another process).
+
+    blocks : planning arrays (:func:`blocks_from_motions`)
+    n_motions : motions in the chunk
+    first_line : line of the first motion (0 when none)
+    problems : what :func:`check_motions` found
+    """
+
+    blocks: Blocks
+    n_motions: int
+    first_line: int
+    problems: list[PrsxyError]
+
+
+def prepare(motions: Sequence[Motion], profile: Profile, limits: Limits | None = None) -> Prepared:
+    """Planning arrays and program-level problems of a chunk of motions."""
+    return Prepared(
+        blocks_from_motions(motions, limits or limits_of(profile)),
+        len(motions),
+        motions[0].line if motions else 0,
+        check_motions(motions, profile),
+    )
+
+
 class Planner:
     """Look-ahead speed planning over a stream of blocks, in bounded memory.
 
@@ -296,11 +323,18 @@ class Pipeline:
 
     def feed(self, motions: Sequence[Motion], final: bool = False) -> list[PointChunk]:
         t0 = time.perf_counter()
-        self._problem(check_motions(motions, self.profile))
-        b = blocks_from_motions(motions, self.limits)
+        prepared = prepare(motions, self.profile, self.limits)
+        self.timings["interpolate"] += time.perf_counter() - t0
+        return self.feed_prepared(prepared, final)
+
+    def feed_prepared(self, prepared: Prepared, final: bool = False) -> list[PointChunk]:
+        """:meth:`feed` for motions already through :func:`prepare`."""
+        t0 = time.perf_counter()
+        self._problem(prepared.problems)
+        b = prepared.blocks
         out: list[PointChunk] = []
         if not self.started:
-            line0 = int(b.line[0]) if len(b) else (motions[0].line if motions else 0)
+            line0 = int(b.line[0]) if len(b) else prepared.first_line
             tl0 = 0.0  # the program starts with no tool length offset in effect
             first = self._points(
                 self.start[None, :],

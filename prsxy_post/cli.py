@@ -6,6 +6,7 @@ rerun with ``--debug`` for the traceback and report it).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import itertools
@@ -242,6 +243,9 @@ class ConvertJob:
     options: str
     progress: bool = False
     chunk: int = 4096
+    #: read and interpret the program in a second process while this one runs the
+    #: rest of the chain (the output is the same; only the wall time changes)
+    parallel: bool = False
 
 
 def inspect_source(path: str) -> str:
@@ -323,6 +327,134 @@ class ConvertStats:
     motions: int = 0
     points: int = 0
     timings: dict[str, float] | None = None
+    #: peak resident memory of the interpreter process [MB] when one ran
+    helper_peak_rss_mb: float | None = None
+
+
+def peak_rss_mb() -> float | None:
+    """This process's peak resident memory [MB] (Linux), None where unknown."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return None
+
+
+def _prepare_here(
+    job: ConvertJob, cfg: Any, prof: Any, counts: dict[str, float], bar: Any = None
+) -> Iterator[Any]:
+    """The program's motions, chunk by chunk, through :func:`chain.prepare`."""
+    from . import chain, gcode
+
+    def counted(it: Iterator[str]) -> Iterator[str]:
+        for ln in it:
+            counts["lines"] += 1
+            yield ln
+
+    lines = (
+        iter_program_lines(job.program, bar)
+        if job.program != "-"
+        else iter(gcode.split_lines(read_text("-", "G-code program")))
+    )
+    motions = gcode.iter_motions(counted(lines), cfg, job.program)
+    limits = chain.limits_of(prof)
+    while True:
+        t0 = time.perf_counter()
+        batch = list(itertools.islice(motions, job.chunk))
+        prepared = chain.prepare(batch, prof, limits)
+        counts["parse"] += time.perf_counter() - t0
+        counts["motions"] += len(batch)
+        yield prepared
+        if len(batch) < job.chunk:
+            return
+
+
+def _prepare_child(conn: Any, job: ConvertJob, cfg: Any, prof: Any) -> None:
+    """Runs in the interpreter process: sends ("chunk", prepared, chars read),
+    then ("done", counts, peak MB), or ("error", PrsxyError) / ("crash", text)."""
+    chars = [0]
+
+    def progress(n: int) -> None:
+        chars[0] = n
+
+    counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
+    try:
+        for prepared in _prepare_here(job, cfg, prof, counts, progress):
+            conn.send(("chunk", prepared, chars[0]))
+        conn.send(("done", counts, peak_rss_mb()))
+    except PrsxyError as err:
+        conn.send(("error", err, counts))
+    except BaseException:
+        conn.send(("crash", traceback.format_exc(), counts))
+    finally:
+        conn.close()
+
+
+@contextlib.contextmanager
+def _prepared_chunks(
+    job: ConvertJob, cfg: Any, prof: Any, counts: dict[str, float], bar: Any
+) -> Iterator[Iterator[Any]]:
+    """Prepared chunks of the program, made here or, with ``job.parallel`` where
+    processes can fork, by a second process that runs ahead (a full pipe holds
+    it back, so memory stays bounded). Errors arrive in program order: every
+    chunk before a G-code error is delivered first, as when run here."""
+    import multiprocessing
+
+    if (
+        not job.parallel
+        or job.program == "-"
+        or ("fork" not in multiprocessing.get_all_start_methods())
+    ):
+        yield _prepare_here(job, cfg, prof, counts, bar)
+        return
+    ctx = multiprocessing.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    proc = ctx.Process(target=_prepare_child, args=(send, job, cfg, prof), daemon=True)
+    proc.start()
+    send.close()
+
+    def receive() -> Iterator[Any]:
+        while True:
+            try:
+                msg = recv.recv()
+            except EOFError:
+                raise RuntimeError("the interpreter process ended without a result") from None
+            if msg[0] == "chunk":
+                if bar is not None:
+                    bar(msg[2])
+                yield msg[1]
+                continue
+            counts.update(msg[2] if msg[0] != "done" else msg[1])
+            if msg[0] == "done":
+                counts["helper_peak_rss_mb"] = msg[2] or 0.0
+                return
+            if msg[0] == "error":
+                raise msg[1]
+            raise RuntimeError("in the interpreter process:\n" + msg[1])
+
+    try:
+        yield receive()
+    finally:
+        recv.close()
+        if proc.is_alive():
+            proc.terminate()
+        proc.join()
+
+
+#: programs from this size on are read and interpreted in a second process
+PARALLEL_FROM_BYTES = 256 * 1024
+
+
+def _worth_a_second_process(program: str) -> bool:
+    """A single large program: one core interprets while the other runs the chain."""
+    try:
+        return program != "-" and os.path.getsize(program) >= PARALLEL_FROM_BYTES
+    except OSError:
+        return False  # the conversion itself reports the missing file
 
 
 def _convert_one(job: ConvertJob) -> list[str]:
@@ -335,7 +467,7 @@ def convert_file(job: ConvertJob) -> ConvertStats:
     Outputs go to temp files beside the targets and are renamed only when the
     whole conversion succeeded; on any error the temp files are removed.
     """
-    from . import chain, errormap, gcode, writers
+    from . import chain, errormap, writers
 
     prof = load_profile(job.profile_path)
     sha = inspect_source(job.program) if job.program != "-" else ""
@@ -379,14 +511,9 @@ def convert_file(job: ConvertJob) -> ConvertStats:
                 sinks[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
             sinks[part].write(text)
 
-    n_lines = n_motions = n_points = 0
-    t_parse = t_write = 0.0
-
-    def counted(it: Iterator[str]) -> Iterator[str]:
-        nonlocal n_lines
-        for ln in it:
-            n_lines += 1
-            yield ln
+    n_points = 0
+    t_write = 0.0
+    counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
 
     def write(make: Callable[[], list[tuple[int, str]]]) -> None:
         nonlocal t_write
@@ -395,24 +522,13 @@ def convert_file(job: ConvertJob) -> ConvertStats:
         t_write += time.perf_counter() - t0
 
     try:
-        lines = (
-            iter_program_lines(job.program, bar)
-            if job.program != "-"
-            else iter(gcode.split_lines(read_text("-", "G-code program")))
-        )
-        motions = gcode.iter_motions(counted(lines), cfg, job.program)
         pipe = chain.Pipeline(prof, stages, emap, start=job.start)
         write(writer.begin)
-        while True:
-            t0 = time.perf_counter()
-            batch = list(itertools.islice(motions, job.chunk))
-            t_parse += time.perf_counter() - t0
-            n_motions += len(batch)
-            for pc in pipe.feed(batch):
-                n_points += len(pc)
-                write(functools.partial(writer.feed, pc))
-            if len(batch) < job.chunk:
-                break
+        with _prepared_chunks(job, cfg, prof, counts, bar) as source:
+            for prepared in source:
+                for pc in pipe.feed_prepared(prepared):
+                    n_points += len(pc)
+                    write(functools.partial(writer.feed, pc))
         tail = pipe.finish()
         n_points += sum(len(pc) for pc in tail)
         for pc in tail[:-1]:
@@ -430,8 +546,15 @@ def convert_file(job: ConvertJob) -> ConvertStats:
         if job.output == "-":
             sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))
             written = ["-"]
-        timings = {"parse": t_parse, **pipe.timings, "write": t_write}
-        return ConvertStats(written, n_lines, n_motions, n_points, timings)
+        timings = {"parse": counts["parse"], **pipe.timings, "write": t_write}
+        return ConvertStats(
+            written,
+            int(counts["lines"]),
+            int(counts["motions"]),
+            n_points,
+            timings,
+            counts.get("helper_peak_rss_mb"),
+        )
     except PrsxyError as err:
         raise err.located(source=job.program) from None
     except OSError as exc:
@@ -544,6 +667,7 @@ def convert(
         opts.append(f"--start {start}")
     ext = ".pmc" if fmt == "pmac" else ".ngc"
     show_progress = not quiet and sys.stderr.isatty() and jobs == 1
+    pooled = jobs > 1 and len(programs) > 1
     jobs_list = []
     for prog in programs:
         if out_dir:
@@ -552,10 +676,18 @@ def convert(
             out = output or "-"
         jobs_list.append(
             ConvertJob(
-                prog, profile_path, fmt, out, st, stages, " ".join(opts), progress=show_progress
+                prog,
+                profile_path,
+                fmt,
+                out,
+                st,
+                stages,
+                " ".join(opts),
+                progress=show_progress,
+                parallel=not pooled and _worth_a_second_process(prog),
             )
         )
-    if jobs > 1 and len(jobs_list) > 1:
+    if pooled:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
             results = list(pool.map(_run_job, jobs_list))
     else:

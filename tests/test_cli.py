@@ -99,6 +99,85 @@ def test_streamed_output_equals_one_shot(tmp_path: Path) -> None:
         assert outs[0] == outs[1], sample
 
 
+def _convert(tmp_path: Path, program: str, prof: str, fmt: str, parallel: bool, chunk: int):
+    """Output text (or the error) of one conversion, in one process or two."""
+    from prsxy_post.cli import ConvertJob, convert_file
+    from prsxy_post.errors import PrsxyError
+
+    out = tmp_path / f"{Path(program).stem}.{fmt}.{parallel}.{chunk}"
+    job = ConvertJob(
+        program,
+        prof,
+        fmt,
+        str(out),
+        None,
+        (True, True, True),
+        f"--format {fmt}",
+        chunk=chunk,
+        parallel=parallel,
+    )
+    try:
+        convert_file(job)
+    except PrsxyError as err:
+        assert not out.exists()
+        return "error: " + str(err)
+    return out.read_text()
+
+
+@pytest.mark.parametrize("fmt", ["pmac", "gcode"])
+def test_two_processes_give_the_same_output(tmp_path: Path, fmt: str) -> None:
+    """The interpreter in a second process, chunks of 3 motions: the same bytes."""
+    os.chdir(ROOT)
+    for sample in SAMPLES:
+        prof = SHOP if "drill" in sample else PERTURBED
+        one = _convert(tmp_path, f"samples/{sample}", prof, fmt, False, 3)
+        two = _convert(tmp_path, f"samples/{sample}", prof, fmt, True, 3)
+        assert not one.startswith("error") and one == two, sample
+
+
+@pytest.mark.parametrize(
+    ("bad", "where"),
+    [
+        ("G1 X10 Y10 X5", "9000:"),  # a G-code error, far into the program
+        ("G1 X900", "9000:"),  # out of reach, found by the chain
+        ("G1 X10 F99999999", "9000:"),  # a feed above the machine's
+    ],
+)
+def test_two_processes_give_the_same_errors(tmp_path: Path, bad: str, where: str) -> None:
+    body = ["G21 G90 G1 F1000"] + [
+        f"X{(i % 50) * 0.2:.1f} Y{(i % 7) * 0.1:.1f}" for i in range(2, 9000)
+    ]
+    program = tmp_path / "big.ngc"
+    program.write_text("\n".join([*body, bad, "X0 Y0", "M2"]) + "\n")
+    one = _convert(tmp_path, str(program), SHOP, "pmac", False, 1000)
+    two = _convert(tmp_path, str(program), SHOP, "pmac", True, 1000)
+    assert one.startswith("error: ") and where in one
+    assert one == two
+
+
+def test_large_programs_run_in_two_processes(runner: CliRunner, tmp_path: Path) -> None:
+    """Above the size where a second process pays, the CLI uses one, with the
+    same output and the same errors (at the right line) as one process."""
+    from prsxy_post.cli import PARALLEL_FROM_BYTES, _worth_a_second_process
+
+    lines = [f"X{(i % 50) * 0.2:.4f} Y{(i % 7) * 0.1:.4f} Z0.0000" for i in range(20000)]
+    program = tmp_path / "big.ngc"
+    program.write_text("\n".join(["G21 G90 G1 F3000", *lines, "M2"]) + "\n")
+    assert program.stat().st_size >= PARALLEL_FROM_BYTES
+    assert _worth_a_second_process(str(program))
+    out = tmp_path / "big.pmc"
+    r = invoke(runner, "convert", str(program), "--profile", SHOP, "-o", str(out), "-q")
+    assert r.exit_code == 0, r.output
+    assert out.read_text() == _convert(tmp_path, str(program), SHOP, "pmac", False, 4096)
+    program.write_text("\n".join(["G21 G90 G1 F3000", *lines, "G2 X1", "M2"]) + "\n")
+    out.write_text("keep me")
+    r = runner.invoke(main, ["convert", str(program), "--profile", SHOP, "-o", str(out)])
+    assert r.exit_code == 1
+    assert f"big.ngc:{len(lines) + 2}:" in r.output
+    _no_traceback(r.output)
+    assert out.read_text() == "keep me"
+
+
 def test_batch_with_jobs(runner: CliRunner, tmp_path: Path) -> None:
     r = invoke(
         runner,
