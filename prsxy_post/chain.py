@@ -579,13 +579,15 @@ def run_chain(
     return ChainResult(samples, pc.q_target, pc.P_ideal, pc.P_cmd, pipe.geo, pipe.problems, pc.t)
 
 
-def correct_virtual(q: np.ndarray, error_map: ErrorMap, iterations: int = 3) -> np.ndarray:
+def correct_virtual(q: np.ndarray, error_map: ErrorMap, iterations: int = 2) -> np.ndarray:
     """Q' with Q' + e(Q') = Q, by fixed-point iteration from Q' = Q − e(Q) (Eq. 6).
 
     The paper's Q' = Q − e(Q) evaluates the error at the programmed pose; the
     machine, commanded Q', errs by e(Q'), so iterating Q'_{k+1} = Q − e(Q'_k)
-    lands the tip closer. e is smooth and small (µm over mm), so the iteration
-    contracts quickly; ``iterations`` = 1 is the paper's formula.
+    lands the tip closer. e is smooth and small (µm over mm): each step shrinks
+    what is left by |∂e/∂Q| ≈ 1e-4, so the second evaluation leaves about
+    1e-11 mm (measured on a calibrated map) and a third changes nothing a
+    program prints. ``iterations`` = 1 is the paper's formula.
     """
     qp = q - error_map(q)
     for _ in range(iterations - 1):

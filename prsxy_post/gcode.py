@@ -1183,45 +1183,52 @@ class Interpreter:
             current_cc = clear
 
 
-#: The common CAM block: an optional N, an optional G0/G1, axis words in the order
-#: X Y Z A B (each at most once), an optional F, nothing else. Matched over a whole
-#: batch of lines at once (one match per line: the last group takes any other line).
+#: The common CAM block: an optional N, an optional G0/G1/G2/G3, axis words in the
+#: order X Y Z A B, arc words I J K R, an optional F (each at most once), nothing
+#: else. Matched over a whole batch of lines at once (one match per line: the last
+#: group takes any other line).
 _NUM = r"[ \t]*([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))[ \t]*"
 _FAST_LINE = re.compile(
-    r"^[ \t]*(?:[Nn][ \t]*[0-9]+[ \t]*)?(?:[Gg][ \t]*0*([01])(?![0-9.])[ \t]*)?"
-    + "".join(f"(?:[{c}{c.lower()}]{_NUM})?" for c in "XYZABF")
+    r"^[ \t]*(?:[Nn][ \t]*[0-9]+[ \t]*)?(?:[Gg][ \t]*0*([0-3])(?![0-9.])[ \t]*)?"
+    + "".join(f"(?:[{c}{c.lower()}]{_NUM})?" for c in "XYZABIJKRF")
     + r"($|.*)",
     re.M,
 )
 _ZERO5 = (0.0, 0.0, 0.0, 0.0, 0.0)
+_ARC_LETTERS = ("X", "Y", "Z", "A", "B", "I", "J", "K", "R", "F")
 #: lines matched at once: large enough that the regex runs in C for most of the
 #: time, small enough that a batch is a few hundred kilobytes at most
 _BATCH = 1024
 
 
 def _fast(it: Interpreter, words: tuple[str, ...], n: int) -> bool:
-    """Interpret a straight-move block from its matched words, without building a Block.
+    """Interpret a move from its matched words, without building a Block.
 
-    ``words``: the groups of :data:`_FAST_LINE` (G, X, Y, Z, A, B, F, rest). Only
-    blocks the full path would accept the same way take it: G0/G1 (or none, with
-    G0/G1 in effect), F only in G94 and positive for a feed move; anything else
-    (and every error) goes the full way, which reports it with its column.
+    ``words``: the groups of :data:`_FAST_LINE` (G, X, Y, Z, A, B, I, J, K, R, F,
+    rest). Only blocks the full path would accept the same way take it: G0/G1
+    without arc words, or G2/G3 (given or in effect) in G94, with F positive
+    for a feed move; anything else, and every error, goes the full way, which
+    reports it with its column.
     """
-    g, xs, ys, zs, as_, bs, fs, rest = words
+    g, xs, ys, zs, as_, bs, is_, js, ks, rs, fs, rest = words
     if rest or not (xs or ys or zs or as_ or bs):
         return False
     st = it.st
-    motion = (1 if g == "1" else 0) if g else st.motion
-    if motion not in (0, 1) or st.ended or st.inverse_time:
+    motion = int(g) if g else st.motion
+    if motion not in (0, 1, 2, 3) or st.ended or st.inverse_time:
         return False
     if fs:
         feed = float(fs)
-        if feed < 0 or (feed == 0 and motion == 1):
+        if feed < 0 or (feed == 0 and motion):
             return False
-    elif motion == 1 and st.feed <= 0:
+    elif motion and st.feed <= 0:
         return False
     else:
         feed = st.feed
+    if motion >= 2:
+        return _fast_arc(it, int(motion), words, n)
+    if is_ or js or ks or rs:
+        return False
     start = st.pos
     sc = MM_PER_INCH if st.units == "inch" else 1.0
     if st.absolute:
@@ -1277,6 +1284,34 @@ def _fast(it: Interpreter, words: tuple[str, ...], n: int) -> bool:
     return True
 
 
+def _fast_arc(it: Interpreter, motion: int, words: tuple[str, ...], n: int) -> bool:
+    """G2/G3 from matched words through the interpreter's own arc code. Words carry
+    no columns here, so an arc the interpreter refuses goes the full way (with
+    the state as it was) to be reported with its column."""
+    st = it.st
+    seen = {
+        letter: Word(letter, float(text), text, 0)
+        for letter, text in zip(_ARC_LETTERS, words[1:11], strict=True)
+        if text
+    }
+    axis_words = {a: seen[a] for a in _AXES if a in seen}
+    saved = (st.feed, st.feed_units, st.motion, st.cycle_il)
+    if "F" in seen:
+        st.feed = seen["F"].value
+        st.feed_units = st.units
+    it._seen = seen
+    try:
+        it._arc(motion, axis_words, seen, n)
+    except GCodeError:
+        st.feed, st.feed_units, st.motion, st.cycle_il = saved
+        return False
+    if words[0]:
+        st.cycle_il = None
+    st.motion = motion
+    it.started = True
+    return True
+
+
 def _batches(lines: Iterable[str]) -> Iterator[list[str]]:
     batch: list[str] = []
     for raw in lines:
@@ -1313,7 +1348,7 @@ def iter_motions(
     for batch in _batches(lines):
         matches = _FAST_LINE.findall("\n".join(batch)) if fast else []
         if len(matches) != len(batch):  # a line with a character that ends lines
-            matches = [("", "", "", "", "", "", "", "-")] * len(batch)
+            matches = [("",) * 11 + ("-",)] * len(batch)
         for raw, words in zip(batch, matches):  # noqa: B905 (equal lengths by construction)
             n += 1
             if _fast(it, words, n):

@@ -300,12 +300,34 @@ def _outcome(lines: list[str], fast: bool) -> tuple[list[gcode.Motion], str | No
 
 NUMBER = st.sampled_from(["1.5", "-2", ".5", "3.", "-0.25", " 1", "0", "10", "-7.125"])
 WELL_FORMED = st.builds(
-    lambda n, g, axes, f, sep: sep.join(
-        [x for x in (n, g) if x] + [a + v for a, v in axes] + ([f] if f else [])
+    lambda n, g, axes, arc, f, sep: sep.join(
+        [x for x in (n, g) if x] + [a + v for a, v in axes + arc] + ([f] if f else [])
     ),
     st.sampled_from(["", "N10", "n 7"]),
-    st.sampled_from(["", "", "G0", "G1", "g01", "G90", "G91", "G20", "G21", "G55", "G54", "G2"]),
+    st.sampled_from(
+        [
+            "",
+            "",
+            "G0",
+            "G1",
+            "g01",
+            "G90",
+            "G91",
+            "G20",
+            "G21",
+            "G55",
+            "G54",
+            "G2",
+            "G3",
+            "g03",
+            "G18",
+            "G17",
+            "G91.1",
+            "G90.1",
+        ]
+    ),
     st.lists(st.tuples(st.sampled_from("XYZABxyzab"), NUMBER), max_size=4),
+    st.lists(st.tuples(st.sampled_from("IJKRij"), NUMBER), max_size=2),
     st.sampled_from(["", "", "F100", "f0", "F-1", "F 250."]),
     st.sampled_from(["", " ", "\t"]),
 )
@@ -332,7 +354,15 @@ def test_fast_path_gives_what_the_full_interpreter_gives(body: list[str]) -> Non
 @pytest.mark.parametrize("coord", ["G54", "G55"])
 def test_fast_path_in_every_modal_state(units: str, mode: str, coord: str) -> None:
     body = ["G1 X1 F200", "Y2", "Z-1", "A5", "B-3 F50", "G0 X2 Y1 Z1 A1 B1", "X3", "G1 A2"]
-    lines = [f"{units} {mode} {coord} G17", *body, "Z.5", "M2"]
+    body += [
+        "G2 X5 Y1 R10",
+        "G3 X3 Y2 Z2 R10 F300",
+        "X1 Y1 R5 F250",
+        "G1 X2 F10 Y1",
+        "G18 G2 X3 Z0 R10",
+    ]
+    body += ["G17 G2 X2 Y0 I1 J0"] if mode == "G91" else ["G17 G2 X5 Y1 I1 J0"]
+    lines = [f"{units} {mode} {coord} G17", *body, "G1 Z.5", "M2"]
     fast, slow = _outcome(lines, True), _outcome(lines, False)
     assert slow[1] is None
     assert fast == slow
