@@ -31,7 +31,6 @@ from typing import Any
 
 import numpy as np
 from numpy.polynomial import legendre
-from scipy import linalg
 
 from .errors import FitError, ProfileError
 from .profile import Profile
@@ -246,6 +245,8 @@ def _ridge(X: np.ndarray, y: np.ndarray, lam: float) -> np.ndarray:
     pen[0, 0] = 0.0
     A = np.vstack([Xs, pen])
     b = np.concatenate([y, np.zeros(m)])
+    from scipy import linalg  # here: converting evaluates maps, only fitting needs scipy
+
     sol, *_ = linalg.lstsq(A, b, lapack_driver="gelsy")
     return sol / scale
 

@@ -54,11 +54,11 @@ _INT_DIGITS = 9
 def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str = "\n") -> list[str]:
     """Rows of text, ``prefix value prefix value ...``, each value in fixed point.
 
-    The same text as ``"%s%.{d}f" % (prefix, value)`` per column, for values that
-    are already rounded to their ``d`` decimals (:func:`_round`), but built for
-    all rows at once: digits as bytes in an (N, width) array, unused places
-    dropped. Python formats each value only when one is too large for
-    :data:`_INT_DIGITS`.
+    The same text as ``"%s%.{d}f" % (prefix, value)`` per column, built for all
+    rows at once: digits as bytes in an (N, width) array, unused places dropped.
+    Python formats a value itself only where the scaled value lies within 1e-6
+    of a rounding tie (there the binary value decides, as in Python) and every
+    value of a column too large for :data:`_INT_DIGITS`.
 
     Parameters
     ----------
@@ -85,7 +85,11 @@ def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str =
                 for row in np.column_stack([c[1] for c in columns]).tolist()
             )
             return text.splitlines(keepends=True)
-        k = np.rint(np.abs(v) * 10.0**d).astype(np.int64)
+        t = np.abs(v) * 10.0**d
+        k = np.rint(t).astype(np.int64)
+        tie = np.flatnonzero(np.abs(t - np.floor(t) - 0.5) < 1e-6)
+        if tie.size:
+            k[tie] = [int(f"{abs(x):.{d}f}".replace(".", "")) for x in v[tie].tolist()]
         width = max(len(str(int(k.max()))), d + 1)  # at least the units digit
         digits = np.empty((n, width), np.uint8)
         x = k
@@ -98,7 +102,7 @@ def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str =
         # leading zeros of the integer part go, the units digit stays
         lead = np.cumsum(digits[:, : int_w - 1] != 0, axis=1) == 0
         chars[:, : int_w - 1][lead] = 0
-        sign = np.where((v < 0) & (k > 0), ord("-"), 0).astype(np.uint8)
+        sign = np.where(np.signbit(v), ord("-"), 0).astype(np.uint8)
         block = np.zeros((n, width + 2), np.uint8)
         block[:, 0] = sign
         block[:, 1 : int_w + 1] = chars[:, :int_w]
@@ -310,18 +314,18 @@ class PmacWriter:
         text[changed, 0] = [f"; line {ln}\n" for ln in line[changed].tolist()]
         self.last_line = int(line[-1])
         stand = standing[k0:k1]
-        ms = ["%.4f" % (x * 1000.0) for x in dts]
-        moving = np.flatnonzero(~stand).tolist()
-        cur = self.tm_cur
-        for i in moving:
-            if ms[i] != cur:
-                text[i, 1] = "PVT" + ms[i] + "\n"
-                cur = ms[i]
-        self.tm_cur = cur
+        ms = format_fixed_rows([("", pts.dt[k0:k1] * 1000.0, 4)])  # "%.4f\n" each
+        moving = np.flatnonzero(~stand)
+        if moving.size:
+            mv = [ms[i] for i in moving.tolist()]
+            before = [self.tm_cur, *mv[:-1]]
+            new = [i for i, a, b in zip(moving.tolist(), mv, before, strict=True) if a != b]
+            text[new, 1] = ["PVT" + ms[i] for i in new]
+            self.tm_cur = mv[-1]
         text[:, 2] = rows[k0:k1]
         for i in np.flatnonzero(stand).tolist():
             # the path stands (dwell): a DWELL holds it for any length
-            text[i, 2] = "DWELL" + ms[i] + "\n"
+            text[i, 2] = "DWELL" + ms[i]
         return "".join(text.ravel().tolist())
 
     def finish(self, chunk: PointChunk | None = None) -> list[Piece]:

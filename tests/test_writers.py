@@ -33,5 +33,24 @@ def test_fixed_rows_are_the_text_python_prints(values: np.ndarray, decimals: lis
     assert format_fixed_rows(cols) == want
 
 
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.one_of(
+            st.floats(-1e5, 1e5, allow_nan=False),
+            # just beside rounding ties: the binary value decides, as in Python
+            st.integers(-(10**8), 10**8).map(lambda i: (i + 0.5) / 1e4),
+            st.sampled_from([-0.0, -1e-9, 0.00005, 1.00005, 2.675]),
+        ),
+        min_size=1,
+        max_size=30,
+    ),
+    st.integers(0, 6),
+)
+def test_unrounded_values_print_as_python_prints_them(values: list[float], d: int) -> None:
+    got = format_fixed_rows([("PVT", np.array(values), d)])
+    assert got == [f"PVT{x:.{d}f}\n" for x in values]
+
+
 def test_no_rows() -> None:
     assert format_fixed_rows([("X", np.zeros(0), 3)]) == []
