@@ -24,6 +24,7 @@ The compensation is Q' = Q − e(Q) (Eq. 6), iterated in :func:`chain.correct_vi
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -152,16 +153,47 @@ class ErrorMap:
     provenance: dict[str, Any]
 
     def __call__(self, q: np.ndarray) -> np.ndarray:
-        """e(q), shape (N, 5) [mm, mm, mm, deg, deg]."""
+        """e(q), shape (N, 5) [mm, mm, mm, deg, deg]: Σ_u M_u(q) C_u over the
+        distinct Legendre products M_u the components use (each made once)."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        out = np.zeros_like(q)
+        exps, C = self._plan
         tables = legendre_tables(q, self.lo, self.hi, max(self.degree.values(), default=2))
+        out = np.zeros((len(q), 5))
+        # axpy per term rather than one BLAS product: a threaded BLAS would spin
+        # on the core the interpreter process runs on
+        for u, e5 in enumerate(exps):
+            col: np.ndarray | float = 1.0
+            for v, k in enumerate(e5):
+                if k:
+                    col = tables[v][:, k] * col
+            for i in np.flatnonzero(C[u]).tolist():
+                out[:, i] += C[u, i] * col
+        return out
+
+    @functools.cached_property
+    def _plan(self) -> tuple[list[tuple[int, ...]], np.ndarray]:
+        """The distinct products (exponents of x, y, z, A, B; the constant first)
+        and their coefficients per component, (U, 5)."""
+        index: dict[tuple[int, ...], int] = {(0, 0, 0, 0, 0): 0}
+        entries: list[tuple[int, int, float]] = []
         for i, c in enumerate(COMPONENTS):
             if c not in self.coef:
                 continue
-            X, _ = design(q, c, self.degree[c], self.lo, self.hi, self.structure[c], tables)
-            out[:, i] = X @ self.coef[c]
-        return out
+            _, terms = design(
+                np.zeros((1, 5)), c, self.degree[c], self.lo, self.hi, self.structure[c]
+            )
+            coef = self.coef[c]
+            entries.append((0, i, float(coef[0])))
+            for j, (group, e) in enumerate(terms, 1):
+                e5 = [0] * 5
+                for v, k in zip(group, e, strict=True):
+                    e5[v] += k
+                u = index.setdefault(tuple(e5), len(index))
+                entries.append((u, i, float(coef[j])))
+        C = np.zeros((len(index), 5))
+        for u, i, cf in entries:
+            C[u, i] += cf
+        return list(index), C
 
     def to_dict(self) -> dict[str, Any]:
         """The profile's ``[error_map]`` section."""

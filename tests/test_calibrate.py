@@ -82,6 +82,26 @@ def test_error_map_takes_up_effects_outside_the_contract(nominal: profile_mod.Pr
         assert 0 < emap.cv_rms[c] < 2e-3
 
 
+@pytest.mark.parametrize("structure", ["eq5", "eq5-coupled"])
+def test_error_map_evaluation_is_its_design_matrix_times_coefficients(structure: str) -> None:
+    """e(q) (one product over the distinct Legendre terms) = X_c(q) @ coef_c, the
+    fit's own design matrix, for every component."""
+    rng = np.random.default_rng(11)
+    lo, hi = np.array([-150, -150, -60, -25, -25.0]), np.array([150, 150, 40, 25, 25.0])
+    degree = {c: 3 for c in errormap.COMPONENTS}
+    coef = {
+        c: rng.normal(
+            0, 1e-3, errormap.design(np.zeros((1, 5)), c, 3, lo, hi, structure)[0].shape[1]
+        )
+        for c in errormap.COMPONENTS
+    }
+    m = errormap.ErrorMap(lo, hi, degree, dict.fromkeys(degree, structure), coef, {}, {}, {}, {})
+    q = random_poses(rng, 200) * 1.2  # some outside the domain: clamped alike
+    for i, c in enumerate(errormap.COMPONENTS):
+        X, _ = errormap.design(q, c, 3, lo, hi, structure)
+        np.testing.assert_allclose(m(q)[:, i], X @ coef[c], rtol=1e-12, atol=1e-18)
+
+
 def test_error_map_averages_noise_instead_of_interpolating_it() -> None:
     """A smooth field plus 1 µm noise: the cross-validated fit predicts new points
     better than the noise, and never worse than interpolating raw data would."""
