@@ -12,8 +12,10 @@ import hashlib
 import itertools
 import json
 import os
+import queue
 import sys
 import tempfile
+import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
@@ -417,12 +419,35 @@ def _prepared_chunks(
     proc.start()
     send.close()
 
-    def receive() -> Iterator[Any]:
-        while True:
+    # a thread takes chunks off the pipe as they come, so the interpreter runs up
+    # to AHEAD chunks ahead while this process is busy (a queue, not the pipe's
+    # 64 KiB, holds them): chunk times vary, and neither side waits for the other
+    ahead: queue.Queue[tuple[Any, ...]] = queue.Queue(maxsize=AHEAD)
+    stop = threading.Event()
+
+    def pump() -> None:
+        while not stop.is_set():
             try:
                 msg = recv.recv()
-            except EOFError:
-                raise RuntimeError("the interpreter process ended without a result") from None
+            except (EOFError, OSError):
+                msg = ("eof",)
+            while not stop.is_set():
+                try:
+                    ahead.put(msg, timeout=0.1)
+                    break
+                except queue.Full:
+                    continue
+            if msg[0] != "chunk":
+                return
+
+    pumping = threading.Thread(target=pump, daemon=True)
+    pumping.start()
+
+    def receive() -> Iterator[Any]:
+        while True:
+            msg = ahead.get()
+            if msg[0] == "eof":
+                raise RuntimeError("the interpreter process ended without a result")
             if msg[0] == "chunk":
                 if bar is not None:
                     bar(msg[2])
@@ -439,11 +464,16 @@ def _prepared_chunks(
     try:
         yield receive()
     finally:
-        recv.close()
+        stop.set()
         if proc.is_alive():
             proc.terminate()
         proc.join()
+        pumping.join(timeout=5.0)
+        recv.close()
 
+
+#: chunks the interpreter process may run ahead of the chain
+AHEAD = 8
 
 #: programs from this size on are read and interpreted in a second process
 PARALLEL_FROM_BYTES = 256 * 1024

@@ -24,6 +24,7 @@ second one ends it; M2/M30 end the program (nothing after them is read).
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from collections.abc import Iterable, Iterator, Mapping
@@ -1201,87 +1202,111 @@ _ARC_LETTERS = ("X", "Y", "Z", "A", "B", "I", "J", "K", "R", "F")
 _BATCH = 1024
 
 
-def _fast(it: Interpreter, words: tuple[str, ...], n: int) -> bool:
-    """Interpret a move from its matched words, without building a Block.
+def _fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -> int:
+    """Interpret matched lines from ``i`` on while they are common moves, without
+    building Blocks; return the index of the first line not taken.
 
-    ``words``: the groups of :data:`_FAST_LINE` (G, X, Y, Z, A, B, I, J, K, R, F,
-    rest). Only blocks the full path would accept the same way take it: G0/G1
-    without arc words, or G2/G3 (given or in effect) in G94, with F positive
-    for a feed move; anything else, and every error, goes the full way, which
-    reports it with its column.
+    ``matches[k]``: the groups of :data:`_FAST_LINE` (G, X, Y, Z, A, B, I, J, K, R,
+    F, rest) of line ``n0 + k + 1``. Only blocks the full path would accept the
+    same way are taken: G0/G1 without arc words, or G2/G3 (given or in effect),
+    in G94, with F positive for a feed move; anything else, and every error,
+    goes the full way, which reports it with its column. The modal state lives
+    in locals over the run and is written back at its end.
     """
-    g, xs, ys, zs, as_, bs, is_, js, ks, rs, fs, rest = words
-    if rest or not (xs or ys or zs or as_ or bs):
-        return False
     st = it.st
-    motion = int(g) if g else st.motion
-    if motion not in (0, 1, 2, 3) or st.ended or st.inverse_time:
-        return False
-    if fs:
-        feed = float(fs)
-        if feed < 0 or (feed == 0 and motion):
-            return False
-    elif motion and st.feed <= 0:
-        return False
-    else:
-        feed = st.feed
-    if motion >= 2:
-        return _fast_arc(it, int(motion), words, n)
-    if is_ or js or ks or rs:
-        return False
-    start = st.pos
+    if st.ended or st.inverse_time:
+        return i
+    x, y, z, a, b = st.pos
+    motion = st.motion
+    feed = st.feed
     sc = MM_PER_INCH if st.units == "inch" else 1.0
-    if st.absolute:
-        off = it.cfg.work_offsets.get(st.coord, _ZERO5)
-        end = (
-            float(xs) * sc + off[0] if xs else start[0],
-            float(ys) * sc + off[1] if ys else start[1],
-            float(zs) * sc + off[2] if zs else start[2],
-            float(as_) + off[3] if as_ else start[3],
-            float(bs) + off[4] if bs else start[4],
+    absolute = st.absolute
+    ox, oy, oz, oa, ob = it.cfg.work_offsets.get(st.coord, _ZERO5)
+    extra = (st.tool_length, st.tool, st.spindle * st.spindle_dir, False)
+    append = it.out.append
+    new_motion = new_feed = False
+    k = i
+    for words in itertools.islice(matches, i, None):
+        g, xs, ys, zs, as_, bs, is_, js, ks, rs, fs, rest = words
+        if rest or not (xs or ys or zs or as_ or bs):
+            break
+        m = int(g) if g else motion
+        if m not in (0, 1, 2, 3):
+            break
+        if fs:
+            f = float(fs)
+            if f < 0 or (f == 0 and m):
+                break
+        elif m and feed <= 0:
+            break
+        else:
+            f = feed
+        if m >= 2:
+            st.pos, st.motion, st.feed = [x, y, z, a, b], motion, feed
+            if not _fast_arc(it, int(m), words, n0 + k + 1):
+                break
+            x, y, z, a, b = st.pos
+            motion, feed = st.motion, st.feed
+            k += 1
+            continue
+        if is_ or js or ks or rs:
+            break
+        if absolute:
+            ex = float(xs) * sc + ox if xs else x
+            ey = float(ys) * sc + oy if ys else y
+            ez = float(zs) * sc + oz if zs else z
+            ea = float(as_) + oa if as_ else a
+            eb = float(bs) + ob if bs else b
+        else:
+            ex = x + float(xs) * sc if xs else x
+            ey = y + float(ys) * sc if ys else y
+            ez = z + float(zs) * sc if zs else z
+            ea = a + float(as_) if as_ else a
+            eb = b + float(bs) if bs else b
+        if fs:
+            feed = f
+            new_feed = True
+        if g:
+            motion = m
+            new_motion = True
+        if m == 0:
+            kind, rate = "rapid", math.nan
+        else:
+            kind = "feed"
+            moved = (ex - x) ** 2 + (ey - y) ** 2 + (ez - z) ** 2 > 1e-24
+            rate = f * sc if (moved or (ea == a and eb == b)) else f
+        append(
+            _motion_of(
+                (
+                    n0 + k + 1,
+                    kind,
+                    (x, y, z, a, b),
+                    (ex, ey, ez, ea, eb),
+                    rate,
+                    0,
+                    None,
+                    0,
+                    0.0,
+                    *extra,
+                )
+            )
         )
-    else:
-        end = (
-            start[0] + float(xs) * sc if xs else start[0],
-            start[1] + float(ys) * sc if ys else start[1],
-            start[2] + float(zs) * sc if zs else start[2],
-            start[3] + float(as_) if as_ else start[3],
-            start[4] + float(bs) if bs else start[4],
-        )
-    if fs:
-        st.feed = feed
-        st.feed_units = st.units
-    if g:
+        x, y, z, a, b = ex, ey, ez, ea, eb
+        k += 1
+    if k > i:
+        st.pos = [x, y, z, a, b]
         st.motion = motion
-        st.cycle_il = None
-    it.started = True
-    ts = tuple(start)
-    if motion == 0:
-        rate = math.nan
-        kind = "rapid"
-    else:
-        moved = (end[0] - ts[0]) ** 2 + (end[1] - ts[1]) ** 2 + (end[2] - ts[2]) ** 2 > 1e-24
-        rate = feed * sc if (moved or end[3:] == ts[3:]) else feed
-        kind = "feed"
-    it.out.append(
-        Motion(
-            n,
-            kind,
-            ts,
-            end,
-            rate,
-            0,
-            None,
-            0,
-            0.0,
-            st.tool_length,
-            st.tool,
-            st.spindle * st.spindle_dir,
-            False,
-        )
-    )
-    st.pos = list(end)
-    return True
+        st.feed = feed
+        if new_feed:
+            st.feed_units = st.units
+        if new_motion:
+            st.cycle_il = None
+        it.started = True
+    return k
+
+
+def _motion_of(fields: tuple[object, ...]) -> Motion:
+    return tuple.__new__(Motion, fields)
 
 
 def _fast_arc(it: Interpreter, motion: int, words: tuple[str, ...], n: int) -> bool:
@@ -1349,11 +1374,18 @@ def iter_motions(
         matches = _FAST_LINE.findall("\n".join(batch)) if fast else []
         if len(matches) != len(batch):  # a line with a character that ends lines
             matches = [("",) * 11 + ("-",)] * len(batch)
-        for raw, words in zip(batch, matches):  # noqa: B905 (equal lengths by construction)
-            n += 1
-            if _fast(it, words, n):
+        n0 = n
+        i = 0
+        while i < len(batch):
+            k = _fast_run(it, matches, i, n0) if fast else i
+            if k > i:
+                n = n0 + k
                 last_text = n
+                i = k
                 continue
+            raw = batch[i]
+            i += 1
+            n = n0 + i
             mark = len(out)
             try:
                 blk = parse_line(raw, n, source)

@@ -26,12 +26,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .gcode import Motion
+from .gcode import Motion
 
 KIND_RAPID, KIND_FEED, KIND_ARC, KIND_DWELL = 0, 1, 2, 3
 _KIND = {"rapid": KIND_RAPID, "feed": KIND_FEED, "arc": KIND_ARC, "dwell": KIND_DWELL}
@@ -163,22 +161,25 @@ def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
     rotary limits scaled by length/angle; on arcs v ≤ sqrt(a r) (centripetal).
     """
     n = len(motions)
-    kind = np.array([_KIND[m.kind] for m in motions], dtype=int) if n else np.zeros(0, int)
-    start = np.array([m.start for m in motions], dtype=float).reshape(n, 5)
-    end = np.array([m.end for m in motions], dtype=float).reshape(n, 5)
-    line = np.array([m.line for m in motions], dtype=int)
-    tool_length = np.array([m.tool_length for m in motions], dtype=float)
-    feed = np.array([m.feed for m in motions], dtype=float)
-    duration = np.array([m.duration for m in motions], dtype=float)
+    # one pass over the motions (Motion is a tuple): a column per field
+    cols = list(zip(*motions, strict=True)) if n else [()] * len(Motion._fields)
+    f = Motion._fields.index
+    kind = np.array([_KIND[k] for k in cols[f("kind")]], dtype=int).reshape(n)
+    start = np.array(cols[f("start")], dtype=float).reshape(n, 5)
+    end = np.array(cols[f("end")], dtype=float).reshape(n, 5)
+    line = np.array(cols[f("line")], dtype=int).reshape(n)
+    tool_length = np.array(cols[f("tool_length")], dtype=float).reshape(n)
+    feed = np.array(cols[f("feed")], dtype=float).reshape(n)
+    duration = np.array(cols[f("duration")], dtype=float).reshape(n)
     is_arc = kind == KIND_ARC
-    arcs = [m for m in motions if m.kind == "arc"]
     plane = np.zeros(n, dtype=int)
     center = np.zeros((n, 3))
     rotation = np.zeros(n, dtype=int)
+    arcs = np.flatnonzero(is_arc).tolist()
     if arcs:
-        plane[is_arc] = [m.plane for m in arcs]
-        center[is_arc] = np.array([m.center for m in arcs], dtype=float)
-        rotation[is_arc] = [m.rotation for m in arcs]
+        plane[is_arc] = [cols[f("plane")][i] for i in arcs]
+        center[is_arc] = np.array([cols[f("center")][i] for i in arcs], dtype=float)
+        rotation[is_arc] = [cols[f("rotation")][i] for i in arcs]
 
     dxyz = end[:, :3] - start[:, :3]
     lin_len = np.sqrt(np.einsum("ij,ij->i", dxyz, dxyz))
