@@ -274,8 +274,11 @@ def inspect_source(path: str) -> str:
     return h.hexdigest()
 
 
-def iter_program_lines(path: str, progress: Callable[[int], None] | None = None) -> Iterator[str]:
-    """The program's lines without their ends (CR, LF or CRLF), read as a stream.
+def iter_program_batches(
+    path: str, progress: Callable[[int], None] | None = None
+) -> Iterator[list[str]]:
+    """The program's lines without their ends (CR, LF or CRLF), read as a stream,
+    a list per block read.
 
     Bytes that are not UTF-8 become lone surrogates: harmless in comments, and
     rejected by the parser anywhere else.
@@ -288,13 +291,13 @@ def iter_program_lines(path: str, progress: Callable[[int], None] | None = None)
 
         def pieces() -> Iterator[str]:
             chars = 0
-            while piece := fh.read(1 << 18):
+            while piece := fh.read(1 << 17):
                 chars += len(piece)
                 yield piece
                 if progress is not None:
                     progress(chars)
 
-        yield from gcode.iter_lines(pieces())
+        yield from gcode.iter_line_batches(pieces())
 
 
 class _Progress:
@@ -350,17 +353,17 @@ def _prepare_here(
     """The program's motions, chunk by chunk, through :func:`chain.prepare`."""
     from . import chain, gcode
 
-    def counted(it: Iterator[str]) -> Iterator[str]:
-        for ln in it:
-            counts["lines"] += 1
-            yield ln
+    def counted(batches: Iterator[list[str]]) -> Iterator[list[str]]:
+        for batch in batches:
+            counts["lines"] += len(batch)
+            yield batch
 
-    lines = (
-        iter_program_lines(job.program, bar)
+    batches = (
+        iter_program_batches(job.program, bar)
         if job.program != "-"
-        else iter(gcode.split_lines(read_text("-", "G-code program")))
+        else gcode.batches_of(gcode.split_lines(read_text("-", "G-code program")))
     )
-    motions = gcode.iter_motions(counted(lines), cfg, job.program)
+    motions = gcode.iter_motions_batched(counted(batches), cfg, job.program)
     limits = chain.limits_of(prof)
     while True:
         t0 = time.perf_counter()
