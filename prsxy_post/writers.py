@@ -91,17 +91,17 @@ def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str =
         if tie.size:
             k[tie] = [int(f"{abs(x):.{d}f}".replace(".", "")) for x in v[tie].tolist()]
         width = max(len(str(int(k.max()))), d + 1)  # at least the units digit
-        digits = np.empty((n, width), np.uint8)
-        x = k
+        digits = np.empty((width, n), np.uint8)
+        # int32 division is several times faster than int64 where the values fit
+        x = k.astype(np.int32) if width < 10 else k
         for j in range(width - 1, -1, -1):
             q = x // 10
-            digits[:, j] = x - q * 10
+            digits[j] = x - q * 10
             x = q
         int_w = width - d
-        chars = digits + np.uint8(48)
+        chars = (digits + np.uint8(48)).T
         # leading zeros of the integer part go, the units digit stays
-        lead = np.cumsum(digits[:, : int_w - 1] != 0, axis=1) == 0
-        chars[:, : int_w - 1][lead] = 0
+        chars[:, : int_w - 1] *= np.maximum.accumulate(digits[: int_w - 1], axis=0).T != 0
         sign = np.where(np.signbit(v), ord("-"), 0).astype(np.uint8)
         block = np.zeros((n, width + 2), np.uint8)
         block[:, 0] = sign
@@ -112,7 +112,7 @@ def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str =
         parts.append(block)
     parts.append(np.tile(np.frombuffer(end.encode("ascii"), np.uint8), (n, 1)))
     flat = np.hstack(parts).ravel()
-    return flat[flat != 0].tobytes().decode("ascii").splitlines(keepends=True)
+    return np.compress(flat != 0, flat).tobytes().decode("ascii").splitlines(keepends=True)
 
 
 def _header(prov: Provenance, profile: Profile, extra: Sequence[str]) -> list[str]:
