@@ -349,10 +349,12 @@ def peak_rss_mb() -> float | None:
 
 
 def _prepare_here(
-    job: ConvertJob, cfg: Any, prof: Any, counts: dict[str, float], bar: Any = None
+    job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any = None
 ) -> Iterator[Any]:
     """The program's motions, chunk by chunk, through :func:`chain.prepare`."""
     from . import chain, gcode
+
+    cfg = chain.interpreter_config(prof, job.start)
 
     def counted(batches: Iterator[list[str]]) -> Iterator[list[str]]:
         for batch in batches:
@@ -377,7 +379,7 @@ def _prepare_here(
             return
 
 
-def _prepare_child(conn: Any, job: ConvertJob, cfg: Any, prof: Any) -> None:
+def _prepare_child(conn: Any, job: ConvertJob, prof: Any) -> None:
     """Runs in the interpreter process: sends ("chunk", prepared, chars read),
     then ("done", counts, peak MB), or ("error", PrsxyError) / ("crash", text)."""
     chars = [0]
@@ -387,7 +389,7 @@ def _prepare_child(conn: Any, job: ConvertJob, cfg: Any, prof: Any) -> None:
 
     counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
     try:
-        for prepared in _prepare_here(job, cfg, prof, counts, progress):
+        for prepared in _prepare_here(job, prof, counts, progress):
             conn.send(("chunk", prepared, chars[0]))
         conn.send(("done", counts, peak_rss_mb()))
     except PrsxyError as err:
@@ -400,7 +402,7 @@ def _prepare_child(conn: Any, job: ConvertJob, cfg: Any, prof: Any) -> None:
 
 @contextlib.contextmanager
 def _prepared_chunks(
-    job: ConvertJob, cfg: Any, prof: Any, counts: dict[str, float], bar: Any
+    job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any
 ) -> Iterator[Iterator[Any]]:
     """Prepared chunks of the program, made here or, with ``job.parallel`` where
     processes can fork, by a second process that runs ahead (a full pipe holds
@@ -413,13 +415,13 @@ def _prepared_chunks(
         or job.program == "-"
         or ("fork" not in multiprocessing.get_all_start_methods())
     ):
-        yield _prepare_here(job, cfg, prof, counts, bar)
+        yield _prepare_here(job, prof, counts, bar)
         return
     ctx = multiprocessing.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
     sys.stdout.flush()
     sys.stderr.flush()
-    proc = ctx.Process(target=_prepare_child, args=(send, job, cfg, prof), daemon=True)
+    proc = ctx.Process(target=_prepare_child, args=(send, job, prof), daemon=True)
     proc.start()
     send.close()
 
@@ -522,34 +524,14 @@ def convert_file(job: ConvertJob) -> ConvertStats:
 
 
 def _convert_file(job: ConvertJob) -> ConvertStats:
-    from . import chain, errormap, writers
-
     prof = load_profile(job.profile_path)
-    sha = inspect_source(job.program) if job.program != "-" else ""
-    cfg = chain.interpreter_config(prof, job.start)
-    stages = chain.Stages(*job.stages)
-    emap = errormap.from_profile(prof) if stages.error_map else None
-    prov = writers.Provenance(
-        source=job.program,
-        source_sha256=sha,
-        profile_name=prof.name,
-        profile_source=job.profile_path,
-        profile_sha256=sha256_of(job.profile_path),
-        options=job.options,
-    )
-    writer: writers.PmacWriter | writers.GcodeWriter
-    if job.fmt == "pmac":
-        writer = writers.PmacWriter(prof, prov)
-        split = writer.max_pts > 0
-    else:
-        writer = writers.GcodeWriter(prof, prov, float(prof.output["gcode_tolerance_mm"]))
-        split = False
     bar = None
     if job.progress and job.program != "-":
         bar = _Progress(job.program, os.path.getsize(job.program))
     sinks: dict[int, Any] = {}
     temps: dict[int, str] = {}
     memory: dict[int, list[str]] = {}
+    split = False
 
     def emit(pieces: list[tuple[int, str]]) -> None:
         for part, text in pieces:
@@ -577,9 +559,30 @@ def _convert_file(job: ConvertJob) -> ConvertStats:
         t_write += time.perf_counter() - t0
 
     try:
-        pipe = chain.Pipeline(prof, stages, emap, start=job.start)
-        write(writer.begin)
-        with _prepared_chunks(job, cfg, prof, counts, bar) as source:
+        # the interpreter starts first: with a second process, everything below
+        # up to the first chunk happens while it reads
+        with _prepared_chunks(job, prof, counts, bar) as source:
+            from . import chain, errormap, writers
+
+            sha = inspect_source(job.program) if job.program != "-" else ""
+            stages = chain.Stages(*job.stages)
+            emap = errormap.from_profile(prof) if stages.error_map else None
+            prov = writers.Provenance(
+                source=job.program,
+                source_sha256=sha,
+                profile_name=prof.name,
+                profile_source=job.profile_path,
+                profile_sha256=sha256_of(job.profile_path),
+                options=job.options,
+            )
+            writer: writers.PmacWriter | writers.GcodeWriter
+            if job.fmt == "pmac":
+                writer = writers.PmacWriter(prof, prov)
+                split = writer.max_pts > 0
+            else:
+                writer = writers.GcodeWriter(prof, prov, float(prof.output["gcode_tolerance_mm"]))
+            pipe = chain.Pipeline(prof, stages, emap, start=job.start)
+            write(writer.begin)
             for prepared in source:
                 for pc in pipe.feed_prepared(prepared):
                     n_points += len(pc)

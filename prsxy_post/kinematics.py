@@ -228,7 +228,7 @@ def solve_platform(
     q = np.atleast_2d(np.asarray(q, dtype=float))
     n = q.shape[0]
     t = _tool_vectors(geo, n, tool_length_offset)
-    Rab = rot_y(np.radians(q[:, 4])) @ rot_x(np.radians(q[:, 3]))  # (N, 3, 3)
+    Rab = _rot_yx(np.radians(q[:, 3]), np.radians(q[:, 4]))  # Ry(B) Rx(A), (N, 3, 3)
     nul, Mp = geo._m
     # R b = cos γ · Rab (bx, by, 0) + sin γ · Rab (−by, bx, 0) + Rab (0, 0, bz)
     bxy = geo.b.copy()
@@ -263,8 +263,22 @@ def solve_platform(
     cg, sg = np.cos(gamma), np.sin(gamma)
     r = r0 + rc * cg[:, None] + rs * sg[:, None]
     c = r @ Mp.T
-    R = Rab @ rot_z(gamma)
+    # R = Rab Rz(γ), written out: Rz mixes the first two columns only
+    R = np.empty_like(Rab)
+    R[:, :, 0] = Rab[:, :, 0] * cg[:, None] + Rab[:, :, 1] * sg[:, None]
+    R[:, :, 1] = Rab[:, :, 1] * cg[:, None] - Rab[:, :, 0] * sg[:, None]
+    R[:, :, 2] = Rab[:, :, 2]
     return PlatformPose(c, gamma, R)
+
+
+def _rot_yx(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Ry(b) Rx(a) written out, shape (N, 3, 3); radians."""
+    ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
+    R = np.empty((len(a), 3, 3))
+    R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = cb, sb * sa, sb * ca
+    R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = 0.0, ca, -sa
+    R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = -sb, cb * sa, cb * ca
+    return R
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
