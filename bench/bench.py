@@ -10,8 +10,13 @@ For each size it generates a five-axis finishing program (short G1 moves at F200
 five-axis passes, small R arcs), converts it with every compensation stage on and
 PMAC output (a calibrated profile with real-axis tables and an error map), in a child
 process so peak resident memory is that conversion's alone, and reports per stage:
-seconds, lines/s, interpolation points/s. In the same run and on the same file it
-times LinuxCNC's ``rs274 -g`` and pygcode's ``Machine`` when they are installed.
+seconds, lines/s, interpolation points/s. Two times: ``chain`` is the conversion
+inside the process (what ``convert_file`` takes: read, interpret, plan, compensate,
+write), ``command`` is the whole ``prsxy-post convert`` command as a user runs it
+(Python's start and imports included). In the same run and on the same file it
+times LinuxCNC's ``rs274 -g`` (a whole command too) and pygcode's ``Machine`` when
+they are installed. Large programs are interpreted in a second process (see
+README); peak memory is reported for both processes.
 
 It is a script, not a test: the figures depend on the machine. README shows the
 latest figures with the machine they were taken on.
@@ -115,6 +120,7 @@ def child_convert(program: str, prof: str, out: str) -> None:
                 "points": st.points,
                 "timings": st.timings,
                 "peak_rss_mb": rss,
+                "helper_peak_rss_mb": st.helper_peak_rss_mb,
             }
         )
     )
@@ -150,6 +156,28 @@ def time_rs274(program: Path) -> float | None:
         return time.perf_counter() - t0
 
 
+def time_command(program: Path, prof: Path, out: Path) -> float:
+    """Wall time of the ``prsxy-post convert`` command, start to exit."""
+    t0 = time.perf_counter()
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "prsxy_post.cli",
+            "convert",
+            str(program),
+            "--profile",
+            str(prof),
+            "-o",
+            str(out),
+            "-q",
+        ],
+        check=True,
+        cwd=ROOT,
+    )
+    return time.perf_counter() - t0
+
+
 def time_pygcode(program: Path, limit_lines: int) -> float | None:
     try:
         from pygcode import Line, Machine
@@ -181,6 +209,7 @@ def run(sizes: list[int], pygcode_limit: int) -> list[dict]:
             )
             r = json.loads(proc.stdout.strip().splitlines()[-1])
             r["size_lines"] = n
+            r["command_s"] = time_command(prog, prof, out)
             r["rs274_s"] = time_rs274(prog)
             r["pygcode_s"] = time_pygcode(prog, pygcode_limit)
             r["output_mb"] = out.stat().st_size / 1e6
@@ -198,22 +227,22 @@ def report(results: list[dict]) -> str:
         "",
     ]
     lines += [
-        "| lines | total s | lines/s | points | points/s | peak RSS MB | rs274 -g s | "
-        "pygcode Machine s | total / rs274 |",
-        "|" + "---:|" * 9,
+        "| lines | chain s | command s | lines/s | points/s | peak RSS MB | rs274 -g s | "
+        "pygcode Machine s | chain / rs274 | command / rs274 | pygcode / command |",
+        "|" + "---:|" * 11,
     ]
+
+    def f(x: float | None, fmt: str) -> str:
+        return format(x, fmt) if x else "-"
+
     for r in results:
-        rs = r["rs274_s"]
-        pg = r["pygcode_s"]
+        rs, pg, cmd, tot = r["rs274_s"], r["pygcode_s"], r["command_s"], r["total_s"]
+        helper = r.get("helper_peak_rss_mb") or 0.0
         lines.append(
-            f"| {r['lines']:,} | {r['total_s']:.2f} | {r['lines'] / r['total_s']:,.0f} | "
-            f"{r['points']:,} | {r['points'] / r['total_s']:,.0f} | {r['peak_rss_mb']:.0f} | "
-            + (f"{rs:.2f}" if rs else "-")
-            + " | "
-            + (f"{pg:.1f}" if pg else "-")
-            + " | "
-            + (f"{r['total_s'] / rs:.2f}" if rs else "-")
-            + " |"
+            f"| {r['lines']:,} | {tot:.2f} | {cmd:.2f} | {r['lines'] / cmd:,.0f} | "
+            f"{r['points'] / cmd:,.0f} | {r['peak_rss_mb']:.0f} + {helper:.0f} | "
+            f"{f(rs, '.2f')} | {f(pg, '.1f')} | {f(rs and tot / rs, '.2f')} | "
+            f"{f(rs and cmd / rs, '.2f')} | {f(pg and pg / cmd, '.1f')} |"
         )
     lines += [
         "",
