@@ -20,7 +20,6 @@ import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
@@ -746,6 +745,8 @@ def convert(
             )
         )
     if pooled:
+        from concurrent.futures import ProcessPoolExecutor  # here: it takes 10 ms to import
+
         with ProcessPoolExecutor(max_workers=jobs) as pool:
             results = list(pool.map(_run_job, jobs_list))
     else:
