@@ -1,6 +1,7 @@
 """How often diagnose is right: every library member hidden at several sizes and seeds.
 
-    python bench/diagnose_accuracy.py [--seeds 5] [--json out.json]
+    python bench/diagnose_accuracy.py [--seeds 5 | --seed 3 --seed 4] [--json out.json]
+    python bench/diagnose_accuracy.py --summarise a.json b.json
 
 For each effect of the library (at realistic sizes: tens of µm for lengths, a few
 hundredths of a degree for angles, 0.1 mm/m squareness, a few µm of backlash or
@@ -107,45 +108,64 @@ def one(nominal: profile.Profile, effects: dict[str, float], seed: int) -> dict:
     }
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seeds", type=int, default=3)
-    ap.add_argument("--json")
-    args = ap.parse_args()
-    nominal = profile.loads((ROOT / "profiles" / "prsxy-nominal.toml").read_text(), "nominal")
-    out = []
-    for seed in range(args.seeds):
-        out.append(one(nominal, {}, 1000 + seed))
-        for name, size in SIZES.items():
-            for k in (0.5, 1.0, 2.0):
-                out.append(one(nominal, {name: size * k}, seed * 100 + len(out)))
-        names = list(SIZES)
-        rng = np.random.default_rng(seed)
-        for _ in range(4):
-            a, b = rng.choice(len(names), 2, replace=False)
-            out.append(
-                one(
-                    nominal,
-                    {names[a]: SIZES[names[a]], names[b]: SIZES[names[b]]},
-                    5000 + seed * 10 + len(out),
-                )
-            )
-        print(f"seed {seed}: {len(out)} runs so far", file=sys.stderr)
+def run_seed(nominal: profile.Profile, seed: int) -> list[dict]:
+    """Every case of one seed; case i of seed s uses RNG seed s·1000 + i."""
+    out = [one(nominal, {}, 1000 + seed)]
+    for name, size in SIZES.items():
+        for k in (0.5, 1.0, 2.0):
+            out.append(one(nominal, {name: size * k}, seed * 1000 + len(out)))
+    names = list(SIZES)
+    rng = np.random.default_rng(seed)
+    for _ in range(4):
+        a, b = rng.choice(len(names), 2, replace=False)
+        effects = {names[a]: SIZES[names[a]], names[b]: SIZES[names[b]]}
+        out.append(one(nominal, effects, 5000 + seed * 1000 + len(out)))
+    return out
+
+
+def summarise(out: list[dict]) -> str:
     single = [r for r in out if len(r["effects"]) == 1]
     none = [r for r in out if not r["effects"]]
     pairs = [r for r in out if len(r["effects"]) == 2]
     sized = [r for r in single if r["sized"] is not None]
-    print(
+    lines = [
+        f"seeds {sorted({r['seed_group'] for r in out})}: {len(out)} diagnoses",
         f"single effects: named first {sum(r['first'] for r in single)}/{len(single)}, "
         f"sized within 20 % {sum(r['sized'] for r in sized)}/{len(sized)}, "
         f"residual to noise and nothing more on a second pass "
-        f"{sum(r['clean'] for r in single)}/{len(single)}"
-    )
-    print(f"no hidden effect: nothing named {sum(r['named'] for r in none)}/{len(none)}")
-    print(f"two hidden effects: both found {sum(r['named'] for r in pairs)}/{len(pairs)}")
-    for r in single:
-        if not (r["first"] and r["clean"]):
-            print("  missed:", r["effects"], "found", r["found"], f"after {r['rms_after_um']:.2f}")
+        f"{sum(r['clean'] for r in single)}/{len(single)}",
+        f"no hidden effect: nothing named {sum(r['named'] for r in none)}/{len(none)}",
+        f"two hidden effects: both found {sum(r['named'] for r in pairs)}/{len(pairs)}",
+    ]
+    for r in out:
+        ok = r["named"] and (len(r["effects"]) != 1 or (r["first"] and r["clean"]))
+        if not ok:
+            lines.append(
+                f"  missed: {r['effects']} found {r['found']} after {r['rms_after_um']:.2f} µm"
+            )
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seeds", type=int, default=3, help="seeds 0 .. N-1")
+    ap.add_argument("--seed", type=int, action="append", help="these seeds instead")
+    ap.add_argument("--json", help="write the cases here")
+    ap.add_argument("--summarise", nargs="+", metavar="JSON", help="only summarise saved runs")
+    args = ap.parse_args()
+    if args.summarise:
+        out = [r for f in args.summarise for r in json.loads(Path(f).read_text())]
+        print(summarise(out))
+        return
+    nominal = profile.loads((ROOT / "profiles" / "prsxy-nominal.toml").read_text(), "nominal")
+    out = []
+    for seed in args.seed or range(args.seeds):
+        cases = run_seed(nominal, seed)
+        for r in cases:
+            r["seed_group"] = seed
+        out += cases
+        print(f"seed {seed}: {len(out)} diagnoses so far", file=sys.stderr)
+    print(summarise(out))
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=1))
 

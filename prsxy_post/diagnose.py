@@ -16,7 +16,11 @@ The loop an engineer runs with a ballbar plot, made a procedure:
    long as its improvement passes both an F-test at level ``alpha`` and the
    BIC penalty (ΔSSE/σ̂² > dof · ln n). Effects whose signatures cannot be told
    apart from the chosen one (correlation of the whitened, already-explained-
-   projected columns above ``alias_corr``) are reported as its aliases.
+   projected columns above ``alias_corr``) are reported as its aliases. Two
+   effects together can resemble a third; when the best single effect leaves
+   more than four times the noise, the step looks ahead over every pair
+   (:func:`_best_pair`) and starts with the stronger member of a pair that
+   explains clearly more than the greedy choice with its best partner.
 4. **Add** it: the sizes are refined by Gauss–Newton through the full
    (nonlinear) model and written into the profile with a provenance note.
 5. **Show** the gap shrink: residual RMS and max before and after, per run.
