@@ -404,9 +404,10 @@ def _prepared_chunks(
     job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any
 ) -> Iterator[Iterator[Any]]:
     """Prepared chunks of the program, made here or, with ``job.parallel`` where
-    processes can fork, by a second process that runs ahead (a full pipe holds
-    it back, so memory stays bounded). Errors arrive in program order: every
-    chunk before a G-code error is delivered first, as when run here."""
+    processes can fork, by a second process that runs ahead, at most
+    :data:`AHEAD` chunks (a bounded queue, then the pipe, hold it back), so memory
+    stays bounded. Errors arrive in program order: every chunk before a G-code
+    error is delivered first, as when run here."""
     import multiprocessing
 
     if (
