@@ -1193,11 +1193,14 @@ class Interpreter:
 #: order X Y Z A B, arc words I J K R, an optional F (each at most once), nothing
 #: else. Matched over a whole batch of lines at once (one match per line: the last
 #: group takes any other line).
-_NUM = r"[ \t]*([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))[ \t]*"
+#: Possessive quantifiers (nothing is given back: the last group takes whatever is
+#: left, so no match ever needs to backtrack) make it a third faster; only the
+#: zeros of G00 must be able to give one back.
+_NUM = r"[ \t]*+([-+]?+(?:[0-9]++\.?+[0-9]*+|\.[0-9]++))[ \t]*+"
 _FAST_LINE = re.compile(
-    r"^[ \t]*(?:[Nn][ \t]*[0-9]+[ \t]*)?(?:[Gg][ \t]*0*([0-3])(?![0-9.])[ \t]*)?"
-    + "".join(f"(?:[{c}{c.lower()}]{_NUM})?" for c in "XYZABIJKRF")
-    + r"($|.*)",
+    r"^[ \t]*+(?:[Nn][ \t]*+[0-9]++[ \t]*+)?+(?:[Gg][ \t]*+0*([0-3])(?![0-9.])[ \t]*+)?+"
+    + "".join(f"(?:[{c}{c.lower()}]{_NUM})?+" for c in "XYZABIJKRF")
+    + r"(.*)$",
     re.M,
 )
 _ZERO5 = (0.0, 0.0, 0.0, 0.0, 0.0)
