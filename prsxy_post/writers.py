@@ -57,8 +57,8 @@ def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str =
     The same text as ``"%s%.{d}f" % (prefix, value)`` per column, built for all
     rows at once: digits as bytes in an (N, width) array, unused places dropped.
     Python formats a value itself only where the scaled value lies within 1e-6
-    of a rounding tie (there the binary value decides, as in Python) and every
-    value of a column too large for :data:`_INT_DIGITS`.
+    of a rounding tie (there the binary value decides, as in Python), and every
+    value when one is too large for :data:`_INT_DIGITS` (or for exact integers).
 
     Parameters
     ----------
@@ -205,7 +205,6 @@ class PmacWriter:
         self.last_line: int | None = None
         self.last_P: np.ndarray | None = None
         d = self.dec
-        self.row_fmt = " ".join(f"{a}%.{d}f:%.4f" for a in self.names)
         self.pos_fmt = " ".join(f"{a}%.{d}f" for a in self.names)
 
     def _open_part(self, P0: np.ndarray) -> list[str]:
