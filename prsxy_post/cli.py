@@ -66,6 +66,19 @@ def sha256_of(path: str) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+def _publish(tmp: str, target: str | Path) -> None:
+    """Rename a finished temp file onto its target with the mode an ordinary new
+    file gets (mkstemp makes it 0600), or the mode of the file it replaces."""
+    try:
+        mode = os.stat(target).st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        mode = 0o666 & ~umask
+    os.chmod(tmp, mode)
+    os.replace(tmp, target)
+
+
 def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:
     """Write every file or none: temp files beside the targets, then renames.
 
@@ -83,7 +96,7 @@ def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | b
                 fh.flush()
                 os.fsync(fh.fileno())
         for tmp, path in temps:
-            os.replace(tmp, path)
+            _publish(tmp, path)
     except OSError as exc:
         for tmp, _ in temps:
             if os.path.exists(tmp):
@@ -599,7 +612,7 @@ def _convert_file(job: ConvertJob) -> ConvertStats:
         written = []
         for part in sorted(temps):
             target = _part_path(job.output, part, split)
-            os.replace(temps[part], target)
+            _publish(temps[part], target)
             written.append(target)
         if job.output == "-":
             sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))

@@ -67,6 +67,24 @@ def test_golden_outputs(
     assert got == golden.read_text(), f"{golden.name} changed"
 
 
+def test_outputs_get_ordinary_file_modes(runner: CliRunner, tmp_path: Path) -> None:
+    """Written through a temp file, an output still gets the mode a new file gets
+    (umask applied), and a replaced file keeps its own."""
+    old = os.umask(0o022)
+    try:
+        new = tmp_path / "new.pmc"
+        invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP, "-o", str(new))
+        assert new.stat().st_mode & 0o777 == 0o644
+        kept = tmp_path / "kept.pmc"
+        kept.write_text("old")
+        kept.chmod(0o640)
+        invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP, "-o", str(kept))
+        assert kept.read_text() != "old"
+        assert kept.stat().st_mode & 0o777 == 0o640
+    finally:
+        os.umask(old)
+
+
 def test_output_is_deterministic(runner: CliRunner, tmp_path: Path) -> None:
     a, b = tmp_path / "a.pmc", tmp_path / "b.pmc"
     invoke(runner, "convert", "samples/pocket.ngc", "--profile", PERTURBED, "-o", str(a))
