@@ -19,7 +19,7 @@ import tempfile
 import threading
 import time
 import traceback
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Generator, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
@@ -289,7 +289,7 @@ def inspect_source(path: str) -> str:
 
 def iter_program_batches(
     path: str, progress: Callable[[int], None] | None = None
-) -> Iterator[list[str]]:
+) -> Generator[list[str], None, None]:
     """The program's lines without their ends (CR, LF or CRLF), read as a stream,
     a list per block read.
 
@@ -801,23 +801,43 @@ def check(
 
     prof = load_profile(profile_path)
     st = parse_pose(start, "--start") if start else None
-    text = read_text(program, "G-code program")
     cfg = chain.interpreter_config(prof, st)
-    motions = list(gcode.iter_motions(gcode.split_lines(text), cfg, program))
     stages = chain.Stages(not no_error_map, not nominal_kinematics, not no_axis_comp)
     emap = errormap.from_profile(prof) if stages.error_map else None
-    result = chain.run_chain(motions, prof, stages, emap, start=st, collect=True)
-    for p in result.problems:
+    # streamed like convert: a program of millions of lines is checked in bounded
+    # memory (the points are counted, not kept)
+    if program == "-":
+        batches = gcode.batches_of(gcode.split_lines(read_text(program, "G-code program")))
+    else:
+        inspect_source(program)  # a binary file is refused with its line
+        batches = iter_program_batches(program)
+    motions = gcode.iter_motions_batched(batches, cfg, program)
+    pipe = chain.Pipeline(prof, stages, emap, start=st, collect=True)
+    n_motions = n_points = 0
+    seconds = 0.0
+
+    def count(chunks: list[Any]) -> None:
+        nonlocal n_points, seconds
+        for pc in chunks:
+            n_points += len(pc)
+            seconds += float(np.sum(pc.dt))
+
+    with _few_gc_passes(), contextlib.closing(motions), contextlib.closing(batches):
+        while True:
+            batch = list(itertools.islice(motions, 4096))
+            n_motions += len(batch)
+            count(pipe.feed(batch))
+            if len(batch) < 4096:
+                break
+        count(pipe.finish())
+    problems = sorted(pipe.problems, key=lambda p: p.line or 0)
+    for p in problems:
         click.echo(str(p.located(source=program)))
-    n = len(result.problems)
-    s = result.samples
+    n = len(problems)
     if n:
         click.echo(f"{program}: {n} problem{'s' * (n != 1)}", err=True)
         sys.exit(1)
-    click.echo(
-        f"{program}: ok ({len(motions)} motions, {len(s)} points, {float(np.sum(s.dt)):.2f} s)",
-        err=True,
-    )
+    click.echo(f"{program}: ok ({n_motions} motions, {n_points} points, {seconds:.2f} s)", err=True)
 
 
 # ------------------------------------------------------------------ measurements

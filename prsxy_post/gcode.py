@@ -27,7 +27,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Generator, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -1346,7 +1346,7 @@ def _fast_arc(it: Interpreter, motion: int, words: tuple[str, ...], n: int) -> b
     return True
 
 
-def batches_of(lines: Iterable[str]) -> Iterator[list[str]]:
+def batches_of(lines: Iterable[str]) -> Generator[list[str], None, None]:
     """Lines in lists of :data:`_BATCH`."""
     batch: list[str] = []
     for raw in lines:
@@ -1384,7 +1384,7 @@ def iter_motions_batched(
     config: InterpreterConfig | None = None,
     source: str = "<string>",
     fast: bool = True,
-) -> Iterator[Motion]:
+) -> Generator[Motion, None, None]:
     """:func:`iter_motions` over lines that come in lists (:func:`iter_line_batches`)."""
     it = Interpreter(config, source)
     out = it.out

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 
 import pytest
@@ -272,6 +273,25 @@ def test_check_lists_every_problem(runner: CliRunner, tmp_path: Path) -> None:
     assert f"{prog}:4:" in r.output and "above the machine's maximum" in r.output
     ok = invoke(runner, "check", "samples/pocket.ngc", "--profile", SHOP)
     assert ok.exit_code == 0
+
+
+def test_check_streams_long_programs_and_lists_problems_in_line_order(
+    runner: CliRunner, tmp_path: Path
+) -> None:
+    """Problems in different chunks of a long program, listed by line, each once."""
+    body = [f"X{(i % 40) * 0.5:.1f} Y{(i % 9) * 0.5:.1f}" for i in range(10000)]
+    body[6000] = "X500"  # beyond the table's travel (and on the way back)
+    body[2000], body[2001] = "X1 A40", "X1 A0"  # tilted beyond the limit
+    body[9000], body[9001] = "X2 F99999", "X1 F2000"  # above the machine's feed
+    prog = tmp_path / "long.ngc"
+    prog.write_text("\n".join(["G21 G90 G1 F2000", *body, "M2"]) + "\n")
+    r = invoke(runner, "check", str(prog), "--profile", SHOP)
+    assert r.exit_code == 1
+    found = [int(m) for m in re.findall(rf"^{re.escape(str(prog))}:(\d+):", r.output, re.M)]
+    assert found == sorted(found)
+    assert set(found) >= {2002, 6002, 9002}
+    assert len(found) <= 6
+    assert f"{len(found)} problems" in r.output
 
 
 # ---------------------------------------------------------------- errors
