@@ -194,6 +194,11 @@ class Profile:
 # ---------------------------------------------------------------- validation
 
 
+#: No number in a profile is larger than this (lengths in mm, counts, limits):
+#: larger ones are typos, and squaring 1e154 overflows.
+MAX_MAGNITUDE = 1e12
+
+
 class _Checker:
     """Reads typed values out of a TOML table, naming the key in every error."""
 
@@ -231,9 +236,18 @@ class _Checker:
         value = doc[name]
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(key, f"is a {_tname(value)} ({value!r})", "a number")
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:
+            raise self.fail(
+                key,
+                "is an integer beyond any float",
+                f"a number of magnitude at most {MAX_MAGNITUDE:g}",
+            ) from None
         if not math.isfinite(x):
             raise self.fail(key, f"is {value!r}", "a finite number")
+        if abs(x) > MAX_MAGNITUDE:
+            raise self.fail(key, f"is {x:g}", f"a number of magnitude at most {MAX_MAGNITUDE:g}")
         if positive and x <= 0:
             raise self.fail(key, f"is {x:g}", "a number > 0")
         if (lo is not None and x < lo) or (hi is not None and x > hi):
@@ -258,6 +272,10 @@ class _Checker:
             raise self.fail(key, f"is a {_tname(value)} ({value!r})", "an integer")
         if lo is not None and value < lo:
             raise self.fail(key, f"is {value}", f"an integer >= {lo}")
+        if abs(value) > MAX_MAGNITUDE:
+            raise self.fail(
+                key, f"is {value}", f"an integer of magnitude at most {MAX_MAGNITUDE:g}"
+            )
         return value
 
     def string(
@@ -290,6 +308,10 @@ class _Checker:
         for i, v in enumerate(value):
             if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
                 raise self.fail(f"{key}[{i}]", f"is {v!r}", "a finite number")
+            if abs(v) > MAX_MAGNITUDE:
+                raise self.fail(
+                    f"{key}[{i}]", f"is {v:g}", f"a number of magnitude at most {MAX_MAGNITUDE:g}"
+                )
         return np.array(value, dtype=float)
 
     def unknown(self, doc: Mapping[str, Any], allowed: set[str], path: str) -> None:
