@@ -108,18 +108,36 @@ def one(nominal: profile.Profile, effects: dict[str, float], seed: int) -> dict:
     }
 
 
+def scored(nominal: profile.Profile, effects: dict[str, float], seed: int) -> dict:
+    """:func:`one`, with an exception counted as a miss (and its message kept)."""
+    try:
+        return one(nominal, effects, seed)
+    except Exception as exc:  # a crash is a wrong answer, not the end of the sweep
+        return {
+            "effects": effects,
+            "seed": seed,
+            "named": False,
+            "first": False,
+            "sized": None,
+            "rms_after_um": float("nan"),
+            "noise_um": float("nan"),
+            "clean": False,
+            "found": [f"{type(exc).__name__}: {exc}"],
+        }
+
+
 def run_seed(nominal: profile.Profile, seed: int) -> list[dict]:
     """Every case of one seed; case i of seed s uses RNG seed s·1000 + i."""
-    out = [one(nominal, {}, 1000 + seed)]
+    out = [scored(nominal, {}, 1000 + seed)]
     for name, size in SIZES.items():
         for k in (0.5, 1.0, 2.0):
-            out.append(one(nominal, {name: size * k}, seed * 1000 + len(out)))
+            out.append(scored(nominal, {name: size * k}, seed * 1000 + len(out)))
     names = list(SIZES)
     rng = np.random.default_rng(seed)
     for _ in range(4):
         a, b = rng.choice(len(names), 2, replace=False)
         effects = {names[a]: SIZES[names[a]], names[b]: SIZES[names[b]]}
-        out.append(one(nominal, effects, 5000 + seed * 1000 + len(out)))
+        out.append(scored(nominal, effects, 5000 + seed * 1000 + len(out)))
     return out
 
 

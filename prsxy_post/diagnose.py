@@ -46,7 +46,7 @@ import numpy as np
 from scipy import stats
 
 from . import axiscomp, calibrate, kinematics, simulate
-from .errors import FitError
+from .errors import FitError, ProfileError
 from .profile import MOTORS, Profile, profile_from_dict
 
 EXTRA_PARAMS = [f"effects.guide_bow[{i}]" for i in (1, 2, 3)] + [
@@ -892,8 +892,17 @@ def diagnose(
         )
         if not new:
             break
+        saved = [(e.estimate, e.stderr, e.phase_deg) for e in total]
         total.append(new[0])
-        updated, after, lin_now = _refine(current, data, measured, w, total, refine)
+        try:
+            updated, after, lin_now = _refine(current, data, measured, w, total, refine)
+        except ProfileError:
+            # through the full model its size ran beyond anything a machine (or a
+            # profile) holds: the linear signature fitted noise, not this effect
+            total.pop()
+            for e, (est, se, ph) in zip(total, saved, strict=True):
+                e.estimate, e.stderr, e.phase_deg = est, se, ph
+            break
     # a final joint test: an effect whose size is within 3 standard errors of
     # zero once the others are in is not kept
     kept = [e for e in total if abs(e.estimate) > 3 * e.stderr]
