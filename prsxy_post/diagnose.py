@@ -13,8 +13,9 @@ The loop an engineer runs with a ballbar plot, made a procedure:
 3. **Name** the effect: every member of a library of physical effects gives a
    column of the linearised model (its residual signature). Forward selection
    adds, one at a time, the effect that explains the whitened residual best, as
-   long as its improvement passes both an F-test at level ``alpha`` and the
-   BIC penalty (ΔSSE/σ̂² > dof · ln n). Effects whose signatures cannot be told
+   long as its improvement passes both an F-test at level ``alpha`` (Bonferroni-
+   corrected for the number of candidates the best was chosen from) and the BIC
+   penalty (ΔSSE/σ̂² > dof · ln n). Effects whose signatures cannot be told
    apart from the chosen one (correlation of the whitened, already-explained-
    projected columns above ``alias_corr``) are reported as its aliases. Two
    effects together can resemble a third; when the best single effect leaves
@@ -565,7 +566,9 @@ def select_effects(
         pval = float(stats.f.sf(F, dof, dof_res))
         # sigma2 ≈ 1 when the noise estimate is right; the BIC term guards against
         # an effect that is significant only because the noise was underestimated
-        if pval > alpha or (sse - s_new) / max(sigma2, 1e-300) < dof * math.log(n):
+        # the best of m candidates is tested, not one chosen beforehand: Bonferroni
+        # (without it, noise alone passes alpha = 1e-3 at some step of some runs)
+        if pval * len(results) > alpha or (sse - s_new) / max(sigma2, 1e-300) < dof * math.log(n):
             break
         # aliases: other members whose signature, after what is already explained,
         # is nearly the same as the chosen one's

@@ -70,6 +70,18 @@ def test_hidden_effect_is_named_sized_and_removed(
     assert again.effects == []
 
 
+def test_the_best_of_many_candidates_must_beat_noise_by_more_than_one(
+    nominal: profile_mod.Profile,
+) -> None:
+    """Found by bench/diagnose_accuracy.py: after the squareness was taken out,
+    a backlash of -0.03 µm passed alpha = 1e-3 as the best of ~150 candidates
+    (p = 8e-4) and the next steps fitted noise. Bonferroni stops there."""
+    truth = hide(nominal, "table.squareness", 1e-4)
+    d = _run(nominal, truth, seed=2038)
+    assert [e.name for e in d.effects] == ["table.squareness"]
+    assert d.effects[0].estimate == pytest.approx(1e-4, rel=0.05)
+
+
 def test_nothing_hidden_names_nothing(nominal: profile_mod.Profile) -> None:
     d = _run(nominal, nominal, seed=3, axis=True)
     assert d.effects == []
