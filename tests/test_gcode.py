@@ -345,8 +345,8 @@ WELL_FORMED = st.builds(
     )
 )
 def test_fast_path_gives_what_the_full_interpreter_gives(body: list[str]) -> None:
-    """Straight moves skip building a Block; the motions, and every error with the
-    motions before it, must be the full interpreter's."""
+    """Common moves (G0-G3) skip building a Block; the motions, and every error
+    with the motions before it, must be the full interpreter's."""
     lines = ["G21 G90 G17 G1 F500", *body, "M2"]
     assert _outcome(lines, fast=True) == _outcome(lines, fast=False)
 
@@ -375,7 +375,7 @@ def test_fast_path_crosses_batches() -> None:
     fast, slow = _outcome(lines, True), _outcome(lines, False)
     assert fast == slow
     assert len(fast[0]) == 2502
-    # an error in the third batch: every motion before it, none after
+    # an error many batches in: every motion before it, none after
     bad = [*lines[:2100], "G1 X1 X2", *lines[2100:]]
     got, msg = _outcome(bad, True)
     assert msg is not None and msg.startswith("t.ngc:2101:")
