@@ -103,14 +103,14 @@ def bench_profile(path: Path) -> Path:
 def child_convert(program: str, prof: str, out: str) -> None:
     """Run in a child process: convert and print the stats as JSON."""
     sys.path.insert(0, str(ROOT))
-    from prsxy_post.cli import ConvertJob, convert_file
+    from prsxy_post.cli import ConvertJob, convert_file, peak_rss_mb
 
     t0 = time.perf_counter()
     st = convert_file(
         ConvertJob(program, prof, "pmac", out, None, (True, True, True), "bench", parallel=True)
     )
     total = time.perf_counter() - t0
-    rss = peak_rss_mb()
+    rss = peak_rss_mb() or resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     print(
         json.dumps(
             {
@@ -124,18 +124,6 @@ def child_convert(program: str, prof: str, out: str) -> None:
             }
         )
     )
-
-
-def peak_rss_mb() -> float:
-    """This process's own peak resident memory. Not ru_maxrss: Linux carries the
-    parent's high-water mark across fork and exec into it."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 def time_rs274(program: Path) -> float | None:

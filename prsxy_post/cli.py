@@ -350,7 +350,9 @@ class ConvertStats:
 
 
 def peak_rss_mb() -> float | None:
-    """This process's peak resident memory [MB] (Linux), None where unknown."""
+    """This process's own peak resident memory [MB] (Linux), None where unknown.
+    Not ru_maxrss: Linux carries the parent's high-water mark into a forked or
+    exec'd child."""
     try:
         for line in Path("/proc/self/status").read_text().splitlines():
             if line.startswith("VmHWM:"):
