@@ -301,11 +301,9 @@ class PmacWriter:
         where the path stands)."""
         m = k1 - k0
         line = pts.line[k0:k1]
-        dts = pts.dt[k0:k1].tolist()
-        t = self.t_total
-        for x in dts:  # in order, as one running sum: the same bits however chunked
-            t += x
-        self.t_total = t
+        # one running sum in order (accumulate is sequential, unlike sum): the same
+        # bits however the program was chunked
+        self.t_total = float(np.add.accumulate(np.concatenate([[self.t_total], pts.dt[k0:k1]]))[-1])
         text = np.empty((m, 3), dtype=object)
         text[:] = ""
         prev_line = np.concatenate([[-1 if self.last_line is None else self.last_line], line[:-1]])
