@@ -273,8 +273,13 @@ class _Checker:
         if lo is not None and value < lo:
             raise self.fail(key, f"is {value}", f"an integer >= {lo}")
         if abs(value) > MAX_MAGNITUDE:
+            shown = (
+                str(value)
+                if len(str(value)) <= 20
+                else f"{str(value)[:12]}… ({len(str(value))} digits)"
+            )
             raise self.fail(
-                key, f"is {value}", f"an integer of magnitude at most {MAX_MAGNITUDE:g}"
+                key, f"is {shown}", f"an integer of magnitude at most {MAX_MAGNITUDE:g}"
             )
         return value
 
@@ -306,11 +311,14 @@ class _Checker:
         if n is not None and len(value) != n:
             raise self.fail(key, f"has {len(value)} values", want)
         for i, v in enumerate(value):
-            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            if isinstance(v, bool) or not isinstance(v, int | float):
                 raise self.fail(f"{key}[{i}]", f"is {v!r}", "a finite number")
-            if abs(v) > MAX_MAGNITUDE:
+            if not abs(v) <= MAX_MAGNITUDE:  # NaN and infinities too; no float(v) of a huge int
+                shown = repr(v) if len(repr(v)) <= 20 else f"{repr(v)[:12]}…"
                 raise self.fail(
-                    f"{key}[{i}]", f"is {v:g}", f"a number of magnitude at most {MAX_MAGNITUDE:g}"
+                    f"{key}[{i}]",
+                    f"is {shown}",
+                    f"a finite number of magnitude at most {MAX_MAGNITUDE:g}",
                 )
         return np.array(value, dtype=float)
 

@@ -54,6 +54,8 @@ def _set(doc: object, path: tuple, value: object) -> None:
 # found by this test in CI: squaring the height overflowed in the reach check
 @example([(("kinematics", "legs", 0, "guide_height"), 1.3407807929942597e154)])
 @example([(("kinematics", "tool_length"), 10**400)])
+@example([(("work", "origin"), [0, 0, 10**400])])  # float() of it would overflow
+@example([(("output", "decimals"), 10**30)])
 def test_mutated_documents_give_a_profile_or_a_keyed_error(edits: list) -> None:
     import copy
 
