@@ -33,7 +33,6 @@ axis reversal beyond the run's residual scatter.
 
 from __future__ import annotations
 
-import io
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
@@ -254,18 +253,9 @@ def plot_runs(
 ) -> bytes:
     """Polar plots, one per circle: measured deviation around the reference circle,
     magnified, the fitted terms dashed, a simulated prediction dotted. PNG bytes."""
-    try:
-        import matplotlib
+    from .report import png, pyplot
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        from .errors import UsageError
-
-        raise UsageError(
-            "plots need matplotlib, which is not installed",
-            expected="pip install 'prsxy-post[plot]'",
-        ) from None
+    plt = pyplot()
     n = len(runs)
     cols = min(3, n)
     rows = (n + cols - 1) // cols
@@ -298,7 +288,4 @@ def plot_runs(
         if k == 0:
             ax.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.25, -0.25))
     fig.tight_layout(rect=(0, 0, 1, 0.95))
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100, metadata={"Software": None})
-    plt.close(fig)
-    return buf.getvalue()
+    return png(fig, dpi=100)

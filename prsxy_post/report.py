@@ -10,7 +10,8 @@ import numpy as np
 from .errors import UsageError
 
 
-def _mpl() -> Any:
+def pyplot() -> Any:
+    """matplotlib's pyplot on the file-only backend, or a usage error naming the extra."""
     try:
         import matplotlib
 
@@ -24,9 +25,10 @@ def _mpl() -> Any:
     return plt
 
 
-def _png(fig: Any) -> bytes:
+def png(fig: Any, dpi: int = 110) -> bytes:
+    """The figure as PNG bytes (no software stamp: the same plot, the same bytes); closes it."""
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, metadata={"Software": None})
+    fig.savefig(buf, format="png", dpi=dpi, metadata={"Software": None})
     import matplotlib.pyplot as plt
 
     plt.close(fig)
@@ -38,7 +40,7 @@ def _ballbar_figure(result: Any, current: Any, data: Any) -> bytes | None:
 
     if not data.runs:
         return None
-    plt = _mpl()
+    plt = pyplot()
     measured, segs = data.measured()
     before = dg.predict(current, data, want_columns=False).pred
     from .profile import profile_from_dict
@@ -69,7 +71,7 @@ def _ballbar_figure(result: Any, current: Any, data: Any) -> bytes | None:
         if k == 0:
             ax.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.2, -0.25))
     fig.tight_layout()
-    return _png(fig)
+    return png(fig)
 
 
 def _pose_figure(result: Any, current: Any, data: Any) -> bytes | None:
@@ -78,7 +80,7 @@ def _pose_figure(result: Any, current: Any, data: Any) -> bytes | None:
 
     if not data.poses:
         return None
-    plt = _mpl()
+    plt = pyplot()
     measured, segs = data.measured()
     before = measured - dg.predict(current, data, want_columns=False).pred
     after = measured - dg.predict(profile_from_dict(result.updated), data, want_columns=False).pred
@@ -95,7 +97,7 @@ def _pose_figure(result: Any, current: Any, data: Any) -> bytes | None:
         ax.set_aspect("equal")
     axes[0].set_ylabel("y (mm)")
     fig.colorbar(sc, ax=axes, shrink=0.8)
-    return _png(fig)
+    return png(fig)
 
 
 def diagnose_report(result: Any, current: Any, data: Any) -> dict[str, str | bytes]:
