@@ -103,12 +103,10 @@ def bench_profile(path: Path) -> Path:
 def child_convert(program: str, prof: str, out: str) -> None:
     """Run in a child process: convert and print the stats as JSON."""
     sys.path.insert(0, str(ROOT))
-    from prsxy_post.cli import ConvertJob, convert_file, peak_rss_mb
+    from prsxy_post.convert import ConvertJob, convert_file, peak_rss_mb
 
     t0 = time.perf_counter()
-    st = convert_file(
-        ConvertJob(program, prof, "pmac", out, None, (True, True, True), "bench", parallel=True)
-    )
+    st = convert_file(ConvertJob(program, prof, "pmac", out, options="bench", parallel=True))
     total = time.perf_counter() - t0
     rss = peak_rss_mb() or resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     print(

@@ -205,8 +205,11 @@ class Prepared:
 
 def prepare(motions: Sequence[Motion], profile: Profile, limits: Limits | None = None) -> Prepared:
     """Planning arrays and program-level problems of a chunk of motions."""
+    # machine functions are carried by the writers (issue "controller truth", in
+    # progress); the planner does not see them yet
+    moves = [m for m in motions if m.kind != "function"]
     return Prepared(
-        blocks_from_motions(motions, limits or limits_of(profile)),
+        blocks_from_motions(moves, limits or limits_of(profile)),
         len(motions),
         motions[0].line if motions else 0,
         check_motions(motions, profile),

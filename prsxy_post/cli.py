@@ -8,18 +8,11 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import gc
-import hashlib
 import itertools
 import json
-import os
-import queue
 import sys
-import tempfile
-import threading
-import time
 import traceback
-from collections.abc import Callable, Generator, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
@@ -28,88 +21,8 @@ import click
 import numpy as np
 
 from . import __version__
-from . import profile as profile_mod
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
-
-# ------------------------------------------------------------------ file helpers
-
-
-def read_text(path: str, kind: str = "file") -> str:
-    """Read a text file for a parser: binary files and unreadable paths are errors.
-
-    Bytes that are not UTF-8 are read as Latin-1 (G-code from older CAM systems
-    has such bytes in comments; outside comments every parser rejects them).
-    """
-    try:
-        data = Path(path).read_bytes() if path != "-" else sys.stdin.buffer.read()
-    except OSError as exc:
-        raise PrsxyError(
-            f"cannot read {kind}: {exc.strerror}", source=path, expected=f"a readable {kind}"
-        ) from None
-    if b"\0" in data:
-        line = data[: data.index(b"\0")].count(b"\n") + 1
-        raise PrsxyError(
-            f"binary data (a NUL byte) in the {kind}",
-            source=path,
-            line=line,
-            expected=f"a text {kind}",
-        )
-    if data.startswith(b"\xef\xbb\xbf"):
-        data = data[3:]
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError:
-        return data.decode("latin-1")
-
-
-def sha256_of(path: str) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def _publish(tmp: str, target: str | Path) -> None:
-    """Rename a finished temp file onto its target with the mode an ordinary new
-    file gets (mkstemp makes it 0600), or the mode of the file it replaces."""
-    try:
-        mode = os.stat(target).st_mode & 0o7777
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        mode = 0o666 & ~umask
-    os.chmod(tmp, mode)
-    os.replace(tmp, target)
-
-
-def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:
-    """Write every file or none: temp files beside the targets, then renames.
-
-    An existing output is replaced only once every new file is complete on disk.
-    """
-    temps: list[tuple[str, Path]] = []
-    try:
-        for path, content in files.items():
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-            temps.append((tmp, path))
-            data = content.encode("utf-8") if isinstance(content, str) else content
-            with os.fdopen(fd, "wb") as fh:
-                fh.write(data)
-                fh.flush()
-                os.fsync(fh.fileno())
-        for tmp, path in temps:
-            _publish(tmp, path)
-    except OSError as exc:
-        for tmp, _ in temps:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-        raise PrsxyError(
-            f"cannot write output: {exc.strerror}",
-            source=str(exc.filename or ""),
-            expected="a writable location",
-        ) from None
-
-
-def load_profile(path: str) -> profile_mod.Profile:
-    return profile_mod.loads(read_text(path, "profile"), path)
+from .files import load_profile, read_text, write_atomic
 
 
 def parse_pose(text: str, option: str) -> tuple[float, ...]:
@@ -247,411 +160,19 @@ def inspect(program: str, profile_path: str | None, start: str | None, as_json: 
 # ------------------------------------------------------------------ convert
 
 
-@dataclass(frozen=True)
-class ConvertJob:
-    program: str
-    profile_path: str
-    fmt: str
-    output: str  # a path, or "-" for standard output; parts get .partN before the suffix
-    start: tuple[float, ...] | None
-    stages: tuple[bool, bool, bool]
-    options: str
-    progress: bool = False
-    chunk: int = 4096
-    #: read and interpret the program in a second process while this one runs the
-    #: rest of the chain (the output is the same; only the wall time changes)
-    parallel: bool = False
-
-
-def inspect_source(path: str) -> str:
-    """sha256 of a program file, refusing binary files (a NUL byte) with its line."""
-    h = hashlib.sha256()
-    line = 1
-    try:
-        with open(path, "rb") as fh:
-            while block := fh.read(1 << 20):
-                if b"\0" in block:
-                    line += block[: block.index(b"\0")].count(b"\n")
-                    raise PrsxyError(
-                        "binary data (a NUL byte) in the G-code program",
-                        source=path,
-                        line=line,
-                        expected="a text file",
-                    )
-                line += block.count(b"\n")
-                h.update(block)
-    except OSError as exc:
-        raise PrsxyError(
-            f"cannot read G-code program: {exc.strerror}", source=path, expected="a readable file"
-        ) from None
-    return h.hexdigest()
-
-
-def iter_program_batches(
-    path: str, progress: Callable[[int], None] | None = None
-) -> Generator[list[str], None, None]:
-    """The program's lines without their ends (CR, LF or CRLF), read as a stream,
-    a list per block read.
-
-    Bytes that are not UTF-8 become lone surrogates: harmless in comments, and
-    rejected by the parser anywhere else.
-    """
-    from . import gcode
-
-    with open(path, encoding="utf-8", errors="surrogateescape", newline="") as fh:
-        if fh.read(1) != "\ufeff":
-            fh.seek(0)
-
-        def pieces() -> Iterator[str]:
-            chars = 0
-            while piece := fh.read(1 << 17):
-                chars += len(piece)
-                yield piece
-                if progress is not None:
-                    progress(chars)
-
-        yield from gcode.iter_line_batches(pieces())
-
-
 class _Progress:
     """A one-line progress display on a terminal's stderr."""
 
-    def __init__(self, name: str, total: int) -> None:
+    def __init__(self, name: str) -> None:
         self.name = name
-        self.total = max(total, 1)
 
-    def __call__(self, done: int) -> None:
-        pct = min(100.0, 100.0 * done / self.total)
+    def __call__(self, done: int, total: int) -> None:
+        pct = min(100.0, 100.0 * done / max(total, 1))
         sys.stderr.write(f"\r{self.name}: {pct:5.1f}%")
         sys.stderr.flush()
 
     def close(self) -> None:
         sys.stderr.write(f"\r{self.name}: done  \n")
-
-
-def _part_path(out: str, part: int, nparts_hint: bool) -> str:
-    if not nparts_hint:
-        return out
-    base, ext = os.path.splitext(out)
-    return f"{base}.part{part + 1}{ext}"
-
-
-@dataclass
-class ConvertStats:
-    """What a conversion did, for the benchmark: paths, counts and seconds per stage."""
-
-    written: list[str]
-    lines: int = 0
-    motions: int = 0
-    points: int = 0
-    timings: dict[str, float] | None = None
-    #: peak resident memory of the interpreter process [MB] when one ran
-    helper_peak_rss_mb: float | None = None
-
-
-def peak_rss_mb() -> float | None:
-    """This process's own peak resident memory [MB] (Linux), None where unknown.
-    Not ru_maxrss: Linux carries the parent's high-water mark into a forked or
-    exec'd child."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    return None
-
-
-def _prepare_here(
-    job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any = None
-) -> Iterator[Any]:
-    """The program's motions, chunk by chunk, through :func:`chain.prepare`."""
-    from . import chain, gcode
-
-    cfg = chain.interpreter_config(prof, job.start)
-
-    def counted(batches: Iterator[list[str]]) -> Iterator[list[str]]:
-        for batch in batches:
-            counts["lines"] += len(batch)
-            yield batch
-
-    batches = (
-        iter_program_batches(job.program, bar)
-        if job.program != "-"
-        else gcode.batches_of(gcode.split_lines(read_text("-", "G-code program")))
-    )
-    motions = gcode.iter_motions_batched(counted(batches), cfg, job.program)
-    limits = chain.limits_of(prof)
-    while True:
-        t0 = time.perf_counter()
-        batch = list(itertools.islice(motions, job.chunk))
-        prepared = chain.prepare(batch, prof, limits)
-        counts["parse"] += time.perf_counter() - t0
-        counts["motions"] += len(batch)
-        yield prepared
-        if len(batch) < job.chunk:
-            return
-
-
-def _prepare_child(conn: Any, job: ConvertJob, prof: Any) -> None:
-    """Runs in the interpreter process: sends ("chunk", prepared, chars read),
-    then ("done", counts, peak MB), or ("error", PrsxyError) / ("crash", text)."""
-    chars = [0]
-
-    def progress(n: int) -> None:
-        chars[0] = n
-
-    counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
-    try:
-        for prepared in _prepare_here(job, prof, counts, progress):
-            conn.send(("chunk", prepared, chars[0]))
-        conn.send(("done", counts, peak_rss_mb()))
-    except PrsxyError as err:
-        conn.send(("error", err, counts))
-    except BaseException:
-        conn.send(("crash", traceback.format_exc(), counts))
-    finally:
-        conn.close()
-
-
-@contextlib.contextmanager
-def _prepared_chunks(
-    job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any
-) -> Iterator[Iterator[Any]]:
-    """Prepared chunks of the program, made here or, with ``job.parallel`` where
-    processes can fork, by a second process that runs ahead, at most
-    :data:`AHEAD` chunks (a bounded queue, then the pipe, hold it back), so memory
-    stays bounded. Errors arrive in program order: every chunk before a G-code
-    error is delivered first, as when run here."""
-    import multiprocessing
-
-    if (
-        not job.parallel
-        or job.program == "-"
-        or ("fork" not in multiprocessing.get_all_start_methods())
-    ):
-        yield _prepare_here(job, prof, counts, bar)
-        return
-    ctx = multiprocessing.get_context("fork")
-    recv, send = ctx.Pipe(duplex=False)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    proc = ctx.Process(target=_prepare_child, args=(send, job, prof), daemon=True)
-    proc.start()
-    send.close()
-
-    # a thread takes chunks off the pipe as they come, so the interpreter runs up
-    # to AHEAD chunks ahead while this process is busy (a queue, not the pipe's
-    # 64 KiB, holds them): chunk times vary, and neither side waits for the other
-    ahead: queue.Queue[tuple[Any, ...]] = queue.Queue(maxsize=AHEAD)
-    stop = threading.Event()
-
-    def pump() -> None:
-        while not stop.is_set():
-            try:
-                msg = recv.recv()
-            except (EOFError, OSError):
-                msg = ("eof",)
-            while not stop.is_set():
-                try:
-                    ahead.put(msg, timeout=0.1)
-                    break
-                except queue.Full:
-                    continue
-            if msg[0] != "chunk":
-                return
-
-    pumping = threading.Thread(target=pump, daemon=True)
-    pumping.start()
-
-    def receive() -> Iterator[Any]:
-        while True:
-            msg = ahead.get()
-            if msg[0] == "eof":
-                raise RuntimeError("the interpreter process ended without a result")
-            if msg[0] == "chunk":
-                if bar is not None:
-                    bar(msg[2])
-                yield msg[1]
-                continue
-            counts.update(msg[2] if msg[0] != "done" else msg[1])
-            if msg[0] == "done":
-                counts["helper_peak_rss_mb"] = msg[2] or 0.0
-                return
-            if msg[0] == "error":
-                raise msg[1]
-            raise RuntimeError("in the interpreter process:\n" + msg[1])
-
-    try:
-        yield receive()
-    finally:
-        stop.set()
-        if proc.is_alive():
-            proc.terminate()
-        proc.join()
-        pumping.join(timeout=5.0)
-        recv.close()
-
-
-#: chunks the interpreter process may run ahead of the chain
-AHEAD = 8
-
-#: programs from this size on are read and interpreted in a second process
-PARALLEL_FROM_BYTES = 256 * 1024
-
-
-def _worth_a_second_process(program: str) -> bool:
-    """A single large program: one core interprets while the other runs the chain."""
-    try:
-        return program != "-" and os.path.getsize(program) >= PARALLEL_FROM_BYTES
-    except OSError:
-        return False  # the conversion itself reports the missing file
-
-
-def _convert_one(job: ConvertJob) -> list[str]:
-    return convert_file(job).written
-
-
-@contextlib.contextmanager
-def _few_gc_passes() -> Iterator[None]:
-    """Rarer passes of the cycle collector: a conversion makes millions of
-    short-lived tuples and no cycles to speak of, and the passes over them cost a
-    fifth of the interpreter's time (measured). Objects that exist before are
-    frozen out of the passes; all is as it was afterwards."""
-    old = gc.get_threshold()
-    gc.freeze()
-    gc.set_threshold(50_000, 20, 20)
-    try:
-        yield
-    finally:
-        gc.set_threshold(*old)
-        gc.unfreeze()
-
-
-def convert_file(job: ConvertJob) -> ConvertStats:
-    """Convert one program, streaming, into its output file(s).
-
-    Outputs go to temp files beside the targets and are renamed only when the
-    whole conversion succeeded; on any error the temp files are removed.
-    """
-    with _few_gc_passes():
-        return _convert_file(job)
-
-
-def _convert_file(job: ConvertJob) -> ConvertStats:
-    prof = load_profile(job.profile_path)
-    bar = None
-    if job.progress and job.program != "-":
-        bar = _Progress(job.program, os.path.getsize(job.program))
-    sinks: dict[int, Any] = {}
-    temps: dict[int, str] = {}
-    memory: dict[int, list[str]] = {}
-    split = False
-
-    def emit(pieces: list[tuple[int, str]]) -> None:
-        for part, text in pieces:
-            if job.output == "-":
-                memory.setdefault(part, []).append(text)
-                continue
-            if part not in sinks:
-                target = Path(_part_path(job.output, part, split))
-                target.parent.mkdir(parents=True, exist_ok=True)
-                fd, tmp = tempfile.mkstemp(
-                    prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
-                )
-                temps[part] = tmp
-                sinks[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
-            sinks[part].write(text)
-
-    n_points = 0
-    t_write = 0.0
-    counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
-
-    def write(make: Callable[[], list[tuple[int, str]]]) -> None:
-        nonlocal t_write
-        t0 = time.perf_counter()
-        emit(make())
-        t_write += time.perf_counter() - t0
-
-    try:
-        # the interpreter starts first: with a second process, everything below
-        # up to the first chunk happens while it reads
-        with _prepared_chunks(job, prof, counts, bar) as source:
-            from . import chain, errormap, writers
-
-            sha = inspect_source(job.program) if job.program != "-" else ""
-            stages = chain.Stages(*job.stages)
-            emap = errormap.from_profile(prof) if stages.error_map else None
-            prov = writers.Provenance(
-                source=job.program,
-                source_sha256=sha,
-                profile_name=prof.name,
-                profile_source=job.profile_path,
-                profile_sha256=sha256_of(job.profile_path),
-                options=job.options,
-            )
-            writer: writers.PmacWriter | writers.GcodeWriter
-            if job.fmt == "pmac":
-                writer = writers.PmacWriter(prof, prov)
-                split = writer.max_pts > 0
-            else:
-                writer = writers.GcodeWriter(prof, prov, float(prof.output["gcode_tolerance_mm"]))
-            pipe = chain.Pipeline(prof, stages, emap, start=job.start)
-            write(writer.begin)
-            for prepared in source:
-                for pc in pipe.feed_prepared(prepared):
-                    n_points += len(pc)
-                    write(functools.partial(writer.feed, pc))
-        tail = pipe.finish()
-        n_points += sum(len(pc) for pc in tail)
-        for pc in tail[:-1]:
-            write(functools.partial(writer.feed, pc))
-        write(functools.partial(writer.finish, tail[-1] if tail else None))
-        for fh in sinks.values():
-            fh.flush()
-            os.fsync(fh.fileno())
-            fh.close()
-        written = []
-        for part in sorted(temps):
-            target = _part_path(job.output, part, split)
-            _publish(temps[part], target)
-            written.append(target)
-        if job.output == "-":
-            sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))
-            written = ["-"]
-        timings = {"parse": counts["parse"], **pipe.timings, "write": t_write}
-        return ConvertStats(
-            written,
-            int(counts["lines"]),
-            int(counts["motions"]),
-            n_points,
-            timings,
-            counts.get("helper_peak_rss_mb"),
-        )
-    except PrsxyError as err:
-        raise err.located(source=job.program) from None
-    except OSError as exc:
-        raise PrsxyError(
-            f"cannot write output: {exc.strerror}",
-            source=job.output,
-            expected="a writable location",
-        ) from None
-    finally:
-        if bar is not None:
-            bar.close()
-        for fh in sinks.values():
-            if not fh.closed:
-                fh.close()
-        for tmp in temps.values():
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-
-
-def _run_job(job: ConvertJob) -> tuple[list[str] | None, str | None, int]:
-    try:
-        return _convert_one(job), None, 0
-    except PrsxyError as err:
-        return None, str(err), err.exit_code
 
 
 @main.command()
@@ -723,9 +244,12 @@ def convert(
         raise UsageError(
             "several programs and no --out-dir", expected="--out-dir DIR for several programs"
         )
+    from . import chain
+    from . import convert as conv
+
     load_profile(profile_path)  # fail once, early, on a bad profile
     st = parse_pose(start, "--start") if start else None
-    stages = (not no_error_map, not nominal_kinematics, not no_axis_comp)
+    stages = chain.Stages(not no_error_map, not nominal_kinematics, not no_axis_comp)
     opts = [f"--format {fmt}"]
     opts += [
         f
@@ -739,7 +263,6 @@ def convert(
     if start:
         opts.append(f"--start {start}")
     ext = ".pmc" if fmt == "pmac" else ".ngc"
-    show_progress = not quiet and sys.stderr.isatty() and jobs == 1
     pooled = jobs > 1 and len(programs) > 1
     jobs_list = []
     for prog in programs:
@@ -748,7 +271,7 @@ def convert(
         else:
             out = output or "-"
         jobs_list.append(
-            ConvertJob(
+            conv.ConvertJob(
                 prog,
                 profile_path,
                 fmt,
@@ -756,22 +279,28 @@ def convert(
                 st,
                 stages,
                 " ".join(opts),
-                progress=show_progress,
-                parallel=not pooled and _worth_a_second_process(prog),
+                parallel=not pooled and conv.worth_a_second_process(prog),
             )
         )
     if pooled:
-        from concurrent.futures import ProcessPoolExecutor  # here: it takes 10 ms to import
-
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
-            results = list(pool.map(_run_job, jobs_list))
+        results = conv.convert_many(jobs_list, workers=jobs)
     else:
-        results = [_run_job(j) for j in jobs_list]
+        results = []
+        for job in jobs_list:
+            show = not quiet and sys.stderr.isatty() and job.program != "-"
+            bar = _Progress(job.program) if show else None
+            try:
+                results.append((conv.convert_file(job, bar).written, None))
+            except PrsxyError as err:
+                results.append((None, err))
+            finally:
+                if bar is not None:
+                    bar.close()
     worst = 0
-    for job, (files, err, code) in zip(jobs_list, results, strict=True):
-        if err is not None:
-            click.echo(err, err=True)
-            worst = max(worst, code)
+    for job, (files, problem) in zip(jobs_list, results, strict=True):
+        if problem is not None:
+            click.echo(str(problem), err=True)
+            worst = max(worst, problem.exit_code)
             continue
         if not quiet and files != ["-"]:
             click.echo(f"{job.program} -> {', '.join(files or [])}", err=True)
@@ -800,6 +329,8 @@ def check(
 ) -> None:
     """Run the whole chain without writing and list every problem with its line."""
     from . import chain, errormap, gcode
+    from .convert import few_gc_passes, iter_program_batches
+    from .files import inspect_source
 
     prof = load_profile(profile_path)
     st = parse_pose(start, "--start") if start else None
@@ -824,7 +355,7 @@ def check(
             n_points += len(pc)
             seconds += float(np.sum(pc.dt))
 
-    with _few_gc_passes(), contextlib.closing(motions), contextlib.closing(batches):
+    with few_gc_passes(), contextlib.closing(motions), contextlib.closing(batches):
         while True:
             batch = list(itertools.islice(motions, 4096))
             n_motions += len(batch)
@@ -1023,10 +554,10 @@ def profile_files(
 ) -> dict[Path, str | bytes]:
     """The profile to write (checked to read back) and, when it replaces its input,
     a .bak of the input."""
-    from .profile import dumps
+    from .profile import dumps, loads
 
     text = dumps(doc)
-    profile_mod.loads(text, output)  # what we write must read back
+    loads(text, output)  # what we write must read back
     files: dict[Path, str | bytes] = {Path(output): text}
     if in_place and Path(output).resolve() == Path(input_path).resolve():
         files[Path(output + ".bak")] = read_text(input_path, "profile")

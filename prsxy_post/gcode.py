@@ -81,6 +81,14 @@ class Motion(NamedTuple):
         LinuxCNC's ARC_FEED (+ counter-clockwise seen from the plane normal's + end)
     duration : dwell seconds
     tool_length : active tool length offset [mm] (G43 / G43.1), 0 after G49
+    path_tol : path control mode in effect (LinuxCNC group 13) [mm]: None when the
+        program set none or gave G64 without P (the profile's default tolerance
+        applies), the G64 P tolerance, 0.0 for G61 (exact path), −1.0 for G61.1
+        (exact stop at every block end)
+    words : kind ``"function"`` only: the machine functions of the block, in
+        LinuxCNC's order of execution, as (letter, value) pairs: S, T, M6,
+        M3/M4/M5, M7/M8/M9, M48/M49 before the block's motion; M0, M1, M60, M2,
+        M30 after it
     """
 
     line: int
@@ -96,6 +104,12 @@ class Motion(NamedTuple):
     tool: int = 0
     spindle: float = 0.0
     inverse_time: bool = False
+    path_tol: float | None = None
+    words: tuple[tuple[str, float], ...] = ()
+
+
+#: path_tol of G61.1 (exact stop)
+EXACT_STOP = -1.0
 
 
 def motion_to_json(m: Motion) -> dict[str, object]:
@@ -113,6 +127,8 @@ def motion_to_json(m: Motion) -> dict[str, object]:
         d["rotation"] = m.rotation
     if m.kind == "dwell":
         d["duration"] = m.duration
+    if m.kind == "function":
+        d["words"] = [f"{letter}{value:g}" for letter, value in m.words]
     return d
 
 
@@ -492,6 +508,7 @@ class _State:
     cycle_q: float = 0.0
     cycle_p: float = 0.0
     cycle_il: float | None = None
+    path_tol: float | None = None
     ended: bool = False
 
 
@@ -525,6 +542,7 @@ class Interpreter:
         kw.setdefault("tool", st.tool)
         kw.setdefault("spindle", st.spindle * st.spindle_dir)
         kw.setdefault("inverse_time", st.inverse_time)
+        kw.setdefault("path_tol", st.path_tol)
         self.out.append(Motion(**kw))  # type: ignore[arg-type]
 
     # -- one block
@@ -645,17 +663,33 @@ class Interpreter:
         if "F" in seen:
             st.feed = seen["F"].value
             st.feed_units = st.units
+        # machine functions before the motion, in LinuxCNC's order of execution
+        # (S, T, M6, M3/M4/M5, M7/M8/M9, M48/M49): an S or T that changes nothing
+        # is no function
+        pre: list[tuple[str, float]] = []
         if "S" in seen:
+            if seen["S"].value != st.spindle:
+                pre.append(("S", seen["S"].value))
             st.spindle = seen["S"].value
         if "T" in seen:
             t = seen["T"].value
             if t != int(t):
                 raise self.err("tool number not an integer", line, seen["T"], "T<n>")
+            if int(t) != st.next_tool:
+                pre.append(("T", float(int(t))))
             st.next_tool = int(t)
         if 6 in mgroups:
             st.tool = st.next_tool
+            pre.append(("M", 6.0))
         if 7 in mgroups:
             st.spindle_dir = {3: 1, 4: -1, 5: 0}[int(mgroups[7][0])]
+            pre.append(("M", float(mgroups[7][0])))
+        for grp in (8, 9):
+            if grp in mgroups:
+                pre.append(("M", float(mgroups[grp][0])))
+        if pre:
+            p = tuple(st.pos)
+            self.emit(line=line, kind="function", start=p, end=p, words=tuple(pre))
         # dwell
         if nonmodal and nonmodal[0][0] == 4:
             if "P" not in seen:
@@ -679,6 +713,8 @@ class Interpreter:
             st.arc_absolute = groups[4][0] == 90.1
         if 10 in groups:
             st.retract_r = groups[10][0] == 99
+        if 13 in groups:
+            self._path_control(groups[13], seen, line)
         axis_words = {a: seen[a] for a in _AXES if a in seen}
         nm = nonmodal[0][0] if nonmodal else None
         motion = groups[1][0] if 1 in groups else None
@@ -731,9 +767,27 @@ class Interpreter:
                 self._motion(st.motion, axis_words, seen, line, new=False)
             else:
                 self._check_unused(seen, line, st.motion if motion is None else motion)
-        # program stop / end
-        if 4 in mgroups and mgroups[4][0] in (2, 30):
-            st.ended = True
+        # program stop / end, after the motion
+        if 4 in mgroups:
+            p = tuple(st.pos)
+            code = mgroups[4][0]
+            self.emit(line=line, kind="function", start=p, end=p, words=(("M", float(code)),))
+            if code in (2, 30):
+                st.ended = True
+
+    def _path_control(self, g: tuple[float, Word], seen: dict[str, Word], line: int) -> None:
+        """G61 (exact path), G61.1 (exact stop), G64 [P tolerance] [Q]: the blend
+        tolerance the planner may use at corners (:attr:`Motion.path_tol`)."""
+        code = g[0]
+        st = self.st
+        if code == 61:
+            st.path_tol = 0.0
+        elif code == 61.1:
+            st.path_tol = EXACT_STOP
+        elif "P" in seen:
+            st.path_tol = seen["P"].value * self.scale()
+        else:
+            st.path_tol = None  # "best possible speed": the profile's tolerance
 
     # -- pieces
     def _check_unused(self, seen: dict[str, Word], line: int, motion: float | None) -> None:
@@ -1231,7 +1285,7 @@ def _fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) 
     sc = MM_PER_INCH if st.units == "inch" else 1.0
     absolute = st.absolute
     ox, oy, oz, oa, ob = it.cfg.work_offsets.get(st.coord, _ZERO5)
-    extra = (st.tool_length, st.tool, st.spindle * st.spindle_dir, False)
+    extra = (st.tool_length, st.tool, st.spindle * st.spindle_dir, False, st.path_tol, ())
     append = it.out.append
     new_motion = new_feed = False
     k = i

@@ -95,7 +95,8 @@ def test_output_is_deterministic(runner: CliRunner, tmp_path: Path) -> None:
 
 def test_streamed_output_equals_one_shot(tmp_path: Path) -> None:
     """Chunks of 3 motions (cutting arcs, reversals and the canned cycles) = one chunk."""
-    from prsxy_post.cli import ConvertJob, convert_file
+    from prsxy_post.chain import Stages
+    from prsxy_post.convert import ConvertJob, convert_file
 
     os.chdir(ROOT)
     for sample in SAMPLES:
@@ -109,7 +110,7 @@ def test_streamed_output_equals_one_shot(tmp_path: Path) -> None:
                     "pmac",
                     str(out),
                     None,
-                    (True, True, True),
+                    Stages(),
                     "",
                     chunk=chunk,
                 )
@@ -120,7 +121,8 @@ def test_streamed_output_equals_one_shot(tmp_path: Path) -> None:
 
 def _convert(tmp_path: Path, program: str, prof: str, fmt: str, parallel: bool, chunk: int):
     """Output text (or the error) of one conversion, in one process or two."""
-    from prsxy_post.cli import ConvertJob, convert_file
+    from prsxy_post.chain import Stages
+    from prsxy_post.convert import ConvertJob, convert_file
     from prsxy_post.errors import PrsxyError
 
     out = tmp_path / f"{Path(program).stem}.{fmt}.{parallel}.{chunk}"
@@ -130,7 +132,7 @@ def _convert(tmp_path: Path, program: str, prof: str, fmt: str, parallel: bool, 
         fmt,
         str(out),
         None,
-        (True, True, True),
+        Stages(),
         f"--format {fmt}",
         chunk=chunk,
         parallel=parallel,
@@ -177,13 +179,13 @@ def test_two_processes_give_the_same_errors(tmp_path: Path, bad: str, where: str
 def test_large_programs_run_in_two_processes(runner: CliRunner, tmp_path: Path) -> None:
     """Above the size where a second process pays, the CLI uses one, with the
     same output and the same errors (at the right line) as one process."""
-    from prsxy_post.cli import PARALLEL_FROM_BYTES, _worth_a_second_process
+    from prsxy_post.convert import PARALLEL_FROM_BYTES, worth_a_second_process
 
     lines = [f"X{(i % 50) * 0.2:.4f} Y{(i % 7) * 0.1:.4f} Z0.0000" for i in range(20000)]
     program = tmp_path / "big.ngc"
     program.write_text("\n".join(["G21 G90 G1 F3000", *lines, "M2"]) + "\n")
     assert program.stat().st_size >= PARALLEL_FROM_BYTES
-    assert _worth_a_second_process(str(program))
+    assert worth_a_second_process(str(program))
     out = tmp_path / "big.pmc"
     r = invoke(runner, "convert", str(program), "--profile", SHOP, "-o", str(out), "-q")
     assert r.exit_code == 0, r.output

@@ -20,7 +20,17 @@ CFG = gcode.InterpreterConfig(
 
 
 def run(text: str, cfg: gcode.InterpreterConfig = CFG) -> list[gcode.Motion]:
-    return gcode.interpret(text, cfg, "t.ngc")
+    """The motions of a program (machine functions apart: :func:`functions`)."""
+    return [m for m in gcode.interpret(text, cfg, "t.ngc") if m.kind != "function"]
+
+
+def functions(text: str) -> list[tuple[int, str]]:
+    """(line, words) of every machine function of a program."""
+    return [
+        (m.line, " ".join(f"{k}{v:g}" for k, v in m.words))
+        for m in gcode.interpret(text, CFG, "t.ngc")
+        if m.kind == "function"
+    ]
 
 
 def err(text: str) -> str:
@@ -275,7 +285,8 @@ def test_speed_of_the_interpreter() -> None:
     )
     t0 = time.perf_counter()
     n = sum(1 for _ in gcode.iter_motions(lines, CFG))
-    assert n == 20001  # "G1 F2000" alone is a zero-length move, as in LinuxCNC
+    # "G1 F2000" alone is a zero-length move, as in LinuxCNC; M2 is a machine function
+    assert n == 20002
     assert time.perf_counter() - t0 < 5.0
 
 
@@ -374,13 +385,53 @@ def test_fast_path_crosses_batches() -> None:
     lines = ["G21 G90 G1 F1000"] + [f"X{i}" for i in range(2500)] + ["G0 Z1", "M2"]
     fast, slow = _outcome(lines, True), _outcome(lines, False)
     assert fast == slow
-    assert len(fast[0]) == 2502
+    assert len(fast[0]) == 2503  # 2502 moves and the M2
     # an error many batches in: every motion before it, none after
     bad = [*lines[:2100], "G1 X1 X2", *lines[2100:]]
     got, msg = _outcome(bad, True)
     assert msg is not None and msg.startswith("t.ngc:2101:")
     assert got == _outcome(bad, False)[0]
     assert got[-1].line == 2100
+
+
+def test_machine_functions_in_linuxcncs_order_of_execution() -> None:
+    """S, T, M6, M3/M4/M5, M7-M9 run before the block's motion, M0/M1/M2/M30 after
+    it (LinuxCNC's G-code docs, "Order of Execution"); an S or T that changes
+    nothing is no function."""
+    text = "\n".join(
+        [
+            "G21 G90",
+            "T2 M6",
+            "M3 S12000 G0 X1",
+            "S12000 G1 X2 F100",
+            "M8 G1 X3 M0",
+            "M9 M5 M1",
+            "M30",
+        ]
+    )
+    assert functions(text) == [
+        (2, "T2 M6"),
+        (3, "S12000 M3"),
+        (5, "M8"),
+        (5, "M0"),
+        (6, "M5 M9"),
+        (6, "M1"),
+        (7, "M30"),
+    ]
+    ms = gcode.interpret(text, CFG, "t.ngc")
+    kinds = [(m.line, m.kind) for m in ms]
+    assert kinds.index((3, "function")) < kinds.index((3, "rapid"))
+    assert kinds.index((5, "feed")) < kinds.index((5, "function"), kinds.index((5, "feed")))
+
+
+@pytest.mark.parametrize(
+    ("mode", "tol"),
+    [("G61", 0.0), ("G61.1", gcode.EXACT_STOP), ("G64 P0.01", 0.01), ("G64", None), ("", None)],
+)
+def test_path_control_mode_rides_on_every_motion(mode: str, tol: float | None) -> None:
+    ms = run(f"G21 G90 {mode}\nG1 X1 F100\nG0 X2\nM2")
+    assert [m.path_tol for m in ms] == [tol, tol]
+    assert run("G20 G64 P0.001\nG1 X1 F10\nM2")[0].path_tol == pytest.approx(0.0254)
 
 
 @settings(max_examples=300, deadline=None)

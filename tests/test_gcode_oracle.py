@@ -61,7 +61,8 @@ def _ours(text: str) -> tuple[list[gcode.Motion], GCodeError | None]:
     out: list[gcode.Motion] = []
     try:
         for m in gcode.iter_motions(gcode.split_lines(text), cfg, "p.ngc"):
-            out.append(m)
+            if m.kind != "function":  # machine functions: compared apart (not motions)
+                out.append(m)
     except GCodeError as err:
         return out, err
     return out, None

@@ -1,0 +1,449 @@
+"""Converting programs: G-code files in, controller programs out, streamed.
+
+The library's conversion engine (the ``convert`` command is a thin shell over
+:func:`convert_file` and :func:`convert_many`). A program is read as a stream of
+line batches, interpreted, and fed chunk by chunk through the compensation
+chain (:mod:`prsxy_post.chain`) into the dialect's writer; memory stays flat on
+programs of millions of lines. A program of :data:`PARALLEL_FROM_BYTES` or more
+may be read and interpreted in a second process while this one runs the chain;
+the output is byte for byte the same.
+
+Example
+-------
+>>> from prsxy_post.convert import ConvertJob, convert_file
+>>> stats = convert_file(ConvertJob("part.ngc", "shop.toml", "pmac", "part.pmc"))
+... # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import gc
+import itertools
+import os
+import queue
+import sys
+import tempfile
+import threading
+import time
+import traceback
+from collections.abc import Callable, Generator, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .chain import Stages
+from .errors import PrsxyError
+from .files import inspect_source, load_profile, publish, read_text, sha256_of
+
+
+@dataclass(frozen=True)
+class ConvertJob:
+    """One program to convert.
+
+    program : G-code file, or "-" for standard input
+    profile_path : the machine profile (TOML)
+    fmt : output dialect ("pmac" or "gcode")
+    output : a path, or "-" for standard output; split parts get .partN before
+        the suffix
+    start : start pose (x, y, z, a, b) [mm, deg]; default the profile's
+    stages : which compensation stages run
+    options : how it was asked for, for the output's header
+    chunk : motions per chunk through the chain (the output does not depend on it)
+    parallel : read and interpret the program in a second process while this one
+        runs the rest of the chain (the output is the same; only the wall time
+        changes)
+    """
+
+    program: str
+    profile_path: str
+    fmt: str
+    output: str  # a path, or "-" for standard output; parts get .partN before the suffix
+    start: tuple[float, ...] | None = None
+    stages: Stages = field(default_factory=Stages)
+    options: str = ""
+    chunk: int = 4096
+    parallel: bool = False
+
+
+def iter_program_batches(
+    path: str, progress: Callable[[int], None] | None = None
+) -> Generator[list[str], None, None]:
+    """The program's lines without their ends (CR, LF or CRLF), read as a stream,
+    a list per block read.
+
+    Bytes that are not UTF-8 become lone surrogates: harmless in comments, and
+    rejected by the parser anywhere else.
+    """
+    from . import gcode
+
+    with open(path, encoding="utf-8", errors="surrogateescape", newline="") as fh:
+        if fh.read(1) != "\ufeff":
+            fh.seek(0)
+
+        def pieces() -> Iterator[str]:
+            chars = 0
+            while piece := fh.read(1 << 17):
+                chars += len(piece)
+                yield piece
+                if progress is not None:
+                    progress(chars)
+
+        yield from gcode.iter_line_batches(pieces())
+
+
+def _part_path(out: str, part: int, nparts_hint: bool) -> str:
+    if not nparts_hint:
+        return out
+    base, ext = os.path.splitext(out)
+    return f"{base}.part{part + 1}{ext}"
+
+
+@dataclass
+class ConvertStats:
+    """What a conversion did, for the benchmark: paths, counts and seconds per stage."""
+
+    written: list[str]
+    lines: int = 0
+    motions: int = 0
+    points: int = 0
+    timings: dict[str, float] | None = None
+    #: peak resident memory of the interpreter process [MB] when one ran
+    helper_peak_rss_mb: float | None = None
+
+
+def peak_rss_mb() -> float | None:
+    """This process's own peak resident memory [MB] (Linux), None where unknown.
+    Not ru_maxrss: Linux carries the parent's high-water mark into a forked or
+    exec'd child."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return None
+
+
+def _prepare_here(
+    job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any = None
+) -> Iterator[Any]:
+    """The program's motions, chunk by chunk, through :func:`chain.prepare`."""
+    from . import chain, gcode
+
+    cfg = chain.interpreter_config(prof, job.start)
+
+    def counted(batches: Iterator[list[str]]) -> Iterator[list[str]]:
+        for batch in batches:
+            counts["lines"] += len(batch)
+            yield batch
+
+    batches = (
+        iter_program_batches(job.program, bar)
+        if job.program != "-"
+        else gcode.batches_of(gcode.split_lines(read_text("-", "G-code program")))
+    )
+    motions = gcode.iter_motions_batched(counted(batches), cfg, job.program)
+    limits = chain.limits_of(prof)
+    while True:
+        t0 = time.perf_counter()
+        batch = list(itertools.islice(motions, job.chunk))
+        prepared = chain.prepare(batch, prof, limits)
+        counts["parse"] += time.perf_counter() - t0
+        counts["motions"] += len(batch)
+        yield prepared
+        if len(batch) < job.chunk:
+            return
+
+
+def _prepare_child(conn: Any, job: ConvertJob, prof: Any) -> None:
+    """Runs in the interpreter process: sends ("chunk", prepared, chars read),
+    then ("done", counts, peak MB), or ("error", PrsxyError) / ("crash", text)."""
+    chars = [0]
+
+    def progress(n: int) -> None:
+        chars[0] = n
+
+    counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
+    try:
+        for prepared in _prepare_here(job, prof, counts, progress):
+            conn.send(("chunk", prepared, chars[0]))
+        conn.send(("done", counts, peak_rss_mb()))
+    except PrsxyError as err:
+        conn.send(("error", err, counts))
+    except BaseException:
+        conn.send(("crash", traceback.format_exc(), counts))
+    finally:
+        conn.close()
+
+
+@contextlib.contextmanager
+def _prepared_chunks(
+    job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any
+) -> Iterator[Iterator[Any]]:
+    """Prepared chunks of the program, made here or, with ``job.parallel`` where
+    processes can fork, by a second process that runs ahead, at most
+    :data:`AHEAD` chunks (a bounded queue, then the pipe, hold it back), so memory
+    stays bounded. Errors arrive in program order: every chunk before a G-code
+    error is delivered first, as when run here."""
+    import multiprocessing
+
+    if (
+        not job.parallel
+        or job.program == "-"
+        or ("fork" not in multiprocessing.get_all_start_methods())
+    ):
+        yield _prepare_here(job, prof, counts, bar)
+        return
+    ctx = multiprocessing.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    proc = ctx.Process(target=_prepare_child, args=(send, job, prof), daemon=True)
+    proc.start()
+    send.close()
+
+    # a thread takes chunks off the pipe as they come, so the interpreter runs up
+    # to AHEAD chunks ahead while this process is busy (a queue, not the pipe's
+    # 64 KiB, holds them): chunk times vary, and neither side waits for the other
+    ahead: queue.Queue[tuple[Any, ...]] = queue.Queue(maxsize=AHEAD)
+    stop = threading.Event()
+
+    def pump() -> None:
+        while not stop.is_set():
+            try:
+                msg = recv.recv()
+            except (EOFError, OSError):
+                msg = ("eof",)
+            while not stop.is_set():
+                try:
+                    ahead.put(msg, timeout=0.1)
+                    break
+                except queue.Full:
+                    continue
+            if msg[0] != "chunk":
+                return
+
+    pumping = threading.Thread(target=pump, daemon=True)
+    pumping.start()
+
+    def receive() -> Iterator[Any]:
+        while True:
+            msg = ahead.get()
+            if msg[0] == "eof":
+                raise RuntimeError("the interpreter process ended without a result")
+            if msg[0] == "chunk":
+                if bar is not None:
+                    bar(msg[2])
+                yield msg[1]
+                continue
+            counts.update(msg[2] if msg[0] != "done" else msg[1])
+            if msg[0] == "done":
+                counts["helper_peak_rss_mb"] = msg[2] or 0.0
+                return
+            if msg[0] == "error":
+                raise msg[1]
+            raise RuntimeError("in the interpreter process:\n" + msg[1])
+
+    try:
+        yield receive()
+    finally:
+        stop.set()
+        if proc.is_alive():
+            proc.terminate()
+        proc.join()
+        pumping.join(timeout=5.0)
+        recv.close()
+
+
+#: chunks the interpreter process may run ahead of the chain
+AHEAD = 8
+
+#: programs from this size on are read and interpreted in a second process
+PARALLEL_FROM_BYTES = 256 * 1024
+
+
+def _convert_one(job: ConvertJob) -> list[str]:
+    return convert_file(job).written
+
+
+@contextlib.contextmanager
+def few_gc_passes() -> Iterator[None]:
+    """Rarer passes of the cycle collector: a conversion makes millions of
+    short-lived tuples and no cycles to speak of, and the passes over them cost a
+    fifth of the interpreter's time (measured). Objects that exist before are
+    frozen out of the passes; all is as it was afterwards."""
+    old = gc.get_threshold()
+    gc.freeze()
+    gc.set_threshold(50_000, 20, 20)
+    try:
+        yield
+    finally:
+        gc.set_threshold(*old)
+        gc.unfreeze()
+
+
+def convert_file(
+    job: ConvertJob, progress: Callable[[int, int], None] | None = None
+) -> ConvertStats:
+    """Convert one program, streaming, into its output file(s).
+
+    Outputs go to temp files beside the targets and are renamed only when the
+    whole conversion succeeded; on any error the temp files are removed. With
+    ``output="-"`` the text is written to standard output at the end.
+
+    Parameters
+    ----------
+    job : ConvertJob
+    progress : called with (characters read, file size) as the program is read
+
+    Raises
+    ------
+    PrsxyError
+        Located at the program's line (and column) that cannot be converted.
+    """
+    with few_gc_passes():
+        return _convert_file(job, progress)
+
+
+def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) -> ConvertStats:
+    prof = load_profile(job.profile_path)
+    bar = None
+    if progress is not None and job.program != "-":
+        size = os.path.getsize(job.program)
+
+        def bar(done: int) -> None:
+            progress(done, size)
+
+    sinks: dict[int, Any] = {}
+    temps: dict[int, str] = {}
+    memory: dict[int, list[str]] = {}
+    split = False
+
+    def emit(pieces: list[tuple[int, str]]) -> None:
+        for part, text in pieces:
+            if job.output == "-":
+                memory.setdefault(part, []).append(text)
+                continue
+            if part not in sinks:
+                target = Path(_part_path(job.output, part, split))
+                target.parent.mkdir(parents=True, exist_ok=True)
+                fd, tmp = tempfile.mkstemp(
+                    prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
+                )
+                temps[part] = tmp
+                sinks[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
+            sinks[part].write(text)
+
+    n_points = 0
+    t_write = 0.0
+    counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
+
+    def write(make: Callable[[], list[tuple[int, str]]]) -> None:
+        nonlocal t_write
+        t0 = time.perf_counter()
+        emit(make())
+        t_write += time.perf_counter() - t0
+
+    try:
+        # the interpreter starts first: with a second process, everything below
+        # up to the first chunk happens while it reads
+        with _prepared_chunks(job, prof, counts, bar) as source:
+            from . import chain, errormap, writers
+
+            sha = inspect_source(job.program) if job.program != "-" else ""
+            stages = job.stages
+            emap = errormap.from_profile(prof) if stages.error_map else None
+            prov = writers.Provenance(
+                source=job.program,
+                source_sha256=sha,
+                profile_name=prof.name,
+                profile_source=job.profile_path,
+                profile_sha256=sha256_of(job.profile_path),
+                options=job.options,
+            )
+            writer: writers.PmacWriter | writers.GcodeWriter
+            if job.fmt == "pmac":
+                writer = writers.PmacWriter(prof, prov)
+                split = writer.max_pts > 0
+            else:
+                writer = writers.GcodeWriter(prof, prov, float(prof.output["gcode_tolerance_mm"]))
+            pipe = chain.Pipeline(prof, stages, emap, start=job.start)
+            write(writer.begin)
+            for prepared in source:
+                for pc in pipe.feed_prepared(prepared):
+                    n_points += len(pc)
+                    write(functools.partial(writer.feed, pc))
+        tail = pipe.finish()
+        n_points += sum(len(pc) for pc in tail)
+        for pc in tail[:-1]:
+            write(functools.partial(writer.feed, pc))
+        write(functools.partial(writer.finish, tail[-1] if tail else None))
+        for fh in sinks.values():
+            fh.flush()
+            os.fsync(fh.fileno())
+            fh.close()
+        written = []
+        for part in sorted(temps):
+            target = _part_path(job.output, part, split)
+            publish(temps[part], target)
+            written.append(target)
+        if job.output == "-":
+            sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))
+            written = ["-"]
+        timings = {"parse": counts["parse"], **pipe.timings, "write": t_write}
+        return ConvertStats(
+            written,
+            int(counts["lines"]),
+            int(counts["motions"]),
+            n_points,
+            timings,
+            counts.get("helper_peak_rss_mb"),
+        )
+    except PrsxyError as err:
+        raise err.located(source=job.program) from None
+    except OSError as exc:
+        raise PrsxyError(
+            f"cannot write output: {exc.strerror}",
+            source=job.output,
+            expected="a writable location",
+        ) from None
+    finally:
+        for fh in sinks.values():
+            if not fh.closed:
+                fh.close()
+        for tmp in temps.values():
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+
+
+def _run_job(job: ConvertJob) -> tuple[list[str] | None, PrsxyError | None]:
+    try:
+        return _convert_one(job), None
+    except PrsxyError as err:
+        return None, err
+
+
+def convert_many(
+    jobs: Sequence[ConvertJob], workers: int = 1
+) -> list[tuple[list[str] | None, PrsxyError | None]]:
+    """Convert several programs, in ``workers`` processes when more than one.
+
+    Returns, per job in order, the files written or the error that stopped it
+    (one program's error does not stop the others).
+    """
+    if workers > 1 and len(jobs) > 1:
+        from concurrent.futures import ProcessPoolExecutor  # here: it takes 10 ms to import
+
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            return list(pool.map(_run_job, jobs))
+    return [_run_job(j) for j in jobs]
+
+
+def worth_a_second_process(program: str) -> bool:
+    """A single large program: one core interprets while the other runs the chain."""
+    try:
+        return program != "-" and os.path.getsize(program) >= PARALLEL_FROM_BYTES
+    except OSError:
+        return False  # the conversion itself reports the missing file

@@ -1,0 +1,122 @@
+"""Files in and out: text for the parsers, atomic publication of outputs.
+
+Everything that reads or writes a file for the library goes through here, so
+the rules hold everywhere: binary files are refused with the line of their
+first NUL byte, non-UTF-8 text is read as Latin-1, and outputs are written to
+temp files beside their targets and renamed only when every one is complete
+(a failed run leaves nothing half-written and never replaces an existing file).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from .errors import PrsxyError
+from .profile import Profile, loads
+
+
+def read_text(path: str, kind: str = "file") -> str:
+    """Read a text file for a parser: binary files and unreadable paths are errors.
+
+    Bytes that are not UTF-8 are read as Latin-1 (G-code from older CAM systems
+    has such bytes in comments; outside comments every parser rejects them).
+    """
+    try:
+        data = Path(path).read_bytes() if path != "-" else sys.stdin.buffer.read()
+    except OSError as exc:
+        raise PrsxyError(
+            f"cannot read {kind}: {exc.strerror}", source=path, expected=f"a readable {kind}"
+        ) from None
+    if b"\0" in data:
+        line = data[: data.index(b"\0")].count(b"\n") + 1
+        raise PrsxyError(
+            f"binary data (a NUL byte) in the {kind}",
+            source=path,
+            line=line,
+            expected=f"a text {kind}",
+        )
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+def sha256_of(path: str) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def publish(tmp: str, target: str | Path) -> None:
+    """Rename a finished temp file onto its target with the mode an ordinary new
+    file gets (mkstemp makes it 0600), or the mode of the file it replaces."""
+    try:
+        mode = os.stat(target).st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        mode = 0o666 & ~umask
+    os.chmod(tmp, mode)
+    os.replace(tmp, target)
+
+
+def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:
+    """Write every file or none: temp files beside the targets, then renames.
+
+    An existing output is replaced only once every new file is complete on disk.
+    """
+    temps: list[tuple[str, Path]] = []
+    try:
+        for path, content in files.items():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+            temps.append((tmp, path))
+            data = content.encode("utf-8") if isinstance(content, str) else content
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
+                fh.flush()
+                os.fsync(fh.fileno())
+        for tmp, path in temps:
+            publish(tmp, path)
+    except OSError as exc:
+        for tmp, _ in temps:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+        raise PrsxyError(
+            f"cannot write output: {exc.strerror}",
+            source=str(exc.filename or ""),
+            expected="a writable location",
+        ) from None
+
+
+def load_profile(path: str) -> Profile:
+    """Read and validate a profile file."""
+    return loads(read_text(path, "profile"), path)
+
+
+def inspect_source(path: str) -> str:
+    """sha256 of a program file, refusing binary files (a NUL byte) with its line."""
+    h = hashlib.sha256()
+    line = 1
+    try:
+        with open(path, "rb") as fh:
+            while block := fh.read(1 << 20):
+                if b"\0" in block:
+                    line += block[: block.index(b"\0")].count(b"\n")
+                    raise PrsxyError(
+                        "binary data (a NUL byte) in the G-code program",
+                        source=path,
+                        line=line,
+                        expected="a text file",
+                    )
+                line += block.count(b"\n")
+                h.update(block)
+    except OSError as exc:
+        raise PrsxyError(
+            f"cannot read G-code program: {exc.strerror}", source=path, expected="a readable file"
+        ) from None
+    return h.hexdigest()
