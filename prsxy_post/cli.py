@@ -22,7 +22,7 @@ import numpy as np
 
 from . import __version__
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
-from .files import load_profile, read_text, write_atomic
+from .files import load_profile, read_text, sha256_of, write_atomic
 
 
 def parse_pose(text: str, option: str) -> tuple[float, ...]:
@@ -376,13 +376,24 @@ def check(
 # ------------------------------------------------------------------ measurements
 
 
-def read_measurements(paths: Sequence[str]) -> tuple[list[Any], list[Any], list[Any]]:
-    """Read measurement files, sorted by kind: poses, ballbar runs, axis runs."""
+def read_measurements(
+    paths: Sequence[str],
+    profile_path: str | None = None,
+    commanded_with: str | None = None,
+    ignore_provenance: bool = True,
+) -> tuple[list[Any], list[Any], list[Any]]:
+    """Read measurement files, sorted by kind: poses, ballbar runs, axis runs.
+
+    With ``profile_path``, refuse files commanded with another profile than
+    ``commanded_with`` (default ``profile_path``) unless ``ignore_provenance``.
+    """
     from . import measure
 
+    data = [measure.read_measurement(read_text(p, "measurement file"), p) for p in paths]
+    if profile_path is not None:
+        check_provenance(data, profile_path, commanded_with, ignore_provenance)
     poses, runs, axis = [], [], []
-    for p in paths:
-        m = measure.read_measurement(read_text(p, "measurement file"), p)
+    for m in data:
         if isinstance(m, measure.PoseData):
             poses.append(m)
         elif isinstance(m, measure.BallbarRun):
@@ -390,6 +401,34 @@ def read_measurements(paths: Sequence[str]) -> tuple[list[Any], list[Any], list[
         else:
             axis.append(m)
     return poses, runs, axis
+
+
+def fingerprint(path: str) -> Any:
+    """The ``# commanded_with:`` fingerprint of a profile file (name and sha256)."""
+    from . import measure
+
+    return measure.CommandedWith(Path(path).name, sha256_of(path))
+
+
+def check_provenance(
+    data: Sequence[Any], profile_path: str, commanded_with: str | None, ignore: bool
+) -> None:
+    """Refuse data commanded with another profile than the command was told."""
+    from . import measure
+
+    if ignore:
+        return
+    path = commanded_with or profile_path
+    option = "--commanded-with" if commanded_with else "--profile"
+    measure.check_commanded_with(data, fingerprint(path), option)
+
+
+ignore_provenance_option = click.option(
+    "--ignore-provenance",
+    is_flag=True,
+    help="Use measurement files even when their '# commanded_with:' names another "
+    "profile than --commanded-with (or --profile).",
+)
 
 
 def _out_dir_files(out_dir: str, files: dict[str, str]) -> None:
@@ -504,6 +543,7 @@ def simulate(
         pose_noise_um=pose_noise_um,
         laser_noise_um=laser_noise_um,
         axis_runs=not no_axis_runs,
+        commanded_with=fingerprint(profile_path),
     )
     _out_dir_files(out_dir, files)
     click.echo(f"wrote {len(files)} files to {out_dir}", err=True)
@@ -603,6 +643,7 @@ def _check_output(out: str, inputs: Sequence[str], in_place: bool) -> None:
     "--seed", default=0, show_default=True, type=int, help="Seed of the cross-validation split."
 )
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
+@ignore_provenance_option
 @click.option("--json", "as_json", is_flag=True, help="Print the stage reports as JSON.")
 @guarded
 def calibrate(
@@ -614,6 +655,7 @@ def calibrate(
     max_rel_stderr: float,
     seed: int,
     in_place: bool,
+    ignore_provenance: bool,
     as_json: bool,
 ) -> None:
     """Calibrate PROFILE from measurement files DATA (axis, poses, ballbar).
@@ -635,7 +677,7 @@ def calibrate(
         raise UsageError(
             f"unknown stage {sorted(unknown)[0]!r}", expected="tables, kinematics, map"
         )
-    poses, runs, axis = read_measurements(data)
+    poses, runs, axis = read_measurements(data, profile_path, commanded_with, ignore_provenance)
     reports = []
     doc = dict(start.raw)
     real_axis = list(start.axis_comp)
@@ -735,6 +777,7 @@ def _json_default(x: Any) -> Any:
     help="Significance level of the F-test for each new effect.",
 )
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
+@ignore_provenance_option
 @guarded
 def diagnose(
     data: Sequence[str],
@@ -745,6 +788,7 @@ def diagnose(
     report_dir: str | None,
     alpha: float,
     in_place: bool,
+    ignore_provenance: bool,
 ) -> None:
     """Find where PROFILE's simulation and the measurements DATA disagree and why."""
     from . import diagnose as dg
@@ -753,7 +797,7 @@ def diagnose(
         _check_output(output, [profile_path], in_place)
     current = load_profile(profile_path)
     commanded = load_profile(commanded_with) if commanded_with else current
-    poses, runs, axis = read_measurements(data)
+    poses, runs, axis = read_measurements(data, profile_path, commanded_with, ignore_provenance)
     d = dg.Data.build(commanded, poses, runs, axis)
     result = dg.diagnose(current, d, alpha=alpha)
     files: dict[Path, str | bytes] = {}

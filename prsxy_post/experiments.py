@@ -9,6 +9,7 @@ contract's measurement files, ready for ``calibrate``, ``diagnose`` and ``ballba
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -95,8 +96,13 @@ def measurement_files(
     pose_noise_um: float = 1.0,
     laser_noise_um: float = 0.3,
     axis_runs: bool = True,
+    commanded_with: measure.CommandedWith | None = None,
 ) -> dict[str, str]:
-    """Every file of a measurement campaign, as {file name: text}."""
+    """Every file of a measurement campaign, as {file name: text}.
+
+    ``commanded_with``: the fingerprint of the commanding profile's file, written
+    into every file as ``# commanded_with:`` (measure's module docstring).
+    """
     files: dict[str, str] = {}
     runs: list[Any] = []
     for r in radii:
@@ -139,7 +145,7 @@ def measurement_files(
             )
     for run in runs:
         name = "ballbar-" + run.name.replace(" ", "-") + ".csv"
-        files[name] = measure.format_ballbar(run)
+        files[name] = measure.format_ballbar(replace(run, commanded_with=commanded_with))
     if n_poses:
         q = pose_grid(rng, n_poses)
         meas = simulate.measure_poses(truth, commanded, q, rng, pose_noise_um)
@@ -151,6 +157,7 @@ def measurement_files(
                 axis=meas[:, 3:],
                 rows=np.arange(n_poses) + 1,
                 meta={},
+                commanded_with=commanded_with,
             )
         )
     if axis_runs:
@@ -171,6 +178,7 @@ def measurement_files(
                 run=a[:, 4].astype(int),
                 rows=np.arange(len(a)) + 1,
                 meta={},
+                commanded_with=commanded_with,
             )
         )
     return files

@@ -5,11 +5,23 @@ UTF-8 CSV with a header row; ``# key: value`` metadata lines before it; the kind
 :class:`~prsxy_post.errors.MeasurementError` naming the file, the line and the
 column. Writers return the exact contract form (extra columns are allowed on
 reading and ignored).
+
+Provenance (an optional metadata key of this project; the contract's files stay
+valid without it): ``# commanded_with: <profile file name> sha256:<64 hex digits>``
+says which profile commanded the machine while it was measured, by the sha256 of
+that profile file's bytes (what ``sha256sum shop.toml`` prints). ``simulate``
+writes it into every file; for a real instrument's export add the line by hand
+before the header. ``calibrate`` and ``diagnose`` read it and refuse data that
+were commanded with another profile than the one they are told
+(:func:`check_commanded_with`).
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
+import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -24,6 +36,32 @@ COLUMNS = {
 }
 #: fewest samples a ballbar run must have to be analysed (a circle's harmonics)
 MIN_BALLBAR_ROWS = 16
+#: the optional provenance key (module docstring)
+COMMANDED_WITH = "commanded_with"
+_SHA256 = re.compile(r"sha256:([0-9a-fA-F]{64})")
+
+
+@dataclass(frozen=True)
+class CommandedWith:
+    """Which profile commanded the machine while it was measured.
+
+    name : the profile's file name (for people; the digest decides)
+    sha256 : hex digest of the profile file's bytes
+    line : the metadata line it was read from (for messages), None when made here
+    """
+
+    name: str
+    sha256: str
+    line: int | None = field(default=None, compare=False)
+
+    def __str__(self) -> str:
+        return f"{self.name} sha256:{self.sha256}"
+
+    @classmethod
+    def of(cls, name: str, content: str | bytes) -> CommandedWith:
+        """The fingerprint of a profile file: its name and the sha256 of its bytes."""
+        data = content.encode("utf-8") if isinstance(content, str) else content
+        return cls(name, hashlib.sha256(data).hexdigest())
 
 
 @dataclass(frozen=True)
@@ -34,6 +72,7 @@ class PoseData:
     tip : (N, 3) measured mx, my, mz [mm]
     axis : (N, 2) measured ma, mb [deg]; NaN where the file leaves them empty
     rows : (N,) line number of each row in the file
+    commanded_with : the profile that commanded the machine, when the file says
     """
 
     source: str
@@ -42,6 +81,7 @@ class PoseData:
     axis: np.ndarray
     rows: np.ndarray
     meta: dict[str, str] = field(default_factory=dict)
+    commanded_with: CommandedWith | None = None
 
 
 @dataclass(frozen=True)
@@ -57,6 +97,7 @@ class BallbarRun:
     dev_um: np.ndarray
     rows: np.ndarray
     meta: dict[str, str] = field(default_factory=dict)
+    commanded_with: CommandedWith | None = None
 
 
 @dataclass(frozen=True)
@@ -71,6 +112,7 @@ class AxisData:
     run: np.ndarray
     rows: np.ndarray
     meta: dict[str, str] = field(default_factory=dict)
+    commanded_with: CommandedWith | None = None
 
 
 Measurement = PoseData | BallbarRun | AxisData
@@ -279,7 +321,15 @@ def _poses(tab: _Table, source: str) -> PoseData:
                 key="ma",
                 expected="both or neither",
             )
-    return PoseData(source, v[:, :5], v[:, 5:8], v[:, 8:10], _rows(tab), dict(tab.meta))
+    return PoseData(
+        source,
+        v[:, :5],
+        v[:, 5:8],
+        v[:, 8:10],
+        _rows(tab),
+        dict(tab.meta),
+        _commanded_with(tab, source),
+    )
 
 
 def _meta_vector(tab: _Table, key: str, n: int, source: str) -> np.ndarray:
@@ -341,7 +391,16 @@ def _ballbar(tab: _Table, source: str) -> BallbarRun:
         )
     name = tab.meta.get("name", source)
     return BallbarRun(
-        source, name, pivot, length, v[:, 0], v[:, 1:6], v[:, 6], _rows(tab), dict(tab.meta)
+        source,
+        name,
+        pivot,
+        length,
+        v[:, 0],
+        v[:, 1:6],
+        v[:, 6],
+        _rows(tab),
+        dict(tab.meta),
+        _commanded_with(tab, source),
     )
 
 
@@ -387,7 +446,60 @@ def _axis(tab: _Table, source: str) -> AxisData:
         v[:, 4].astype(int),
         _rows(tab),
         dict(tab.meta),
+        _commanded_with(tab, source),
     )
+
+
+def _commanded_with(tab: _Table, source: str) -> CommandedWith | None:
+    """The optional ``# commanded_with:`` line, checked for its form."""
+    value = tab.meta.get(COMMANDED_WITH)
+    if value is None:
+        return None
+    line = tab.meta_lines[COMMANDED_WITH]
+    m = _SHA256.search(value)
+    name = value[: m.start()].strip() if m else ""
+    if m is None or value[m.end() :].strip() or not name:
+        raise _fail(
+            f"commanded_with is {value!r}",
+            source,
+            line,
+            key=COMMANDED_WITH,
+            expected="<profile file name> sha256:<64 hex digits of the file's sha256>",
+        )
+    return CommandedWith(name, m.group(1).lower(), line)
+
+
+def check_commanded_with(
+    data: Sequence[Measurement], commanding: CommandedWith, option: str = "--profile"
+) -> None:
+    """Refuse measurements that say another profile commanded the machine.
+
+    Files without ``# commanded_with:`` are taken at the caller's word (the
+    contract's form has no such line).
+
+    Raises
+    ------
+    MeasurementError
+        At the first file whose digest differs from ``commanding``'s, naming both.
+    """
+    for d in data:
+        cw = d.commanded_with
+        if cw is None or cw.sha256 == commanding.sha256:
+            continue
+        raise MeasurementError(
+            f"measured while the machine was commanded with {cw.name} "
+            f"(sha256 {cw.sha256[:12]}…), not with {commanding.name} "
+            f"(sha256 {commanding.sha256[:12]}…) as {option} says",
+            source=d.source,
+            line=cw.line,
+            key=COMMANDED_WITH,
+            expected=f"--commanded-with naming the profile {cw.name} that commanded it, "
+            "or --ignore-provenance to use these data anyway",
+        )
+
+
+def _meta_lines(d: Measurement) -> list[str]:
+    return [f"# {COMMANDED_WITH}: {d.commanded_with}"] if d.commanded_with is not None else []
 
 
 def _fmt(x: float, decimals: int) -> str:
@@ -395,7 +507,7 @@ def _fmt(x: float, decimals: int) -> str:
 
 
 def format_poses(d: PoseData) -> str:
-    lines = ["# kind: poses", ",".join(COLUMNS["poses"])]
+    lines = ["# kind: poses", *_meta_lines(d), ",".join(COLUMNS["poses"])]
     for q, tip, ax in zip(d.commanded, d.tip, d.axis, strict=True):
         cells = [_fmt(v, 6) for v in (*q, *tip)]
         cells += ["" if math.isnan(v) else _fmt(v, 6) for v in ax]
@@ -406,6 +518,7 @@ def format_poses(d: PoseData) -> str:
 def format_ballbar(r: BallbarRun) -> str:
     lines = [
         "# kind: ballbar",
+        *_meta_lines(r),
         f"# name: {r.name}",
         "# pivot: " + ", ".join(f"{v:g}" for v in r.pivot),
         f"# length: {r.length:g}",
@@ -417,7 +530,7 @@ def format_ballbar(r: BallbarRun) -> str:
 
 
 def format_axis(d: AxisData) -> str:
-    lines = ["# kind: axis", ",".join(COLUMNS["axis"])]
+    lines = ["# kind: axis", *_meta_lines(d), ",".join(COLUMNS["axis"])]
     for m, t, meas, di, run in zip(d.motor, d.target, d.measured, d.direction, d.run, strict=True):
         lines.append(f"{int(m)},{_fmt(t, 4)},{_fmt(meas, 6)},{int(di)},{int(run)}")
     return "\n".join(lines) + "\n"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -95,3 +97,26 @@ def test_mutated_files_never_crash(name: str, pos: int, junk: str) -> None:
         measure.read_measurement(text[:pos] + junk + text[pos + 1 :], name)
     except MeasurementError as exc:
         assert str(exc).startswith(name)
+
+
+def test_commanded_with_round_trips_and_is_checked() -> None:
+    """The optional provenance line: written, read back, and a mismatch refused at
+    its line; files without it (the contract's form) pass unchecked."""
+    cw = measure.CommandedWith.of("shop.toml", b"[machine]\n")
+    assert cw.sha256 == hashlib.sha256(b"[machine]\n").hexdigest()
+    plain = measure.read_measurement(EXAMPLES["poses.csv"], "poses.csv")
+    assert plain.commanded_with is None
+    text = measure.format_poses(
+        measure.PoseData(
+            "p.csv", plain.commanded, plain.tip, plain.axis, plain.rows, {}, commanded_with=cw
+        )
+    )
+    assert text.splitlines()[1] == f"# commanded_with: shop.toml sha256:{cw.sha256}"
+    again = measure.read_poses(text, "p.csv")
+    assert again.commanded_with == cw and again.commanded_with.line == 2
+    measure.check_commanded_with([plain, again], cw)  # both fine
+    other = measure.CommandedWith.of("cal.toml", b"[machine]\nname = 'x'\n")
+    with pytest.raises(MeasurementError) as exc:
+        measure.check_commanded_with([plain, again], other)
+    assert str(exc.value).startswith("p.csv:2: commanded_with: measured while")
+    assert "shop.toml" in str(exc.value) and "cal.toml" in str(exc.value)
