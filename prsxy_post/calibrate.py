@@ -46,51 +46,26 @@ from typing import Any
 
 import numpy as np
 
-from . import axiscomp, kinematics, simulate
+from . import axiscomp, errormap, kinematics, simulate
+from . import effects as registry
 from .errors import FitError
-from .profile import LEG_OPTIONAL, LEG_REQUIRED, MOTORS, KinematicParams, Profile, TableParams
+from .profile import MOTORS, KinematicParams, Profile, TableParams
 
-LEG_KEYS = LEG_REQUIRED + LEG_OPTIONAL
-
-
-def parameter_names() -> list[str]:
-    """Profile paths of every contract parameter, in θ order."""
-    names = ["kinematics.tool_length", "kinematics.tool_offset_x", "kinematics.tool_offset_y"]
-    for i in range(1, 4):
-        names += [f"kinematics.legs[{i}].{k}" for k in LEG_KEYS]
-    names += ["table.scale_x", "table.scale_y", "table.squareness"]
-    return names
+LEG_KEYS = registry.LEG_KEYS
 
 
-PARAMS = parameter_names()
-
-
-def _prior_scale(name: str) -> float:
-    key = name.rsplit(".", 1)[-1]
-    return simulate.ERROR_SIGMA[key]
-
-
-PRIOR = np.array([_prior_scale(n) for n in PARAMS])
+#: Profile paths of every contract parameter, in θ order (from the effects registry).
+PARAMS = list(registry.CONTRACT)
+#: Typical size of each (its prior): the registry's.
+PRIOR = np.array([registry.prior(n) for n in PARAMS])
 
 
 def units(name: str) -> str:
-    key = name.rsplit(".", 1)[-1]
-    if key in ("guide_angle", "platform_angle", "guide_tilt_x", "guide_tilt_y", "hinge_twist"):
-        return "deg"
-    if key in ("scale_x", "scale_y"):
-        return "1"
-    if key == "squareness":
-        return "rad"
-    return "mm"
+    return registry.unit(name)
 
 
 def theta_of(profile: Profile) -> np.ndarray:
-    kp, tb = profile.kinematics, profile.table
-    v = [kp.tool_length, kp.tool_offset_x, kp.tool_offset_y]
-    for leg in kp.legs:
-        v += [getattr(leg, k) for k in LEG_KEYS]
-    v += [tb.scale_x, tb.scale_y, tb.squareness]
-    return np.array(v, dtype=float)
+    return registry.theta_of(profile, PARAMS)
 
 
 def params_of(theta: np.ndarray) -> tuple[KinematicParams, TableParams]:
@@ -112,8 +87,7 @@ def params_of(theta: np.ndarray) -> tuple[KinematicParams, TableParams]:
 
 
 def geometry_of(profile: Profile, theta: np.ndarray) -> kinematics.Geometry:
-    kp, tb = params_of(theta)
-    return kinematics.Geometry.from_params(kp, profile.origin, tb, profile.effects)
+    return registry.geometry_at(profile, PARAMS, theta)
 
 
 # ---------------------------------------------------------------- data
@@ -218,13 +192,8 @@ def _out(geo: kinematics.Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
 
 
 def default_steps(names: Sequence[str], theta: np.ndarray) -> np.ndarray:
-    """Central-difference steps: relative for lengths and angles, absolute for small terms."""
-    return np.array(
-        [
-            1e-6 * max(1.0, abs(t)) if n.startswith("kinematics") else 1e-7
-            for n, t in zip(names, theta, strict=True)
-        ]
-    )
+    """Central-difference steps (the registry's, per member)."""
+    return registry.fd_steps(names, theta)
 
 
 def fk_with_jacobian(
@@ -659,3 +628,276 @@ def stage_error_map(
         "fit_rms below it by much would mean the map follows noise"
     ]
     return emap, StageReport("virtual-axis error map (Eq. 5)", changed, rb, ra, mb, ma, notes)
+
+
+# ---------------------------------------------------------------- the physical stage
+
+
+def _axis_doc(tables: Sequence[Any]) -> list[dict[str, Any]]:
+    """``[[axis_comp]]`` entries of tables."""
+    return [
+        {
+            "motor": int(c.motor),
+            "positions": np.asarray(c.positions, dtype=float).tolist(),
+            "forward": np.asarray(c.forward, dtype=float).tolist(),
+            "reverse": np.asarray(c.reverse, dtype=float).tolist(),
+        }
+        for c in tables
+    ]
+
+
+def _kind_stats(
+    resid: np.ndarray, segs: Sequence[Any]
+) -> tuple[dict[str, float], dict[str, float]]:
+    parts: dict[str, list[np.ndarray]] = {}
+    for s in segs:
+        parts.setdefault(s.kind, []).append(resid[s.start : s.stop])
+    return _stats({k: np.concatenate(v) for k, v in parts.items()})
+
+
+def stage_effects(
+    now: Profile,
+    commanded: Profile,
+    poses: Sequence[Any],
+    runs: Sequence[Any],
+    *,
+    alpha: float = 1e-3,
+    max_rel_stderr: float = 0.25,
+) -> tuple[dict[str, Any], list[Any], StageReport]:
+    """The physical stage: the library's effects outside the contract (bowed guides,
+    curved table axes, backlash, cyclic error, servo lag), named, sized and written
+    into the profile, with every contract parameter refitted jointly with them.
+
+    The selection is diagnose's (:func:`prsxy_post.diagnose.find_effects`) with the
+    contract parameters free, on the pose and ballbar data (the laser runs made
+    the tables). Returns the profile document, the effects and the report.
+    """
+    from . import diagnose
+
+    data = diagnose.Data.build(commanded, list(poses), list(runs), [])
+    candidates = [n for n in registry.members() if n not in set(registry.CONTRACT)]
+    measured, segs = data.measured()
+    before = measured - diagnose.predict(now, data, []).pred
+    found, fit, noise, _ = diagnose.find_effects(
+        now,
+        data,
+        candidates=candidates,
+        free=list(registry.CONTRACT),
+        alpha=alpha,
+        max_rel_stderr=max_rel_stderr,
+    )
+    doc = registry.apply(now.raw, now, fit.changes())
+    after = measured - diagnose.predict(fit.profile, data, []).pred
+    rb, mb = _kind_stats(before, segs)
+    ra, ma = _kind_stats(after, segs)
+    changed = [
+        {
+            "name": e.name,
+            "change": e.estimate,
+            "stderr": e.stderr,
+            "unit": e.unit,
+            **({"period_mm": e.period, "phase_deg": e.phase_deg} if e.period else {}),
+        }
+        for e in found
+    ]
+    notes = [e.sentence() for e in found] or ["no effect beyond the contract's terms found"]
+    notes.append(
+        "contract parameters refitted with them: "
+        + ", ".join(
+            f"{n} {d:+.3g}"
+            for n, d in zip(fit.free, fit.x[: len(fit.free)], strict=True)
+            if abs(d) > 0
+        )
+        if any(abs(d) > 0 for d in fit.x[: len(fit.free)])
+        else "contract parameters unchanged"
+    )
+    rep = StageReport(
+        "physical effects (the library's, beyond the contract)",
+        changed,
+        rb,
+        ra,
+        mb,
+        ma,
+        notes,
+        {"noise": noise},
+    )
+    return doc, found, rep
+
+
+def _retable(doc: dict[str, Any], now: Profile, axis: Sequence[Any], found: Sequence[Any]) -> None:
+    """Tables from the laser runs less the periodic terms now modelled, with the
+    ballbar's extra backlash put back: the table holds what no named effect does."""
+    from . import tables as tables_mod
+    from .profile import profile_from_dict
+
+    prof = profile_from_dict(doc, now.source)
+    cyc = axiscomp.tables_by_motor((), prof.effects)
+    motor = np.concatenate([a.motor for a in axis])
+    target = np.concatenate([a.target for a in axis])
+    measured = np.concatenate([a.measured for a in axis]).copy()
+    for m, t in cyc.items():
+        sel = motor == m
+        measured[sel] -= t.lo(target[sel]) - target[sel]  # the cyclic part alone
+    direction = np.concatenate([a.direction for a in axis])
+    run = np.concatenate([a.run for a in axis])
+    new = tables_mod.tables_from_axis(motor, target, measured, direction, run)
+    merged = {c["motor"]: c for c in doc.get("axis_comp", [])}
+    merged.update({c["motor"]: c for c in _axis_doc(new)})
+    doc["axis_comp"] = [merged[m] for m in sorted(merged)]
+    extra = [e.change() for e in found if registry.family(e.name).key == "backlash"]
+    if extra:
+        doc.update(registry.apply(doc, prof, extra))
+
+
+def fit_error_map(profile: Profile, data: Any, seed: int, sources: Sequence[str]) -> Any:
+    """Stage 3 on diagnose's model: the Eq. 5 map fitted on the pose residual
+    [mm, deg] that ``profile`` (every effect it holds, no map) leaves."""
+    from . import diagnose, errormap
+
+    measured, segs = data.measured()
+    resid = measured - diagnose.predict(profile, data, []).pred
+    q, e = [], []
+    k = 0
+    tip = np.zeros((0, 3))
+    for s in segs:
+        if s.kind == "pose_tip":
+            tip = resid[s.start : s.stop].reshape(-1, 3)
+        elif s.kind == "pose_axis":
+            ax = resid[s.start : s.stop].reshape(-1, 2)
+            q.append(data.poses[k].commanded)
+            e.append(np.column_stack([tip, ax]))
+            k += 1
+    if not q:
+        raise FitError(
+            "the error map needs pose measurements", expected="a pose file (kind: poses)"
+        )
+    Q, E = np.vstack(q), np.vstack(e)
+    ok = np.all(np.isfinite(E[:, :3]), axis=1)
+    E = np.where(np.isfinite(E), E, 0.0)
+    return errormap.fit(
+        Q[ok], E[ok], rng=np.random.default_rng(seed), provenance={"from": list(sources)}
+    )
+
+
+#: The stages of :func:`calibrate`, in the paper's order: real axes first
+#: (tables, kinematic parameters, the library's physical effects), the
+#: virtual-axis map for what remains.
+STAGES = ("tables", "kinematics", "effects", "map")
+
+
+@dataclass
+class Calibration:
+    """The calibrated profile document (provenance recorded) and what each stage did."""
+
+    doc: dict[str, Any]
+    reports: list[StageReport]
+    effects: list[Any]
+
+    def to_json(self) -> dict[str, Any]:
+        return {"stages": [r.to_dict() for r in self.reports]}
+
+
+def calibrate(
+    start: Profile,
+    commanded: Profile,
+    poses: Sequence[Any],
+    runs: Sequence[Any],
+    axis: Sequence[Any],
+    *,
+    stages: Sequence[str] = STAGES,
+    max_rel_stderr: float = 0.25,
+    alpha: float = 1e-3,
+    seed: int = 0,
+    commanded_with: Any = None,
+    sources: Sequence[str] | None = None,
+) -> Calibration:
+    """Calibrate ``start`` from measurements taken while ``commanded`` commanded the
+    machine: real-axis tables from laser runs, the contract's kinematic parameters,
+    the library's physical effects (with the contract refitted jointly), then the
+    virtual-axis error map on what remains.
+
+    Example
+    -------
+    >>> cal = calibrate(nominal, nominal, poses, runs, axis)  # doctest: +SKIP
+    >>> text = profile.dumps(cal.doc)  # doctest: +SKIP
+
+    Raises
+    ------
+    FitError
+        When no stage had data to work on, or a fit cannot identify anything.
+    """
+    from . import diagnose, provenance
+    from .errors import UsageError
+    from .profile import profile_from_dict
+
+    want = list(dict.fromkeys(stages))
+    unknown = [s for s in want if s not in STAGES]
+    if unknown:
+        raise UsageError(f"unknown stage {unknown[0]!r}", expected=", ".join(STAGES))
+    doc: dict[str, Any] = dict(start.raw)
+    real_axis = list(start.axis_comp)
+    reports: list[StageReport] = []
+    found: list[Any] = []
+    if "tables" in want and axis:
+        real_axis, rep = stage_tables(start, axis)
+        reports.append(rep)
+        doc["axis_comp"] = _axis_doc(real_axis)
+    if "kinematics" in want and (poses or runs):
+        theta, _, _, rep = stage_kinematics(
+            start, commanded, real_axis, poses, runs, max_rel_stderr=max_rel_stderr
+        )
+        reports.append(rep)
+        doc = apply_theta(doc, theta)
+    if "effects" in want and (poses or runs):
+        now = profile_from_dict(doc, start.source)
+        doc, found, rep = stage_effects(
+            now, commanded, poses, runs, alpha=alpha, max_rel_stderr=max_rel_stderr
+        )
+        if axis and "tables" in want and found:
+            _retable(doc, now, axis, found)
+        reports.append(rep)
+    if "map" in want and poses:
+        now = profile_from_dict(doc, start.source)
+        data = diagnose.Data.build(commanded, list(poses), [], [])
+        emap = fit_error_map(now, data, seed, [p.source for p in poses])
+        measured, segs = data.measured()
+        before = measured - diagnose.predict(now, data, []).pred
+        doc["error_map"] = emap.to_dict()
+        after = (
+            measured
+            - diagnose.predict(profile_from_dict(doc, start.source), data, [], with_map=True).pred
+        )
+        rb, mb = _kind_stats(before, segs)
+        ra, ma = _kind_stats(after, segs)
+        changed = [
+            {
+                "name": f"error_map.{c}",
+                "degree": emap.degree[c],
+                "lambda": emap.lam[c],
+                "cv_rms": emap.cv_rms[c],
+                "fit_rms": emap.fit_rms[c],
+                "unit": errormap.UNITS[c],
+            }
+            for c in emap.coef
+        ]
+        notes = [
+            "cv_rms: cross-validated prediction error on poses left out of the fit; "
+            "fit_rms below it by much would mean the map follows noise"
+        ]
+        reports.append(
+            StageReport("virtual-axis error map (Eq. 5)", changed, rb, ra, mb, ma, notes)
+        )
+    if not reports:
+        raise FitError(
+            "no stage had data to work on",
+            expected="axis files for tables, pose or ballbar files for the "
+            "kinematics and effects, pose files for the map",
+        )
+    note = {
+        "start": start.source,
+        "data": list(sources) if sources is not None else [],
+        "stages": [r.name for r in reports],
+        "effects": [f"{e.name} {e.estimate:+.6g} {e.unit} ± {e.stderr:.2g}" for e in found],
+    }
+    doc = provenance.record(doc, "calibrate", note, commanded_with=commanded_with)
+    return Calibration(doc, reports, found)

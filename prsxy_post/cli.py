@@ -627,9 +627,9 @@ def _check_output(out: str, inputs: Sequence[str], in_place: bool) -> None:
 )
 @click.option(
     "--stages",
-    default="tables,kinematics,map",
+    default="tables,kinematics,effects,map",
     show_default=True,
-    help="Which stages to run (comma separated).",
+    help="Which stages to run (comma separated): tables, kinematics, effects, map.",
 )
 @click.option(
     "--max-rel-stderr",
@@ -660,85 +660,42 @@ def calibrate(
 ) -> None:
     """Calibrate PROFILE from measurement files DATA (axis, poses, ballbar).
 
-    Stage 1 fits real-axis tables from laser runs (ISO 230-2 figures), stage 2 the
-    kinematic and table parameters from poses and ballbar runs, stage 3 the
+    Real axes first, as in the paper: real-axis tables from laser runs (ISO 230-2
+    figures), the kinematic and table parameters from poses and ballbar runs, the
+    physical effects of the library beyond them (bowed guides, curved table axes,
+    backlash, cyclic error, servo lag; named, sized and compensated), then the
     virtual-axis error map from what remains. Each stage prints what it changed
     and the residuals before and after.
+
+    Example: prsxy-post calibrate poses.csv axis.csv ballbar-*.csv --profile
+    nominal.toml -o calibrated.toml
     """
     from . import calibrate as cal
-    from .profile import profile_from_dict
 
     _check_output(output, [profile_path], in_place)
     start = load_profile(profile_path)
     commanded = load_profile(commanded_with) if commanded_with else start
-    want = {s.strip() for s in stages.split(",") if s.strip()}
-    unknown = want - {"tables", "kinematics", "map"}
-    if unknown:
-        raise UsageError(
-            f"unknown stage {sorted(unknown)[0]!r}", expected="tables, kinematics, map"
-        )
+    want = [s.strip() for s in stages.split(",") if s.strip()]
     poses, runs, axis = read_measurements(data, profile_path, commanded_with, ignore_provenance)
-    reports = []
-    doc = dict(start.raw)
-    real_axis = list(start.axis_comp)
-    if "tables" in want and axis:
-        real_axis, rep = cal.stage_tables(start, axis)
-        reports.append(rep)
-        doc["axis_comp"] = [
-            {
-                "motor": c.motor,
-                "positions": c.positions.tolist(),
-                "forward": c.forward.tolist(),
-                "reverse": c.reverse.tolist(),
-            }
-            for c in real_axis
-        ]
-    fitted = None
-    if "kinematics" in want and (poses or runs):
-        theta, _, obs, rep = cal.stage_kinematics(
-            start, commanded, real_axis, poses, runs, max_rel_stderr=max_rel_stderr
-        )
-        reports.append(rep)
-        doc = cal.apply_theta(doc, theta)
-        fitted = (theta, obs)
-    if "map" in want and poses:
-        prof_now = profile_from_dict(doc, output)
-        if fitted is None:
-            obs = cal.observations(commanded, real_axis, poses, [])
-            theta = cal.theta_of(prof_now)
-        else:
-            theta, obs = fitted
-        emap, rep = cal.stage_error_map(
-            prof_now, theta, obs, np.random.default_rng(seed), {"from": [p.source for p in poses]}
-        )
-        reports.append(rep)
-        doc["error_map"] = emap.to_dict()
-    if not reports:
-        raise UsageError(
-            "no stage had data to work on",
-            expected="axis files for tables, pose or ballbar files for the "
-            "kinematics, pose files for the map",
-        )
-    prov = dict(doc.get("provenance", {}))
-    prov["calibrate"] = {
-        "by": f"prsxy-post {__version__}",
-        "start": profile_path,
-        "commanded_with": commanded_with or profile_path,
-        "data": list(data),
-        "stages": [r.name for r in reports],
-    }
-    doc["provenance"] = prov
-    write_atomic(profile_files(doc, output, profile_path, in_place))
+    result = cal.calibrate(
+        start,
+        commanded,
+        poses,
+        runs,
+        axis,
+        stages=want,
+        max_rel_stderr=max_rel_stderr,
+        seed=seed,
+        commanded_with=fingerprint(commanded_with or profile_path),
+        sources=list(data),
+    )
+    write_atomic(profile_files(result.doc, output, profile_path, in_place))
     if as_json:
         click.echo(
-            json.dumps(
-                {"stages": [r.to_dict() for r in reports], "output": output},
-                default=_json_default,
-                indent=1,
-            )
+            json.dumps({**result.to_json(), "output": output}, default=_json_default, indent=1)
         )
     else:
-        for r in reports:
+        for r in result.reports:
             _print_stage(r)
         click.echo(f"wrote {output}")
 
@@ -799,7 +756,9 @@ def diagnose(
     commanded = load_profile(commanded_with) if commanded_with else current
     poses, runs, axis = read_measurements(data, profile_path, commanded_with, ignore_provenance)
     d = dg.Data.build(commanded, poses, runs, axis)
-    result = dg.diagnose(current, d, alpha=alpha)
+    result = dg.diagnose(
+        current, d, alpha=alpha, commanded_with=fingerprint(commanded_with or profile_path)
+    )
     files: dict[Path, str | bytes] = {}
     if output:
         files.update(profile_files(result.updated, output, profile_path, in_place))
@@ -813,6 +772,8 @@ def diagnose(
         write_atomic(files)
     if as_json:
         click.echo(json.dumps(result.to_json(), default=_json_default, indent=1))
+        for u in result.unexplained:
+            click.echo(f"warning: {u['sentence']}", err=True)
         return
     click.echo(f"noise: {', '.join(f'{k} {v:.3f}' for k, v in result.to_json()['noise'].items())}")
     for r in result.regions[:5]:
@@ -822,13 +783,27 @@ def diagnose(
             f"{unit} ({r['ratio']:.1f} x noise)"
         )
     if not result.effects:
-        click.echo("no missing effect found: the model explains the data to their noise")
+        click.echo(
+            "no missing effect found: the model explains the data to their noise"
+            if not result.unexplained
+            else "no library effect found, but the data are not explained (see the warnings)"
+        )
     for e in result.effects:
         al = f" (cannot be told apart from: {', '.join(e.aliases)})" if e.aliases else ""
         extra = f", period {e.period:g} mm" if e.period else ""
         click.echo(f"effect: {e.name} {e.estimate:+.6g} ± {e.stderr:.2g} {e.unit}{extra}{al}")
+        for dep in e.depends_on:
+            click.echo(
+                f"  note: {e.name} would move by {dep['shift']:+.4g} {e.unit} "
+                f"({dep['in_stderr']:+.1f} standard errors) without {dep['name']}"
+            )
     click.echo(f"residual RMS: {result.rms_before_um:.3f} um -> {result.rms_after_um:.3f} um")
-    click.echo(result.summary)
+    for e in result.effects:
+        click.echo(e.sentence())
+    if result.map_note is not None:
+        click.echo(f"error map: {result.map_note['action']} ({result.map_note['reason']})")
+    for u in result.unexplained:
+        click.echo(f"warning: {u['sentence']}", err=True)
     if output:
         click.echo(f"wrote {output}")
 
@@ -871,7 +846,7 @@ def ballbar(
             model = load_profile(profile_path)
             commanded = load_profile(commanded_with) if commanded_with else model
             d = dg.Data.build(commanded, [], data, [])
-            pred = dg.predict(model, d, want_columns=False).pred
+            pred = dg.predict(model, d, []).pred
             _, segs = d.measured()
             predicted = {s.source: pred[s.start : s.stop] * 1000.0 for s in segs}
         write_atomic({Path(plot_path): bb.plot_runs(results, data, predicted)})

@@ -507,42 +507,9 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     c.unknown(tsec, set(TABLE_KEYS), "table")
     table = TableParams(*(c.number(tsec, k, "table", 0.0, lo=-0.01, hi=0.01) for k in TABLE_KEYS))
     axis_comp = _axis_comp(c, doc["axis_comp"]) if "axis_comp" in doc else ()
-    esec = c.table(doc, "effects", "", False) or {}
-    c.unknown(esec, {"guide_bow", "table_straightness", "servo_lag_ms", "cyclic"}, "effects")
-    bow = c.vector(esec, "guide_bow", "effects", 3, [0.0, 0.0, 0.0])
-    straight = c.vector(esec, "table_straightness", "effects", 2, [0.0, 0.0])
-    lag = c.vector(esec, "servo_lag_ms", "effects", 5, [0.0] * 5)
-    for key, vals, lim in (
-        ("guide_bow", bow, 1.0),
-        ("table_straightness", straight, 1.0),
-        ("servo_lag_ms", lag, 100.0),
-    ):
-        if np.any(np.abs(vals) > lim):
-            raise c.fail(f"effects.{key}", f"is {vals.tolist()}", f"values within ±{lim:g}")
-    cyc_raw = esec.get("cyclic", [])
-    if not isinstance(cyc_raw, list) or not all(isinstance(x, dict) for x in cyc_raw):
-        raise c.fail("effects.cyclic", "is not an array of tables", "[[effects.cyclic]] tables")
-    cyclic = []
-    for i, e in enumerate(cyc_raw):
-        p = f"effects.cyclic[{i + 1}]"
-        c.unknown(e, {"motor", "amplitude", "period", "phase"}, p)
-        m = c.integer(e, "motor", p)
-        if m not in MOTORS:
-            raise c.fail(f"{p}.motor", f"is {m}", "one of 1, 2, 3, 5, 6")
-        cyclic.append(
-            Cyclic(
-                m,
-                c.number(e, "amplitude", p, lo=-1.0, hi=1.0),
-                c.number(e, "period", p, positive=True),
-                c.number(e, "phase", p, 0.0),
-            )
-        )
-    effects = Effects(
-        (bow[0], bow[1], bow[2]),
-        (straight[0], straight[1]),
-        (lag[0], lag[1], lag[2], lag[3], lag[4]),
-        tuple(cyclic),
-    )
+    from . import effects as effects_registry  # local: the registry imports this module
+
+    effects = effects_registry.parse_section(c, doc)
     motors = _motors(c, doc.get("motors"))
 
     sections = {name_: _section_with_defaults(c, doc, name_) for name_ in DEFAULTS}

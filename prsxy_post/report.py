@@ -42,10 +42,10 @@ def _ballbar_figure(result: Any, current: Any, data: Any) -> bytes | None:
         return None
     plt = pyplot()
     measured, segs = data.measured()
-    before = dg.predict(current, data, want_columns=False).pred
+    before = dg.predict(current, data, []).pred
     from .profile import profile_from_dict
 
-    after = dg.predict(profile_from_dict(result.updated), data, want_columns=False).pred
+    after = dg.predict(profile_from_dict(result.updated), data, []).pred
     runs = [s for s in segs if s.kind == "ballbar"]
     n = len(runs)
     cols = min(4, n)
@@ -82,8 +82,8 @@ def _pose_figure(result: Any, current: Any, data: Any) -> bytes | None:
         return None
     plt = pyplot()
     measured, segs = data.measured()
-    before = measured - dg.predict(current, data, want_columns=False).pred
-    after = measured - dg.predict(profile_from_dict(result.updated), data, want_columns=False).pred
+    before = measured - dg.predict(current, data, []).pred
+    after = measured - dg.predict(profile_from_dict(result.updated), data, []).pred
     seg = next(s for s in segs if s.kind == "pose_tip")
     q = data.poses[0].commanded
     eb = np.linalg.norm(before[seg.start : seg.stop].reshape(-1, 3), axis=1) * 1000

@@ -11,9 +11,12 @@ core of the ``simulate`` command.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from . import axiscomp, kinematics
+from . import effects as registry
 from .profile import MOTORS as MOTOR_ORDER
 from .profile import Profile
 
@@ -22,48 +25,6 @@ def truth_geometry(truth: Profile) -> kinematics.Geometry:
     return kinematics.Geometry.from_params(
         truth.kinematics, truth.origin, truth.table, truth.effects
     )
-
-
-def servo_velocity(P: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Central-difference velocity (P_{k+1} − P_{k−1}) / (t_{k+1} − t_{k−1}); 0 at both ends."""
-    v = np.zeros_like(P)
-    if len(P) > 2:
-        span = np.maximum(t[2:] - t[:-2], 1e-9)
-        v[1:-1] = (P[2:] - P[:-2]) / span[:, None]
-    return v
-
-
-def servo_lead(profile: Profile, M: np.ndarray, t: np.ndarray | None) -> np.ndarray:
-    """Commands that make lagging motors reach M: c = M + τ · v(M) (exact inverse of
-    :func:`servo_follow`). τ from ``effects.servo_lag_ms``."""
-    lag = np.asarray(profile.effects.servo_lag_ms) / 1000.0
-    if t is None or not np.any(lag):
-        return M
-    return M + lag[None, :] * servo_velocity(M, t)
-
-
-def servo_follow(profile: Profile, c: np.ndarray, t: np.ndarray | None) -> np.ndarray:
-    """Where motors with a servo lag τ are for commands c: the following error is
-    τ times the motor's velocity, m = c − τ · v(m) (the velocity as central
-    differences over the points, zero at the ends). Solved as a banded system."""
-    from scipy.linalg import solve_banded
-
-    lag = np.asarray(profile.effects.servo_lag_ms) / 1000.0
-    if t is None or not np.any(lag) or len(c) < 3:
-        return c
-    out = c.copy()
-    n = len(c)
-    span = np.maximum(t[2:] - t[:-2], 1e-9)
-    for col in range(5):
-        if not lag[col]:
-            continue
-        a = lag[col] / span  # rows 1..n-2: −a m_{k−1} + m_k + a m_{k+1} = c_k
-        ab = np.zeros((3, n))
-        ab[1] = 1.0
-        ab[0, 2:] = a  # super-diagonal of row k at column k+1
-        ab[2, :-2] = -a  # sub-diagonal of row k at column k−1
-        out[:, col] = solve_banded((1, 1), ab, c[:, col])
-    return out
 
 
 def actual_motors(
@@ -77,7 +38,7 @@ def actual_motors(
     """
     tables = axiscomp.profile_tables(truth)
     if approach is None:
-        P_cmd = servo_follow(truth, P_cmd, t)
+        P_cmd = registry.SERVO_LAG.follow(truth, P_cmd, t)
     out = np.array(P_cmd, dtype=float, copy=True)
     for col, m in enumerate(MOTOR_ORDER):
         table = tables.get(m)
@@ -113,27 +74,6 @@ def execute(
     if not np.all(ok):
         raise RuntimeError(f"forward kinematics did not converge at {np.sum(~ok)} points")
     return q
-
-
-#: Typical manufacturing errors (1 σ) of each contract term, for random machines.
-ERROR_SIGMA = {
-    "guide_radius": 0.05,
-    "guide_angle": 0.02,
-    "guide_height": 0.05,
-    "strut_length": 0.05,
-    "platform_radius": 0.05,
-    "platform_angle": 0.02,
-    "guide_tilt_x": 0.01,
-    "guide_tilt_y": 0.01,
-    "hinge_twist": 0.03,
-    "platform_z": 0.04,
-    "tool_length": 0.04,
-    "tool_offset_x": 0.02,
-    "tool_offset_y": 0.02,
-    "scale_x": 4e-5,
-    "scale_y": 4e-5,
-    "squareness": 1e-4,
-}
 
 
 def random_axis_table(
@@ -180,10 +120,10 @@ def random_machine(
     ----------
     base : the design (usually the nominal profile)
     rng : random generator
-    scale : multiplies :data:`ERROR_SIGMA`
+    scale : multiplies each term's prior (its typical error, :mod:`effects`)
     axis_errors : add real-axis tables with backlash for every motor
-    effects : add effects outside the contract's terms (bowed guides, curved
-        table axes) that only the virtual-axis error map can take up
+    effects : add the geometry effects outside the contract's terms (bowed
+        guides, curved table axes), each at its prior
     """
     from .profile import kinematics_to_dict, profile_from_dict
 
@@ -194,24 +134,54 @@ def random_machine(
     }
     kin = kinematics_to_dict(base.kinematics)
     for key in ("tool_length", "tool_offset_x", "tool_offset_y"):
-        kin[key] = kin[key] + rng.normal(0, ERROR_SIGMA[key] * scale)
-    for leg in kin["legs"]:
+        kin[key] = kin[key] + rng.normal(0, registry.prior(f"kinematics.{key}") * scale)
+    for i, leg in enumerate(kin["legs"]):
         for key in leg:
-            leg[key] = leg[key] + rng.normal(0, ERROR_SIGMA[key] * scale)
+            sigma = registry.prior(f"kinematics.legs[{i + 1}].{key}")
+            leg[key] = leg[key] + rng.normal(0, sigma * scale)
     doc["kinematics"] = kin
     doc["table"] = {
-        k: getattr(base.table, k) + rng.normal(0, ERROR_SIGMA[k] * scale)
+        k: getattr(base.table, k) + rng.normal(0, registry.prior(f"table.{k}") * scale)
         for k in ("scale_x", "scale_y", "squareness")
     }
     if axis_errors:
         doc["axis_comp"] = [random_axis_table(m, rng) for m in MOTOR_ORDER]
     if effects:
         doc["effects"] = {
-            "guide_bow": rng.normal(0, 0.01, 3).tolist(),
-            "table_straightness": rng.normal(0, 0.05, 2).tolist(),
+            fam.effects_keys[0]: rng.normal(0, fam.prior, len(fam.members())).tolist()
+            for fam in registry.iter_families("geometry")
+            if fam.effects_keys
         }
     doc["machine"] = {"name": name}
     return profile_from_dict(doc, f"<{name}>")
+
+
+def plant(base: Profile, changes: Sequence[registry.Change], name: str = "planted") -> Profile:
+    """``base`` with library effects added, each written at its profile home."""
+    from .profile import profile_from_dict
+
+    doc = registry.apply(base.raw, base, changes)
+    doc["machine"] = {"name": name}
+    return profile_from_dict(doc, f"<{name}>")
+
+
+def random_effects(
+    rng: np.random.Generator,
+    n: int,
+    *,
+    scale: float = 1.0,
+    candidates: Sequence[str] | None = None,
+) -> list[registry.Change]:
+    """``n`` different library members at realistic sizes.
+
+    Every family is equally likely (a member of a family with k members has
+    weight 1/k); sizes are drawn by the family (:meth:`effects.Family.random_change`:
+    0.5 to 2 times its prior, either sign where a sign means something).
+    """
+    names = list(candidates if candidates is not None else registry.members())
+    weight = np.array([1.0 / len(registry.family(m).members()) for m in names])
+    pick = rng.choice(len(names), size=n, replace=False, p=weight / weight.sum())
+    return [registry.family(names[k]).random_change(names[k], rng, scale) for k in pick]
 
 
 # ---------------------------------------------------------------- measurements
@@ -263,7 +233,7 @@ def motion_commands(
     for col, m in enumerate(MOTOR_ORDER):
         if m in tables:
             P[:, col] = axiscomp.compensate(tables[m], P[:, col])
-    return servo_lead(commanded, P, t)
+    return registry.SERVO_LAG.lead(commanded, P, t)
 
 
 def measure_poses(

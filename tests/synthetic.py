@@ -3,11 +3,9 @@ sampled every 10 ms, random poses, laser runs, all measured on a truth machine."
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 
-from prsxy_post import kinematics, simulate
+from prsxy_post import kinematics, measure, simulate
 from prsxy_post.profile import MOTORS, Profile
 
 
@@ -48,13 +46,13 @@ def campaign(
     axis: bool = False,
     bb_noise: float = 0.5,
     pose_noise: float = 1.0,
-) -> tuple[list, list, list]:
-    """Poses, ballbar runs and (optionally) laser runs, as measure-like objects."""
+) -> tuple[list[measure.PoseData], list[measure.BallbarRun], list[measure.AxisData]]:
+    """Poses, ballbar runs and (optionally) laser runs, as the readers return them."""
     poses = []
     if n_poses:
         q = random_poses(rng, n_poses)
         m = simulate.measure_poses(truth, commanded, q, rng, pose_noise)
-        poses.append(SimpleNamespace(source="poses.csv", commanded=q, tip=m[:, :3], axis=m[:, 3:]))
+        poses.append(measure.PoseData("poses.csv", q, m[:, :3], m[:, 3:], np.arange(n_poses) + 2))
     runs = []
     for r in radii:
         for tilt in tilts:
@@ -67,14 +65,8 @@ def campaign(
                 )
                 name = f"r{r:g} tilt{tilt:g} {'ccw' if sign > 0 else 'cw'}"
                 runs.append(
-                    SimpleNamespace(
-                        source=name + ".csv",
-                        name=name,
-                        t=t,
-                        commanded=q,
-                        pivot=np.zeros(3),
-                        length=r,
-                        dev_um=dev,
+                    measure.BallbarRun(
+                        name + ".csv", name, np.zeros(3), r, t, q, dev, np.arange(len(t)) + 5
                     )
                 )
     laser = []
@@ -83,13 +75,14 @@ def campaign(
             [simulate.measure_axis(truth, m, np.linspace(-200, 200, 21), 5, rng) for m in MOTORS]
         )
         laser.append(
-            SimpleNamespace(
-                source="axis.csv",
-                motor=rows[:, 0].astype(int),
-                target=rows[:, 1],
-                measured=rows[:, 2],
-                direction=rows[:, 3].astype(int),
-                run=rows[:, 4].astype(int),
+            measure.AxisData(
+                "axis.csv",
+                rows[:, 0].astype(int),
+                rows[:, 1],
+                rows[:, 2],
+                rows[:, 3].astype(int),
+                rows[:, 4].astype(int),
+                np.arange(len(rows)) + 2,
             )
         )
     return poses, runs, laser

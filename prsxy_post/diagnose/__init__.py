@@ -1,0 +1,664 @@
+"""Find where simulation and measurement disagree, name the missing effects, add them.
+
+The loop an engineer runs with a ballbar plot, made a procedure
+(:func:`diagnose`):
+
+1. **Simulate** every measurement with the current model (the profile), the
+   machine commanded as the data say (:mod:`.model`).
+2. **Noise.** Every library member's signature at the current model, fitted all
+   together to the residual: what even the whole library leaves is the noise of
+   each data kind (ballbar, pose tip, pose axis, laser), estimated from the data
+   themselves. Residuals are whitened by it.
+3. **Name** the effects (:mod:`.selection`): backward elimination from the full
+   model, a forward check, and the sparsest explanation; each member judged by
+   an F-test, Bonferroni-corrected for the number of candidates, and the BIC.
+   Members the data cannot tell apart from a named one are reported as its
+   aliases (its confounded group).
+4. **Add** them: the sizes are refined by Gauss–Newton through the full
+   (nonlinear) model; the model is linearised again at the result and the
+   selection repeated on it until it no longer changes. Standard errors come
+   from the joint fit at the end; an estimate that moves by more than its
+   standard error when another named effect is left out says so
+   (:attr:`Effect.depends_on`).
+5. **Say what is left** (:mod:`.leftover`): every data kind still above its
+   noise, where, by how much, and how much of it any library member could take.
+6. **Close the loop.** A profile with a virtual-axis error map: the map is part
+   of the model, but when pose data are given the physical effects are judged
+   on what the map took (real axes first, as in the paper) and the map is then
+   refitted on what they leave (:attr:`Diagnosis.map_note`).
+
+The library of effects is the registry in :mod:`prsxy_post.effects`; the
+calibration's physical stage (:func:`prsxy_post.calibrate.calibrate`) runs the
+same selection with the contract parameters free (``free=``).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from .. import effects as registry
+from .. import errormap, provenance
+from ..errors import FitError, ProfileError
+from ..measure import CommandedWith
+from ..profile import Profile, profile_from_dict
+from . import leftover, selection
+from .model import Data, Linearised, Segment, column_keys, predict, split_key
+
+__all__ = [
+    "Data",
+    "Diagnosis",
+    "Effect",
+    "Linearised",
+    "Segment",
+    "apply_effects",
+    "diagnose",
+    "estimate_noise",
+    "predict",
+    "regions",
+]
+
+#: Signatures more alike than this (|partial correlation|) cannot be told apart.
+ALIAS_CORR = 0.98
+
+
+@dataclass
+class Effect:
+    """A named effect: its estimate (the change to add to the profile's value, or
+    the term's size), standard error and unit; for a periodic term its period [mm]
+    and phase [deg]; members the data cannot tell apart from it; its evidence
+    (``chi2``: the drop of the whitened SSE it gives, ``p_value`` of its F-test);
+    the other named effects whose omission would move it by more than two standard
+    errors and 2 % (``depends_on``: name, shift, shift in standard errors): the
+    estimate is only as good as the model it was fitted in."""
+
+    name: str
+    estimate: float
+    stderr: float
+    unit: str
+    aliases: list[str] = field(default_factory=list)
+    period: float | None = None
+    phase_deg: float | None = None
+    p_value: float = 0.0
+    chi2: float = 0.0
+    depends_on: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def key(self) -> str:
+        return self.name if self.period is None else f"{self.name}@{self.period:g}"
+
+    def change(self) -> registry.Change:
+        return registry.Change(self.name, self.estimate, self.period, self.phase_deg)
+
+    def sentence(self) -> str:
+        return registry.family(self.name).sentence(self.name, self.estimate, self.period)
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {
+            "name": self.name,
+            "estimate": self.estimate,
+            "stderr": self.stderr,
+            "unit": self.unit,
+        }
+        if self.aliases:
+            d["aliases"] = self.aliases
+        if self.period is not None:
+            d["period_mm"] = self.period
+            d["phase_deg"] = self.phase_deg
+        d["p_value"] = self.p_value
+        d["chi2"] = self.chi2
+        if self.depends_on:
+            d["depends_on"] = self.depends_on
+        d["sentence"] = self.sentence()
+        return d
+
+
+def apply_effects(
+    doc: dict[str, Any], effects: Sequence[Effect], profile: Profile
+) -> dict[str, Any]:
+    """A profile document with the effects added (estimates are changes to add)."""
+    return registry.apply(doc, profile, [e.change() for e in effects])
+
+
+# ---------------------------------------------------------------- noise and regions
+
+
+def _kind_rows(segs: list[Segment], n: int) -> dict[str, np.ndarray]:
+    out: dict[str, np.ndarray] = {}
+    for s in segs:
+        m = out.setdefault(s.kind, np.zeros(n, dtype=bool))
+        m[s.start : s.stop] = True
+    return out
+
+
+def _whiten(segs: list[Segment], noise: dict[str, float], n: int) -> np.ndarray:
+    w = np.ones(n)
+    for s in segs:
+        w[s.start : s.stop] = 1.0 / max(noise.get(s.kind, 1e-3), 1e-12)
+    return w
+
+
+def estimate_noise(
+    data: Data, resid: np.ndarray, segs: list[Segment], normal: selection.Normal
+) -> dict[str, float]:
+    """Measurement noise per data kind [mm or deg]: what a fit of every library
+    member (and the free parameters) together leaves, with its degrees of freedom.
+
+    Starting values: ballbar 1.4826 · MAD of consecutive differences / √2; laser
+    the pooled spread of repeated runs; poses 1 µm and 1 arcsec. Two passes
+    (the second whitened by the first). ``normal``: the cross-products of every
+    signature and the residual (:class:`.selection.Normal`).
+    """
+    noise = {"pose_tip": 1e-3, "pose_axis": 3e-4, "ballbar": 0.5e-3, "axis": 0.3e-3}
+    noise.update(leftover.independent_noise(data, resid, segs))
+    noise = {k: v for k, v in noise.items() if k in normal.M}
+    n = sum(normal.n.values())
+    for _ in range(2):
+        sse, rank = normal.full_fit(noise)
+        frac = max(1.0 - rank / max(n, 1), 1e-3)
+        for kind, v in sse.items():
+            if normal.n[kind]:
+                noise[kind] = noise[kind] * math.sqrt(v / normal.n[kind] / frac)
+    return noise
+
+
+def _rows(segs: list[Segment], n: int) -> dict[str, np.ndarray]:
+    return _kind_rows(segs, n)
+
+
+regions = leftover.regions
+
+
+# ---------------------------------------------------------------- fitting
+
+
+@dataclass
+class _Fit:
+    """Sizes of the free members and chosen terms, and where the model is then."""
+
+    free: list[str]
+    keys: list[str]  # column keys of the chosen terms
+    x: np.ndarray  # free deltas then term values (d per term)
+    dims: list[int]
+    profile: Profile
+    lin: Linearised
+    cov: np.ndarray
+    sigma2: float
+
+    def changes(self) -> list[registry.Change]:
+        return _changes(self.free, self.keys, self.dims, self.x)
+
+
+def _changes(
+    free: Sequence[str], keys: Sequence[str], dims: Sequence[int], x: np.ndarray
+) -> list[registry.Change]:
+    out = [registry.Change(n, float(v)) for n, v in zip(free, x[: len(free)], strict=True)]
+    j = len(free)
+    for k, d in zip(keys, dims, strict=True):
+        name, period = split_key(k)
+        if d == 1:
+            out.append(registry.Change(name, float(x[j])))
+        else:
+            a, b = float(x[j]), float(x[j + 1])
+            out.append(
+                registry.Change(name, math.hypot(a, b), period, math.degrees(math.atan2(b, a)))
+            )
+        j += d
+    return out
+
+
+def _priors(free: Sequence[str], keys: Sequence[str], dims: Sequence[int]) -> np.ndarray:
+    s = [registry.prior(n) for n in free]
+    for k, d in zip(keys, dims, strict=True):
+        s += [registry.prior(split_key(k)[0])] * d
+    return np.array(s)
+
+
+def _design(lin: Linearised, keys: Sequence[str], w: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    if not keys:
+        return np.zeros((int(ok.sum()), 0))
+    return (np.hstack([lin.columns[k] for k in keys]) * w[:, None])[ok]
+
+
+def refine(
+    current: Profile,
+    data: Data,
+    measured: np.ndarray,
+    w: np.ndarray,
+    keys: Sequence[str],
+    x0: np.ndarray,
+    *,
+    free: Sequence[str] = (),
+    with_map: bool = False,
+    iterations: int = 6,
+    max_rel_stderr: float = 0.25,
+) -> _Fit:
+    """Gauss–Newton on the sizes through the full (nonlinear) model.
+
+    keys : column keys of the chosen terms; x0 : starting sizes (free deltas,
+    then each term's values). Directions of the free members the data cannot
+    determine to ``max_rel_stderr`` of their prior stay where they are.
+
+    Raises
+    ------
+    ProfileError
+        When a size runs beyond what a profile can hold.
+    """
+    free = list(free)
+    keys = list(keys)
+    dims = [2 if split_key(k)[1] is not None else 1 for k in keys]
+    x = np.array(x0, dtype=float)
+    s = _priors(free, keys, dims)
+    all_keys = free + keys
+    prof = current
+    lin = predict(current, data, all_keys, with_map=with_map)
+    cov = np.zeros((len(x), len(x)))
+    sigma2 = 1.0
+    for it in range(iterations + 1):
+        prof = profile_from_dict(
+            registry.apply(current.raw, current, _changes(free, keys, dims, x)), current.source
+        )
+        lin = predict(prof, data, all_keys, with_map=with_map)
+        r = measured - lin.pred
+        ok = np.isfinite(r)
+        X = _design(lin, all_keys, w, ok)
+        rw = (r * w)[ok]
+        if not X.shape[1]:
+            sigma2 = float(rw @ rw) / max(len(rw), 1)
+            break
+        Xs = X * s
+        U, S, Vt = np.linalg.svd(Xs, full_matrices=False)
+        # directions mostly of free members that the data determine worse than
+        # max_rel_stderr of their prior stay put; the chosen terms passed their
+        # tests, so every direction of theirs is kept
+        free_part = np.sum(Vt[:, : len(free)] ** 2, axis=1)
+        weak = 1.0 / np.maximum(S, 1e-300) >= max_rel_stderr
+        keep = (S > 1e-12 * (S[0] if S.size else 1.0)) & ~(weak & (free_part > 0.5))
+        dz = Vt[keep].T @ ((U[:, keep].T @ rw) / S[keep])
+        dx = s * dz
+        res = rw - X @ dx
+        dof = max(len(rw) - int(keep.sum()), 1)
+        sigma2 = float(res @ res) / dof
+        cov = (s[:, None] * ((Vt[keep].T / S[keep] ** 2) @ Vt[keep]) * s[None, :]) * sigma2
+        se = np.sqrt(np.maximum(np.diag(cov), 1e-300))
+        if it == iterations:
+            break
+        x = x + dx
+        if np.max(np.abs(dx) / se, initial=0.0) < 0.01:
+            prof = profile_from_dict(
+                registry.apply(current.raw, current, _changes(free, keys, dims, x)), current.source
+            )
+            lin = predict(prof, data, all_keys, with_map=with_map)
+            break
+    return _Fit(free, keys, x, dims, prof, lin, cov, sigma2)
+
+
+def _select(
+    normal: selection.Normal,
+    noise: dict[str, float],
+    free: Sequence[str],
+    candidates: Sequence[str],
+    alpha: float,
+) -> tuple[selection.Gram, selection.Test, list[int]]:
+    priors = {k: registry.prior(split_key(k)[0]) for k in candidates}
+    g = selection.Gram.build(normal, noise, candidates, free, priors=priors)
+    # the noise scale of the whole library's fit: 1 when the whitening is right
+    sse, rank = normal.full_fit(noise)
+    sigma2 = sum(sse.values()) / max(sum(normal.n.values()) - rank, 1)
+    test = selection.Test(alpha, max(len(g.keys), 1), sigma2, g.n)
+    return g, test, selection.select(g, test)
+
+
+# ---------------------------------------------------------------- the whole loop
+
+
+@dataclass
+class Diagnosis:
+    """What :func:`diagnose` found; :meth:`to_json` is the contract's JSON."""
+
+    effects: list[Effect]
+    noise: dict[str, float]
+    rms_before_um: float
+    rms_after_um: float
+    per_run: list[dict[str, Any]]
+    regions: list[dict[str, Any]]
+    unexplained: list[dict[str, Any]]
+    updated: dict[str, Any]
+    summary: str
+    map_note: dict[str, Any] | None = None
+    residual_before: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    residual_after: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+
+    def to_json(self) -> dict[str, Any]:
+        noise_um = (
+            self.noise.get(
+                "ballbar", self.noise.get("pose_tip", self.noise.get("axis", float("nan")))
+            )
+            * 1000.0
+        )
+        out = {
+            "rms_before_um": self.rms_before_um,
+            "rms_after_um": self.rms_after_um,
+            "noise_um": noise_um,
+            "noise": {
+                k: v * (3600.0 if k == "pose_axis" else 1000.0) for k, v in self.noise.items()
+            },
+            "noise_units": {k: ("arcsec" if k == "pose_axis" else "um") for k in self.noise},
+            "effects": [e.to_dict() for e in self.effects],
+            "regions": self.regions,
+            "unexplained": self.unexplained,
+            "runs": self.per_run,
+            "summary": self.summary,
+        }
+        if self.map_note is not None:
+            out["error_map"] = self.map_note
+        return out
+
+
+def _rms_um(resid: np.ndarray, segs: list[Segment]) -> float:
+    v = np.concatenate([resid[s.start : s.stop] for s in segs if s.unit == "mm"] or [np.zeros(0)])
+    v = v[np.isfinite(v)]
+    return float(np.sqrt(np.mean(v**2)) * 1000.0) if v.size else float("nan")
+
+
+def _per_run(before: np.ndarray, after: np.ndarray, segs: list[Segment]) -> list[dict[str, Any]]:
+    out = []
+    for s in segs:
+        scale, unit = (3600.0, "arcsec") if s.unit == "deg" else (1000.0, "um")
+        b, a = before[s.start : s.stop], after[s.start : s.stop]
+        b, a = b[np.isfinite(b)], a[np.isfinite(a)]
+        if not b.size:
+            continue
+        out.append(
+            {
+                "source": s.source,
+                "kind": s.kind,
+                "name": s.name,
+                "unit": unit,
+                "rms_before": float(np.sqrt(np.mean(b**2)) * scale),
+                "rms_after": float(np.sqrt(np.mean(a**2)) * scale),
+                "max_before": float(np.max(np.abs(b)) * scale),
+                "max_after": float(np.max(np.abs(a)) * scale),
+            }
+        )
+    return out
+
+
+def _effects_of(fit: _Fit, g: selection.Gram | None, sel: list[int], test: Any) -> list[Effect]:
+    """Named effects with estimates, standard errors and dependencies from a fit."""
+    nf = len(fit.free)
+    out: list[Effect] = []
+    pos = []
+    j = nf
+    for d in fit.dims:
+        pos.append((j, j + d))
+        j += d
+    x, C = fit.x, fit.cov
+    for t, (k, (a, b)) in enumerate(zip(fit.keys, pos, strict=True)):
+        name, period = split_key(k)
+        v = x[a:b]
+        Ck = C[a:b, a:b]
+        if b - a == 1:
+            est = float(v[0])
+            se = float(math.sqrt(max(Ck[0, 0], 0.0)))
+            phase = None
+            u = np.ones(1)
+        else:
+            est = float(math.hypot(v[0], v[1]))
+            u = v / est if est > 0 else np.array([1.0, 0.0])
+            se = float(math.sqrt(max(float(u @ Ck @ u), 0.0)))
+            phase = float(math.degrees(math.atan2(v[1], v[0])))
+        # the Wald statistic: the drop of the whitened SSE over σ̂²
+        chi2 = float(v @ np.linalg.solve(Ck, v)) if se > 0 else 0.0
+        p = float(stats.chi2.sf(chi2, b - a))
+        depends = []
+        for t2, (k2, (a2, b2)) in enumerate(zip(fit.keys, pos, strict=True)):
+            if t2 == t:
+                continue
+            # β_t without k2: β_t − C_t,k2 C_k2,k2⁻¹ β_k2
+            shift_v = -C[a:b, a2:b2] @ np.linalg.solve(C[a2:b2, a2:b2], x[a2:b2])
+            shift = float(u @ shift_v)
+            # worth saying: beyond two standard errors and 2 % of the estimate
+            if se > 0 and abs(shift) > max(2 * se, 0.02 * abs(est)):
+                depends.append(
+                    {
+                        "name": split_key(k2)[0],
+                        "period_mm": split_key(k2)[1],
+                        "shift": shift,
+                        "in_stderr": shift / se,
+                    }
+                )
+        aliases: list[str] = []
+        if g is not None and k in g.keys:
+            i = g.keys.index(k)
+            if i in sel:
+                aliases = [
+                    split_key(g.keys[j])[0]
+                    for j in selection.aliases(g, sel, sel.index(i), ALIAS_CORR)
+                ]
+        out.append(
+            Effect(
+                name,
+                est,
+                se,
+                registry.unit(name),
+                aliases,
+                period,
+                phase,
+                p,
+                chi2,
+                depends,
+            )
+        )
+    out.sort(key=lambda e: -e.chi2)
+    return out
+
+
+def find_effects(
+    current: Profile,
+    data: Data,
+    *,
+    candidates: Sequence[str] | None = None,
+    free: Sequence[str] = (),
+    alpha: float = 1e-3,
+    rounds: int = 3,
+    with_map: bool = False,
+    max_rel_stderr: float = 0.25,
+) -> tuple[list[Effect], _Fit, dict[str, float], np.ndarray]:
+    """Steps 2-4 of the module docstring: (effects, fit, noise, whitening weights).
+
+    candidates : member names to choose from (default: every member not in ``free``)
+    free : members always fitted, never reported as effects (calibration frees
+        the contract parameters)
+    """
+    measured, segs = data.measured()
+    if not segs:
+        raise FitError("no measurements to diagnose", expected="pose, ballbar or axis files")
+    free = list(free)
+    names = [n for n in (registry.members() if candidates is None else candidates) if n not in free]
+    keys = column_keys(names)
+    lin0 = predict(current, data, free + keys, with_map=with_map)
+    resid0 = measured - lin0.pred
+    rows = _kind_rows(segs, len(resid0))
+    normal = selection.Normal.of(lin0.columns, resid0, rows)
+    noise = estimate_noise(data, resid0, segs, normal)
+    w = _whiten(segs, noise, len(resid0))
+    fit = refine(
+        current,
+        data,
+        measured,
+        w,
+        [],
+        np.zeros(len(free)),
+        free=free,
+        with_map=with_map,
+        max_rel_stderr=max_rel_stderr,
+    )
+    chosen: list[str] | None = None
+    g: selection.Gram | None = None
+    sel: list[int] = []
+    test = None
+    for _ in range(max(rounds, 1)):
+        g, test, sel = _select(normal, noise, free, keys, alpha)
+        if chosen is not None and {g.keys[i] for i in sel} == set(chosen):
+            break
+        while True:
+            picked = [g.keys[i] for i in sel]
+            # starting sizes: the free ones where they are, the chosen at the
+            # selection's linear estimates (relative to ``current``, as z is)
+            beta, C, _ = g.fit(sel)
+            b_u, _ = g.unscaled(sel, beta, C)
+            x0 = np.concatenate([fit.x[: len(free)], b_u])
+            try:
+                fit = refine(
+                    current,
+                    data,
+                    measured,
+                    w,
+                    picked,
+                    x0,
+                    free=free,
+                    with_map=with_map,
+                    max_rel_stderr=max_rel_stderr,
+                )
+                break
+            except ProfileError:
+                # through the full model a size ran beyond anything a profile holds:
+                # its linear signature fitted something else; the weakest leaves
+                if not sel:
+                    raise
+                sel.pop(_weakest(g, sel))
+        chosen = [g.keys[i] for i in sel]
+        # the working response at the new model: the data as its linearisation sees
+        # them, relative to ``current`` (the sizes found are added back)
+        lin = predict(fit.profile, data, free + keys, with_map=with_map)
+        z = measured - lin.pred
+        j = 0
+        for k, d in zip(free + fit.keys, [1] * len(free) + fit.dims, strict=True):
+            z = z + lin.columns[k] @ fit.x[j : j + d]
+            j += d
+        normal = selection.Normal.of(lin.columns, z, rows)
+    assert test is not None
+    return _effects_of(fit, g, sel, test), fit, noise, w
+
+
+def _weakest(g: selection.Gram, sel: Sequence[int]) -> int:
+    """Position in ``sel`` of the member with the least evidence in the joint fit."""
+    beta, C, _ = g.fit(sel)
+    pos = np.concatenate([[0], np.cumsum([g.dims[k] for k in sel])])
+    ev = [
+        float(beta[a:b] @ np.linalg.solve(C[a:b, a:b], beta[a:b]))
+        for a, b in itertools.pairwise(pos)
+    ]
+    return int(np.argmin(ev))
+
+
+def diagnose(
+    current: Profile,
+    data: Data,
+    *,
+    alpha: float = 1e-3,
+    rounds: int = 3,
+    commanded_with: CommandedWith | None = None,
+    rng_seed: int = 0,
+) -> Diagnosis:
+    """The whole loop (module docstring); ``data`` was commanded by ``data.commanded``."""
+    measured, segs = data.measured()
+    if not segs:
+        raise FitError("no measurements to diagnose", expected="pose, ballbar or axis files")
+    has_map = errormap.from_profile(current) is not None
+    refit_map = has_map and bool(data.poses)
+    sel_map = has_map and not refit_map
+    before = measured - predict(current, data, [], with_map=has_map).pred
+    effects, _, noise, w = find_effects(current, data, alpha=alpha, rounds=rounds, with_map=sel_map)
+    updated_doc = apply_effects(current.raw, effects, current) if effects else dict(current.raw)
+    map_note: dict[str, Any] | None = None
+    if has_map:
+        map_note = {
+            "action": "kept",
+            "reason": "no effect was added" if not effects else "no pose data to refit it",
+        }
+        if refit_map and effects:
+            prof_new = profile_from_dict(updated_doc, current.source)
+            resid = measured - predict(prof_new, data, [], with_map=False).pred
+            emap = _refit_map(data, resid, segs, rng_seed, [p.source for p in data.poses])
+            updated_doc["error_map"] = emap.to_dict()
+            map_note = {
+                "action": "refitted",
+                "reason": "the effects added explain part of what the old map held; "
+                "it was fitted again on the pose residual they leave",
+                "cv_rms": {c: float(v) for c, v in emap.cv_rms.items()},
+            }
+        elif sel_map and effects:
+            map_note["reason"] = (
+                "no pose data to refit it: the effects were judged on what the map leaves"
+            )
+    updated = profile_from_dict(updated_doc, current.source)
+    after = measured - predict(updated, data, [], with_map=has_map).pred
+    rms_b, rms_a = _rms_um(before, segs), _rms_um(after, segs)
+    all_keys = column_keys()
+
+    def library() -> Linearised:
+        return predict(updated, data, all_keys, with_map=has_map)
+
+    left = leftover.unexplained(data, after, segs, noise, w, library)
+    note: dict[str, Any] = {
+        "data": sorted({s.source for s in segs}),
+        "effects": [f"{e.name} {e.estimate:+.6g} {e.unit} ± {e.stderr:.2g}" for e in effects],
+        "rms_before_um": rms_b,
+        "rms_after_um": rms_a,
+    }
+    if map_note is not None:
+        note["error_map"] = map_note["action"]
+    udoc = provenance.record(updated_doc, "diagnose", note, commanded_with=commanded_with)
+    summary = (
+        " ".join(e.sentence() for e in effects)
+        if effects
+        else "The model explains the measurements to their noise: no effect is missing."
+    )
+    if left:
+        summary += " " + " ".join(item["sentence"] for item in left)
+    return Diagnosis(
+        effects,
+        noise,
+        rms_b,
+        rms_a,
+        _per_run(before, after, segs),
+        leftover.regions(data, before, segs, noise),
+        left,
+        udoc,
+        summary,
+        map_note,
+        before,
+        after,
+    )
+
+
+def _refit_map(
+    data: Data, resid: np.ndarray, segs: list[Segment], seed: int, sources: list[str]
+) -> errormap.ErrorMap:
+    """The virtual-axis map fitted on the pose residual [mm, deg] a model leaves."""
+    q, e = [], []
+    k = 0
+    for s in segs:
+        if s.kind == "pose_tip":
+            p = data.poses[k]
+            tip = resid[s.start : s.stop].reshape(-1, 3)
+        elif s.kind == "pose_axis":
+            ax = resid[s.start : s.stop].reshape(-1, 2)
+            q.append(p.commanded)
+            e.append(np.column_stack([tip, ax]))
+            k += 1
+    Q = np.vstack(q)
+    E = np.vstack(e)
+    okr = np.all(np.isfinite(E[:, :3]), axis=1)
+    E = np.where(np.isfinite(E), E, 0.0)
+    return errormap.fit(
+        Q[okr], E[okr], rng=np.random.default_rng(seed), provenance={"from": sources}
+    )

@@ -1,0 +1,311 @@
+"""The model of the measurements: predictions and each library member's signature.
+
+For a model profile (geometry, real-axis tables, effects; optionally its
+virtual-axis error map e) and measurements taken while a known profile commanded
+the machine (its chain made the motor commands P_cmd):
+
+    pose tip, axis:  y = FK_model(P)                     (+ e(y) with the map)
+    ballbar:         d = |tip(P) − pivot| − length        (+ e on the tip)
+    laser:           p = lo(target) or hi(target) of the model's table
+
+where P is where the model's motors put their driven parts for P_cmd (servo lag,
+then the play model of the tables with their cyclic terms; poses and laser
+targets are approached on their own from one side).
+
+A member's signature is the change of every prediction per unit of its size:
+
+- a geometry member θ_j: ∂y/∂θ_j, by the implicit-function theorem on the FK
+  constraints (:func:`prsxy_post.calibrate.fk_with_jacobian`);
+- a motor member of motor m: ∂y/∂P_m × its motor term (the registry's
+  :meth:`~prsxy_post.effects.MotorFamily.motor_term`), and the motor term itself
+  on that motor's laser rows.
+
+Along a ballbar run the FK sensitivities change smoothly with the pose, so they
+are computed on every k-th sample (about :data:`JACOBIAN_POINTS` a run) and
+interpolated linearly in time (the error of that at one-degree spacing is about
+1e-5 of the sensitivity); motor terms (signs, periodic terms) are taken at every
+sample.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import axiscomp, calibrate, errormap, kinematics, simulate
+from .. import effects as registry
+from ..measure import AxisData, BallbarRun, PoseData
+from ..profile import MOTORS, Profile
+
+#: FK sensitivities are computed on about this many samples of each ballbar run.
+JACOBIAN_POINTS = 360
+
+
+def column_keys(names: Sequence[str] | None = None) -> list[str]:
+    """Column keys of members: the name, or ``name@period`` for each scanned period."""
+    out = []
+    for n in registry.members() if names is None else names:
+        fam = registry.family(n)
+        variants = getattr(fam, "variants", ())
+        out += [f"{n}@{p:g}" for p in variants] if variants else [n]
+    return out
+
+
+def split_key(key: str) -> tuple[str, float | None]:
+    """(member name, period or None) of a column key."""
+    name, _, per = key.partition("@")
+    return name, (float(per) if per else None)
+
+
+@dataclass
+class Segment:
+    """One measurement file's rows in the stacked vector of measured values."""
+
+    kind: str  # "pose_tip", "pose_axis", "ballbar", "axis"
+    source: str
+    name: str
+    start: int
+    stop: int
+    unit: str  # "mm" or "deg"
+
+
+@dataclass
+class Data:
+    """Measurements and the motor commands the machine was given for them.
+
+    P_pose, P_run : motor commands (N, 5) [mm] the commanding profile's chain made
+    v_run : command velocities (N, 5) [mm/s]; dir_run : the side (±1) each motor
+    last moved from (N, 5)
+    """
+
+    poses: list[PoseData]
+    runs: list[BallbarRun]
+    axis: list[AxisData]
+    commanded: Profile
+    P_pose: list[np.ndarray] = field(default_factory=list)
+    P_run: list[np.ndarray] = field(default_factory=list)
+    v_run: list[np.ndarray] = field(default_factory=list)
+    dir_run: list[np.ndarray] = field(default_factory=list)
+    #: platform poses of the last prediction, per file: the next one starts there
+    guess: dict[tuple[str, int], np.ndarray] = field(
+        default_factory=dict, repr=False, compare=False
+    )
+
+    @classmethod
+    def build(
+        cls,
+        commanded: Profile,
+        poses: Sequence[PoseData],
+        runs: Sequence[BallbarRun],
+        axis: Sequence[AxisData],
+    ) -> Data:
+        d = cls(list(poses), list(runs), list(axis), commanded)
+        for p in poses:
+            d.P_pose.append(simulate.pose_commands(commanded, p.commanded))
+        for r in runs:
+            P = simulate.motion_commands(commanded, r.commanded, t=r.t)
+            d.P_run.append(P)
+            d.v_run.append(registry.SERVO_LAG.velocity(P, r.t))
+            d.dir_run.append(last_direction(P))
+        return d
+
+    def measured(self) -> tuple[np.ndarray, list[Segment]]:
+        """Stacked measured values [mm or deg] and the segment of each file."""
+        vals: list[np.ndarray] = []
+        segs: list[Segment] = []
+        n = 0
+
+        def add(kind: str, src: str, name: str, v: np.ndarray, unit: str) -> None:
+            nonlocal n
+            vals.append(v)
+            segs.append(Segment(kind, src, name, n, n + len(v), unit))
+            n += len(v)
+
+        for p in self.poses:
+            add("pose_tip", p.source, "tip", p.tip.ravel(), "mm")
+            add("pose_axis", p.source, "axis", p.axis.ravel(), "deg")
+        for r in self.runs:
+            add("ballbar", r.source, r.name or r.source, r.dev_um * 1e-3, "mm")
+        for a in self.axis:
+            add("axis", a.source, "laser", a.measured, "mm")
+        return (np.concatenate(vals) if vals else np.zeros(0)), segs
+
+
+def last_direction(P: np.ndarray) -> np.ndarray:
+    """The direction (±1) each motor last moved in, (N, 5): the side of the play its
+    part sits on (+1 before the first move)."""
+    step = np.diff(P, axis=0, prepend=P[:1])
+    sgn = np.sign(np.where(np.abs(step) > 1e-12, step, 0.0))
+    idx = np.where(sgn != 0, np.arange(len(P))[:, None], -1)
+    idx = np.maximum.accumulate(idx, axis=0)
+    last = np.take_along_axis(sgn, np.maximum(idx, 0), axis=0)
+    last[idx < 0] = 1.0
+    return last
+
+
+@dataclass
+class Linearised:
+    """Predictions and signatures.
+
+    pred : (n,) predicted values, stacked as :meth:`Data.measured`
+    columns : column key -> (n, d) change of the predictions per unit of the member
+        (d = 2 for a periodic term: its sine and cosine parts)
+    """
+
+    pred: np.ndarray
+    columns: dict[str, np.ndarray]
+    segments: list[Segment]
+
+
+def _interp_rows(idx: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
+    """Values (k, m) at sample indices ``idx``, linearly interpolated to 0..n-1."""
+    if len(idx) == n:
+        return values
+    x = np.arange(n)
+    return np.column_stack([np.interp(x, idx, values[:, j]) for j in range(values.shape[1])])
+
+
+def _thin(n: int) -> np.ndarray:
+    stride = max(1, n // JACOBIAN_POINTS)
+    idx = np.arange(0, n, stride)
+    return idx if idx[-1] == n - 1 else np.append(idx, n - 1)
+
+
+def predict(
+    model: Profile,
+    data: Data,
+    keys: Sequence[str] | None = None,
+    *,
+    with_map: bool = False,
+) -> Linearised:
+    """Every measurement as ``model`` predicts it, and the signatures of ``keys``.
+
+    keys : column keys (:func:`column_keys`); None for every member of the library
+    with_map : add the model's virtual-axis error map to the predicted poses
+    """
+    keys = column_keys() if keys is None else list(keys)
+    geo_names = [k for k in keys if registry.family(split_key(k)[0]).stage == "geometry"]
+    motor_keys = [k for k in keys if k not in set(geo_names)]
+    motor_fams = {k: registry.family(split_key(k)[0]) for k in motor_keys}
+    want = bool(keys)
+    theta = registry.theta_of(model, geo_names)
+    steps = registry.fd_steps(geo_names, theta)
+
+    def make_geo(t: np.ndarray) -> kinematics.Geometry:
+        return registry.geometry_at(model, geo_names, t)
+
+    emap = errormap.from_profile(model) if with_map else None
+    tables = axiscomp.profile_tables(model)
+    preds: list[np.ndarray] = []
+    cols: dict[str, list[np.ndarray]] = {k: [] for k in keys}
+
+    def motor_columns(
+        sens: np.ndarray,
+        P: np.ndarray,
+        P_cmd: np.ndarray,
+        direction: np.ndarray,
+        velocity: np.ndarray,
+        approach: int | None,
+    ) -> dict[str, np.ndarray]:
+        """(N, r, d) per key: sensitivities (N, r, 5) times each motor term (N, d)."""
+        out = {}
+        for k in motor_keys:
+            name, period = split_key(k)
+            fam = motor_fams[k]
+            assert isinstance(fam, registry.MotorFamily)
+            i = MOTORS.index(fam.motor(name))
+            ctx = registry.MotorContext(P_cmd[:, i], tables.get(MOTORS[i]), approach)
+            term = fam.motor_term(P[:, i], direction[:, i], velocity[:, i], period, ctx)
+            out[k] = sens[:, :, i, None] * term[:, None, :]
+        return out
+
+    for n_pose, P_cmd in enumerate(data.P_pose):
+        Pm = simulate.actual_motors(model, P_cmd, approach=+1)
+        y, J, xv, JP = calibrate.fk_with_jacobian(
+            make_geo, theta, Pm, data.guess.get(("pose", n_pose)), want, steps,
+            motors=bool(motor_keys),
+        )  # fmt: skip
+        data.guess[("pose", n_pose)] = xv
+        if emap is not None:
+            y = y + emap(y)
+        preds += [y[:, :3].ravel(), y[:, 3:].ravel()]
+        if not want:
+            continue
+
+        def red(a: np.ndarray) -> np.ndarray:  # (N, 5, d) -> (3N + 2N, d)
+            d = a.shape[2]
+            return np.concatenate([a[:, :3, :].reshape(-1, d), a[:, 3:, :].reshape(-1, d)])
+
+        assert J is not None
+        for j, nm in enumerate(geo_names):
+            cols[nm].append(red(J[:, :, j : j + 1]))
+        if motor_keys:
+            assert JP is not None
+            ones = np.ones_like(Pm)
+            for k, c in motor_columns(JP, Pm, P_cmd, ones, np.zeros_like(Pm), +1).items():
+                cols[k].append(red(c))
+    for n_run, (r, P_cmd, vel, direction) in enumerate(
+        zip(data.runs, data.P_run, data.v_run, data.dir_run, strict=True)
+    ):
+        Pm = simulate.actual_motors(model, P_cmd, t=r.t)
+        followed = registry.SERVO_LAG.follow(model, P_cmd, r.t)  # what the play model sees
+        y, _, xv, _ = calibrate.fk_with_jacobian(
+            make_geo, theta, Pm, data.guess.get(("run", n_run)), False, steps
+        )
+        data.guess[("run", n_run)] = xv
+        tip = y[:, :3] + (emap(y)[:, :3] if emap is not None else 0.0)
+        vec = tip - r.pivot
+        dist = np.linalg.norm(vec, axis=1)
+        preds.append(dist - r.length)
+        if not want:
+            continue
+        idx = _thin(len(Pm))
+        _, J, _, JP = calibrate.fk_with_jacobian(
+            make_geo, theta, Pm[idx], xv[idx], True, steps, motors=bool(motor_keys)
+        )
+        unit = vec[idx] / dist[idx, None]
+        assert J is not None
+        if geo_names:
+            Jr = _interp_rows(idx, np.einsum("ni,nim->nm", unit, J[:, :3, :]), len(Pm))
+            for j, nm in enumerate(geo_names):
+                cols[nm].append(Jr[:, j : j + 1])
+        if motor_keys:
+            assert JP is not None
+            JPr = _interp_rows(idx, np.einsum("ni,nim->nm", unit, JP[:, :3, :]), len(Pm))
+            sens = JPr[:, None, :]
+            for k, c in motor_columns(sens, Pm, followed, direction, vel, None).items():
+                cols[k].append(c[:, 0, :])
+    for a in data.axis:
+        pa = np.empty(len(a.target))
+        for m in np.unique(a.motor):
+            for d in (1, -1):
+                sel = (a.motor == m) & (a.direction == d)
+                pa[sel] = axiscomp.approach(tables.get(int(m)), a.target[sel], d)
+        preds.append(pa)
+        if not want:
+            continue
+        for nm in geo_names:
+            cols[nm].append(np.zeros((len(pa), 1)))
+        for k in motor_keys:
+            name, period = split_key(k)
+            fam = motor_fams[k]
+            assert isinstance(fam, registry.MotorFamily)
+            m = fam.motor(name)
+            c = np.zeros((len(pa), fam.columns()))
+            for d in (1, -1):
+                sel = (a.motor == m) & (a.direction == d)
+                if np.any(sel):
+                    ctx = registry.MotorContext(a.target[sel], tables.get(m), d)
+                    c[sel] = fam.motor_term(
+                        a.target[sel],
+                        np.full(int(sel.sum()), float(d)),
+                        np.zeros(int(sel.sum())),
+                        period,
+                        ctx,
+                    )
+            cols[k].append(c)
+    _, segs = data.measured()
+    columns = {k: np.concatenate(v) for k, v in cols.items()} if want else {}
+    return Linearised(np.concatenate(preds) if preds else np.zeros(0), columns, segs)

@@ -1,0 +1,479 @@
+"""Which library members the data need: selection on the linearised model.
+
+Inputs are whitened (divided by the noise of their kind): the residual r (n,)
+and each candidate's signature block A_k (n, d_k), with the always-free columns
+(calibration's contract parameters) projected out. Everything after works on
+the Gram matrix of the unit-normalised columns, G = AᵀA, b = Aᵀr:
+
+    SSE(S) = rᵀr − b_Sᵀ G_S⁻¹ b_S
+
+1. **Dependencies.** Members whose signatures are exact combinations of others
+   (the tool length and the three ball-joint heights; on poses alone a motor's
+   backlash and its guide height) show as eigenvalues ~0 of G_S. Of each such
+   set the member that explains least on its own leaves first.
+2. **Backward elimination from the full model.** With every candidate in,
+   β = G_S⁻¹ b_S and C = G_S⁻¹; the member with the largest p-value of its partial
+   F-test F_k = β_kᵀ (C_kk)⁻¹ β_k / (d_k σ²) leaves while it fails the test:
+   Bonferroni-corrected for the m candidates (p_k · m > α) or below the BIC
+   penalty (F_k d_k < d_k ln n). Starting from the full model, every effect that
+   is present is in the model while the others are judged, so two effects that
+   together resemble a third do not pull the selection towards the third.
+3. **Forward check.** A member outside whose addition passes the same test is
+   added and the elimination rerun (stepwise in both directions).
+4. **Sparsest explanation.** A member outside that, added, lets the elimination
+   end with fewer members (or the same number and a better fit) without a
+   significantly worse fit replaces them (three ball-joint heights that are one
+   tool length).
+
+σ² is the noise scale of the full model's residual: 1 when the whitening is right.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+#: Eigenvalue of the normalised Gram matrix below which members are dependent.
+DEPENDENT = 1e-8
+
+
+@dataclass
+class Normal:
+    """Cross-products ZᵀZ of Z = [columns, residual] per data kind, unwhitened.
+
+    Whitening divides a kind's rows by its noise σ, so the whitened normal
+    equations for any noise estimate are Σ_kind M_kind / σ_kind²: the expensive
+    products are made once per linearisation.
+    """
+
+    keys: list[str]
+    dims: list[int]
+    M: dict[str, np.ndarray]  # kind -> (p + 1, p + 1), residual last
+    n: dict[str, int]
+
+    @classmethod
+    def of(
+        cls, columns: Mapping[str, np.ndarray], r: np.ndarray, rows: Mapping[str, np.ndarray]
+    ) -> Normal:
+        """columns : key -> (n, d); r : (n,) residual; rows : kind -> (n,) bool."""
+        keys = list(columns)
+        dims = [columns[k].shape[1] for k in keys]
+        M, n = {}, {}
+        for kind, sel in rows.items():
+            sel = sel & np.isfinite(r)
+            Z = np.hstack([*(columns[k][sel] for k in keys), r[sel][:, None]])
+            M[kind] = Z.T @ Z
+            n[kind] = int(sel.sum())
+        return cls(keys, dims, M, n)
+
+    def whitened(self, noise: Mapping[str, float]) -> np.ndarray:
+        return sum(m / max(noise[k], 1e-300) ** 2 for k, m in self.M.items())  # type: ignore[return-value]
+
+    def columns(self, keys: Sequence[str]) -> np.ndarray:
+        start = np.concatenate([[0], np.cumsum(self.dims)]).astype(int)
+        pos = {k: i for i, k in enumerate(self.keys)}
+        parts = [np.arange(start[pos[k]], start[pos[k] + 1]) for k in keys]
+        return np.concatenate(parts) if parts else np.zeros(0, dtype=int)
+
+    def full_fit(self, noise: Mapping[str, float]) -> tuple[dict[str, float], int]:
+        """Whitened SSE per kind of every column fitted together, and their rank."""
+        Mw = self.whitened(noise)
+        p = Mw.shape[0] - 1
+        coef, rank = _pinv_solve(Mw[:p, :p], Mw[:p, p])
+        out = {}
+        for kind, m in self.M.items():
+            s = m[p, p] - 2 * coef @ m[:p, p] + coef @ m[:p, :p] @ coef
+            out[kind] = float(max(s, 0.0)) / max(noise[kind], 1e-300) ** 2
+        return out, rank
+
+
+def _pinv_solve(G: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, int]:
+    """Minimum-norm solution of G x = b for a symmetric, possibly singular G (its
+    columns scaled to unit diagonal first), and G's numerical rank."""
+    d = np.sqrt(np.maximum(np.diag(G), 1e-300))
+    Gn = G / np.outer(d, d)
+    w, V = np.linalg.eigh(Gn)
+    keep = w > 1e-10 * max(float(w[-1]), 1e-300) if w.size else np.zeros(0, dtype=bool)
+    x = V[:, keep] @ ((V[:, keep].T @ (b / d)) / w[keep])
+    return x / d, int(keep.sum())
+
+
+@dataclass
+class Gram:
+    """The normal equations of the whitened candidates (module docstring).
+
+    keys : candidate column keys; dims : columns of each; G : (p, p) Gram matrix
+    of the unit-normalised columns; b : (p,) their products with r; norm : (p,)
+    the columns' norms before normalising; rr : rᵀr; n : rows; n_free : rank of
+    the free columns projected out.
+    """
+
+    keys: list[str]
+    dims: list[int]
+    start: np.ndarray
+    G: np.ndarray
+    b: np.ndarray
+    norm: np.ndarray
+    rr: float
+    n: int
+    n_free: int
+    prior: np.ndarray  # (p,) typical size of each column's member
+
+    @classmethod
+    def build(
+        cls,
+        normal: Normal,
+        noise: Mapping[str, float],
+        candidates: Sequence[str],
+        free: Sequence[str] = (),
+        *,
+        priors: Mapping[str, float] | None = None,
+        invisible: float = 1e-9,
+    ) -> Gram:
+        """Whitened normal equations of ``candidates`` with the ``free`` columns
+        projected out (Schur complement). A candidate whose whitened columns are all
+        shorter than ``invisible`` (a unit size moves the data by a billionth of
+        their noise), or lie in the span of the free columns, is left out: the data
+        do not see it."""
+        Mw = normal.whitened(noise)
+        p = Mw.shape[0] - 1
+        cand = [k for k in candidates if k in set(normal.keys)]
+        ia = normal.columns(cand)
+        iF = normal.columns(list(free))
+        G = Mw[np.ix_(ia, ia)]
+        b = Mw[ia, p]
+        rr = float(Mw[p, p])
+        n_free = 0
+        if iF.size:
+            GFF = Mw[np.ix_(iF, iF)]
+            GFA = Mw[np.ix_(iF, ia)]
+            bF = Mw[iF, p]
+            d = np.sqrt(np.maximum(np.diag(GFF), 1e-300))
+            w, V = np.linalg.eigh(GFF / np.outer(d, d))
+            keep = w > 1e-10 * max(float(w[-1]), 1e-300)
+            n_free = int(keep.sum())
+            # pseudo-inverse of GFF on its identified subspace
+            P = (V[:, keep] / w[keep]) @ V[:, keep].T / np.outer(d, d)
+            G_before = np.diag(G).copy()
+            G = G - GFA.T @ P @ GFA
+            b = b - GFA.T @ P @ bF
+            rr = rr - float(bF @ P @ bF)
+        else:
+            G_before = np.diag(G).copy()
+        diag = np.maximum(np.diag(G), 0.0)
+        start_all = np.concatenate(
+            [[0], np.cumsum([normal.dims[normal.keys.index(k)] for k in cand])]
+        )
+        keys, dims, cols = [], [], []
+        for i, k in enumerate(cand):
+            c = np.arange(start_all[i], start_all[i + 1])
+            if np.max(np.sqrt(G_before[c])) < invisible:
+                continue
+            if np.max(diag[c] / np.maximum(G_before[c], 1e-300)) < 1e-12:
+                continue  # inside the span of the free columns
+            keys.append(k)
+            dims.append(len(c))
+            cols.append(c)
+        sel = np.concatenate(cols) if cols else np.zeros(0, dtype=int)
+        G = G[np.ix_(sel, sel)]
+        b = b[sel]
+        norm = np.sqrt(np.maximum(np.diag(G), 1e-300))
+        start = np.concatenate([[0], np.cumsum(dims)]).astype(int)
+        n = sum(normal.n.values())
+        prior = (
+            np.concatenate(
+                [np.full(d, (priors or {}).get(k, 1.0)) for k, d in zip(keys, dims, strict=True)]
+            )
+            if keys
+            else np.zeros(0)
+        )
+        return cls(
+            keys, dims, start, G / np.outer(norm, norm), b / norm, norm, rr, n, n_free, prior
+        )
+
+    def columns(self, S: Sequence[int]) -> np.ndarray:
+        if not S:
+            return np.zeros(0, dtype=int)
+        return np.concatenate([np.arange(self.start[k], self.start[k + 1]) for k in S])
+
+    def fit(self, S: Sequence[int]) -> tuple[np.ndarray, np.ndarray, float]:
+        """β (normalised), C = G_S⁻¹ and SSE of the model with blocks S."""
+        c = self.columns(S)
+        if not c.size:
+            return np.zeros(0), np.zeros((0, 0)), self.rr
+        Gs = self.G[np.ix_(c, c)]
+        C = np.linalg.inv(Gs)
+        beta = C @ self.b[c]
+        return beta, C, max(self.rr - float(self.b[c] @ beta), 0.0)
+
+    def dof(self, S: Sequence[int]) -> int:
+        return max(self.n - self.n_free - sum(self.dims[k] for k in S), 1)
+
+    def unscaled(self, S: Sequence[int], beta: np.ndarray, C: np.ndarray) -> tuple:
+        """β and C in the members' own units (per unit of whitened column)."""
+        nrm = self.norm[self.columns(S)]
+        return beta / nrm, C / np.outer(nrm, nrm)
+
+
+@dataclass(frozen=True)
+class Test:
+    """The significance test of members (module docstring)."""
+
+    alpha: float
+    m: int  # candidates the best was chosen from (Bonferroni)
+    sigma2: float
+    n: int
+
+    def passes(
+        self, delta_sse: np.ndarray, d: np.ndarray, dof: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(significant, p-value) of blocks of d columns that explain delta_sse."""
+        delta_sse = np.asarray(delta_sse, dtype=float)
+        d = np.asarray(d, dtype=float)
+        chi = delta_sse / max(self.sigma2, 1e-300)
+        p = stats.f.sf(chi / d, d, dof)
+        ok = (p * self.m <= self.alpha) & (chi >= d * math.log(self.n))
+        return ok, p
+
+
+def _block_dsse(beta: np.ndarray, C: np.ndarray, dims: Sequence[int]) -> np.ndarray:
+    """SSE increase when each block leaves: β_kᵀ (C_kk)⁻¹ β_k."""
+    out = np.empty(len(dims))
+    pos = 0
+    for i, d in enumerate(dims):
+        bk = beta[pos : pos + d]
+        if d == 1:
+            out[i] = bk[0] ** 2 / max(C[pos, pos], 1e-300)
+        else:
+            out[i] = float(bk @ np.linalg.solve(C[pos : pos + d, pos : pos + d], bk))
+        pos += d
+    return out
+
+
+def _drop_dependent(g: Gram, S: list[int]) -> list[int]:
+    """The members of S less those the data cannot tell from combinations of others.
+
+    Combinations of members that the data do not determine (eigenvalues of the
+    normalised G_S below :data:`DEPENDENT`: the platform frame's definition, a
+    common servo lag, a strut's length against its guide's height) are resolved
+    towards the sparsest explanation (:func:`_sparsest`): along those directions
+    the sizes are chosen so that the fewest members keep a size worth naming, and
+    the members set to zero leave.
+    """
+    S = list(S)
+    for _ in range(len(S)):
+        if len(S) < 2:
+            return S
+        c = g.columns(S)
+        w, V = np.linalg.eigh(g.G[np.ix_(c, c)])
+        null = w <= DEPENDENT
+        if not null.any():
+            return S
+        N = V[:, null]
+        keep = ~null
+        beta0 = V[:, keep] @ ((V[:, keep].T @ g.b[c]) / w[keep])
+        u = 1.0 / (g.norm[c] * g.prior[c])  # |β| u: size in units of the member's prior
+        zero = _sparsest(beta0, N, u)
+        owner = np.repeat(np.arange(len(S)), [g.dims[k] for k in S])
+        gone = {int(owner[j]) for j in zero}
+        S = [k for i, k in enumerate(S) if i not in gone]
+    return S
+
+
+#: A size below this fraction of a member's prior is not worth naming.
+NEGLIGIBLE = 0.05
+
+
+def _sparsest(beta0: np.ndarray, N: np.ndarray, u: np.ndarray) -> list[int]:
+    """Columns to set to zero along the undetermined directions N (p, k).
+
+    β = β0 + N c; choosing k columns Z to be zero fixes c. Of every such choice
+    (the columns involved taken k at a time, up to 20 000 choices) the one with
+    the fewest sizes above :data:`NEGLIGIBLE` of their prior wins, ties going to
+    the least Σ |β_j| u_j. Beyond that many choices: the weighted-L1 minimum
+    (a linear program), its k smallest columns."""
+    from itertools import combinations
+    from math import comb
+
+    k = N.shape[1]
+    J = np.nonzero(np.linalg.norm(N, axis=1) > 1e-6)[0]
+    if len(J) <= k:
+        return [int(j) for j in J[:k]]
+    if comb(len(J), k) <= 20_000:
+        Z = np.array(list(combinations(J.tolist(), k)))  # (C, k)
+        A = N[Z]  # (C, k, k)
+        good = np.abs(np.linalg.det(A)) > 1e-6 * np.prod(np.linalg.norm(A, axis=2), axis=1)
+        Z, A = Z[good], A[good]
+        if len(Z):
+            cvec = np.linalg.solve(A, -beta0[Z][..., None])[..., 0]  # (C, k)
+            bJ = beta0[J][None, :] + cvec @ N[J].T  # (C, |J|)
+            size = np.abs(bJ) * u[J][None, :]
+            count = np.sum(size > NEGLIGIBLE, axis=1)
+            l1 = np.sum(size, axis=1)
+            best = int(np.lexsort((l1, count))[0])
+            return [int(j) for j in Z[best]]
+    beta = _min_weighted_l1(beta0, N, u)
+    order = J[np.argsort(np.abs(beta[J]) * u[J])]
+    return [int(j) for j in order[:k]]
+
+
+def _min_weighted_l1(beta0: np.ndarray, N: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """β = β0 + N c minimising Σ u_j |β_j| (a linear program in c and t ≥ |β|)."""
+    from scipy.optimize import linprog
+
+    _, k = N.shape
+    rows = np.nonzero(np.linalg.norm(N, axis=1) > 1e-9)[0]
+    if not rows.size:
+        return beta0
+    m = len(rows)
+    cost = np.concatenate([np.zeros(k), u[rows]])
+    A = np.block([[N[rows], -np.eye(m)], [-N[rows], -np.eye(m)]])
+    rhs = np.concatenate([-beta0[rows], beta0[rows]])
+    bounds = [(None, None)] * k + [(0, None)] * m
+    res = linprog(cost, A_ub=A, b_ub=rhs, bounds=bounds, method="highs")
+    if not res.success:
+        return beta0
+    return beta0 + N @ res.x[:k]
+
+
+def backward(g: Gram, S: Sequence[int], test: Test) -> list[int]:
+    """Backward elimination from ``S`` (module docstring, steps 1-2).
+
+    The inverse C = G_S⁻¹ is downdated as members leave (C ← C_rr − C_rk C_kk⁻¹ C_kr),
+    and recomputed every 16 removals against drift."""
+    S = _drop_dependent(g, list(S))
+    removed = 0
+    C = beta = np.zeros(0)
+    while S:
+        if removed % 16 == 0:
+            beta, C, _ = g.fit(S)
+        dims = [g.dims[k] for k in S]
+        dsse = _block_dsse(beta, C, dims)
+        ok, p = test.passes(dsse, np.array(dims), g.dof(S))
+        if np.all(ok):
+            break
+        bad = np.nonzero(~ok)[0]
+        i = int(bad[np.lexsort((dsse[bad], -p[bad]))[0]])  # largest p, then least dsse
+        a = sum(dims[:i])
+        b = a + dims[i]
+        rest = np.r_[0:a, b : len(beta)]
+        X = np.linalg.solve(C[a:b, a:b], C[a:b, rest])
+        beta = beta[rest] - C[rest, a:b] @ np.linalg.solve(C[a:b, a:b], beta[a:b])
+        C = C[np.ix_(rest, rest)] - C[rest, a:b] @ X
+        S.pop(i)
+        removed += 1
+    return S
+
+
+def forward_candidate(g: Gram, S: Sequence[int], test: Test) -> int | None:
+    """The member outside S whose addition explains most, if it passes the test.
+
+    For every block K outside at once, by the Schur complement:
+    ΔSSE_K = q_Kᵀ (G_KK − G_KS C G_SK)⁻¹ q_K, q_K = b_K − G_KS β."""
+    c = g.columns(S)
+    beta, C, _ = g.fit(S)
+    if c.size:
+        M = C @ g.G[c, :]  # (p_S, p)
+        q = g.b - g.G[:, c] @ beta
+    else:
+        M = np.zeros((0, len(g.b)))
+        q = g.b.copy()
+    inside = set(S)
+    best, best_d = None, 0.0
+    for k in range(len(g.keys)):
+        if k in inside:
+            continue
+        a, b = g.start[k], g.start[k + 1]
+        sch = g.G[a:b, a:b] - (g.G[a:b, c] @ M[:, a:b] if c.size else 0.0)
+        try:
+            d = float(q[a:b] @ np.linalg.solve(sch, q[a:b]))
+        except np.linalg.LinAlgError:
+            continue
+        if d > best_d:
+            best, best_d = k, d
+    if best is None:
+        return None
+    ok, _ = test.passes(np.array([best_d]), np.array([g.dims[best]]), g.dof([*S, best]))
+    return best if bool(ok[0]) else None
+
+
+def select(g: Gram, test: Test, start: Sequence[int] | None = None) -> list[int]:
+    """Members the data need (module docstring, steps 1-4), as indices into g.keys."""
+    S = backward(g, list(range(len(g.keys))) if start is None else list(start), test)
+    for _ in range(4 * len(g.keys) + 10):
+        k = forward_candidate(g, S, test)
+        if k is not None:
+            S = backward(g, [*S, k], test)
+            continue
+        swapped = _sparser(g, S, test)
+        if swapped is None:
+            break
+        S = swapped
+    return S
+
+
+def _sparser(g: Gram, S: list[int], test: Test) -> list[int] | None:
+    """A selection with fewer members (or as many and a better fit) that one
+    outside member makes possible without a significantly worse fit."""
+    _, _, sse = g.fit(S)
+    d_S = sum(g.dims[k] for k in S)
+    best: tuple[int, float, list[int]] | None = None
+    for k in range(len(g.keys)):
+        if k in S:
+            continue
+        try:
+            T = backward(g, [*S, k], test)
+        except np.linalg.LinAlgError:
+            continue
+        if k not in T:
+            continue
+        _, _, s = g.fit(T)
+        d_T = sum(g.dims[j] for j in T)
+        if len(T) < len(S):
+            # fewer members, and the fit not significantly worse
+            extra = max(d_S - d_T, 1)
+            limit = test.sigma2 * float(stats.chi2.isf(test.alpha, extra))
+            if s - sse > limit:
+                continue
+        elif len(T) == len(S):
+            if s >= sse - 1e-9 * max(sse, 1.0):
+                continue
+        else:
+            continue
+        key = (len(T), s)
+        if best is None or key < (len(best[2]), best[1]):
+            best = (k, s, T)
+    return best[2] if best is not None else None
+
+
+def aliases(g: Gram, S: Sequence[int], i: int, corr: float) -> list[int]:
+    """Members outside S that, given the rest of S, the data cannot tell apart from
+    S[i]: |partial correlation| of their signatures above ``corr`` (single
+    columns only)."""
+    k = S[i]
+    if g.dims[k] != 1:
+        return []
+    R = [j for j in S if j != k]
+    cR = g.columns(R)
+    ck = g.columns([k])[0]
+    out = np.array([j for j in range(len(g.keys)) if j not in S and g.dims[j] == 1], dtype=int)
+    if not out.size:
+        return []
+    cj = g.start[out]
+    if cR.size:
+        GRR = g.G[np.ix_(cR, cR)]
+        X = np.linalg.solve(GRR, g.G[np.ix_(cR, np.append(cj, ck))])
+        red = (
+            g.G[np.ix_(np.append(cj, ck), np.append(cj, ck))]
+            - g.G[np.ix_(np.append(cj, ck), cR)] @ X
+        )
+    else:
+        idx = np.append(cj, ck)
+        red = g.G[np.ix_(idx, idx)]
+    var = np.maximum(np.diag(red), 1e-300)
+    c = red[-1, :-1] / np.sqrt(var[-1] * var[:-1])
+    return [int(j) for j, cc in zip(out, c, strict=True) if abs(cc) > corr]
