@@ -22,7 +22,18 @@ import numpy as np
 
 from . import __version__
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
-from .files import load_profile, read_text, write_atomic
+from .files import load_profile as _load_profile
+from .files import read_text, write_atomic
+from .profile import Profile
+from .writers import DIALECTS
+
+
+def load_profile(path: str) -> Profile:
+    """A profile, with what the user should know about it said on stderr."""
+    prof = _load_profile(path)
+    for note in prof.notes:
+        click.echo(f"{path}: {note}", err=True)
+    return prof
 
 
 def parse_pose(text: str, option: str) -> tuple[float, ...]:
@@ -183,10 +194,10 @@ class _Progress:
 @click.option(
     "--format",
     "fmt",
-    type=click.Choice(["pmac", "gcode"]),
+    type=click.Choice(sorted(DIALECTS)),
     default="pmac",
     show_default=True,
-    help="Motor-space PMAC program or corrected Cartesian G-code.",
+    help="; ".join(f"{n}: {d.summary}" for n, d in sorted(DIALECTS.items())) + ".",
 )
 @click.option(
     "-o", "--output", default=None, help="Output file for one program ('-' for standard output)."
@@ -262,7 +273,7 @@ def convert(
     ]
     if start:
         opts.append(f"--start {start}")
-    ext = ".pmc" if fmt == "pmac" else ".ngc"
+    ext = DIALECTS[fmt].extension
     pooled = jobs > 1 and len(programs) > 1
     jobs_list = []
     for prog in programs:

@@ -253,7 +253,7 @@ def sides(
     out = np.tile(np.asarray(side, dtype=int), (m, 1))
     for col in cols:
         sg = np.where(resting, 0, signs(V[:, col]))
-        for k, c, ta, tb, new in ins.windows:
+        for k, c, _ta, tb, new in ins.windows:
             if c == col:
                 row = (step == k) & ~standing_before
                 # the whole step up to the window's end is on the old side (the

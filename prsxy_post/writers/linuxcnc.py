@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from ..profile import Profile
 
 SETTINGS = {
-    "decimals": Setting(5, 4, 9, "decimals of positions", "decimals"),
+    "decimals": Setting(6, 4, 9, "decimals of positions", "decimals"),
     "tolerance_mm": Setting(
         0.0,
         0.0,
