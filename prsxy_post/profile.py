@@ -446,9 +446,32 @@ def _motors(c: _Checker, entries: Any) -> tuple[MotorConfig, ...]:
     return tuple(out)
 
 
+#: ``[output.pmac]``: keys of the Turbo PMAC output (profiles/README.md). Only the
+#: table export's key so far; the motion-program keys join it here.
+OUTPUT_PMAC_DEFAULTS: dict[str, float] = {
+    # Ixx85, the backlash take-up rate, in mm per PMAC background cycle (SRM
+    # "Ixx85", p. 148: 1/16 count per background cycle; 0 disables the backlash).
+    # 0.0005 mm takes up a 10 µm backlash in 20 background cycles; tune it as the
+    # SRM advises (as high as the dynamics allow).
+    "backlash_takeup_mm": 0.0005,
+}
+
+
+def _output_pmac(c: _Checker, sec: dict[str, Any]) -> dict[str, Any]:
+    sub = c.table(sec, "pmac", "output", False) or {}
+    c.unknown(sub, set(OUTPUT_PMAC_DEFAULTS), "output.pmac")
+    out = {}
+    for k, d in OUTPUT_PMAC_DEFAULTS.items():
+        out[k] = c.number(sub, k, "output.pmac", d, positive=True)
+    return out
+
+
 def _section_with_defaults(c: _Checker, doc: Mapping[str, Any], name: str) -> dict[str, Any]:
     defaults = DEFAULTS[name]
     sec = c.table(doc, name, "", False) or {}
+    if name == "output":
+        pmac = _output_pmac(c, sec)
+        sec = {k: v for k, v in sec.items() if k != "pmac"}
     c.unknown(sec, set(defaults), name)
     out: dict[str, Any] = {}
     for k, d in defaults.items():
@@ -458,6 +481,8 @@ def _section_with_defaults(c: _Checker, doc: Mapping[str, Any], name: str) -> di
             out[k] = c.integer(sec, k, name, d, lo=0)
         else:
             out[k] = c.number(sec, k, name, d, lo=0.0)
+    if name == "output":
+        out["pmac"] = pmac
     return out
 
 
