@@ -211,7 +211,7 @@ def test_rows_beyond_256_are_resampled_with_the_error_stated() -> None:
         p2, 1, joint.motor_positions, axis_runs.targets(p2.motor(1), np.random.default_rng(0))
     )
     assert np.max(np.abs(r)) <= f.interp_error_mm + 1e-6
-    assert f"{f.interp_error_mm * 1e3:.4f} µm" in f.text
+    assert f"{f.interp_error_mm * 1e3:.4f} um" in f.text
     # a table too rough for 256 rows is refused, naming it
     doc["axis_comp"][0]["forward"] = (
         np.interp(dense, t0.positions, t0.forward) + 0.002 * (np.arange(401) % 2)

@@ -136,7 +136,7 @@ def export(
         joint = JOINT_OF_MOTOR[comp.motor]
         what = (
             "nominal, forward, reverse positions\n"
-            "# (LinuxCNC's trims: nominal − forward, nominal − reverse)"
+            "# (LinuxCNC's trims: nominal - forward, nominal - reverse)"
             if file_type == 0
             else "nominal, forward trim, reverse trim"
         )
@@ -149,7 +149,7 @@ def export(
             "# commanded position moving + (forward) or - (reverse) so that the axis ends there",
             f"# (profile '{profile.name}', contract play model). {len(rows)} rows"
             + (f", resampled evenly from {resampled}" if resampled else "")
-            + f"; linear interpolation between them is within {err * 1e3:.4f} µm of the exact",
+            + f"; linear interpolation between them is within {err * 1e3:.4f} um of the exact",
             f"# correction over the travel {mc.min:g} .. {mc.max:g} mm.",
         ]
         files.append(

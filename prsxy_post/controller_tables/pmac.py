@@ -267,12 +267,12 @@ def export(profile: Profile, *, max_interp_error_mm: float = MAX_INTERP_ERROR_MM
     ]
     for t in tables:
         mm = t.home_offset / 16 / profile.motor(t.motor).counts_per_mm
-        note = f"add {t.home_offset:+d} to I{t.motor}26 ({mm * 1e3:+.4f} µm)"
+        note = f"add {t.home_offset:+d} to I{t.motor}26 ({mm * 1e3:+.4f} um)"
         lines.append(f"; home offset: motor {t.motor} {note}")
     for t in tables:
         lines.append(
             f"; motor {t.motor}: {t.entries} entries over {t.count_length} counts; PMAC's "
-            f"interpolation is within {t.interp_error_mm * 1e3:.4f} µm of the exact correction"
+            f"interpolation is within {t.interp_error_mm * 1e3:.4f} um of the exact correction"
         )
     cyc = sorted({c.motor for c in profile.effects.cyclic})
     if cyc:
