@@ -130,8 +130,8 @@ def test_exported_files_make_every_joint_exact(file_type: int, seed: int) -> Non
     prof = axis_runs.machine(seed, varying_backlash=seed == 1)
     exp = linuxcnc.export(prof, file_type)
     texts = {f.motor: f.text for f in exp.files}
-    for f in exp.files:
-        assert LinuxcncJoint(f.text, file_type).entries == len(prof.axis_comp[0].positions)
+    for f, comp in zip(exp.files, prof.axis_comp, strict=True):
+        assert LinuxcncJoint(f.text, file_type).entries == len(comp.positions) == f.rows
     assert _worst(prof, texts, file_type, seed) < 0.5e-3
 
 

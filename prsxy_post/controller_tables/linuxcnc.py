@@ -140,17 +140,19 @@ def export(
             if file_type == 0
             else "nominal, forward trim, reverse trim"
         )
+        rows_note = f"{len(rows)} rows" + (
+            f", resampled evenly from {resampled}" if resampled else ""
+        )
         lines += [
             f"# prsxy-post: motor {comp.motor} = joint {joint}, COMP_FILE_TYPE {file_type}:",
             f"# {what} [mm].",
             "# LinuxCNC stops reading at the first line that is not three numbers",
-            "# (usrmotLoadComp),",
-            "# so these notes after the data are not read. A trim is what LinuxCNC adds to the",
-            "# commanded position moving + (forward) or - (reverse) so that the axis ends there",
-            f"# (profile '{profile.name}', contract play model). {len(rows)} rows"
-            + (f", resampled evenly from {resampled}" if resampled else "")
-            + f"; linear interpolation between them is within {err * 1e3:.4f} um of the exact",
-            f"# correction over the travel {mc.min:g} .. {mc.max:g} mm.",
+            "# (usrmotLoadComp), so it never reads these notes after the data.",
+            "# A trim is what LinuxCNC adds to the commanded position moving + (forward)",
+            "# or - (reverse), so that the axis ends there (contract play model of",
+            f"# profile '{profile.name}'). {rows_note}; interpolated linearly they are",
+            f"# within {err * 1e3:.4f} um of the exact correction over the travel",
+            f"# {mc.min:g} .. {mc.max:g} mm.",
         ]
         files.append(
             CompFile(
