@@ -176,6 +176,8 @@ def _ini(files: list[CompFile], file_type: int, name: str) -> str:
         "# Merge these keys into the [JOINT_n] sections of the machine's INI; COMP_FILE is",
         "# opened as written (relative to the directory LinuxCNC runs in, the config's).",
         "# With a comp file LinuxCNC does not use the joint's BACKLASH (control.c).",
+        "# Nominal positions are joint positions in the profile's motor coordinates [mm]:",
+        "# the joint must be homed so that its position 0 is the motor's zero.",
     ]
     for f in sorted(files, key=lambda f: f.joint):
         out += ["", f"[JOINT_{f.joint}]", f"COMP_FILE = {f.name}", f"COMP_FILE_TYPE = {file_type}"]
