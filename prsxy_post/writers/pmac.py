@@ -56,6 +56,14 @@ SETTINGS = {
         "ending at rest at a block end",
         "max_points_per_program",
     ),
+    "backlash_takeup_mm": Setting(
+        0.0005,
+        1e-9,
+        1.0,
+        "`tables export --format pmac`: Ixx85, how fast the controller takes up a "
+        "backlash [mm per background cycle] (Software Reference, Ixx85: 1/16 count "
+        "per background cycle; 0 would disable the backlash)",
+    ),
     "rotary_buffer_points": Setting(
         0,
         0,
