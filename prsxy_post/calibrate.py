@@ -499,7 +499,7 @@ def _axis_residuals(tables: Sequence[Any], axis: Sequence[Any]) -> dict[str, np.
 
 def stage_tables(start: Profile, axis: Sequence[Any]) -> tuple[list[Any], StageReport]:
     """Stage 1: [[axis_comp]] tables and ISO 230-2 figures from laser runs."""
-    from . import tables as tables_mod
+    from . import iso230_2
     from .profile import AxisComp
 
     motor = np.concatenate([a.motor for a in axis])
@@ -509,9 +509,9 @@ def stage_tables(start: Profile, axis: Sequence[Any]) -> tuple[list[Any], StageR
     run = np.concatenate([a.run for a in axis])
     new = [
         AxisComp(t.motor, t.positions, t.forward, t.reverse)
-        for t in tables_mod.tables_from_axis(motor, target, measured, direction, run)
+        for t in iso230_2.tables_from_axis(motor, target, measured, direction, run)
     ]
-    figures = tables_mod.iso230_2(motor, target, measured, direction, run)
+    figures = iso230_2.iso230_2(motor, target, measured, direction, run)
     merged = {c.motor: c for c in start.axis_comp}
     merged.update({c.motor: c for c in new})
     tabs = [merged[m] for m in sorted(merged)]
@@ -727,7 +727,7 @@ def stage_effects(
 def _retable(doc: dict[str, Any], now: Profile, axis: Sequence[Any], found: Sequence[Any]) -> None:
     """Tables from the laser runs less the periodic terms now modelled, with the
     ballbar's extra backlash put back: the table holds what no named effect does."""
-    from . import tables as tables_mod
+    from . import iso230_2
     from .profile import profile_from_dict
 
     prof = profile_from_dict(doc, now.source)
@@ -740,7 +740,7 @@ def _retable(doc: dict[str, Any], now: Profile, axis: Sequence[Any], found: Sequ
         measured[sel] -= t.lo(target[sel]) - target[sel]  # the cyclic part alone
     direction = np.concatenate([a.direction for a in axis])
     run = np.concatenate([a.run for a in axis])
-    new = tables_mod.tables_from_axis(motor, target, measured, direction, run)
+    new = iso230_2.tables_from_axis(motor, target, measured, direction, run)
     merged = {c["motor"]: c for c in doc.get("axis_comp", [])}
     merged.update({c["motor"]: c for c in _axis_doc(new)})
     doc["axis_comp"] = [merged[m] for m in sorted(merged)]
