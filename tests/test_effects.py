@@ -1,0 +1,128 @@
+"""The effects registry: one place per effect, and every user of it agreeing."""
+
+from __future__ import annotations
+
+import importlib
+import re
+
+import numpy as np
+import pytest
+
+from prsxy_post import diagnose, effects, simulate
+from prsxy_post import profile as profile_mod
+from prsxy_post.errors import ProfileError
+
+from .conftest import ROOT
+
+
+def _resolve(dotted: str) -> object:
+    """``module.attr.attr`` inside the package, or an AssertionError naming it."""
+    parts = dotted.split(".")
+    obj: object = importlib.import_module(f"prsxy_post.{parts[0]}")
+    for p in parts[1:]:
+        obj = getattr(obj, p)
+    return obj
+
+
+@pytest.mark.parametrize("fam", effects.FAMILIES, ids=lambda f: f.key)
+def test_every_family_names_real_functions_and_says_everything(fam: effects.Family) -> None:
+    assert callable(_resolve(fam.simulated_by)), fam.simulated_by
+    assert callable(_resolve(fam.compensated_by)), fam.compensated_by
+    assert fam.unit and fam.prior > 0 and fam.home and fam.pattern
+    assert fam.members(), fam.key
+    for name in fam.members():
+        assert effects.family(name) is fam
+        s = fam.sentence(name, fam.prior, 10.0)
+        assert s.endswith(".") and len(s) > 20
+
+
+def test_member_names_are_unique_and_the_contract_is_the_calibration_order() -> None:
+    names = effects.members()
+    assert len(names) == len(set(names))
+    assert len(effects.CONTRACT) == 36
+    assert effects.GEOMETRY[:36] == effects.CONTRACT
+    with pytest.raises(KeyError, match="unknown effect 'backlash\\[4\\]'"):
+        effects.family("backlash[4]")
+
+
+@pytest.mark.parametrize("name", effects.members(), ids=str)
+def test_writing_a_member_moves_exactly_that_member(
+    nominal: profile_mod.Profile, name: str
+) -> None:
+    """Each family writes its size at its profile home and reads it back: a
+    geometry member's value moves by the change and nothing else does; a motor
+    member adds its term (backlash to the tables, a cyclic entry, a lag)."""
+    fam = effects.family(name)
+    ch = fam.random_change(name, np.random.default_rng(1))
+    assert 0.5 * fam.prior <= abs(ch.delta) <= 2.0 * fam.prior
+    prof = simulate.plant(nominal, [ch])
+    if fam.stage == "geometry":
+        before = effects.theta_of(nominal, effects.GEOMETRY)
+        after = effects.theta_of(prof, effects.GEOMETRY)
+        expect = before.copy()
+        expect[effects.GEOMETRY.index(name)] += ch.delta
+        np.testing.assert_allclose(after, expect, rtol=0, atol=1e-12)
+    elif fam.key == "backlash":
+        m = int(name[9:-1])
+        t = next(c for c in prof.axis_comp if c.motor == m)
+        np.testing.assert_allclose(t.reverse - t.forward, ch.delta)
+    elif fam.key == "cyclic":
+        (c,) = prof.effects.cyclic
+        assert (c.motor, c.amplitude, c.period) == (int(name[7:-1]), ch.delta, ch.period)
+    else:
+        lag = prof.effects.servo_lag_ms
+        assert lag[effects.MOTOR_INDEX[int(name[10:-1])]] == ch.delta
+        assert sum(abs(v) for v in lag) == abs(ch.delta)
+
+
+def test_the_effects_section_is_read_by_the_families(tmp_path) -> None:
+    text = (ROOT / "profiles/prsxy-nominal.toml").read_text()
+    good = text + (
+        "\n[effects]\nguide_bow = [0.01, 0.0, -0.02]\nservo_lag_ms = [0, 0, 0, 1.5, 0]\n"
+        "[[effects.cyclic]]\nmotor = 5\namplitude = 0.003\nperiod = 10.0\n"
+    )
+    p = profile_mod.loads(good, "g.toml")
+    assert p.effects.guide_bow == (0.01, 0.0, -0.02)
+    assert p.effects.servo_lag_ms[3] == 1.5
+    assert p.effects.cyclic[0].period == 10.0
+    for bad, key in (
+        ("[effects]\nguide_bow = [2.0, 0, 0]\n", "effects.guide_bow"),
+        ("[effects]\nservo_lag_ms = [0, 0, 0]\n", "effects.servo_lag_ms"),
+        ("[effects]\nwobble = 1\n", "effects.wobble"),
+        ("[[effects.cyclic]]\nmotor = 4\namplitude = 0.001\nperiod = 5\n", "motor"),
+    ):
+        with pytest.raises(ProfileError, match=re.escape(key)):
+            profile_mod.loads(text + "\n" + bad, "b.toml")
+
+
+def test_servo_lead_is_the_exact_inverse_of_the_follow(nominal: profile_mod.Profile) -> None:
+    """The conversion's lead and the simulator's follow are one model: commands led
+    by τ v reach the wanted positions exactly."""
+    prof = simulate.plant(nominal, [effects.Change("servo_lag[5]", 2.0)])
+    t = np.arange(0, 2.0, 0.01)
+    M = np.column_stack([np.zeros((len(t), 3)), 50 * np.sin(3 * t), 20 * np.cos(2 * t)])
+    c = effects.SERVO_LAG.lead(prof, M, t)
+    assert np.max(np.abs(c[:, 3] - M[:, 3])) > 0.1  # 2 ms at 150 mm/s
+    np.testing.assert_allclose(effects.SERVO_LAG.follow(prof, c, t), M, atol=1e-9)
+
+
+def test_no_module_dispatches_on_effect_names() -> None:
+    """Adding an effect is one registry entry: nothing else parses member names."""
+    pat = re.compile(r"startswith\(\"(backlash|cyclic|servo_lag|effects\.|kinematics\.legs)")
+    offenders = [
+        str(p.relative_to(ROOT))
+        for p in (ROOT / "prsxy_post").rglob("*.py")
+        if p.name != "effects.py" and pat.search(p.read_text())
+    ]
+    assert offenders == []
+
+
+def test_diagnose_units_and_priors_come_from_the_registry() -> None:
+    e = diagnose.Effect("table.squareness", 1e-4, 1e-6, effects.unit("table.squareness"))
+    assert e.unit == "rad"
+    assert "out of square by +0.1000 mm/m" in e.sentence()
+    from prsxy_post import calibrate
+
+    assert calibrate.PRIOR[calibrate.PARAMS.index("table.squareness")] == effects.prior(
+        "table.squareness"
+    )
