@@ -29,13 +29,21 @@ hysteresis** H of a pair: the largest radial difference between the two
 directions at the same angle. **Cyclic error**: the largest harmonic of order ≥ 3
 left after the model. **Reversal spikes**: the largest residual within 3° of an
 axis reversal beyond the run's residual scatter.
+
+**Significance.** Each diagnostic figure carries its standard error from the fit
+(σ̂² (XᵀX)⁻¹, σ̂ the scatter the whole model leaves) and is *reported* only when it
+stands above the noise: its p-value (two-sided; the cyclic term's from the χ²
+with two degrees of freedom of its sine and cosine, over the 58 orders searched)
+times the number of figures is below :data:`ALPHA` (Bonferroni). Pure noise
+then reports nothing, where the largest of 58 harmonics of noise alone is always
+a few tenths of a µm.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -45,6 +53,49 @@ from .measure import BallbarRun
 
 PLANES = {"XY": (0, 1), "XZ": (0, 2), "YZ": (1, 2)}
 TERMS = ("c0", "c1", "s1", "c2", "s2", "backlash_1", "backlash_2", "straight_1", "straight_2")
+#: Significance level of a reported figure (Bonferroni over the figures of a run).
+ALPHA = 1e-3
+#: Harmonic orders searched for a cyclic error.
+CYCLIC_ORDERS = range(3, 61)
+#: The diagnostic figures that are tested (set-up terms, radius and centre, are not).
+FIGURES = (
+    "squareness",
+    "scale_mismatch",
+    "backlash_x",
+    "backlash_y",
+    "straightness_x",
+    "straightness_y",
+    "cyclic",
+)
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A diagnostic figure with its standard error and significance.
+
+    value, stderr : in the figure's unit (mm/m, mm, µm, ms); z : |value| / stderr
+    (for the cyclic term the square root of its χ²); p_value : after the
+    Bonferroni correction; significant : p_value < :data:`ALPHA`.
+    """
+
+    value: float
+    stderr: float
+    z: float
+    p_value: float
+    significant: bool
+
+
+def _figure(value: float, stderr: float, tests: int, chi2_2dof: float | None = None) -> Figure:
+    from scipy import stats
+
+    if chi2_2dof is not None:
+        p = float(stats.chi2.sf(chi2_2dof, 2))
+        z = math.sqrt(max(chi2_2dof, 0.0))
+    else:
+        z = abs(value) / stderr if stderr > 0 else math.inf
+        p = float(2 * stats.norm.sf(z))
+    p = min(1.0, p * tests)
+    return Figure(float(value), float(stderr), float(z), p, p < ALPHA)
 
 
 @dataclass(frozen=True)
@@ -69,6 +120,12 @@ class BallbarResult:
     reversal_spike_um: float
     residual_rms_um: float
     terms: dict[str, float]
+    noise_um: float = 0.0
+    figures: dict[str, Figure] = field(default_factory=dict)
+
+    def reported(self) -> dict[str, Figure]:
+        """The figures that stand above the noise."""
+        return {k: f for k, f in self.figures.items() if f.significant}
 
 
 @dataclass(frozen=True)
@@ -81,6 +138,11 @@ class BallbarPair:
     scale_mismatch_mm: float
     servo_mismatch_ms: float
     backlash_um: tuple[float, float]
+    figures: dict[str, Figure] = field(default_factory=dict)
+
+    def reported(self) -> dict[str, Figure]:
+        """The figures that stand above the noise."""
+        return {k: f for k, f in self.figures.items() if f.significant}
 
 
 def angles(run: BallbarRun) -> tuple[str, np.ndarray, str]:
@@ -124,12 +186,12 @@ def design(th: np.ndarray, direction: str, r: float) -> np.ndarray:
 
 
 def analyse_run(run: BallbarRun) -> BallbarResult:
+    """The figures of one run, each with its significance (module docstring)."""
     plane, th, direction = angles(run)
     r = run.length
     dev = run.dev_um
     X = design(th, direction, r)
     coef, *_ = np.linalg.lstsq(X, dev, rcond=None)
-    terms = dict(zip(TERMS, (float(x) for x in coef), strict=True))
     resid = dev - X @ coef
     # ISO 230-4: about the least-squares centre
     centred = dev - coef[1] * np.cos(th) - coef[2] * np.sin(th)
@@ -137,22 +199,47 @@ def analyse_run(run: BallbarRun) -> BallbarResult:
     order = np.argsort(th)
     ths, res_s = th[order], resid[order]
     best_amp, best_k = 0.0, 0
-    for k in range(3, 61):
+    for k in CYCLIC_ORDERS:
         a = 2 * np.trapezoid(res_s * np.cos(k * ths), ths) / (ths[-1] - ths[0])
         b = 2 * np.trapezoid(res_s * np.sin(k * ths), ths) / (ths[-1] - ths[0])
         amp = math.hypot(a, b)
         if amp > best_amp:
             best_amp, best_k = amp, k
+    Xf = X
     if best_k:
         # refit with the cyclic harmonic in the model: backlash steps hold harmonics
         # of every even order and would otherwise take up part of it
         Xk = np.column_stack([X, np.cos(best_k * th), np.sin(best_k * th)])
         ck, *_ = np.linalg.lstsq(Xk, dev, rcond=None)
         if np.sum((dev - Xk @ ck) ** 2) < np.sum(resid**2):
-            coef = ck[: len(TERMS)]
+            coef = ck
             best_amp = float(math.hypot(ck[-2], ck[-1]))
-            terms = dict(zip(TERMS, (float(x) for x in coef), strict=True))
             resid = dev - Xk @ ck
+            Xf = Xk
+        else:
+            best_k = 0
+    terms = dict(zip(TERMS, (float(x) for x in coef[: len(TERMS)]), strict=True))
+    # standard errors: σ̂² (XᵀX)⁻¹ with σ̂ what the whole model leaves
+    dof = max(len(dev) - Xf.shape[1], 1)
+    sigma2 = float(resid @ resid) / dof
+    cov = np.linalg.pinv(Xf.T @ Xf) * sigma2
+    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    n_fig = len(FIGURES)
+    figs = {
+        "squareness": _figure(2 * coef[4] / r, 2 * se[4] / r, n_fig),
+        "scale_mismatch": _figure(2 * coef[3] / 1000.0, 2 * se[3] / 1000.0, n_fig),
+        "backlash_x": _figure(coef[5], se[5], n_fig),
+        "backlash_y": _figure(coef[6], se[6], n_fig),
+        "straightness_x": _figure(coef[7], se[7], n_fig),
+        "straightness_y": _figure(coef[8], se[8], n_fig),
+    }
+    if best_k and Xf.shape[1] > len(TERMS):
+        ab = coef[-2:]
+        chi = float(ab @ np.linalg.solve(cov[-2:, -2:], ab))
+        amp_se = float(math.sqrt(max((ab / best_amp) @ cov[-2:, -2:] @ (ab / best_amp), 0.0)))
+        figs["cyclic"] = _figure(best_amp, amp_se, n_fig * len(CYCLIC_ORDERS), chi)
+    else:
+        figs["cyclic"] = Figure(0.0, 0.0, 0.0, 1.0, False)
     deg = np.degrees(th) % 90.0
     near = np.minimum(deg, 90.0 - deg) < 3.0
     scatter = float(np.std(resid))
@@ -173,11 +260,13 @@ def analyse_run(run: BallbarRun) -> BallbarResult:
         scale_mismatch_mm=float(2 * coef[3] / 1000.0),
         backlash_um=(float(coef[5]), float(coef[6])),
         straightness_um=(float(coef[7]), float(coef[8])),
-        cyclic_um=best_amp,
+        cyclic_um=best_amp if best_k else 0.0,
         cyclic_order=best_k,
         reversal_spike_um=max(spike, 0.0),
         residual_rms_um=float(np.sqrt(np.mean(resid**2))),
         terms=terms,
+        noise_um=math.sqrt(sigma2),
+        figures=figs,
     )
 
 
@@ -208,6 +297,26 @@ def analyse_runs(runs: Sequence[BallbarRun]) -> tuple[list[BallbarResult], list[
             if omega > 0
             else math.nan
         )
+        fa_, fb_ = a.figures, b.figures
+
+        def avg(k: str, fa_: dict = fa_, fb_: dict = fb_) -> Figure:
+            return _figure(
+                (fa_[k].value + fb_[k].value) / 2,
+                math.hypot(fa_[k].stderr, fb_[k].stderr) / 2,
+                4,
+            )
+
+        # s2 = squareness · r / 2 [µm]: the servo term's error from the two squareness errors
+        se_s2 = math.hypot(fa_["squareness"].stderr, fb_["squareness"].stderr) * a.radius / 2
+        pair_figs = {
+            "squareness": avg("squareness"),
+            "scale_mismatch": avg("scale_mismatch"),
+            "backlash_x": avg("backlash_x"),
+            "backlash_y": avg("backlash_y"),
+            "servo_mismatch": _figure(
+                servo, se_s2 / (a.radius * 1000.0 * omega) * 1000.0 if omega > 0 else math.inf, 4
+            ),
+        }
         pairs.append(
             BallbarPair(
                 name=key[0],
@@ -221,6 +330,7 @@ def analyse_runs(runs: Sequence[BallbarRun]) -> tuple[list[BallbarResult], list[
                     (a.backlash_um[0] + b.backlash_um[0]) / 2,
                     (a.backlash_um[1] + b.backlash_um[1]) / 2,
                 ),
+                figures=pair_figs,
             )
         )
     return results, pairs
@@ -245,47 +355,199 @@ def result_to_json(x: BallbarResult | BallbarPair) -> dict[str, Any]:
     return asdict(x)
 
 
+def circles(
+    results: Sequence[BallbarResult], runs: Sequence[BallbarRun]
+) -> list[list[tuple[BallbarResult, BallbarRun]]]:
+    """The runs grouped by circle: a ccw and a cw run of the same circle together
+    (ccw first), every other run on its own, in the order they came."""
+    groups: dict[tuple[str, float, str], list[tuple[BallbarResult, BallbarRun]]] = {}
+    for res, run in zip(results, runs, strict=True):
+        groups.setdefault(_pair_key(res), []).append((res, run))
+    out = []
+    for g in groups.values():
+        dirs = [r.direction for r, _ in g]
+        if sorted(dirs) == ["ccw", "cw"]:
+            out.append(sorted(g, key=lambda x: x[0].direction != "ccw"))
+        else:
+            out += [[x] for x in g]
+    return out
+
+
+def nice_division(span_um: float, divisions: float = 5.0) -> float:
+    """A scale of 1, 2 or 5 × 10ⁿ µm per division so that ``span_um`` takes about
+    ``divisions`` divisions (ballbar software's choice of plot scale)."""
+    target = max(span_um, 1e-3) / divisions
+    k = math.floor(math.log10(target))
+    for m in (1.0, 2.0, 5.0, 10.0):
+        if m * 10**k >= target:
+            return float(m * 10**k)
+    return float(10 ** (k + 1))
+
+
+_DIRECTION_COLOUR = {"ccw": "tab:blue", "cw": "tab:red"}
+
+
+def polar_panel(
+    ax: Any,
+    traces: Sequence[tuple[np.ndarray, np.ndarray, dict[str, Any]]],
+    um_per_div: float | None = None,
+) -> float:
+    """Draw deviation traces (θ [rad], Δr [µm], line style) on a polar axes the way
+    ballbar software does: the reference circle at 5 divisions, a grid circle every
+    division (4 inside, 4 outside), the deviation magnified to the scale. Returns
+    the scale [µm/div]."""
+    span = max((float(np.ptp(d)) for _, d, _ in traces if len(d)), default=1.0)
+    div = um_per_div or nice_division(span)
+    base = 5 * div
+    ring = np.linspace(0, 2 * np.pi, 361)
+    for k in range(-4, 5):
+        ax.plot(
+            ring,
+            np.full_like(ring, base + k * div),
+            color="0.45" if k == 0 else "0.85",
+            lw=0.9 if k == 0 else 0.5,
+            zorder=1,
+        )
+    for th, d, style in traces:
+        order = np.argsort(th)
+        ax.plot(th[order], base + np.clip(d[order], -4.8 * div, 4.8 * div), zorder=3, **style)
+    ax.set_ylim(0, base + 5 * div)
+    ax.set_yticks([])
+    ax.grid(False)
+    ax.set_xticks(np.radians(np.arange(0, 360, 45)))
+    ax.tick_params(labelsize=7)
+    return div
+
+
 def plot_runs(
     results: Sequence[BallbarResult],
     runs: Sequence[BallbarRun],
     predicted: Mapping[str, np.ndarray] | None = None,
     um_per_div: float | None = None,
 ) -> bytes:
-    """Polar plots, one per circle: measured deviation around the reference circle,
-    magnified, the fitted terms dashed, a simulated prediction dotted. PNG bytes."""
+    """Polar plots as ballbar software draws them: one per circle, its ccw and cw
+    runs overlaid on one scale (µm per division in the title), the mean radius and
+    the set-up centre offset removed so what is left is the machine's shape; the
+    fitted terms dashed and a simulated prediction dotted. PNG bytes."""
     from .report import png, pyplot
 
     plt = pyplot()
-    n = len(runs)
+    groups = circles(results, runs)
+    n = len(groups)
     cols = min(3, n)
     rows = (n + cols - 1) // cols
-    fig = plt.figure(figsize=(4.2 * cols, 4.4 * rows))
-    for k, (res, run) in enumerate(zip(results, runs, strict=True)):
+    fig = plt.figure(figsize=(4.4 * cols, 4.8 * rows))
+    for k, group in enumerate(groups):
         ax = fig.add_subplot(rows, cols, k + 1, projection="polar")
-        _, th, _ = angles(run)
-        # as ballbar software shows it: the mean radius and the set-up centre offset
-        # removed, so what is left is the machine's shape
-        dev = _centred(th, run.dev_um)
-        span = max(float(np.ptp(dev)), 1.0)
-        div = um_per_div or float(10 ** math.ceil(math.log10(span / 4)))
-        base = 4 * div  # reference circle radius on the plot, in µm
-        order = np.argsort(th)
-        ax.plot(th[order], np.full(len(th), base), color="0.6", lw=0.8, label="reference")
-        ax.plot(th, base + dev, lw=1.0, label="measured")
-        model = model_deviation(th[order], res.terms, res.direction, res.radius)
-        ax.plot(th[order], base + _centred(th[order], model), ls="--", lw=0.8, label="fitted terms")
-        if predicted and run.source in predicted:
-            ax.plot(
-                th, base + _centred(th, predicted[run.source]), ls=":", lw=1.0, label="simulated"
+        traces: list[tuple[np.ndarray, np.ndarray, dict[str, Any]]] = []
+        for res, run in group:
+            _, th, _ = angles(run)
+            colour = _DIRECTION_COLOUR[res.direction]
+            traces.append(
+                (th, _centred(th, run.dev_um), {"color": colour, "lw": 1.0, "label": res.direction})
             )
-        ax.set_ylim(0, base + 3 * div)
-        ax.set_yticks([base - 2 * div, base, base + 2 * div])
-        ax.set_yticklabels([])
+            model = model_deviation(th, res.terms, res.direction, res.radius)
+            traces.append(
+                (th, _centred(th, model), {"color": colour, "lw": 0.8, "ls": "--", "alpha": 0.7})
+            )
+            if predicted and run.source in predicted:
+                traces.append(
+                    (
+                        th,
+                        _centred(th, predicted[run.source]),
+                        {"color": "black", "lw": 0.9, "ls": ":"},
+                    )
+                )
+        div = polar_panel(ax, traces, um_per_div)
+        first = group[0][0]
+        gs = ", ".join(f"{r.direction} {r.circular_deviation_um:.1f}" for r, _ in group)
         ax.set_title(
-            f"{res.name} ({res.direction})\n{div:g} µm/div, G = {res.circular_deviation_um:.1f} µm",
+            f"{first.name.replace('ccw', '').replace('cw', '').strip(' -_')} "
+            f"({' + '.join(r.direction for r, _ in group)})\n"
+            f"{div:g} µm/div; G [µm]: {gs}",
             fontsize=9,
         )
-        if k == 0:
-            ax.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.25, -0.25))
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
+        ax.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.2, -0.2))
+    note = "dashed: fitted terms" + ("; dotted: simulated" if predicted else "")
+    fig.text(0.99, 0.005, note, fontsize=7, ha="right")
+    fig.tight_layout(rect=(0, 0.02, 1, 0.97))
     return png(fig, dpi=100)
+
+
+#: How each figure is printed: label, unit, format.
+LABELS = {
+    "squareness": ("squareness", "mm/m", "+.4f"),
+    "scale_mismatch": ("scale mismatch", "mm", "+.4f"),
+    "backlash_x": ("backlash, first axis", "um", "+.2f"),
+    "backlash_y": ("backlash, second axis", "um", "+.2f"),
+    "straightness_x": ("straightness, first axis", "um", "+.2f"),
+    "straightness_y": ("straightness, second axis", "um", "+.2f"),
+    "cyclic": ("cyclic error", "um", ".2f"),
+    "servo_mismatch": ("servo mismatch", "ms", "+.3f"),
+}
+
+
+def describe(fig: Mapping[str, Figure], cyclic_order: int = 0) -> str:
+    """The figures standing above the noise, each with its significance."""
+    parts = []
+    for k, f in fig.items():
+        if not f.significant:
+            continue
+        label, unit, fmt = LABELS[k]
+        extra = f" (order {cyclic_order})" if k == "cyclic" and cyclic_order else ""
+        parts.append(f"{label} {f.value:{fmt}} {unit}{extra} ({f.z:.0f} σ)")
+    return "; ".join(parts) if parts else "nothing above the noise"
+
+
+@dataclass
+class Analysis:
+    """Every run and every (ccw, cw) pair analysed; a model's simulation of each run
+    [µm] by source file when one was given."""
+
+    runs: list[BallbarRun]
+    results: list[BallbarResult]
+    pairs: list[BallbarPair]
+    predicted: dict[str, np.ndarray] | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "runs": [result_to_json(r) for r in self.results],
+            "pairs": [result_to_json(p) for p in self.pairs],
+        }
+
+    def lines(self) -> list[str]:
+        """The text report: per run and pair, only what stands above the noise."""
+        out = []
+        for r in self.results:
+            out.append(
+                f"{r.source}: {r.plane} r{r.radius:g} {r.direction} F{r.feed_mm_min:.0f}: "
+                f"circular deviation {r.circular_deviation_um:.2f} um, noise "
+                f"{r.noise_um:.2f} um; {describe(r.figures, r.cyclic_order)}"
+            )
+        for p in self.pairs:
+            out.append(
+                f"pair {p.name} r{p.radius:g}: hysteresis {p.circular_hysteresis_um:.2f} um; "
+                f"{describe(p.figures)}"
+            )
+        return out
+
+
+def analyse(runs: Sequence[BallbarRun], model: Any = None, commanded: Any = None) -> Analysis:
+    """Analyse ballbar runs; with a ``model`` profile, also simulate each run as the
+    model predicts it (the machine commanded by ``commanded``, default the model).
+
+    Example
+    -------
+    >>> a = analyse([measure.read_ballbar(text, "r50-ccw.csv")])  # doctest: +SKIP
+    >>> print("\\n".join(a.lines()))  # doctest: +SKIP
+    """
+    results, pairs = analyse_runs(runs)
+    predicted = None
+    if model is not None:
+        from . import diagnose
+
+        d = diagnose.Data.build(commanded or model, [], list(runs), [])
+        pred = diagnose.predict(model, d, []).pred
+        _, segs = d.measured()
+        predicted = {s.source: pred[s.start : s.stop] * 1000.0 for s in segs}
+    return Analysis(list(runs), results, pairs, predicted)

@@ -735,7 +735,7 @@ def _json_default(x: Any) -> Any:
     "report_dir",
     default=None,
     type=click.Path(file_okay=False),
-    help="Write report.md and plots into this directory.",
+    help="Write report.html (self-contained), report.md and the plots into this directory.",
 )
 @click.option(
     "--alpha",
@@ -777,7 +777,7 @@ def diagnose(
         from . import report
 
         files.update(
-            {Path(report_dir) / k: v for k, v in report.diagnose_report(result, current, d).items()}
+            {Path(report_dir) / k: v for k, v in report.diagnose_report(result, d).items()}
         )
     if files:
         write_atomic(files)
@@ -836,6 +836,14 @@ def diagnose(
     type=click.Path(dir_okay=False),
     help="Profile the machine was commanded with (default: --profile).",
 )
+@click.option(
+    "--report",
+    "report_dir",
+    default=None,
+    type=click.Path(file_okay=False),
+    help="Write report.html (self-contained), report.md and the plots into this directory.",
+)
+@ignore_provenance_option
 @guarded
 def ballbar(
     runs: Sequence[str],
@@ -843,51 +851,41 @@ def ballbar(
     plot_path: str | None,
     profile_path: str | None,
     commanded_with: str | None,
+    report_dir: str | None,
+    ignore_provenance: bool,
 ) -> None:
-    """ISO 230-4 circular deviation and ballbar diagnostics of ballbar RUNS."""
+    """ISO 230-4 circular deviation and ballbar diagnostics of ballbar RUNS.
+
+    Each figure is printed only when it stands above the noise, with its
+    significance; --json has them all. Polar plots overlay a circle's ccw and cw
+    runs on one µm/div scale.
+
+    Example: prsxy-post ballbar ballbar-*.csv --report bb-report
+    """
     from . import ballbar as bb
-    from . import diagnose as dg
     from . import measure
 
     data = [measure.read_ballbar(read_text(p, "ballbar file"), p) for p in runs]
-    results, pairs = bb.analyse_runs(data)
+    model = commanded = None
+    if profile_path:
+        check_provenance(data, profile_path, commanded_with, ignore_provenance)
+        model = load_profile(profile_path)
+        commanded = load_profile(commanded_with) if commanded_with else model
+    analysis = bb.analyse(data, model, commanded)
+    files: dict[Path, str | bytes] = {}
     if plot_path:
-        predicted = None
-        if profile_path:
-            model = load_profile(profile_path)
-            commanded = load_profile(commanded_with) if commanded_with else model
-            d = dg.Data.build(commanded, [], data, [])
-            pred = dg.predict(model, d, []).pred
-            _, segs = d.measured()
-            predicted = {s.source: pred[s.start : s.stop] * 1000.0 for s in segs}
-        write_atomic({Path(plot_path): bb.plot_runs(results, data, predicted)})
+        files[Path(plot_path)] = bb.plot_runs(analysis.results, data, analysis.predicted)
+    if report_dir:
+        from . import report
+
+        files.update({Path(report_dir) / k: v for k, v in report.ballbar_report(analysis).items()})
+    if files:
+        write_atomic(files)
     if as_json:
-        click.echo(
-            json.dumps(
-                {
-                    "runs": [bb.result_to_json(r) for r in results],
-                    "pairs": [bb.result_to_json(p) for p in pairs],
-                },
-                indent=1,
-            )
-        )
+        click.echo(json.dumps(analysis.to_json(), indent=1, default=_json_default))
         return
-    for r in results:
-        click.echo(
-            f"{r.source}: {r.plane} r{r.radius:g} {r.direction} F{r.feed_mm_min:.0f}: "
-            f"circular deviation {r.circular_deviation_um:.2f} um, squareness "
-            f"{r.squareness_mm_per_m:+.4f} mm/m, scale mismatch "
-            f"{r.scale_mismatch_mm:+.4f} mm, backlash X {r.backlash_um[0]:+.2f} "
-            f"Y {r.backlash_um[1]:+.2f} um, cyclic {r.cyclic_um:.2f} um "
-            f"(order {r.cyclic_order}), reversal spike {r.reversal_spike_um:.2f} um, "
-            f"straightness {r.straightness_um[0]:+.2f} / {r.straightness_um[1]:+.2f} um"
-        )
-    for p in pairs:
-        click.echo(
-            f"pair {p.name} r{p.radius:g}: squareness {p.squareness_mm_per_m:+.4f} mm/m, "
-            f"scale mismatch {p.scale_mismatch_mm:+.4f} mm, servo mismatch "
-            f"{p.servo_mismatch_ms:+.3f} ms, hysteresis {p.circular_hysteresis_um:.2f} um"
-        )
+    for line in analysis.lines():
+        click.echo(line)
 
 
 @main.group()

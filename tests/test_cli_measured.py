@@ -7,8 +7,13 @@ something is left unexplained, and the HTML reports opened in a real browser.
 from __future__ import annotations
 
 import hashlib
+import json
+import re
+import shutil
+import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -125,3 +130,135 @@ def test_malformed_provenance_line_is_located(runner: CliRunner, tmp_path: Path)
     assert r.exit_code == 1
     assert r.output.startswith(f"{bad}:2: commanded_with: commanded_with is"), r.output
     assert "64 hex digits" in r.output
+
+
+# ---------------------------------------------------------------- never silent
+
+
+def test_what_no_library_effect_explains_is_said_on_stderr_and_in_the_json(
+    runner: CliRunner, tmp_path: Path
+) -> None:
+    """A cyclic error of a pitch the library does not scan (7.3 mm) on motor 5: the
+    diagnosis warns that the ballbar data are left above their noise, where, and
+    that no library effect takes it; the JSON carries the same."""
+    truth = tmp_path / "truth.toml"
+    truth.write_text(
+        (ROOT / NOMINAL).read_text()
+        + "\n[[effects.cyclic]]\nmotor = 5\namplitude = 0.004\nperiod = 7.3\n"
+    )
+    files = _simulate(runner, tmp_path / "m", str(truth), NOMINAL, "--radii", "100")
+    r = invoke(runner, "diagnose", *files, "--profile", NOMINAL)
+    assert r.exit_code == 0, r.output
+    warn = [ln for ln in r.stderr.splitlines() if ln.startswith("warning: Left unexplained")]
+    assert warn and "ballbar residual" in warn[0] and "no effect of the library" in warn[0], (
+        r.stderr
+    )
+    assert "warning" not in r.stdout
+    r = invoke(runner, "diagnose", *files, "--profile", NOMINAL, "--json")
+    j = json.loads(r.stdout)
+    (u,) = [x for x in j["unexplained"] if x["kind"] == "ballbar"]
+    assert u["ratio"] > 1.5 and u["regions"] and u["library_share"] < 0.5
+
+
+def test_a_clean_diagnosis_warns_of_nothing(runner: CliRunner, tmp_path: Path) -> None:
+    files = _simulate(runner, tmp_path / "m", NOMINAL, NOMINAL)
+    r = invoke(runner, "diagnose", *files, "--profile", NOMINAL, "--json")
+    assert r.exit_code == 0 and r.stderr == "", r.stderr
+    assert json.loads(r.stdout)["unexplained"] == []
+
+
+# ---------------------------------------------------------------- reports in a browser
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+#: a transparent 1x1 PNG: what an image that failed to render would leave
+BLANK = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNkYPhfDwAChwGA60e6kgAAAABJRU5ErkJggg=="
+
+
+def _screenshot(page: Path, out: Path, profile_dir: Path) -> np.ndarray:
+    """The page as headless Chromium renders it, (h, w, 3) in 0..1."""
+    subprocess.run(
+        [
+            CHROMIUM,
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            f"--user-data-dir={profile_dir}",
+            "--hide-scrollbars",
+            "--window-size=1200,4200",
+            f"--screenshot={out}",
+            page.as_uri(),
+        ],
+        check=True,
+        capture_output=True,
+        timeout=180,
+    )
+    import matplotlib.image
+
+    return matplotlib.image.imread(str(out))[:, :, :3]
+
+
+def _renders_every_plot(page: Path, tmp: Path) -> None:
+    """Every embedded plot is drawn: the page with that image blanked out differs
+    from the page as written over a large area (a broken or empty image would not)."""
+    text = page.read_text()
+    assert "http://" not in text and "https://" not in text  # nothing fetched
+    images = re.findall(r'<img id="([^"]+)"[^>]*src="data:image/png;base64,([^"]+)"', text)
+    assert images and len(images) == text.count("<img")
+    full = _screenshot(page, tmp / "full.png", tmp / "chromium")
+    assert float(np.mean(full < 0.9)) > 0.05  # not a blank page
+    for name, data in images:
+        blanked = tmp / f"without-{name}.html"
+        blanked.write_text(text.replace(data, BLANK))
+        shot = _screenshot(blanked, tmp / f"without-{name}.png", tmp / "chromium")
+        h = min(len(full), len(shot))
+        changed = np.mean(np.any(np.abs(full[:h] - shot[:h]) > 0.1, axis=2))
+        assert changed > 0.01, f"{name}: the plot does not show in the page ({changed:.4f})"
+
+
+needs_chromium = pytest.mark.skipif(
+    not Path(CHROMIUM).exists(), reason="the report test needs Debian's chromium"
+)
+
+
+@needs_chromium
+def test_diagnose_report_renders_in_a_browser(
+    runner: CliRunner, tmp_path: Path, square_truth: Path
+) -> None:
+    files = _simulate(runner, tmp_path / "m", str(square_truth), NOMINAL)
+    out = tmp_path / "report"
+    r = invoke(runner, "diagnose", *files, "--profile", NOMINAL, "--report", str(out))
+    assert r.exit_code == 0, r.output
+    assert {"report.html", "report.md", "ballbar.png", "poses.png"} <= {
+        p.name for p in out.iterdir()
+    }
+    page = (out / "report.html").read_text()
+    assert "table.squareness" in page and "out of square" in page
+    _renders_every_plot(out / "report.html", tmp_path)
+    # the model after the effect was added is drawn over the measured trace, not
+    # hidden under it: tab:blue (31, 119, 180) runs round every panel, a line of
+    # at least 250 pixels each (a circle of 5 divisions is about 600 pixels round)
+    import matplotlib.image
+
+    img = matplotlib.image.imread(str(out / "ballbar.png"))[:, :, :3]
+    blue = np.all(np.abs(img - np.array([31, 119, 180]) / 255) < 0.15, axis=2)
+    n_runs = len([f for f in files if "ballbar" in f])
+    assert blue.sum() > 250 * n_runs, (blue.sum(), n_runs)
+
+
+@needs_chromium
+def test_ballbar_report_renders_in_a_browser(
+    runner: CliRunner, tmp_path: Path, square_truth: Path
+) -> None:
+    files = _simulate(runner, tmp_path / "m", str(square_truth), NOMINAL)
+    runs = [f for f in files if "ballbar" in f]
+    out = tmp_path / "report"
+    r = invoke(runner, "ballbar", *runs, "--report", str(out))
+    assert r.exit_code == 0, r.output
+    page = (out / "report.html").read_text()
+    assert "squareness" in page and "µm/div" in (out / "report.md").read_text() + page
+    _renders_every_plot(out / "report.html", tmp_path)

@@ -25,8 +25,8 @@ def _select(cols: dict[str, np.ndarray], r: np.ndarray, alpha: float = 1e-3) -> 
     rows = {"k": np.ones(len(r), dtype=bool)}
     normal = selection.Normal.of(cols, r, rows)
     g = selection.Gram.build(normal, {"k": 1.0}, list(cols))
-    sse, rank = normal.full_fit({"k": 1.0})
-    test = selection.Test(alpha, len(g.keys), sse["k"] / (len(r) - rank), g.n)
+    sse, used, _ = normal.full_fit({"k": 1.0})
+    test = selection.Test(alpha, len(g.keys), sse["k"] / (len(r) - used["k"]), g.n)
     return sorted(g.keys[i] for i in selection.select(g, test))
 
 
@@ -78,7 +78,7 @@ def test_linear_standard_errors_cover_the_truth_95_percent() -> None:
     beta = np.zeros(p)
     beta[[1, 4, 7]] = [0.5, -0.3, 0.2]
     hits = total = 0
-    for k in range(200):
+    for _ in range(200):
         r = X @ beta + rng.normal(size=n) * 2.0
         cols = {f"m{j}": X[:, j : j + 1] for j in range(p)}
         normal = selection.Normal.of(cols, r, {"k": np.ones(n, dtype=bool)})

@@ -151,20 +151,21 @@ def estimate_noise(
     member (and the free parameters) together leaves, with its degrees of freedom.
 
     Starting values: ballbar 1.4826 · MAD of consecutive differences / √2; laser
-    the pooled spread of repeated runs; poses 1 µm and 1 arcsec. Two passes
-    (the second whitened by the first). ``normal``: the cross-products of every
-    signature and the residual (:class:`.selection.Normal`).
+    the pooled spread of repeated runs; poses 1 µm and 1 arcsec. Each kind's
+    degrees of freedom are its rows less its share of the fit (tr(G⁺ G_kind)): a
+    few poses beside thousands of ballbar samples give most of their freedom to
+    the fit. Three passes, each whitened by the one before. ``normal``: the
+    cross-products of every signature and the residual (:class:`.selection.Normal`).
     """
     noise = {"pose_tip": 1e-3, "pose_axis": 3e-4, "ballbar": 0.5e-3, "axis": 0.3e-3}
     noise.update(leftover.independent_noise(data, resid, segs))
     noise = {k: v for k, v in noise.items() if k in normal.M}
-    n = sum(normal.n.values())
-    for _ in range(2):
-        sse, rank = normal.full_fit(noise)
-        frac = max(1.0 - rank / max(n, 1), 1e-3)
+    for _ in range(3):
+        sse, used, _ = normal.full_fit(noise)
         for kind, v in sse.items():
-            if normal.n[kind]:
-                noise[kind] = noise[kind] * math.sqrt(v / normal.n[kind] / frac)
+            dof = normal.n[kind] - used[kind]
+            if normal.n[kind] and dof > 0.05 * normal.n[kind]:
+                noise[kind] = noise[kind] * math.sqrt(v / dof)
     return noise
 
 
@@ -309,8 +310,8 @@ def _select(
     priors = {k: registry.prior(split_key(k)[0]) for k in candidates}
     g = selection.Gram.build(normal, noise, candidates, free, priors=priors)
     # the noise scale of the whole library's fit: 1 when the whitening is right
-    sse, rank = normal.full_fit(noise)
-    sigma2 = sum(sse.values()) / max(sum(normal.n.values()) - rank, 1)
+    sse, used, _ = normal.full_fit(noise)
+    sigma2 = sum(sse.values()) / max(sum(normal.n.values()) - sum(used.values()), 1.0)
     test = selection.Test(alpha, max(len(g.keys), 1), sigma2, g.n)
     return g, test, selection.select(g, test)
 
@@ -504,17 +505,26 @@ def find_effects(
     g: selection.Gram | None = None
     sel: list[int] = []
     test = None
-    for _ in range(max(rounds, 1)):
+    z = resid0
+    for n_round in range(max(rounds, 1)):
+        if n_round:
+            # the noise again at the new linearisation: effects the first one saw
+            # only roughly (the play after a reversal) no longer inflate it
+            noise = estimate_noise(data, z, segs, normal)
+            w = _whiten(segs, noise, len(resid0))
         g, test, sel = _select(normal, noise, free, keys, alpha)
-        if chosen is not None and {g.keys[i] for i in sel} == set(chosen):
-            break
+        same = chosen is not None and {g.keys[i] for i in sel} == set(chosen)
         while True:
             picked = [g.keys[i] for i in sel]
-            # starting sizes: the free ones where they are, the chosen at the
-            # selection's linear estimates (relative to ``current``, as z is)
-            beta, C, _ = g.fit(sel)
-            b_u, _ = g.unscaled(sel, beta, C)
-            x0 = np.concatenate([fit.x[: len(free)], b_u])
+            if same:
+                picked = list(fit.keys)  # the same members: start where they are
+                x0 = fit.x
+            else:
+                # starting sizes: the free ones where they are, the chosen at the
+                # selection's linear estimates (relative to ``current``, as z is)
+                beta, C, _ = g.fit(sel)
+                b_u, _ = g.unscaled(sel, beta, C)
+                x0 = np.concatenate([fit.x[: len(free)], b_u])
             try:
                 fit = refine(
                     current,
@@ -531,9 +541,11 @@ def find_effects(
             except ProfileError:
                 # through the full model a size ran beyond anything a profile holds:
                 # its linear signature fitted something else; the weakest leaves
-                if not sel:
+                if not sel or same:
                     raise
                 sel.pop(_weakest(g, sel))
+        if same:
+            break
         chosen = [g.keys[i] for i in sel]
         # the working response at the new model: the data as its linearisation sees
         # them, relative to ``current`` (the sizes found are added back)

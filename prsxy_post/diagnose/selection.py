@@ -15,9 +15,11 @@ the Gram matrix of the unit-normalised columns, G = AᵀA, b = Aᵀr:
    β = G_S⁻¹ b_S and C = G_S⁻¹; the member with the largest p-value of its partial
    F-test F_k = β_kᵀ (C_kk)⁻¹ β_k / (d_k σ²) leaves while it fails the test:
    Bonferroni-corrected for the m candidates (p_k · m > α) or below the BIC
-   penalty (F_k d_k < d_k ln n). Starting from the full model, every effect that
-   is present is in the model while the others are judged, so two effects that
-   together resemble a third do not pull the selection towards the third.
+   penalty (F_k d_k < d_k ln n), or moves no data kind by :data:`NEGLIGIBLE` of
+   its noise (thousands of samples make a 0.05 µm term significant; it is not
+   worth naming). Starting from the full model, every effect that is present is
+   in the model while the others are judged, so two effects that together
+   resemble a third do not pull the selection towards the third.
 3. **Forward check.** A member outside whose addition passes the same test is
    added and the elimination rerun (stepwise in both directions).
 4. **Sparsest explanation.** A member outside that, added, lets the elimination
@@ -37,6 +39,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+#: An effect moving no data kind by this fraction of its noise (RMS) is not named.
+NEGLIGIBLE = 0.1
 #: Eigenvalue of the normalised Gram matrix below which members are dependent.
 DEPENDENT = 1e-8
 
@@ -79,27 +83,34 @@ class Normal:
         parts = [np.arange(start[pos[k]], start[pos[k] + 1]) for k in keys]
         return np.concatenate(parts) if parts else np.zeros(0, dtype=int)
 
-    def full_fit(self, noise: Mapping[str, float]) -> tuple[dict[str, float], int]:
-        """Whitened SSE per kind of every column fitted together, and their rank."""
+    def full_fit(
+        self, noise: Mapping[str, float]
+    ) -> tuple[dict[str, float], dict[str, float], int]:
+        """Every column fitted together: the whitened SSE of each kind, the degrees
+        of freedom the fit took from each kind's rows (its share of the hat matrix's
+        trace, tr(G⁺ G_kind)), and the rank."""
         Mw = self.whitened(noise)
         p = Mw.shape[0] - 1
-        coef, rank = _pinv_solve(Mw[:p, :p], Mw[:p, p])
-        out = {}
+        Gp, rank = _pinv(Mw[:p, :p])
+        coef = Gp @ Mw[:p, p]
+        sse, used = {}, {}
         for kind, m in self.M.items():
+            s2 = max(noise[kind], 1e-300) ** 2
             s = m[p, p] - 2 * coef @ m[:p, p] + coef @ m[:p, :p] @ coef
-            out[kind] = float(max(s, 0.0)) / max(noise[kind], 1e-300) ** 2
-        return out, rank
+            sse[kind] = float(max(s, 0.0)) / s2
+            used[kind] = float(np.sum(Gp * m[:p, :p])) / s2  # tr(G⁺ G_kind), both symmetric
+        return sse, used, rank
 
 
-def _pinv_solve(G: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, int]:
-    """Minimum-norm solution of G x = b for a symmetric, possibly singular G (its
-    columns scaled to unit diagonal first), and G's numerical rank."""
+def _pinv(G: np.ndarray) -> tuple[np.ndarray, int]:
+    """Pseudo-inverse of a symmetric, possibly singular G (its columns scaled to
+    unit diagonal first, eigenvalues below 1e-10 of the largest dropped) and its
+    numerical rank."""
     d = np.sqrt(np.maximum(np.diag(G), 1e-300))
-    Gn = G / np.outer(d, d)
-    w, V = np.linalg.eigh(Gn)
+    w, V = np.linalg.eigh(G / np.outer(d, d))
     keep = w > 1e-10 * max(float(w[-1]), 1e-300) if w.size else np.zeros(0, dtype=bool)
-    x = V[:, keep] @ ((V[:, keep].T @ (b / d)) / w[keep])
-    return x / d, int(keep.sum())
+    P = (V[:, keep] / w[keep]) @ V[:, keep].T
+    return P / np.outer(d, d), int(keep.sum())
 
 
 @dataclass
@@ -122,6 +133,9 @@ class Gram:
     n: int
     n_free: int
     prior: np.ndarray  # (p,) typical size of each column's member
+    #: (p,) RMS of each whitened column over the rows of the data kind it moves
+    #: most: a size β moves that kind by |β| · reach noise standard deviations
+    reach: np.ndarray
 
     @classmethod
     def build(
@@ -191,9 +205,38 @@ class Gram:
             if keys
             else np.zeros(0)
         )
-        return cls(
-            keys, dims, start, G / np.outer(norm, norm), b / norm, norm, rr, n, n_free, prior
+        reach_all = np.max(
+            [
+                np.sqrt(np.diag(m[:p, :p])[ia] / max(noise[k], 1e-300) ** 2 / max(normal.n[k], 1))
+                for k, m in normal.M.items()
+            ],
+            axis=0,
         )
+        return cls(
+            keys,
+            dims,
+            start,
+            G / np.outer(norm, norm),
+            b / norm,
+            norm,
+            rr,
+            n,
+            n_free,
+            prior,
+            reach_all[sel],
+        )
+
+    def effect(self, S: Sequence[int], beta: np.ndarray) -> np.ndarray:
+        """How far each block of S at sizes β (normalised) moves the data kind it
+        moves most, in noise standard deviations (RMS over that kind's rows)."""
+        c = self.columns(S)
+        moved = beta / self.norm[c] * self.reach[c]
+        out = np.empty(len(S))
+        pos = 0
+        for i, k in enumerate(S):
+            out[i] = float(np.sqrt(np.sum(moved[pos : pos + self.dims[k]] ** 2)))
+            pos += self.dims[k]
+        return out
 
     def columns(self, S: Sequence[int]) -> np.ndarray:
         if not S:
@@ -221,7 +264,10 @@ class Gram:
 
 @dataclass(frozen=True)
 class Test:
-    """The significance test of members (module docstring)."""
+    """The significance test of members (module docstring), and what is worth
+    naming: a member that moves no data kind by :data:`NEGLIGIBLE` of its noise
+    (RMS) is not named however significant thousands of samples make it (a
+    0.05 µm cyclic term that only a table's interpolation error resembles)."""
 
     alpha: float
     m: int  # candidates the best was chosen from (Bonferroni)
@@ -284,8 +330,9 @@ def _drop_dependent(g: Gram, S: list[int]) -> list[int]:
     return S
 
 
-#: A size below this fraction of a member's prior is not worth naming.
-NEGLIGIBLE = 0.05
+#: Among equivalent explanations, a size below this fraction of a member's prior
+#: does not count as a member named.
+NEGLIGIBLE_SIZE = 0.05
 
 
 def _sparsest(beta0: np.ndarray, N: np.ndarray, u: np.ndarray) -> list[int]:
@@ -293,7 +340,7 @@ def _sparsest(beta0: np.ndarray, N: np.ndarray, u: np.ndarray) -> list[int]:
 
     β = β0 + N c; choosing k columns Z to be zero fixes c. Of every such choice
     (the columns involved taken k at a time, up to 20 000 choices) the one with
-    the fewest sizes above :data:`NEGLIGIBLE` of their prior wins, ties going to
+    the fewest sizes above :data:`NEGLIGIBLE_SIZE` of their prior wins, ties going to
     the least Σ |β_j| u_j. Beyond that many choices: the weighted-L1 minimum
     (a linear program), its k smallest columns."""
     from itertools import combinations
@@ -312,7 +359,7 @@ def _sparsest(beta0: np.ndarray, N: np.ndarray, u: np.ndarray) -> list[int]:
             cvec = np.linalg.solve(A, -beta0[Z][..., None])[..., 0]  # (C, k)
             bJ = beta0[J][None, :] + cvec @ N[J].T  # (C, |J|)
             size = np.abs(bJ) * u[J][None, :]
-            count = np.sum(size > NEGLIGIBLE, axis=1)
+            count = np.sum(size > NEGLIGIBLE_SIZE, axis=1)
             l1 = np.sum(size, axis=1)
             best = int(np.lexsort((l1, count))[0])
             return [int(j) for j in Z[best]]
@@ -354,6 +401,7 @@ def backward(g: Gram, S: Sequence[int], test: Test) -> list[int]:
         dims = [g.dims[k] for k in S]
         dsse = _block_dsse(beta, C, dims)
         ok, p = test.passes(dsse, np.array(dims), g.dof(S))
+        ok &= g.effect(S, beta) >= NEGLIGIBLE
         if np.all(ok):
             break
         bad = np.nonzero(~ok)[0]
@@ -390,10 +438,11 @@ def forward_candidate(g: Gram, S: Sequence[int], test: Test) -> int | None:
         a, b = g.start[k], g.start[k + 1]
         sch = g.G[a:b, a:b] - (g.G[a:b, c] @ M[:, a:b] if c.size else 0.0)
         try:
-            d = float(q[a:b] @ np.linalg.solve(sch, q[a:b]))
+            step = np.linalg.solve(sch, q[a:b])
         except np.linalg.LinAlgError:
             continue
-        if d > best_d:
+        d = float(q[a:b] @ step)
+        if d > best_d and g.effect([k], step)[0] >= NEGLIGIBLE:
             best, best_d = k, d
     if best is None:
         return None
@@ -404,15 +453,14 @@ def forward_candidate(g: Gram, S: Sequence[int], test: Test) -> int | None:
 def select(g: Gram, test: Test, start: Sequence[int] | None = None) -> list[int]:
     """Members the data need (module docstring, steps 1-4), as indices into g.keys."""
     S = backward(g, list(range(len(g.keys))) if start is None else list(start), test)
+    seen = {frozenset(S)}
     for _ in range(4 * len(g.keys) + 10):
         k = forward_candidate(g, S, test)
-        if k is not None:
-            S = backward(g, [*S, k], test)
-            continue
-        swapped = _sparser(g, S, test)
-        if swapped is None:
-            break
-        S = swapped
+        T = backward(g, [*S, k], test) if k is not None else _sparser(g, S, test)
+        if T is None or frozenset(T) in seen:
+            break  # nothing better, or back where it was (no cycles)
+        S = T
+        seen.add(frozenset(S))
     return S
 
 
