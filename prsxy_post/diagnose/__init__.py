@@ -257,22 +257,15 @@ def refine(
     x = np.array(x0, dtype=float)
     s = _priors(free, keys, dims)
     all_keys = free + keys
-    prof = current
-    lin = predict(current, data, all_keys, with_map=with_map)
-    cov = np.zeros((len(x), len(x)))
-    sigma2 = 1.0
-    for it in range(iterations + 1):
+
+    def model_at(x: np.ndarray, columns: bool) -> tuple[Profile, Linearised]:
         prof = profile_from_dict(
             registry.apply(current.raw, current, _changes(free, keys, dims, x)), current.source
         )
-        lin = predict(prof, data, all_keys, with_map=with_map)
-        r = measured - lin.pred
-        ok = np.isfinite(r)
-        X = _design(lin, all_keys, w, ok)
-        rw = (r * w)[ok]
-        if not X.shape[1]:
-            sigma2 = float(rw @ rw) / max(len(rw), 1)
-            break
+        return prof, predict(prof, data, all_keys if columns else [], with_map=with_map)
+
+    def solve(X: np.ndarray, rw: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """Step, covariance and σ̂² of the linear model X at residual rw."""
         Xs = X * s
         U, S, Vt = np.linalg.svd(Xs, full_matrices=False)
         # directions mostly of free members that the data determine worse than
@@ -281,22 +274,38 @@ def refine(
         free_part = np.sum(Vt[:, : len(free)] ** 2, axis=1)
         weak = 1.0 / np.maximum(S, 1e-300) >= max_rel_stderr
         keep = (S > 1e-12 * (S[0] if S.size else 1.0)) & ~(weak & (free_part > 0.5))
-        dz = Vt[keep].T @ ((U[:, keep].T @ rw) / S[keep])
-        dx = s * dz
+        dx = s * (Vt[keep].T @ ((U[:, keep].T @ rw) / S[keep]))
         res = rw - X @ dx
-        dof = max(len(rw) - int(keep.sum()), 1)
-        sigma2 = float(res @ res) / dof
+        sigma2 = float(res @ res) / max(len(rw) - int(keep.sum()), 1)
         cov = (s[:, None] * ((Vt[keep].T / S[keep] ** 2) @ Vt[keep]) * s[None, :]) * sigma2
-        se = np.sqrt(np.maximum(np.diag(cov), 1e-300))
-        if it == iterations:
-            break
+        return dx, cov, sigma2
+
+    # Gauss-Newton with the Jacobian of the start (the model is close to linear in
+    # sizes of micrometres), evaluated again where it converged for the covariance
+    prof, lin = model_at(x, True)
+    r = measured - lin.pred
+    ok = np.isfinite(r)
+    X = _design(lin, all_keys, w, ok)
+    if not X.shape[1]:
+        rw = (r * w)[ok]
+        return _Fit(free, keys, x, dims, prof, lin, np.zeros((0, 0)), float(rw @ rw) / len(rw))
+    for _ in range(iterations):
+        dx, cov, sigma2 = solve(X, (r * w)[ok])
         x = x + dx
+        prof, lin = model_at(x, False)
+        r = measured - lin.pred
+        se = np.sqrt(np.maximum(np.diag(cov), 1e-300))
         if np.max(np.abs(dx) / se, initial=0.0) < 0.01:
-            prof = profile_from_dict(
-                registry.apply(current.raw, current, _changes(free, keys, dims, x)), current.source
-            )
-            lin = predict(prof, data, all_keys, with_map=with_map)
             break
+    prof, lin = model_at(x, True)
+    r = measured - lin.pred
+    dx, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
+    if np.max(np.abs(dx) / np.sqrt(np.maximum(np.diag(cov), 1e-300)), initial=0.0) > 0.1:
+        # not yet there with the start's Jacobian: one more step with the new one
+        x = x + dx
+        prof, lin = model_at(x, True)
+        r = measured - lin.pred
+        _, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
     return _Fit(free, keys, x, dims, prof, lin, cov, sigma2)
 
 
@@ -490,17 +499,7 @@ def find_effects(
     normal = selection.Normal.of(lin0.columns, resid0, rows)
     noise = estimate_noise(data, resid0, segs, normal)
     w = _whiten(segs, noise, len(resid0))
-    fit = refine(
-        current,
-        data,
-        measured,
-        w,
-        [],
-        np.zeros(len(free)),
-        free=free,
-        with_map=with_map,
-        max_rel_stderr=max_rel_stderr,
-    )
+    fit = _Fit(free, [], np.zeros(len(free)), [], current, lin0, np.zeros((0, 0)), 1.0)
     chosen: list[str] | None = None
     g: selection.Gram | None = None
     sel: list[int] = []
