@@ -552,15 +552,24 @@ def _print_stage(rep: Any) -> None:
 def profile_files(
     doc: dict[str, Any], output: str, input_path: str, in_place: bool
 ) -> dict[Path, str | bytes]:
-    """The profile to write (checked to read back) and, when it replaces its input,
-    a .bak of the input."""
-    from .profile import dumps, loads
+    """The input profile rewritten to hold ``doc`` (checked to read back) and, when
+    it replaces its input, a .bak of the input.
 
-    text = dumps(doc)
+    ``doc`` is the input's document with sections changed; the text is the
+    input's with only those changes made (:mod:`prsxy_post.profile.update`), so
+    the user's comments and layout survive.
+    """
+    import tomllib
+
+    from .profile import loads
+    from .profile.update import changes_between, update_text
+
+    original = read_text(input_path, "profile")
+    text = update_text(original, changes_between(tomllib.loads(original), doc), input_path)
     loads(text, output)  # what we write must read back
     files: dict[Path, str | bytes] = {Path(output): text}
     if in_place and Path(output).resolve() == Path(input_path).resolve():
-        files[Path(output + ".bak")] = read_text(input_path, "profile")
+        files[Path(output + ".bak")] = original
     return files
 
 
