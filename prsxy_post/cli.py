@@ -6,10 +6,9 @@ rerun with ``--debug`` for the traceback and report it).
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import itertools
 import json
+import os
 import sys
 import traceback
 from collections.abc import Callable, Sequence
@@ -71,6 +70,12 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
         except KeyboardInterrupt:
             click.echo("interrupted; no output written", err=True)
             sys.exit(130)
+        except BrokenPipeError:
+            # the reader went away (prsxy-post inspect big.ngc | head): stop quietly,
+            # and keep Python from complaining when it flushes stdout at exit
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            sys.exit(1)
         except Exception as exc:  # a bug: say so plainly
             if ctx.debug:
                 traceback.print_exc()
@@ -131,20 +136,17 @@ start_option = click.option(
 @guarded
 def inspect(program: str, profile_path: str | None, start: str | None, as_json: bool) -> None:
     """Print the interpreted motions of PROGRAM (workpiece frame, mm, degrees)."""
-    from . import chain, gcode
+    from . import gcode
+    from . import program as prog
 
-    text = read_text(program, "G-code program")
-    if profile_path:
-        prof = load_profile(profile_path)
-        cfg = chain.interpreter_config(prof, parse_pose(start, "--start") if start else None)
+    prof = load_profile(profile_path) if profile_path else None
+    st = parse_pose(start, "--start") if start else None
+    if program == "-":
+        batches = prog.text_batches(read_text(program, "G-code program"))
     else:
-        cfg = (
-            gcode.InterpreterConfig(start=parse_pose(start, "--start"))
-            if start
-            else gcode.InterpreterConfig()
-        )
+        batches = prog.file_batches(program)
     out = sys.stdout
-    for m in gcode.iter_motions(gcode.split_lines(text), cfg, program):
+    for m in prog.motions(batches, prof, start=st, source=program):
         d = gcode.motion_to_json(m)
         if as_json:
             out.write(json.dumps(d) + "\n")
@@ -153,7 +155,9 @@ def inspect(program: str, profile_path: str | None, start: str | None, as_json: 
             extra = ""
             if d["kind"] == "arc":
                 extra = f" G{d['plane']} centre {d['center']} rotation {d['rotation']}"
-            feed = "" if d.get("feed") is None else f" F{d['feed']:g}"
+            if d["kind"] == "function":
+                extra = " " + " ".join(str(w) for w in d["words"])  # type: ignore[attr-defined]
+            feed = "" if m.kind in ("rapid", "dwell", "function") else f" F{m.feed:g}"
             out.write(f"{d['line']:>6} {d['kind']:<5} {end}{feed}{extra}\n")
 
 
@@ -315,9 +319,14 @@ def convert(
 @click.argument("program", type=click.Path(dir_okay=False, allow_dash=True))
 @profile_option
 @start_option
-@click.option("--no-error-map", is_flag=True)
-@click.option("--no-axis-comp", is_flag=True)
-@click.option("--nominal-kinematics", is_flag=True)
+@click.option("--no-error-map", is_flag=True, help="Skip the virtual-axis error map stage.")
+@click.option("--no-axis-comp", is_flag=True, help="Skip the real-axis tables stage.")
+@click.option(
+    "--nominal-kinematics",
+    is_flag=True,
+    help="Use the nominal design in the IK instead of the calibrated geometry.",
+)
+@click.option("--each-line", is_flag=True, help="List every problem line instead of the groups.")
 @guarded
 def check(
     program: str,
@@ -326,51 +335,54 @@ def check(
     no_error_map: bool,
     no_axis_comp: bool,
     nominal_kinematics: bool,
+    each_line: bool,
 ) -> None:
-    """Run the whole chain without writing and list every problem with its line."""
-    from . import chain, errormap, gcode
-    from .convert import few_gc_passes, iter_program_batches
-    from .files import inspect_source
+    """Run PROGRAM through the whole chain without writing and report what the
+    machine cannot do: motors beyond their travel, poses out of reach, tilts and
+    feeds beyond the limits.
+
+    Problems are grouped by kind, with the runs of lines, how many lines and the
+    worst value (the figures are those of the motor commands convert writes).
+    Exit code 1 when there is any.
+    """
+    from . import chain
+    from . import check as chk
+    from . import program as prog
 
     prof = load_profile(profile_path)
     st = parse_pose(start, "--start") if start else None
-    cfg = chain.interpreter_config(prof, st)
     stages = chain.Stages(not no_error_map, not nominal_kinematics, not no_axis_comp)
-    emap = errormap.from_profile(prof) if stages.error_map else None
-    # streamed like convert: a program of millions of lines is checked in bounded
-    # memory (the points are counted, not kept)
     if program == "-":
-        batches = gcode.batches_of(gcode.split_lines(read_text(program, "G-code program")))
+        batches = prog.text_batches(read_text(program, "G-code program"))
     else:
-        inspect_source(program)  # a binary file is refused with its line
-        batches = iter_program_batches(program)
-    motions = gcode.iter_motions_batched(batches, cfg, program)
-    pipe = chain.Pipeline(prof, stages, emap, start=st, collect=True)
-    n_motions = n_points = 0
-    seconds = 0.0
-
-    def count(chunks: list[Any]) -> None:
-        nonlocal n_points, seconds
-        for pc in chunks:
-            n_points += len(pc)
-            seconds += float(np.sum(pc.dt))
-
-    with few_gc_passes(), contextlib.closing(motions), contextlib.closing(batches):
-        while True:
-            batch = list(itertools.islice(motions, 4096))
-            n_motions += len(batch)
-            count(pipe.feed(batch))
-            if len(batch) < 4096:
-                break
-        count(pipe.finish())
-    problems = sorted(pipe.problems, key=lambda p: p.line or 0)
-    for p in problems:
-        click.echo(str(p.located(source=program)))
-    n = len(problems)
-    if n:
-        click.echo(f"{program}: {n} problem{'s' * (n != 1)}", err=True)
-        sys.exit(1)
-    click.echo(f"{program}: ok ({n_motions} motions, {n_points} points, {seconds:.2f} s)", err=True)
+        batches = prog.file_batches(program)
+    report = chk.check_batches(batches, prof, stages=stages, start=st, source=program)
+    if each_line:
+        for p in report.problems:
+            click.echo(str(p.error(prof, program)))
+    else:
+        for g in report.groups():
+            click.echo(g.describe(prof, program))
+    if report.stopped is not None:
+        click.echo(str(report.stopped))
+    if report.ok:
+        click.echo(
+            f"{program}: ok ({report.motions} motions, {report.points} points, "
+            f"{report.seconds:.2f} s)",
+            err=True,
+        )
+        return
+    n = len({p.line for p in report.problems})
+    kinds = len(report.groups())
+    summary = (
+        f"{n} line{'s' * (n != 1)} with problems in {kinds} group{'s' * (kinds != 1)}"
+        if n
+        else "no problem before it stopped"
+    )
+    if report.stopped is not None:
+        summary += "; stopped early (above)"
+    click.echo(f"{program}: {summary}", err=True)
+    sys.exit(1)
 
 
 # ------------------------------------------------------------------ measurements
