@@ -21,7 +21,7 @@ import numpy as np
 
 from . import __version__
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
-from .files import load_profile, read_text, write_atomic
+from .files import clash, load_profile, read_text, same_file, write_atomic
 
 
 def parse_pose(text: str, option: str) -> tuple[float, ...]:
@@ -91,8 +91,82 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
 
 # ------------------------------------------------------------------ the group
 
+#: The examples each command's --help ends with, by command ("" is the program).
+#: tests/test_cli_everyday.py parses every one against the command's options.
+EXAMPLES: dict[str, tuple[str, ...]] = {
+    "": (
+        "prsxy-post convert part.ngc --profile shop.toml -o part.pmc",
+        "prsxy-post check part.ngc --profile shop.toml",
+        "prsxy-post COMMAND --help",
+    ),
+    "inspect": (
+        "prsxy-post inspect part.ngc",
+        "prsxy-post inspect part.ngc --profile shop.toml --json",
+    ),
+    "convert": (
+        "prsxy-post convert part.ngc --profile shop.toml -o part.pmc",
+        "prsxy-post convert part.ngc --profile shop.toml            # writes part.pmc",
+        "prsxy-post convert *.ngc --profile shop.toml --out-dir pmc/ --jobs 2",
+        "prsxy-post convert part.ngc --profile shop.toml --format gcode -o part-comp.ngc",
+        "prsxy-post convert part.ngc --profile shop.toml -o - | less",
+    ),
+    "check": (
+        "prsxy-post check part.ngc --profile shop.toml",
+        "prsxy-post check part.ngc --profile shop.toml --each-line",
+    ),
+    "simulate": (
+        "prsxy-post simulate --truth machine.toml --profile shop.toml -o measured/",
+        "prsxy-post simulate --truth machine.toml --profile shop.toml -o bb/ --only-xy",
+    ),
+    "calibrate": (
+        "prsxy-post calibrate measured/*.csv --profile shop.toml -o calibrated.toml",
+        "prsxy-post calibrate axis.csv --profile shop.toml --stages tables -o shop.toml --in-place",
+    ),
+    "diagnose": (
+        "prsxy-post diagnose measured/*.csv --profile calibrated.toml",
+        "prsxy-post diagnose measured/*.csv --profile cal.toml -o updated.toml --report rep/",
+    ),
+    "ballbar": (
+        "prsxy-post ballbar xy-r50-ccw.csv xy-r50-cw.csv",
+        "prsxy-post ballbar run*.csv --plot ballbar.png --profile shop.toml",
+    ),
+    "tables": (
+        "prsxy-post tables export --profile shop.toml --format pmac --out-dir comp/",
+        "prsxy-post tables import comp/motor5.pmc --format pmac --profile shop.toml -o new.toml",
+    ),
+    "tables export": (
+        "prsxy-post tables export --profile shop.toml --format pmac --out-dir comp/",
+        "prsxy-post tables export --profile shop.toml --format linuxcnc1 --out-dir comp/",
+    ),
+    "tables import": (
+        "prsxy-post tables import comp/motor5.pmc --format pmac --profile shop.toml -o new.toml",
+        "prsxy-post tables import x.comp --format linuxcnc1 --motor 5 --profile a.toml -o b.toml",
+    ),
+}
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+
+class _Examples(click.Command):
+    """Ends --help with the command's :data:`EXAMPLES`, as written."""
+
+    def format_epilog(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        super().format_epilog(ctx, formatter)
+        names, c = [], ctx
+        while c.parent is not None:  # the command's path below the program
+            names.append(c.info_name or "")
+            c = c.parent
+        examples = EXAMPLES.get(" ".join(reversed(names)))
+        if examples:
+            with formatter.section("Examples"):
+                for ex in examples:
+                    formatter.write(" " * formatter.current_indent + ex + "\n")
+
+
+class _Group(_Examples, click.Group):
+    command_class = _Examples
+    group_class = type  # sub-groups (tables) are made alike
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="prsxy-post")
 @click.option("--debug", is_flag=True, help="Show a traceback with errors.")
 @click.pass_context
@@ -193,7 +267,11 @@ class _Progress:
     help="Motor-space PMAC program or corrected Cartesian G-code.",
 )
 @click.option(
-    "-o", "--output", default=None, help="Output file for one program ('-' for standard output)."
+    "-o",
+    "--output",
+    default=None,
+    help="Output file for one program ('-' for standard output); default: beside "
+    "the program, with the format's extension (part.ngc -> part.pmc).",
 )
 @click.option(
     "--out-dir",
@@ -234,8 +312,11 @@ def convert(
 ) -> None:
     """Convert G-code PROGRAMS into compensated motor programs (or corrected G-code).
 
-    Outputs are written atomically: a failed conversion leaves no partial file and
-    never replaces an existing one.
+    Each output goes beside its program with the format's extension (part.ngc ->
+    part.pmc), to -o FILE, or into --out-dir; -o - writes to standard output. An
+    output never replaces an input (a program or the profile). Outputs are written
+    atomically: a failed conversion leaves no partial file and never replaces an
+    existing one.
     """
     if output and out_dir:
         raise UsageError("-o and --out-dir given together", expected="one of them")
@@ -243,10 +324,6 @@ def convert(
         raise UsageError(
             f"-o names one output but {len(programs)} programs were given",
             expected="--out-dir DIR for several programs",
-        )
-    if not output and not out_dir and len(programs) > 1:
-        raise UsageError(
-            "several programs and no --out-dir", expected="--out-dir DIR for several programs"
         )
     from . import chain
     from . import convert as conv
@@ -269,11 +346,31 @@ def convert(
     ext = ".pmc" if fmt == "pmac" else ".ngc"
     pooled = jobs > 1 and len(programs) > 1
     jobs_list = []
-    for prog in programs:
-        if out_dir:
-            out = str(Path(out_dir) / (Path(prog).stem + ext))
-        else:
-            out = output or "-"
+    outs = [_output_of(prog, ext, output, out_dir) for prog in programs]
+    for prog, out in zip(programs, outs, strict=True):
+        others = [p for p, o in zip(programs, outs, strict=True) if p != prog and same_file(o, out)]
+        if others:
+            raise UsageError(
+                f"{prog} and {others[0]} would both be written to {out}",
+                expected="programs with different names, or one convert per directory",
+            )
+        hit = clash(out, {f"G-code program {prog}": prog, f"profile {profile_path}": profile_path})
+        if hit is not None:
+            if output:
+                raise UsageError(
+                    f"-o {output} would overwrite the {hit[0]}", expected="another output file"
+                )
+            if out_dir:
+                raise UsageError(
+                    f"--out-dir {out_dir} would write {out} over the {hit[0]}",
+                    expected="another directory, or -o FILE",
+                )
+            raise UsageError(
+                f"the default output {out} (the program's name with the {fmt} format's "
+                f"extension) would overwrite the {hit[0]}",
+                expected="-o FILE or --out-dir DIR for the output",
+            )
+    for prog, out in zip(programs, outs, strict=True):
         jobs_list.append(
             conv.ConvertJob(
                 prog,
@@ -310,6 +407,20 @@ def convert(
             click.echo(f"{job.program} -> {', '.join(files or [])}", err=True)
     if worst:
         sys.exit(worst)
+
+
+def _output_of(program: str, ext: str, output: str | None, out_dir: str | None) -> str:
+    """Where convert writes a program's output: -o, --out-dir/NAME.ext, or beside it."""
+    if output:
+        return output
+    if out_dir:
+        return str(Path(out_dir) / (Path(program).stem + ext))
+    if program == "-":
+        raise UsageError(
+            "the program comes from standard input, so there is no file to write beside",
+            expected="-o FILE, or -o - for standard output",
+        )
+    return str(Path(program).with_suffix(ext))
 
 
 # ------------------------------------------------------------------ check
