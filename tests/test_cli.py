@@ -219,7 +219,7 @@ def test_batch_with_jobs(runner: CliRunner, tmp_path: Path) -> None:
 
 
 def test_stdout_and_split_programs(runner: CliRunner, tmp_path: Path) -> None:
-    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP)
+    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP, "-o", "-")
     assert r.exit_code == 0 and "OPEN PROG 1 CLEAR" in r.output
     prof = tmp_path / "split.toml"
     prof.write_text(
