@@ -14,7 +14,7 @@ import traceback
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
 import numpy as np
@@ -22,6 +22,9 @@ import numpy as np
 from . import __version__
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
 from .files import clash, load_profile, read_text, same_file, write_atomic
+
+if TYPE_CHECKING:
+    from .measure import AxisData, BallbarRun, PoseData
 
 
 def parse_pose(text: str, option: str) -> tuple[float, ...]:
@@ -499,11 +502,15 @@ def check(
 # ------------------------------------------------------------------ measurements
 
 
-def read_measurements(paths: Sequence[str]) -> tuple[list[Any], list[Any], list[Any]]:
+def read_measurements(
+    paths: Sequence[str],
+) -> tuple[list[PoseData], list[BallbarRun], list[AxisData]]:
     """Read measurement files, sorted by kind: poses, ballbar runs, axis runs."""
     from . import measure
 
-    poses, runs, axis = [], [], []
+    poses: list[PoseData] = []
+    runs: list[BallbarRun] = []
+    axis: list[AxisData] = []
     for p in paths:
         m = measure.read_measurement(read_text(p, "measurement file"), p)
         if isinstance(m, measure.PoseData):
