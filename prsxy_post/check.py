@@ -275,6 +275,95 @@ def _worst_per_line(excess: np.ndarray, lines: np.ndarray) -> np.ndarray:
     return np.asarray(ranked[first])
 
 
+def feed_problems(profile: Profile, motions: Sequence[Motion]) -> list[Problem]:
+    """Programmed feeds above ``limits.max_feed_mm_min``, one per motion."""
+    fmax = float(profile.limits.max_feed_mm_min)
+    return [
+        Problem("feed", m.line, m.feed, m.feed - fmax)
+        for m in motions
+        if m.kind in ("feed", "arc") and m.feed > fmax
+    ]
+
+
+def tilt_problems(profile: Profile, q: np.ndarray, line: np.ndarray) -> list[Problem]:
+    """Tool-axis tilts beyond ``limits.max_tilt_deg``, worst point per line.
+
+    q : (N, 5) programmed poses [mm, mm, mm, deg, deg]; line : (N,) their lines.
+    The tool axis (cos A sin B, −sin A, cos A cos B) leans from vertical by
+    arccos(cos A cos B).
+    """
+    lim = float(profile.limits.max_tilt_deg)
+    a, b = np.radians(q[:, 3]), np.radians(q[:, 4])
+    tilt = np.degrees(np.arccos(np.clip(np.cos(a) * np.cos(b), -1.0, 1.0)))
+    return [
+        Problem("tilt", int(line[i]), float(tilt[i]), float(tilt[i] - lim))
+        for i in _worst_per_line(tilt - lim, line)
+    ]
+
+
+def reach_problems(
+    geo: kinematics.Geometry,
+    q_target: np.ndarray,
+    tool_length: np.ndarray,
+    P_ideal: np.ndarray,
+    line: np.ndarray,
+) -> list[Problem]:
+    """Poses the struts cannot reach (NaN rows of the IK's ``P_ideal``), worst point
+    per line, sized by how much longer the worst strut would have to be [mm].
+
+    The ball joint of leg i is sqrt(L_i² − disc_i) from its guide line (disc_i the
+    contract's (d·v)² − |v|² + L²), so the strut lacks that minus L_i; inf where
+    no platform pose exists at all.
+    """
+    out = ~np.all(np.isfinite(P_ideal), axis=1)
+    if not np.any(out):
+        return []
+    idx = np.nonzero(out)[0]
+    pose = kinematics.solve_platform(geo, q_target[idx], tool_length[idx])
+    disc = kinematics.strut_discriminant(geo, pose)
+    with np.errstate(invalid="ignore"):
+        lack = np.sqrt(geo.L[None, :] ** 2 - disc) - geo.L[None, :]
+        short = np.max(lack, axis=1)
+    short = np.where(np.isfinite(short), short, np.inf)
+    excess = np.zeros(len(P_ideal))
+    excess[idx] = np.maximum(short, 2 * TOLERANCE)
+    return [
+        Problem("reach", int(line[i]), float(excess[i]), float(excess[i]))
+        for i in _worst_per_line(excess, line)
+    ]
+
+
+def travel_problems(profile: Profile, P_cmd: np.ndarray, line: np.ndarray) -> list[Problem]:
+    """Motors commanded beyond their travel (``[[motors]] min/max``), worst point
+    per line and motor.
+
+    P_cmd : (N, 5) motor commands [mm], columns :data:`MOTORS`; NaN rows (out of
+    reach) are left to :func:`reach_problems`.
+    """
+    lo = np.array([profile.motor(m).min for m in MOTORS])
+    hi = np.array([profile.motor(m).max for m in MOTORS])
+    ok = np.all(np.isfinite(P_cmd), axis=1)
+    with np.errstate(invalid="ignore"):
+        excess = np.maximum(P_cmd - hi[None, :], lo[None, :] - P_cmd)
+    excess[~ok] = -np.inf
+    return [
+        Problem("travel", int(line[i]), float(P_cmd[i, col]), float(excess[i, col]), m)
+        for col, m in enumerate(MOTORS)
+        for i in _worst_per_line(excess[:, col], line)
+    ]
+
+
+def point_problems(
+    profile: Profile, geo: kinematics.Geometry, pc: chain.PointChunk
+) -> list[Problem]:
+    """Tilt, reach and travel problems of a run of points from the chain."""
+    return [
+        *tilt_problems(profile, pc.q, pc.line),
+        *reach_problems(geo, pc.q_target, pc.tool_length, pc.P_ideal, pc.line),
+        *travel_problems(profile, pc.P_cmd, pc.line),
+    ]
+
+
 class _Judge:
     """Problems of the points and motions as they come, worst per line."""
 
@@ -285,23 +374,19 @@ class _Judge:
         self.lines: list[np.ndarray] = []
         self.n_points = 0
         self.seconds = 0.0
-        lim = profile.limits
-        self.max_tilt = float(lim.max_tilt_deg)
-        self.max_feed = float(lim.max_feed_mm_min)
-        self.lo = np.array([profile.motor(m).min for m in MOTORS])
-        self.hi = np.array([profile.motor(m).max for m in MOTORS])
 
-    def add(self, p: Problem) -> None:
-        key = (p.line, p.kind, p.motor)
-        old = self.found.get(key)
-        if old is None or p.excess > old.excess:
-            self.found[key] = p
+    def add(self, problems: Iterable[Problem]) -> None:
+        for p in problems:
+            key = (p.line, p.kind, p.motor)
+            old = self.found.get(key)
+            if old is None or p.excess > old.excess:  # a line that spans two chunks
+                self.found[key] = p
 
     def motions(self, batch: Sequence[Motion]) -> None:
-        for m in batch:
-            if m.kind in ("feed", "arc") and m.feed > self.max_feed:
-                self.add(Problem("feed", m.line, m.feed, m.feed - self.max_feed))
-                self.lines.append(np.array([m.line]))
+        found = feed_problems(self.profile, batch)
+        self.add(found)
+        if found:
+            self.lines.append(np.array([p.line for p in found]))
 
     def points(self, chunks: Sequence[chain.PointChunk]) -> None:
         for pc in chunks:
@@ -310,48 +395,7 @@ class _Judge:
             self.n_points += len(pc)
             self.seconds += float(np.sum(pc.dt))
             self.lines.append(np.unique(pc.line))
-            self._tilt(pc)
-            self._reach(pc)
-            self._travel(pc)
-
-    def _tilt(self, pc: chain.PointChunk) -> None:
-        # the tool axis (cos A sin B, −sin A, cos A cos B) is tilted from vertical by
-        # arccos(cos A cos B)
-        a, b = np.radians(pc.q[:, 3]), np.radians(pc.q[:, 4])
-        tilt = np.degrees(np.arccos(np.clip(np.cos(a) * np.cos(b), -1.0, 1.0)))
-        for i in _worst_per_line(tilt - self.max_tilt, pc.line):
-            self.add(Problem("tilt", int(pc.line[i]), float(tilt[i]), tilt[i] - self.max_tilt))
-
-    def _reach(self, pc: chain.PointChunk) -> None:
-        out = ~np.all(np.isfinite(pc.P_ideal), axis=1)
-        if not np.any(out):
-            return
-        idx = np.nonzero(out)[0]
-        pose = kinematics.solve_platform(self.geo, pc.q_target[idx], pc.tool_length[idx])
-        disc = kinematics.strut_discriminant(self.geo, pose)
-        # the ball joint is sqrt(L² − disc) from the guide line: the strut lacks
-        # that minus its length L (the worst strut of the point)
-        with np.errstate(invalid="ignore"):
-            lack = np.sqrt(self.geo.L[None, :] ** 2 - disc) - self.geo.L[None, :]
-            short = np.max(lack, axis=1)
-        # no platform pose at all (no spin satisfies the hinge planes): beyond any strut
-        short = np.where(np.isfinite(short), short, np.inf)
-        excess = np.zeros(len(pc))
-        excess[idx] = np.maximum(short, 2 * TOLERANCE)
-        for i in _worst_per_line(excess, pc.line):
-            self.add(Problem("reach", int(pc.line[i]), float(excess[i]), float(excess[i])))
-
-    def _travel(self, pc: chain.PointChunk) -> None:
-        P = pc.P_cmd
-        ok = np.all(np.isfinite(P), axis=1)
-        with np.errstate(invalid="ignore"):
-            excess = np.maximum(P - self.hi[None, :], self.lo[None, :] - P)
-        excess[~ok] = -np.inf
-        for col, m in enumerate(MOTORS):
-            for i in _worst_per_line(excess[:, col], pc.line):
-                self.add(
-                    Problem("travel", int(pc.line[i]), float(P[i, col]), float(excess[i, col]), m)
-                )
+            self.add(point_problems(self.profile, self.geo, pc))
 
     def report(self, source: str, stopped: PrsxyError | None, n_motions: int) -> CheckReport:
         problems = sorted(
