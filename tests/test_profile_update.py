@@ -29,6 +29,7 @@ from prsxy_post.profile.update import (
     SetValue,
     changes_between,
     dumps,
+    key_of,
     update_text,
 )
 
@@ -206,6 +207,17 @@ def test_impossible_edits_name_the_key(edit: Any, message: str) -> None:
 def test_not_toml_is_located() -> None:
     with pytest.raises(ProfileError, match="not valid TOML"):
         update_text("[table\n", [], "p.toml")
+
+
+def test_key_of_reads_the_paths_errors_and_diagnose_print() -> None:
+    assert key_of("kinematics.legs[2].strut_length") == ("kinematics", "legs", 1, "strut_length")
+    assert key_of("table.squareness") == ("table", "squareness")
+    assert key_of("effects.guide_bow[3]") == ("effects", "guide_bow", 2)
+    for bad in ("backlash[5", "legs[0].x", "a..b", ""):
+        with pytest.raises(ValueError):
+            key_of(bad)
+    out = update_text(SHOP, [SetValue(key_of("kinematics.legs[3].hinge_twist"), 0.01)])
+    assert profile_mod.loads(out, "o").kinematics.legs[2].hinge_twist == 0.01
 
 
 def test_dumps_writes_a_profile_that_reads_back() -> None:

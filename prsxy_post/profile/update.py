@@ -31,6 +31,7 @@ from __future__ import annotations
 import copy
 import itertools
 import math
+import re
 import tomllib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -149,6 +150,26 @@ def update_text(text: str, changes: Iterable[Change], source: str = "<profile>")
             "(a bug in prsxy_post.profile.update)"
         )
     return out
+
+
+def key_of(path: str) -> Key:
+    """The key path of a dotted profile path as errors and diagnose name it (arrays
+    counted from 1): ``"kinematics.legs[2].strut_length"`` →
+    ``("kinematics", "legs", 1, "strut_length")``.
+
+    Raises
+    ------
+    ValueError
+        For a path that is not of that form.
+    """
+    out: list[str | int] = []
+    for part in path.split("."):
+        m = re.fullmatch(r"([A-Za-z0-9_-]+)((?:\[[1-9][0-9]*\])*)", part)
+        if m is None:
+            raise ValueError(f"{path!r} is not a profile path like kinematics.legs[2].hinge_twist")
+        out.append(m.group(1))
+        out += [int(i) - 1 for i in re.findall(r"\[(\d+)\]", m.group(2))]
+    return tuple(out)
 
 
 def changes_between(old: Mapping[str, Any], new: Mapping[str, Any]) -> list[Change]:
@@ -492,7 +513,7 @@ def _assign_tables(
             for k, v in t.items():
                 _assign(tables[j], k, v, None)
             keep.append(tables[j])
-    if keep != tables or any(a is not b for a, b in zip(keep, tables, strict=False)):
+    if len(keep) != len(tables) or any(a is not b for a, b in zip(keep, tables, strict=True)):
         old.clear()
         for t in keep:
             old.append(t)
