@@ -21,7 +21,7 @@ import numpy as np
 
 from . import __version__
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
-from .files import clash, load_profile, read_text, same_file, write_atomic
+from .files import clash, load_profile, read_text, write_atomic
 
 if TYPE_CHECKING:
     from .measure import AxisData, BallbarRun, PoseData
@@ -350,11 +350,12 @@ def convert(
     pooled = jobs > 1 and len(programs) > 1
     jobs_list = []
     outs = [_output_of(prog, ext, output, out_dir) for prog in programs]
+    seen: dict[Path, str] = {}
     for prog, out in zip(programs, outs, strict=True):
-        others = [p for p, o in zip(programs, outs, strict=True) if p != prog and same_file(o, out)]
-        if others:
+        first = seen.setdefault(Path(out).resolve(), prog)
+        if first != prog and out != "-":
             raise UsageError(
-                f"{prog} and {others[0]} would both be written to {out}",
+                f"{first} and {prog} would both be written to {out}",
                 expected="programs with different names, or one convert per directory",
             )
         hit = clash(out, {f"G-code program {prog}": prog, f"profile {profile_path}": profile_path})
@@ -478,7 +479,7 @@ def check(
         for g in report.groups():
             click.echo(g.describe(prof, program))
     if report.stopped is not None:
-        click.echo(str(report.stopped))
+        click.echo(str(report.stopped), err=True)
     if report.ok:
         click.echo(
             f"{program}: ok ({report.motions} motions, {report.points} points, "
@@ -494,7 +495,7 @@ def check(
         else "no problem before it stopped"
     )
     if report.stopped is not None:
-        summary += "; stopped early (above)"
+        summary += "; the check stopped at the error above"
     click.echo(f"{program}: {summary}", err=True)
     sys.exit(1)
 

@@ -237,6 +237,19 @@ def test_check_groups_problems_by_kind(runner: CliRunner, tmp_path: Path) -> Non
     )
 
 
+def test_check_reports_the_problems_before_a_gcode_error(runner: CliRunner, tmp_path: Path) -> None:
+    prog = tmp_path / "bad.ngc"
+    prog.write_text("G21 G90 G1 F3000\nX310\nX0\nG1 X1 Q\nM2\n")
+    r = run(runner, "check", str(prog), "--profile", NOMINAL)
+    assert r.exit_code == 1
+    assert r.stdout.startswith(f"{prog}:2: motor 5 (X) commanded beyond its travel on 2 lines")
+    err = r.stderr.splitlines()
+    assert err[0].startswith(f"{prog}:4:")
+    assert (
+        err[1] == f"{prog}: 2 lines with problems in 1 group; the check stopped at the error above"
+    )
+
+
 # ---------------------------------------------------------------- a pipe closed early
 
 
