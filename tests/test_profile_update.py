@@ -115,7 +115,14 @@ def test_calibrate_like_rewrite_keeps_every_comment() -> None:
     assert doc["error_map"]["hi"] == [1.0] * 5
     assert doc["provenance"]["calibrate"] == [{"by": "prsxy-post", "data": ["a.csv", "b.csv"]}]
     # the sections it did not touch are line for line the user's
-    for section in ("[limits]", "[start]", "[gcode]", "[work.offsets]", "[[tools]]", "[output]"):
+    for section in (
+        "[limits]",
+        "[start]",
+        "[gcode]",
+        "[work.offsets]",
+        "[[tools]]",
+        "[output.pmac]",
+    ):
         start = COMMENTED.index(section)
         block = COMMENTED[start : COMMENTED.index("\n\n", start)]
         assert block in out, section
@@ -289,7 +296,7 @@ def test_any_document_becomes_any_other(old: dict[str, Any], new: dict[str, Any]
                     ("kinematics", "legs", 2, "platform_angle"),
                     ("axis_comp", 1, "forward"),
                     ("tools", 0, "length"),
-                    ("output", "decimals"),
+                    ("output", "pmac", "decimals"),
                 ]
             ),
             st.floats(-1e-3, 1e-3, allow_nan=False) | st.lists(st.floats(0, 1e-3), max_size=3),
