@@ -1033,12 +1033,7 @@ TABLE_FORMATS = click.Choice(["linuxcnc0", "linuxcnc1", "pmac"])
 @click.option("--out-dir", required=True, type=click.Path(file_okay=False))
 @guarded
 def tables_export(profile_path: str, fmt: str, out_dir: str) -> None:
-    """Write the profile's [[axis_comp]] tables as the controller loads them.
-
-    \b
-    Example:
-      prsxy-post tables export --profile shop.toml --format pmac --out-dir pmac/
-    """
+    """Write the profile's [[axis_comp]] tables as the controller loads them."""
     from .controller_tables import linuxcnc, pmac
 
     prof = load_profile(profile_path)
@@ -1146,12 +1141,7 @@ def tables_import(
     output: str,
     in_place: bool,
 ) -> None:
-    """Read controller tables into a profile's [[axis_comp]] (replacing those motors').
-
-    \b
-    Example:
-      prsxy-post tables import comp/motor5.comp --profile shop.toml --format linuxcnc1 -o new.toml
-    """
+    """Read controller tables into a profile's [[axis_comp]] (replacing those motors')."""
     from .controller_tables import linuxcnc, pmac, with_tables
 
     _check_output(output, [profile_path], in_place)
