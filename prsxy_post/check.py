@@ -30,11 +30,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import chain, errormap, kinematics
+from . import errormap, kinematics
 from .errors import LimitError, PrsxyError, ReachError
 from .profile import MOTORS, Profile
 
 if TYPE_CHECKING:
+    from . import chain  # imported where used: the chain may use this module's rules
     from .gcode import Motion
 
 #: the kinds of problem, in the order they are listed for a line
@@ -185,7 +186,7 @@ def check_batches(
         Never raises for a problem of the program: a G-code error ends the
         check and is ``report.stopped``.
     """
-    from . import program
+    from . import chain, program
     from .convert import few_gc_passes
 
     stages = stages or chain.Stages()
