@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 
@@ -104,7 +103,7 @@ def measurement_files(
     into every file as ``# commanded_with:`` (measure's module docstring).
     """
     files: dict[str, str] = {}
-    runs: list[Any] = []
+    runs: list[measure.BallbarRun] = []
     for r in radii:
         for ccw in (True, False):
             if "XY" in planes:

@@ -13,11 +13,15 @@ import base64
 import html
 import io
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .errors import UsageError
+
+if TYPE_CHECKING:
+    from .ballbar import Analysis
+    from .diagnose import Data, Diagnosis
 
 
 def pyplot() -> Any:
@@ -122,7 +126,7 @@ class Page:
 # ---------------------------------------------------------------- diagnose
 
 
-def _ballbar_figure(result: Any, data: Any) -> bytes | None:
+def _ballbar_figure(result: Diagnosis, data: Data) -> bytes | None:
     """Per run, on its own scale: measured (grey), simulated with the profile as it
     was (orange, dashed) and with the effects added (blue, on top)."""
     from .ballbar import _centred, angles, nice_division, polar_panel
@@ -159,7 +163,7 @@ def _ballbar_figure(result: Any, data: Any) -> bytes | None:
     return png(fig, dpi=90)
 
 
-def _pose_figure(result: Any, data: Any) -> bytes | None:
+def _pose_figure(result: Diagnosis, data: Data) -> bytes | None:
     """Tip [µm] and axis [arcsec] residual at each pose, before and after; every
     panel on its own colour scale (the after panel would be one colour on the
     before panel's)."""
@@ -195,7 +199,7 @@ def _pose_figure(result: Any, data: Any) -> bytes | None:
     return png(fig, dpi=90)
 
 
-def _residual_figure(result: Any) -> bytes:
+def _residual_figure(result: Diagnosis) -> bytes:
     """RMS per file before and after, on a logarithmic scale."""
     plt = pyplot()
     runs = result.per_run
@@ -213,7 +217,7 @@ def _residual_figure(result: Any) -> bytes:
     return png(fig, dpi=90)
 
 
-def diagnose_report(result: Any, data: Any) -> dict[str, str | bytes]:
+def diagnose_report(result: Diagnosis, data: Data) -> dict[str, str | bytes]:
     """Files of the report folder: report.html, report.md and the plots."""
     j = result.to_json()
     page = Page("Diagnosis")
@@ -337,7 +341,7 @@ def diagnose_report(result: Any, data: Any) -> dict[str, str | bytes]:
 # ---------------------------------------------------------------- ballbar
 
 
-def ballbar_report(analysis: Any) -> dict[str, str | bytes]:
+def ballbar_report(analysis: Analysis) -> dict[str, str | bytes]:
     """report.html, report.md and the polar plots of a ballbar analysis."""
     from .ballbar import LABELS, describe, plot_runs
 

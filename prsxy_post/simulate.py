@@ -17,8 +17,7 @@ import numpy as np
 
 from . import axiscomp, kinematics
 from . import effects as registry
-from .profile import MOTORS as MOTOR_ORDER
-from .profile import Profile
+from .profile import MOTORS, Profile
 
 
 def truth_geometry(truth: Profile) -> kinematics.Geometry:
@@ -40,7 +39,7 @@ def actual_motors(
     if approach is None:
         P_cmd = registry.SERVO_LAG.follow(truth, P_cmd, t)
     out = np.array(P_cmd, dtype=float, copy=True)
-    for col, m in enumerate(MOTOR_ORDER):
+    for col, m in enumerate(MOTORS):
         table = tables.get(m)
         if table is None:
             continue
@@ -145,7 +144,7 @@ def random_machine(
         for k in ("scale_x", "scale_y", "squareness")
     }
     if axis_errors:
-        doc["axis_comp"] = [random_axis_table(m, rng) for m in MOTOR_ORDER]
+        doc["axis_comp"] = [random_axis_table(m, rng) for m in MOTORS]
     if effects:
         doc["effects"] = {
             fam.effects_keys[0]: rng.normal(0, fam.prior, len(fam.members())).tolist()
@@ -218,7 +217,7 @@ def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -
     """
     P = _wanted_motors(commanded, q, tool_length)
     tables = axiscomp.profile_tables(commanded)
-    for col, m in enumerate(MOTOR_ORDER):
+    for col, m in enumerate(MOTORS):
         if m in tables:
             P[:, col] = tables[m].lo_inv(P[:, col])
     return P
@@ -230,7 +229,7 @@ def motion_commands(
     """Motor commands for a continuous motion through poses q at times t (time order)."""
     P = _wanted_motors(commanded, q, tool_length)
     tables = axiscomp.profile_tables(commanded)
-    for col, m in enumerate(MOTOR_ORDER):
+    for col, m in enumerate(MOTORS):
         if m in tables:
             P[:, col] = axiscomp.compensate(tables[m], P[:, col])
     return registry.SERVO_LAG.lead(commanded, P, t)

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from prsxy_post import kinematics, measure, simulate
+from prsxy_post import kinematics, simulate
+from prsxy_post.measure import AxisData, BallbarRun, PoseData
 from prsxy_post.profile import MOTORS, Profile
 
 
@@ -46,13 +47,14 @@ def campaign(
     axis: bool = False,
     bb_noise: float = 0.5,
     pose_noise: float = 1.0,
-) -> tuple[list[measure.PoseData], list[measure.BallbarRun], list[measure.AxisData]]:
-    """Poses, ballbar runs and (optionally) laser runs, as the readers return them."""
+) -> tuple[list[PoseData], list[BallbarRun], list[AxisData]]:
+    """Poses, ballbar runs and (optionally) laser runs, as the files would read
+    (``rows``: the line of each row in a file with one header line)."""
     poses = []
     if n_poses:
         q = random_poses(rng, n_poses)
         m = simulate.measure_poses(truth, commanded, q, rng, pose_noise)
-        poses.append(measure.PoseData("poses.csv", q, m[:, :3], m[:, 3:], np.arange(n_poses) + 2))
+        poses.append(PoseData("poses.csv", q, m[:, :3], m[:, 3:], _rows(len(q))))
     runs = []
     for r in radii:
         for tilt in tilts:
@@ -65,8 +67,15 @@ def campaign(
                 )
                 name = f"r{r:g} tilt{tilt:g} {'ccw' if sign > 0 else 'cw'}"
                 runs.append(
-                    measure.BallbarRun(
-                        name + ".csv", name, np.zeros(3), r, t, q, dev, np.arange(len(t)) + 5
+                    BallbarRun(
+                        source=name + ".csv",
+                        name=name,
+                        pivot=np.zeros(3),
+                        length=r,
+                        t=t,
+                        commanded=q,
+                        dev_um=dev,
+                        rows=_rows(len(t)),
                     )
                 )
     laser = []
@@ -75,14 +84,18 @@ def campaign(
             [simulate.measure_axis(truth, m, np.linspace(-200, 200, 21), 5, rng) for m in MOTORS]
         )
         laser.append(
-            measure.AxisData(
-                "axis.csv",
-                rows[:, 0].astype(int),
-                rows[:, 1],
-                rows[:, 2],
-                rows[:, 3].astype(int),
-                rows[:, 4].astype(int),
-                np.arange(len(rows)) + 2,
+            AxisData(
+                source="axis.csv",
+                motor=rows[:, 0].astype(int),
+                target=rows[:, 1],
+                measured=rows[:, 2],
+                direction=rows[:, 3].astype(int),
+                run=rows[:, 4].astype(int),
+                rows=_rows(len(rows)),
             )
         )
     return poses, runs, laser
+
+
+def _rows(n: int) -> np.ndarray:
+    return np.arange(2, n + 2)

@@ -171,7 +171,10 @@ def test_a_clean_diagnosis_warns_of_nothing(runner: CliRunner, tmp_path: Path) -
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 #: a transparent 1x1 PNG: what an image that failed to render would leave
-BLANK = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNkYPhfDwAChwGA60e6kgAAAABJRU5ErkJggg=="
+BLANK = (
+    "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNkYPhfDwAChwGA60e6kgAAAABJRU5Erk"
+    "Jggg=="
+)
 
 
 def _screenshot(page: Path, out: Path, profile_dir: Path) -> np.ndarray:
