@@ -2,31 +2,40 @@
 
     python samples/table2/replay.py [--keep DIR]
 
-1. ``simulate`` X-Y ballbar circles (radii 40, 50, 60, 80, 90 mm, ccw and cw) on the
+With the library, as a shop's script would (each step is also a command, named
+beside it):
+
+1. simulate X-Y ballbar circles (radii 40, 50, 60, 80, 90 mm, ccw and cw) on the
    machine of ``truth.toml`` (the paper's table: 0.1349 mm/m out of square, 0.0256 mm
-   scale mismatch at r = 40 mm), commanded with the nominal profile;
-2. ``ballbar`` the runs (before);
-3. ``calibrate`` from the ballbar files only (the table's squareness and scales are
-   what X-Y circles can identify);
-4. ``simulate`` the same circle programs commanded with the calibrated profile and
-   ``ballbar`` them again (after);
+   scale mismatch at r = 40 mm), commanded with the nominal profile
+   (``prsxy-post simulate --only-xy``);
+2. analyse the runs (``prsxy-post ballbar``), before;
+3. calibrate from the ballbar files alone: the kinematic stage, since X-Y circles
+   identify the table's squareness and scales (``prsxy-post calibrate --stages
+   kinematics``);
+4. simulate the same circles commanded with the calibrated profile and analyse
+   them again, after;
 5. print both beside the paper's figures.
 
-Every step is the command a user would type; the script prints them.
+With ``--keep DIR`` the measurement files and the calibrated profile are written
+there, as the commands would write them.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import shlex
-import subprocess
 import sys
-import tempfile
 from pathlib import Path
+
+import numpy as np
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
+sys.path.insert(0, str(ROOT))
+
+from prsxy_post import ballbar, calibrate, experiments, measure, profile  # noqa: E402
+from prsxy_post.files import write_atomic  # noqa: E402
+
 RADII = (40, 50, 60, 80, 90)
 # the paper's Table 2: (squareness mm/m, scale mismatch mm) before and after
 PAPER = {
@@ -38,65 +47,50 @@ PAPER = {
 }
 
 
-def cli(*args: str) -> str:
-    cmd = [sys.executable, "-m", "prsxy_post.cli", *args]
-    print("$ prsxy-post " + " ".join(shlex.quote(a) for a in args), file=sys.stderr)
-    return subprocess.run(cmd, check=True, capture_output=True, text=True, cwd=ROOT).stdout
+def measure_circles(
+    truth: profile.Profile, commanded: profile.Profile, seed: int
+) -> tuple[dict[str, str], list[measure.BallbarRun]]:
+    """The X-Y circles as files (contract form) and as read back from them."""
+    files = experiments.measurement_files(
+        truth,
+        commanded,
+        np.random.default_rng(seed),
+        radii=[float(r) for r in RADII],
+        tilts=[],
+        planes=["XY"],
+        n_poses=0,
+        axis_runs=False,
+        commanded_with=measure.CommandedWith.of(Path(commanded.source).name, commanded.text),
+    )
+    runs = [measure.read_ballbar(text, name) for name, text in sorted(files.items())]
+    return files, runs
 
 
-def pairs(out_dir: Path) -> dict[int, dict]:
-    files = sorted(str(p) for p in out_dir.glob("ballbar-*.csv"))
-    j = json.loads(cli("ballbar", *files, "--json"))
-    return {round(p["radius"]): p for p in j["pairs"]}
+def pairs(runs: list[measure.BallbarRun]) -> dict[int, ballbar.BallbarPair]:
+    return {round(p.radius): p for p in ballbar.analyse(runs).pairs}
 
 
-def main() -> dict[int, tuple[dict, dict]]:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--keep", help="keep the files in this directory")
+def main() -> dict[int, tuple[ballbar.BallbarPair, ballbar.BallbarPair]]:
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
+    ap.add_argument("--keep", help="write the files into this directory")
     args = ap.parse_args()
-    work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="table2-"))
-    work.mkdir(parents=True, exist_ok=True)
-    radii = ",".join(str(r) for r in RADII)
-    nominal = str(ROOT / "profiles" / "prsxy-nominal.toml")
-    truth = str(HERE / "truth.toml")
-    common = ["--radii", radii, "--only-xy", "--poses", "0", "--no-axis-runs"]
-    cli(
-        "simulate",
-        "--truth",
-        truth,
-        "--profile",
-        nominal,
-        "-o",
-        str(work / "before"),
-        "--seed",
-        "1",
-        *common,
+    nominal = profile.loads((ROOT / "profiles" / "prsxy-nominal.toml").read_text(), "nominal")
+    truth = profile.loads((HERE / "truth.toml").read_text(), "truth.toml")
+    files_before, runs_before = measure_circles(truth, nominal, seed=1)
+    before = pairs(runs_before)
+    cal = calibrate.calibrate(
+        nominal, nominal, [], runs_before, [], stages=["kinematics"], sources=sorted(files_before)
     )
-    before = pairs(work / "before")
-    cal = str(work / "calibrated.toml")
-    cli(
-        "calibrate",
-        *sorted(str(p) for p in (work / "before").glob("*.csv")),
-        "--profile",
-        nominal,
-        "-o",
-        cal,
-        "--stages",
-        "kinematics",
-    )
-    cli(
-        "simulate",
-        "--truth",
-        truth,
-        "--profile",
-        cal,
-        "-o",
-        str(work / "after"),
-        "--seed",
-        "2",
-        *common,
-    )
-    after = pairs(work / "after")
+    cal_text = profile.dumps(cal.doc)
+    calibrated = profile.loads(cal_text, "calibrated.toml")
+    files_after, runs_after = measure_circles(truth, calibrated, seed=2)
+    after = pairs(runs_after)
+    if args.keep:
+        keep = Path(args.keep)
+        out: dict[Path, str | bytes] = {keep / "before" / n: t for n, t in files_before.items()}
+        out.update({keep / "after" / n: t for n, t in files_after.items()})
+        out[keep / "calibrated.toml"] = cal_text
+        write_atomic(out)
     print(
         "| radius mm | squareness mm/m: paper before | ours before | paper after | ours after "
         "| scale mismatch mm: paper before | ours before | paper after | ours after |"
@@ -106,11 +100,10 @@ def main() -> dict[int, tuple[dict, dict]]:
         (pb, pa) = PAPER[r]
         b, a = before[r], after[r]
         print(
-            f"| {r} | {pb[0]:.4f} | {b['squareness_mm_per_m']:.4f} | {pa[0]:.4f} | "
-            f"{a['squareness_mm_per_m']:.4f} | {pb[1]:.4f} | {b['scale_mismatch_mm']:.4f} | "
-            f"{pa[1]:.4f} | {a['scale_mismatch_mm']:.5f} |"
+            f"| {r} | {pb[0]:.4f} | {b.squareness_mm_per_m:.4f} | {pa[0]:.4f} | "
+            f"{a.squareness_mm_per_m:.4f} | {pb[1]:.4f} | {b.scale_mismatch_mm:.4f} | "
+            f"{pa[1]:.4f} | {a.scale_mismatch_mm:.5f} |"
         )
-    print(f"\n(files in {work})", file=sys.stderr)
     return {r: (before[r], after[r]) for r in RADII}
 
 
