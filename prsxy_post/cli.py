@@ -701,10 +701,15 @@ def _fmt_stats(d: dict[str, float]) -> str:
 def _print_stage(rep: Any) -> None:
     click.echo(f"== {rep.name}")
     for c in rep.changed:
-        if "change" in c:
+        if "change" in c and "from" in c:
             click.echo(
                 f"  {c['name']}: {c['from']:.6g} -> {c['to']:.6g} "
                 f"({c['change']:+.3g} ± {c['stderr']:.2g} {c['unit']})"
+            )
+        elif "change" in c:  # an effect of the library added
+            period = f", period {c['period_mm']:g} mm" if c.get("period_mm") else ""
+            click.echo(
+                f"  {c['name']}: {c['change']:+.4g} ± {c['stderr']:.2g} {c['unit']}{period}"
             )
         elif "cv_rms" in c:
             scale = 3600.0 if c["unit"] == "deg" else 1000.0
