@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from prsxy_post import diagnose, effects, experiments, measure, profile, simulate  # noqa: E402
-from prsxy_post.diagnose import model  # noqa: E402
+from prsxy_post.diagnose import model, selection  # noqa: E402
 
 NOMINAL = ROOT / "profiles" / "prsxy-nominal.toml"
 
@@ -56,7 +56,9 @@ def campaign(truth: profile.Profile, nominal: profile.Profile, seed: int) -> dia
 
 def confounded(nominal: profile.Profile, seed: int = 12345) -> dict[str, set[str]]:
     """Each member's confounded group on a nominal campaign: members whose whitened
-    signatures correlate above diagnose's alias threshold."""
+    signatures correlate above diagnose's alias threshold, and members taking part
+    in a combination the data do not determine at all (diagnose's
+    ``undetermined_with``: the platform frame's definition, a common servo lag)."""
     d = campaign(nominal, nominal, seed)
     names = effects.members()
     keys = model.column_keys(names)
@@ -77,6 +79,13 @@ def confounded(nominal: profile.Profile, seed: int = 12345) -> dict[str, set[str
         for j, b in enumerate(vis):
             if i != j and C[i, j] > diagnose.ALIAS_CORR:
                 groups[a].add(b)
+    rows = diagnose._kind_rows(segs, len(meas))
+    normal = selection.Normal.of(lin.columns, np.where(ok, 0.0, np.nan), rows)
+    g = selection.Gram.build(normal, {k: noise[k] for k in rows}, keys)
+    for grp in selection.undetermined(g):
+        names_in = {model.split_key(g.keys[j])[0] for j in grp}
+        for a in names_in:
+            groups[a] |= names_in
     return groups
 
 

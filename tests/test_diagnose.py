@@ -165,3 +165,26 @@ def test_an_estimate_that_depends_on_another_says_so(nominal: profile_mod.Profil
         dep = by[x].depends_on
         assert [dd["name"] for dd in dep] == [y]
         assert abs(dep[0]["in_stderr"]) > 2 and abs(dep[0]["shift"]) > 0.02 * abs(by[x].estimate)
+
+
+def test_the_profile_likelihood_interval_agrees_where_the_model_is_linear(
+    nominal: profile_mod.Profile, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Every interval is checked against the model at estimate + 2 stderr; forced to
+    take the profile likelihood (as it would where the model bends), the interval
+    of a nearly linear effect is the linear one (estimate ± 2 stderr) within 5 %."""
+    truth = hide(nominal, C("table.squareness", 1e-4), C("backlash[6]", 0.005))
+    rng = np.random.default_rng(21)
+    poses, runs, laser = campaign(truth, nominal, rng, n_poses=60, tilts=(0.0,))
+    data = diagnose.Data.build(nominal, poses, runs, laser)
+    linear = diagnose.diagnose(nominal, data)
+    for e in linear.effects:
+        assert e.interval_method == "linear" and e.nonlinearity < 0.01, e
+    monkeypatch.setattr(diagnose, "NONLINEAR", -1.0)
+    profiled = diagnose.diagnose(nominal, data)
+    for e, f in zip(linear.effects, profiled.effects, strict=True):
+        assert f.interval_method == "profile"
+        assert f.interval is not None and e.interval is not None
+        width = e.interval[1] - e.interval[0]
+        assert f.interval[0] == pytest.approx(e.interval[0], abs=0.05 * width), e.name
+        assert f.interval[1] == pytest.approx(e.interval[1], abs=0.05 * width), e.name

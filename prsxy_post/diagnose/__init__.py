@@ -76,7 +76,11 @@ class Effect:
     (``chi2``: the drop of the whitened SSE it gives, ``p_value`` of its F-test);
     the other named effects whose omission would move it by more than two standard
     errors and 2 % (``depends_on``: name, shift, shift in standard errors): the
-    estimate is only as good as the model it was fitted in."""
+    estimate is only as good as the model it was fitted in; the members with which
+    it forms a combination these data do not determine at all
+    (``undetermined_with``: the platform frame's definition, a common servo lag):
+    of the equivalent explanations the one naming the fewest effects was taken,
+    and the sizes are those of that explanation."""
 
     name: str
     estimate: float
@@ -88,6 +92,15 @@ class Effect:
     p_value: float = 0.0
     chi2: float = 0.0
     depends_on: list[dict[str, Any]] = field(default_factory=list)
+    undetermined_with: list[str] = field(default_factory=list)
+    #: the 2-standard-error interval of the estimate, and how it was found:
+    #: "linear" (estimate ± 2 stderr) or "profile" (the profile likelihood, where
+    #: the model is not linear enough over the interval)
+    interval: tuple[float, float] | None = None
+    interval_method: str = "linear"
+    #: how far the model moved from its linearisation at estimate + 2 stderr
+    #: (relative), the test of whether the linear interval holds
+    nonlinearity: float = 0.0
 
     @property
     def key(self) -> str:
@@ -115,6 +128,12 @@ class Effect:
         d["chi2"] = self.chi2
         if self.depends_on:
             d["depends_on"] = self.depends_on
+        if self.undetermined_with:
+            d["undetermined_with"] = self.undetermined_with
+        if self.interval is not None:
+            d["interval"] = list(self.interval)
+            d["interval_method"] = self.interval_method
+        d["nonlinearity"] = self.nonlinearity
         d["sentence"] = self.sentence()
         return d
 
@@ -400,6 +419,94 @@ def _per_run(before: np.ndarray, after: np.ndarray, segs: list[Segment]) -> list
     return out
 
 
+#: The linear interval holds while the model at estimate + 2 stderr is within this
+#: (relative) of its linearisation; beyond it the profile likelihood is used.
+NONLINEAR = 0.1
+
+
+def _intervals(
+    found: list[Effect],
+    fit: _Fit,
+    current: Profile,
+    data: Data,
+    measured: np.ndarray,
+    w: np.ndarray,
+    with_map: bool,
+) -> None:
+    """The 2-standard-error interval of each effect, checked against the model.
+
+    The model is evaluated at the estimate + 2 stderr (along the estimate's own
+    direction for a periodic term); when the predictions moved differently from
+    the linearisation by more than :data:`NONLINEAR`, the interval is the profile
+    likelihood's: the sizes where the residual, with the other members refitted
+    (linearly), has grown by 4 σ̂² (secant steps on each side)."""
+    nf = len(fit.free)
+    pos = np.concatenate([[nf], nf + np.cumsum(fit.dims)]).astype(int)
+    ok = np.isfinite(measured - fit.lin.pred)
+    keys = fit.free + fit.keys
+    X = _design(fit.lin, keys, w, ok)
+
+    def pred_at(x: np.ndarray) -> np.ndarray:
+        doc = registry.apply(current.raw, current, _changes(fit.free, fit.keys, fit.dims, x))
+        return predict(profile_from_dict(doc, current.source), data, [], with_map=with_map).pred
+
+    by_key = {e.key: e for e in found}
+    for t, k in enumerate(fit.keys):
+        e = by_key.get(k)
+        if e is None or not e.stderr > 0:
+            continue
+        a, b = int(pos[t]), int(pos[t + 1])
+        v = fit.x[a:b]
+        u = v / np.linalg.norm(v) if np.linalg.norm(v) > 0 else np.eye(b - a)[0]
+        step = np.zeros_like(fit.x)
+        step[a:b] = 2 * e.stderr * u
+        try:
+            moved = (pred_at(fit.x + step) - fit.lin.pred) * w
+        except (ProfileError, FitError):
+            moved = np.full_like(measured, np.nan)
+        lin = X @ step
+        dn = moved[ok]
+        e.nonlinearity = (
+            float(np.linalg.norm(dn - lin)) / max(float(np.linalg.norm(lin)), 1e-300)
+            if np.all(np.isfinite(dn))
+            else float("inf")
+        )
+        e.interval = (e.estimate - 2 * e.stderr, e.estimate + 2 * e.stderr)
+        if e.nonlinearity <= NONLINEAR:
+            continue
+        # profile likelihood along u: the others refitted linearly at each size
+        others = np.ones(X.shape[1], dtype=bool)
+        others[a:b] = False
+        Q, _ = np.linalg.qr(X[:, others]) if others.any() else (np.zeros((len(dn), 0)), None)
+        r0 = ((measured - fit.lin.pred) * w)[ok]
+        base = float(np.sum((r0 - Q @ (Q.T @ r0)) ** 2))
+
+        def excess(
+            s: float, unit_step: np.ndarray = step / 2, Q: np.ndarray = Q, base: float = base
+        ) -> float:
+            """Profiled SSE growth at estimate + s stderr, less 4 σ̂²."""
+            try:
+                r = ((measured - pred_at(fit.x + s * unit_step)) * w)[ok]
+            except (ProfileError, FitError):
+                return float("inf")
+            return float(np.sum((r - Q @ (Q.T @ r)) ** 2)) - base - 4 * fit.sigma2
+
+        ends = []
+        for sign in (1.0, -1.0):
+            s0, f0 = 0.0, -4 * fit.sigma2
+            s1, f1 = 2.0 * sign, excess(2.0 * sign)
+            for _ in range(8):
+                if not np.isfinite(f1) or abs(f1 - f0) < 1e-12:
+                    break
+                s0, f0, s1 = s1, f1, s1 - f1 * (s1 - s0) / (f1 - f0)
+                f1 = excess(s1)
+                if abs(f1) < 0.01 * fit.sigma2:
+                    break
+            ends.append(e.estimate + s1 * e.stderr)
+        e.interval = (min(ends), max(ends))
+        e.interval_method = "profile"
+
+
 def _effects_of(fit: _Fit, g: selection.Gram | None, sel: list[int], test: Any) -> list[Effect]:
     """Named effects with estimates, standard errors and dependencies from a fit."""
     nf = len(fit.free)
@@ -410,6 +517,7 @@ def _effects_of(fit: _Fit, g: selection.Gram | None, sel: list[int], test: Any) 
         pos.append((j, j + d))
         j += d
     x, C = fit.x, fit.cov
+    groups = selection.undetermined(g) if g is not None else []
     for t, (k, (a, b)) in enumerate(zip(fit.keys, pos, strict=True)):
         name, period = split_key(k)
         v = x[a:b]
@@ -452,6 +560,10 @@ def _effects_of(fit: _Fit, g: selection.Gram | None, sel: list[int], test: Any) 
                     split_key(g.keys[j])[0]
                     for j in selection.aliases(g, sel, sel.index(i), ALIAS_CORR)
                 ]
+        together: list[str] = []
+        if g is not None and k in g.keys:
+            i = g.keys.index(k)
+            together = sorted({g.keys[j] for grp in groups if i in grp for j in grp if j != i})
         out.append(
             Effect(
                 name,
@@ -464,6 +576,7 @@ def _effects_of(fit: _Fit, g: selection.Gram | None, sel: list[int], test: Any) 
                 p,
                 chi2,
                 depends,
+                together,
             )
         )
     out.sort(key=lambda e: -e.chi2)
@@ -556,7 +669,9 @@ def find_effects(
             j += d
         normal = selection.Normal.of(lin.columns, z, rows)
     assert test is not None
-    return _effects_of(fit, g, sel, test), fit, noise, w
+    found = _effects_of(fit, g, sel, test)
+    _intervals(found, fit, current, data, measured, w, with_map)
+    return found, fit, noise, w
 
 
 def _weakest(g: selection.Gram, sel: Sequence[int]) -> int:

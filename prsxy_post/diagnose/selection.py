@@ -525,3 +525,23 @@ def aliases(g: Gram, S: Sequence[int], i: int, corr: float) -> list[int]:
     var = np.maximum(np.diag(red), 1e-300)
     c = red[-1, :-1] / np.sqrt(var[-1] * var[:-1])
     return [int(j) for j, cc in zip(out, c, strict=True) if abs(cc) > corr]
+
+
+def undetermined(g: Gram) -> list[set[int]]:
+    """Sets of candidates whose signatures have a combination the data do not
+    determine (the eigenvectors of G with eigenvalues below :data:`DEPENDENT`):
+    each set is the candidates with a weight above 0.1 of the largest in one such
+    combination; sets sharing a member are merged."""
+    if not g.keys:
+        return []
+    w, V = np.linalg.eigh(g.G)
+    owner = np.repeat(np.arange(len(g.keys)), g.dims)
+    groups: list[set[int]] = []
+    for v in V[:, w <= DEPENDENT].T:
+        a = np.abs(v)
+        members = {int(owner[j]) for j in np.nonzero(a > 0.1 * a.max())[0]}
+        for other in [x for x in groups if x & members]:
+            members |= other
+            groups.remove(other)
+        groups.append(members)
+    return groups
