@@ -82,10 +82,9 @@ def confounded(nominal: profile.Profile, seed: int = 12345) -> dict[str, set[str
     rows = diagnose._kind_rows(segs, len(meas))
     normal = selection.Normal.of(lin.columns, np.where(ok, 0.0, np.nan), rows)
     g = selection.Gram.build(normal, {k: noise[k] for k in rows}, keys)
-    for grp in selection.undetermined(g):
-        names_in = {model.split_key(g.keys[j])[0] for j in grp}
-        for a in names_in:
-            groups[a] |= names_in
+    for i, tied in selection.undetermined(g).items():
+        a = model.split_key(g.keys[i])[0]
+        groups[a] |= {model.split_key(g.keys[j])[0] for j in tied}
     return groups
 
 

@@ -173,13 +173,13 @@ def estimate_noise(
     the pooled spread of repeated runs; poses 1 µm and 1 arcsec. Each kind's
     degrees of freedom are its rows less its share of the fit (tr(G⁺ G_kind)): a
     few poses beside thousands of ballbar samples give most of their freedom to
-    the fit. Three passes, each whitened by the one before. ``normal``: the
+    the fit. Two passes, the second whitened by the first. ``normal``: the
     cross-products of every signature and the residual (:class:`.selection.Normal`).
     """
     noise = {"pose_tip": 1e-3, "pose_axis": 3e-4, "ballbar": 0.5e-3, "axis": 0.3e-3}
     noise.update(leftover.independent_noise(data, resid, segs))
     noise = {k: v for k, v in noise.items() if k in normal.M}
-    for _ in range(3):
+    for _ in range(2):
         sse, used, _ = normal.full_fit(noise)
         for kind, v in sse.items():
             dof = normal.n[kind] - used[kind]
@@ -563,7 +563,7 @@ def _effects_of(fit: _Fit, g: selection.Gram | None, sel: list[int], test: Any) 
         together: list[str] = []
         if g is not None and k in g.keys:
             i = g.keys.index(k)
-            together = sorted({g.keys[j] for grp in groups if i in grp for j in grp if j != i})
+            together = sorted({split_key(g.keys[j])[0] for j in groups.get(i, set())})
         out.append(
             Effect(
                 name,

@@ -527,21 +527,35 @@ def aliases(g: Gram, S: Sequence[int], i: int, corr: float) -> list[int]:
     return [int(j) for j, cc in zip(out, c, strict=True) if abs(cc) > corr]
 
 
-def undetermined(g: Gram) -> list[set[int]]:
-    """Sets of candidates whose signatures have a combination the data do not
-    determine (the eigenvectors of G with eigenvalues below :data:`DEPENDENT`):
-    each set is the candidates with a weight above 0.1 of the largest in one such
-    combination; sets sharing a member are merged."""
+def undetermined(g: Gram) -> dict[int, set[int]]:
+    """For each candidate taking part in a combination the data do not determine
+    (the null space N of the normalised G: eigenvalues below :data:`DEPENDENT`),
+    the candidates it is tied to there.
+
+    With P = N Nᵀ the projector onto that space, candidates i and j are tied when
+    both lie in it by more than 1 % (P_ii, P_jj > 0.01) and |P_ij| exceeds a tenth of
+    √(P_ii P_jj). P does not depend on how the null space's basis happens to be
+    chosen, so nearly degenerate combinations of different legs stay apart."""
     if not g.keys:
-        return []
+        return {}
     w, V = np.linalg.eigh(g.G)
+    N = V[:, w <= DEPENDENT]
+    if not N.shape[1]:
+        return {}
+    P = N @ N.T
     owner = np.repeat(np.arange(len(g.keys)), g.dims)
-    groups: list[set[int]] = []
-    for v in V[:, w <= DEPENDENT].T:
-        a = np.abs(v)
-        members = {int(owner[j]) for j in np.nonzero(a > 0.1 * a.max())[0]}
-        for other in [x for x in groups if x & members]:
-            members |= other
-            groups.remove(other)
-        groups.append(members)
-    return groups
+    k = len(g.keys)
+    Pb = np.zeros((k, k))
+    np.maximum.at(Pb, (owner[:, None], owner[None, :]), np.abs(P))
+    d = np.diag(Pb)
+    inside = d > 0.01
+    out: dict[int, set[int]] = {}
+    for i in np.nonzero(inside)[0]:
+        tied = {
+            int(j)
+            for j in np.nonzero(inside & (Pb[i] > 0.1 * np.sqrt(d[i] * np.maximum(d, 1e-300))))[0]
+            if j != i
+        }
+        if tied:
+            out[int(i)] = tied
+    return out
