@@ -517,7 +517,7 @@ def _effects_of(fit: _Fit, g: selection.Gram | None, sel: list[int], test: Any) 
         pos.append((j, j + d))
         j += d
     x, C = fit.x, fit.cov
-    groups = selection.undetermined(g) if g is not None else []
+    groups = selection.undetermined(g) if g is not None else {}
     for t, (k, (a, b)) in enumerate(zip(fit.keys, pos, strict=True)):
         name, period = split_key(k)
         v = x[a:b]
