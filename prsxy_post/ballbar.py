@@ -525,9 +525,9 @@ class Analysis:
                 f"{r.noise_um:.2f} um; {describe(r.figures, r.cyclic_order)}"
             )
         for p in self.pairs:
-            r = "" if f"r{p.radius:g}" in p.name else f" r{p.radius:g}"
+            rad = "" if f"r{p.radius:g}" in p.name else f" r{p.radius:g}"
             out.append(
-                f"pair {p.name}{r}: hysteresis {p.circular_hysteresis_um:.2f} um; "
+                f"pair {p.name}{rad}: hysteresis {p.circular_hysteresis_um:.2f} um; "
                 f"{describe(p.figures)}"
             )
         return out

@@ -825,20 +825,3 @@ def parse_section(checker: Any, doc: Mapping[str, Any]) -> Effects:
 
 def iter_families(stage: str | None = None) -> Iterator[Family]:
     return (f for f in FAMILIES if stage in (None, f.stage))
-
-
-def describe() -> list[dict[str, Any]]:
-    """The registry as a table (for documentation and ``--help``)."""
-    return [
-        {
-            "family": f.key,
-            "pattern": f.pattern,
-            "unit": f.unit,
-            "prior": f.prior,
-            "home": f.home,
-            "stage": f.stage,
-            "simulated_by": f.simulated_by,
-            "compensated_by": f.compensated_by,
-        }
-        for f in FAMILIES
-    ]
