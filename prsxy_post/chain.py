@@ -26,7 +26,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import axiscomp, kinematics, reversals
-from .errors import LimitError, PrsxyError, ReachError
+from . import check as checks
+from .errors import LimitError, PrsxyError
 from .interpolate import Blocks, Limits, Plan, Planner, Samples, at_times, blocks_from_motions
 from .interpolate.sampling import sample, steps
 from .profile import MOTORS, Profile, nominal_kinematics
@@ -108,27 +109,7 @@ ErrorFunction = Callable[[np.ndarray], np.ndarray]
 
 def check_motions(motions: Sequence[Motion], profile: Profile) -> list[PrsxyError]:
     """Problems visible in the program itself: feed above the machine's maximum."""
-    out: list[PrsxyError] = []
-    fmax = profile.limits["max_feed_mm_min"]
-    for m in motions:
-        if m.kind in ("feed", "arc") and m.feed > fmax:
-            out.append(
-                LimitError(
-                    f"feed F{m.feed:g} mm/min is above the machine's maximum",
-                    line=m.line,
-                    expected=f"at most {fmax:g} mm/min (limits.max_feed_mm_min)",
-                )
-            )
-    return out
-
-
-def _first_per_line(bad: np.ndarray, lines: np.ndarray) -> list[int]:
-    """Indices of the first bad point of each distinct line, in order."""
-    idx = np.nonzero(bad)[0]
-    if idx.size == 0:
-        return []
-    _, first = np.unique(lines[idx], return_index=True)
-    return sorted(idx[first].tolist())
+    return [p.error(profile) for p in checks.feed_problems(profile, motions)]
 
 
 @dataclass
@@ -358,15 +339,24 @@ class Pipeline:
             # before any point is made: a long move to an unreachable place is an
             # error at its line, and a block of a billion points is never tried
             n_steps = steps(done, plan.law, self.limits).sum(axis=1)
-            long = n_steps > 256
-            if np.any(long):
-                self._check_ends(done.take(long))
+            long = np.flatnonzero(n_steps > 256)
+            late: list[PrsxyError] = []
+            if long.size:
+                late = self._end_problems(done.take(long))
+                if late and not self.collect:
+                    # the blocks before the first long one that cannot be done are
+                    # made and checked first: an earlier line's problem comes first
+                    worst_line = min(e.line or 0 for e in late)
+                    cut = int(long[np.flatnonzero(done.line[long] == worst_line)[0]])
+                    plan = plan.head(cut)
+                    n_steps = n_steps[:cut]
             self._guard(plan, n_steps)
             s = sample(plan, self.limits)
             self.timings["interpolate"] += time.perf_counter() - t0
             pc = self._points(plan, s)
             if pc is not None:
                 out.append(pc)
+            self._problem(late)
         if final:
             if not self.any_motion:
                 raise LimitError(
@@ -426,19 +416,20 @@ class Pipeline:
             return w.take(slice(0, 0))
         return Blocks.concat(out)
 
-    def _check_ends(self, b: Blocks) -> None:
+    def _end_problems(self, b: Blocks) -> list[PrsxyError]:
         """Reach and travel at the end points of long blocks, before interpolating them:
         a move to X1e9 is an error at its line, not a billion points. (Short blocks are
-        checked point by point, as every block is.)"""
-        if not len(b):
-            return
+        checked point by point, as every block is; the ends are judged before the
+        real-axis tables, which move a command by micrometres.)"""
         ends = b.end
         q_t = correct_virtual(ends, self.error_map) if self.error_map is not None else ends
         ik = kinematics.inverse(self.geo, q_t, b.tool_length)
-        errs = check_pose_problems(self.profile, ends, b.line, ik.reachable)
-        errs += check_travel(self.profile, ik.P, b.line)
-        if errs and not self.collect:
-            raise sorted(errs, key=lambda e: e.line or 0)[0]
+        found = [
+            *checks.tilt_problems(self.profile, ends, b.line),
+            *checks.reach_problems(self.geo, q_t, b.tool_length, ik.P, b.line),
+            *checks.travel_problems(self.profile, ik.P, b.line),
+        ]
+        return [p.error(self.profile) for p in found]
 
     def _guard(self, plan: Plan, n_steps: np.ndarray) -> None:
         """Refuse absurd work: more points or machining time than the profile allows,
@@ -482,7 +473,11 @@ class Pipeline:
         q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
         t1 = time.perf_counter()
         ik = kinematics.inverse(self.geo, q_t, tool)
-        self._problem(check_pose_problems(self.profile, q, line, ik.reachable))
+        pose = [
+            *checks.tilt_problems(self.profile, q, line),
+            *checks.reach_problems(self.geo, q_t, tool, ik.P, line),
+        ]
+        self._problem([p.error(self.profile) for p in pose])
         V = np.zeros_like(ik.P)
         moving = np.flatnonzero(np.any(qdot != 0.0, axis=1))
         if moving.size:
@@ -776,56 +771,9 @@ class Pipeline:
             ready.P_cmd = ready.P_cmd + self.lag[None, :] * ready.V_cmd
             ready.V_cmd = ready.V_cmd + self.lag[None, :] * acc
         self.held = None if k == len(h) else h.take(slice(k, len(h)))
-        self._problem(check_travel(self.profile, ready.P_cmd, ready.line))
+        travel = checks.travel_problems(self.profile, ready.P_cmd, ready.line)
+        self._problem([p.error(self.profile) for p in travel])
         return ready
-
-
-def check_pose_problems(
-    profile: Profile, q: np.ndarray, line: np.ndarray, reachable: np.ndarray
-) -> list[PrsxyError]:
-    """Tilt beyond the limit and poses out of reach, one per G-code line and kind."""
-    out: list[PrsxyError] = []
-    max_tilt = profile.limits["max_tilt_deg"]
-    cos_tilt = np.cos(np.radians(q[:, 3])) * np.cos(np.radians(q[:, 4]))
-    tilt = np.degrees(np.arccos(np.clip(cos_tilt, -1.0, 1.0)))
-    for i in _first_per_line(tilt > max_tilt + 1e-9, line):
-        out.append(
-            LimitError(
-                f"tool axis tilted {tilt[i]:.3f}° at A{q[i, 3]:.4f} B{q[i, 4]:.4f}",
-                line=int(line[i]),
-                expected=f"at most {max_tilt:g}° (limits.max_tilt_deg)",
-            )
-        )
-    for i in _first_per_line(~reachable, line):
-        out.append(
-            ReachError(
-                "pose out of the machine's reach at X{:.4f} Y{:.4f} Z{:.4f} A{:.4f} B{:.4f}".format(
-                    *q[i]
-                ),
-                line=int(line[i]),
-                expected="a pose the struts can reach (see the profile's [kinematics])",
-            )
-        )
-    return out
-
-
-def check_travel(profile: Profile, P_cmd: np.ndarray, line: np.ndarray) -> list[PrsxyError]:
-    """Motors commanded beyond their travel, one per G-code line and motor."""
-    out: list[PrsxyError] = []
-    ok = np.all(np.isfinite(P_cmd), axis=1)
-    for col, m in enumerate(MOTORS):
-        mc = profile.motor(m)
-        p = P_cmd[:, col]
-        bad = ok & ((p < mc.min - 1e-9) | (p > mc.max + 1e-9))
-        for i in _first_per_line(bad, line):
-            out.append(
-                ReachError(
-                    f"motor {m} ({mc.axis}) commanded to {p[i]:.4f} mm, beyond its travel",
-                    line=int(line[i]),
-                    expected=f"{mc.min:g} to {mc.max:g} mm (motors[{m}].min/max)",
-                )
-            )
-    return out
 
 
 def run_chain(

@@ -176,11 +176,6 @@ def test_check_and_convert_give_the_same_figure_for_a_long_move(
     assert str(first.error(nominal, str(tmp_path / "p.ngc"))) == str(conv)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="chain.check_travel names the first point beyond travel of a line, and "
-    "Pipeline._check_ends raises before earlier short blocks are checked (lead's chain.py)",
-)
 def test_check_and_convert_give_the_same_figure_for_a_rapid(
     tmp_path: Path, nominal: profile_mod.Profile
 ) -> None:

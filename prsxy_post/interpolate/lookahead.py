@@ -282,6 +282,14 @@ class Plan:
         self.end_corner = end_corner
         self.next_dq_in = next_dq_in
 
+    def head(self, k: int) -> Plan:
+        """The plan of its first k blocks (where the rest is cut off)."""
+        from dataclasses import fields
+
+        law = TimeLaw(**{f.name: getattr(self.law, f.name)[:k] for f in fields(self.law)})
+        nxt = self.blocks.dq_in[k] if k < len(self.blocks) else self.next_dq_in
+        return Plan(self.blocks.take(slice(0, k)), law, False, nxt)
+
 
 __all__ = [
     "KAPPA",
