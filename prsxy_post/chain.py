@@ -28,7 +28,7 @@ import numpy as np
 from . import axiscomp, kinematics, reversals
 from . import check as checks
 from .errors import LimitError, PrsxyError
-from .interpolate import Blocks, Limits, Plan, Planner, Samples, at_times, blocks_from_motions
+from .interpolate import Blocks, Plan, PlanLimits, Planner, Samples, at_times, blocks_from_motions
 from .interpolate.sampling import sample, steps
 from .profile import MOTORS, Profile, nominal_kinematics
 
@@ -71,12 +71,12 @@ def interpreter_config(profile: Profile, start: Sequence[float] | None = None) -
     )
 
 
-def limits_of(profile: Profile, segment: str = "cubic") -> Limits:
+def limits_of(profile: Profile, segment: str = "cubic") -> PlanLimits:
     """The planner's limits from a profile; ``segment``: how the target controller
     moves between points ("cubic" or "chord", from the output dialect)."""
     lim = profile.limits
     ip = profile.interpolation
-    return Limits(
+    return PlanLimits(
         rapid_mm_min=lim["rapid_mm_min"],
         rapid_deg_min=lim["rapid_deg_min"],
         accel_mm_s2=lim["max_accel_mm_s2"],
@@ -88,7 +88,7 @@ def limits_of(profile: Profile, segment: str = "cubic") -> Limits:
     )
 
 
-def geometry_of(profile: Profile, stages: Stages) -> kinematics.Geometry:
+def ik_geometry(profile: Profile, stages: Stages) -> kinematics.Geometry:
     """The geometry the IK uses: calibrated, or the contract's nominal design."""
     if stages.calibrated:
         return kinematics.Geometry.from_params(
@@ -213,7 +213,7 @@ class Prepared:
     problems: list[PrsxyError]
 
 
-def prepare(motions: Sequence[Motion], profile: Profile, limits: Limits) -> Prepared:
+def prepare(motions: Sequence[Motion], profile: Profile, limits: PlanLimits) -> Prepared:
     """Planning arrays and program-level problems of a chunk of motions."""
     return Prepared(
         blocks_from_motions(motions, limits),
@@ -271,7 +271,7 @@ class Pipeline:
         self.collect = collect
         self.limits = limits_of(profile, segment)
         self.planner = Planner(self.limits)
-        self.geo = geometry_of(profile, stages)
+        self.geo = ik_geometry(profile, stages)
         self.tables = axiscomp.profile_tables(profile) if stages.axis_comp else {}
         self.table_cols = [
             (col, self.tables[m]) for col, m in enumerate(MOTORS) if m in self.tables

@@ -103,7 +103,7 @@ def test_reach_figure_is_how_much_longer_the_strut_must_be() -> None:
             dict(leg, strut_length=leg["strut_length"] + extra) for leg in doc["kinematics"]["legs"]
         ]
         p2 = profile_mod.profile_from_dict(doc)
-        geo = chain.geometry_of(p2, chain.Stages())
+        geo = chain.ik_geometry(p2, chain.Stages())
         return bool(kinematics.inverse(geo, q).reachable[0])
 
     assert not reachable(lack - 1e-4)

@@ -22,9 +22,9 @@ from .geometry import (
     LINEAR_EPS_MM,
     PLANE_AXES,
     Blocks,
-    Limits,
+    PlanLimits,
     blocks_from_motions,
-    evaluate,
+    pose_at,
 )
 from .lookahead import Plan, Planner, backward_pass, forward_pass, junction_limits
 from .sampling import Samples, at_times, sample
@@ -40,17 +40,17 @@ __all__ = [
     "LINEAR_EPS_MM",
     "PLANE_AXES",
     "Blocks",
-    "Limits",
     "Plan",
+    "PlanLimits",
     "Planner",
     "Samples",
     "TimeLaw",
     "at_times",
     "backward_pass",
     "blocks_from_motions",
-    "evaluate",
     "forward_pass",
     "junction_limits",
+    "pose_at",
     "sample",
     "time_law",
 ]

@@ -52,7 +52,7 @@ ARC_TANGENTIAL_SHARE = 0.5
 
 
 @dataclass(frozen=True)
-class Limits:
+class PlanLimits:
     """What the planner must respect (profile ``[limits]`` and ``[interpolation]``).
 
     rapid_mm_min, rapid_deg_min : G0 speeds along XYZ, and of A/B-only moves
@@ -195,7 +195,7 @@ def _plane_axes(plane: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return iu, iv, iw
 
 
-def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
+def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks:
     """Turn interpreted motions into planning arrays (vectorised); no-motion moves are dropped.
 
     Speed limits: F (mm/min) along XYZ, or degrees/min for rotary-only moves;
@@ -314,12 +314,12 @@ def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
     moving = ~b.stops
     if np.any(moving):
         k = np.flatnonzero(moving)
-        _, b.dq_in[k] = evaluate(b, k, np.zeros(len(k)))
-        _, b.dq_out[k] = evaluate(b, k, b.length[k])
+        _, b.dq_in[k] = pose_at(b, k, np.zeros(len(k)))
+        _, b.dq_out[k] = pose_at(b, k, b.length[k])
     return b
 
 
-def evaluate(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pose q(s) and tangent dq/ds at path distance ``s`` into blocks ``k``.
 
     Returns
@@ -359,7 +359,7 @@ def evaluate(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.nd
     return q, dq
 
 
-def segment_limit(b: Blocks, limits: Limits) -> np.ndarray:
+def segment_limit(b: Blocks, limits: PlanLimits) -> np.ndarray:
     """Longest time step [s] on each block at speed 1 (divide by the speed).
 
     Between two points a controller moves along a cubic (PVT) or a chord. On a
@@ -377,7 +377,7 @@ def segment_limit(b: Blocks, limits: Limits) -> np.ndarray:
     return np.where(np.isfinite(hv), hv, np.inf)
 
 
-def point_bound(b: Blocks, limits: Limits) -> np.ndarray:
+def point_bound(b: Blocks, limits: PlanLimits) -> np.ndarray:
     """An upper bound on the points each block can become, whatever the plan.
 
     The slowest a block can be is from rest to rest: τ ≤ L / v + v / a (v, a: the

@@ -35,7 +35,7 @@ import math
 import numpy as np
 
 from ..gcode import EXACT_STOP
-from .geometry import CORNER_SHARE, Blocks, Limits, segment_limit
+from .geometry import CORNER_SHARE, Blocks, PlanLimits, segment_limit
 from .timelaw import TimeLaw, time_law
 
 #: Share of the acceleration limit a corner's blend may use (module docstring).
@@ -45,7 +45,7 @@ KAPPA = 0.5
 TANGENT_EPS = 1e-9
 
 
-def junction_limits(b: Blocks, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
+def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarray]:
     """Speed limit at the end of each block (its junction with the next one).
 
     Returns
@@ -190,7 +190,7 @@ class Planner:
     The result is the same, bit for bit, as planning the whole program at once.
     """
 
-    def __init__(self, limits: Limits) -> None:
+    def __init__(self, limits: PlanLimits) -> None:
         self.limits = limits
         self.pending: Blocks | None = None
         self.v_start = 0.0
