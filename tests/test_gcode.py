@@ -154,6 +154,9 @@ REJECT = [
     ("G21\nG1 X#1 F100\nM2\n", "t.ngc:2:5:", "parameters (#)"),
     ("G21\nG1 X[1+2] F100\nM2\n", "t.ngc:2:5:", "expressions"),
     ("G21\no100 sub\nM2\n", "t.ngc:2:1:", "O-words"),
+    # a letter O typed for a zero is said to be one (issue 12), not taken for an O-word
+    ("G21\nG1 X10 Y1O F100\nM2\n", "t.ngc:2:10:", "letter O inside the number of 'Y' ('Y1O')"),
+    ("G21\nGO X1\nM2\n", "t.ngc:2:2:", "the letter O as the number of 'G' ('GO')"),
     ("G21\nG41 D1 G1 X1 F100\nM2\n", "t.ngc:2:1:", "is not supported ('G41')"),
     ("G21\nG92 X0\nM2\n", "t.ngc:2:1:", "G92"),
     ("G21\nG10 L2 P1 X0\nM2\n", "t.ngc:2:1:", "G10"),

@@ -1,0 +1,178 @@
+"""Canned cycles (G73, G81-G86, G89) as LinuxCNC expands them into moves."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .codes import CYCLE_SHAPE
+from .motion import MM_PER_INCH
+from .read import Word
+
+if TYPE_CHECKING:
+    from .execute import Interpreter
+
+
+#: G73/G83 back-off before the next peck (LinuxCNC's G83_RAPID_DELTA, inch).
+G83_RAPID_DELTA_INCH = 0.010
+
+
+def cycle(
+    it: Interpreter,
+    motion: int,
+    axis_words: dict[str, Word],
+    seen: dict[str, Word],
+    line: int,
+    new: bool,
+) -> None:
+    st = it.st
+    gw = next(iter(axis_words.values()), None)
+    if st.inverse_time:
+        raise it.err("canned cycle in inverse time mode (G93)", line, gw, "G94")
+    if st.feed <= 0:
+        raise it.err(
+            "canned cycle with no feed rate",
+            line,
+            gw or seen.get("R"),
+            "an F word before the cycle",
+        )
+    for a in ("A", "B"):
+        if a in axis_words:
+            raise it.err(
+                "A/B words in a canned cycle",
+                line,
+                axis_words[a],
+                "X Y Z R only: rotary axes may not move in a cycle",
+            )
+    first = st.motion != motion
+    sc = it.scale()
+    iu, iv, iw = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[st.plane]
+    ax = "XYZ"
+    name_w = ax[iw]
+    if first and name_w not in axis_words:
+        raise it.err(
+            f"{name_w} missing in the first block of a canned cycle",
+            line,
+            gw,
+            f"{name_w}<bottom> with G{motion} in G{st.plane}",
+        )
+    if "R" not in seen and first:
+        raise it.err("R missing in the first block of a canned cycle", line, gw, "R<retract plane>")
+    if "L" in seen:
+        lv = seen["L"].value
+        if lv != int(lv) or lv < 1:
+            raise it.err("L must be a positive integer", line, seen["L"], "L1, L2, ...")
+        repeats = int(lv)
+    else:
+        repeats = 1
+    if motion in (73, 83):
+        if "Q" in seen:
+            st.cycle_q = seen["Q"].value * sc
+        elif first:
+            raise it.err(f"Q missing with G{motion}", line, gw, "Q<peck depth>")
+        if st.cycle_q <= 0:
+            raise it.err("Q must be positive", line, seen.get("Q"), "Q > 0")
+    if motion in (82, 84, 86, 89):
+        if "P" in seen:
+            st.cycle_p = seen["P"].value
+        elif first and motion != 84:
+            raise it.err(f"P (dwell) missing with G{motion}", line, gw, "P<seconds>")
+    if motion == 84 and st.spindle_dir != 1:
+        raise it.err("G84 with the spindle not turning clockwise", line, gw, "M3 first")
+    if motion == 86 and st.spindle_dir == 0:
+        raise it.err("G86 with the spindle not turning", line, gw, "M3 or M4 first")
+    off = it.offset()
+    cur = list(st.pos)
+    # work in program coordinates of the cycle axes, then add the offset back
+    cur_w = (cur[iw] - off[iw]) / sc
+    if st.cycle_il is None:
+        st.cycle_il = cur_w
+    old_cc = st.cycle_il
+    z_given = axis_words[name_w].value if name_w in axis_words else None
+    if "R" in seen:
+        st.cycle_r = seen["R"].value
+    if z_given is not None:
+        st.cycle_z = z_given
+    z_num = st.cycle_z
+    if st.absolute:
+        r = st.cycle_r
+        cc = z_num
+        aa = axis_words[ax[iu]].value if ax[iu] in axis_words else (cur[iu] - off[iu]) / sc
+        bb = axis_words[ax[iv]].value if ax[iv] in axis_words else (cur[iv] - off[iv]) / sc
+        inc_a = inc_b = 0.0
+    else:
+        inc_a = axis_words[ax[iu]].value if ax[iu] in axis_words else 0.0
+        inc_b = axis_words[ax[iv]].value if ax[iv] in axis_words else 0.0
+        r = st.cycle_r + old_cc
+        cc = r + z_num
+        aa = (cur[iu] - off[iu]) / sc
+        bb = (cur[iv] - off[iv]) / sc
+    if r < cc:
+        raise it.err(
+            f"R below the bottom of the cycle in G{st.plane}",
+            line,
+            seen.get("R") or axis_words.get(name_w),
+            f"R >= {name_w} (the retract plane above the bottom)",
+        )
+
+    def pt(a: float, b: float, w: float) -> list[float]:
+        p = list(st.pos)
+        p[iu], p[iv], p[iw] = a * sc + off[iu], b * sc + off[iv], w * sc + off[iw]
+        return p
+
+    def traverse(a: float, b: float, w: float) -> None:
+        end = pt(a, b, w)
+        it.emit(line=line, kind="rapid", start=tuple(st.pos), end=tuple(end))
+        st.pos = end
+
+    def feed(a: float, b: float, w: float) -> None:
+        end = pt(a, b, w)
+        f = st.feed * (MM_PER_INCH if st.units == "inch" else 1.0)
+        it.emit(line=line, kind="feed", start=tuple(st.pos), end=tuple(end), feed=f)
+        st.pos = end
+
+    def dwell(t: float) -> None:
+        p = tuple(st.pos)
+        it.emit(line=line, kind="dwell", start=p, end=p, duration=t)
+
+    # LinuxCNC: below the R plane (judged by the level the cycles started at),
+    # rise straight up to it first; the first move of each hole goes across at
+    # the higher of where the tool is and the clearance level
+    current_cc = cur_w
+    if old_cc < r:
+        traverse((cur[iu] - off[iu]) / sc, (cur[iv] - off[iv]) / sc, r)
+        old_cc = r
+        current_cc = r
+    clear = r if st.retract_r else old_cc
+    delta = G83_RAPID_DELTA_INCH * (1.0 if st.units == "inch" else MM_PER_INCH)
+    for _ in range(repeats):
+        aa += inc_a
+        bb += inc_b
+        first_w = max(current_cc, clear)
+        traverse(aa, bb, first_w)
+        if first_w != r:
+            traverse(aa, bb, r)
+        if motion in (73, 83):
+            q = st.cycle_q / sc
+            depth = r - q
+            while depth > cc:
+                feed(aa, bb, depth)
+                if motion == 83:
+                    traverse(aa, bb, r)
+                traverse(aa, bb, depth + delta)
+                depth -= q
+            feed(aa, bb, cc)
+            traverse(aa, bb, clear)
+        elif motion == 85:
+            feed(aa, bb, cc)
+            feed(aa, bb, r)
+            traverse(aa, bb, clear)
+        else:
+            # feed to the bottom, dwell or not, retract at rapid or at feed
+            # (G84 taps out, G89 bores out; G86 stops the spindle, which the
+            # motion does not see)
+            dwells, feed_out = CYCLE_SHAPE[motion]
+            feed(aa, bb, cc)
+            if dwells:
+                dwell(st.cycle_p)
+            (feed if feed_out else traverse)(aa, bb, clear)
+        current_cc = clear
