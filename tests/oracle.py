@@ -14,7 +14,7 @@ import re
 import shutil
 import subprocess
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 RS274 = shutil.which("rs274")
 NUM = r"(-?\d+\.\d+)"
@@ -37,6 +37,10 @@ class OracleMotion:
 class OracleResult:
     motions: list[OracleMotion]
     error: str | None
+    #: every canonical call in order: (name, argument text)
+    calls: list[tuple[str, str]] = field(default_factory=list)
+    #: what (PRINT,...) wrote (rs274 prints it among the calls)
+    prints: list[str] = field(default_factory=list)
 
 
 def run(
@@ -75,10 +79,12 @@ def run(
             timeout=timeout,
             stdin=subprocess.DEVNULL,
         )
-    return parse(proc.stdout + proc.stderr)
+    return parse(proc.stdout, proc.stderr)
 
 
-def parse(out: str) -> OracleResult:
+def parse(out: str, err: str = "") -> OracleResult:
+    """Canonical calls from rs274's standard output; the error (the first line
+    of standard error after "executing") from its standard error."""
     scale = 1.0
     offset = [0.0] * 6
     feed = 0.0
@@ -86,16 +92,21 @@ def parse(out: str) -> OracleResult:
     motions: list[OracleMotion] = []
     last: tuple[float, ...] = (0.0,) * 5
     error = None
+    for ln in err.splitlines():
+        if ln.strip() and ln.strip() != "executing":
+            error = ln.strip()  # the message; the offending line follows
+            break
+    calls: list[tuple[str, str]] = []
+    prints: list[str] = []
     lines = out.splitlines()
     for i, ln in enumerate(lines):
         m = re.match(r"\s*\d+ N[\d.]+\s+(\w+)\((.*)\)\s*$", ln)
         if not m:
-            if ln.strip() and not ln.startswith("executing") and not re.match(r"\s*\d+ N", ln):
-                # an error message, followed by the offending line
-                if error is None:
-                    error = ln.strip()
+            if not re.match(r"\s*\d+ N", ln):
+                prints.append(ln)
             continue
         name, args = m.group(1), m.group(2)
+        calls.append((name, args))
         vals = [float(v) for v in re.findall(r"-?\d+\.\d+|-?\d+", args)] if args else []
         if name == "USE_LENGTH_UNITS":
             scale = 25.4 if "INCHES" in args else 1.0
@@ -138,4 +149,4 @@ def parse(out: str) -> OracleResult:
         elif name == "DWELL":
             p = motions[-1].end if motions else None
             motions.append(OracleMotion(i, "dwell", p or (math.nan,) * 5, None, duration=vals[0]))
-    return OracleResult(motions, error)
+    return OracleResult(motions, error, calls, prints)

@@ -30,27 +30,30 @@ second one ends it; M2/M30 end the program (nothing after them is read).
 
 from .config import InterpreterConfig, ToolEntry
 from .execute import Interpreter
-from .lines import batches_of, iter_line_batches, split_lines
+from .lines import FileLines, ProgramLines, batches_of, iter_line_batches, split_lines
 from .motion import EXACT_STOP, MM_PER_INCH, Motion, Pose, motion_to_json
-from .read import Block, Word, parse_line
+from .read import Block, Word, evaluate, parse
 from .stream import interpret, iter_motions, iter_motions_batched
 
 __all__ = [
     "EXACT_STOP",
     "MM_PER_INCH",
     "Block",
+    "FileLines",
     "Interpreter",
     "InterpreterConfig",
     "Motion",
     "Pose",
+    "ProgramLines",
     "ToolEntry",
     "Word",
     "batches_of",
+    "evaluate",
     "interpret",
     "iter_line_batches",
     "iter_motions",
     "iter_motions_batched",
     "motion_to_json",
-    "parse_line",
+    "parse",
     "split_lines",
 ]

@@ -1,112 +1,138 @@
-"""G and M codes: their modal groups, and those outside this tool's subset."""
+"""G and M codes: LinuxCNC 2.9's modal groups (``interp_array.cc``: ``_gees``,
+``_ems``), and the ones outside what this machine runs."""
 
 from __future__ import annotations
 
-G_GROUP = {
-    0: 1,
-    1: 1,
-    2: 1,
-    3: 1,
-    73: 1,
-    80: 1,
-    81: 1,
-    82: 1,
-    83: 1,
-    84: 1,
-    85: 1,
-    86: 1,
-    89: 1,
-    17: 2,
-    18: 2,
-    19: 2,
-    90: 3,
-    91: 3,
-    90.1: 4,
-    91.1: 4,
-    93: 5,
-    94: 5,
-    20: 6,
-    21: 6,
-    40: 7,
-    43: 8,
-    43.1: 8,
-    49: 8,
-    98: 10,
-    99: 10,
-    54: 12,
-    55: 12,
-    56: 12,
-    57: 12,
-    58: 12,
-    59: 12,
-    61: 13,
-    61.1: 13,
-    64: 13,
-    4: 0,
-    28: 0,
-    30: 0,
-    53: 0,
+#: G code (×10, as LinuxCNC keys them: G43.1 is 431) → modal group
+G_GROUPS: dict[int, int] = {
+    **dict.fromkeys([40, 100, 280, 281, 300, 301, 520, 530, 920, 53], 0),
+    **dict.fromkeys(
+        [
+            0,
+            10,
+            20,
+            30,
+            50,
+            51,
+            52,
+            330,
+            331,
+            382,
+            383,
+            384,
+            385,
+            700,
+            710,
+            711,
+            712,
+            720,
+            721,
+            722,
+            730,
+            740,
+            760,
+            *list(range(800, 900, 10)),
+        ],
+        1,
+    ),
+    **dict.fromkeys([170, 171, 180, 181, 190, 191], 2),
+    900: 3,
+    910: 3,
+    901: 4,
+    911: 4,
+    930: 5,
+    940: 5,
+    950: 5,
+    200: 6,
+    210: 6,
+    **dict.fromkeys([400, 410, 411, 420, 421], 7),
+    **dict.fromkeys([430, 431, 432, 490], 8),
+    980: 10,
+    990: 10,
+    **dict.fromkeys([540, 550, 560, 570, 580, 590, 591, 592, 593], 12),
+    610: 13,
+    611: 13,
+    640: 13,
+    960: 14,
+    970: 14,
+    70: 15,
+    80: 15,
+    921: 16,
+    922: 16,
+    923: 16,
 }
-G_REJECT = {
-    41: "cutter compensation (G41/G42) is not supported",
-    42: "cutter compensation (G41/G42) is not supported",
-    41.1: "cutter compensation (G41/G42) is not supported",
-    42.1: "cutter compensation (G41/G42) is not supported",
-    92: "G92 offsets are not supported",
-    92.1: "G92 offsets are not supported",
-    92.2: "G92 offsets are not supported",
-    92.3: "G92 offsets are not supported",
-    10: "G10 (setting offsets from the program) is not supported",
-    5: "splines (G5) are not supported",
-    5.1: "splines (G5.1) are not supported",
-    5.2: "NURBS (G5.2) are not supported",
-    5.3: "NURBS (G5.3) are not supported",
-    15: "polar coordinates (G15/G16) are not supported",
-    16: "polar coordinates (G15/G16) are not supported",
-    87: "G87 back boring is not supported",
-    88: "G88 (manual retract) is not supported",
-    74: "G74 left-hand tapping is not supported",
-    76: "G76 threading is not supported",
-    33: "G33 spindle-synchronised motion is not supported",
-    33.1: "G33.1 rigid tapping is not supported",
-    38.2: "probing (G38.x) is not supported",
-    38.3: "probing (G38.x) is not supported",
-    38.4: "probing (G38.x) is not supported",
-    38.5: "probing (G38.x) is not supported",
-    28.1: "G28.1 (storing the home position) is not supported",
-    30.1: "G30.1 (storing the home position) is not supported",
-    95: "G95 feed per revolution is not supported",
-    96: "G96 constant surface speed is not supported",
-    97: "G96/G97 spindle modes are not supported",
-    7: "lathe diameter mode (G7) is not supported",
-    8: "lathe radius mode (G8) is not supported",
-    17.1: "U-V planes are not supported",
-    18.1: "U-W planes are not supported",
-    19.1: "V-W planes are not supported",
-    59.1: "G59.1 is not supported (G54 to G59)",
-    59.2: "G59.2 is not supported (G54 to G59)",
-    59.3: "G59.3 is not supported (G54 to G59)",
-    43.2: "G43.2 (additional offsets) is not supported",
-    52: "G52 is not supported",
-    64.1: "G64 variants are not supported",
-    90.2: "unknown G code",
+
+#: G codes LinuxCNC knows that this machine does not run (×10 → why)
+G_OUT_OF_SCOPE: dict[int, str] = {
+    70: "lathe diameter mode (G7) is out of scope for this machine",
+    80: "lathe radius mode (G8) is out of scope for this machine",
+    330: "spindle-synchronised motion (G33) is out of scope for this machine",
+    331: "rigid tapping (G33.1) is out of scope for this machine",
+    760: "threading (G76) is out of scope for this machine",
+    382: "probing (G38.2) is out of scope for this machine",
+    383: "probing (G38.3) is out of scope for this machine",
+    384: "probing (G38.4) is out of scope for this machine",
+    385: "probing (G38.5) is out of scope for this machine",
+    700: "lathe finishing cycles (G70) are out of scope for this machine",
+    710: "lathe roughing cycles (G71) are out of scope for this machine",
+    711: "lathe roughing cycles (G71.1) are out of scope for this machine",
+    712: "lathe roughing cycles (G71.2) are out of scope for this machine",
+    720: "lathe roughing cycles (G72) are out of scope for this machine",
+    721: "lathe roughing cycles (G72.1) are out of scope for this machine",
+    722: "lathe roughing cycles (G72.2) are out of scope for this machine",
+    171: "U-V planes (G17.1) are out of scope (no U, V, W axes)",
+    181: "U-W planes (G18.1) are out of scope (no U, V, W axes)",
+    191: "V-W planes (G19.1) are out of scope (no U, V, W axes)",
+    950: "feed per revolution (G95) is out of scope for this machine (no spindle feedback)",
+    870: "back boring (G87) is not supported",
+    880: "G88 (boring with a manual retract) is not supported",
+    740: "left-hand tapping (G74) is not supported",
 }
-M_GROUP: dict[float, int] = {
-    0: 4,
-    1: 4,
-    2: 4,
-    30: 4,
-    60: 4,
-    3: 7,
-    4: 7,
-    5: 7,
+
+#: not yet: removed as each lands
+G_NOT_YET: dict[int, str] = {
+    410: "cutter compensation (G41) is not supported",
+    420: "cutter compensation (G42) is not supported",
+    411: "cutter compensation (G41.1) is not supported",
+    421: "cutter compensation (G42.1) is not supported",
+    920: "G92 offsets are not supported",
+    921: "G92 offsets are not supported",
+    922: "G92 offsets are not supported",
+    923: "G92 offsets are not supported",
+    100: "G10 (setting offsets from the program) is not supported",
+    50: "splines (G5) are not supported",
+    51: "splines (G5.1) are not supported",
+    52: "NURBS (G5.2) are not supported",
+    53: "NURBS (G5.3) are not supported",
+    281: "G28.1 (storing the home position) is not supported",
+    301: "G30.1 (storing the home position) is not supported",
+    960: "G96 constant surface speed is not supported",
+    970: "G96/G97 spindle modes are not supported",
+    432: "G43.2 (additional offsets) is not supported",
+    520: "G52 is not supported",
+}
+
+#: M code → modal group (LinuxCNC's _ems; M98 is read as an O-word)
+M_GROUPS: dict[int, int] = {
+    **dict.fromkeys([0, 1, 2, 30, 60, 99], 4),
+    **dict.fromkeys([62, 63, 64, 65, 66, 67, 68], 5),
     6: 6,
-    7: 8,
-    8: 8,
-    9: 8,
-    48: 9,
-    49: 9,
+    61: 6,
+    **dict.fromkeys([3, 4, 5, 19, 70, 71, 72, 73], 7),
+    **dict.fromkeys([7, 8, 9], 8),
+    **dict.fromkeys([48, 49, 50, 51, 52, 53], 9),
+    **dict.fromkeys(range(100, 200), 10),
 }
+M_OUT_OF_SCOPE: dict[int, str] = {
+    19: "spindle orientation (M19) is out of scope for this machine",
+}
+M_NOT_YET: dict[int, str] = {
+    **dict.fromkeys(
+        [50, 51, 52, 53, 61, 62, 63, 64, 65, 66, 67, 68, 70, 71, 72, 73],
+        "this M code is not supported",
+    ),
+}
+
 CYCLES = {73, 81, 82, 83, 84, 85, 86, 89}
 #: canned cycles of one plunge: (dwell at the bottom, retract at feed rate)
 CYCLE_SHAPE = {
@@ -119,7 +145,20 @@ CYCLE_SHAPE = {
 AXES = "XYZAB"
 
 
-def code_of(v: float) -> float:
-    """G/M number as a key: integers stay integers; G43.1 stays 43.1."""
-    r = round(v, 1)
-    return int(r) if r == int(r) else r
+def g_code10(v: float) -> int | None:
+    """LinuxCNC's read_g: ten times the value, within 0.001 of an integer (else
+    None: not a G code)."""
+    import math
+
+    x = v * 10.0
+    n = math.floor(x)
+    if x - n > 0.999:
+        return math.ceil(x)
+    if x - n > 0.001:
+        return None
+    return int(n)
+
+
+def code_of(code10: int) -> float:
+    """G/M number as used in the interpreter's state: G1 is 1, G43.1 is 43.1."""
+    return code10 // 10 if code10 % 10 == 0 else code10 / 10.0

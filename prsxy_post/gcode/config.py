@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from .motion import Pose
@@ -20,10 +20,24 @@ class ToolEntry:
 class InterpreterConfig:
     """What the interpreter needs from the machine profile.
 
-    work_offsets : G54..G59 → (x, y, z, a, b) [mm, deg]; missing ones are zero
-    g28_position, g30_position : stored positions, workpiece frame
-    tool_table : tool number → ToolEntry
+    work_offsets : G54..G59.3 → (x, y, z, a, b) [mm, deg] (keys 54..59, 59.1..59.3);
+        missing ones are zero. They are the parameters #5221.. a program reads and
+        may change (G10 L2/L20, or by assigning them)
+    g28_position, g30_position : stored positions, workpiece frame (#5161.., #5181..)
+    tool_table : tool number → ToolEntry (G10 L1/L10/L11 change the program's copy)
     start : initial position, workpiece frame
+    active_work_offset : the coordinate system in effect at the start (54..59.3)
+    subroutine_path : directories searched, in order, for ``name.ngc`` when a
+        program calls a subroutine it has not defined (LinuxCNC's
+        ``[RS274NGC] SUBROUTINE_PATH``); the program's own directory is searched
+        first (LinuxCNC's ``PROGRAM_PREFIX``)
+    max_loop_iterations : a loop that passes more often is stopped with an error
+        (a program that never ends would otherwise hang the conversion)
+    on_message : called as ``on_message(source, line, kind, text)`` for the
+        program's ``(MSG,…)``, ``(DEBUG,…)`` and ``(PRINT,…)`` comments (kind
+        "MSG", "DEBUG", "PRINT"; parameters in DEBUG and PRINT already
+        substituted as LinuxCNC does); None: messages are dropped (the library
+        never prints)
     """
 
     work_offsets: Mapping[int, Pose] = field(default_factory=dict)
@@ -31,4 +45,7 @@ class InterpreterConfig:
     g30_position: Pose = (0.0, 0.0, 0.0, 0.0, 0.0)
     tool_table: Mapping[int, ToolEntry] = field(default_factory=dict)
     start: Pose = (0.0, 0.0, 0.0, 0.0, 0.0)
-    active_work_offset: int = 54
+    active_work_offset: float = 54
+    subroutine_path: tuple[str, ...] = ()
+    max_loop_iterations: int = 1_000_000
+    on_message: Callable[[str, int, str, str], None] | None = None

@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import os
+
 from ..errors import GCodeError
-from . import cycles, moves
-from .codes import AXES, CYCLES, G_GROUP, G_REJECT, M_GROUP, code_of
-from .config import InterpreterConfig
+from . import cycles, messages, moves
+from .check import classify
+from .codes import CYCLES
+from .config import InterpreterConfig, ToolEntry
+from .expr import ExprError
 from .motion import EXACT_STOP, MM_PER_INCH, Motion
+from .params import Parameters
 from .read import Block, Word, fail
 from .state import State
 
@@ -21,10 +26,151 @@ class Interpreter:
         self.out: list[Motion] = []
         self.percent_seen = False
         self.started = False  # a non-blank line was read (a later '%' is an error)
+        self.params = Parameters(self._system, self._position, lambda: False)
+        self.tools = dict(self.cfg.tool_table)
+        self.user_m: frozenset[int] = frozenset()
+        #: the main program's line of the call in progress (motions made in
+        #: another file carry it), 0 outside calls
+        self.call_line = 0
+        #: set by the control flow: the last subroutine's return value
+        self.control: object | None = None
+        self.line = 0
+        p = self.params.values
+        for base, pos in ((5161, self.cfg.g28_position), (5181, self.cfg.g30_position)):
+            for i, v in enumerate(pos[:5]):
+                p[base + i] = float(v)
+        for code, off in self.cfg.work_offsets.items():
+            base = 5201 + 20 * _coord_index(code)
+            for i, v in enumerate(off[:5]):
+                p[base + i] = float(v)
+        index = _coord_index(self.cfg.active_work_offset)
+        p[5220] = float(index)
+        self.st.coord = index
+        self.st.origin = self._stored_origin(index)
 
     # -- helpers
-    def offset(self, code: int | None = None) -> tuple[float, ...]:
-        return tuple(self.cfg.work_offsets.get(code or self.st.coord, (0.0,) * 5))
+    def _stored_origin(self, index: int) -> list[float]:
+        base = 5201 + 20 * index
+        return self.params.values[base : base + 5]
+
+    def offset(self) -> tuple[float, ...]:
+        """Program origin in the workpiece frame: the work offset plus G92 [mm, deg]."""
+        o, g = self.st.origin, self.st.g92
+        return (o[0] + g[0], o[1] + g[1], o[2] + g[2], o[3] + g[3], o[4] + g[4])
+
+    def _position(self, index: int) -> float:
+        """#5420..#5428: the current position in program coordinates and units."""
+        i = index - 5420
+        if i >= 5:
+            return 0.0
+        v = self.st.pos[i] - self.offset()[i]
+        return v / self.scale() if i < 3 else v
+
+    def _system(self, name: str) -> float:
+        """LinuxCNC's read-only named parameters (interp_namedparams.cc)."""
+        st = self.st
+        sc = self.scale()
+        if name in ("_x", "_y", "_z", "_a", "_b"):
+            return self._position(5420 + "xyzab".index(name[1]))
+        if name in ("_c", "_u", "_v", "_w", "_abs_c", "_remap_level", "_lathe_diameter_mode"):
+            return 0.0
+        if name in ("_abs_x", "_abs_y", "_abs_z", "_abs_a", "_abs_b"):
+            i = "xyzab".index(name[-1])
+            v = st.pos[i] + (st.tool_length if i == 2 else 0.0)
+            return v / sc if i < 3 else v
+        if name == "_line":
+            return float(self.line)
+        if name == "_motion_mode":
+            return 800.0 if st.motion is None else round(st.motion * 10)
+        if name == "_plane":
+            return st.plane * 10.0
+        if name == "_ccomp":
+            return 400.0
+        if name in ("_metric", "_imperial"):
+            return float((st.units == "mm") == (name == "_metric"))
+        if name in ("_absolute", "_incremental"):
+            return float(st.absolute == (name == "_absolute"))
+        if name in ("_inverse_time", "_units_per_minute"):
+            return float(st.inverse_time == (name == "_inverse_time"))
+        if name == "_units_per_rev":
+            return 0.0
+        if name == "_coord_system":
+            k = st.coord
+            return 530.0 + 10 * k if k < 7 else 584.0 + k
+        if name == "_tool_offset":
+            return float(st.tool_length != 0.0)
+        if name in ("_retract_r_plane", "_retract_old_z"):
+            return float(st.retract_r == (name == "_retract_r_plane"))
+        if name == "_spindle_rpm_mode":
+            return 1.0
+        if name == "_spindle_css_mode":
+            return 0.0
+        if name == "_ijk_absolute_mode":
+            return float(st.arc_absolute)
+        if name == "_lathe_radius_mode":
+            return 1.0
+        if name in ("_spindle_on", "_spindle_cw"):
+            return float(st.spindle_dir != 0 if name == "_spindle_on" else st.spindle_dir == 1)
+        if name in ("_mist", "_flood"):
+            return float(st.mist if name == "_mist" else st.flood)
+        if name in ("_speed_override", "_feed_override"):
+            return float(st.overrides)
+        if name in ("_adaptive_feed", "_feed_hold"):
+            return 0.0
+        if name == "_feed":
+            return st.feed
+        if name == "_rpm":
+            return abs(st.spindle)
+        if name in ("_current_tool", "_current_pocket"):
+            return float(st.tool)
+        if name in ("_selected_tool", "_selected_pocket"):
+            return float(st.next_tool)
+        if name == "_value":
+            return getattr(self.control, "return_value", 0.0)
+        if name == "_value_returned":
+            return float(getattr(self.control, "value_returned", False))
+        if name == "_call_level":
+            return float(self.params.call_level)
+        if name == "_task":
+            return 1.0  # the program runs on the machine (LinuxCNC's milltask: 1)
+        if name == "_vmajor":
+            return 2.9
+        if name == "_vminor":
+            return 0.0
+        if name == "_metric_machine":
+            return 1.0
+        raise AssertionError(name)
+
+    def find_subroutine(self, name: str) -> str | None:
+        """``name.ngc`` beside the program, then on the subroutine path."""
+        dirs = list(self.cfg.subroutine_path)
+        here = os.path.dirname(self.source) if os.path.isfile(self.source) else None
+        if here is not None:
+            dirs.insert(0, here or ".")
+        return find_subroutine(name, dirs)
+
+    def message(self, kind: str, text: str, line: int) -> None:
+        """A speaking comment: to on_message (or an error for ABORT)."""
+        if kind in ("DEBUG", "PRINT", "ABORT"):
+            if kind == "DEBUG" and not self.params.values[5599] > 0.0:
+                return
+
+            def number(n: int) -> float | None:
+                if not 0 <= n < 5602:
+                    return None
+                return self._position(n) if 5420 <= n <= 5428 else self.params.values[n]
+
+            def named(name: str) -> float | None:
+                try:
+                    return self.params.get_named(name, 0)
+                except ExprError:
+                    return None
+
+            text = messages.expand(text, number, named)
+        if kind == "ABORT":
+            raise fail(f"the program aborts: {text}", self.source, line, None)
+        if self.cfg.on_message is not None:
+            self.cfg.on_message(self.source, line, kind, text)
 
     def err(
         self, msg: str, line: int, word: Word | None = None, expected: str | None = None
@@ -66,96 +212,19 @@ class Interpreter:
             return
         if blk.words or blk.has_text:
             self.started = True
+        line = blk.line
+        self.line = line
+        if blk.comment is not None:
+            spoken = messages.kind_of(blk.comment)
+            if spoken is not None:
+                self.message(spoken[0], spoken[1], line)
         if not blk.words:
             return
-        line = blk.line
-        seen: dict[str, Word] = {}
-        gs: list[Word] = []
-        ms: list[Word] = []
-        for w in blk.words:
-            if w.letter == "G":
-                gs.append(w)
-            elif w.letter == "M":
-                ms.append(w)
-            elif w.letter == "N":
-                if w is not blk.words[0]:
-                    raise self.err(
-                        "N word not at the start of the line", line, w, "the line number first"
-                    )
-                continue
-            else:
-                if w.letter in seen:
-                    raise self.err(
-                        f"{w.letter} word repeated", line, w, f"one {w.letter} word per block"
-                    )
-                seen[w.letter] = w
-        groups: dict[int, tuple[float, Word]] = {}
-        nonmodal: list[tuple[float, Word]] = []
-        for w in gs:
-            code = code_of(w.value)
-            if code in G_REJECT:
-                raise self.err(G_REJECT[code], line, w, "the milling subset (see README)")
-            if code not in G_GROUP:
-                raise self.err("unknown G code", line, w, "a G code LinuxCNC knows")
-            grp = G_GROUP[code]
-            if grp == 1 and grp in groups and 80 in (code, groups[grp][0]):
-                # LinuxCNC lets G80 stand beside another motion code; the other wins
-                if code == 80:
-                    continue
-                groups[grp] = (code, w)
-                continue
-            if grp == 0:
-                if nonmodal:
-                    raise self.err(
-                        "two G codes of the non-modal group in one block",
-                        line,
-                        w,
-                        "one of G4, G28, G30, G53 per block",
-                    )
-                nonmodal.append((code, w))
-                continue
-            if grp in groups:
-                raise self.err(
-                    "two G codes of the same modal group",
-                    line,
-                    w,
-                    f"one of them (already {groups[grp][1].text})",
-                )
-            groups[grp] = (code, w)
-        mgroups: dict[int, tuple[float, Word]] = {}
-        for w in ms:
-            code = code_of(w.value)
-            if code not in M_GROUP:
-                raise self.err(
-                    "unsupported M code", line, w, "M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30 M48 M49 M60"
-                )
-            grp = M_GROUP[int(code)]
-            if grp in mgroups:
-                raise self.err(
-                    "two M codes of the same modal group",
-                    line,
-                    w,
-                    f"one of them (already {mgroups[grp][1].text})",
-                )
-            mgroups[grp] = (code, w)
-        if len(ms) > 4:
-            raise self.err("too many M codes in one block", line, ms[4], "at most four")
-        if "D" in seen:
-            raise self.err(
-                "D words (cutter radius) are not supported",
-                line,
-                seen["D"],
-                "no cutter compensation",
-            )
-        for key in ("F", "S", "T", "P", "Q", "R", "L", "H"):
-            if key in seen and seen[key].value < 0:
-                if key in ("R",):
-                    continue
-                raise self.err(f"negative {key} word", line, seen[key], f"{key} >= 0")
-        # feed mode, F, S, T
+        w = classify(blk.words, st.motion, not st.absolute, self.user_m, self.source, line)
+        seen, groups, mgroups = w.seen, w.g, w.m
+        # LinuxCNC's execute_block: feed mode, F, S, T, M codes, G codes, stops
         if 5 in groups:
-            g = groups[5][0]
-            new_it = g == 93
+            new_it = groups[5][0] == 93
             if new_it != st.inverse_time:
                 st.feed = 0.0
             st.inverse_time = new_it
@@ -171,31 +240,34 @@ class Interpreter:
                 pre.append(("S", seen["S"].value))
             st.spindle = seen["S"].value
         if "T" in seen:
-            t = seen["T"].value
-            if t != int(t):
-                raise self.err("tool number not an integer", line, seen["T"], "T<n>")
-            if int(t) != st.next_tool:
-                pre.append(("T", float(int(t))))
-            st.next_tool = int(t)
+            t = int(seen["T"].value)
+            if t:
+                self.tool(t, line, seen["T"])
+            if t != st.next_tool:
+                pre.append(("T", float(t)))
+            st.next_tool = t
         if 6 in mgroups:
             st.tool = st.next_tool
             pre.append(("M", 6.0))
         if 7 in mgroups:
-            st.spindle_dir = {3: 1, 4: -1, 5: 0}[int(mgroups[7][0])]
+            st.spindle_dir = {3: 1, 4: -1, 5: 0}[mgroups[7][0]]
             pre.append(("M", float(mgroups[7][0])))
-        for grp in (8, 9):
-            if grp in mgroups:
-                pre.append(("M", float(mgroups[grp][0])))
+        if 8 in mgroups:
+            code = mgroups[8][0]
+            st.mist = code == 7 or (st.mist and code != 9)
+            st.flood = code == 8 or (st.flood and code != 9)
+            pre.append(("M", float(code)))
+        if 9 in mgroups:
+            st.overrides = mgroups[9][0] == 48
+            pre.append(("M", float(mgroups[9][0])))
         if pre:
             p = tuple(st.pos)
             self.emit(line=line, kind="function", start=p, end=p, words=tuple(pre))
-        # dwell
-        if nonmodal and nonmodal[0][0] == 4:
-            if "P" not in seen:
-                raise self.err("G4 without a dwell time", line, nonmodal[0][1], "G4 P<seconds>")
+        # G codes, in convert_g's order
+        mode0 = groups[0][0] if 0 in groups else None
+        if mode0 == 4:
             p = tuple(st.pos)
             self.emit(line=line, kind="dwell", start=p, end=p, duration=seen["P"].value)
-        # plane, units
         if 2 in groups:
             st.plane = int(groups[2][0])
         if 6 in groups:
@@ -205,73 +277,39 @@ class Interpreter:
         if 8 in groups:
             self._tool_length(groups[8], seen, line)
         if 12 in groups:
-            st.coord = int(groups[12][0])
+            index = _coord_index(groups[12][0])
+            st.coord = index
+            st.origin = self._stored_origin(index)
+            self.params.values[5220] = float(index)
+        if 13 in groups:
+            self._path_control(groups[13], seen, line)
         if 3 in groups:
             st.absolute = groups[3][0] == 90
         if 4 in groups:
             st.arc_absolute = groups[4][0] == 90.1
         if 10 in groups:
             st.retract_r = groups[10][0] == 99
-        if 13 in groups:
-            self._path_control(groups[13], seen, line)
-        axis_words = {a: seen[a] for a in AXES if a in seen}
-        nm = nonmodal[0][0] if nonmodal else None
-        motion = groups[1][0] if 1 in groups else None
-        if nm in (28, 30):
-            if motion is not None and motion != 80 and axis_words:
-                raise self.err(
-                    "two G codes that both use axis words",
-                    line,
-                    groups[1][1],
-                    f"G{nm} or a motion, not both",
-                )
-            moves.home(self, nm, axis_words, line)
-        elif nm == 53:
-            mode = motion if motion is not None else st.motion
-            if mode not in (0, 1):
-                raise self.err(
-                    "G53 with a motion other than G0 or G1",
-                    line,
-                    nonmodal[0][1],
-                    "G53 G0 or G53 G1",
-                )
-            if not st.absolute:
-                raise self.err("G53 in incremental mode", line, nonmodal[0][1], "G90 with G53")
-            if motion is not None:
+        axis_words = w.axis
+        if mode0 in (28, 30):
+            moves.home(self, mode0, axis_words, line)
+        motion = w.motion
+        if motion is not None:
+            if mode0 == 53:
                 st.motion = motion
-            moves.linear(self, int(mode), axis_words, seen, line, machine=True)
-        else:
-            if motion is not None:
-                if motion == 80:
-                    if axis_words:
-                        w = next(iter(axis_words.values()))
-                        raise self.err(
-                            "axis words with G80", line, w, "no X Y Z A B with G80 (motion off)"
-                        )
-                    st.motion = None
-                    st.cycle_il = None
-                else:
-                    if motion not in CYCLES:
-                        st.cycle_il = None
-                    self._motion(motion, axis_words, seen, line, new=True)
-            elif axis_words:
-                if st.motion is None:
-                    w = next(iter(axis_words.values()))
-                    raise self.err(
-                        "axis words with no motion mode",
-                        line,
-                        w,
-                        "a G0, G1, G2, G3 or canned cycle in effect (not G80)",
-                    )
-                self._motion(st.motion, axis_words, seen, line, new=False)
+                moves.linear(self, int(motion), axis_words, seen, line, machine=True)
+            elif motion == 80:
+                st.motion = None
+                st.cycle_il = None
             else:
-                self._check_unused(seen, line, st.motion if motion is None else motion)
+                if motion not in CYCLES:
+                    st.cycle_il = None
+                self._motion(motion, axis_words, seen, line, new=1 in groups)
         # program stop / end, after the motion
         if 4 in mgroups:
             p = tuple(st.pos)
             code = mgroups[4][0]
             self.emit(line=line, kind="function", start=p, end=p, words=(("M", float(code)),))
-            if code in (2, 30):
+            if code in (2, 30, 99):
                 st.ended = True
 
     def _path_control(self, g: tuple[float, Word], seen: dict[str, Word], line: int) -> None:
@@ -315,30 +353,40 @@ class Interpreter:
         st.pos[2] += old - st.tool_length
 
     def _set_tool_length(self, g: tuple[float, Word], seen: dict[str, Word], line: int) -> None:
+        """LinuxCNC's convert_tool_length_offset: G43 takes the length of tool H
+        (H0, or no H: the tool in the spindle), G43.1 Z the length given, G49 none."""
         st = self.st
         code, w = g
         if code == 49:
             st.tool_length = 0.0
         elif code == 43:
-            n = int(seen["H"].value) if "H" in seen else st.tool
-            if "H" in seen and seen["H"].value != int(seen["H"].value):
-                raise self.err("H not an integer", line, seen["H"], "H<tool number>")
+            n = int(seen["H"].value) if "H" in seen else 0
             if n == 0:
-                st.tool_length = 0.0
-            elif n not in self.cfg.tool_table:
-                raise self.err(
-                    f"tool {n} is not in the profile's tool table",
-                    line,
-                    seen.get("H", w),
-                    "a [[tools]] entry for it",
-                )
-            else:
-                st.tool_length = self.cfg.tool_table[n].length
-        else:  # G43.1
-            if "Z" not in seen:
-                raise self.err("G43.1 without a Z length", line, w, "G43.1 Z<length>")
-            st.tool_length = seen["Z"].value * self.scale()
-            del seen["Z"]
+                n = st.tool
+            st.tool_length = self.tool(n, line, seen.get("H", w)).length if n else 0.0
+        else:  # G43.1: the axis words are the offsets
+            for a in ("X", "Y", "A", "B"):
+                if a in seen and seen[a].value != 0.0:
+                    raise self.err(
+                        f"a tool offset in {a} (G43.1)",
+                        line,
+                        seen[a],
+                        "a tool length (Z) only on this machine",
+                    )
+            if "Z" in seen:
+                st.tool_length = seen["Z"].value * self.scale()
+
+    def tool(self, n: int, line: int, w: Word | None) -> ToolEntry:
+        """Tool n of the tool table (LinuxCNC's find_tool_index)."""
+        entry = self.tools.get(n)
+        if entry is None:
+            raise self.err(
+                f"tool {n} is not in the profile's tool table",
+                line,
+                w,
+                "a [[tools]] entry for it",
+            )
+        return entry
 
     def _motion(
         self,
@@ -367,3 +415,18 @@ class Interpreter:
             moves.linear(self, int(motion), axis_words, seen, line)
         else:
             moves.arc(self, int(motion), axis_words, seen, line)
+
+
+def _coord_index(code: float) -> int:
+    """G54..G59 → 1..6, G59.1..G59.3 → 7..9 (LinuxCNC's origin index)."""
+    c = round(code * 10)
+    return {540: 1, 550: 2, 560: 3, 570: 4, 580: 5, 590: 6, 591: 7, 592: 8, 593: 9}[c]
+
+
+def find_subroutine(name: str, directories: list[str]) -> str | None:
+    """``name.ngc`` in the first of the directories that has it."""
+    for d in directories:
+        path = os.path.join(d, f"{name}.ngc")
+        if os.path.isfile(path):
+            return path
+    return None

@@ -27,7 +27,6 @@ _FAST_LINE = re.compile(
     + r"(.*)$",
     re.M,
 )
-_ZERO5 = (0.0, 0.0, 0.0, 0.0, 0.0)
 _ARC_LETTERS = ("X", "Y", "Z", "A", "B", "I", "J", "K", "R", "F")
 #: lines matched at once: large enough that the regex runs in C for most of the
 #: time, small enough that what a batch makes stays in the CPU's caches (measured:
@@ -54,7 +53,7 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
     feed = st.feed
     sc = MM_PER_INCH if st.units == "inch" else 1.0
     absolute = st.absolute
-    ox, oy, oz, oa, ob = it.cfg.work_offsets.get(st.coord, _ZERO5)
+    ox, oy, oz, oa, ob = it.offset()
     extra = (st.tool_length, st.tool, st.spindle * st.spindle_dir, False, st.path_tol, ())
     append = it.out.append
     new_motion = new_feed = False

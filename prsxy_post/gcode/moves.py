@@ -227,7 +227,8 @@ def home(it: Interpreter, code: float, axis_words: dict[str, Word], line: int) -
     inter = target(it, axis_words)
     it.emit(line=line, kind="rapid", start=tuple(st.pos), end=tuple(inter))
     st.pos = inter
-    home = list(it.cfg.g28_position if code == 28 else it.cfg.g30_position)
+    base = 5161 if code == 28 else 5181
+    home = it.params.values[base : base + 5]
     home[2] -= st.tool_length  # a stored machine position is of the gauge point
     end = list(st.pos)
     for i, a in enumerate(AXES):

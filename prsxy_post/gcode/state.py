@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 
 @dataclass
 class State:
-    pos: list[float]  # workpiece frame, mm / deg
+    pos: list[float]  # workpiece frame, mm / deg (the tool tip)
+    origin: list[float] = field(default_factory=lambda: [0.0] * 5)  # active work offset
+    g92: list[float] = field(default_factory=lambda: [0.0] * 5)  # G92 / G52 offset
     units: str = "mm"
     plane: int = 17
     absolute: bool = True
@@ -21,7 +23,10 @@ class State:
     tool: int = 0
     next_tool: int = 0
     tool_length: float = 0.0
-    coord: int = 54
+    coord: int = 1  # LinuxCNC's origin index: 1 (G54) .. 9 (G59.3)
+    mist: bool = False
+    flood: bool = False
+    overrides: bool = True  # M48 (LinuxCNC's start) / M49
     retract_r: bool = True  # G99 (LinuxCNC default) vs G98
     cycle_r: float = 0.0
     cycle_z: float = 0.0  # in the cycle's own axis, workpiece frame
