@@ -50,11 +50,27 @@ def run(
     g30: tuple[float, ...] = (0, 0, 0, 0, 0),
     tools: dict[int, float] | None = None,
     timeout: float = 60.0,
+    subroutines: dict[str, str] | None = None,
 ) -> OracleResult:
-    """Interpret a program with rs274; offsets/positions in mm (converted to its inches)."""
+    """Interpret a program with rs274; offsets/positions in mm (converted to its inches).
+
+    ``subroutines``: files ``name.ngc`` → text, put in a folder rs274 searches
+    (``[RS274NGC] SUBROUTINE_PATH`` of an INI file); see :func:`subroutine_dir`.
+    """
     assert RS274 is not None
     with tempfile.TemporaryDirectory() as d:
         prog = os.path.join(d, "p.ngc")
+        extra: list[str] = []
+        if subroutines:
+            subs = os.path.join(d, "subs")
+            os.mkdir(subs)
+            for name, body in subroutines.items():
+                with open(os.path.join(subs, name), "w", encoding="utf-8", newline="") as fh:
+                    fh.write(body)
+            ini = os.path.join(d, "p.ini")
+            with open(ini, "w") as fh:
+                fh.write(f"[RS274NGC]\nSUBROUTINE_PATH = {subs}\n")
+            extra = ["-i", ini]
         with open(prog, "w", encoding="utf-8", newline="") as fh:
             fh.write(program_text)
         var = os.path.join(d, "p.var")
@@ -73,7 +89,8 @@ def run(
             for n, length in (tools or {}).items():
                 fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D0 ;\n")
         proc = subprocess.run(
-            [RS274, "-t", tbl, "-v", var, "-g", prog],
+            [RS274, *extra, "-t", tbl, "-v", var, "-g", prog],
+            cwd=d,
             capture_output=True,
             text=True,
             timeout=timeout,

@@ -31,8 +31,9 @@ class InterpreterConfig:
         program calls a subroutine it has not defined (LinuxCNC's
         ``[RS274NGC] SUBROUTINE_PATH``); the program's own directory is searched
         first (LinuxCNC's ``PROGRAM_PREFIX``)
-    max_loop_iterations : a loop that passes more often is stopped with an error
-        (a program that never ends would otherwise hang the conversion)
+    max_loop_passes : how often, in all, the program's loops may go round
+        (while, do, repeat passes and M98 L repeats); one more is an error (a
+        program that never ends would otherwise hang the conversion)
     on_message : called as ``on_message(source, line, kind, text)`` for the
         program's ``(MSG,…)``, ``(DEBUG,…)`` and ``(PRINT,…)`` comments (kind
         "MSG", "DEBUG", "PRINT"; parameters in DEBUG and PRINT already
@@ -47,5 +48,5 @@ class InterpreterConfig:
     start: Pose = (0.0, 0.0, 0.0, 0.0, 0.0)
     active_work_offset: float = 54
     subroutine_path: tuple[str, ...] = ()
-    max_loop_iterations: int = 1_000_000
+    max_loop_passes: int = 10_000_000
     on_message: Callable[[str, int, str, str], None] | None = None

@@ -16,9 +16,11 @@ ahead; meeting that definition later is an error there, and here).
   then read ahead in the current file. At most 10 call levels (LinuxCNC's limit).
 - ``if/elseif/else/endif``, ``while/endwhile``, ``do/while``,
   ``repeat/endrepeat``, ``break``/``continue``: skip forward by label, jump back
-  to the loop's line. Loops stop with an error after
-  :attr:`InterpreterConfig.max_loop_iterations` passes (a program that would
-  never end is refused, not run forever).
+  to the loop's line. All loops of a program together may go round
+  :attr:`InterpreterConfig.max_loop_passes` times (M98 L repeats count too);
+  one more stops the program with an error at the loop's line: a program that
+  would never end is refused, not run for ever (a nested loop too, where a
+  limit per loop would not do).
 - Fanuc-style ``M98 P… L…`` / ``O…`` / ``M99`` subprograms, as LinuxCNC 2.9
   accepts them.
 
@@ -48,7 +50,6 @@ class Offset:
     file: str
     index: int  # the line's own index: jumping here reads it again
     repeat_count: int = -1
-    iterations: int = 0
 
 
 @dataclass
@@ -79,13 +80,14 @@ class Control:
     :class:`Jump` to continue elsewhere.
     """
 
-    def __init__(self, interp: object, max_loop_iterations: int) -> None:
+    def __init__(self, interp: object, max_loop_passes: int) -> None:
         from .execute import Interpreter
 
         assert isinstance(interp, Interpreter)
         self.it = interp
         self.params = interp.params
-        self.max_loops = max_loop_iterations
+        self.max_passes = max_loop_passes
+        self.passes = 0
         self.skipping_o: str | None = None
         self.skipping_to_sub: str | None = None
         self.skipping_start = 0
@@ -230,12 +232,10 @@ class Control:
                     op.repeat_count = _round_to_int(values[0])
                 if op.repeat_count > 0:
                     op.repeat_count -= 1
-                    self._count(op, o, source, line)
                 else:
                     self.skipping_o = name
                     self.skipping_start = line
                     op.repeat_count = -1
-                    op.iterations = 0
             return
         if kind == "while":
             op = self.offsets.get(name)
@@ -246,18 +246,14 @@ class Control:
                 op = self._save_offset(name, kind, here, line, source, o)
             self.skipping_o = None
             if op.kind == kind:
-                if values[0] != 0.0:
-                    self._count(op, o, source, line)
-                else:
+                if values[0] == 0.0:
                     self.skipping_o = name
                     self.skipping_start = line
-                    op.iterations = 0
             else:  # the end of a do-while
                 if values[0] != 0.0 and not self.doing_break:
-                    self._count(op, o, source, line)
+                    self._count(o, source, line)
                     raise Jump((op.file, op.index))
                 self.doing_break = False
-                op.iterations = 0
             return
         if kind == "if":
             op = self.offsets.get(name)
@@ -333,10 +329,11 @@ class Control:
                 self.skipping_o = None
                 if self.doing_continue:
                     self.doing_continue = False
+                    self._count(o, source, line)
                     raise Jump((op.file, op.index))
                 # LinuxCNC leaves doing_break set here (a later do-while sees it)
-                op.iterations = 0
                 return
+            self._count(o, source, line)
             raise Jump((op.file, op.index))
 
     # -- pieces
@@ -375,15 +372,18 @@ class Control:
         self.offsets[name] = op
         return op
 
-    def _count(self, op: Offset, o: OWord, source: str, line: int) -> None:
-        op.iterations += 1
-        if op.iterations > self.max_loops:
+    def _count(self, o: OWord, source: str, line: int) -> None:
+        """One more jump back to the top of a loop (in all the program's loops
+        together): every way round, whatever the labels, so a loop that never
+        ends cannot escape it."""
+        self.passes += 1
+        if self.passes > self.max_passes:
             raise fail(
-                f"the loop has run {self.max_loops} times and would go on",
+                f"the program's loops have gone round {self.max_passes} times and would go on",
                 source,
                 line,
                 o.column,
-                "a loop that ends (or a higher [gcode] max_loop_iterations in the profile)",
+                "loops that end (or a higher [gcode] max_loop_passes in the profile)",
             )
 
     def _call(
@@ -426,6 +426,7 @@ class Control:
                 caller.m98_loops = _round_to_int(words["L"])
             caller.m98_loops -= 1
             if caller.m98_loops > 0:
+                self._count(o, source, line)
                 ret = here  # this M98 again for the next pass
             else:
                 caller.m98_loops = -1

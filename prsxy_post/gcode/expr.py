@@ -9,12 +9,14 @@ The arithmetic is LinuxCNC's (``interp_execute.cc``: ``execute_binary1/2``,
   ``**`` > ``* / MOD`` > ``+ -`` > ``EQ NE GT GE LT LE`` > ``AND OR XOR``;
 - a leading sign binds tighter than any binary operator (``[-2**2]`` is 4);
 - ``MOD`` is C's ``fmod`` made non-negative by adding ``|b|``;
-- ``EQ``, ``NE``, ``GE``, ``LE`` compare within 0.0001 (``TOLERANCE_EQUAL``);
-  ``GT`` and ``LT`` exactly;
+- ``EQ`` and ``NE`` compare within 0.0001 (``TOLERANCE_EQUAL``); ``GT``,
+  ``GE``, ``LT``, ``LE`` exactly (LinuxCNC 2.9; later versions give GE and LE
+  the tolerance too);
 - ``AND``, ``OR``, ``XOR`` give 1.0 or 0.0, any non-zero being true;
-- angles are degrees; the conversion multiplies by π in C's long double before
-  rounding to double (``x * M_PIl / 180``), as LinuxCNC does, so that
-  ``SIN[30]`` is exactly what it gives there;
+- angles are degrees; SIN, COS and TAN work in C's long double
+  (``sin(x * M_PIl / 180.0)`` picks ``sinl`` in C++), the inverse functions
+  convert their double result with ``(r * 180.0) / M_PIl``, as LinuxCNC does, so
+  that ``SIN[30]`` and ``TAN[9143008]`` are to the bit what they are there;
 - ``ROUND`` is C's ``(int)(x ± 0.5)``: 32-bit, half away from zero;
   ``FIX``/``FUP`` are floor/ceil; ``ATAN[y]/[x]`` is atan2 in degrees;
 - a value that comes out NaN or infinite is an error where it is read (every
@@ -68,8 +70,9 @@ def to_radians(deg: float) -> float:
 
 
 def to_degrees(rad: float) -> float:
-    """``rad * 180.0 / M_PIl`` in long double, rounded to double (ASIN/ACOS/ATAN)."""
-    return float(np.longdouble(rad) * _L180 / _PI_L)
+    """``(rad * 180.0) / M_PIl``, rounded to double (ASIN/ACOS/ATAN): the product
+    of two doubles is a double, the division by M_PIl is in long double."""
+    return float(np.longdouble(rad * 180.0) / _PI_L)
 
 
 def c_pow(a: float, b: float) -> float:
@@ -176,21 +179,9 @@ def binary(op: str, left: Value, right: Value, column: int) -> Value:
     if op == "lt":
         return lambda p: 1.0 if left(p) < right(p) else 0.0
     if op == "ge":
-
-        def ge(p: Params) -> float:
-            a = left(p)
-            b = right(p)
-            return 1.0 if abs(a - b) < TOLERANCE_EQUAL or a >= b else 0.0
-
-        return ge
+        return lambda p: 1.0 if left(p) >= right(p) else 0.0
     if op == "le":
-
-        def le(p: Params) -> float:
-            a = left(p)
-            b = right(p)
-            return 1.0 if abs(a - b) < TOLERANCE_EQUAL or a <= b else 0.0
-
-        return le
+        return lambda p: 1.0 if left(p) <= right(p) else 0.0
     raise AssertionError(op)
 
 
@@ -231,8 +222,10 @@ def unary(name: str, arg: Value, column: int) -> Value:
 
         return inverse
     if name in ("cos", "sin", "tan"):
-        g = {"cos": math.cos, "sin": math.sin, "tan": math.tan}[name]
-        return lambda p: g(to_radians(arg(p)))
+        # C++'s <cmath> picks the long double overload for a long double
+        # argument: sinl(x * M_PIl / 180), then rounded to double
+        g = {"cos": np.cos, "sin": np.sin, "tan": np.tan}[name]
+        return lambda p: float(g(np.longdouble(arg(p)) * _PI_L / _L180))
     if name == "exp":
 
         def exp(p: Params) -> float:

@@ -6,8 +6,8 @@ The library never prints: a message goes to
 standard error). ``DEBUG`` and ``PRINT`` substitute parameters the way
 ``convert_param_comment`` does: ``#12`` and ``#<name>`` become their values
 (``%lf``, six decimals), ``%d`` switches to no decimals, ``%f`` to four and
-``%.Nf`` to N (0–9) for the parameters after it; an unknown one prints
-``######``. ``DEBUG`` speaks only while #5599 is positive. ``ABORT`` stops the
+``%.Nf`` to N (0–9) for the parameters after it; an unknown one, or one
+29 characters do not hold, prints ``######``. ``DEBUG`` speaks only while #5599 is positive. ``ABORT`` stops the
 program with its text as the error. ``LOG``, ``LOGOPEN``, ``LOGAPPEND`` and
 ``LOGCLOSE`` (files LinuxCNC writes on the controller) are ignored, as any other
 comment.
@@ -77,7 +77,9 @@ def expand(
                 out.append("######")
             else:
                 v = 0.0 if abs(value) < 0.0001 else value  # LinuxCNC's equal(value, 0.0)
-                out.append((fmt.replace("lf", "f")) % v)
+                shown = fmt.replace("lf", "f") % v
+                # LinuxCNC formats into a buffer of 30 characters (VAL_LEN)
+                out.append(shown if len(shown) < 30 else "######")
             continue
         out.append(c)
         i += 1

@@ -97,6 +97,9 @@ class OWord:
 
 
 BLANK, PERCENT, BLOCK = 0, 1, 2
+#: LinuxCNC's longest line: fgets into LINELEN (255) bytes, and a line that
+#: fills 254 of them is "too long" (interp_read.cc, read_text)
+MAX_LINE = 252
 
 
 @dataclass(frozen=True, slots=True)
@@ -453,6 +456,16 @@ def parse(raw: str) -> Parsed:
     stripped = raw.strip()
     if not stripped:
         return Parsed(BLANK)
+    if len(raw) > MAX_LINE:
+        return Parsed(
+            BLOCK,
+            always=(
+                f"line of {len(raw)} characters",
+                MAX_LINE + 1,
+                f"at most {MAX_LINE} (LinuxCNC reads lines into 255 bytes, line end included)",
+            ),
+            has_text=True,
+        )
     try:
         s, cols = _close_and_downcase(raw)
     except _Bad as exc:
@@ -641,7 +654,7 @@ def _parse_oword(r: _Reader, delete: bool, m: int | None) -> Parsed:
     number: Value | None = None
     try:
         if s[r.i] == "<":
-            name = "<" + r.name() + ">"
+            name = r.name()
         else:
             n = r.integer("an O-word number")
             number = expr.constant(float(n)) if isinstance(n, int) else n

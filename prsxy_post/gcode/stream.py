@@ -87,7 +87,8 @@ def _run(
 ) -> Generator[Motion, None, None]:
     cfg = config or InterpreterConfig()
     it = Interpreter(cfg, source)
-    ctl = Control(it, cfg.max_loop_iterations)
+    ctl = Control(it, cfg.max_loop_passes)
+    it.control = ctl
     params = it.params
     out = it.out
     files: dict[str, ProgramLines] = {source: main}
