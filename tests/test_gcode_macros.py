@@ -181,7 +181,7 @@ def test_every_function() -> None:
     ],
 )
 def test_bad_expressions_are_refused_by_both(expr: str) -> None:
-    printed, err = agree(f"G21\n#1 = {expr}\n(PRINT,%.9f#1)\nM2\n")
+    _printed, err = agree(f"G21\n#1 = {expr}\n(PRINT,%.9f#1)\nM2\n")
     assert err is not None
 
 
@@ -233,7 +233,8 @@ def test_read_only_parameters() -> None:
 
 def test_debug_msg_print_formats() -> None:
     printed, err = agree(
-        "G21\n#1=3.14159 #<v>=2\n(MSG, hello there)\n(DEBUG, pi is #1 and %d#1 and %.2f#<v> #<nope>)\n"
+        "G21\n#1=3.14159 #<v>=2\n(MSG, hello there)\n"
+        "(DEBUG, pi is #1 and %d#1 and %.2f#<v> #<nope>)\n"
         "(PRINT,%f#1 #2 # end)\n#5599=0\n(DEBUG, not shown)\nM2\n"
     )
     assert err is None and printed == ["3.1416 0.0000 # end"]
@@ -263,7 +264,7 @@ M2
 
 
 def test_if_elseif_else() -> None:
-    printed, err = agree(IF_CHAIN)
+    printed, _err = agree(IF_CHAIN)
     assert printed == [" negative", " zero", " small", " large"]
 
 
@@ -326,7 +327,7 @@ M2
 
 
 def test_nested_loops() -> None:
-    printed, err = agree(
+    printed, _err = agree(
         """G21
 #1 = 0
 #3 = 0
@@ -457,7 +458,7 @@ def test_control_flow_errors_refused_by_both(program: str) -> None:
 
 def test_a_skipped_line_is_not_read() -> None:
     # LinuxCNC does not read what a false if skips: a syntax error there is none
-    printed, err = agree("G21\no1 if [0]\nG1 X[1+\n#<x> = [1/0]\no1 endif\nM2\n")
+    _printed, err = agree("G21\no1 if [0]\nG1 X[1+\n#<x> = [1/0]\no1 endif\nM2\n")
     assert err is None
 
 

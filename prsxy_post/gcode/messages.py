@@ -6,11 +6,11 @@ The library never prints: a message goes to
 standard error). ``DEBUG`` and ``PRINT`` substitute parameters the way
 ``convert_param_comment`` does: ``#12`` and ``#<name>`` become their values
 (``%lf``, six decimals), ``%d`` switches to no decimals, ``%f`` to four and
-``%.Nf`` to N (0–9) for the parameters after it; an unknown one, or one
-29 characters do not hold, prints ``######``. ``DEBUG`` speaks only while #5599 is positive. ``ABORT`` stops the
-program with its text as the error. ``LOG``, ``LOGOPEN``, ``LOGAPPEND`` and
-``LOGCLOSE`` (files LinuxCNC writes on the controller) are ignored, as any other
-comment.
+``%.Nf`` to N (0–9) for the parameters after it; an unknown one, or one 29
+characters do not hold, prints ``######``. ``DEBUG`` speaks only while #5599
+is positive. ``ABORT`` stops the program with its text as the error. ``LOG``,
+``LOGOPEN``, ``LOGAPPEND`` and ``LOGCLOSE`` (files LinuxCNC writes on the
+controller) are ignored, as any other comment.
 """
 
 from __future__ import annotations
