@@ -54,6 +54,13 @@ def fail(err: PrsxyError) -> NoReturn:
     sys.exit(err.exit_code)
 
 
+def say(source: str, line: int, kind: str, text: str) -> None:
+    """A program's (MSG,…), (DEBUG,…), (PRINT,…) on standard error, as LinuxCNC
+    shows them to the operator (module level: it crosses to worker processes)."""
+    sys.stderr.write(f"{source}:{line}: ({kind}) {text.strip()}\n")
+    sys.stderr.flush()
+
+
 def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
     """Run a command: user errors become one located line, bugs exit 3."""
 
@@ -136,12 +143,14 @@ def inspect(program: str, profile_path: str | None, start: str | None, as_json: 
     text = read_text(program, "G-code program")
     if profile_path:
         prof = load_profile(profile_path)
-        cfg = chain.interpreter_config(prof, parse_pose(start, "--start") if start else None)
+        cfg = chain.interpreter_config(
+            prof, parse_pose(start, "--start") if start else None, on_message=say
+        )
     else:
         cfg = (
-            gcode.InterpreterConfig(start=parse_pose(start, "--start"))
+            gcode.InterpreterConfig(start=parse_pose(start, "--start"), on_message=say)
             if start
-            else gcode.InterpreterConfig()
+            else gcode.InterpreterConfig(on_message=say)
         )
     out = sys.stdout
     for m in gcode.iter_motions(gcode.split_lines(text), cfg, program):
@@ -280,6 +289,7 @@ def convert(
                 stages,
                 " ".join(opts),
                 parallel=not pooled and conv.worth_a_second_process(prog),
+                on_message=say,
             )
         )
     if pooled:
@@ -334,7 +344,7 @@ def check(
 
     prof = load_profile(profile_path)
     st = parse_pose(start, "--start") if start else None
-    cfg = chain.interpreter_config(prof, st)
+    cfg = chain.interpreter_config(prof, st, on_message=say)
     stages = chain.Stages(not no_error_map, not nominal_kinematics, not no_axis_comp)
     emap = errormap.from_profile(prof) if stages.error_map else None
     # streamed like convert: a program of millions of lines is checked in bounded
@@ -344,7 +354,8 @@ def check(
     else:
         inspect_source(program)  # a binary file is refused with its line
         batches = iter_program_batches(program)
-    motions = gcode.iter_motions_batched(batches, cfg, program)
+    lines_from = gcode.FileLines(program) if program != "-" else None
+    motions = gcode.iter_motions_batched(batches, cfg, program, lines_from=lines_from)
     pipe = chain.Pipeline(prof, stages, emap, start=st, collect=True)
     n_motions = n_points = 0
     seconds = 0.0

@@ -34,6 +34,8 @@ class InterpreterConfig:
     max_loop_passes : how often, in all, the program's loops may go round
         (while, do, repeat passes and M98 L repeats); one more is an error (a
         program that never ends would otherwise hang the conversion)
+    user_m_codes : the M100..M199 the controller has (LinuxCNC runs a user M code
+        only when its program file exists); a program's others are refused
     on_message : called as ``on_message(source, line, kind, text)`` for the
         program's ``(MSG,…)``, ``(DEBUG,…)`` and ``(PRINT,…)`` comments (kind
         "MSG", "DEBUG", "PRINT"; parameters in DEBUG and PRINT already
@@ -49,4 +51,5 @@ class InterpreterConfig:
     active_work_offset: float = 54
     subroutine_path: tuple[str, ...] = ()
     max_loop_passes: int = 10_000_000
+    user_m_codes: frozenset[int] = frozenset()
     on_message: Callable[[str, int, str, str], None] | None = None

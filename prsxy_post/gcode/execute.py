@@ -28,7 +28,7 @@ class Interpreter:
         self.started = False  # a non-blank line was read (a later '%' is an error)
         self.params = Parameters(self._system, self._position, lambda: False)
         self.tools = dict(self.cfg.tool_table)
-        self.user_m: frozenset[int] = frozenset()
+        self.user_m: frozenset[int] = frozenset(self.cfg.user_m_codes)
         #: the main program's line of the call in progress (motions made in
         #: another file carry it), 0 outside calls
         self.call_line = 0
@@ -260,6 +260,11 @@ class Interpreter:
         if 9 in mgroups:
             st.overrides = mgroups[9][0] == 48
             pre.append(("M", float(mgroups[9][0])))
+        if 10 in mgroups:  # a user M code, with its P and Q (LinuxCNC passes both)
+            pre.append(("M", float(mgroups[10][0])))
+            for letter in ("P", "Q"):
+                if letter in seen:
+                    pre.append((letter, seen[letter].value))
         if pre:
             p = tuple(st.pos)
             self.emit(line=line, kind="function", start=p, end=p, words=tuple(pre))

@@ -3,7 +3,7 @@
 (source: samples/pocket.ngc)
 (source sha256: 0f999217469b6e1517f180bd1d8d36c783b3d537628f473044ee05ff2ec6122d)
 (profile: PRS-XY nominal, shop settings [profiles/prsxy-shop.toml])
-(profile sha256: 14d9a66f6e92cd33676682188d1f7924a808be48547fa37645fda381ce52b95e)
+(profile sha256: 70d255a2015719d714a59f3948729fdd41feaa25cf594ea3c49b0f732183479d)
 (options: --format gcode)
 (interpolation period: 10 ms)
 (For a controller whose inverse kinematics is the nominal design, with an ideal table.)
