@@ -1,9 +1,10 @@
 """LinuxCNC's ``rs274 -g`` as a test oracle: run it, read its canonical calls back as motions.
 
-rs274 prints positions in program coordinates (the work offset is printed apart,
-by SET_G5X_OFFSET) and in the length units in effect (USE_LENGTH_UNITS); this
-turns them into the workpiece frame in mm, the frame of ``inspect --json``.
-Its standalone tool table and parameter file are in inches.
+rs274 prints positions in program coordinates (the work offset and the G92
+offset are printed apart, by SET_G5X_OFFSET and SET_G92_OFFSET) and in the
+length units in effect (USE_LENGTH_UNITS); this turns them into the workpiece
+frame in mm, the frame of ``inspect --json``. Its standalone tool table and
+parameter file are in inches.
 """
 
 from __future__ import annotations
@@ -103,7 +104,9 @@ def parse(out: str, err: str = "") -> OracleResult:
     """Canonical calls from rs274's standard output; the error (the first line
     of standard error after "executing") from its standard error."""
     scale = 1.0
-    offset = [0.0] * 6
+    g5x = [0.0] * 6
+    g92 = [0.0] * 6
+    offset = [0.0] * 6  # G5x + G92: printed positions are program coordinates
     feed = 0.0
     plane = 17
     motions: list[OracleMotion] = []
@@ -129,7 +132,11 @@ def parse(out: str, err: str = "") -> OracleResult:
             scale = 25.4 if "INCHES" in args else 1.0
         elif name == "SET_G5X_OFFSET":
             # printed in the length units in effect when it is set
-            offset = [v * scale for v in vals[1:4]] + list(vals[4:7])
+            g5x = [v * scale for v in vals[1:4]] + list(vals[4:7])
+            offset = [a + b for a, b in zip(g5x, g92, strict=True)]
+        elif name == "SET_G92_OFFSET":
+            g92 = [v * scale for v in vals[0:3]] + list(vals[3:6])
+            offset = [a + b for a, b in zip(g5x, g92, strict=True)]
         elif name == "SELECT_PLANE":
             plane = {"CANON_PLANE_XY": 17, "CANON_PLANE_XZ": 18, "CANON_PLANE_YZ": 19}[args]
         elif name == "SET_FEED_RATE":

@@ -95,21 +95,13 @@ G_NOT_YET: dict[int, str] = {
     420: "cutter compensation (G42) is not supported",
     411: "cutter compensation (G41.1) is not supported",
     421: "cutter compensation (G42.1) is not supported",
-    920: "G92 offsets are not supported",
-    921: "G92 offsets are not supported",
-    922: "G92 offsets are not supported",
-    923: "G92 offsets are not supported",
-    100: "G10 (setting offsets from the program) is not supported",
     50: "splines (G5) are not supported",
     51: "splines (G5.1) are not supported",
     52: "NURBS (G5.2) are not supported",
     53: "NURBS (G5.3) are not supported",
-    281: "G28.1 (storing the home position) is not supported",
-    301: "G30.1 (storing the home position) is not supported",
     960: "G96 constant surface speed is not supported",
     970: "G96/G97 spindle modes are not supported",
     432: "G43.2 (additional offsets) is not supported",
-    520: "G52 is not supported",
 }
 
 #: M code → modal group (LinuxCNC's _ems; M98 is read as an O-word)

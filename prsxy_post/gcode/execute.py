@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 
 from ..errors import GCodeError
-from . import cycles, messages, moves
+from . import cycles, messages, moves, offsets
 from .check import classify
 from .codes import CYCLES
 from .config import InterpreterConfig, ToolEntry
@@ -46,12 +46,25 @@ class Interpreter:
         index = _coord_index(self.cfg.active_work_offset)
         p[5220] = float(index)
         self.st.coord = index
-        self.st.origin = self._stored_origin(index)
+        self.st.origin = self.stored_origin(index)
 
     # -- helpers
-    def _stored_origin(self, index: int) -> list[float]:
+    def stored_origin(self, index: int) -> list[float]:
+        """The offsets of coordinate system ``index`` (1: G54 .. 9: G59.3) as the
+        parameters hold them now."""
         base = 5201 + 20 * index
         return self.params.values[base : base + 5]
+
+    def tool_parameters(self) -> None:
+        """#5400-#5413 from the tool in the spindle (LinuxCNC's set_tool_parameters)."""
+        p = self.params.values
+        p[5400:5414] = [0.0] * 14
+        n = self.st.tool
+        entry = self.tools.get(n) if n > 0 else None
+        if entry is not None:
+            p[5400] = float(n)
+            p[5403] = entry.length
+            p[5410] = entry.diameter
 
     def offset(self) -> tuple[float, ...]:
         """Program origin in the workpiece frame: the work offset plus G92 [mm, deg]."""
@@ -248,6 +261,8 @@ class Interpreter:
             st.next_tool = t
         if 6 in mgroups:
             st.tool = st.next_tool
+            st.spindle_dir = 0  # LinuxCNC stops the spindle for a tool change
+            self.tool_parameters()
             pre.append(("M", 6.0))
         if 7 in mgroups:
             st.spindle_dir = {3: 1, 4: -1, 5: 0}[mgroups[7][0]]
@@ -283,8 +298,15 @@ class Interpreter:
             self._tool_length(groups[8], seen, line)
         if 12 in groups:
             index = _coord_index(groups[12][0])
+            if self.params.values[5210 + 20 * index] != 0.0:
+                raise self.err(
+                    "rotated coordinate systems are not supported (its parameter R is not 0)",
+                    line,
+                    groups[12][1],
+                    "coordinate systems without rotation on this machine",
+                )
             st.coord = index
-            st.origin = self._stored_origin(index)
+            st.origin = self.stored_origin(index)
             self.params.values[5220] = float(index)
         if 13 in groups:
             self._path_control(groups[13], seen, line)
@@ -295,8 +317,16 @@ class Interpreter:
         if 10 in groups:
             st.retract_r = groups[10][0] == 99
         axis_words = w.axis
-        if mode0 in (28, 30):
+        if mode0 == 10:
+            offsets.g10(self, seen, groups[0][1], line)
+        elif mode0 in (28, 30):
             moves.home(self, mode0, axis_words, line)
+        elif mode0 in (28.1, 30.1):
+            offsets.save_home(self, mode0)
+        elif mode0 in (52, 92):
+            offsets.axis_offsets(self, mode0, seen)
+        if 16 in groups:
+            offsets.axis_offsets(self, groups[16][0], seen)
         motion = w.motion
         if motion is not None:
             if mode0 == 53:
@@ -373,7 +403,7 @@ class Interpreter:
             for a in ("X", "Y", "A", "B"):
                 if a in seen and seen[a].value != 0.0:
                     raise self.err(
-                        f"a tool offset in {a} (G43.1)",
+                        f"tool offsets in {a} (G43.1) are not supported",
                         line,
                         seen[a],
                         "a tool length (Z) only on this machine",
