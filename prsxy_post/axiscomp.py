@@ -108,6 +108,25 @@ class MotorTable:
         """p with hi(p) = target."""
         return self._solve(np.asarray(target, dtype=float), self.hi_err)
 
+    def slope(self, p: np.ndarray, side: np.ndarray) -> np.ndarray:
+        """d lo/dp (side > 0) or d hi/dp (side < 0) at p: how fast the driven part
+        moves per unit of command, to turn a wanted velocity into a command
+        velocity. Piecewise-linear errors: the slope of the interval holding p
+        (the one above it at a table point), zero outside the table."""
+        p = np.asarray(p, dtype=float)
+        out = np.ones_like(p)
+        if len(self.breaks) > 1:
+            i = np.clip(np.searchsorted(self.breaks, p, side="right") - 1, 0, len(self.breaks) - 2)
+            inside = (p >= self.breaks[0]) & (p < self.breaks[-1])
+            db = np.diff(self.breaks)
+            s_lo = np.diff(self.lo_err) / db
+            s_hi = np.diff(self.hi_err) / db
+            out = out + np.where(inside, np.where(side > 0, s_lo[i], s_hi[i]), 0.0)
+        for amp, period, phase in self.cyclic:
+            w = 2 * np.pi / period
+            out = out + amp * w * np.cos(w * p + np.radians(phase))
+        return out
+
     @property
     def max_play(self) -> float:
         return float(np.max(self.hi_err - self.lo_err))
@@ -218,6 +237,26 @@ def compensate(
         state.target = float(target[-1])
         state.command = float(cmd[-1])
     return cmd
+
+
+def compensate_sided(table: MotorTable | None, target: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """Commands whose result is ``target`` with the driven part pushed from ``side``
+    (+1: the motor moves up, the part sits at lo; −1: down, at hi).
+
+    The chain decides the side from the planned velocity of the motor (a
+    continuous motion, whose reversals it places in time), where
+    :func:`compensate` decides it from consecutive wanted positions.
+    """
+    target = np.asarray(target, dtype=float)
+    if table is None or len(target) == 0:
+        return target.copy()
+    up = side > 0
+    out = np.empty_like(target)
+    if np.any(up):
+        out[up] = table.lo_inv(target[up])
+    if not np.all(up):
+        out[~up] = table.hi_inv(target[~up])
+    return out
 
 
 def tables_by_motor(

@@ -530,7 +530,7 @@ def _axis_residuals(tables: Sequence[Any], axis: Sequence[Any]) -> dict[str, np.
 
 def stage_tables(start: Profile, axis: Sequence[Any]) -> tuple[list[Any], StageReport]:
     """Stage 1: [[axis_comp]] tables and ISO 230-2 figures from laser runs."""
-    from . import tables as tables_mod
+    from . import iso230_2
     from .profile import AxisComp
 
     motor = np.concatenate([a.motor for a in axis])
@@ -540,9 +540,9 @@ def stage_tables(start: Profile, axis: Sequence[Any]) -> tuple[list[Any], StageR
     run = np.concatenate([a.run for a in axis])
     new = [
         AxisComp(t.motor, t.positions, t.forward, t.reverse)
-        for t in tables_mod.tables_from_axis(motor, target, measured, direction, run)
+        for t in iso230_2.tables_from_axis(motor, target, measured, direction, run)
     ]
-    figures = tables_mod.iso230_2(motor, target, measured, direction, run)
+    figures = iso230_2.iso230_2(motor, target, measured, direction, run)
     merged = {c.motor: c for c in start.axis_comp}
     merged.update({c.motor: c for c in new})
     tabs = [merged[m] for m in sorted(merged)]

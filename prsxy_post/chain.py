@@ -4,6 +4,13 @@
     paper Eq. 6) → P = IK of the calibrated [kinematics] and [table] (Eq. 3, g')
     → real-axis tables (Eq. 3, E_i) → motor commands
 
+Every point carries, besides where each motor must be, how fast it must move
+there: the planned velocity of the path pushed through the chain (the IK's
+derivative along the path, the tables' slopes). A controller that runs a cubic
+between points (Turbo PMAC PVT) then moves on the programmed path between them
+too, not only at them. Where a motor with play reverses, the chain places the
+crossing of the play in a window of its own (:mod:`.reversals`).
+
 Every stage can be switched off (:class:`Stages`) for comparisons. The chain is
 pure: motions and a profile in, arrays out; it raises located errors (the
 G-code line) for anything the machine cannot do.
@@ -13,34 +20,19 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import axiscomp, kinematics
+from . import axiscomp, kinematics, reversals
 from .errors import LimitError, PrsxyError, ReachError
-from .interpolate import (
-    KIND_DWELL,
-    Blocks,
-    Limits,
-    Samples,
-    TimeLaw,
-    backward_pass,
-    blocks_from_motions,
-    forward_pass,
-    junction_limits,
-    sample,
-    steps_per_block,
-    time_law,
-)
+from .interpolate import Blocks, Limits, Plan, Planner, Samples, at_times, blocks_from_motions
+from .interpolate.sampling import sample, steps
 from .profile import MOTORS, Profile, nominal_kinematics
 
 if TYPE_CHECKING:
     from .gcode import InterpreterConfig, Motion
-
-#: Name of each motor column of P, in order.
-MOTOR_ORDER = MOTORS
 
 
 @dataclass(frozen=True)
@@ -62,25 +54,6 @@ class Stages:
         return (
             "stages on: " + (", ".join(on) or "none") + ("; off: " + ", ".join(off) if off else "")
         )
-
-
-@dataclass
-class ChainResult:
-    """Everything the chain computed, point by point.
-
-    samples : interpolation points (q is the programmed path)
-    q_target : (N, 5) the pose handed to the IK, after the virtual-axis map
-    P_ideal : (N, 5) IK motor positions (what the motors must reach)
-    P_cmd : (N, 5) motor commands after the real-axis tables
-    """
-
-    samples: Samples
-    q_target: np.ndarray
-    P_ideal: np.ndarray
-    P_cmd: np.ndarray
-    geometry: kinematics.Geometry
-    problems: list[PrsxyError] = field(default_factory=list)
-    t: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def interpreter_config(
@@ -112,14 +85,20 @@ def interpreter_config(
     )
 
 
-def limits_of(profile: Profile) -> Limits:
+def limits_of(profile: Profile, segment: str = "cubic") -> Limits:
+    """The planner's limits from a profile; ``segment``: how the target controller
+    moves between points ("cubic" or "chord", from the output dialect)."""
     lim = profile.limits
+    ip = profile.interpolation
     return Limits(
         rapid_mm_min=lim["rapid_mm_min"],
         rapid_deg_min=lim["rapid_deg_min"],
         accel_mm_s2=lim["max_accel_mm_s2"],
         accel_deg_s2=lim["max_accel_deg_s2"],
         period_s=profile.period_ms / 1000.0,
+        tolerance_mm=ip.get("path_tolerance_mm", 0.0005),
+        tolerance_deg=ip.get("path_tolerance_arcsec", 0.5) / 3600.0,
+        segment=segment,
     )
 
 
@@ -138,7 +117,8 @@ def controller_geometry(profile: Profile) -> kinematics.Geometry:
     return kinematics.Geometry.from_params(kp, profile.origin)
 
 
-ErrorMap = Callable[[np.ndarray], np.ndarray]
+#: A fitted virtual-axis error: q (N, 5) → e(q) (N, 5) [mm, deg].
+ErrorFunction = Callable[[np.ndarray], np.ndarray]
 
 
 def check_motions(motions: Sequence[Motion], profile: Profile) -> list[PrsxyError]:
@@ -168,37 +148,86 @@ def _first_per_line(bad: np.ndarray, lines: np.ndarray) -> list[int]:
 
 @dataclass
 class PointChunk:
-    """A run of consecutive interpolation points with everything the chain computed.
+    """A run of consecutive points with everything the chain computed.
 
-    t : (n,) time at each point [s] from the program start
-    Other fields as in :class:`ChainResult` (``samples`` split into arrays).
+    q : (n, 5) [mm, mm, mm, deg, deg] the programmed path (workpiece frame)
+    qdot : (n, 5) [mm/s, deg/s] its planned velocity
+    dt : (n,) [s] time of the segment that ends at each point
+    t : (n,) [s] time at each point from the program start
+    line : (n,) source line
+    first : (n,) bool, first point of its block
+    tool_length : (n,) active G43 offset [mm]
+    speed : (n,) planned path speed [mm/s or deg/s]
+    dwell : (n,) bool, the path stands for dt here (a dwell, a machine function,
+        or a motor crossing its play at rest)
+    fn : (n,) object, the machine-function words at function points, else None
+    block_end : (n,) bool, the last point of its block
+    split : (n,) int8, a split program's part ends at rest at this point (1: a stop
+        the program makes, 2: one put there for the split), else 0
+    q_target : (n, 5) the pose handed to the IK, after the virtual-axis map
+    P_ideal, V_ideal : (n, 5) [mm, mm/s] where the motors must be and how fast
+    P_cmd, V_cmd : (n, 5) the commands after the real-axis tables and servo lead
     """
 
     q: np.ndarray
+    qdot: np.ndarray
     dt: np.ndarray
     t: np.ndarray
     line: np.ndarray
     first: np.ndarray
     tool_length: np.ndarray
     speed: np.ndarray
+    dwell: np.ndarray
+    fn: np.ndarray
+    block_end: np.ndarray
+    split: np.ndarray
     q_target: np.ndarray
     P_ideal: np.ndarray
+    V_ideal: np.ndarray
     P_cmd: np.ndarray
+    V_cmd: np.ndarray
 
     def __len__(self) -> int:
         return len(self.dt)
 
-    def take(self, sl: slice) -> PointChunk:
-        return PointChunk(**{k: getattr(self, k)[sl] for k in self.__dataclass_fields__})
+    def take(self, sl: slice | np.ndarray) -> PointChunk:
+        return PointChunk(**{f.name: getattr(self, f.name)[sl] for f in fields(self)})
 
     @staticmethod
     def concat(chunks: Sequence[PointChunk]) -> PointChunk:
         return PointChunk(
             **{
-                k: np.concatenate([getattr(c, k) for c in chunks])
-                for k in PointChunk.__dataclass_fields__
+                f.name: np.concatenate([getattr(c, f.name) for c in chunks])
+                for f in fields(PointChunk)
             }
         )
+
+    @staticmethod
+    def empty() -> PointChunk:
+        def z(name: str) -> np.ndarray:
+            if name in ("q", "qdot", "q_target", "P_ideal", "V_ideal", "P_cmd", "V_cmd"):
+                return np.zeros((0, 5))
+            if name == "split":
+                return np.zeros(0, dtype=np.int8)
+            if name in ("first", "dwell", "block_end"):
+                return np.zeros(0, dtype=bool)
+            if name == "line":
+                return np.zeros(0, dtype=int)
+            if name == "fn":
+                return np.empty(0, dtype=object)
+            return np.zeros(0)
+
+        return PointChunk(**{f.name: z(f.name) for f in fields(PointChunk)})
+
+
+@dataclass
+class ChainResult:
+    """Everything the chain computed for a whole program (one PointChunk), and the
+    problems found when collecting them."""
+
+    points: PointChunk
+    geometry: kinematics.Geometry
+    problems: list[PrsxyError] = field(default_factory=list)
 
 
 @dataclass
@@ -218,111 +247,86 @@ class Prepared:
     problems: list[PrsxyError]
 
 
-def prepare(motions: Sequence[Motion], profile: Profile, limits: Limits | None = None) -> Prepared:
+def prepare(motions: Sequence[Motion], profile: Profile, limits: Limits) -> Prepared:
     """Planning arrays and program-level problems of a chunk of motions."""
-    # machine functions are carried by the writers (issue "controller truth", in
-    # progress); the planner does not see them yet
-    moves = [m for m in motions if m.kind != "function"]
     return Prepared(
-        blocks_from_motions(moves, limits or limits_of(profile)),
+        blocks_from_motions(motions, limits),
         len(motions),
         motions[0].line if motions else 0,
         check_motions(motions, profile),
     )
 
 
-class Planner:
-    """Look-ahead speed planning over a stream of blocks, in bounded memory.
-
-    Blocks wait until the path after them is long enough to stop from any speed
-    (1.5 · v_max² / 2a) or a forced stop follows; then their junction speeds
-    cannot change with anything further in the program, and they are committed.
-    The result is the same, bit for bit, as planning the whole program at once.
-    """
-
-    def __init__(self, limits: Limits) -> None:
-        self.limits = limits
-        self.pending: Blocks | None = None
-        self.v_start = 0.0
-
-    def push(self, new: Blocks, final: bool = False) -> tuple[Blocks, TimeLaw] | None:
-        if self.pending is None or len(self.pending) == 0:
-            b = new
-        elif len(new) == 0:
-            b = self.pending
-        else:
-            b = Blocks(
-                **{
-                    k: np.concatenate([getattr(self.pending, k), getattr(new, k)])
-                    for k in Blocks.__dataclass_fields__
-                }
-            )
-        n = len(b)
-        if n == 0:
-            self.pending = b
-            return None
-        vj = junction_limits(b, self.limits.period_s)
-        v_back = backward_pass(b, vj)
-        if final:
-            c = n - 1
-        else:
-            moving = b.kind != KIND_DWELL
-            length = np.where(moving & ~b.angular, b.length, 0.0)
-            remaining = np.cumsum(length[::-1])[::-1]  # remaining[k]: blocks k..n-1
-            after = np.concatenate([remaining[1:], [0.0]])
-            lin = ~b.angular & moving
-            vmax = float(np.max(b.vmax[lin])) if np.any(lin) else 0.0
-            amin = float(np.min(b.accel[lin])) if np.any(lin) else 1.0
-            need = 1.5 * vmax * vmax / (2.0 * amin)
-            ok = np.nonzero(after >= need)[0]
-            c = int(ok[-1]) if ok.size else -1
-            stops = np.nonzero(vj[:-1] == 0.0)[0]
-            if stops.size:
-                c = max(c, int(stops[-1]))
-        if c < 0:
-            self.pending = b
-            return None
-        done = b.take(slice(0, c + 1))
-        v_out = forward_pass(done, v_back[: c + 1], self.v_start)
-        law = time_law(done, v_out, self.v_start)
-        self.v_start = float(v_out[-1])
-        self.pending = b.take(slice(c + 1, n))
-        return done, law
+#: One-sided step [s] of the directional derivative of the IK along the planned
+#: velocity: the IK moves by ~v·1e-6 s (under a µm), where its curvature makes an
+#: error of 1e-9 of the velocity and rounding one of 1e-8 mm/s.
+VEL_STEP_S = 1e-6
 
 
 class Pipeline:
     """The compensation chain over a stream of motions, chunk by chunk.
 
-    Feed it lists of motions; it returns :class:`PointChunk` s as they become
-    final. State carried across chunks: the planner's pending blocks and speed,
-    the real-axis compensation state of every motor, the last point (for the
-    servo lead), the clock, and the counters of the work guard.
+    Feed it prepared chunks of motions; it returns :class:`PointChunk` s as they
+    become final. State carried across chunks: the planner's pending blocks and
+    speed, each motor's side of its play and real-axis compensation, the last
+    point (reversals, servo lead), the clock, and the counters of the work guard.
+
+    Parameters
+    ----------
+    profile : Profile
+    stages : Stages
+    error_map : the fitted virtual-axis error, applied as Q' = Q − e(Q') when
+        ``stages.error_map``
+    start : (5,) start pose; default the profile's
+    collect : gather every problem in ``problems`` instead of raising the first
+    segment : how the target controller moves between points, "cubic" or "chord"
+    max_part_points : > 0: the program is split into parts of at most this many
+        points, each ending at rest at a block end (:meth:`_parts`)
     """
 
     def __init__(
         self,
         profile: Profile,
         stages: Stages = Stages(),
-        error_map: ErrorMap | None = None,
+        error_map: ErrorFunction | None = None,
         *,
         start: Sequence[float] | None = None,
         collect: bool = False,
+        segment: str = "cubic",
+        max_part_points: int = 0,
     ) -> None:
         self.profile = profile
+        self.max_part = max_part_points
+        self.window: Blocks | None = None  # blocks held to choose where a part ends
+        self.part_used = 1  # the start point belongs to the first part
         self.stages = stages
         self.error_map = error_map if stages.error_map else None
         self.start = np.asarray(profile.start if start is None else start, dtype=float)
         self.collect = collect
-        self.limits = limits_of(profile)
+        self.limits = limits_of(profile, segment)
         self.planner = Planner(self.limits)
         self.geo = geometry_of(profile, stages)
         self.tables = axiscomp.profile_tables(profile) if stages.axis_comp else {}
-        self.states = {m: axiscomp.PlayState() for m in self.tables}
+        self.table_cols = [
+            (col, self.tables[m]) for col, m in enumerate(MOTORS) if m in self.tables
+        ]
+        self.play_cols = [col for col, t in self.table_cols if t.max_play > 1e-12]
+        # the contract: the first point of a motion is approached from below (lo)
+        self.side = np.ones(5, dtype=int)
         self.lag = (
             np.asarray(profile.effects.servo_lag_ms) / 1000.0 if stages.axis_comp else np.zeros(5)
         )
+        self.reversal_s = profile.interpolation.get("reversal_ms", 1.0) / 1000.0
+        from .interpolate.geometry import REVERSAL_SHARE
+
+        self.reversal_tol = REVERSAL_SHARE * self.limits.tolerance_mm
+        # where each motor's driven part is, and the last commands (for _settle)
+        self.play_y: dict[int, float] = {}
+        self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
+        self.contacts: list[tuple[int, int, int]] = []
+        self.last: PointChunk | None = None  # the last point made (before the lead)
         self.held: PointChunk | None = None  # points waiting for the servo lead
-        self.prev: tuple[np.ndarray, float] | None = None  # last released (P, t)
+        self.prev_out: PointChunk | None = None  # the last point released
         self.problems: list[PrsxyError] = []
         self.t = 0.0
         self.n_points = 0
@@ -353,33 +357,27 @@ class Pipeline:
         out: list[PointChunk] = []
         if not self.started:
             line0 = int(b.line[0]) if len(b) else prepared.first_line
-            tl0 = 0.0  # the program starts with no tool length offset in effect
-            first = self._points(
-                self.start[None, :],
-                np.zeros(1),
-                np.array([line0]),
-                np.array([False]),
-                np.array([tl0]),
-                np.zeros(1),
-            )
+            first = self._start_point(line0)
             if first is not None:
                 out.append(first)
             self.started = True
-        res = self.planner.push(b, final)
-        if res is not None:
-            done, law = res
-            if len(done):
+        if self.max_part:
+            b = self._parts(b, final)
+        plan = self.planner.push(b, final)
+        if plan is not None:
+            done = plan.blocks
+            if np.any(~done.stops):
                 self.any_motion = True
             # before any point is made: a long move to an unreachable place is an
             # error at its line, and a block of a billion points is never tried
-            steps = steps_per_block(law, self.limits.period_s)
-            long = steps > 256
+            n_steps = steps(done, plan.law, self.limits).sum(axis=1)
+            long = n_steps > 256
             if np.any(long):
                 self._check_ends(done.take(long))
-            self._guard(law, done.line)
-            s = sample(done, law, self.limits.period_s)
+            self._guard(plan, n_steps)
+            s = sample(plan, self.limits)
             self.timings["interpolate"] += time.perf_counter() - t0
-            pc = self._points(s.q, s.dt, s.line, s.first, s.tool_length, s.speed)
+            pc = self._points(plan, s)
             if pc is not None:
                 out.append(pc)
         if final:
@@ -396,6 +394,51 @@ class Pipeline:
     def finish(self) -> list[PointChunk]:
         return self.feed([], final=True)
 
+    def _parts(self, new: Blocks, final: bool) -> Blocks:
+        """Where a split program's parts end: at rest after a block, the last place
+        before the part could hold more than ``max_part_points`` points, judged by
+        an upper bound of each block's points that no plan can exceed
+        (:func:`.interpolate.geometry.point_bound`). The last stop the program
+        makes anyway before that place, or else a stop put at the last block end
+        (its junction becomes a G61.1 exact stop). Blocks wait here until that
+        place is known; their number is bounded by the part size."""
+        from .interpolate.geometry import point_bound
+
+        w = new if self.window is None else Blocks.concat([self.window, new])
+        out: list[Blocks] = []
+        budget = self.max_part
+        while len(w):
+            cum = self.part_used + np.cumsum(point_bound(w, self.limits))
+            over = np.flatnonzero(cum > budget)
+            if over.size == 0:
+                break
+            j = int(over[0])
+            if j == 0:
+                raise LimitError(
+                    f"this block alone can make more than {budget} points, more than a part "
+                    "may hold",
+                    line=int(w.line[0]),
+                    expected="a larger output.pmac.max_points_per_program, or a shorter block",
+                )
+            nxt_stop = np.concatenate([w.stops[1:], [False]])
+            rest = w.stops | nxt_stop | (w.tol == -1.0)
+            cand = np.flatnonzero(rest[:j])
+            k = int(cand[-1]) if cand.size else j - 1
+            w.split_after[k] = 1 if cand.size else 2
+            w.tol[k] = -1.0  # the part ends at rest: an exact stop (G61.1) if not one
+            w.tol_deg[k] = -1.0
+            out.append(w.take(slice(0, k + 1)))
+            w = w.take(slice(k + 1, len(w)))
+            self.part_used = 0
+        if final:
+            out.append(w)
+            self.window = None
+        else:
+            self.window = w
+        if not out:
+            return w.take(slice(0, 0))
+        return Blocks.concat(out)
+
     def _check_ends(self, b: Blocks) -> None:
         """Reach and travel at the end points of long blocks, before interpolating them:
         a move to X1e9 is an error at its line, not a billion points. (Short blocks are
@@ -410,64 +453,334 @@ class Pipeline:
         if errs and not self.collect:
             raise sorted(errs, key=lambda e: e.line or 0)[0]
 
-    def _guard(self, law: TimeLaw, line: np.ndarray) -> None:
+    def _guard(self, plan: Plan, n_steps: np.ndarray) -> None:
         """Refuse absurd work: more points or machining time than the profile allows,
         judged from the time law, before the points are made."""
         lim = self.profile.limits
-        steps = steps_per_block(law, self.limits.period_s)
-        n_after = self.n_points + np.cumsum(steps)
-        t_after = self.t + np.cumsum(law.duration)
+        n_after = self.n_points + np.cumsum(n_steps)
+        t_after = self.t + np.cumsum(plan.law.duration)
         over = np.nonzero((n_after > lim["max_points"]) | (t_after > lim["max_time_s"]))[0]
         if over.size:
             k = int(over[0])
             raise LimitError(
                 f"the program would interpolate to more than {int(lim['max_points'])} points or "
                 f"run longer than {lim['max_time_s']:g} s (reached here)",
-                line=int(line[k]),
+                line=int(plan.blocks.line[k]),
                 expected="a shorter program, or larger limits.max_points / limits.max_time_s",
             )
 
-    def _points(
-        self,
-        q: np.ndarray,
-        dt: np.ndarray,
-        line: np.ndarray,
-        first: np.ndarray,
-        tool: np.ndarray,
-        speed: np.ndarray,
-    ) -> PointChunk | None:
+    # -- points
+    def _start_point(self, line0: int) -> PointChunk | None:
+        z5 = np.zeros((1, 5))
+        s = Samples(
+            q=self.start[None, :].copy(),
+            qdot=z5.copy(),
+            dt=np.zeros(1),
+            line=np.array([line0]),
+            block=np.zeros(1, dtype=int),
+            tau=np.zeros(1),
+            first=np.array([False]),
+            tool_length=np.zeros(1),  # the program starts with no tool length offset
+            speed=np.zeros(1),
+            dwell=np.array([True]),
+            fn=np.empty(1, dtype=object),
+            block_end=np.array([True]),
+            split=np.zeros(1, dtype=np.int8),
+        )
+        return self._points(None, s)
+
+    def _solve(self, q: np.ndarray, qdot: np.ndarray, tool: np.ndarray, line: np.ndarray):
+        """Virtual-axis map, IK and the IK's velocity for points."""
+        t0 = time.perf_counter()
+        q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
+        t1 = time.perf_counter()
+        ik = kinematics.inverse(self.geo, q_t, tool)
+        self._problem(check_pose_problems(self.profile, q, line, ik.reachable))
+        V = np.zeros_like(ik.P)
+        moving = np.flatnonzero(np.any(qdot != 0.0, axis=1))
+        if moving.size:
+            # e(Q) changes by µm over mm: its share of the velocity (1e-4 of it)
+            # moves the cubic by far less than the rounding of the written numbers
+            ahead = kinematics.inverse(
+                self.geo, q_t[moving] + VEL_STEP_S * qdot[moving], tool[moving]
+            ).P
+            V[moving] = (ahead - ik.P[moving]) / VEL_STEP_S
+        self.timings["error_map"] += t1 - t0
+        self.timings["kinematics"] += time.perf_counter() - t1
+        return q_t, ik.P, V, bool(np.all(ik.reachable))
+
+    def _points(self, plan: Plan | None, s: Samples) -> PointChunk | None:
+        q_t, P, V, reachable = self._solve(s.q, s.qdot, s.tool_length, s.line)
+        pc = PointChunk(
+            q=s.q,
+            qdot=s.qdot,
+            dt=s.dt,
+            t=np.zeros(len(s)),
+            line=s.line,
+            first=s.first,
+            tool_length=s.tool_length,
+            speed=s.speed,
+            dwell=s.dwell,
+            fn=s.fn,
+            block_end=s.block_end,
+            split=s.split,
+            q_target=q_t,
+            P_ideal=P,
+            V_ideal=V,
+            P_cmd=P,
+            V_cmd=V,
+        )
+        t0 = time.perf_counter()
+        side = np.tile(self.side, (len(pc), 1))
+        self.targets = pc.P_ideal
+        self.contacts = []
+        if self.play_cols and reachable:
+            pc, side = self._reversals(plan, s, pc)
         # a running sum continued across chunks (not chunk offset + cumsum), so the
         # clock is the same bit for bit however the program was cut
-        t = np.cumsum(np.concatenate([[self.t], dt]))[1:]
+        t = np.cumsum(np.concatenate([[self.t], pc.dt]))[1:]
+        pc.t = t
         if len(t):
             self.t = float(t[-1])
-        self.n_points += len(dt)
-        t0 = time.perf_counter()
-        q_target = correct_virtual(q, self.error_map) if self.error_map is not None else q
-        t1 = time.perf_counter()
-        ik = kinematics.inverse(self.geo, q_target, tool)
-        self._problem(check_pose_problems(self.profile, q, line, ik.reachable))
-        t2 = time.perf_counter()
-        P_comp = ik.P.copy()
-        if np.all(ik.reachable):
-            for col, m in enumerate(MOTOR_ORDER):
-                if m in self.tables:
-                    P_comp[:, col] = axiscomp.compensate(
-                        self.tables[m], ik.P[:, col], self.states[m]
-                    )
-        self.timings["error_map"] += t1 - t0
-        self.timings["kinematics"] += t2 - t1
-        self.timings["axis_tables"] += time.perf_counter() - t2
-        pc = PointChunk(q, dt, t, line, first, tool, speed, q_target, ik.P, P_comp)
+        self.n_points += len(pc)
+        if reachable and self.table_cols:
+            P_cmd = pc.P_ideal.copy()
+            V_cmd = pc.V_ideal.copy()
+            for col, table in self.table_cols:
+                P_cmd[:, col] = axiscomp.compensate_sided(table, self.targets[:, col], side[:, col])
+                V_cmd[:, col] = pc.V_ideal[:, col] / table.slope(P_cmd[:, col], side[:, col])
+            if self.play_cols:
+                self._settle(pc, side, P_cmd, V_cmd)
+            pc.P_cmd, pc.V_cmd = P_cmd, V_cmd
+        self.timings["axis_tables"] += time.perf_counter() - t0
+        self.last = pc.take(slice(len(pc) - 1, len(pc)))
         self.held = pc if self.held is None else PointChunk.concat([self.held, pc])
         return self._release(final=False)
+
+    def _reversals(
+        self, plan: Plan | None, s: Samples, pc: PointChunk
+    ) -> tuple[PointChunk, np.ndarray]:
+        """Give every reversal of a motor with play its crossing window
+        (:mod:`.reversals`), and return the points with the side of every motor."""
+        last = self.last
+        prev = (
+            None if last is None else (last.P_ideal[0], last.V_ideal[0], bool(last.speed[0] == 0))
+        )
+        t_end = np.cumsum(pc.dt)
+        resting = pc.speed == 0.0
+        ins = reversals.plan_insertions(
+            t_end,
+            pc.dt,
+            pc.P_ideal,
+            pc.V_ideal,
+            resting,
+            prev,
+            self.play_cols,
+            self.side,
+            self.reversal_tol,
+            self.reversal_s,
+        )
+        n = len(pc)
+        step = np.arange(n)
+        when = t_end
+        before = np.zeros(n, dtype=bool)
+        if ins:
+            extra, e_step, e_when, e_before, dt = self._new_points(plan, s, pc, t_end, ins)
+            # time order: a standing point first in its step, then the points inside
+            # the step by time, then the step's own end point
+            step_all = np.concatenate([step, e_step])
+            rank = np.concatenate([np.full(n, 2), np.where(e_before, 0, 1)])
+            when_all = np.concatenate([when, e_when])
+            order = np.lexsort((when_all, rank, step_all))
+            both = PointChunk.concat([pc, extra])
+            both.dt = np.concatenate([dt, extra.dt])
+            pc = both.take(order)
+            step = step_all[order]
+            when = when_all[order]
+            before = np.concatenate([before, e_before])[order]
+            resting = pc.speed == 0.0
+        side = reversals.sides(
+            step, when, before, pc.V_ideal, resting, ins, self.play_cols, self.side
+        )
+        self.side = side[-1].copy() if len(side) else self.side
+        self.targets = reversals.contact_targets(step, when, before, pc.P_ideal, ins)
+        # where each crossing ends (the motor meets its part) and where it began
+        contacts: list[tuple[int, int, int]] = []
+        plain = ~before
+        for k, col, ta, tb, _new in ins.windows:
+            end = np.flatnonzero((step == k) & plain & (when == tb))
+            beg = np.flatnonzero((step == k) & plain & (when == ta))
+            if not end.size:
+                continue
+            if beg.size:
+                b0 = int(beg[0])
+            else:  # the window starts at the point before the step
+                prior = np.flatnonzero((step < k) & plain)
+                b0 = int(prior[-1]) if prior.size else -1
+            contacts.append((int(end[0]), b0, col))
+        for k, col, _new in ins.stands:
+            end = np.flatnonzero((step == k) & before)
+            if end.size:
+                contacts.append((int(end[0]), int(end[0]) - 1, col))
+        self.contacts = sorted(contacts)
+        return pc, side
+
+    def _settle(
+        self, pc: PointChunk, side: np.ndarray, P_cmd: np.ndarray, V_cmd: np.ndarray
+    ) -> None:
+        """Follow every motor with play through the cubics of its own commands
+        (:func:`.reversals.follow`) and end each crossing where the part really
+        stands: a corner's blend may have carried it a little past the wanted
+        extreme (within the corner tolerance), and a motor that met it at the wanted
+        position would then push it with the crossing's speed. Updates the commands
+        in place and carries where every part is into the next chunk."""
+        prev_P = self.last_cmd[0] if self.last_cmd is not None else None
+        prev_V = self.last_cmd[1] if self.last_cmd is not None else None
+        for col in self.play_cols:
+            table = self.tables[MOTORS[col]]
+            if prev_P is None:
+                # the contract: the first point is approached from below
+                y0 = float(table.lo(P_cmd[:1, col])[0])
+                P0, V0 = float(P_cmd[0, col]), 0.0
+            else:
+                y0 = self.play_y[col]
+                P0, V0 = float(prev_P[col]), float(prev_V[col])  # type: ignore[index]
+            cursor = 0
+            for end, beg, c in self.contacts:
+                if c != col:
+                    continue
+                y = reversals.follow(
+                    table,
+                    y0,
+                    P0,
+                    V0,
+                    P_cmd[cursor : end + 1, col],
+                    V_cmd[cursor : end + 1, col],
+                    pc.dt[cursor : end + 1],
+                )
+                first = max(beg + 1, cursor) - cursor
+                span = y[first:]
+                old = -int(side[end, col])
+                stuck = float(span.min() if old < 0 else span.max())
+                if beg >= cursor:
+                    # the part's position when the window begins counts too
+                    at_beg = y[beg - cursor, -1] if beg >= cursor else y0
+                    stuck = min(stuck, float(at_beg)) if old < 0 else max(stuck, float(at_beg))
+                new = np.array([stuck])
+                P_cmd[end, col] = float(
+                    (table.lo_inv(new) if side[end, col] > 0 else table.hi_inv(new))[0]
+                )
+                y_end = reversals.follow(
+                    table,
+                    y0,
+                    P0,
+                    V0,
+                    P_cmd[cursor : end + 1, col],
+                    V_cmd[cursor : end + 1, col],
+                    pc.dt[cursor : end + 1],
+                )[-1, -1]
+                y0, P0, V0 = float(y_end), float(P_cmd[end, col]), float(V_cmd[end, col])
+                cursor = end + 1
+            if cursor < len(pc):
+                y0 = float(
+                    reversals.follow(
+                        table, y0, P0, V0, P_cmd[cursor:, col], V_cmd[cursor:, col], pc.dt[cursor:]
+                    )[-1, -1]
+                )
+            self.play_y[col] = y0
+        self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
+
+    def _new_points(
+        self,
+        plan: Plan | None,
+        s: Samples,
+        pc: PointChunk,
+        t_end: np.ndarray,
+        ins: reversals.Insertions,
+    ) -> tuple[PointChunk, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The standing points and the points inside steps that the reversals need,
+        and the chunk's step times cut at them."""
+        parts: list[PointChunk] = []
+        e_step: list[int] = []
+        e_when: list[float] = []
+        e_before: list[bool] = []
+        dt = pc.dt.copy()
+        for k, hold in sorted(ins.stand.items()):
+            src = pc.take(slice(k - 1, k)) if k > 0 else self.last
+            assert src is not None  # a stand needs a point to stand at
+            dup = PointChunk(**{f.name: getattr(src, f.name).copy() for f in fields(src)})
+            dup.qdot[:] = 0.0
+            dup.V_ideal[:] = 0.0
+            dup.V_cmd[:] = 0.0
+            dup.speed[:] = 0.0
+            dup.dwell[:] = True
+            dup.block_end[:] = False
+            dup.split[:] = 0
+            dup.first[:] = False
+            dup.fn[:] = None
+            dup.dt[:] = hold
+            dup.line[:] = pc.line[k]
+            parts.append(dup)
+            e_step.append(k)
+            e_when.append(float(t_end[k] - pc.dt[k]))
+            e_before.append(True)
+        if ins.mid and plan is not None:
+            ks = np.array([k for k, ts in sorted(ins.mid.items()) for _ in ts], dtype=int)
+            tt = np.array([t for _, ts in sorted(ins.mid.items()) for t in ts])
+            blk = s.block[ks]
+            tau = s.tau[ks] - (t_end[ks] - tt)
+            q, qdot = at_times(plan, blk, tau)
+            v = np.linalg.norm(qdot[:, :3], axis=1)
+            v = np.where(v > 0, v, np.linalg.norm(qdot[:, 3:], axis=1))
+            q_t, P, V, _ = self._solve(q, qdot, s.tool_length[ks], s.line[ks])
+            m = len(ks)
+            seg = np.zeros(m)
+            for k in sorted(ins.mid):
+                sel = np.flatnonzero(ks == k)
+                t1 = float(t_end[k])
+                cuts = np.concatenate([[t1 - float(pc.dt[k])], tt[sel], [t1]])
+                d = np.diff(cuts)
+                seg[sel] = d[:-1]
+                dt[k] = d[-1]
+            parts.append(
+                PointChunk(
+                    q=q,
+                    qdot=qdot,
+                    dt=seg,
+                    t=np.zeros(m),
+                    line=s.line[ks],
+                    first=np.zeros(m, dtype=bool),
+                    tool_length=s.tool_length[ks],
+                    speed=v,
+                    dwell=np.zeros(m, dtype=bool),
+                    fn=np.empty(m, dtype=object),
+                    block_end=np.zeros(m, dtype=bool),
+                    split=np.zeros(m, dtype=np.int8),
+                    q_target=q_t,
+                    P_ideal=P,
+                    V_ideal=V,
+                    P_cmd=P,
+                    V_cmd=V,
+                )
+            )
+            e_step += ks.tolist()
+            e_when += tt.tolist()
+            e_before += [False] * m
+        return (
+            PointChunk.concat(parts),
+            np.array(e_step, dtype=int),
+            np.array(e_when),
+            np.array(e_before, dtype=bool),
+            dt,
+        )
 
     def _release(self, final: bool) -> PointChunk | None:
         """Points whose servo lead is final.
 
-        The lead c = M + τ v(M) uses the central-difference velocity, so a point
-        is final once the next one exists; the last point released is kept as
-        the previous point of the next chunk.
+        A motor that follows its command with a lag τ (τ ṁ + m = c, profile
+        ``effects.servo_lag_ms``) reaches M when commanded c = M + τ M', whose
+        velocity is M' + τ M''; M'' is taken as the central difference of the
+        planned velocities, so a point is final once the next one exists.
         """
         h = self.held
         if h is None or len(h) == 0:
@@ -478,22 +791,21 @@ class Pipeline:
             return None
         ready = h.take(slice(0, k))
         if lagging:
-            prev = self.prev
-            # neighbours of every ready point: the previous one (or itself at the
-            # start) and the next one (or itself at the end)
-            P_all = np.vstack([prev[0][None, :] if prev else h.P_cmd[:1], h.P_cmd])
-            t_all = np.concatenate([[prev[1]] if prev else h.t[:1], h.t])
+            prev = self.prev_out
+            V_all = np.vstack([prev.V_cmd if prev is not None else h.V_cmd[:1], h.V_cmd])
+            t_all = np.concatenate([prev.t if prev is not None else h.t[:1], h.t])
             if final:
-                P_all = np.vstack([P_all, h.P_cmd[-1:]])
+                V_all = np.vstack([V_all, h.V_cmd[-1:]])
                 t_all = np.concatenate([t_all, h.t[-1:]])
-            span = np.maximum(t_all[2 : k + 2] - t_all[:k], 1e-9)
-            v = (P_all[2 : k + 2] - P_all[:k]) / span[:, None]
-            if prev is None:
-                v[0] = 0.0
-            if final:
-                v[-1] = 0.0
-            self.prev = (h.P_cmd[k - 1].copy(), float(h.t[k - 1]))
-            ready.P_cmd = ready.P_cmd + self.lag[None, :] * v
+            span = t_all[2 : k + 2] - t_all[:k]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                acc = np.where(
+                    span[:, None] > 0, (V_all[2 : k + 2] - V_all[:k]) / span[:, None], 0.0
+                )
+            acc[ready.speed == 0.0] = 0.0
+            self.prev_out = h.take(slice(k - 1, k))
+            ready.P_cmd = ready.P_cmd + self.lag[None, :] * ready.V_cmd
+            ready.V_cmd = ready.V_cmd + self.lag[None, :] * acc
         self.held = None if k == len(h) else h.take(slice(k, len(h)))
         self._problem(check_travel(self.profile, ready.P_cmd, ready.line))
         return ready
@@ -532,7 +844,7 @@ def check_travel(profile: Profile, P_cmd: np.ndarray, line: np.ndarray) -> list[
     """Motors commanded beyond their travel, one per G-code line and motor."""
     out: list[PrsxyError] = []
     ok = np.all(np.isfinite(P_cmd), axis=1)
-    for col, m in enumerate(MOTOR_ORDER):
+    for col, m in enumerate(MOTORS):
         mc = profile.motor(m)
         p = P_cmd[:, col]
         bad = ok & ((p < mc.min - 1e-9) | (p > mc.max + 1e-9))
@@ -551,11 +863,13 @@ def run_chain(
     motions: Sequence[Motion],
     profile: Profile,
     stages: Stages = Stages(),
-    error_map: ErrorMap | None = None,
+    error_map: ErrorFunction | None = None,
     *,
     start: Sequence[float] | None = None,
     collect: bool = False,
     chunk: int = 0,
+    segment: str = "cubic",
+    max_part_points: int = 0,
 ) -> ChainResult:
     """Interpolate, correct, solve and compensate a whole program in memory.
 
@@ -572,32 +886,33 @@ def run_chain(
         Gather every problem in ``result.problems`` instead of raising the first.
     chunk : feed the pipeline this many motions at a time (0: all at once); the
         result is the same either way.
+    segment : how the controller moves between points ("cubic" or "chord")
+    max_part_points : > 0: end a part at rest at a block end before every this
+        many points (``PointChunk.split``)
 
     Raises
     ------
     LimitError, ReachError
         Naming the G-code line (unless ``collect``).
     """
-    pipe = Pipeline(profile, stages, error_map, start=start, collect=collect)
+    pipe = Pipeline(
+        profile,
+        stages,
+        error_map,
+        start=start,
+        collect=collect,
+        segment=segment,
+        max_part_points=max_part_points,
+    )
     parts: list[PointChunk] = []
     step = chunk if chunk > 0 else max(len(motions), 1)
     for i in range(0, len(motions), step):
         parts += pipe.feed(motions[i : i + step])
     parts += pipe.finish()
-    pc = PointChunk.concat(parts)
-    samples = Samples(
-        q=pc.q,
-        dt=pc.dt,
-        line=pc.line,
-        block=np.zeros(len(pc), dtype=int),
-        first=pc.first,
-        tool_length=pc.tool_length,
-        speed=pc.speed,
-    )
-    return ChainResult(samples, pc.q_target, pc.P_ideal, pc.P_cmd, pipe.geo, pipe.problems, pc.t)
+    return ChainResult(PointChunk.concat(parts), pipe.geo, pipe.problems)
 
 
-def correct_virtual(q: np.ndarray, error_map: ErrorMap, iterations: int = 2) -> np.ndarray:
+def correct_virtual(q: np.ndarray, error_map: ErrorFunction, iterations: int = 2) -> np.ndarray:
     """Q' with Q' + e(Q') = Q, by fixed-point iteration from Q' = Q − e(Q) (Eq. 6).
 
     The paper's Q' = Q − e(Q) evaluates the error at the programmed pose; the

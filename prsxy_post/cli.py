@@ -22,7 +22,18 @@ import numpy as np
 
 from . import __version__
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
-from .files import load_profile, read_text, write_atomic
+from .files import load_profile as _load_profile
+from .files import read_text, write_atomic
+from .profile import Profile
+from .writers import DIALECTS
+
+
+def load_profile(path: str) -> Profile:
+    """A profile, with what the user should know about it said on stderr."""
+    prof = _load_profile(path)
+    for note in prof.notes:
+        click.echo(f"{path}: {note}", err=True)
+    return prof
 
 
 def parse_pose(text: str, option: str) -> tuple[float, ...]:
@@ -192,10 +203,10 @@ class _Progress:
 @click.option(
     "--format",
     "fmt",
-    type=click.Choice(["pmac", "gcode"]),
+    type=click.Choice(sorted(DIALECTS)),
     default="pmac",
     show_default=True,
-    help="Motor-space PMAC program or corrected Cartesian G-code.",
+    help="; ".join(f"{n}: {d.summary}" for n, d in sorted(DIALECTS.items())) + ".",
 )
 @click.option(
     "-o", "--output", default=None, help="Output file for one program ('-' for standard output)."
@@ -271,7 +282,7 @@ def convert(
     ]
     if start:
         opts.append(f"--start {start}")
-    ext = ".pmc" if fmt == "pmac" else ".ngc"
+    ext = DIALECTS[fmt].extension
     pooled = jobs > 1 and len(programs) > 1
     jobs_list = []
     for prog in programs:
@@ -873,7 +884,14 @@ def ballbar(
 
 @main.group()
 def tables() -> None:
-    """Real-axis tables in the formats controllers read: LinuxCNC, Turbo PMAC."""
+    """Real-axis tables in the files controllers load: LinuxCNC comp files, Turbo PMAC.
+
+    \b
+    Examples:
+      prsxy-post tables export --profile shop.toml --format linuxcnc1 --out-dir comp/
+      prsxy-post tables export --profile shop.toml --format pmac --out-dir pmac/
+      prsxy-post tables import comp/motor5.comp --profile shop.toml --format linuxcnc1 -o new.toml
+    """
 
 
 TABLE_FORMATS = click.Choice(["linuxcnc0", "linuxcnc1", "pmac"])
@@ -886,13 +904,19 @@ TABLE_FORMATS = click.Choice(["linuxcnc0", "linuxcnc1", "pmac"])
     "fmt",
     type=TABLE_FORMATS,
     required=True,
-    help="linuxcnc0/linuxcnc1: COMP_FILE_TYPE 0/1; pmac: DEFINE COMP + backlash.",
+    help="linuxcnc0/linuxcnc1: COMP_FILE_TYPE 0/1 files and an INI snippet; "
+    "pmac: one Turbo PMAC file (DEFINE COMP, DEFINE BLCOMP, Ixx85/Ixx86, I51).",
 )
 @click.option("--out-dir", required=True, type=click.Path(file_okay=False))
 @guarded
 def tables_export(profile_path: str, fmt: str, out_dir: str) -> None:
-    """Write the profile's [[axis_comp]] tables, one file per motor."""
-    from . import tables as tb
+    """Write the profile's [[axis_comp]] tables as the controller loads them.
+
+    \b
+    Example:
+      prsxy-post tables export --profile shop.toml --format pmac --out-dir pmac/
+    """
+    from .controller_tables import linuxcnc, pmac
 
     prof = load_profile(profile_path)
     if not prof.axis_comp:
@@ -902,20 +926,73 @@ def tables_export(profile_path: str, fmt: str, out_dir: str) -> None:
             key="axis_comp",
             expected="tables to export",
         )
-    files: dict[Path, str] = {}
-    for c in prof.axis_comp:
-        t = tb.AxisTable(c.motor, c.positions, c.forward, c.reverse)
-        if fmt == "pmac":
-            text = tb.format_pmac_comp(
-                t, motor=c.motor, counts_per_mm=prof.motor(c.motor).counts_per_mm
+    out = Path(out_dir)
+    if fmt == "pmac":
+        pm = pmac.export(prof)
+        write_atomic({out / pm.name: pm.text})
+        click.echo(f"wrote {out / pm.name}", err=True)
+        for t in pm.motors:
+            click.echo(
+                f"motor {t.motor}: {t.entries} entries, I{t.motor}86={t.ixx86}, "
+                f"I{t.motor}85={t.ixx85}, within {t.interp_error_mm * 1e3:.4f} µm; "
+                f"add {t.home_offset:+d} to I{t.motor}26 (home offset) and home again",
+                err=True,
             )
-            files[Path(out_dir) / f"motor{c.motor}.pmc"] = text
-        else:
-            files[Path(out_dir) / f"motor{c.motor}.comp"] = tb.format_linuxcnc_comp(
-                t, file_type=int(fmt[-1])
+    else:
+        lc = linuxcnc.export(prof, int(fmt[-1]))
+        files = {out / f.name: f.text for f in lc.files}
+        files[out / lc.ini_name] = lc.ini
+        write_atomic(files)
+        click.echo(f"wrote {len(files)} files to {out_dir} ({lc.ini_name} names them)", err=True)
+        for f in lc.files:
+            note = f", resampled from {f.resampled_from}" if f.resampled_from else ""
+            click.echo(
+                f"motor {f.motor} (joint {f.joint}): {f.rows} rows{note}, "
+                f"within {f.interp_error_mm * 1e3:.4f} µm",
+                err=True,
             )
-    write_atomic(files)
-    click.echo(f"wrote {len(files)} files to {out_dir}", err=True)
+    cyc = sorted({c.motor for c in prof.effects.cyclic})
+    if cyc:
+        click.echo(
+            "note: the cyclic errors ([[effects.cyclic]]) of motors "
+            + ", ".join(str(m) for m in cyc)
+            + " are not in these tables",
+            err=True,
+        )
+
+
+def _linuxcnc_motor(
+    path: str, text: str, file_type: int, motor: int | None, ini: dict[str, tuple[int, int]] | None
+) -> int:
+    """The motor of a LinuxCNC comp file: --motor, the INI snippet, or the file's notes;
+    sources that disagree are an error."""
+    from .controller_tables import linuxcnc
+
+    named: dict[str, int] = {}
+    if motor is not None:
+        named["--motor"] = motor
+    if ini is not None and Path(path).name in ini:
+        m, ini_type = ini[Path(path).name]
+        if ini_type != file_type:
+            raise UsageError(
+                f"the INI gives {Path(path).name} COMP_FILE_TYPE = {ini_type}",
+                source=path,
+                expected=f"--format linuxcnc{ini_type}",
+            )
+        named["the INI"] = m
+    in_file = linuxcnc.motor_named_in(text)
+    if in_file is not None:
+        named["the file"] = in_file
+    if not named:
+        raise UsageError(
+            "a LinuxCNC comp file does not say its motor",
+            source=path,
+            expected="--motor or --ini with the INI (snippet) naming the file",
+        )
+    if len(set(named.values())) > 1:
+        says = ", ".join(f"{k} motor {v}" for k, v in named.items())
+        raise UsageError(f"the motor is contradictory: {says}", source=path, expected="one motor")
+    return next(iter(named.values()))
 
 
 @tables.command("import")
@@ -926,7 +1003,13 @@ def tables_export(profile_path: str, fmt: str, out_dir: str) -> None:
     "--motor",
     type=click.IntRange(1, 6),
     default=None,
-    help="Motor of a LinuxCNC file (PMAC tables name their motor).",
+    help="Motor of a LinuxCNC file (default: from --ini or the file's prsxy-post notes).",
+)
+@click.option(
+    "--ini",
+    default=None,
+    type=click.Path(dir_okay=False),
+    help="LinuxCNC INI (or the exported snippet) whose [JOINT_n] COMP_FILE names the files.",
 )
 @click.option("-o", "--output", required=True, help="Profile to write with the tables.")
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
@@ -936,41 +1019,31 @@ def tables_import(
     profile_path: str,
     fmt: str,
     motor: int | None,
+    ini: str | None,
     output: str,
     in_place: bool,
 ) -> None:
-    """Read tables into a profile's [[axis_comp]] (replacing those motors' tables)."""
-    from . import tables as tb
+    """Read controller tables into a profile's [[axis_comp]] (replacing those motors').
+
+    \b
+    Example:
+      prsxy-post tables import comp/motor5.comp --profile shop.toml --format linuxcnc1 -o new.toml
+    """
+    from .controller_tables import linuxcnc, pmac, with_tables
 
     _check_output(output, [profile_path], in_place)
     prof = load_profile(profile_path)
+    ini_map = linuxcnc.read_ini(read_text(ini, "INI file"), ini) if ini else None
     new: list[Any] = []
     for f in files:
         text = read_text(f, "table file")
         if fmt == "pmac":
-            # counts per mm of the motor each table names
-            first = tb.read_pmac_comp(text, f, counts_per_mm=1.0)
-            for t in first:
-                cpm = prof.motor(t.motor).counts_per_mm
-                new += [
-                    x for x in tb.read_pmac_comp(text, f, counts_per_mm=cpm) if x.motor == t.motor
-                ]
+            new += pmac.read(text, f, prof)
         else:
-            if motor is None or motor == 4:
-                raise UsageError(
-                    "--motor is needed for LinuxCNC files", expected="--motor 1, 2, 3, 5 or 6"
-                )
-            new.append(tb.read_linuxcnc_comp(text, f, file_type=int(fmt[-1]), motor=motor))
-    doc = dict(prof.raw)
-    merged = {c["motor"]: c for c in doc.get("axis_comp", [])}
-    for t in new:
-        merged[t.motor] = {
-            "motor": t.motor,
-            "positions": t.positions.tolist(),
-            "forward": t.forward.tolist(),
-            "reverse": t.reverse.tolist(),
-        }
-    doc["axis_comp"] = [merged[m] for m in sorted(merged)]
+            ft = int(fmt[-1])
+            m = _linuxcnc_motor(f, text, ft, motor, ini_map)
+            new.append(linuxcnc.read_comp(text, f, file_type=ft, motor=m))
+    doc = with_tables(dict(prof.raw), new)
     write_atomic(profile_files(doc, output, profile_path, in_place))
     click.echo(
         f"wrote {output} with tables for motors {', '.join(str(t.motor) for t in new)}", err=True

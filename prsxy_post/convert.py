@@ -150,7 +150,9 @@ def _prepare_here(
     # a program whose loops and calls jump back reads those lines again from the file
     lines_from = gcode.FileLines(job.program) if job.program != "-" else None
     motions = gcode.iter_motions_batched(counted(batches), cfg, job.program, lines_from=lines_from)
-    limits = chain.limits_of(prof)
+    from . import writers
+
+    limits = chain.limits_of(prof, writers.dialect(job.fmt).segment)
     while True:
         t0 = time.perf_counter()
         batch = list(itertools.islice(motions, job.chunk))
@@ -368,13 +370,18 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                 profile_sha256=sha256_of(job.profile_path),
                 options=job.options,
             )
-            writer: writers.PmacWriter | writers.GcodeWriter
-            if job.fmt == "pmac":
-                writer = writers.PmacWriter(prof, prov)
-                split = writer.max_pts > 0
-            else:
-                writer = writers.GcodeWriter(prof, prov, float(prof.output["gcode_tolerance_mm"]))
-            pipe = chain.Pipeline(prof, stages, emap, start=job.start)
+            dialect = writers.dialect(job.fmt)
+            settings = writers.settings_of(prof, job.fmt)
+            writer = dialect.make(prof, settings, prov)
+            split = dialect.parts(settings) > 0
+            pipe = chain.Pipeline(
+                prof,
+                stages,
+                emap,
+                start=job.start,
+                segment=dialect.segment,
+                max_part_points=dialect.parts(settings),
+            )
             write(writer.begin)
             for prepared in source:
                 for pc in pipe.feed_prepared(prepared):
@@ -382,9 +389,9 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                     write(functools.partial(writer.feed, pc))
         tail = pipe.finish()
         n_points += sum(len(pc) for pc in tail)
-        for pc in tail[:-1]:
+        for pc in tail:
             write(functools.partial(writer.feed, pc))
-        write(functools.partial(writer.finish, tail[-1] if tail else None))
+        write(writer.finish)
         for fh in sinks.values():
             fh.flush()
             os.fsync(fh.fileno())

@@ -36,14 +36,14 @@ def ballbar_run(
         radius, plane=plane, ccw=ccw, tilt_deg=tilt, feed=feed, pivot=(pivot[0], pivot[1], pivot[2])
     )
     motions = gcode.interpret(text, chain.interpreter_config(commanded), "<ballbar>")
-    first_cut = next(i for i, m in enumerate(motions) if m.kind != "rapid")
-    circle = motions[first_cut:]
+    first_cut = next(i for i, m in enumerate(motions) if m.kind not in ("rapid", "function"))
+    circle = [m for m in motions[first_cut:] if m.kind != "function"]
     start = np.array(circle[0].start, dtype=float)
     res = chain.run_chain(
         circle, commanded, chain.Stages(error_map=False, axis_comp=False), start=start.tolist()
     )
-    q = res.samples.q
-    t = np.cumsum(res.samples.dt)
+    q = res.points.q
+    t = res.points.t
     piv = np.asarray(pivot, dtype=float)
     dev = simulate.measure_ballbar(truth, commanded, q, t, piv, radius, rng, noise_um)
     direction = "ccw" if ccw else "cw"

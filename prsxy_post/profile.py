@@ -52,7 +52,12 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "max_points": 50_000_000,
         "max_time_s": 360_000.0,
     },
-    "interpolation": {"period_ms": 10.0},
+    "interpolation": {
+        "period_ms": 10.0,
+        "path_tolerance_mm": 0.0005,
+        "path_tolerance_arcsec": 0.5,
+        "reversal_ms": 1.0,
+    },
     "start": {"pose": [0.0, 0.0, 0.0, 0.0, 0.0]},
     "gcode": {
         "g28": [0.0, 0.0, 0.0, 0.0, 0.0],
@@ -60,14 +65,6 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "subroutine_path": [],  # directories (relative: to the profile's folder)
         "max_loop_passes": 10_000_000,
         "user_m_codes": [],  # M100..M199 the controller has
-    },
-    "output": {
-        "coordinate_system": 1,
-        "program": 1,
-        "decimals": 5,
-        "max_points_per_program": 0,
-        "rotary_buffer_points": 0,
-        "gcode_tolerance_mm": 0.0,
     },
 }
 
@@ -186,8 +183,13 @@ class Profile:
     g28: tuple[float, float, float, float, float]
     g30: tuple[float, float, float, float, float]
     tools: Mapping[int, tuple[float, float]]  # number -> (length, diameter)
-    output: Mapping[str, Any]
+    #: ``[output.<dialect>]`` sections, validated, with their defaults
+    output: Mapping[str, Mapping[str, Any]]
     raw: dict[str, Any] = field(repr=False)
+    #: ``[interpolation]`` with its defaults (period_ms, path_tolerance_mm, …)
+    interpolation: Mapping[str, float] = field(default_factory=dict)
+    #: what the user should know about the file: deprecated keys and where they went
+    notes: tuple[str, ...] = ()
     source: str = "<profile>"
     #: the [gcode] section as read (with its defaults)
     gcode: Mapping[str, Any] = field(default_factory=dict)
@@ -454,6 +456,46 @@ def _motors(c: _Checker, entries: Any) -> tuple[MotorConfig, ...]:
     return tuple(out)
 
 
+def _output(c: _Checker, doc: Mapping[str, Any]) -> tuple[dict[str, dict[str, Any]], list[str]]:
+    """``[output.<dialect>]`` for every registered dialect, with the keys it declares;
+    the old flat ``[output]`` keys are still read, with a note saying where they go."""
+    from .writers import DIALECTS  # here: the dialects' modules import this one
+
+    sec = c.table(doc, "output", "", False) or {}
+    legacy: dict[str, list[str]] = {}
+    for name, d in DIALECTS.items():
+        for key, st in d.settings.items():
+            if st.legacy:
+                legacy.setdefault(st.legacy, []).append(f"output.{name}.{key}")
+    c.unknown(sec, set(DIALECTS) | set(legacy), "output")
+    out: dict[str, dict[str, Any]] = {}
+    for name, d in DIALECTS.items():
+        path = f"output.{name}"
+        sub = c.table(sec, name, "output", False) or {}
+        c.unknown(sub, set(d.settings), path)
+        vals: dict[str, Any] = {}
+        for key, st in d.settings.items():
+            src, where, k = sub, path, key
+            if key not in sub and st.legacy and st.legacy in sec:
+                src, where, k = sec, "output", st.legacy
+            if isinstance(st.default, int):
+                v: float | int = c.integer(src, k, where, st.default, lo=int(st.lo))
+                if v > st.hi:
+                    raise c.fail(
+                        f"{where}.{k}", f"is {v}", f"an integer from {st.lo:g} to {st.hi:g}"
+                    )
+            else:
+                v = c.number(src, k, where, st.default, lo=st.lo, hi=st.hi)
+            vals[key] = v
+        out[name] = vals
+    notes = [
+        f"output.{old}: deprecated key, read as {' and '.join(new)} (write it there)"
+        for old, new in legacy.items()
+        if old in sec
+    ]
+    return out, notes
+
+
 def _section_with_defaults(c: _Checker, doc: Mapping[str, Any], name: str) -> dict[str, Any]:
     defaults = DEFAULTS[name]
     sec = c.table(doc, name, "", False) or {}
@@ -510,6 +552,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         "error_map",
         "provenance",
         "effects",
+        "output",
         *DEFAULTS,
     }
     c.unknown(doc, known, "")
@@ -584,12 +627,18 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     ):
         if limits[k] <= 0:
             raise c.fail(f"limits.{k}", f"is {limits[k]:g}", "a number > 0")
-    period = sections["interpolation"]["period_ms"]
+    interp = sections["interpolation"]
+    period = interp["period_ms"]
     if not 0.1 <= period <= 1000.0:
         raise c.fail("interpolation.period_ms", f"is {period:g}", "0.1 to 1000 ms")
-    out_sec = sections["output"]
-    if out_sec["decimals"] < 4 or out_sec["decimals"] > 9:
-        raise c.fail("output.decimals", f"is {out_sec['decimals']}", "4 to 9 decimals")
+    for key, lo, hi, unit in (
+        ("path_tolerance_mm", 1e-6, 10.0, "mm"),
+        ("path_tolerance_arcsec", 0.001, 36000.0, "arcsec"),
+        ("reversal_ms", 0.05, 100.0, "ms"),
+    ):
+        if not lo <= interp[key] <= hi:
+            raise c.fail(f"interpolation.{key}", f"is {interp[key]:g}", f"{lo:g} to {hi:g} {unit}")
+    out_sec, notes = _output(c, doc)
 
     tools: dict[int, tuple[float, float]] = {}
     tools_raw = doc.get("tools", [])
@@ -627,6 +676,8 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         output=out_sec,
         raw=raw,
         source=source,
+        interpolation=interp,
+        notes=tuple(notes),
         gcode=g,
     )
     _check_reach(prof)

@@ -51,8 +51,9 @@ def _trace_error(truth: profile_mod.Profile, prof: profile_mod.Profile, program:
     text = (ROOT / "samples" / program).read_text()
     ms = gcode.interpret(text, chain.interpreter_config(prof))
     res = chain.run_chain(ms, prof, error_map=errormap.from_profile(prof))
-    qa = simulate.execute(truth, res.P_cmd, res.samples.tool_length, t=res.t)
-    return float(np.linalg.norm(qa[:, :3] - res.samples.q[:, :3], axis=1).max())
+    pts = res.points
+    qa = simulate.execute(truth, pts.P_cmd, pts.tool_length, t=pts.t)
+    return float(np.linalg.norm(qa[:, :3] - pts.q[:, :3], axis=1).max())
 
 
 @pytest.mark.slow

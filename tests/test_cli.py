@@ -225,7 +225,7 @@ def test_stdout_and_split_programs(runner: CliRunner, tmp_path: Path) -> None:
     prof.write_text(
         (ROOT / SHOP)
         .read_text()
-        .replace("max_points_per_program = 0", "max_points_per_program = 500")
+        .replace("max_points_per_program = 0", "max_points_per_program = 1500")
     )
     r = invoke(
         runner,
@@ -238,8 +238,20 @@ def test_stdout_and_split_programs(runner: CliRunner, tmp_path: Path) -> None:
     )
     assert r.exit_code == 0, r.output
     parts = sorted(tmp_path.glob("p.part*.pmc"))
-    assert len(parts) >= 3
+    assert len(parts) >= 2
     assert "OPEN PROG 2 CLEAR" in parts[1].read_text()
+    # the old flat key is still read, with a note saying where it goes now
+    old = tmp_path / "old.toml"
+    old.write_text(
+        prof.read_text()
+        .replace("[output.pmac]", "[output]")
+        .replace("[output.gcode]", "[output.gcode_unused]")
+    )
+    old.write_text(old.read_text().split("[output.gcode_unused]")[0])
+    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", str(old), "-o", "-")
+    assert r.exit_code == 0
+    assert "output.max_points_per_program: deprecated key, read as " in r.output
+    assert "output.pmac.max_points_per_program" in r.output
 
 
 def test_stages_can_be_switched_off(runner: CliRunner, tmp_path: Path) -> None:
@@ -514,7 +526,7 @@ def test_every_gcode_rejection_through_the_cli(
 
 
 def test_gcode_tolerance_reduction_stays_within_it(runner: CliRunner, tmp_path: Path) -> None:
-    """With output.gcode_tolerance_mm every dropped point lies within it of the chord."""
+    """With output.gcode.tolerance_mm every dropped point lies within it of the chord."""
     import numpy as np
 
     from .test_tracking import read_gcode_points
@@ -522,7 +534,7 @@ def test_gcode_tolerance_reduction_stays_within_it(runner: CliRunner, tmp_path: 
     tol = 0.002
     prof = tmp_path / "tol.toml"
     prof.write_text(
-        (ROOT / SHOP).read_text().replace("gcode_tolerance_mm = 0.0", f"gcode_tolerance_mm = {tol}")
+        (ROOT / SHOP).read_text().replace("\ntolerance_mm = 0.0 ", f"\ntolerance_mm = {tol} ")
     )
     dense, sparse = tmp_path / "d.ngc", tmp_path / "s.ngc"
     for p, out in ((SHOP, dense), (str(prof), sparse)):

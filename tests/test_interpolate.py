@@ -1,4 +1,5 @@
-"""Coarse interpolation: exact path, speed ≤ F, acceleration limited, stream = one shot."""
+"""Coarse interpolation: exact path, speed ≤ F, acceleration limited, phases as
+points, corners within the tolerance, stream = one shot."""
 
 from __future__ import annotations
 
@@ -7,46 +8,73 @@ import pytest
 
 from prsxy_post import chain, gcode, interpolate
 from prsxy_post import profile as profile_mod
+from prsxy_post.interpolate.geometry import CORNER_SHARE
 
 from .conftest import ROOT
 
 LIM = interpolate.Limits(rapid_mm_min=6000.0, accel_mm_s2=1000.0, period_s=0.01)
 
 
-def _plan(text: str) -> tuple[interpolate.Blocks, interpolate.TimeLaw, interpolate.Samples]:
+def _plan(text: str, lim: interpolate.Limits = LIM):
     ms = gcode.interpret(text)
-    b = interpolate.blocks_from_motions(ms, LIM)
-    vj = interpolate.junction_limits(b, LIM.period_s)
-    v = interpolate.forward_pass(b, interpolate.backward_pass(b, vj))
-    law = interpolate.time_law(b, v)
-    return b, law, interpolate.sample(b, law, LIM.period_s)
+    b = interpolate.blocks_from_motions(ms, lim)
+    plan = interpolate.Planner(lim).push(b, final=True)
+    assert plan is not None
+    return plan.blocks, plan.law, interpolate.sample(plan, lim)
 
 
 def test_block_ends_are_points_and_steps_are_at_most_the_period() -> None:
     b, law, s = _plan("G21 G1 X10 F600\nG1 Y5\nG2 X20 Y5 I5 J0\nG4 P0.05\nG0 X0 Y0\nM2\n")
-    ends = s.q[np.nonzero(np.diff(np.append(s.block, -1)))[0]]
+    ends = s.q[s.block_end]
     np.testing.assert_allclose(ends, b.end, atol=1e-12)
-    assert s.dt.max() <= LIM.period_s + 1e-12
+    assert s.dt[~s.dwell].max() <= LIM.period_s + 1e-12
     np.testing.assert_allclose(np.bincount(s.block, weights=s.dt), law.duration)
 
 
+def test_a_dwell_is_one_point_held_for_its_time() -> None:
+    _, _, s = _plan("G21 G1 X10 F600\nG4 P2.5\nG1 X20\nM2\n")
+    held = s.dwell & (s.dt > 0)
+    assert held.sum() == 1 and s.dt[held][0] == 2.5
+
+
+def test_phases_of_constant_acceleration_are_points() -> None:
+    """Between two points the acceleration of the plan is constant: a point at every
+    phase boundary, and no phase shorter than a quarter period unless it is the
+    whole block."""
+    b, law, s = _plan("G21 G1 X30 F1200\nG1 X30.5 Y0.2\nG1 X60 Y0\nG3 X60 Y10 R5\nM2\n")
+    for k in range(len(b)):
+        bounds = np.cumsum([law.t1[k], law.t2[k], law.t3[k]])
+        taus = s.tau[s.block == k]
+        for t_b, t_ph in zip(bounds, (law.t1[k], law.t2[k], law.t3[k]), strict=True):
+            if t_ph > 0:
+                assert np.min(np.abs(taus - t_b)) < 1e-12
+        phases = np.array([law.t1[k], law.t2[k], law.t3[k]])
+        present = phases[phases > 0]
+        assert np.all(present >= LIM.min_phase_s - 1e-12) or len(present) == 1
+
+
 def test_speed_never_exceeds_feed_and_acceleration_holds() -> None:
-    _, law, s = _plan("G21 G1 X30 F1200\nG1 X30.5 Y0.2\nG1 X60 Y0\nG3 X60 Y10 R5\nM2\n")
-    v = s.speed
-    assert v.max() <= 1200 / 60 + 1e-9
-    # between points of one block the speed changes by at most a·dt
-    same = s.block[1:] == s.block[:-1]
-    dv = np.abs(np.diff(v))[same]
-    assert np.all(dv <= LIM.accel_mm_s2 * s.dt[1:][same] + 1e-9)
-    # trapezoids: entry and exit speeds reachable within each block
-    assert np.all(law.t1 >= -1e-12) and np.all(law.t3 >= -1e-12)
+    b, law, s = _plan("G21 G1 X30 F1200\nG1 X30.5 Y0.2\nG1 X60 Y0\nG3 X60 Y10 R5\nM2\n")
+    assert s.speed.max() <= 1200 / 60 + 1e-9
+    assert np.all(law.a1 <= b.accel + 1e-9) and np.all(law.a3 <= b.accel + 1e-9)
+    assert np.all(law.t1 >= 0) and np.all(law.t3 >= 0)
 
 
-def test_corner_speed_is_what_one_cycle_can_turn() -> None:
-    _, law, _ = _plan("G21 G1 X20 F3000\nG1 Y20\nM2\n")
-    # 90° corner: the velocity jump 2 v sin 45° is at most a · period
-    assert law.v1[0] * 2 * np.sin(np.pi / 4) <= LIM.accel_mm_s2 * LIM.period_s + 1e-9
-    assert law.v1[0] > 0
+def test_corner_speed_keeps_the_cubic_within_the_tolerance() -> None:
+    """A 1° bend of a polyline is taken at speed: the written mean velocity leaves
+    each cubic by (4/27) · period · v |Δt| / 2 at most (lookahead's docstring)."""
+    turn = np.radians(1.0)
+    text = f"G21 G1 X20 F3000\nG1 X{20 + 20 * np.cos(turn):.6f} Y{20 * np.sin(turn):.6f}\nM2\n"
+    b, law, _ = _plan(text)
+    v = law.v1[0]
+    d = np.linalg.norm(b.dq_in[1, :3] - b.dq_out[0, :3])
+    assert v > 0
+    assert (4 / 27) * LIM.period_s * v * d / 2 <= CORNER_SHARE * LIM.tolerance_mm * (1 + 1e-9)
+
+
+def test_a_sharp_corner_is_a_stop() -> None:
+    _, law, _ = _plan("G21 G1 X20 F3000\nG1 Y20\nG1 X0 Y0\nM2\n")
+    assert law.v1[0] == 0 and law.v1[1] == 0
 
 
 def test_helix_is_exactly_on_its_helix() -> None:
@@ -58,14 +86,24 @@ def test_helix_is_exactly_on_its_helix() -> None:
     np.testing.assert_allclose(s.q[arc, 2], -3.0 * th / (4 * np.pi), atol=1e-9)
 
 
+def test_velocity_is_the_tangent_times_the_speed() -> None:
+    _, _, s = _plan("G21 G0 X5 Y0 Z0\nG3 X5 Y0 I-5 J0 F600\nM2\n")
+    inside = (s.block == 1) & ~s.block_end
+    # on a circle about the origin the velocity is perpendicular to the radius
+    radial = np.einsum("ij,ij->i", s.q[inside, :2], s.qdot[inside, :2])
+    np.testing.assert_allclose(radial, 0.0, atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(s.qdot[inside, :3], axis=1), s.speed[inside])
+
+
 @pytest.mark.parametrize("chunk", [1, 2, 5, 17])
 def test_planner_streams_like_one_shot(chunk: int) -> None:
     prof = profile_mod.loads((ROOT / "profiles" / "prsxy-shop.toml").read_text(), "shop")
     ms = gcode.interpret(
         (ROOT / "samples" / "pocket.ngc").read_text(), chain.interpreter_config(prof)
     )
-    one = chain.run_chain(ms, prof)
-    streamed = chain.run_chain(ms, prof, chunk=chunk)
-    assert np.array_equal(one.samples.q, streamed.samples.q)
-    assert np.array_equal(one.samples.dt, streamed.samples.dt)
+    one = chain.run_chain(ms, prof).points
+    streamed = chain.run_chain(ms, prof, chunk=chunk).points
+    assert np.array_equal(one.q, streamed.q)
+    assert np.array_equal(one.dt, streamed.dt)
     assert np.array_equal(one.P_cmd, streamed.P_cmd)
+    assert np.array_equal(one.V_cmd, streamed.V_cmd)

@@ -123,3 +123,17 @@ def test_round_trip_through_dumps(perturbed: profile_mod.Profile) -> None:
     again = profile_mod.loads(profile_mod.dumps(perturbed.raw), "again")
     assert again.kinematics == perturbed.kinematics
     assert again.table == perturbed.table
+
+
+def test_output_pmac_section() -> None:
+    """[output.pmac] backlash_takeup_mm: documented default, > 0, unknown keys named."""
+    text = (ROOT / "profiles" / "prsxy-nominal.toml").read_text()
+    assert profile_mod.loads(text).output["pmac"]["backlash_takeup_mm"] == 0.0005
+    got = profile_mod.loads(text + "\n[output.pmac]\nbacklash_takeup_mm = 0.002\n")
+    assert got.output["pmac"]["backlash_takeup_mm"] == 0.002
+    with pytest.raises(
+        ProfileError, match=r"output.pmac.backlash_takeup_mm: is 0 \(expected a number in \[1e-09, 1"
+    ):
+        profile_mod.loads(text + "\n[output.pmac]\nbacklash_takeup_mm = 0\n", "x.toml")
+    with pytest.raises(ProfileError, match=r"output.pmac.takeup: unknown key"):
+        profile_mod.loads(text + "\n[output.pmac]\ntakeup = 1\n", "x.toml")

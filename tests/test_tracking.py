@@ -206,47 +206,73 @@ def machines() -> list[tuple[str, int | None]]:
     return [("nominal", None), ("random", 11), ("random", 12), ("random", 13)]
 
 
-def _truth(kind: str, seed: int | None) -> profile_mod.Profile:
+def truth_machine(kind: str, seed: int | None, *, play: bool = True) -> profile_mod.Profile:
+    """The shop profile's nominal machine, or one with random errors in every contract
+    term and (``play``) real-axis tables with backlash for every motor."""
     nominal = profile_mod.loads((ROOT / "profiles" / "prsxy-shop.toml").read_text(), "shop")
     if seed is None:
         return nominal
     return simulate.random_machine(
-        nominal, np.random.default_rng(seed), axis_errors=True, name=f"random {seed}"
+        nominal, np.random.default_rng(seed), axis_errors=play, name=f"random {seed}"
     )
-
-
-def _convert(truth: profile_mod.Profile, path) -> tuple[list[gcode.Motion], chain.ChainResult]:
-    text = path.read_text()
-    cfg = chain.interpreter_config(truth)
-    motions = list(gcode.iter_motions(gcode.split_lines(text), cfg, str(path)))
-    return motions, chain.run_chain(motions, truth)
 
 
 PROV = writers.Provenance("x.ngc", "0" * 64, "p", "p.toml", "0" * 64, "")
 
 
+def convert(
+    profile: profile_mod.Profile, text: str, fmt: str = "pmac", chunk: int = 0
+) -> tuple[list[gcode.Motion], chain.ChainResult, list[str]]:
+    """Interpret, run the chain for the dialect and write: (motions, result, part texts)."""
+    cfg = chain.interpreter_config(profile)
+    motions = list(gcode.iter_motions(gcode.split_lines(text), cfg, "x.ngc"))
+    d = writers.dialect(fmt)
+    settings = writers.settings_of(profile, fmt)
+    res = chain.run_chain(
+        motions, profile, segment=d.segment, chunk=chunk, max_part_points=d.parts(settings)
+    )
+    w = d.make(profile, settings, PROV)
+    parts: dict[int, list[str]] = {}
+    for part, piece in [*w.begin(), *w.feed(res.points), *w.finish()]:
+        parts.setdefault(part, []).append(piece)
+    return motions, res, ["".join(parts[k]) for k in sorted(parts)]
+
+
 @pytest.mark.parametrize(("kind", "seed"), machines())
 @pytest.mark.parametrize("path", PROGRAMS, ids=lambda p: p.name)
-def test_pmac_program_traces_the_path(kind: str, seed: int | None, path) -> None:
-    truth = _truth(kind, seed)
-    motions, res = _convert(truth, path)
-    text = writers.write_pmac(res, truth, PROV)[0]
-    P, dt, lines = read_pmac(text)
-    assert len(P) == len(res.samples)
-    q_exec = simulate.execute(truth, P, res.samples.tool_length)
-    check_trace(motions, q_exec, dt, lines, res.samples.tool_length)
+def test_pmac_program_traces_the_path_at_its_points(kind: str, seed: int | None, path) -> None:
+    truth = truth_machine(kind, seed)
+    motions, res, texts = convert(truth, path.read_text())
+    P, dt, lines = read_pmac(texts[0])
+    pts = res.points
+    # every chain point is the RAPID start, a row, a DWELL, or a machine function
+    # (standing, no time: not a point the machine goes to)
+    rows = ~(pts.dwell & (pts.dt == 0))
+    rows[0] = True
+    assert len(P) == int(np.sum(rows))
+    q_exec = simulate.execute(truth, P, pts.tool_length[rows])
+    check_trace(motions, q_exec, dt, lines, pts.tool_length[rows])
 
 
 @pytest.mark.parametrize(("kind", "seed"), machines()[:3])
 @pytest.mark.parametrize("path", PROGRAMS, ids=lambda p: p.name)
-def test_gcode_output_through_controller_traces_the_path(kind: str, seed: int | None, path) -> None:
+def test_gcode_output_through_controller_traces_the_path_at_its_points(
+    kind: str, seed: int | None, path
+) -> None:
     """The controller runs its own IK (here the nominal design) on the written points;
     the true machine executes the resulting motor commands."""
-    truth = _truth(kind, seed)
-    motions, res = _convert(truth, path)
+    truth = truth_machine(kind, seed)
+    motions, res, texts = convert(truth, path.read_text(), "gcode")
     cgeo = chain.controller_geometry(truth)
-    text = writers.write_gcode(res, truth, PROV)
-    q_read, dt, lines = read_gcode_points(text)
+    q_read, dt, lines = read_gcode_points(texts[0])
+    tool = _tool_of_lines(res, lines)
     P_ctrl = kinematics.inverse(cgeo, q_read).P  # the controller's own IK
-    q_exec = simulate.execute(truth, P_ctrl, res.samples.tool_length)
-    check_trace(motions, q_exec, dt, lines, res.samples.tool_length)
+    q_exec = simulate.execute(truth, P_ctrl, tool)
+    check_trace(motions, q_exec, dt, lines, tool)
+
+
+def _tool_of_lines(res: chain.ChainResult, lines: np.ndarray) -> np.ndarray:
+    """The tool length in effect at each written point, from the chain's points of
+    its G-code line (a length changes only with the machine at rest)."""
+    by_line = dict(zip(res.points.line.tolist(), res.points.tool_length.tolist(), strict=True))
+    return np.array([by_line.get(int(ln), 0.0) for ln in lines])

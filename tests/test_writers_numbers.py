@@ -7,7 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from prsxy_post.writers import _round, format_fixed_rows
+from prsxy_post.writers.numbers import format_fixed_rows
+from prsxy_post.writers.numbers import round_clean as _round
 
 FLOATS = st.one_of(
     st.floats(-1e6, 1e6, allow_nan=False),

@@ -1,0 +1,101 @@
+"""What the controller executes: the README's table, measured.
+
+Every sample is converted for the nominal machine and for machines with random
+errors in every contract term and backlash in every motor (seeds 11-13), in both
+formats; the written program is run as its controller runs it (the PVT cubics of
+Turbo PMAC; LinuxCNC's straight lines between the written points), densely
+sampled between the points, executed by the true machine (play model, forward
+kinematics) and held against the G-code's geometry (tests/controllers.py, the
+same code the tests use).
+
+    python bench/controller_truth.py            # the table, Markdown
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from prsxy_post import chain, kinematics  # noqa: E402
+from tests import controllers as ctl  # noqa: E402
+from tests.test_tracking import (  # noqa: E402
+    _tool_of_lines,
+    convert,
+    path_distance,
+    truth_machine,
+)
+
+MACHINES = [("nominal", None), ("random", 11), ("random", 12), ("random", 13)]
+
+
+def at_points(motions, q: np.ndarray, line: np.ndarray) -> float:
+    """Largest distance of the executed points themselves from their lines' paths."""
+    worst = 0.0
+    for ln in np.unique(line):
+        ms = [m for m in motions if m.line == ln and m.kind not in ("dwell", "function")]
+        if not ms:
+            continue
+        sel = line == ln
+        d = np.min([path_distance(m, q[sel])[0] for m in ms], axis=0)
+        worst = max(worst, float(d.max()))
+    return worst
+
+
+def measure(path: Path, fmt: str, kind: str, seed: int | None) -> dict[str, float]:
+    truth = truth_machine(kind, seed)
+    motions, res, texts = convert(truth, path.read_text(), fmt)
+    rapid = truth.limits["rapid_mm_min"]
+    if fmt == "pmac":
+        run = ctl.run_pmac(texts)
+        tool = _tool_of_lines(res, run.line[run.seg])
+        q = ctl.machine_executes(truth, run.t_dense, run.P_dense, tool)
+        tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, rapid)
+        pts = ctl.machine_executes(truth, run.t, run.P, _tool_of_lines(res, run.line))
+        point = at_points(motions, pts, run.line)
+        blend = 0.0
+    else:
+        grun = ctl.run_gcode(texts[0])
+        tool = _tool_of_lines(res, grun.line[grun.seg])
+        cgeo = chain.controller_geometry(truth)
+        P = kinematics.inverse(cgeo, grun.q_dense).P
+        q = ctl.machine_executes(truth, grun.t_dense, P, tool)
+        tr = ctl.judge(motions, q, grun.t_dense, grun.seg, grun.line, tool, rapid)
+        Pp = kinematics.inverse(cgeo, grun.q).P
+        pts = ctl.machine_executes(truth, grun.t, Pp, _tool_of_lines(res, grun.line))
+        point = at_points(motions, pts, grun.line)
+        blend = grun.blend or 0.0
+    return {
+        "path_um": tr.path_mm * 1000.0,
+        "points_um": point * 1000.0,
+        "ab_arcsec": tr.ab_deg * 3600.0,
+        "speed": tr.speed_ratio,
+        "blend_um": blend * 1000.0,
+    }
+
+
+def main() -> None:
+    print(
+        "| program | format | largest path error between points µm (nominal / random 11, "
+        "12, 13) | at the points µm | tool axis arcsec | speed / F |"
+    )
+    print("|---|---|---|---:|---:|---:|")
+    for path in sorted((ROOT / "samples").glob("*.ngc")):
+        for fmt in ("pmac", "gcode"):
+            rows = [measure(path, fmt, k, s) for k, s in MACHINES]
+            between = " / ".join(f"{r['path_um']:.3f}" for r in rows)
+            extra = f" + G64 P {rows[0]['blend_um']:.2f}" if fmt == "gcode" else ""
+            print(
+                f"| {path.name} | {fmt} | {between}{extra} | "
+                f"{max(r['points_um'] for r in rows):.3f} | "
+                f"{max(r['ab_arcsec'] for r in rows):.3f} | "
+                f"{max(r['speed'] for r in rows):.4f} |"
+            )
+
+
+if __name__ == "__main__":
+    main()

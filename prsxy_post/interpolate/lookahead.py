@@ -1,0 +1,281 @@
+"""Look-ahead: the speed at every junction between blocks, planned over a stream.
+
+A controller running PVT segments is told one velocity at each point, the same
+for the segment before and the segment after it. Where the path turns a corner
+at speed v, the planned velocity jumps by Δ = v (t_out − t_in) (t: the tangents
+dq/ds of the two blocks); the point carries the mean of the two sides, so each
+side's cubic is off by Δ/2 at its end. A Hermite cubic whose end velocity is off
+by δ over a step h leaves its intended course by at most (4/27) h |δ| (the basis
+function s³ − s² peaks at 4/27) and its acceleration changes by up to 4 |δ| / h.
+So a corner may be taken at speed v only while
+
+    (4/27) · period · v |t_out − t_in| / 2  ≤  CORNER_SHARE · tolerance     (path)
+    4 · v |t_out − t_in| / 2 / h_lo        ≤  κ · a                         (accel)
+
+(h_lo: the shortest step next to the corner), both for XYZ (mm) and for A/B
+(degrees). A sharp corner is therefore a stop, a slight bend of a polyline is
+taken at speed, and a tangent junction (a line into a tangent arc) costs nothing.
+The cubics next to a corner carry the mean velocity, shorter than v by cos(θ/2),
+while they cover their chords: their speed bulges by up to 1/cos(θ/2) over the
+larger speed at their ends, so the blocks next to a corner keep below cos(θ/2) of
+their speed limits (:func:`corner_bend`).
+The blocks next to a corner keep κ of their acceleration for it: their own
+tangential acceleration is limited to sqrt(1 − κ²) of the limit, so the vector
+sum stays within the profile's limit.
+
+Junctions next to a dwell, a machine function, a rotary-only move, a change of
+tool length or a G61.1 block are stops. Then a backward and a forward pass make
+every block able to slow down and speed up in time (v² changes by at most 2aL).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..gcode import EXACT_STOP
+from .geometry import CORNER_SHARE, Blocks, Limits, segment_limit
+from .timelaw import TimeLaw, time_law
+
+#: Share of the acceleration limit a corner's blend may use (module docstring).
+KAPPA = 0.5
+
+#: Tangents closer than this are one direction (a tangent junction).
+TANGENT_EPS = 1e-9
+
+
+def junction_limits(b: Blocks, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
+    """Speed limit at the end of each block (its junction with the next one).
+
+    Returns
+    -------
+    vj : (n,) [mm/s or deg/s]; the last block ends at rest
+    corner : (n + 1,) bool, junction j (before block j) is a corner taken with
+        the mean velocity: the blocks on both sides leave κ of their acceleration
+        for it. corner[0] and corner[n] are False.
+    """
+    n = len(b)
+    vj = np.zeros(n)
+    corner = np.zeros(n + 1, dtype=bool)
+    if n < 2:
+        return vj, corner
+    d_xyz = np.linalg.norm(b.dq_in[1:, :3] - b.dq_out[:-1, :3], axis=1)
+    d_ab = np.linalg.norm(b.dq_in[1:, 3:] - b.dq_out[:-1, 3:], axis=1)
+    period = limits.period_s
+    # the shortest step next to the junction: a phase lasts at least min_phase
+    # (or is the whole block, at least L / vmax), and curves cut steps shorter
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dur = np.where(b.stops, 0.0, b.length / b.vmax)
+        h_curve = 0.5 * segment_limit(b, limits) / b.vmax
+    h_blk = np.minimum(np.minimum(dur, h_curve), limits.min_phase_s)
+    h_lo = np.minimum(h_blk[:-1], h_blk[1:])
+    tol = b.tol[:-1]
+    tol_deg = b.tol_deg[:-1]
+    a_xyz = KAPPA * limits.accel_mm_s2
+    a_ab = KAPPA * limits.accel_deg_s2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v_tol = np.minimum(
+            np.where(
+                d_xyz > TANGENT_EPS, 27.0 * CORNER_SHARE * tol / (2.0 * period * d_xyz), np.inf
+            ),
+            np.where(
+                d_ab > TANGENT_EPS, 27.0 * CORNER_SHARE * tol_deg / (2.0 * period * d_ab), np.inf
+            ),
+        )
+        v_acc = np.minimum(
+            np.where(d_xyz > TANGENT_EPS, a_xyz * h_lo / (2.0 * d_xyz), np.inf),
+            np.where(d_ab > TANGENT_EPS, a_ab * h_lo / (2.0 * d_ab), np.inf),
+        )
+    # an arc next to the junction already spends its normal acceleration on v²/r:
+    # the blend must share it, v²/r + 2 v d / h_lo ≤ sqrt(1 − ½²) a
+    r_min = np.minimum(b.curv_r[:-1], b.curv_r[1:])
+    curved = np.isfinite(r_min) & (d_xyz > TANGENT_EPS)
+    if np.any(curved):
+        an = math.sqrt(0.75) * limits.accel_mm_s2
+        c = np.flatnonzero(curved)
+        p = 2.0 * d_xyz[c] / np.where(h_lo[c] > 0, h_lo[c], np.inf)
+        r = r_min[c]
+        # v² / r + p v − an = 0
+        v_acc[c] = np.minimum(v_acc[c], 0.5 * r * (-p + np.sqrt(p * p + 4.0 * an / r)))
+    v = np.minimum(np.minimum(b.vmax[:-1], b.vmax[1:]), np.minimum(v_tol, v_acc))
+    # a corner of 90° or more is a stop: taking it at the speed the tolerance allows
+    # (tenths of a mm/s) gains nothing, and a motor reversing there is best turned
+    # at rest
+    sharp = np.einsum("ij,ij->i", b.dq_in[1:, :3], b.dq_out[:-1, :3]) <= 0.0
+    sharp &= (d_xyz > TANGENT_EPS) & ~b.angular[:-1] & ~b.angular[1:]
+    stop = (
+        sharp
+        | b.stops[:-1]
+        | b.stops[1:]
+        | b.angular[:-1]
+        | b.angular[1:]
+        | (b.tool_length[:-1] != b.tool_length[1:])
+        | (tol == EXACT_STOP)
+    )
+    v = np.where(stop, 0.0, v)
+    vj[:-1] = v
+    corner[1:-1] = ~stop & ((d_xyz > TANGENT_EPS) | (d_ab > TANGENT_EPS))
+    return vj, corner
+
+
+def corner_bend(b: Blocks) -> np.ndarray:
+    """(n + 1,) cos(θ/2) of the turn at each junction (1 where tangent, at the ends):
+    next to a corner taken at speed the cubics bulge by up to 1/cos(θ/2) over the
+    larger speed at their ends, so the blocks there keep below cos(θ/2) of their
+    limit (checked over random corners and speed changes)."""
+    out = np.ones(len(b) + 1)
+    if len(b) > 1:
+        out[1:-1] = np.minimum(
+            1.0, 0.5 * np.linalg.norm(b.dq_in[1:, :3] + b.dq_out[:-1, :3], axis=1)
+        )
+    return out
+
+
+def effective_accel(b: Blocks, corner: np.ndarray) -> np.ndarray:
+    """Each block's tangential acceleration: sqrt(1 − κ²) of its limit next to a
+    corner (module docstring), its limit elsewhere."""
+    near = corner[:-1] | corner[1:]
+    return np.where(near & ~b.stops, b.accel * math.sqrt(1.0 - KAPPA**2), b.accel)
+
+
+def backward_pass(length: np.ndarray, accel: np.ndarray, vj: np.ndarray) -> np.ndarray:
+    """v_out[k] ≤ sqrt(v_out[k+1]² + 2 a_{k+1} L_{k+1}): every block can slow down in time.
+
+    A plain loop over Python floats: its arithmetic does not depend on where a
+    stream was cut, which keeps streamed output identical to one-shot output.
+    """
+    n = len(vj)
+    v = vj.tolist()
+    two_al = (2.0 * accel * length).tolist()
+    sqrt = math.sqrt
+    nxt = v[-1] if n else 0.0
+    for k in range(n - 2, -1, -1):
+        lim = sqrt(nxt * nxt + two_al[k + 1])
+        if v[k] > lim:
+            v[k] = lim
+        nxt = v[k]
+    return np.array(v, dtype=float)
+
+
+def forward_pass(
+    length: np.ndarray, accel: np.ndarray, v_back: np.ndarray, v_start: float = 0.0
+) -> np.ndarray:
+    """v_out[k] ≤ sqrt(v_out[k−1]² + 2 a_k L_k): every block can speed up in time."""
+    v = v_back.tolist()
+    two_al = (2.0 * accel * length).tolist()
+    sqrt = math.sqrt
+    prev = v_start
+    for k in range(len(v)):
+        lim = sqrt(prev * prev + two_al[k])
+        if v[k] > lim:
+            v[k] = lim
+        prev = v[k]
+    return np.array(v, dtype=float)
+
+
+class Planner:
+    """Look-ahead speed planning over a stream of blocks, in bounded memory.
+
+    Blocks wait until the path after them is long enough to stop from any speed
+    (1.5 · v_max² / 2a) or a stop follows; then their junction speeds cannot
+    change with anything further in the program, and they are committed. The
+    last two blocks always wait for the next one (the junction after a block's
+    successor sets the successor's speed limit, which the block's exit speed
+    depends on).
+    The result is the same, bit for bit, as planning the whole program at once.
+    """
+
+    def __init__(self, limits: Limits) -> None:
+        self.limits = limits
+        self.pending: Blocks | None = None
+        self.v_start = 0.0
+        # the junction before the first pending block is a corner (it was planned
+        # with the blocks committed before it)
+        self.start_corner = False
+        self.start_bend = 1.0
+
+    def push(self, new: Blocks, final: bool = False) -> Plan | None:
+        """Add blocks; return the plan of the blocks that became final, if any."""
+        if self.pending is None or len(self.pending) == 0:
+            b = new
+        elif len(new) == 0:
+            b = self.pending
+        else:
+            b = Blocks.concat([self.pending, new])
+        n = len(b)
+        if n == 0:
+            self.pending = b
+            return None
+        vj, corner = junction_limits(b, self.limits)
+        corner[0] = self.start_corner
+        accel = effective_accel(b, corner)
+        bend = corner_bend(b)
+        bend[0] = self.start_bend
+        near = np.where(corner, bend, 1.0)
+        vmax = b.vmax * np.minimum(near[:-1], near[1:])
+        vj = np.minimum(vj, np.concatenate([np.minimum(vmax[:-1], vmax[1:]), [0.0]]))
+        length = np.where(b.stops, 0.0, b.length)
+        v_back = backward_pass(length, accel, vj)
+        if final:
+            c = n - 1
+        else:
+            moving = ~b.stops
+            lin = moving & ~b.angular
+            run = np.where(lin, b.length, 0.0)
+            remaining = np.cumsum(run[::-1])[::-1]  # remaining[k]: blocks k..n-1
+            after = np.concatenate([remaining[1:], [0.0]])
+            top = float(np.max(b.vmax[lin])) if np.any(lin) else 0.0
+            amin = float(np.min(accel[lin])) if np.any(lin) else 1.0
+            need = 1.5 * top * top / (2.0 * amin)
+            # a block's speed limit near a corner depends on the junction after the
+            # next block (corner_bend), so two blocks must follow the last committed
+            ok = np.nonzero(after[:-2] >= need)[0]
+            c = int(ok[-1]) if ok.size else -1
+            stops = np.nonzero(vj[:-1] == 0.0)[0]
+            if stops.size:
+                c = max(c, int(stops[-1]))
+        if c < 0:
+            self.pending = b
+            return None
+        done = b.take(slice(0, c + 1))
+        v_out = forward_pass(length[: c + 1], accel[: c + 1], v_back[: c + 1], self.v_start)
+        done.accel = accel[: c + 1]
+        done.vmax = vmax[: c + 1]
+        law = time_law(done, v_out, self.v_start, self.limits.min_phase_s)
+        nxt = b.dq_in[c + 1] if c + 1 < n else np.zeros(5)
+        plan = Plan(done, law, bool(corner[c + 1]) if c + 1 < n else False, nxt)
+        self.v_start = float(v_out[-1])
+        self.start_corner = bool(corner[c + 1])
+        self.start_bend = float(bend[c + 1])
+        self.pending = b.take(slice(c + 1, n))
+        return plan
+
+
+class Plan:
+    """Committed blocks with their time law.
+
+    blocks : Blocks (accel is the effective tangential acceleration)
+    law : TimeLaw
+    end_corner : the last block ends in a corner taken at speed
+    next_dq_in : (5,) tangent of the block after the last one (for that corner's
+        mean velocity)
+    """
+
+    def __init__(self, blocks: Blocks, law: TimeLaw, end_corner: bool, next_dq_in: np.ndarray):
+        self.blocks = blocks
+        self.law = law
+        self.end_corner = end_corner
+        self.next_dq_in = next_dq_in
+
+
+__all__ = [
+    "KAPPA",
+    "Plan",
+    "Planner",
+    "TimeLaw",
+    "backward_pass",
+    "effective_accel",
+    "forward_pass",
+    "junction_limits",
+]

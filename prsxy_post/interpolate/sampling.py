@@ -1,0 +1,139 @@
+"""Interpolation points: where the controller is told to be, when, and how fast.
+
+Every block's end is a point, and so is every boundary between its phases of
+constant acceleration (:mod:`.timelaw`); each phase is cut into equal steps of at
+most the period (shorter on tight curves: :func:`.geometry.segment_limit`). Each
+point carries the planned velocity of the motion there, dq/dt = v · dq/ds; at a
+corner taken at speed, the mean of the two sides (:mod:`.lookahead`). A dwell is
+one point held for its whole duration, a machine function one point of no
+duration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from .geometry import KIND_DWELL, KIND_FUNCTION, Blocks, Limits, evaluate, segment_limit
+from .lookahead import Plan
+from .timelaw import TimeLaw, distance, speed
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Interpolation points.
+
+    q : (N, 5) [mm, mm, mm, deg, deg] workpiece frame, on the programmed path
+    qdot : (N, 5) [mm/s, deg/s] planned velocity at the point
+    dt : (N,) [s] time of the segment that ends at each point (a dwell: its length)
+    line : (N,) source line of the block the point belongs to
+    block : (N,) index of the block in its plan
+    tau : (N,) [s] local time in the block
+    first : (N,) bool, first point of its block
+    tool_length : (N,) active G43 offset [mm]
+    speed : (N,) planned path speed at the point [mm/s or deg/s]
+    dwell : (N,) bool, the path stands for dt (a dwell or a machine function)
+    fn : (N,) object, the machine-function words at function points, else None
+    block_end : (N,) bool, the last point of its block
+    split : (N,) int8, a split program's part ends at rest at this point (1: a stop
+        the program makes, 2: a stop put there for the split), else 0
+    """
+
+    q: np.ndarray
+    qdot: np.ndarray
+    dt: np.ndarray
+    line: np.ndarray
+    block: np.ndarray
+    tau: np.ndarray
+    first: np.ndarray
+    tool_length: np.ndarray
+    speed: np.ndarray
+    dwell: np.ndarray
+    fn: np.ndarray
+    block_end: np.ndarray
+    split: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.dt)
+
+    def take(self, sel: slice | np.ndarray) -> Samples:
+        return Samples(**{f.name: getattr(self, f.name)[sel] for f in fields(self)})
+
+
+def steps(b: Blocks, law: TimeLaw, limits: Limits) -> np.ndarray:
+    """(n, 3) steps in each phase of each block (0 for a phase that is absent)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        h = np.minimum(limits.period_s, segment_limit(b, limits) / np.maximum(law.vp, 1e-300))
+    t = np.column_stack([law.t1, law.t2, law.t3])
+    n = np.where(t > 0, np.ceil(t / h[:, None] - 1e-9), 0).astype(np.int64)
+    n = np.where(t > 0, np.maximum(n, 1), 0)
+    stand = b.stops
+    n[stand] = [0, 1, 0]  # one point for a dwell or a function
+    return n
+
+
+def sample(plan: Plan, limits: Limits) -> Samples:
+    """Points of a plan's blocks, in time order, each block's end point last."""
+    b, law = plan.blocks, plan.law
+    n_ph = steps(b, law, limits)
+    counts = n_ph.reshape(-1)
+    nb = len(b)
+    blk = np.repeat(np.repeat(np.arange(nb), 3), counts)
+    phase = np.repeat(np.tile(np.arange(3), nb), counts)
+    starts = np.cumsum(counts) - counts
+    j = np.arange(len(blk)) - np.repeat(starts, counts) + 1  # 1..n within the phase
+    t_ph = np.column_stack([law.t1, law.t2, law.t3])
+    t_before = np.column_stack([np.zeros(nb), law.t1, law.t1 + law.t2])
+    nj = n_ph[blk, phase]
+    step = t_ph[blk, phase] / nj
+    tau = t_before[blk, phase] + j * step
+    last_of_block = np.zeros(len(blk), dtype=bool)
+    if len(blk):
+        last_of_block[np.cumsum(counts.reshape(nb, 3).sum(axis=1)) - 1] = True
+    tau = np.where(last_of_block, law.duration[blk], tau)
+    first = np.ones(len(blk), dtype=bool)
+    first[1:] = blk[1:] != blk[:-1]
+
+    stand = b.stops[blk]
+    s = np.where(last_of_block | stand, b.length[blk], distance(law, blk, tau))
+    q, dq = evaluate(b, blk, s)
+    v = np.where(stand, 0.0, speed(law, blk, tau))
+    v = np.where(last_of_block & ~stand, law.v1[blk], v)
+    qdot = v[:, None] * dq
+    # a junction taken at speed: the mean of the velocities on its two sides (the
+    # same vector where the path is tangent)
+    nxt = np.vstack([b.dq_in[1:], plan.next_dq_in[None, :]])
+    at_end = np.flatnonzero(last_of_block & ~stand & (v > 0))
+    if at_end.size:
+        kb = blk[at_end]
+        qdot[at_end] = 0.5 * v[at_end, None] * (b.dq_out[kb] + nxt[kb])
+    dt = np.where(stand, np.where(b.kind[blk] == KIND_DWELL, b.duration[blk], 0.0), step)
+    fn = np.empty(len(blk), dtype=object)
+    is_fn = b.kind[blk] == KIND_FUNCTION
+    fn[is_fn] = b.fn[blk[is_fn]]
+    return Samples(
+        q=q,
+        qdot=qdot,
+        dt=dt,
+        line=b.line[blk],
+        block=blk,
+        tau=tau,
+        first=first,
+        tool_length=b.tool_length[blk],
+        speed=v,
+        dwell=stand,
+        fn=fn,
+        block_end=last_of_block,
+        split=np.where(last_of_block, b.split_after[blk], 0).astype(np.int8),
+    )
+
+
+def at_times(plan: Plan, k: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pose and planned velocity at local times ``tau`` inside blocks ``k`` (no corner
+    averaging: for points strictly inside a block)."""
+    b, law = plan.blocks, plan.law
+    s = distance(law, k, tau)
+    q, dq = evaluate(b, k, s)
+    v = speed(law, k, tau)
+    return q, v[:, None] * dq

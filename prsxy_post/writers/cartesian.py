@@ -1,0 +1,37 @@
+"""The Cartesian step every Cartesian dialect shares.
+
+A controller with its own inverse kinematics (``[controller_kinematics]``, the
+nominal design when absent, with an ideal table) is given, at every point, the
+pose its kinematics turn into the compensated motor commands:
+q_written = FK_controller(P_cmd) (contract, "The compensation chain"). Its own IK
+then reproduces the commands, and with them the compensation.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .. import kinematics
+from ..errors import ReachError
+
+if TYPE_CHECKING:
+    from ..chain import PointChunk
+
+
+def written_points(cgeo: kinematics.Geometry, chunk: PointChunk) -> np.ndarray:
+    """FK of the controller's geometry at the motor commands, warm-started at the
+    pose the chain aimed for; (n, 5) [mm, mm, mm, deg, deg]."""
+    guess = kinematics.platform_guess(
+        kinematics.solve_platform(cgeo, chunk.q_target), chunk.q_target
+    )
+    q, ok = kinematics.forward(cgeo, chunk.P_cmd, guess=guess)
+    if not np.all(ok):
+        k = int(np.argmin(ok))
+        raise ReachError(
+            "the controller's kinematics cannot express this point",
+            line=int(chunk.line[k]),
+            expected="a pose within reach of [controller_kinematics]",
+        )
+    return q

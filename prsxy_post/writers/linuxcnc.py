@@ -1,0 +1,183 @@
+"""Corrected Cartesian G-code for LinuxCNC running the machine's kinematics.
+
+Each point is written where the controller's own kinematics reproduce the
+compensated motor commands (:mod:`.cartesian`). LinuxCNC moves along a straight
+line between two points (in its Cartesian space) and blends corners within the
+``G64 P`` tolerance the program sets before its first motion (LinuxCNC's default
+G64 without P may cut corners by any amount); the planner makes points dense
+enough on curves that the chords stay within the path tolerance. Timing is kept
+with G93 inverse time: F = 1 / (segment minutes). Machine functions (S, T, M6,
+M3-M5, M7-M9, M0, M1, ...) are written where the program has them, at rest; each
+G4 is one G4.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..interpolate.geometry import CORNER_SHARE
+from .base import Dialect, Piece, Provenance, Setting, header, words_text
+from .cartesian import written_points
+from .numbers import round_clean
+
+if TYPE_CHECKING:
+    from ..chain import PointChunk
+    from ..profile import Profile
+
+SETTINGS = {
+    "decimals": Setting(6, 4, 9, "decimals of positions", "decimals"),
+    "tolerance_mm": Setting(
+        0.0,
+        0.0,
+        10.0,
+        "> 0: drop points while the chord through the kept ones stays within this "
+        "(it adds to the path error)",
+        "gcode_tolerance_mm",
+    ),
+}
+
+
+class GcodeWriter:
+    """Corrected Cartesian G-code (module docstring).
+
+    With a tolerance > 0, points are dropped while the chord from the last written
+    point stays within it of every point in between (XYZ in mm, A/B read as mm at
+    1 mm per degree); a block's end point and every stop are always written.
+    """
+
+    def __init__(self, profile: Profile, settings: Mapping[str, Any], prov: Provenance) -> None:
+        from ..chain import controller_geometry
+
+        self.profile = profile
+        self.prov = prov
+        self.tol = float(settings["tolerance_mm"])
+        self.dec = int(settings["decimals"])
+        self.cgeo = controller_geometry(profile)
+        self.blend = CORNER_SHARE * profile.interpolation.get("path_tolerance_mm", 0.0005)
+        self.n = 0
+        self.t_total = 0.0
+        self.last_line: int | None = None
+        self.last_q: np.ndarray | None = None
+        self.run: list[tuple[np.ndarray, float]] = []  # held back: (point, its dt)
+        self.fmt = " ".join(f"{a}%.{self.dec}f" for a in "XYZAB")
+        self.ended_by: str | None = None
+
+    def begin(self) -> list[Piece]:
+        ck = (
+            "profile [controller_kinematics]"
+            if self.profile.controller_kinematics
+            else "the nominal design"
+        )
+        extra = [
+            f"For a controller whose inverse kinematics is {ck}, with an ideal table.",
+            "Run with no tool length offset (G49) and no work offset: tool lengths and",
+            "offsets are in the points. Timing is G93 inverse time per segment.",
+            f"Corners blend within G64 P{self.blend:g} (LinuxCNC's G64 without P would",
+            "cut them by any amount).",
+        ]
+        lines = ["%"] + [
+            "(" + x.replace("(", "[").replace(")", "]") + ")"
+            for x in header(self.prov, self.profile, extra)
+        ]
+        lines.append("G21 G90 G17 G40 G49 G94")
+        lines.append(f"G64 P{self.blend:g}")
+        return [(0, "\n".join(lines) + "\n")]
+
+    def feed(self, chunk: PointChunk) -> list[Piece]:
+        if len(chunk) == 0:
+            return []
+        q = round_clean(written_points(self.cgeo, chunk), self.dec)
+        lines: list[str] = []
+        for k in range(len(chunk)):
+            qk = q[k]
+            if self.n == 0:
+                lines.append("G0 " + self.fmt % tuple(qk))
+                lines.append("G93")
+                self.last_q = qk
+                self.n = 1
+                continue
+            if chunk.line[k] != self.last_line:
+                lines.append(f"(line {int(chunk.line[k])})")
+                self.last_line = int(chunk.line[k])
+            dtk = float(chunk.dt[k])
+            self.t_total += dtk
+            words = chunk.fn[k]
+            if words is not None:
+                self._write_held(lines)
+                if any(w in (("M", 2.0), ("M", 30.0)) for w in words):
+                    lines.append("G94")  # back to units per minute before the end
+                    self.ended_by = words_text(words)
+                lines.append(words_text(words))
+                continue
+            standing = (
+                self.last_q is not None and np.array_equal(qk, self.last_q) and chunk.dwell[k]
+            )
+            if standing:
+                self._write_held(lines)
+                lines.append(f"G4 P{dtk:.4f}")
+                continue
+            if self.tol > 0 and not chunk.block_end[k] and chunk.speed[k] > 0:
+                # a point that may be dropped: keep it back while the chord from the
+                # last written point to it passes all the held-back ones
+                if not self._within(qk):
+                    self._write_held(lines)
+                self.run.append((qk, dtk))
+                continue
+            if self.run and not self._within(qk):
+                self._write_held(lines)
+            t = dtk + sum(d for _, d in self.run)
+            lines.append("G1 " + self.fmt % tuple(qk) + f" F{60.0 / t:.3f}")
+            self.last_q = qk
+            self.run = []
+            self.n += 1
+        return [(0, "\n".join(lines) + "\n")] if lines else []
+
+    def _write_held(self, lines: list[str]) -> None:
+        """Write the last held-back point (it becomes the new chord start)."""
+        if not self.run:
+            return
+        qh = self.run[-1][0]
+        t = sum(d for _, d in self.run)
+        lines.append("G1 " + self.fmt % tuple(qh) + f" F{60.0 / t:.3f}")
+        self.last_q = qh
+        self.run = []
+        self.n += 1
+
+    def _within(self, qk: np.ndarray) -> bool:
+        """Would the chord from the last written point to qk pass the held-back points?"""
+        if not self.run or self.last_q is None:
+            return True
+        a = self.last_q
+        d = qk - a
+        dd = float(d @ d)
+        if dd == 0:
+            return False
+        pts = np.array([p for p, _ in self.run])
+        t = np.clip((pts - a) @ d / dd, 0, 1)
+        return float(np.linalg.norm(pts - (a + t[:, None] * d), axis=1).max()) <= self.tol
+
+    def finish(self) -> list[Piece]:
+        lines: list[str] = []
+        self._write_held(lines)
+        if self.ended_by is None:
+            lines += ["G94", "M2"]
+        lines.append(f"(end: {self.n} points, {self.t_total:.3f} s)")
+        lines.append("%")
+        return [(0, "\n".join(lines) + "\n")]
+
+
+def _make(profile: Profile, settings: Mapping[str, Any], prov: Provenance) -> GcodeWriter:
+    return GcodeWriter(profile, settings, prov)
+
+
+DIALECT = Dialect(
+    name="gcode",
+    extension=".ngc",
+    summary="corrected Cartesian G-code for LinuxCNC running the machine's kinematics",
+    segment="chord",
+    settings=SETTINGS,
+    make=_make,
+)

@@ -1,0 +1,338 @@
+"""What the controller executes, between the points too (issue "controller truth").
+
+The written program is read back from its text and run the way its controller
+runs it (:mod:`tests.controllers`: the PVT cubic of every segment for Turbo PMAC,
+straight lines in LinuxCNC's Cartesian space for the G-code), densely sampled;
+the true machine follows the commands (the contract's play model on the
+continuous command, then its forward kinematics), and every sample is held
+against the G-code's own geometry:
+
+- within 0.5 µm and 0.5 arcsec of the programmed path (LinuxCNC: the polyline
+  within the tolerance less the G64 P it is told to blend with);
+- never faster than F (or the rapid rate) beyond the rounding of the written
+  numbers (0.1 %: six decimals of a mm over the shortest segments);
+- within the acceleration limit, on the commanded motion: the contract's play
+  model takes a part up with a jolt wherever a motor meets it moving, which no
+  command can smooth away entirely.
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from prsxy_post import chain, kinematics
+
+from . import controllers as ctl
+from .conftest import ROOT
+from .test_tracking import TOL_DEG, TOL_MM, _tool_of_lines, convert, truth_machine
+
+SAMPLES = sorted((ROOT / "samples").glob("*.ngc"))
+#: rounding of the written numbers, as a share of the speed (module docstring)
+SPEED_ROUNDING = 1e-3
+#: the same for the acceleration of the commanded motion
+ACCEL_ROUNDING = 0.01
+
+
+def execute_pmac(truth, texts: list[str], res: chain.ChainResult):
+    """Run PMAC text(s) as the controller does; the truth machine's tip poses."""
+    run = ctl.run_pmac(texts)
+    tool = _tool_of_lines(res, run.line[run.seg])
+    q = ctl.machine_executes(truth, run.t_dense, run.P_dense, tool)
+    return run, q, tool
+
+
+def judge_pmac(truth, motions, res, texts) -> ctl.Trace:
+    run, q, tool = execute_pmac(truth, texts, res)
+    return ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits["rapid_mm_min"])
+
+
+def assert_within(tr: ctl.Trace, accel: float | None, path_mm: float = TOL_MM) -> None:
+    """Path, tool axis and speed; the acceleration where ``accel`` is given (a
+    machine without play: with play, the contract's model takes a part up with a
+    jolt wherever a motor meets it moving, and a motor crossing its play moves
+    alone, unloaded, faster than the path)."""
+    assert tr.path_mm <= path_mm, f"{tr.path_mm * 1000:.3f} µm off the path at line {tr.worst_line}"
+    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
+    assert tr.speed_ratio <= 1 + SPEED_ROUNDING, f"{tr.speed_ratio:.5f} x F"
+    if accel is not None:
+        assert tr.accel_mm_s2 <= accel * (1 + ACCEL_ROUNDING), f"{tr.accel_mm_s2:.0f} mm/s²"
+
+
+MACHINES = [("nominal", None), ("random", 11), ("random", 12), ("random", 13)]
+
+
+@pytest.mark.parametrize(("kind", "seed"), MACHINES)
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
+def test_pvt_cubics_stay_on_the_path(kind: str, seed: int | None, path) -> None:
+    """Machines with random errors in every contract term and backlash in every motor."""
+    truth = truth_machine(kind, seed)
+    motions, res, texts = convert(truth, path.read_text())
+    assert_within(judge_pmac(truth, motions, res, texts), None)
+
+
+@pytest.mark.parametrize(("kind", "seed"), MACHINES)
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
+def test_pvt_cubics_keep_to_the_acceleration_limit(kind: str, seed: int | None, path) -> None:
+    """The same machines without play: the tip's acceleration along the executed
+    motion (blends, arcs, phases) stays within the profile's limit."""
+    truth = truth_machine(kind, seed, play=False)
+    motions, res, texts = convert(truth, path.read_text())
+    assert_within(judge_pmac(truth, motions, res, texts), truth.limits["max_accel_mm_s2"])
+
+
+@pytest.mark.parametrize(("kind", "seed"), MACHINES[:3])
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
+def test_linuxcnc_lines_stay_on_the_path(kind: str, seed: int | None, path) -> None:
+    """LinuxCNC moves straight between the written points in its Cartesian space and
+    its own kinematics turn them into joint commands."""
+    truth = truth_machine(kind, seed)
+    motions, res, texts = convert(truth, path.read_text(), "gcode")
+    run = ctl.run_gcode(texts[0])
+    assert run.blend is not None and run.blend < TOL_MM, "no G64 P before the first motion"
+    first_move = texts[0].index("\nG0 ")
+    assert texts[0].index(f"G64 P{run.blend:g}") < first_move
+    tool = _tool_of_lines(res, run.line[run.seg])
+    P = kinematics.inverse(chain.controller_geometry(truth), run.q_dense).P
+    q = ctl.machine_executes(truth, run.t_dense, P, tool)
+    tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits["rapid_mm_min"])
+    # LinuxCNC's blends stay within G64 P of the corner; the polyline gets the rest
+    assert tr.path_mm <= TOL_MM - run.blend, f"{tr.path_mm * 1000:.3f} µm"
+    assert tr.ab_deg <= TOL_DEG
+    assert tr.speed_ratio <= 1 + SPEED_ROUNDING
+
+
+# ------------------------------------------------------------------ generated corners
+
+
+@st.composite
+def programs(draw: st.DrawFn) -> str:
+    """Short programs of lines and arcs meeting at any angle, any length and feed."""
+    lines = ["G21 G90 G17 G94", "G0 X0 Y0 Z2", "G1 Z0 F300"]
+    x = y = 0.0
+    heading = draw(st.floats(0, 2 * np.pi))
+    for _ in range(draw(st.integers(2, 6))):
+        feed = draw(st.sampled_from([60, 300, 1200, 3000, 6000]))
+        turn = draw(st.floats(-np.pi, np.pi))
+        heading += turn
+        length = draw(st.floats(0.05, 20.0))
+        if draw(st.booleans()):
+            x += length * np.cos(heading)
+            y += length * np.sin(heading)
+            lines.append(f"G1 X{x:.4f} Y{y:.4f} F{feed}")
+        else:
+            r = draw(st.floats(0.2, 15.0))
+            sweep = draw(st.floats(0.2, 3.0)) * draw(st.sampled_from([-1, 1]))
+            # centre to the left (ccw) or right (cw) of the heading
+            side = 1 if sweep > 0 else -1
+            cx = x - side * r * np.sin(heading)
+            cy = y + side * r * np.cos(heading)
+            a0 = np.arctan2(y - cy, x - cx)
+            a1 = a0 + sweep
+            x, y = cx + r * np.cos(a1), cy + r * np.sin(a1)
+            heading += sweep
+            code = "G3" if sweep > 0 else "G2"
+            lines.append(
+                f"{code} X{x:.4f} Y{y:.4f} I{cx - (x - r * np.cos(a1) + r * np.cos(a0)):.4f} "
+                f"J{cy - (y - r * np.sin(a1) + r * np.sin(a0)):.4f} F{feed}"
+            )
+    lines += ["G0 Z2", "M2"]
+    return "\n".join(lines) + "\n"
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(programs(), st.sampled_from([None, 21]))
+def test_any_corner_any_speed_stays_on_the_path(text: str, seed: int | None) -> None:
+    truth = truth_machine("random" if seed else "nominal", seed)
+    motions, res, texts = convert(truth, text)
+    tr = judge_pmac(truth, motions, res, texts)
+    assert_within(tr, None if seed else truth.limits["max_accel_mm_s2"])
+
+
+# ------------------------------------------------------------------ velocities
+
+
+def test_the_velocity_at_each_point_is_the_plan_s_on_both_sides() -> None:
+    """A straight line at constant speed: every written velocity is the speed, so each
+    cubic is the straight line itself (no overshoot into the next block)."""
+    truth = truth_machine("nominal", None)
+    text = "G21 G90\nG0 X0 Y0 Z0\nG1 X50 F3000\nG1 Y50\nG0 Z5\nM2\n"
+    _motions, _res, texts = convert(truth, text)
+    run = ctl.run_pmac(texts)
+    # table X (motor 5) runs at F = 50 mm/s in the middle of the first line
+    mid = (run.line == 3) & (np.abs(run.V[:, 3] - 50.0) < 1e-3)
+    assert np.sum(mid) > 50
+    # at the square corner the motion stops: both motors at rest
+    corner = np.flatnonzero((run.line[:-1] == 3) & (run.line[1:] == 4))[0]
+    assert np.all(run.V[corner] == 0)
+
+
+# ------------------------------------------------------------------ split programs
+
+
+def _split_profile(truth, max_points: int):
+    from prsxy_post.profile import profile_from_dict
+
+    doc = dict(truth.raw)
+    doc["output"] = {"pmac": {"max_points_per_program": max_points}}
+    return profile_from_dict(doc, "<split>")
+
+
+@pytest.mark.parametrize("seed", [None, 11])
+def test_split_parts_end_at_rest_and_run_as_one_program(seed: int | None) -> None:
+    base = truth_machine("random" if seed else "nominal", seed)
+    text = (ROOT / "samples" / "pocket.ngc").read_text()
+    truth = _split_profile(base, 1500)
+    motions, res, texts = convert(truth, text)
+    assert len(texts) >= 2
+    runs = [ctl.run_pmac([t]) for t in texts]
+    for r in runs[:-1]:
+        # every part ends at rest at the end of a block
+        assert np.all(r.V[-1] == 0)
+        assert len(r.P) <= 1500
+    for a, b in itertools.pairwise(runs):
+        # the next starts exactly where the previous ended
+        assert np.array_equal(a.P[-1], b.P[0])
+    # run one after the other (run_pmac checks each RAPID moves nothing), they trace
+    # the path as one program does
+    tr = judge_pmac(truth, motions, res, texts)
+    assert_within(tr, None if seed else truth.limits["max_accel_mm_s2"])
+    ends = [re.search(r"; end of part \d+: at rest after line (\d+), (.*)", t) for t in texts[:-1]]
+    assert all(ends), "every part but the last says where and why it ends"
+
+
+def test_split_at_the_stops_the_program_makes_anyway_changes_nothing() -> None:
+    """Where the program stops by itself often enough, its parts are the unsplit
+    program cut at those stops: the same points."""
+    truth = truth_machine("nominal", None)
+    # a square, corner after corner: every corner is a stop
+    body = [f"G1 X{(i % 2) * 20} Y{((i // 2) % 2) * 20} F1200" for i in range(40)]
+    text = "\n".join(["G21 G90", "G0 X0 Y0 Z0", *body, "M2"]) + "\n"
+    _, _, whole = convert(truth, text)
+    _, _, parts = convert(_split_profile(truth, 300), text)
+    assert len(parts) > 2
+    one = ctl.run_pmac(whole)
+    split = ctl.run_pmac(parts)
+    np.testing.assert_array_equal(one.P, split.P)
+    np.testing.assert_array_equal(one.V, split.V)
+    np.testing.assert_allclose(one.t, split.t, atol=1e-9)
+
+
+# ------------------------------------------------------------------ rotary buffer
+
+
+def test_rotary_buffer_is_sized_in_words_and_set_up_in_order() -> None:
+    """User Manual, "Rotary Motion Program Buffers": DEFINE ROT {constant} is "the size
+    of the buffer in memory words", "each value in a program (e.g. X1250) takes one
+    word"; no data-gathering buffer may exist (DELETE GATHER first); B0 points the
+    coordinate system at the buffer and "cannot be given while the rotary buffers are
+    open" (Software Reference, OPEN ROTARY)."""
+    from prsxy_post.profile import profile_from_dict
+
+    base = truth_machine("nominal", None)
+    doc = dict(base.raw)
+    doc["output"] = {"pmac": {"rotary_buffer_points": 200}}
+    truth = profile_from_dict(doc, "<rot>")
+    motions, res, texts = convert(truth, (ROOT / "samples" / "pocket.ngc").read_text())
+    assert len(texts) == 1
+    code = [ln.split(";")[0].strip() for ln in texts[0].splitlines()]
+    code = [c for c in code if c]
+    i_gather, i_define = code.index("DELETE GATHER"), code.index("DEFINE ROT 2400")
+    i_b0, i_open = code.index("B0"), code.index("OPEN ROT")
+    assert i_gather < i_define < i_b0 < i_open
+    # a PVT line holds a position and a velocity per motor: ten words
+    row = next(c for c in code if c.startswith("U") and ":" in c)
+    assert len(re.findall(r"-?\d+\.\d+", row)) == 10
+    tr = judge_pmac(truth, motions, res, texts)
+    assert_within(tr, truth.limits["max_accel_mm_s2"])
+
+
+# ------------------------------------------------------------------ machine functions
+
+
+FUNCTIONS = """G21 G90
+T2 M6
+G43 H2
+S12000 M3
+M8
+G0 X10 Y10 Z5
+G1 Z-1 F300
+G4 P2.5
+G1 X20
+M0
+M9 M5
+G0 Z5
+M30
+"""
+
+
+def test_machine_functions_are_carried_in_order_pmac() -> None:
+    truth = truth_machine("nominal", None)
+    _motions, _res, texts = convert(truth, FUNCTIONS)
+    run = ctl.run_pmac(texts)
+    assert [w for _, w in run.functions] == ["T2 M6", "S12000 M3", "M8", "M0", "M5 M9", "M30"]
+    # one DWELL for the G4, of its length
+    assert [ms for _, ms in run.dwells] == [2500.0]
+    # each function waits for the motion to end: DWELL0 right before it
+    code = [ln.split(";")[0].strip() for ln in texts[0].splitlines()]
+    code = [c for c in code if c]
+    for w in ("T2 M6", "S12000 M3", "M8", "M0", "M5 M9", "M30"):
+        assert code[code.index(w) - 1] == "DWELL0"
+    trailer = texts[-1]
+    assert "M6 (PROG 1001 N6000)" in trailer and "T2 (PROG 1002 N2000)" in trailer
+    assert "S (Q127)" in trailer
+
+
+def test_machine_functions_are_carried_in_order_gcode() -> None:
+    truth = truth_machine("nominal", None)
+    _, _, texts = convert(truth, FUNCTIONS, "gcode")
+    run = ctl.run_gcode(texts[0])
+    assert [w for _, w in run.functions] == ["T2 M6", "S12000 M3", "M8", "M0", "M5 M9", "M30"]
+    assert [s for _, s in run.dwells] == [2.5]
+
+
+def test_header_states_the_controller_settings() -> None:
+    truth = truth_machine("nominal", None)
+    _, _, texts = convert(truth, FUNCTIONS)
+    head = texts[0][: texts[0].index("CLOSE")]
+    # Turbo PMAC numbers coordinate system s's I-variables Isxx as I(50+s)xx: &1 I51xx
+    for needed in ("I42=0", "I5190=1000", "I5150=0", "I51=0", "Mxx69", "DELETE COMP", "Ixx86=0"):
+        assert needed in head, needed
+    assert "path tolerance 0.0005 mm" in head
+    assert "Ixx51" not in head  # no such setting: tables are switched by the global I51
+
+
+# ------------------------------------------------------------------ a third-party parser
+
+
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
+def test_dls_pmacanalyse_reads_the_same_program(path) -> None:
+    """Diamond Light Source's Turbo PMAC parser (dls-pmacanalyse) reads the written
+    program; the moves it finds are the ones the tests execute."""
+    from dls_pmacanalyse.pmacparser import PmacParser
+    from dls_pmacanalyse.pmacstate import PmacState
+
+    truth = truth_machine("random", 12)
+    _, _, texts = convert(truth, path.read_text())
+    state = PmacState("prsxy-post")
+    PmacParser(texts[0].splitlines(), state).onLine()
+    tokens = [str(t) for t in state.getMotionProgram(1).v]
+    lines = "".join(" " if t == "\n" else t for t in tokens).replace(" ", "\n")
+    rows = [
+        [float(v) for pair in re.findall(r"[UVWXY](-?\d+\.\d+):(-?\d+\.\d+)", ln) for v in pair]
+        for ln in "".join(t if t != "\n" else "\n" for t in tokens).splitlines()
+        if re.match(r"U-?\d", ln)
+    ]
+    run = ctl.run_pmac(texts)
+    dwelled = {k for k, _ in run.dwells}
+    moved = [k for k in range(1, len(run.P)) if k not in dwelled]
+    got = np.array(rows)
+    assert got.shape == (len(moved), 10)
+    np.testing.assert_array_equal(got[:, 0::2], run.P[moved])
+    np.testing.assert_array_equal(got[:, 1::2], run.V[moved])
+    assert lines
