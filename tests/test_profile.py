@@ -132,7 +132,8 @@ def test_output_pmac_section() -> None:
     got = profile_mod.loads(text + "\n[output.pmac]\nbacklash_takeup_mm = 0.002\n")
     assert got.output["pmac"]["backlash_takeup_mm"] == 0.002
     with pytest.raises(
-        ProfileError, match=r"output.pmac.backlash_takeup_mm: is 0 \(expected a number in \[1e-09, 1"
+        ProfileError,
+        match=r"output.pmac.backlash_takeup_mm: is 0 \(expected a number in \[1e-09, 1",
     ):
         profile_mod.loads(text + "\n[output.pmac]\nbacklash_takeup_mm = 0\n", "x.toml")
     with pytest.raises(ProfileError, match=r"output.pmac.takeup: unknown key"):
