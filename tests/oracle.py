@@ -49,7 +49,7 @@ def run(
     offsets: dict[int, tuple[float, ...]] | None = None,
     g28: tuple[float, ...] = (0, 0, 0, 0, 0),
     g30: tuple[float, ...] = (0, 0, 0, 0, 0),
-    tools: dict[int, float] | None = None,
+    tools: dict[int, float] | dict[int, tuple[float, float]] | None = None,
     timeout: float = 60.0,
     subroutines: dict[str, str] | None = None,
 ) -> OracleResult:
@@ -87,8 +87,9 @@ def run(
             fh.write("\n".join(sorted(lines, key=lambda s: int(s.split()[0]))) + "\n")
         tbl = os.path.join(d, "p.tbl")
         with open(tbl, "w") as fh:
-            for n, length in (tools or {}).items():
-                fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D0 ;\n")
+            for n, spec in (tools or {}).items():
+                length, diameter = spec if isinstance(spec, tuple) else (spec, 0.0)
+                fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D{diameter / 25.4:.9f} ;\n")
         proc = subprocess.run(
             [RS274, *extra, "-t", tbl, "-v", var, "-g", prog],
             cwd=d,

@@ -158,7 +158,7 @@ REJECT = [
     # a letter O typed for a zero is said to be one (issue 12), not taken for an O-word
     ("G21\nG1 X10 Y1O F100\nM2\n", "t.ngc:2:10:", "letter O inside the number of 'Y' ('Y1O')"),
     ("G21\nGO X1\nM2\n", "t.ngc:2:2:", "the letter O as the number of 'G' ('GO')"),
-    ("G21\nG41 D1 G1 X1 F100\nM2\n", "t.ngc:2:1:", "is not supported ('G41')"),
+    ("G21\nG41 G1 X1 F100\nG81 X1 Z-1 R1\nM2\n", "t.ngc:3:5:", "canned cycle with cutter comp"),
     ("G21\nG92\nM2\n", "t.ngc:2:1:", "G92 without axis words"),
     ("G21\nG10 L2 P1 R30\nM2\n", "t.ngc:2:11:", "rotated coordinate systems"),
     ("G21\nG10 L3 P1 X0\nM2\n", "t.ngc:2:5:", "G10 without L0, L1, L2, L10, L11 or L20"),

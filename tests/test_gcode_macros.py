@@ -26,7 +26,8 @@ from .test_gcode_oracle import _agree, _require_rs274
 
 pytestmark = pytest.mark.linuxcnc
 
-TOOLS = {1: 5.0, 2: 7.5}
+#: tool number → (length, diameter) [mm]
+TOOLS = {1: (5.0, 6.0), 2: (7.5, 3.0), 3: (10.0, 12.7)}
 
 
 def ours(
@@ -38,7 +39,7 @@ def ours(
         for name, body in (subs or {}).items():
             Path(d, name).write_text(body)
         cfg = gcode.InterpreterConfig(
-            tool_table={n: gcode.ToolEntry(v) for n, v in TOOLS.items()},
+            tool_table={n: gcode.ToolEntry(*v) for n, v in TOOLS.items()},
             subroutine_path=(d,),
             on_message=lambda source, line, kind, text: msgs.append((kind, text)),
         )

@@ -71,7 +71,9 @@ def _ours(text: str) -> tuple[list[gcode.Motion], GCodeError | None]:
 
 
 def _agree(om: oracle.OracleMotion, m: gcode.Motion) -> str | None:
-    tol = 6e-5 * om.scale + 1e-9
+    # rs274 prints four decimals of a position and, apart, of the offsets added to
+    # it: two roundings of half a unit of the last decimal each
+    tol = 1.2e-4 * om.scale + 1e-9
     if om.kind != m.kind:
         return f"kind {om.kind} vs {m.kind}"
     if om.kind == "dwell":

@@ -45,6 +45,7 @@ def classify(
     words: tuple[Word, ...],
     motion_mode: float | None,
     incremental: bool,
+    plane: int,
     user_m: frozenset[int],
     source: str,
     line: int,
@@ -135,18 +136,15 @@ def classify(
                     raise err(f"negative {letter} word", w, f"{letter} >= 0")
                 w = w._replace(value=float(n))
             seen[letter] = w
-    for p in ("@", "^"):
-        if p in seen:
-            raise err("polar coordinates (@, ^) are not supported", seen[p], "X and Y words")
     if m_count > 4:
         raise err("more than four M codes in one block", None, "at most four")
-    _enhance(out, motion_mode, err)
+    _enhance(out, motion_mode, plane, err)
     _check_g(out, incremental, err)
     _check_other(out, err)
     return out
 
 
-def _enhance(out: Words, motion_mode: float | None, err: object) -> None:
+def _enhance(out: Words, motion_mode: float | None, plane: int, err: object) -> None:
     """LinuxCNC's enhance_block: the block's motion, and where axis words go."""
     assert callable(err)
     seen = out.seen
@@ -158,6 +156,13 @@ def _enhance(out: Words, motion_mode: float | None, err: object) -> None:
     mode1 = out.g[1][0] if 1 in out.g else None
     covets = mode0 in (10, 28, 30, 52, 92)
     first_axis = next(iter(axis.values()), None)
+    if polar:
+        pw = seen.get("@") or seen.get("^")
+        if plane != 17:
+            raise err("polar coordinates outside the G17 plane", pw, "G17 for @ and ^")
+        for a in ("X", "Y"):
+            if a in seen:
+                raise err(f"polar coordinates and a {a} word", seen[a], "@ and ^ without X, Y")
     if mode1 is not None:
         w1 = out.g[1][1]
         if mode1 == 80:

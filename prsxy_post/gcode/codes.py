@@ -91,10 +91,6 @@ G_OUT_OF_SCOPE: dict[int, str] = {
 
 #: not yet: removed as each lands
 G_NOT_YET: dict[int, str] = {
-    410: "cutter compensation (G41) is not supported",
-    420: "cutter compensation (G42) is not supported",
-    411: "cutter compensation (G41.1) is not supported",
-    421: "cutter compensation (G42.1) is not supported",
     50: "splines (G5) are not supported",
     51: "splines (G5.1) are not supported",
     52: "NURBS (G5.2) are not supported",

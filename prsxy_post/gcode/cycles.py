@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 from .codes import CYCLE_SHAPE
@@ -84,6 +85,11 @@ def cycle(
     cur = list(st.pos)
     # work in program coordinates of the cycle axes, then add the offset back
     cur_w = (cur[iw] - off[iw]) / sc
+    # positions are kept in mm: a level reached in inches comes back a rounding
+    # off (38.1 / 25.4); LinuxCNC, in program units, compares it exactly
+    for level in (st.cycle_r, st.cycle_z, *(w.value for w in (seen.get("R"),) if w)):
+        if abs(cur_w - level) <= 1e-9 * max(1.0, abs(level)):
+            cur_w = level
     if st.cycle_il is None:
         st.cycle_il = cur_w
     old_cc = st.cycle_il
@@ -93,15 +99,27 @@ def cycle(
     if z_given is not None:
         st.cycle_z = z_given
     z_num = st.cycle_z
+    # polar words (G17 only): @ radius, ^ angle about the program origin; in G91
+    # they add to the radius and the angle at every repeat (LinuxCNC's CYCLE_MACRO)
+    d2r = math.pi / 180.0
+    polar = "@" in seen or "^" in seen
+    inc_r = inc_t = 0.0
     if st.absolute:
         r = st.cycle_r
         cc = z_num
         aa = axis_words[ax[iu]].value if ax[iu] in axis_words else (cur[iu] - off[iu]) / sc
         bb = axis_words[ax[iv]].value if ax[iv] in axis_words else (cur[iv] - off[iv]) / sc
+        if polar:
+            here_a, here_b = (cur[iu] - off[iu]) / sc, (cur[iv] - off[iv]) / sc
+            radius = seen["@"].value if "@" in seen else math.hypot(here_b, here_a)
+            theta = seen["^"].value * d2r if "^" in seen else math.atan2(here_b, here_a)
+            aa, bb = radius * math.cos(theta), radius * math.sin(theta)
         inc_a = inc_b = 0.0
     else:
         inc_a = axis_words[ax[iu]].value if ax[iu] in axis_words else 0.0
         inc_b = axis_words[ax[iv]].value if ax[iv] in axis_words else 0.0
+        inc_r = seen["@"].value if "@" in seen else 0.0
+        inc_t = seen["^"].value * d2r if "^" in seen else 0.0
         r = st.cycle_r + old_cc
         cc = r + z_num
         aa = (cur[iu] - off[iu]) / sc
@@ -147,6 +165,22 @@ def cycle(
     for _ in range(repeats):
         aa += inc_a
         bb += inc_b
+        if inc_r or inc_t:
+            if aa == 0 and bb == 0:
+                raise it.err(
+                    "incremental polar motion at the origin",
+                    line,
+                    seen.get("@") or seen.get("^"),
+                    "G90 or a start off the origin",
+                )
+            if inc_r:
+                theta = math.atan2(bb, aa)
+                radius = math.hypot(bb, aa) + inc_r
+                aa, bb = radius * math.cos(theta), radius * math.sin(theta)
+            if inc_t:
+                theta = math.atan2(bb, aa) + inc_t
+                radius = math.hypot(bb, aa)
+                aa, bb = radius * math.cos(theta), radius * math.sin(theta)
         first_w = max(current_cc, clear)
         traverse(aa, bb, first_w)
         if first_w != r:

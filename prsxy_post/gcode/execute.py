@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 
 from ..errors import GCodeError
-from . import cycles, messages, moves, offsets
+from . import comp, cycles, messages, moves, offsets
 from .check import classify
 from .codes import CYCLES
 from .config import InterpreterConfig, ToolEntry
@@ -26,7 +26,10 @@ class Interpreter:
         self.out: list[Motion] = []
         self.percent_seen = False
         self.started = False  # a non-blank line was read (a later '%' is an error)
-        self.params = Parameters(self._system, self._position, lambda: False)
+        self.params = Parameters(self._system, self._position, lambda: bool(self.st.comp_side))
+        self.queue = comp.Queue(self)
+        #: after G40 the tool is where compensation left it, not at st.pos
+        self.detached: tuple[float, ...] | None = None
         self.tools = dict(self.cfg.tool_table)
         self.user_m: frozenset[int] = frozenset(self.cfg.user_m_codes)
         #: the main program's line of the call in progress (motions made in
@@ -194,14 +197,61 @@ class Interpreter:
     def scale(self) -> float:
         return MM_PER_INCH if self.st.units == "inch" else 1.0
 
-    def emit(self, **kw: object) -> None:
+    def extras(self) -> dict[str, object]:
+        """The state every motion carries (tool, spindle, feed mode, path control)."""
         st = self.st
-        kw.setdefault("tool_length", st.tool_length)
-        kw.setdefault("tool", st.tool)
-        kw.setdefault("spindle", st.spindle * st.spindle_dir)
-        kw.setdefault("inverse_time", st.inverse_time)
-        kw.setdefault("path_tol", st.path_tol)
+        return {
+            "tool_length": st.tool_length,
+            "tool": st.tool,
+            "spindle": st.spindle * st.spindle_dir,
+            "inverse_time": st.inverse_time,
+            "path_tol": st.path_tol,
+        }
+
+    def emit(self, **kw: object) -> None:
+        """A motion or event out, or held behind a move cutter compensation holds
+        (:class:`.comp.Queue`) so that the order stays."""
+        for k, v in self.extras().items():
+            kw.setdefault(k, v)
+        if self.queue:
+            self.queue.hold(**kw)
+        else:
+            self.emit_now(**kw)
+
+    def emit_now(self, **kw: object) -> None:
+        kw = {k: v for k, v in kw.items() if not k.startswith("_")}
+        if self.detached is not None:
+            # after G40 the tool is off the programmed point: the next move
+            # starts where the tool is, events happen there
+            if kw["kind"] in ("function", "dwell"):
+                kw["start"] = kw["end"] = self.detached
+            else:
+                kw["start"] = self.detached
+                self.detached = None
         self.out.append(Motion(**kw))  # type: ignore[arg-type]
+
+    def no_comp(self, what: str, line: int, w: Word | None) -> None:
+        """What LinuxCNC refuses with cutter compensation on."""
+        if self.st.comp_side:
+            raise self.err(
+                f"{what} with cutter compensation on", line, w, "G40 (compensation off) first"
+            )
+
+    def finish(self) -> None:
+        """The end of the program: what compensation still holds goes out."""
+        if self.queue:
+            self.queue.flush()
+
+    def take_position(self) -> tuple[float, ...]:
+        """Where the tool is (where a move starts), leaving G40's detachment."""
+        if self.detached is not None:
+            pos, self.detached = self.detached, None
+            return pos
+        return tuple(self.st.pos)
+
+    def feed_now(self) -> float:
+        """The feed in effect, mm/min (a move cutter compensation adds)."""
+        return self.st.feed * self.scale()
 
     # -- one block
     def run(self, blk: Block) -> None:
@@ -233,7 +283,9 @@ class Interpreter:
                 self.message(spoken[0], spoken[1], line)
         if not blk.words:
             return
-        w = classify(blk.words, st.motion, not st.absolute, self.user_m, self.source, line)
+        w = classify(
+            blk.words, st.motion, not st.absolute, st.plane, self.user_m, self.source, line
+        )
         seen, groups, mgroups = w.seen, w.g, w.m
         # LinuxCNC's execute_block: feed mode, F, S, T, M codes, G codes, stops
         if 5 in groups:
@@ -260,6 +312,7 @@ class Interpreter:
                 pre.append(("T", float(t)))
             st.next_tool = t
         if 6 in mgroups:
+            self.no_comp("a tool change", line, mgroups[6][1])
             st.tool = st.next_tool
             st.spindle_dir = 0  # LinuxCNC stops the spindle for a tool change
             self.tool_parameters()
@@ -273,6 +326,7 @@ class Interpreter:
             st.flood = code == 8 or (st.flood and code != 9)
             pre.append(("M", float(code)))
         if 9 in mgroups:
+            self.no_comp("M48/M49", line, mgroups[9][1])
             st.overrides = mgroups[9][0] == 48
             pre.append(("M", float(mgroups[9][0])))
         if 10 in mgroups:  # a user M code, with its P and Q (LinuxCNC passes both)
@@ -289,14 +343,22 @@ class Interpreter:
             p = tuple(st.pos)
             self.emit(line=line, kind="dwell", start=p, end=p, duration=seen["P"].value)
         if 2 in groups:
-            st.plane = int(groups[2][0])
+            if int(groups[2][0]) != st.plane:
+                self.no_comp("a change of plane", line, groups[2][1])
+            st.plane = round(groups[2][0])
         if 6 in groups:
             st.units = "inch" if groups[6][0] == 20 else "mm"
         if 7 in groups:
-            pass  # G40: cutter compensation off (it is never on)
+            comp_code, comp_word = groups[7]
+            if comp_code == 40:
+                comp.turn_off(self, line)
+            else:
+                comp.turn_on(self, comp_code, seen, comp_word, line)
         if 8 in groups:
+            self.no_comp("a change of tool length offset", line, groups[8][1])
             self._tool_length(groups[8], seen, line)
         if 12 in groups:
+            self.no_comp("a change of coordinate system", line, groups[12][1])
             index = _coord_index(groups[12][0])
             if self.params.values[5210 + 20 * index] != 0.0:
                 raise self.err(
@@ -309,27 +371,34 @@ class Interpreter:
             st.origin = self.stored_origin(index)
             self.params.values[5220] = float(index)
         if 13 in groups:
+            self.no_comp("a change of path control mode", line, groups[13][1])
             self._path_control(groups[13], seen, line)
         if 3 in groups:
             st.absolute = groups[3][0] == 90
         if 4 in groups:
             st.arc_absolute = groups[4][0] == 90.1
         if 10 in groups:
+            self.no_comp("a change of retract mode", line, groups[10][1])
             st.retract_r = groups[10][0] == 99
         axis_words = w.axis
         if mode0 == 10:
             offsets.g10(self, seen, groups[0][1], line)
         elif mode0 in (28, 30):
+            self.no_comp(f"G{mode0:g}", line, groups[0][1])
             moves.home(self, mode0, axis_words, line)
         elif mode0 in (28.1, 30.1):
+            self.no_comp(f"G{mode0:g}", line, groups[0][1])
             offsets.save_home(self, mode0)
         elif mode0 in (52, 92):
+            self.no_comp(f"G{mode0:g}", line, groups[0][1])
             offsets.axis_offsets(self, mode0, seen)
         if 16 in groups:
+            self.no_comp(f"G{groups[16][0]:g}", line, groups[16][1])
             offsets.axis_offsets(self, groups[16][0], seen)
         motion = w.motion
         if motion is not None:
             if mode0 == 53:
+                self.no_comp("G53", line, groups[0][1])
                 st.motion = motion
                 moves.linear(self, int(motion), axis_words, seen, line, machine=True)
             elif motion == 80:
@@ -339,8 +408,12 @@ class Interpreter:
                 if motion not in CYCLES:
                     st.cycle_il = None
                 self._motion(motion, axis_words, seen, line, new=1 in groups)
-        # program stop / end, after the motion
+        # program stop / end, after the motion: the move compensation holds goes
+        # out first (LinuxCNC's convert_stop)
         if 4 in mgroups:
+            if self.queue:
+                iu, iv = (0, 1) if st.plane == 17 else (2, 0)
+                self.queue.move_endpoint_and_flush(st.pos[iu], st.pos[iv], line)
             p = tuple(st.pos)
             code = mgroups[4][0]
             self.emit(line=line, kind="function", start=p, end=p, words=(("M", float(code)),))
@@ -434,22 +507,29 @@ class Interpreter:
         st = self.st
         self._seen = seen
         if motion in CYCLES:
+            self.no_comp("a canned cycle", line, next(iter(axis_words.values()), None))
             cycles.cycle(self, int(motion), axis_words, seen, line, new)
             st.motion = motion
             return
         st.motion = motion
         if motion in (0, 1):
-            for letter in ("I", "J", "K", "R"):
-                if letter in seen:
-                    raise self.err(
-                        f"{letter} word with G{int(motion)}",
-                        line,
-                        seen[letter],
-                        "I, J, K, R only with arcs or canned cycles",
-                    )
-            moves.linear(self, int(motion), axis_words, seen, line)
+            st.arc_not_allowed = False
+            if comp.active(self):
+                comp.straight(self, int(motion), axis_words, seen, line)
+            else:
+                moves.linear(self, int(motion), axis_words, seen, line)
         else:
-            moves.arc(self, int(motion), axis_words, seen, line)
+            if st.arc_not_allowed:
+                raise self.err(
+                    "an arc as the move after G40",
+                    line,
+                    next(iter(axis_words.values()), None),
+                    "a straight move to leave cutter compensation",
+                )
+            if comp.active(self) and st.plane in (17, 18):
+                comp.arc(self, int(motion), axis_words, seen, line)
+            else:
+                moves.arc(self, int(motion), axis_words, seen, line)
 
 
 def _coord_index(code: float) -> int:

@@ -19,18 +19,72 @@ SPIRAL_ABS_TOLERANCE = {"mm": 2 * 0.01 * math.sqrt(2), "inch": 2 * 0.001 * math.
 SPIRAL_REL_TOLERANCE = 0.001
 
 
-def target(it: Interpreter, axis_words: dict[str, Word], machine: bool = False) -> list[float]:
-    """End point of a move; ``machine`` (G53): LinuxCNC machine coordinates are of
-    the gauge point, so the tip lies the tool length below them in Z."""
+def target(
+    it: Interpreter,
+    axis_words: dict[str, Word],
+    machine: bool = False,
+    seen: dict[str, Word] | None = None,
+    base: list[float] | None = None,
+) -> list[float]:
+    """End point of a move (LinuxCNC's find_ends), workpiece frame.
+
+    ``machine`` (G53): LinuxCNC machine coordinates are of the gauge point, so
+    the tip lies the tool length below them in Z. ``base``: where axes not
+    given stay, and incremental moves start (the programmed point, not the
+    tool's, with cutter compensation on). ``seen`` may hold polar words
+    (``@`` radius, ``^`` angle in degrees, about the program origin, G17)."""
     st = it.st
+    here = st.pos if base is None else base
     off = (0.0, 0.0, -st.tool_length, 0.0, 0.0) if machine else it.offset()
-    out = list(st.pos)
+    out = list(here)
     sc = it.scale()
     for i, a in enumerate(AXES):
         if a in axis_words:
             v = axis_words[a].value * (sc if i < 3 else 1.0)
-            out[i] = (v + off[i]) if (st.absolute or machine) else st.pos[i] + v
+            out[i] = (v + off[i]) if (st.absolute or machine) else here[i] + v
+    if seen is not None and ("@" in seen or "^" in seen):
+        _polar(it, seen, out, here, off, sc)
     return out
+
+
+def _polar(
+    it: Interpreter,
+    seen: dict[str, Word],
+    out: list[float],
+    here: list[float],
+    off: tuple[float, ...],
+    sc: float,
+) -> None:
+    """Polar X Y from ``@`` and ``^`` (find_ends), in program units about the
+    program origin; G91 adds to the current radius and angle."""
+    w = seen.get("@") or seen["^"]
+    line = it.line
+    for a in ("X", "Y"):
+        if a in seen:
+            raise it.err("X or Y words with polar coordinates", line, seen[a], "@ and ^ alone")
+    px = (here[0] - off[0]) / sc
+    py = (here[1] - off[1]) / sc
+    d2r = math.pi / 180.0
+    if it.st.absolute:
+        if "@" in seen and "^" in seen:
+            radius, theta = seen["@"].value, seen["^"].value * d2r
+        elif "@" in seen:
+            if px == 0 and py == 0:
+                raise it.err("a polar radius at the origin", line, w, "an angle (^) too")
+            radius, theta = seen["@"].value, math.atan2(py, px)
+        else:
+            radius, theta = math.hypot(py, px), seen["^"].value * d2r
+    else:
+        if px == 0 and py == 0:
+            raise it.err("incremental polar motion at the origin", line, w, "G90 or a start off it")
+        theta = math.atan2(py, px)
+        radius = math.hypot(py, px)
+        if "@" in seen:
+            radius += seen["@"].value
+        if "^" in seen:
+            theta += seen["^"].value * d2r
+    out[0] = radius * math.cos(theta) * sc + off[0]
+    out[1] = radius * math.sin(theta) * sc + off[1]
 
 
 def feed_rate(
@@ -80,7 +134,7 @@ def linear(
     st = it.st
     it._seen = seen
     start = list(st.pos)
-    end = target(it, axis_words, machine)
+    end = target(it, axis_words, machine, seen)
     if motion == 0:
         it.emit(line=line, kind="rapid", start=tuple(start), end=tuple(end))
     else:
@@ -95,20 +149,84 @@ def arc(
 ) -> None:
     st = it.st
     gw = next(iter(axis_words.values()), None)
-    iu, iv, iw = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[st.plane]
-    off_letters = {17: ("I", "J"), 18: ("K", "I"), 19: ("J", "K")}[st.plane]
+    iu, iv, iw = PLANE_AXES[st.plane]
     start = list(st.pos)
-    end = target(it, axis_words)
+    end = target(it, axis_words, seen=seen)
     sc = it.scale()
-    turns = 1
-    if "P" in seen:
-        p = seen["P"].value
-        if p != int(p) or p < 1:
-            raise it.err("P (turns) must be a positive integer", line, seen["P"], "P1, P2, ...")
-        turns = int(p)
+    turns = _turns(seen)
+    cu, cv = arc_center(
+        it, motion, start[iu] / sc, start[iv] / sc, end[iu] / sc, end[iv] / sc, seen, line, gw
+    )
+    u0, v0, u1, v1 = start[iu] / sc, start[iv] / sc, end[iu] / sc, end[iv] / sc
+    center = [0.0, 0.0, 0.0]
+    center[iu], center[iv] = cu * sc, cv * sc
+    center[iw] = end[iw]
+    rotation = turns if motion == 3 else -turns
+    rad = math.hypot(u0 - cu, v0 - cv) * sc
+    length = arc_length(rad, sweep_of(u0, v0, cu, cv, rotation, u1, v1), end[iw] - start[iw])
+    f = feed_rate(it, start, end, length, line, gw)
+    it.emit(
+        line=line,
+        kind="arc",
+        start=tuple(start),
+        end=tuple(end),
+        feed=f,
+        plane=st.plane,
+        center=tuple(center),
+        rotation=rotation,
+    )
+    st.pos = end
+
+
+#: the plane's first, second axes and its normal (indices into x y z a b)
+PLANE_AXES = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}
+#: the centre offsets of each plane
+PLANE_OFFSETS = {17: ("I", "J"), 18: ("K", "I"), 19: ("J", "K")}
+
+
+def _turns(seen: dict[str, Word]) -> int:
+    return math.floor(seen["P"].value + 0.5) if "P" in seen else 1
+
+
+def sweep_of(
+    u0: float, v0: float, cu: float, cv: float, rotation: int, u1: float, v1: float
+) -> float:
+    """The signed angle an arc turns (LinuxCNC's find_turn) [rad]."""
+    a = math.atan2(v0 - cv, u0 - cu)
+    b = math.atan2(v1 - cv, u1 - cu)
+    if rotation > 0:
+        if b <= a:
+            b += 2 * math.pi
+        return (b - a) + (rotation - 1) * 2 * math.pi
+    if a <= b:
+        a += 2 * math.pi
+    return (b - a) + (rotation + 1) * 2 * math.pi
+
+
+def arc_length(radius: float, sweep: float, axial: float) -> float:
+    """The length of a helix: ``hypot(r θ, h)`` (LinuxCNC's find_arc_length)."""
+    return math.hypot(radius * sweep, axial)
+
+
+def arc_center(
+    it: Interpreter,
+    motion: int,
+    u0: float,
+    v0: float,
+    u1: float,
+    v1: float,
+    seen: dict[str, Word],
+    line: int,
+    gw: Word | None,
+) -> tuple[float, float]:
+    """The centre of an arc from (u0, v0) to (u1, v1) in the plane's axes, program
+    units, from R or the centre words, with LinuxCNC's checks and tolerances
+    (arc_data_r, arc_data_ijk)."""
+    st = it.st
+    iu, iv, _ = PLANE_AXES[st.plane]
+    la, lb = PLANE_OFFSETS[st.plane]
+    sc = it.scale()
     unit = st.units
-    u0, v0 = start[iu] / sc, start[iv] / sc
-    u1, v1 = end[iu] / sc, end[iv] / sc
     if "R" in seen:
         for letter in ("I", "J", "K"):
             if letter in seen:
@@ -146,7 +264,6 @@ def arc(
         d = ar * math.cos(turn2)
         cu, cv = mu + d * math.cos(theta), mv + d * math.sin(theta)
     else:
-        la, lb = off_letters
         if la not in seen and lb not in seen:
             raise it.err(
                 "arc with neither R nor centre offsets",
@@ -163,6 +280,15 @@ def arc(
                     seen[letter],
                     f"{la} and {lb} in G{st.plane}",
                 )
+        if st.arc_absolute:
+            for letter in (la, lb):
+                if letter not in seen:
+                    raise it.err(
+                        f"{letter} word missing in an absolute-centre arc (G90.1)",
+                        line,
+                        gw,
+                        f"both {la} and {lb} in G90.1",
+                    )
         a = seen[la].value if la in seen else 0.0
         b = seen[lb].value if lb in seen else 0.0
         if st.arc_absolute:
@@ -192,34 +318,7 @@ def arc(
                 seen.get(la) or seen.get(lb),
                 f"radii equal within {sa:.4f} {'mm' if unit == 'mm' else 'in'}",
             )
-    center = [0.0, 0.0, 0.0]
-    center[iu], center[iv] = cu * sc, cv * sc
-    center[iw] = end[iw]
-    rotation = turns if motion == 3 else -turns
-    # helix length for feed: the arc's sweep in the plane and the axial travel
-    th0 = math.atan2(v0 - cv, u0 - cu)
-    th1 = math.atan2(v1 - cv, u1 - cu)
-    if rotation > 0:
-        sweep = (th1 - th0) % (2 * math.pi)
-    else:
-        sweep = (th0 - th1) % (2 * math.pi)
-    if sweep <= 1e-12:
-        sweep = 2 * math.pi
-    sweep += 2 * math.pi * (turns - 1)
-    rad = math.hypot(u0 - cu, v0 - cv) * sc
-    length = math.hypot(rad * sweep, end[iw] - start[iw])
-    f = feed_rate(it, start, end, length, line, gw)
-    it.emit(
-        line=line,
-        kind="arc",
-        start=tuple(start),
-        end=tuple(end),
-        feed=f,
-        plane=st.plane,
-        center=tuple(center),
-        rotation=rotation,
-    )
-    st.pos = end
+    return cu, cv
 
 
 def home(it: Interpreter, code: float, axis_words: dict[str, Word], line: int) -> None:

@@ -60,6 +60,8 @@ def _setup_system(it: Interpreter, lv: int, seen: dict[str, Word], w: Word, line
             raise it.err("I and J words with G10 L2", line, seen[bad], "X Y Z A B (and R)")
     p = int(seen["P"].value + 0.0001)
     index = p or st.coord
+    if index == st.coord:
+        it.no_comp("a change of the active coordinate system", line, w)
     base = system_base(index)
     pars = it.params.values
     if "R" in seen:

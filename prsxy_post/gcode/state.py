@@ -35,3 +35,9 @@ class State:
     cycle_il: float | None = None
     path_tol: float | None = None
     ended: bool = False
+    # cutter radius compensation (comp.py)
+    comp_side: int = 0  # 0 off, 1 left (G41), 2 right (G42)
+    comp_radius: float = 0.0  # mm
+    comp_first: bool = True  # the next move is the entry move
+    program: list[float] = field(default_factory=lambda: [0.0] * 5)  # programmed point
+    arc_not_allowed: bool = False  # the move after G40 must be straight

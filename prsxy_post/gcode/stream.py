@@ -183,6 +183,7 @@ def _run(
                 it.run(blk)
                 it.source = source
             if it.st.ended:
+                it.finish()
                 yield from out
                 return
             if len(out) >= _YIELD_EVERY:
