@@ -32,6 +32,7 @@ class OracleMotion:
     rotation: int = 0
     duration: float = 0.0
     scale: float = 1.0  # 25.4 when the interpreter printed inches (4 decimals of them)
+    control_points: int = 0  # curves (NURBS_FEED): how many
 
 
 @dataclass
@@ -171,6 +172,12 @@ def parse(out: str, err: str = "") -> OracleResult:
                 OracleMotion(i, "arc", end5, feed * scale, plane, center, int(rot), scale=scale)
             )
             last = end5
+        elif name == "NURBS_FEED":
+            # the stand-in canon prints only how many control points there are
+            # (and reads its new position from past the end of them)
+            motions.append(
+                OracleMotion(i, "curve", last, feed * scale, control_points=int(vals[0]))
+            )
         elif name == "DWELL":
             p = motions[-1].end if motions else None
             motions.append(OracleMotion(i, "dwell", p or (math.nan,) * 5, None, duration=vals[0]))

@@ -162,7 +162,7 @@ REJECT = [
     ("G21\nG92\nM2\n", "t.ngc:2:1:", "G92 without axis words"),
     ("G21\nG10 L2 P1 R30\nM2\n", "t.ngc:2:11:", "rotated coordinate systems"),
     ("G21\nG10 L3 P1 X0\nM2\n", "t.ngc:2:5:", "G10 without L0, L1, L2, L10, L11 or L20"),
-    ("G21\nG5.2 X1\nM2\n", "t.ngc:2:1:", "NURBS"),
+    ("G21\nG1 F1\nG5.2 X1\nM2\n", "t.ngc:3:6:", "NURBS control point without both X and Y"),
     ("G21\nG16\nM2\n", "t.ngc:2:1:", "unknown G code"),
     ("G21\nG0 C10\nM2\n", "t.ngc:2:4:", "C axis"),
     ("G21\nG0 G1 X1 F1\nM2\n", "t.ngc:2:4:", "same modal group ('G1')"),

@@ -91,10 +91,6 @@ G_OUT_OF_SCOPE: dict[int, str] = {
 
 #: not yet: removed as each lands
 G_NOT_YET: dict[int, str] = {
-    50: "splines (G5) are not supported",
-    51: "splines (G5.1) are not supported",
-    52: "NURBS (G5.2) are not supported",
-    53: "NURBS (G5.3) are not supported",
     960: "G96 constant surface speed is not supported",
     970: "G96/G97 spindle modes are not supported",
     432: "G43.2 (additional offsets) is not supported",

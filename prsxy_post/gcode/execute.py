@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 
 from ..errors import GCodeError
-from . import comp, cycles, messages, moves, offsets
+from . import comp, cycles, messages, moves, offsets, splines
 from .check import classify
 from .codes import CYCLES
 from .config import InterpreterConfig, ToolEntry
@@ -392,6 +392,8 @@ class Interpreter:
         elif mode0 in (52, 92):
             self.no_comp(f"G{mode0:g}", line, groups[0][1])
             offsets.axis_offsets(self, mode0, seen)
+        elif mode0 == 5.3:
+            splines.nurbs_end(self, groups[0][1], line)
         if 16 in groups:
             self.no_comp(f"G{groups[16][0]:g}", line, groups[16][1])
             offsets.axis_offsets(self, groups[16][0], seen)
@@ -509,6 +511,14 @@ class Interpreter:
         if motion in CYCLES:
             self.no_comp("a canned cycle", line, next(iter(axis_words.values()), None))
             cycles.cycle(self, int(motion), axis_words, seen, line, new)
+            st.motion = motion
+            return
+        if motion in (5, 5.1):
+            st.motion = motion
+            splines.bezier(self, motion, axis_words, seen, line)
+            return
+        if motion == 5.2:
+            splines.nurbs_point(self, axis_words, seen, line)
             st.motion = motion
             return
         st.motion = motion

@@ -54,7 +54,7 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
     sc = MM_PER_INCH if st.units == "inch" else 1.0
     absolute = st.absolute
     ox, oy, oz, oa, ob = it.offset()
-    extra = (st.tool_length, st.tool, st.spindle * st.spindle_dir, False, st.path_tol, ())
+    extra = (st.tool_length, st.tool, st.spindle * st.spindle_dir, False, st.path_tol, (), None)
     append = it.out.append
     new_motion = new_feed = False
     k = i

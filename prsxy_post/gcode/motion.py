@@ -6,6 +6,8 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+from ..curves import Nurbs
+
 MM_PER_INCH = 25.4
 
 Pose = tuple[float, ...]  # (x, y, z, A, B)
@@ -30,6 +32,10 @@ class Motion(NamedTuple):
         LinuxCNC's order of execution, as (letter, value) pairs: S, T, M6,
         M3/M4/M5, M7/M8/M9, M48/M49 before the block's motion; M0, M1, M60, M2,
         M30 after it
+    curve : kind ``"curve"`` only (G5, G5.1, G5.2/G5.3): the exact curve from
+        start to end (:class:`prsxy_post.curves.Nurbs`, workpiece frame, mm);
+        A and B go linearly from start to end along its arc length; ``feed`` is
+        along the curve
     """
 
     line: int
@@ -47,6 +53,7 @@ class Motion(NamedTuple):
     inverse_time: bool = False
     path_tol: float | None = None
     words: tuple[tuple[str, float], ...] = ()
+    curve: Nurbs | None = None
 
 
 #: path_tol of G61.1 (exact stop)
@@ -70,4 +77,7 @@ def motion_to_json(m: Motion) -> dict[str, object]:
         d["duration"] = m.duration
     if m.kind == "function":
         d["words"] = [f"{letter}{value:g}" for letter, value in m.words]
+    if m.kind == "curve":
+        assert m.curve is not None
+        d["curve"] = m.curve.to_json()
     return d

@@ -41,3 +41,9 @@ class State:
     comp_first: bool = True  # the next move is the entry move
     program: list[float] = field(default_factory=lambda: [0.0] * 5)  # programmed point
     arc_not_allowed: bool = False  # the move after G40 must be straight
+    # splines (splines.py)
+    g5_i: float = 0.0  # G5's first control point when I J are left out
+    g5_j: float = 0.0
+    nurbs: list[tuple[float, float, float]] = field(default_factory=list)  # x, y, weight
+    nurbs_order: int = 3
+    nurbs_line: int = 0
