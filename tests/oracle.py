@@ -182,3 +182,74 @@ def parse(out: str, err: str = "") -> OracleResult:
             p = motions[-1].end if motions else None
             motions.append(OracleMotion(i, "dwell", p or (math.nan,) * 5, None, duration=vals[0]))
     return OracleResult(motions, error, calls, prints)
+
+
+#: canonical calls of one machine function each: call → our words as text
+_SIMPLE = {
+    "START_SPINDLE_CLOCKWISE": "M3",
+    "START_SPINDLE_COUNTERCLOCKWISE": "M4",
+    "MIST_ON": "M7",
+    "FLOOD_ON": "M8",
+    "OPTIONAL_PROGRAM_STOP": "M1",
+}
+
+
+def function_tokens(calls: list[tuple[str, str]]) -> list[str]:
+    """rs274's canonical calls as our machine functions (``M3``, ``S1000``,
+    ``M62 P1``, …), in order, for the ones a stand-in canon shows: spindle,
+    coolant, tools, outputs, overrides, stops and ends. An S or T that repeats
+    the one before is none (as in our events); the resets of M2/M30 are part
+    of the end."""
+    out: list[str] = []
+    speed = 0.0
+    tool = 0
+    in_change = False
+    reset_from: int | None = None
+    prev = ""
+    for name, args in calls:
+        nums = [float(v) for v in re.findall(r"-?\d+\.\d+|-?\d+", args)] if args else []
+        if name == "SET_SPINDLE_SPEED":
+            if nums[1] != speed:
+                out.append(f"S{nums[1]:g}")
+            speed = nums[1]
+        elif name == "SELECT_TOOL":
+            if int(nums[0]) != tool:
+                out.append(f"T{int(nums[0])}")
+            tool = int(nums[0])
+        elif name == "START_CHANGE":
+            in_change = True
+        elif name == "CHANGE_TOOL":
+            in_change = False
+            out.append("M6")
+        elif name == "CHANGE_TOOL_NUMBER":
+            out.append(f"M61 Q{int(nums[0])}")
+        elif name == "STOP_SPINDLE_TURNING":
+            if not in_change:
+                out.append("M5")
+        elif name == "MIST_OFF":
+            out.append("M9")
+        elif name == "FLOOD_OFF":
+            if prev != "MIST_OFF":
+                out.append("M9")
+        elif name in _SIMPLE:
+            out.append(_SIMPLE[name])
+        elif name == "ENABLE_FEED_OVERRIDE":
+            out.append("M48")
+        elif name == "DISABLE_FEED_OVERRIDE":
+            out.append("M49")
+        elif name in ("SET_MOTION_OUTPUT_BIT", "CLEAR_MOTION_OUTPUT_BIT"):
+            out.append(f"M{62 if name.startswith('SET') else 63} P{int(nums[0])}")
+        elif name in ("SET_AUX_OUTPUT_BIT", "CLEAR_AUX_OUTPUT_BIT"):
+            out.append(f"M{64 if name.startswith('SET') else 65} P{int(nums[0])}")
+        elif name in ("SET_MOTION_OUTPUT_VALUE", "SET_AUX_OUTPUT_VALUE"):
+            code = 67 if "MOTION" in name else 68
+            out.append(f"M{code} E{int(nums[0])} Q{nums[1]:g}")
+        elif name == "PROGRAM_STOP":
+            out.append("M60" if prev == "PALLET_SHUTTLE" else "M0")
+        elif name == "SET_FEED_MODE":
+            reset_from = len(out)  # M2/M30 reset from here on, if PROGRAM_END follows
+        elif name == "PROGRAM_END":
+            del out[reset_from if reset_from is not None else len(out) :]
+            out.append("M30" if prev == "PALLET_SHUTTLE" else "M2")
+        prev = name
+    return out

@@ -54,6 +54,13 @@ def _require_rs274() -> None:
 
 
 def _ours(text: str) -> tuple[list[gcode.Motion], GCodeError | None]:
+    motions, _, err = _ours_all(text)
+    return motions, err
+
+
+def _ours_all(text: str) -> tuple[list[gcode.Motion], list[str], GCodeError | None]:
+    """Our motions, our machine functions as oracle.function_tokens writes them,
+    and the error."""
     cfg = gcode.InterpreterConfig(
         work_offsets=OFFSETS,
         g28_position=G28,
@@ -61,13 +68,42 @@ def _ours(text: str) -> tuple[list[gcode.Motion], GCodeError | None]:
         tool_table={n: gcode.ToolEntry(v) for n, v in TOOLS.items()},
     )
     out: list[gcode.Motion] = []
+    tokens: list[str] = []
     try:
         for m in gcode.iter_motions(gcode.split_lines(text), cfg, "p.ngc"):
-            if m.kind != "function":  # machine functions: compared apart (not motions)
+            if m.kind == "function":
+                tokens += _tokens(m.words)
+            else:
                 out.append(m)
     except GCodeError as err:
-        return out, err
-    return out, None
+        return out, tokens, err
+    return out, tokens, None
+
+
+#: our machine functions a stand-in canon does not show (spindle modes, M66,
+#: override switches M50-M53, user M codes)
+_UNSHOWN = {96.0, 97.0}
+
+
+def _tokens(words: tuple[tuple[str, float], ...]) -> list[str]:
+    out: list[str] = []
+    skip = False
+    for letter, v in words:
+        if letter in ("S", "T"):
+            out.append(f"{letter}{v:g}")
+        elif letter == "M":
+            code = int(v)
+            skip = code in (66, 50, 51, 52, 53) or code >= 100
+            if not skip:
+                out.append(f"M{code}")
+        elif letter == "G":
+            skip = True
+        elif letter in ("P", "E", "Q") and not skip:
+            if out and out[-1].split()[0] in ("M61", "M62", "M63", "M64", "M65", "M67", "M68"):
+                out[-1] += (
+                    f" {letter}{int(v) if letter != 'Q' or out[-1].startswith('M61') else v:g}"
+                )
+    return out
 
 
 def _agree(om: oracle.OracleMotion, m: gcode.Motion) -> str | None:
@@ -120,6 +156,7 @@ def _agree(om: oracle.OracleMotion, m: gcode.Motion) -> str | None:
 _TOOL_CHANGE = re.compile(r"m\s*0*6(?![0-9.])", re.I)
 _LENGTH_CODE = re.compile(r"g\s*(?:43|49)(?![0-9])", re.I)
 _T_WORD = re.compile(r"t\s*[0-9]+", re.I)
+_S_WORD = re.compile(r"s\s*[0-9.]+", re.I)
 
 
 def _for_rs274(text: str) -> str:
@@ -129,9 +166,11 @@ def _for_rs274(text: str) -> str:
         code = line.split(";")[0]
         code = re.sub(r"\([^)]*\)", "", code)
         if _TOOL_CHANGE.search(code) and _LENGTH_CODE.search(code):
+            # S and T run before M6: they stay with it
+            s = _S_WORD.search(code)
             t = _T_WORD.search(code)
-            first = (t.group(0) + " " if t else "") + "M6"
-            rest = _T_WORD.sub("", _TOOL_CHANGE.sub("", code))
+            first = " ".join(w.group(0) for w in (s, t) if w) + " M6"
+            rest = _S_WORD.sub("", _T_WORD.sub("", _TOOL_CHANGE.sub("", code)))
             out += [first, rest]
         else:
             out.append(line)
@@ -157,6 +196,13 @@ def test_agrees_with_linuxcnc(path: Path) -> None:
     for k in range(n):
         why = _agree(ref.motions[k], ours[k])
         assert why is None, f"motion {k} (our line {ours[k].line}): {why}"
+    # the machine functions too, as far as we got
+    _, tokens, _ = _ours_all(text)
+    theirs = oracle.function_tokens(ref.calls)
+    if err is None:
+        assert tokens == theirs
+    else:
+        assert tokens == theirs[: len(tokens)]
 
 
 @pytest.mark.linuxcnc

@@ -260,7 +260,7 @@ def _check_other(out: Words, err: object) -> None:
     m5 = m[5][0] if 5 in m else None
     user_m = 10 in m
     cycle = motion is not None and (81 <= motion <= 89 or motion == 73)
-    if cycle:
+    if cycle or motion == 74:  # is_a_cycle
         for a in ("A", "B"):
             if a in seen:
                 raise err(
@@ -293,7 +293,7 @@ def _check_other(out: Words, err: object) -> None:
         if not (
             mode0 in (10, 4)
             or (g[13][0] if 13 in g else None) == 64
-            or motion in (82, 86, 88, 89, 5, 5.2, 2, 3, 84)
+            or motion in (82, 86, 88, 89, 5, 5.2, 2, 3, 74, 84)
             or (m[9][0] if 9 in m else None) in (50, 51, 52, 53)
             or m5 in (62, 63, 64, 65, 66)
             or user_m
@@ -323,7 +323,7 @@ def _check_other(out: Words, err: object) -> None:
             seen["Q"],
             "Q with one of those",
         )
-    if "R" in seen and not (motion in (2, 3) or cycle or comp in (41.1, 42.1) or mode0 == 10):
+    if "R" in seen and not (motion in (2, 3, 74) or cycle or comp in (41.1, 42.1) or mode0 == 10):
         raise err(
             "R word with no arc or canned cycle to use it",
             seen["R"],

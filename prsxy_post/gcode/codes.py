@@ -86,13 +86,10 @@ G_OUT_OF_SCOPE: dict[int, str] = {
     950: "feed per revolution (G95) is out of scope for this machine (no spindle feedback)",
     870: "back boring (G87) is not supported",
     880: "G88 (boring with a manual retract) is not supported",
-    740: "left-hand tapping (G74) is not supported",
 }
 
 #: not yet: removed as each lands
 G_NOT_YET: dict[int, str] = {
-    960: "G96 constant surface speed is not supported",
-    970: "G96/G97 spindle modes are not supported",
     432: "G43.2 (additional offsets) is not supported",
 }
 
@@ -110,14 +107,9 @@ M_GROUPS: dict[int, int] = {
 M_OUT_OF_SCOPE: dict[int, str] = {
     19: "spindle orientation (M19) is out of scope for this machine",
 }
-M_NOT_YET: dict[int, str] = {
-    **dict.fromkeys(
-        [50, 51, 52, 53, 61, 62, 63, 64, 65, 66, 67, 68, 70, 71, 72, 73],
-        "this M code is not supported",
-    ),
-}
+M_NOT_YET: dict[int, str] = {}
 
-CYCLES = {73, 81, 82, 83, 84, 85, 86, 89}
+CYCLES = {73, 74, 81, 82, 83, 84, 85, 86, 89}
 #: canned cycles of one plunge: (dwell at the bottom, retract at feed rate)
 CYCLE_SHAPE = {
     81: (False, False),

@@ -62,6 +62,8 @@ class Frame:
     ret_line: int = 0  # its line number, for motions made below
     saved: list[float] = field(default_factory=list)  # the caller's #1-#30
     m98_loops: int = -1  # M98 L: passes left
+    context: dict[str, object] | None = None  # M70/M73: the modal state saved here
+    restore_on_return: bool = False  # M73
 
 
 class Jump(Exception):
@@ -458,6 +460,8 @@ class Control:
         if self.call_level != 0:
             frame = self.frames.pop()
             self.params.leave(frame.saved)
+            if frame.restore_on_return and frame.context is not None:
+                self.it.restore(frame.context, self.it.line)
             self.it.call_line = self.frames[-1].ret_line if self.call_level else 0
             assert frame.ret is not None
             raise Jump(frame.ret)

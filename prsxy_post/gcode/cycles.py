@@ -1,4 +1,8 @@
-"""Canned cycles (G73, G81-G86, G89) as LinuxCNC expands them into moves."""
+"""Canned cycles (G73, G74, G81-G86, G89) as LinuxCNC expands them into moves.
+
+Tapping (G74, G84) and boring with a stopped retract (G86) turn the spindle
+about within the cycle; those functions are events among the cycle's moves
+(functions.py word forms), as LinuxCNC's cycle issues them."""
 
 from __future__ import annotations
 
@@ -72,13 +76,15 @@ def cycle(
             raise it.err(f"Q missing with G{motion}", line, gw, "Q<peck depth>")
         if st.cycle_q <= 0:
             raise it.err("Q must be positive", line, seen.get("Q"), "Q > 0")
-    if motion in (82, 84, 86, 89):
+    if motion in (74, 82, 84, 86, 89):
         if "P" in seen:
             st.cycle_p = seen["P"].value
-        elif first and motion != 84:
+        elif first and motion not in (74, 84):
             raise it.err(f"P (dwell) missing with G{motion}", line, gw, "P<seconds>")
     if motion == 84 and st.spindle_dir != 1:
         raise it.err("G84 with the spindle not turning clockwise", line, gw, "M3 first")
+    if motion == 74 and st.spindle_dir != -1:
+        raise it.err("G74 with the spindle not turning counterclockwise", line, gw, "M4 first")
     if motion == 86 and st.spindle_dir == 0:
         raise it.err("G86 with the spindle not turning", line, gw, "M3 or M4 first")
     off = it.offset()
@@ -152,6 +158,10 @@ def cycle(
         p = tuple(st.pos)
         it.emit(line=line, kind="dwell", start=p, end=p, duration=t)
 
+    def function(*words: tuple[str, float]) -> None:
+        p = tuple(st.pos)
+        it.emit(line=line, kind="function", start=p, end=p, words=words)
+
     # LinuxCNC: below the R plane (judged by the level the cycles started at),
     # rise straight up to it first; the first move of each hole goes across at
     # the higher of where the tool is and the clearance level
@@ -200,10 +210,37 @@ def cycle(
             feed(aa, bb, cc)
             feed(aa, bb, r)
             traverse(aa, bb, clear)
+        elif motion in (74, 84):
+            # tapping (convert_cycle_g74_g84): overrides off, in, reverse the
+            # spindle, dwell, out, turn it back, overrides back on
+            forward = 1 if motion == 84 else -1
+            f_on, s_on = st.feed_override, st.speed_override
+            function(("M", 49.0))
+            feed(aa, bb, cc)
+            st.spindle_dir = -forward
+            function(("M", 5.0), ("M", 4.0 if motion == 84 else 3.0))
+            dwell(st.cycle_p)
+            feed(aa, bb, clear)
+            st.spindle_dir = forward
+            function(("M", 5.0), ("M", 3.0 if motion == 84 else 4.0))
+            st.feed_override, st.speed_override = f_on, s_on
+            if f_on and s_on:
+                function(("M", 48.0))
+            elif f_on or s_on:
+                function(("M", 50.0 if f_on else 51.0), ("P", 1.0))
+        elif motion == 86:
+            # boring, spindle stopped for the way out (convert_cycle_g86)
+            turning = st.spindle_dir
+            feed(aa, bb, cc)
+            dwell(st.cycle_p)
+            st.spindle_dir = 0
+            function(("M", 5.0))
+            traverse(aa, bb, clear)
+            st.spindle_dir = turning
+            function(("M", 3.0 if turning > 0 else 4.0))
         else:
             # feed to the bottom, dwell or not, retract at rapid or at feed
-            # (G84 taps out, G89 bores out; G86 stops the spindle, which the
-            # motion does not see)
+            # (G89 bores out)
             dwells, feed_out = CYCLE_SHAPE[motion]
             feed(aa, bb, cc)
             if dwells:

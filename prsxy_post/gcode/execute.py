@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 from ..errors import GCodeError
-from . import comp, cycles, messages, moves, offsets, splines
+from . import comp, cycles, functions, messages, moves, offsets, splines
 from .check import classify
 from .codes import CYCLES
 from .config import InterpreterConfig, ToolEntry
@@ -14,6 +15,9 @@ from .motion import EXACT_STOP, MM_PER_INCH, Motion
 from .params import Parameters
 from .read import Block, Word, fail
 from .state import State
+
+if TYPE_CHECKING:
+    from .control import Control
 
 
 class Interpreter:
@@ -36,7 +40,7 @@ class Interpreter:
         #: another file carry it), 0 outside calls
         self.call_line = 0
         #: set by the control flow: the last subroutine's return value
-        self.control: object | None = None
+        self.control: Control | None = None
         self.line = 0
         p = self.params.values
         for base, pos in ((5161, self.cfg.g28_position), (5181, self.cfg.g30_position)):
@@ -118,9 +122,9 @@ class Interpreter:
         if name in ("_retract_r_plane", "_retract_old_z"):
             return float(st.retract_r == (name == "_retract_r_plane"))
         if name == "_spindle_rpm_mode":
-            return 1.0
+            return float(not st.css)
         if name == "_spindle_css_mode":
-            return 0.0
+            return float(st.css)
         if name == "_ijk_absolute_mode":
             return float(st.arc_absolute)
         if name == "_lathe_radius_mode":
@@ -129,10 +133,14 @@ class Interpreter:
             return float(st.spindle_dir != 0 if name == "_spindle_on" else st.spindle_dir == 1)
         if name in ("_mist", "_flood"):
             return float(st.mist if name == "_mist" else st.flood)
-        if name in ("_speed_override", "_feed_override"):
-            return float(st.overrides)
-        if name in ("_adaptive_feed", "_feed_hold"):
-            return 0.0
+        if name == "_speed_override":
+            return float(st.speed_override)
+        if name == "_feed_override":
+            return float(st.feed_override)
+        if name == "_adaptive_feed":
+            return float(st.adaptive_feed)
+        if name == "_feed_hold":
+            return float(st.feed_hold)
         if name == "_feed":
             return st.feed
         if name == "_rpm":
@@ -142,9 +150,9 @@ class Interpreter:
         if name in ("_selected_tool", "_selected_pocket"):
             return float(st.next_tool)
         if name == "_value":
-            return getattr(self.control, "return_value", 0.0)
+            return self.control.return_value if self.control is not None else 0.0
         if name == "_value_returned":
-            return float(getattr(self.control, "value_returned", False))
+            return float(self.control.value_returned) if self.control is not None else 0.0
         if name == "_call_level":
             return float(self.params.call_level)
         if name == "_task":
@@ -230,6 +238,38 @@ class Interpreter:
                 self.detached = None
         self.out.append(Motion(**kw))  # type: ignore[arg-type]
 
+    def context(self, code: int, w: Word, line: int, pre: list[tuple[str, float]]) -> None:
+        """M70 (save the modal state), M71 (forget it), M72 (restore it), M73
+        (save it, restored when this subroutine returns)."""
+        ctl = self.control
+        assert ctl is not None
+        frame = ctl.frames[-1]
+        if code in (70, 73):
+            frame.context = functions.snapshot(self)
+            frame.restore_on_return = code == 73 and ctl.call_level > 0
+        elif code == 71:
+            frame.context = None
+        else:
+            if frame.context is None:
+                raise self.err(
+                    "M72 with no saved state to restore", line, w, "M70 or M73 before it"
+                )
+            # functions the restore makes come after the block's own so far
+            if pre:
+                p = tuple(self.st.pos)
+                self.emit(line=line, kind="function", start=p, end=p, words=tuple(pre))
+                pre.clear()
+            self.restore(frame.context, line)
+
+    def restore(self, saved: dict[str, object], line: int) -> None:
+        """Back to a saved modal state: the G and M codes LinuxCNC generates for
+        it, run as blocks of this line."""
+        from .read import evaluate, parse
+
+        for text in functions.restore_blocks(functions.snapshot(self), saved):
+            blk = evaluate(parse(text), line, self.params, self.source, self.params.add_named)
+            self.run(blk)
+
     def no_comp(self, what: str, line: int, w: Word | None) -> None:
         """What LinuxCNC refuses with cutter compensation on."""
         if self.st.comp_side:
@@ -297,9 +337,10 @@ class Interpreter:
             st.feed = seen["F"].value
             st.feed_units = st.units
         # machine functions before the motion, in LinuxCNC's order of execution
-        # (S, T, M6, M3/M4/M5, M7/M8/M9, M48/M49): an S or T that changes nothing
-        # is no function
+        # (functions.py): an S or T that changes nothing is no function
         pre: list[tuple[str, float]] = []
+        if 14 in groups:
+            functions.spindle_mode(self, groups[14][0], seen, pre)
         if "S" in seen:
             if seen["S"].value != st.spindle:
                 pre.append(("S", seen["S"].value))
@@ -311,13 +352,19 @@ class Interpreter:
             if t != st.next_tool:
                 pre.append(("T", float(t)))
             st.next_tool = t
-        if 6 in mgroups:
+        if 5 in mgroups:
+            functions.io(self, mgroups[5][0], mgroups[5][1], seen, pre, line)
+        if 6 in mgroups and mgroups[6][0] == 61:
+            functions.tool_number(self, mgroups[6][1], seen, pre, line)
+        elif 6 in mgroups:
             self.no_comp("a tool change", line, mgroups[6][1])
             st.tool = st.next_tool
             st.spindle_dir = 0  # LinuxCNC stops the spindle for a tool change
             self.tool_parameters()
             pre.append(("M", 6.0))
-        if 7 in mgroups:
+        if 7 in mgroups and mgroups[7][0] >= 70:
+            self.context(mgroups[7][0], mgroups[7][1], line, pre)
+        elif 7 in mgroups:
             st.spindle_dir = {3: 1, 4: -1, 5: 0}[mgroups[7][0]]
             pre.append(("M", float(mgroups[7][0])))
         if 8 in mgroups:
@@ -326,9 +373,7 @@ class Interpreter:
             st.flood = code == 8 or (st.flood and code != 9)
             pre.append(("M", float(code)))
         if 9 in mgroups:
-            self.no_comp("M48/M49", line, mgroups[9][1])
-            st.overrides = mgroups[9][0] == 48
-            pre.append(("M", float(mgroups[9][0])))
+            functions.overrides(self, mgroups[9][0], mgroups[9][1], seen, pre, line)
         if 10 in mgroups:  # a user M code, with its P and Q (LinuxCNC passes both)
             pre.append(("M", float(mgroups[10][0])))
             for letter in ("P", "Q"):

@@ -123,6 +123,9 @@ class Parameters:
         self.values[5220] = 1.0
         #: named parameters per call level; level 0 holds the globals too
         self.frames: list[dict[str, float]] = [{}]
+        #: parameters whose value is not known before the program runs (#5399
+        #: after M66): reading one is an error
+        self.unknown: set[int] = set()
         self._system = system
         self._position = position
         self._comp_on = comp_on
@@ -143,6 +146,12 @@ class Parameters:
             return self._position(index)
         if not 1 <= index < NUM_PARAMETERS:
             raise ExprError(f"parameter number {index} out of range", column, "#1 to #5601")
+        if index in self.unknown:
+            raise ExprError(
+                f"#{index} (the input M66 waited for) is not known before the program runs",
+                column,
+                "a program that does not branch on the machine's inputs",
+            )
         return self.values[index]
 
     def _frame(self, name: str) -> dict[str, float]:
@@ -189,6 +198,7 @@ class Parameters:
                 self._frame(target)[target] = value
             else:
                 self.values[target] = value
+                self.unknown.discard(target)
 
     # -- calls
     def enter(self, args: list[float] | None) -> list[float]:

@@ -26,7 +26,11 @@ class State:
     coord: int = 1  # LinuxCNC's origin index: 1 (G54) .. 9 (G59.3)
     mist: bool = False
     flood: bool = False
-    overrides: bool = True  # M48 (LinuxCNC's start) / M49
+    feed_override: bool = True  # M48 (LinuxCNC's start) / M49, M50
+    speed_override: bool = True  # M48 / M49, M51
+    adaptive_feed: bool = False  # M52
+    feed_hold: bool = False  # M53
+    css: bool = False  # G96 (constant surface speed) / G97
     retract_r: bool = True  # G99 (LinuxCNC default) vs G98
     cycle_r: float = 0.0
     cycle_z: float = 0.0  # in the cycle's own axis, workpiece frame
