@@ -80,12 +80,10 @@ def _ours_all(text: str) -> tuple[list[gcode.Motion], list[str], GCodeError | No
     return out, tokens, None
 
 
-#: our machine functions a stand-in canon does not show (spindle modes, M66,
-#: override switches M50-M53, user M codes)
-_UNSHOWN = {96.0, 97.0}
-
-
 def _tokens(words: tuple[tuple[str, float], ...]) -> list[str]:
+    """Our machine functions as oracle.function_tokens writes rs274's, but for
+    those its stand-in canon does not show (spindle modes G96/G97 with D, M66,
+    the override switches M50-M53, user M codes)."""
     out: list[str] = []
     skip = False
     for letter, v in words:
