@@ -48,7 +48,17 @@ import numpy as np
 
 from . import axiscomp, kinematics, simulate
 from .errors import FitError
-from .profile import LEG_OPTIONAL, LEG_REQUIRED, MOTORS, KinematicParams, Profile, TableParams
+from .measure import AxisData, BallbarRun, PoseData
+from .profile import (
+    LEG_OPTIONAL,
+    LEG_REQUIRED,
+    MOTORS,
+    AxisComp,
+    Effects,
+    KinematicParams,
+    Profile,
+    TableParams,
+)
 
 LEG_KEYS = LEG_REQUIRED + LEG_OPTIONAL
 
@@ -146,7 +156,10 @@ class Observations:
 
 
 def reached_motors(
-    real_axis: Sequence[Any], P_cmd: np.ndarray, approach: int | None, effects: Any = None
+    real_axis: Sequence[AxisComp],
+    P_cmd: np.ndarray,
+    approach: int | None,
+    effects: Effects | None = None,
 ) -> np.ndarray:
     """Where the parts end for commands, by the given real-axis tables (play model)."""
     tables = axiscomp.tables_by_motor(tuple(real_axis), effects)
@@ -165,9 +178,9 @@ def reached_motors(
 
 def observations(
     commanded: Profile,
-    real_axis: Sequence[Any],
-    poses: Sequence[Any],
-    runs: Sequence[Any],
+    real_axis: Sequence[AxisComp],
+    poses: Sequence[PoseData],
+    runs: Sequence[BallbarRun],
     ballbar_points: int = 720,
 ) -> Observations:
     """Model inputs for pose files (measure.PoseData) and ballbar runs (measure.BallbarRun).
@@ -515,7 +528,7 @@ class StageReport:
         return dataclasses.asdict(self)
 
 
-def _axis_residuals(tables: Sequence[Any], axis: Sequence[Any]) -> dict[str, np.ndarray]:
+def _axis_residuals(tables: Sequence[AxisComp], axis: Sequence[AxisData]) -> dict[str, np.ndarray]:
     """measured − predicted position for laser runs under given tables [mm], per motor."""
     t = axiscomp.tables_by_motor(tuple(tables))
     out: dict[str, list[np.ndarray]] = {}
@@ -528,10 +541,9 @@ def _axis_residuals(tables: Sequence[Any], axis: Sequence[Any]) -> dict[str, np.
     return {k: np.concatenate(v) for k, v in out.items()}
 
 
-def stage_tables(start: Profile, axis: Sequence[Any]) -> tuple[list[Any], StageReport]:
+def stage_tables(start: Profile, axis: Sequence[AxisData]) -> tuple[list[AxisComp], StageReport]:
     """Stage 1: [[axis_comp]] tables and ISO 230-2 figures from laser runs."""
     from . import iso230_2
-    from .profile import AxisComp
 
     motor = np.concatenate([a.motor for a in axis])
     target = np.concatenate([a.target for a in axis])
@@ -580,9 +592,9 @@ def _jsonable(x: Any) -> Any:
 def stage_kinematics(
     start: Profile,
     commanded: Profile,
-    real_axis: Sequence[Any],
-    poses: Sequence[Any],
-    runs: Sequence[Any],
+    real_axis: Sequence[AxisComp],
+    poses: Sequence[PoseData],
+    runs: Sequence[BallbarRun],
     **kw: Any,
 ) -> tuple[np.ndarray, KinematicFit, Observations, StageReport]:
     """Stage 2: contract parameters from poses and ballbar runs."""

@@ -313,6 +313,8 @@ class Pipeline:
         self.play_cols = [col for col, t in self.table_cols if t.max_play > 1e-12]
         # the contract: the first point of a motion is approached from below (lo)
         self.side = np.ones(5, dtype=int)
+        # where each motor with play last moved with a direction (None: not yet)
+        self.ref = np.full(5, np.nan)
         self.lag = (
             np.asarray(profile.effects.servo_lag_ms) / 1000.0 if stages.axis_comp else np.zeros(5)
         )
@@ -532,7 +534,6 @@ class Pipeline:
         )
         t0 = time.perf_counter()
         side = np.tile(self.side, (len(pc), 1))
-        self.targets = pc.P_ideal
         self.contacts = []
         if self.play_cols and reachable:
             pc, side = self._reversals(plan, s, pc)
@@ -547,7 +548,7 @@ class Pipeline:
             P_cmd = pc.P_ideal.copy()
             V_cmd = pc.V_ideal.copy()
             for col, table in self.table_cols:
-                P_cmd[:, col] = axiscomp.compensate_sided(table, self.targets[:, col], side[:, col])
+                P_cmd[:, col] = axiscomp.compensate_sided(table, pc.P_ideal[:, col], side[:, col])
                 V_cmd[:, col] = pc.V_ideal[:, col] / table.slope(P_cmd[:, col], side[:, col])
             if self.play_cols:
                 self._settle(pc, side, P_cmd, V_cmd)
@@ -566,6 +567,7 @@ class Pipeline:
         prev = (
             None if last is None else (last.P_ideal[0], last.V_ideal[0], bool(last.speed[0] == 0))
         )
+        self.ref = np.where(np.isnan(self.ref), pc.P_ideal[0], self.ref)
         t_end = np.cumsum(pc.dt)
         resting = pc.speed == 0.0
         ins = reversals.plan_insertions(
@@ -577,6 +579,7 @@ class Pipeline:
             prev,
             self.play_cols,
             self.side,
+            self.ref,
             self.reversal_tol,
             self.reversal_s,
         )
@@ -599,29 +602,20 @@ class Pipeline:
             when = when_all[order]
             before = np.concatenate([before, e_before])[order]
             resting = pc.speed == 0.0
-        side = reversals.sides(
-            step, when, before, pc.V_ideal, resting, ins, self.play_cols, self.side
-        )
+        rows = reversals.Rows(step, when, before)
+        side = reversals.sides(rows, pc.V_ideal, resting, ins, self.play_cols, self.side)
         self.side = side[-1].copy() if len(side) else self.side
-        self.targets = reversals.contact_targets(step, when, before, pc.P_ideal, ins)
         # where each crossing ends (the motor meets its part) and where it began
         contacts: list[tuple[int, int, int]] = []
-        plain = ~before
         for k, col, ta, tb, _new in ins.windows:
-            end = np.flatnonzero((step == k) & plain & (when == tb))
-            beg = np.flatnonzero((step == k) & plain & (when == ta))
-            if not end.size:
-                continue
-            if beg.size:
-                b0 = int(beg[0])
-            else:  # the window starts at the point before the step
-                prior = np.flatnonzero((step < k) & plain)
-                b0 = int(prior[-1]) if prior.size else -1
-            contacts.append((int(end[0]), b0, col))
+            end = rows.at(k, tb)
+            beg = rows.at(k, ta)
+            if beg < 0:  # the window starts at the point before the step
+                beg = rows.plain(k)[0] - 1
+            contacts.append((end, beg, col))
         for k, col, _new in ins.stands:
-            end = np.flatnonzero((step == k) & before)
-            if end.size:
-                contacts.append((int(end[0]), int(end[0]) - 1, col))
+            end = rows.standing(k)
+            contacts.append((end, end - 1, col))
         self.contacts = sorted(contacts)
         return pc, side
 
@@ -633,7 +627,13 @@ class Pipeline:
         stands: a corner's blend may have carried it a little past the wanted
         extreme (within the corner tolerance), and a motor that met it at the wanted
         position would then push it with the crossing's speed. Updates the commands
-        in place and carries where every part is into the next chunk."""
+        in place and carries where every part is into the next chunk.
+
+        One pass with the commands as made finds where each part stands in each
+        window (a crossing changes nothing before it, and once in contact the part
+        follows the command whichever way it got there); a second one, after the
+        corrections, carries the parts' positions on.
+        """
         prev_P = self.last_cmd[0] if self.last_cmd is not None else None
         prev_V = self.last_cmd[1] if self.last_cmd is not None else None
         for col in self.play_cols:
@@ -645,49 +645,33 @@ class Pipeline:
             else:
                 y0 = self.play_y[col]
                 P0, V0 = float(prev_P[col]), float(prev_V[col])  # type: ignore[index]
-            cursor = 0
-            for end, beg, c in self.contacts:
-                if c != col:
-                    continue
-                y = reversals.follow(
-                    table,
-                    y0,
-                    P0,
-                    V0,
-                    P_cmd[cursor : end + 1, col],
-                    V_cmd[cursor : end + 1, col],
-                    pc.dt[cursor : end + 1],
+            mine = [(end, beg) for end, beg, c in self.contacts if c == col]
+            if mine:
+                y_pt, lo, hi = reversals.follow(
+                    table, y0, P0, V0, P_cmd[:, col], V_cmd[:, col], pc.dt
                 )
-                first = max(beg + 1, cursor) - cursor
-                span = y[first:]
-                old = -int(side[end, col])
-                stuck = float(span.min() if old < 0 else span.max())
-                if beg >= cursor:
-                    # the part's position when the window begins counts too
-                    at_beg = y[beg - cursor, -1] if beg >= cursor else y0
-                    stuck = min(stuck, float(at_beg)) if old < 0 else max(stuck, float(at_beg))
-                new = np.array([stuck])
-                P_cmd[end, col] = float(
-                    (table.lo_inv(new) if side[end, col] > 0 else table.hi_inv(new))[0]
-                )
-                y_end = reversals.follow(
-                    table,
-                    y0,
-                    P0,
-                    V0,
-                    P_cmd[cursor : end + 1, col],
-                    V_cmd[cursor : end + 1, col],
-                    pc.dt[cursor : end + 1],
-                )[-1, -1]
-                y0, P0, V0 = float(y_end), float(P_cmd[end, col]), float(V_cmd[end, col])
-                cursor = end + 1
-            if cursor < len(pc):
-                y0 = float(
-                    reversals.follow(
-                        table, y0, P0, V0, P_cmd[cursor:, col], V_cmd[cursor:, col], pc.dt[cursor:]
-                    )[-1, -1]
-                )
-            self.play_y[col] = y0
+                lo_l, hi_l, y_l = lo.tolist(), hi.tolist(), y_pt.tolist()
+                ends, stuck, up = [], [], []
+                for end, beg in mine:
+                    first = beg + 1 if beg >= 0 else 0
+                    old = -int(side[end, col])
+                    # where the part stands when the crossing begins: the extreme it
+                    # reached on the old side (the window's start counts too)
+                    at_beg = y_l[beg] if beg >= 0 else y0
+                    if old < 0:
+                        y_at = min([at_beg, *lo_l[first : end + 1]])
+                    else:
+                        y_at = max([at_beg, *hi_l[first : end + 1]])
+                    ends.append(end)
+                    stuck.append(y_at)
+                    up.append(side[end, col] > 0)
+                e = np.array(ends)
+                y_s = np.array(stuck)
+                u = np.array(up)
+                cmd = np.where(u, table.lo_inv(y_s), table.hi_inv(y_s))
+                P_cmd[e, col] = cmd
+            y_end, _, _ = reversals.follow(table, y0, P0, V0, P_cmd[:, col], V_cmd[:, col], pc.dt)
+            self.play_y[col] = float(y_end[-1])
         self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
 
     def _new_points(

@@ -6,26 +6,28 @@ rerun with ``--debug`` for the traceback and report it).
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import itertools
 import json
+import os
 import sys
 import traceback
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
 import numpy as np
 
 from . import __version__
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
+from .files import clash, read_text, write_atomic
 from .files import load_profile as _load_profile
-from .files import read_text, write_atomic
 from .profile import Profile
 from .writers import DIALECTS
+
+if TYPE_CHECKING:
+    from .measure import AxisData, BallbarRun, PoseData
 
 
 def load_profile(path: str) -> Profile:
@@ -89,6 +91,12 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
         except KeyboardInterrupt:
             click.echo("interrupted; no output written", err=True)
             sys.exit(130)
+        except BrokenPipeError:
+            # the reader went away (prsxy-post inspect big.ngc | head): stop quietly,
+            # and keep Python from complaining when it flushes stdout at exit
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            sys.exit(1)
         except Exception as exc:  # a bug: say so plainly
             if ctx.debug:
                 traceback.print_exc()
@@ -104,8 +112,83 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
 
 # ------------------------------------------------------------------ the group
 
+#: The examples each command's --help ends with, by command ("" is the program).
+#: tests/test_cli_everyday.py parses every one against the command's options.
+EXAMPLES: dict[str, tuple[str, ...]] = {
+    "": (
+        "prsxy-post convert part.ngc --profile shop.toml -o part.pmc",
+        "prsxy-post check part.ngc --profile shop.toml",
+        "prsxy-post COMMAND --help",
+    ),
+    "inspect": (
+        "prsxy-post inspect part.ngc",
+        "prsxy-post inspect part.ngc --profile shop.toml --json",
+    ),
+    "convert": (
+        "prsxy-post convert part.ngc --profile shop.toml -o part.pmc",
+        "prsxy-post convert part.ngc --profile shop.toml            # writes part.pmc",
+        "prsxy-post convert *.ngc --profile shop.toml --out-dir pmc/ --jobs 2",
+        "prsxy-post convert part.ngc --profile shop.toml --format gcode -o part-comp.ngc",
+        "prsxy-post convert part.ngc --profile shop.toml -o - | less",
+    ),
+    "check": (
+        "prsxy-post check part.ngc --profile shop.toml",
+        "prsxy-post check part.ngc --profile shop.toml --each-line",
+    ),
+    "simulate": (
+        "prsxy-post simulate --truth machine.toml --profile shop.toml -o measured/",
+        "prsxy-post simulate --truth machine.toml --profile shop.toml -o bb/ --only-xy",
+    ),
+    "calibrate": (
+        "prsxy-post calibrate measured/*.csv --profile shop.toml -o calibrated.toml",
+        "prsxy-post calibrate axis.csv --profile shop.toml --stages tables -o shop.toml --in-place",
+    ),
+    "diagnose": (
+        "prsxy-post diagnose measured/*.csv --profile calibrated.toml",
+        "prsxy-post diagnose measured/*.csv --profile cal.toml -o updated.toml --report rep/",
+    ),
+    "ballbar": (
+        "prsxy-post ballbar xy-r50-ccw.csv xy-r50-cw.csv",
+        "prsxy-post ballbar run*.csv --plot ballbar.png --profile shop.toml",
+    ),
+    "tables": (
+        "prsxy-post tables export --profile shop.toml --format linuxcnc1 --out-dir comp/",
+        "prsxy-post tables export --profile shop.toml --format pmac --out-dir pmac/",
+        "prsxy-post tables import comp/motor5.comp --profile a.toml --format linuxcnc1 -o b.toml",
+    ),
+    "tables export": (
+        "prsxy-post tables export --profile shop.toml --format linuxcnc1 --out-dir comp/",
+        "prsxy-post tables export --profile shop.toml --format pmac --out-dir pmac/",
+    ),
+    "tables import": (
+        "prsxy-post tables import comp/motor5.comp --profile a.toml --format linuxcnc1 -o b.toml",
+        "prsxy-post tables import pmac/motor5.pmc --profile shop.toml --format pmac -o new.toml",
+    ),
+}
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+
+class _Examples(click.Command):
+    """Ends --help with the command's :data:`EXAMPLES`, as written."""
+
+    def format_epilog(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        super().format_epilog(ctx, formatter)
+        names, c = [], ctx
+        while c.parent is not None:  # the command's path below the program
+            names.append(c.info_name or "")
+            c = c.parent
+        examples = EXAMPLES.get(" ".join(reversed(names)))
+        if examples:
+            with formatter.section("Examples"):
+                for ex in examples:
+                    formatter.write(" " * formatter.current_indent + ex + "\n")
+
+
+class _Group(_Examples, click.Group):
+    command_class = _Examples
+    group_class = type  # sub-groups (tables) are made alike
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="prsxy-post")
 @click.option("--debug", is_flag=True, help="Show a traceback with errors.")
 @click.pass_context
@@ -149,22 +232,19 @@ start_option = click.option(
 @guarded
 def inspect(program: str, profile_path: str | None, start: str | None, as_json: bool) -> None:
     """Print the interpreted motions of PROGRAM (workpiece frame, mm, degrees)."""
-    from . import chain, gcode
+    from . import gcode
+    from . import program as prog
 
-    text = read_text(program, "G-code program")
-    if profile_path:
-        prof = load_profile(profile_path)
-        cfg = chain.interpreter_config(
-            prof, parse_pose(start, "--start") if start else None, on_message=say
-        )
+    prof = load_profile(profile_path) if profile_path else None
+    st = parse_pose(start, "--start") if start else None
+    if program == "-":
+        batches = prog.text_batches(read_text(program, "G-code program"))
     else:
-        cfg = (
-            gcode.InterpreterConfig(start=parse_pose(start, "--start"), on_message=say)
-            if start
-            else gcode.InterpreterConfig(on_message=say)
-        )
+        batches = prog.file_batches(program)
     out = sys.stdout
-    for m in gcode.iter_motions(gcode.split_lines(text), cfg, program):
+    for m in prog.motions(
+        batches, prof, start=st, source=program, on_message=say, lines_from=prog.lines_of(program)
+    ):
         d = gcode.motion_to_json(m)
         if as_json:
             out.write(json.dumps(d) + "\n")
@@ -173,7 +253,9 @@ def inspect(program: str, profile_path: str | None, start: str | None, as_json: 
             extra = ""
             if d["kind"] == "arc":
                 extra = f" G{d['plane']} centre {d['center']} rotation {d['rotation']}"
-            feed = "" if d.get("feed") is None else f" F{d['feed']:g}"
+            if d["kind"] == "function":
+                extra = " " + " ".join(str(w) for w in d["words"])  # type: ignore[attr-defined]
+            feed = "" if m.kind in ("rapid", "dwell", "function") else f" F{m.feed:g}"
             out.write(f"{d['line']:>6} {d['kind']:<5} {end}{feed}{extra}\n")
 
 
@@ -209,7 +291,11 @@ class _Progress:
     help="; ".join(f"{n}: {d.summary}" for n, d in sorted(DIALECTS.items())) + ".",
 )
 @click.option(
-    "-o", "--output", default=None, help="Output file for one program ('-' for standard output)."
+    "-o",
+    "--output",
+    default=None,
+    help="Output file for one program ('-' for standard output); default: beside "
+    "the program, with the format's extension (part.ngc -> part.pmc).",
 )
 @click.option(
     "--out-dir",
@@ -250,8 +336,11 @@ def convert(
 ) -> None:
     """Convert G-code PROGRAMS into compensated motor programs (or corrected G-code).
 
-    Outputs are written atomically: a failed conversion leaves no partial file and
-    never replaces an existing one.
+    Each output goes beside its program with the format's extension (part.ngc ->
+    part.pmc), to -o FILE, or into --out-dir; -o - writes to standard output. An
+    output never replaces an input (a program or the profile). Outputs are written
+    atomically: a failed conversion leaves no partial file and never replaces an
+    existing one.
     """
     if output and out_dir:
         raise UsageError("-o and --out-dir given together", expected="one of them")
@@ -259,10 +348,6 @@ def convert(
         raise UsageError(
             f"-o names one output but {len(programs)} programs were given",
             expected="--out-dir DIR for several programs",
-        )
-    if not output and not out_dir and len(programs) > 1:
-        raise UsageError(
-            "several programs and no --out-dir", expected="--out-dir DIR for several programs"
         )
     from . import chain
     from . import convert as conv
@@ -285,11 +370,32 @@ def convert(
     ext = DIALECTS[fmt].extension
     pooled = jobs > 1 and len(programs) > 1
     jobs_list = []
-    for prog in programs:
-        if out_dir:
-            out = str(Path(out_dir) / (Path(prog).stem + ext))
-        else:
-            out = output or "-"
+    outs = [_output_of(prog, ext, output, out_dir) for prog in programs]
+    seen: dict[Path, str] = {}
+    for prog, out in zip(programs, outs, strict=True):
+        first = seen.setdefault(Path(out).resolve(), prog)
+        if first != prog and out != "-":
+            raise UsageError(
+                f"{first} and {prog} would both be written to {out}",
+                expected="programs with different names, or one convert per directory",
+            )
+        hit = clash(out, {f"G-code program {prog}": prog, f"profile {profile_path}": profile_path})
+        if hit is not None:
+            if output:
+                raise UsageError(
+                    f"-o {output} would overwrite the {hit[0]}", expected="another output file"
+                )
+            if out_dir:
+                raise UsageError(
+                    f"--out-dir {out_dir} would write {out} over the {hit[0]}",
+                    expected="another directory, or -o FILE",
+                )
+            raise UsageError(
+                f"the default output {out} (the program's name with the {fmt} format's "
+                f"extension) would overwrite the {hit[0]}",
+                expected="-o FILE or --out-dir DIR for the output",
+            )
+    for prog, out in zip(programs, outs, strict=True):
         jobs_list.append(
             conv.ConvertJob(
                 prog,
@@ -329,6 +435,20 @@ def convert(
         sys.exit(worst)
 
 
+def _output_of(program: str, ext: str, output: str | None, out_dir: str | None) -> str:
+    """Where convert writes a program's output: -o, --out-dir/NAME.ext, or beside it."""
+    if output:
+        return output
+    if out_dir:
+        return str(Path(out_dir) / (Path(program).stem + ext))
+    if program == "-":
+        raise UsageError(
+            "the program comes from standard input, so there is no file to write beside",
+            expected="-o FILE, or -o - for standard output",
+        )
+    return str(Path(program).with_suffix(ext))
+
+
 # ------------------------------------------------------------------ check
 
 
@@ -336,9 +456,14 @@ def convert(
 @click.argument("program", type=click.Path(dir_okay=False, allow_dash=True))
 @profile_option
 @start_option
-@click.option("--no-error-map", is_flag=True)
-@click.option("--no-axis-comp", is_flag=True)
-@click.option("--nominal-kinematics", is_flag=True)
+@click.option("--no-error-map", is_flag=True, help="Skip the virtual-axis error map stage.")
+@click.option("--no-axis-comp", is_flag=True, help="Skip the real-axis tables stage.")
+@click.option(
+    "--nominal-kinematics",
+    is_flag=True,
+    help="Use the nominal design in the IK instead of the calibrated geometry.",
+)
+@click.option("--each-line", is_flag=True, help="List every problem line instead of the groups.")
 @guarded
 def check(
     program: str,
@@ -347,62 +472,76 @@ def check(
     no_error_map: bool,
     no_axis_comp: bool,
     nominal_kinematics: bool,
+    each_line: bool,
 ) -> None:
-    """Run the whole chain without writing and list every problem with its line."""
-    from . import chain, errormap, gcode
-    from .convert import few_gc_passes, iter_program_batches
-    from .files import inspect_source
+    """Run PROGRAM through the whole chain without writing and report what the
+    machine cannot do: motors beyond their travel, poses out of reach, tilts and
+    feeds beyond the limits.
+
+    Problems are grouped by kind, with the runs of lines, how many lines and the
+    worst value (the figures are those of the motor commands convert writes).
+    Exit code 1 when there is any.
+    """
+    from . import chain
+    from . import check as chk
+    from . import program as prog
 
     prof = load_profile(profile_path)
     st = parse_pose(start, "--start") if start else None
-    cfg = chain.interpreter_config(prof, st, on_message=say)
     stages = chain.Stages(not no_error_map, not nominal_kinematics, not no_axis_comp)
-    emap = errormap.from_profile(prof) if stages.error_map else None
-    # streamed like convert: a program of millions of lines is checked in bounded
-    # memory (the points are counted, not kept)
     if program == "-":
-        batches = gcode.batches_of(gcode.split_lines(read_text(program, "G-code program")))
+        batches = prog.text_batches(read_text(program, "G-code program"))
     else:
-        inspect_source(program)  # a binary file is refused with its line
-        batches = iter_program_batches(program)
-    lines_from = gcode.FileLines(program) if program != "-" else None
-    motions = gcode.iter_motions_batched(batches, cfg, program, lines_from=lines_from)
-    pipe = chain.Pipeline(prof, stages, emap, start=st, collect=True)
-    n_motions = n_points = 0
-    seconds = 0.0
-
-    def count(chunks: list[Any]) -> None:
-        nonlocal n_points, seconds
-        for pc in chunks:
-            n_points += len(pc)
-            seconds += float(np.sum(pc.dt))
-
-    with few_gc_passes(), contextlib.closing(motions), contextlib.closing(batches):
-        while True:
-            batch = list(itertools.islice(motions, 4096))
-            n_motions += len(batch)
-            count(pipe.feed(batch))
-            if len(batch) < 4096:
-                break
-        count(pipe.finish())
-    problems = sorted(pipe.problems, key=lambda p: p.line or 0)
-    for p in problems:
-        click.echo(str(p.located(source=program)))
-    n = len(problems)
-    if n:
-        click.echo(f"{program}: {n} problem{'s' * (n != 1)}", err=True)
-        sys.exit(1)
-    click.echo(f"{program}: ok ({n_motions} motions, {n_points} points, {seconds:.2f} s)", err=True)
+        batches = prog.file_batches(program)
+    report = chk.check_batches(
+        batches,
+        prof,
+        stages=stages,
+        start=st,
+        source=program,
+        on_message=say,
+        lines_from=prog.lines_of(program),
+    )
+    if each_line:
+        for p in report.problems:
+            click.echo(str(p.error(prof, program)))
+    else:
+        for g in report.groups():
+            click.echo(g.describe(prof, program))
+    if report.stopped is not None:
+        click.echo(str(report.stopped), err=True)
+    if report.ok:
+        click.echo(
+            f"{program}: ok ({report.motions} motions, {report.points} points, "
+            f"{report.seconds:.2f} s)",
+            err=True,
+        )
+        return
+    n = len({p.line for p in report.problems})
+    kinds = len(report.groups())
+    summary = (
+        f"{n} line{'s' * (n != 1)} with problems in {kinds} group{'s' * (kinds != 1)}"
+        if n
+        else "no problem before it stopped"
+    )
+    if report.stopped is not None:
+        summary += "; the check stopped at the error above"
+    click.echo(f"{program}: {summary}", err=True)
+    sys.exit(1)
 
 
 # ------------------------------------------------------------------ measurements
 
 
-def read_measurements(paths: Sequence[str]) -> tuple[list[Any], list[Any], list[Any]]:
+def read_measurements(
+    paths: Sequence[str],
+) -> tuple[list[PoseData], list[BallbarRun], list[AxisData]]:
     """Read measurement files, sorted by kind: poses, ballbar runs, axis runs."""
     from . import measure
 
-    poses, runs, axis = [], [], []
+    poses: list[PoseData] = []
+    runs: list[BallbarRun] = []
+    axis: list[AxisData] = []
     for p in paths:
         m = measure.read_measurement(read_text(p, "measurement file"), p)
         if isinstance(m, measure.PoseData):
@@ -574,15 +713,24 @@ def _print_stage(rep: Any) -> None:
 def profile_files(
     doc: dict[str, Any], output: str, input_path: str, in_place: bool
 ) -> dict[Path, str | bytes]:
-    """The profile to write (checked to read back) and, when it replaces its input,
-    a .bak of the input."""
-    from .profile import dumps, loads
+    """The input profile rewritten to hold ``doc`` (checked to read back) and, when
+    it replaces its input, a .bak of the input.
 
-    text = dumps(doc)
+    ``doc`` is the input's document with sections changed; the text is the
+    input's with only those changes made (:mod:`prsxy_post.profile.update`), so
+    the user's comments and layout survive.
+    """
+    import tomllib
+
+    from .profile import loads
+    from .profile.update import changes_between, update_text
+
+    original = read_text(input_path, "profile")
+    text = update_text(original, changes_between(tomllib.loads(original), doc), input_path)
     loads(text, output)  # what we write must read back
     files: dict[Path, str | bytes] = {Path(output): text}
     if in_place and Path(output).resolve() == Path(input_path).resolve():
-        files[Path(output + ".bak")] = read_text(input_path, "profile")
+        files[Path(output + ".bak")] = original
     return files
 
 
@@ -884,14 +1032,7 @@ def ballbar(
 
 @main.group()
 def tables() -> None:
-    """Real-axis tables in the files controllers load: LinuxCNC comp files, Turbo PMAC.
-
-    \b
-    Examples:
-      prsxy-post tables export --profile shop.toml --format linuxcnc1 --out-dir comp/
-      prsxy-post tables export --profile shop.toml --format pmac --out-dir pmac/
-      prsxy-post tables import comp/motor5.comp --profile shop.toml --format linuxcnc1 -o new.toml
-    """
+    """Real-axis tables in the files controllers load: LinuxCNC comp files, Turbo PMAC."""
 
 
 TABLE_FORMATS = click.Choice(["linuxcnc0", "linuxcnc1", "pmac"])
@@ -910,12 +1051,7 @@ TABLE_FORMATS = click.Choice(["linuxcnc0", "linuxcnc1", "pmac"])
 @click.option("--out-dir", required=True, type=click.Path(file_okay=False))
 @guarded
 def tables_export(profile_path: str, fmt: str, out_dir: str) -> None:
-    """Write the profile's [[axis_comp]] tables as the controller loads them.
-
-    \b
-    Example:
-      prsxy-post tables export --profile shop.toml --format pmac --out-dir pmac/
-    """
+    """Write the profile's [[axis_comp]] tables as the controller loads them."""
     from .controller_tables import linuxcnc, pmac
 
     prof = load_profile(profile_path)
@@ -1023,12 +1159,7 @@ def tables_import(
     output: str,
     in_place: bool,
 ) -> None:
-    """Read controller tables into a profile's [[axis_comp]] (replacing those motors').
-
-    \b
-    Example:
-      prsxy-post tables import comp/motor5.comp --profile shop.toml --format linuxcnc1 -o new.toml
-    """
+    """Read controller tables into a profile's [[axis_comp]] (replacing those motors')."""
     from .controller_tables import linuxcnc, pmac, with_tables
 
     _check_output(output, [profile_path], in_place)

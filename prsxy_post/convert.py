@@ -35,7 +35,14 @@ from typing import Any
 
 from .chain import Stages
 from .errors import PrsxyError
-from .files import inspect_source, load_profile, publish, read_text, sha256_of
+from .files import (
+    inspect_source,
+    load_profile,
+    publish,
+    read_text,
+    refuse_to_overwrite,
+    sha256_of,
+)
 
 
 @dataclass(frozen=True)
@@ -315,6 +322,8 @@ def convert_file(
 
 
 def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) -> ConvertStats:
+    inputs = {"G-code program": job.program, "profile": job.profile_path}
+    refuse_to_overwrite(job.output, inputs)
     prof = load_profile(job.profile_path)
     bar = None
     if progress is not None and job.program != "-":
@@ -396,9 +405,11 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
             fh.flush()
             os.fsync(fh.fileno())
             fh.close()
+        targets = [_part_path(job.output, part, split) for part in sorted(temps)]
+        for target in targets:  # a part's name (x.part1.pmc) too, before any is published
+            refuse_to_overwrite(target, inputs)
         written = []
-        for part in sorted(temps):
-            target = _part_path(job.output, part, split)
+        for part, target in zip(sorted(temps), targets, strict=True):
             publish(temps[part], target)
             written.append(target)
         if job.output == "-":

@@ -48,6 +48,7 @@ from scipy import stats
 
 from . import axiscomp, calibrate, kinematics, simulate
 from .errors import FitError, ProfileError
+from .measure import AxisData, BallbarRun, PoseData
 from .profile import MOTORS, Profile, profile_from_dict
 
 EXTRA_PARAMS = [f"effects.guide_bow[{i}]" for i in (1, 2, 3)] + [
@@ -107,9 +108,9 @@ class Segment:
 class Data:
     """Measurements and the motor commands the machine was given for them."""
 
-    poses: list[Any]
-    runs: list[Any]
-    axis: list[Any]
+    poses: list[PoseData]
+    runs: list[BallbarRun]
+    axis: list[AxisData]
     commanded: Profile
     P_pose: list[np.ndarray] = field(default_factory=list)
     P_run: list[np.ndarray] = field(default_factory=list)
@@ -118,7 +119,11 @@ class Data:
 
     @classmethod
     def build(
-        cls, commanded: Profile, poses: Sequence[Any], runs: Sequence[Any], axis: Sequence[Any]
+        cls,
+        commanded: Profile,
+        poses: Sequence[PoseData],
+        runs: Sequence[BallbarRun],
+        axis: Sequence[AxisData],
     ) -> Data:
         d = cls(list(poses), list(runs), list(axis), commanded)
         for p in poses:

@@ -9,7 +9,6 @@ contract's measurement files, ready for ``calibrate``, ``diagnose`` and ``ballba
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
@@ -98,7 +97,7 @@ def measurement_files(
 ) -> dict[str, str]:
     """Every file of a measurement campaign, as {file name: text}."""
     files: dict[str, str] = {}
-    runs: list[Any] = []
+    runs: list[measure.BallbarRun] = []
     for r in radii:
         for ccw in (True, False):
             if "XY" in planes:

@@ -15,7 +15,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from .errors import PrsxyError
+from .errors import PrsxyError, UsageError
 from .profile import Profile, loads
 
 
@@ -62,6 +62,43 @@ def publish(tmp: str, target: str | Path) -> None:
         mode = 0o666 & ~umask
     os.chmod(tmp, mode)
     os.replace(tmp, target)
+
+
+def same_file(a: str | Path, b: str | Path) -> bool:
+    """Whether two paths name one file: the same path once links and ``..`` are
+    resolved, or (when both exist) the same file on disk (a hard link)."""
+    pa, pb = Path(a), Path(b)
+    if pa.resolve() == pb.resolve():
+        return True
+    try:
+        return os.path.samefile(pa, pb)
+    except OSError:
+        return False
+
+
+def clash(output: str | Path, inputs: dict[str, str]) -> tuple[str, str] | None:
+    """The input ``output`` would replace, as (what it is, its path), or None.
+
+    inputs : what each input is ("G-code program", "profile") → its path; "-"
+        (standard input or output) is never a file
+    """
+    if str(output) == "-":
+        return None
+    for what, path in inputs.items():
+        if path != "-" and same_file(output, path):
+            return what, path
+    return None
+
+
+def refuse_to_overwrite(output: str | Path, inputs: dict[str, str]) -> None:
+    """Raise :class:`UsageError` when ``output`` would replace one of ``inputs``
+    (:func:`clash`)."""
+    hit = clash(output, inputs)
+    if hit is not None:
+        raise UsageError(
+            f"the output {output} would overwrite the {hit[0]} {hit[1]}",
+            expected="an output file that is none of the inputs",
+        )
 
 
 def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:

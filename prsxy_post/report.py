@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import io
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .errors import UsageError
+
+if TYPE_CHECKING:
+    from .diagnose import Data, Diagnosis
+    from .profile import Profile
 
 
 def pyplot() -> Any:
@@ -35,7 +39,7 @@ def png(fig: Any, dpi: int = 110) -> bytes:
     return buf.getvalue()
 
 
-def _ballbar_figure(result: Any, current: Any, data: Any) -> bytes | None:
+def _ballbar_figure(result: Diagnosis, current: Profile, data: Data) -> bytes | None:
     from . import diagnose as dg
 
     if not data.runs:
@@ -74,7 +78,7 @@ def _ballbar_figure(result: Any, current: Any, data: Any) -> bytes | None:
     return png(fig)
 
 
-def _pose_figure(result: Any, current: Any, data: Any) -> bytes | None:
+def _pose_figure(result: Diagnosis, current: Profile, data: Data) -> bytes | None:
     from . import diagnose as dg
     from .profile import profile_from_dict
 
@@ -100,7 +104,7 @@ def _pose_figure(result: Any, current: Any, data: Any) -> bytes | None:
     return png(fig)
 
 
-def diagnose_report(result: Any, current: Any, data: Any) -> dict[str, str | bytes]:
+def diagnose_report(result: Diagnosis, current: Profile, data: Data) -> dict[str, str | bytes]:
     """Files of the report folder: report.md and the PNG plots."""
     files: dict[str, str | bytes] = {}
     bb = _ballbar_figure(result, current, data)

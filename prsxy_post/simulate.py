@@ -14,8 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import axiscomp, kinematics
-from .profile import MOTORS as MOTOR_ORDER
-from .profile import Profile
+from .profile import MOTORS, Profile
 
 
 def truth_geometry(truth: Profile) -> kinematics.Geometry:
@@ -79,7 +78,7 @@ def actual_motors(
     if approach is None:
         P_cmd = servo_follow(truth, P_cmd, t)
     out = np.array(P_cmd, dtype=float, copy=True)
-    for col, m in enumerate(MOTOR_ORDER):
+    for col, m in enumerate(MOTORS):
         table = tables.get(m)
         if table is None:
             continue
@@ -204,7 +203,7 @@ def random_machine(
         for k in ("scale_x", "scale_y", "squareness")
     }
     if axis_errors:
-        doc["axis_comp"] = [random_axis_table(m, rng) for m in MOTOR_ORDER]
+        doc["axis_comp"] = [random_axis_table(m, rng) for m in MOTORS]
     if effects:
         doc["effects"] = {
             "guide_bow": rng.normal(0, 0.01, 3).tolist(),
@@ -248,7 +247,7 @@ def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -
     """
     P = _wanted_motors(commanded, q, tool_length)
     tables = axiscomp.profile_tables(commanded)
-    for col, m in enumerate(MOTOR_ORDER):
+    for col, m in enumerate(MOTORS):
         if m in tables:
             P[:, col] = tables[m].lo_inv(P[:, col])
     return P
@@ -260,7 +259,7 @@ def motion_commands(
     """Motor commands for a continuous motion through poses q at times t (time order)."""
     P = _wanted_motors(commanded, q, tool_length)
     tables = axiscomp.profile_tables(commanded)
-    for col, m in enumerate(MOTOR_ORDER):
+    for col, m in enumerate(MOTORS):
         if m in tables:
             P[:, col] = axiscomp.compensate(tables[m], P[:, col])
     return servo_lead(commanded, P, t)

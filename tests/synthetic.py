@@ -3,11 +3,10 @@ sampled every 10 ms, random poses, laser runs, all measured on a truth machine."
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 
 from prsxy_post import kinematics, simulate
+from prsxy_post.measure import AxisData, BallbarRun, PoseData
 from prsxy_post.profile import MOTORS, Profile
 
 
@@ -48,13 +47,14 @@ def campaign(
     axis: bool = False,
     bb_noise: float = 0.5,
     pose_noise: float = 1.0,
-) -> tuple[list, list, list]:
-    """Poses, ballbar runs and (optionally) laser runs, as measure-like objects."""
+) -> tuple[list[PoseData], list[BallbarRun], list[AxisData]]:
+    """Poses, ballbar runs and (optionally) laser runs, as the files would read
+    (``rows``: the line of each row in a file with one header line)."""
     poses = []
     if n_poses:
         q = random_poses(rng, n_poses)
         m = simulate.measure_poses(truth, commanded, q, rng, pose_noise)
-        poses.append(SimpleNamespace(source="poses.csv", commanded=q, tip=m[:, :3], axis=m[:, 3:]))
+        poses.append(PoseData("poses.csv", q, m[:, :3], m[:, 3:], _rows(len(q))))
     runs = []
     for r in radii:
         for tilt in tilts:
@@ -67,14 +67,15 @@ def campaign(
                 )
                 name = f"r{r:g} tilt{tilt:g} {'ccw' if sign > 0 else 'cw'}"
                 runs.append(
-                    SimpleNamespace(
+                    BallbarRun(
                         source=name + ".csv",
                         name=name,
-                        t=t,
-                        commanded=q,
                         pivot=np.zeros(3),
                         length=r,
+                        t=t,
+                        commanded=q,
                         dev_um=dev,
+                        rows=_rows(len(t)),
                     )
                 )
     laser = []
@@ -83,13 +84,18 @@ def campaign(
             [simulate.measure_axis(truth, m, np.linspace(-200, 200, 21), 5, rng) for m in MOTORS]
         )
         laser.append(
-            SimpleNamespace(
+            AxisData(
                 source="axis.csv",
                 motor=rows[:, 0].astype(int),
                 target=rows[:, 1],
                 measured=rows[:, 2],
                 direction=rows[:, 3].astype(int),
                 run=rows[:, 4].astype(int),
+                rows=_rows(len(rows)),
             )
         )
     return poses, runs, laser
+
+
+def _rows(n: int) -> np.ndarray:
+    return np.arange(2, n + 2)

@@ -219,7 +219,7 @@ def test_batch_with_jobs(runner: CliRunner, tmp_path: Path) -> None:
 
 
 def test_stdout_and_split_programs(runner: CliRunner, tmp_path: Path) -> None:
-    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP)
+    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP, "-o", "-")
     assert r.exit_code == 0 and "OPEN PROG 1 CLEAR" in r.output
     prof = tmp_path / "split.toml"
     prof.write_text(
@@ -337,13 +337,16 @@ def test_check_streams_long_programs_and_lists_problems_in_line_order(
     body[9000], body[9001] = "X2 F99999", "X1 F2000"  # above the machine's feed
     prog = tmp_path / "long.ngc"
     prog.write_text("\n".join(["G21 G90 G1 F2000", *body, "M2"]) + "\n")
-    r = invoke(runner, "check", str(prog), "--profile", SHOP)
+    r = invoke(runner, "check", str(prog), "--profile", SHOP, "--each-line")
     assert r.exit_code == 1
-    found = [int(m) for m in re.findall(rf"^{re.escape(str(prog))}:(\d+):", r.output, re.M)]
+    found = [int(m) for m in re.findall(rf"^{re.escape(str(prog))}:(\d+):", r.stdout, re.M)]
     assert found == sorted(found)
     assert set(found) >= {2002, 6002, 9002}
     assert len(found) <= 6
-    assert f"{len(found)} problems" in r.output
+    assert f"{len(set(found))} lines with problems in 3 groups" in r.stderr
+    grouped = invoke(runner, "check", str(prog), "--profile", SHOP)
+    starts = re.findall(rf"^{re.escape(str(prog))}:(\d+): (\w+)", grouped.stdout, re.M)
+    assert [(int(n), w) for n, w in starts] == [(2002, "tool"), (6002, "motor"), (9002, "feed")]
 
 
 # ---------------------------------------------------------------- errors

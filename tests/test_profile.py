@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -32,13 +33,41 @@ def test_nominal_profile_is_the_contract_design() -> None:
 def test_contract_only_profile_gets_documented_defaults() -> None:
     p = profile_mod.loads((VECTORS / "nominal.toml").read_text(), "nominal.toml")
     assert p.period_ms == 10.0
-    assert p.limits == profile_mod.DEFAULTS["limits"]
+    assert p.limits == profile_mod.MachineLimits(**_documented_defaults("limits"))
+    assert p.limits.max_points == 50_000_000 and isinstance(p.limits.max_points, int)
     assert [m.axis for m in p.motors] == ["U", "V", "W", "X", "Y"]
     np.testing.assert_array_equal(p.start, np.zeros(5))
     assert p.work_offsets == {}
     assert p.controller_kinematics is None
     assert p.gcode["subroutine_path"] == [] and p.gcode["user_m_codes"] == []
     assert p.gcode["max_loop_passes"] == 10_000_000
+
+
+def _documented_defaults(section: str) -> dict[str, float]:
+    """The defaults of a section as profiles/README.md's table states them."""
+    out = {}
+    readme = (ROOT / "profiles" / "README.md").read_text()
+    for m in re.finditer(rf"^\| `\[{section}\] (\w+)` \| ([\d ]+) \|", readme, re.M):
+        out[m.group(1)] = float(m.group(2).replace(" ", ""))
+    return out
+
+
+def test_documented_limits_are_every_limit() -> None:
+    assert set(_documented_defaults("limits")) == set(profile_mod.DEFAULTS["limits"])
+
+
+def test_limits_read_typed_and_by_key() -> None:
+    p = profile_mod.loads(NOMINAL_TEXT + "\n[limits]\nmax_tilt_deg = 12.5\n", "t")
+    assert p.limits.max_tilt_deg == 12.5 and p.limits["max_tilt_deg"] == 12.5
+    with pytest.raises(KeyError):
+        p.limits["max_tilt"]
+
+
+def test_tools_are_typed() -> None:
+    p = profile_mod.loads(
+        NOMINAL_TEXT + "\n[[tools]]\nnumber = 3\nlength = 35.0\ndiameter = 6.0\n", "t"
+    )
+    assert p.tools[3].length == 35.0 and p.tools[3].diameter == 6.0
 
 
 def test_perturbed_vectors_profile_reads(perturbed: profile_mod.Profile) -> None:

@@ -120,10 +120,14 @@ def junction_limits(b: Blocks, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
 
 
 def corner_bend(b: Blocks) -> np.ndarray:
-    """(n + 1,) cos(θ/2) of the turn at each junction (1 where tangent, at the ends):
-    next to a corner taken at speed the cubics bulge by up to 1/cos(θ/2) over the
-    larger speed at their ends, so the blocks there keep below cos(θ/2) of their
-    limit (checked over random corners and speed changes)."""
+    """(n + 1,) cos(θ/2) of the turn at each junction (1 where tangent, at the ends).
+
+    Next to a corner taken at speed a the cubics bulge: over a step whose far end
+    has speed b, the speed reaches up to max(a, b) / cos(θ/2), but never exceeds b
+    while a ≤ b/2 (both measured over random turns and speeds up to 90°). So a
+    corner taken at no more than cos(θ/2)/2 of the blocks' limit needs nothing more,
+    and a faster one (a slight bend of a polyline, where cos(θ/2) is within a hair
+    of 1) holds the blocks beside it to cos(θ/2) of their limit."""
     out = np.ones(len(b) + 1)
     if len(b) > 1:
         out[1:-1] = np.minimum(
@@ -194,6 +198,7 @@ class Planner:
         # with the blocks committed before it)
         self.start_corner = False
         self.start_bend = 1.0
+        self.start_slow = True
 
     def push(self, new: Blocks, final: bool = False) -> Plan | None:
         """Add blocks; return the plan of the blocks that became final, if any."""
@@ -212,7 +217,15 @@ class Planner:
         accel = effective_accel(b, corner)
         bend = corner_bend(b)
         bend[0] = self.start_bend
-        near = np.where(corner, bend, 1.0)
+        # a corner taken at more than half the blocks' limit times cos(θ/2) holds the
+        # blocks beside it to cos(θ/2) of their limit; slower ones need nothing
+        # (corner_bend)
+        slow = np.ones(n + 1, dtype=bool)
+        if n > 1:
+            lim = np.minimum(b.vmax[:-1], b.vmax[1:])
+            slow[1:-1] = vj[:-1] <= 0.5 * bend[1:-1] * lim
+        slow[0] = self.start_slow
+        near = np.where(corner & ~slow, bend, 1.0)
         vmax = b.vmax * np.minimum(near[:-1], near[1:])
         vj = np.minimum(vj, np.concatenate([np.minimum(vmax[:-1], vmax[1:]), [0.0]]))
         length = np.where(b.stops, 0.0, b.length)
@@ -248,6 +261,7 @@ class Planner:
         self.v_start = float(v_out[-1])
         self.start_corner = bool(corner[c + 1])
         self.start_bend = float(bend[c + 1])
+        self.start_slow = bool(slow[c + 1])
         self.pending = b.take(slice(c + 1, n))
         return plan
 

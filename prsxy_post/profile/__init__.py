@@ -1,11 +1,15 @@
-"""Machine profiles: read, validate, default and write the TOML profile.
+"""Machine profiles: read and validate the TOML profile into typed sections.
 
-The contract (``shared/spec/machine-model.md``, ``data-formats.md``) fixes the
-sections ``[machine]``, ``[work]``, ``[kinematics]`` (three ``legs``), ``[table]``,
-``[[axis_comp]]`` and ``[controller_kinematics]``. Everything else is this
-project's and optional; a profile holding only the contract's keys is valid.
+The contract (``docs/contract/machine-model.md``, ``docs/contract/data-formats.md``)
+fixes the sections ``[machine]``, ``[work]``, ``[kinematics]`` (three ``legs``),
+``[table]``, ``[[axis_comp]]`` and ``[controller_kinematics]``. Everything else is
+this project's and optional; a profile holding only the contract's keys is valid.
 The project's sections, with their defaults, are documented in
-``profiles/README.md`` and in :data:`DEFAULTS`.
+``profiles/README.md`` and in the section dataclasses (:class:`MachineLimits`, …).
+
+Reading is :func:`loads` (``tomllib``); the tool changes a profile file only
+through :mod:`prsxy_post.profile.update`, which keeps the user's comments and
+layout.
 
 Angles are degrees in the file and in :class:`Profile`; :mod:`kinematics` turns
 them into radians.
@@ -14,16 +18,20 @@ them into radians.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
+import re
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, field, fields
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from .errors import ProfileError
+from ..errors import ProfileError
 
+#: The motors, by number, in the column order of every motor-space array
+#: (``P: (N, 5) ndarray [mm]`` holds P1, P2, P3, P5, P6). There is no motor 4.
 MOTORS = (1, 2, 3, 5, 6)
 DEFAULT_AXIS_NAMES = {1: "U", 2: "V", 3: "W", 5: "X", 6: "Y"}
 
@@ -40,18 +48,51 @@ KIN_REQUIRED = ("tool_length",)
 KIN_OPTIONAL = ("tool_offset_x", "tool_offset_y")
 TABLE_KEYS = ("scale_x", "scale_y", "squareness")
 
+
+@dataclass(frozen=True)
+class MachineLimits:
+    """The ``[limits]`` section: what the machine can do and what a job may cost.
+
+    max_tilt_deg : largest tool-axis tilt from vertical [deg]
+    max_feed_mm_min : largest programmed feed F [mm/min]
+    rapid_mm_min : G0 speed along the XYZ path [mm/min]
+    rapid_deg_min : G0 speed of A/B-only moves, and the cap on A/B rates [deg/min]
+    max_accel_mm_s2 : path acceleration the look-ahead plans with [mm/s²]
+    max_accel_deg_s2 : A/B acceleration [deg/s²]
+    max_points : a program that would interpolate to more points is refused
+    max_time_s : ... or one that would run longer [s]
+    """
+
+    max_tilt_deg: float = 30.0
+    max_feed_mm_min: float = 30000.0
+    rapid_mm_min: float = 10000.0
+    rapid_deg_min: float = 3600.0
+    max_accel_mm_s2: float = 2000.0
+    max_accel_deg_s2: float = 3600.0
+    max_points: int = 50_000_000
+    max_time_s: float = 360_000.0
+
+    def __getitem__(self, key: str) -> float:
+        """``limits["rapid_mm_min"]``: the mapping form chain.py still reads
+        (until it reads the attributes; then this goes)."""
+        if key not in _LIMIT_KEYS:
+            raise KeyError(key)
+        return float(getattr(self, key))
+
+
+_LIMIT_KEYS = frozenset(f.name for f in fields(MachineLimits))
+
+
+class Tool(NamedTuple):
+    """One ``[[tools]]`` entry: G43 H<number> adds ``length`` [mm] to the tool length."""
+
+    length: float
+    diameter: float = 0.0
+
+
 #: Defaults of the project's own sections. Each key is documented in profiles/README.md.
 DEFAULTS: dict[str, dict[str, Any]] = {
-    "limits": {
-        "max_tilt_deg": 30.0,
-        "max_feed_mm_min": 30000.0,
-        "rapid_mm_min": 10000.0,
-        "rapid_deg_min": 3600.0,
-        "max_accel_mm_s2": 2000.0,
-        "max_accel_deg_s2": 3600.0,
-        "max_points": 50_000_000,
-        "max_time_s": 360_000.0,
-    },
+    "limits": {f.name: f.default for f in fields(MachineLimits)},
     "interpolation": {
         "period_ms": 10.0,
         "path_tolerance_mm": 0.0005,
@@ -163,9 +204,10 @@ class MotorConfig:
 class Profile:
     """A validated machine profile.
 
-    ``raw`` keeps the parsed document (with defaults filled in) so that a profile
-    can be written back with every key the user had, including ones this version
-    only carries along (the error map, provenance notes).
+    ``raw`` is the parsed document as the user wrote it (no defaults filled in),
+    with the keys this version only carries along (the error map, provenance
+    notes); treat it as read-only. The tool changes a profile file with
+    :func:`prsxy_post.profile.update.update_text` on ``text``.
     """
 
     name: str
@@ -176,13 +218,13 @@ class Profile:
     controller_kinematics: KinematicParams | None
     effects: Effects
     motors: tuple[MotorConfig, ...]
-    limits: Mapping[str, float]
+    limits: MachineLimits
     period_ms: float
     start: np.ndarray  # (5,) workpiece frame
     work_offsets: Mapping[int, tuple[float, float, float, float, float]]
     g28: tuple[float, float, float, float, float]
     g30: tuple[float, float, float, float, float]
-    tools: Mapping[int, tuple[float, float]]  # number -> (length, diameter)
+    tools: Mapping[int, Tool]  # by tool number
     #: ``[output.<dialect>]`` sections, validated, with their defaults
     output: Mapping[str, Mapping[str, Any]]
     raw: dict[str, Any] = field(repr=False)
@@ -193,6 +235,9 @@ class Profile:
     source: str = "<profile>"
     #: the [gcode] section as read (with its defaults)
     gcode: Mapping[str, Any] = field(default_factory=dict)
+    #: the TOML text it was read from ("" when made from a document), for
+    #: :func:`prsxy_post.profile.update.update_text`
+    text: str = field(default="", repr=False)
 
     def motor(self, m: int) -> MotorConfig:
         for mc in self.motors:
@@ -459,7 +504,7 @@ def _motors(c: _Checker, entries: Any) -> tuple[MotorConfig, ...]:
 def _output(c: _Checker, doc: Mapping[str, Any]) -> tuple[dict[str, dict[str, Any]], list[str]]:
     """``[output.<dialect>]`` for every registered dialect, with the keys it declares;
     the old flat ``[output]`` keys are still read, with a note saying where they go."""
-    from .writers import DIALECTS  # here: the dialects' modules import this one
+    from ..writers import DIALECTS  # here: the dialects' modules import this one
 
     sec = c.table(doc, "output", "", False) or {}
     legacy: dict[str, list[str]] = {}
@@ -616,7 +661,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     motors = _motors(c, doc.get("motors"))
 
     sections = {name_: _section_with_defaults(c, doc, name_) for name_ in DEFAULTS}
-    limits = sections["limits"]
+    limits = MachineLimits(**sections["limits"])
     for k in (
         "max_feed_mm_min",
         "rapid_mm_min",
@@ -625,8 +670,8 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         "max_accel_deg_s2",
         "max_time_s",
     ):
-        if limits[k] <= 0:
-            raise c.fail(f"limits.{k}", f"is {limits[k]:g}", "a number > 0")
+        if getattr(limits, k) <= 0:
+            raise c.fail(f"limits.{k}", f"is {getattr(limits, k):g}", "a number > 0")
     interp = sections["interpolation"]
     period = interp["period_ms"]
     if not 0.1 <= period <= 1000.0:
@@ -640,7 +685,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
             raise c.fail(f"interpolation.{key}", f"is {interp[key]:g}", f"{lo:g} to {hi:g} {unit}")
     out_sec, notes = _output(c, doc)
 
-    tools: dict[int, tuple[float, float]] = {}
+    tools: dict[int, Tool] = {}
     tools_raw = doc.get("tools", [])
     if not isinstance(tools_raw, list) or not all(isinstance(x, dict) for x in tools_raw):
         raise c.fail("tools", "is not an array of tables", "[[tools]] tables")
@@ -650,7 +695,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         n = c.integer(t, "number", p, lo=1)
         if n in tools:
             raise c.fail(f"{p}.number", f"tool {n} given twice", "each tool once")
-        tools[n] = (c.number(t, "length", p), c.number(t, "diameter", p, 0.0, lo=0.0))
+        tools[n] = Tool(c.number(t, "length", p), c.number(t, "diameter", p, 0.0, lo=0.0))
 
     if "error_map" in doc and not isinstance(doc["error_map"], dict):
         raise c.fail("error_map", "is not a table", "an [error_map] table")
@@ -686,7 +731,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
 
 def _check_reach(prof: Profile) -> None:
     """A geometry whose struts cannot reach the start pose is an error naming the leg."""
-    from . import kinematics  # local: kinematics imports this module's types
+    from .. import kinematics  # local: kinematics imports this module's types
 
     for section, kp in (
         ("kinematics", prof.kinematics),
@@ -730,8 +775,6 @@ def loads(text: str, source: str = "<profile>") -> Profile:
         msg = str(exc)
         line = col = None
         # tomllib says "... (at line 3, column 7)"
-        import re
-
         m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
         if m:
             line, col = int(m.group(1)), int(m.group(2))
@@ -743,28 +786,16 @@ def loads(text: str, source: str = "<profile>") -> Profile:
             column=col,
             expected="a TOML profile",
         ) from None
-    return profile_from_dict(doc, source)
+    return dataclasses.replace(profile_from_dict(doc, source), text=text)
 
 
 def dumps(doc: Mapping[str, Any]) -> str:
-    """Write a profile document as TOML (deterministic key order as given)."""
-    import tomli_w
+    """A new profile text for a whole document (key order as given), for profiles
+    made from scratch; a user's profile is changed with
+    :func:`prsxy_post.profile.update.update_text`, which keeps its comments."""
+    from .update import dumps as new_text
 
-    return tomli_w.dumps(_plain(doc))
-
-
-def _plain(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _plain(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_plain(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return [_plain(v) for v in x.tolist()]
-    if isinstance(x, np.floating):
-        return float(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    return x
+    return new_text(doc)
 
 
 def kinematics_to_dict(kp: KinematicParams) -> dict[str, Any]:
