@@ -23,6 +23,10 @@ sys.path.insert(0, str(ROOT))
 from prsxy_post import gcode  # noqa: E402
 from prsxy_post.errors import GCodeError  # noqa: E402
 
+#: a low limit on loop passes: a mutated loop that never ends must be stopped
+#: by it, well within the time budget of a case
+FUZZ_CONFIG = gcode.InterpreterConfig(max_loop_passes=20_000)
+
 FRAGMENTS = [
     "G2",
     "G3",
@@ -60,6 +64,40 @@ FRAGMENTS = [
     "G18",
     "G19",
     "G90.1",
+    "#1=",
+    "#<a>=",
+    "#<_b>",
+    "[#1+",
+    "]",
+    "**",
+    " mod ",
+    " eq ",
+    "sin[",
+    "atan[1]/[",
+    "exists[#<a>]",
+    "#5420",
+    "o100 while [#1 lt 3]",
+    "o100 endwhile",
+    "o100 sub",
+    "o100 endsub",
+    "o100 call [1] [2]",
+    "o100 if [1]",
+    "o100 elseif [0]",
+    "o100 else",
+    "o100 endif",
+    "o<x> repeat [2]",
+    "o<x> endrepeat",
+    "o1 do",
+    "o1 while [#1]",
+    "o1 break",
+    "o1 continue",
+    "o1 return [2]",
+    "(DEBUG,#1 %d#2)",
+    "(PRINT,#<a>)",
+    "(MSG,hi)",
+    "M98 P1 L2",
+    "M99",
+    "O1",
 ]
 
 
@@ -114,7 +152,7 @@ def main() -> int:
         n += 1
         signal.alarm(5)
         try:
-            gcode.interpret(text, source="fuzz.ngc")
+            gcode.interpret(text, FUZZ_CONFIG, source="fuzz.ngc")
             ok += 1
         except GCodeError as exc:
             if not str(exc).startswith("fuzz.ngc:"):

@@ -57,17 +57,32 @@ class Stages:
         )
 
 
-def interpreter_config(profile: Profile, start: Sequence[float] | None = None) -> InterpreterConfig:
-    """The G-code interpreter's settings from a profile (offsets, tools, G28/G30, start)."""
+def interpreter_config(
+    profile: Profile,
+    start: Sequence[float] | None = None,
+    on_message: Callable[[str, int, str, str], None] | None = None,
+) -> InterpreterConfig:
+    """The G-code interpreter's settings from a profile (offsets, tools, G28/G30,
+    start, [gcode] subroutine path relative to the profile's folder, loop limit,
+    user M codes); ``on_message`` receives the program's (MSG/DEBUG/PRINT)."""
+    import os
+
     from .gcode import InterpreterConfig, ToolEntry
 
     st = tuple(float(x) for x in (profile.start if start is None else start))
+    g = profile.gcode
+    src = profile.source
+    here = os.path.dirname(os.path.abspath(src)) if os.path.isfile(src) else "."
     return InterpreterConfig(
         work_offsets=dict(profile.work_offsets),
         g28_position=tuple(profile.g28),
         g30_position=tuple(profile.g30),
         tool_table={n: ToolEntry(length=ln, diameter=d) for n, (ln, d) in profile.tools.items()},
         start=st,
+        subroutine_path=tuple(os.path.join(here, d) for d in g.get("subroutine_path", [])),
+        max_loop_passes=int(g.get("max_loop_passes", 10_000_000)),
+        user_m_codes=frozenset(g.get("user_m_codes", [])),
+        on_message=on_message,
     )
 
 
