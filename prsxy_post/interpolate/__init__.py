@@ -15,6 +15,7 @@ the bounds).
 from .geometry import (
     ANGULAR_EPS_DEG,
     KIND_ARC,
+    KIND_CURVE,
     KIND_DWELL,
     KIND_FEED,
     KIND_FUNCTION,
@@ -33,6 +34,7 @@ from .timelaw import TimeLaw, time_law
 __all__ = [
     "ANGULAR_EPS_DEG",
     "KIND_ARC",
+    "KIND_CURVE",
     "KIND_DWELL",
     "KIND_FEED",
     "KIND_FUNCTION",
