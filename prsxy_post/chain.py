@@ -29,6 +29,7 @@ from . import axiscomp, kinematics, reversals
 from . import check as checks
 from .errors import LimitError, PrsxyError
 from .interpolate import Blocks, Plan, PlanLimits, Planner, Samples, at_times, blocks_from_motions
+from .interpolate.geometry import REVERSAL_SHARE
 from .interpolate.sampling import sample, steps
 from .profile import MOTORS, Profile, nominal_kinematics
 
@@ -294,14 +295,12 @@ class Pipeline:
         self.play_cols = [col for col, t in self.table_cols if t.max_play > 1e-12]
         # the contract: the first point of a motion is approached from below (lo)
         self.side = np.ones(5, dtype=int)
-        # where each motor with play last moved with a direction (None: not yet)
+        # where each motor with play last moved with a direction (NaN: not yet)
         self.ref = np.full(5, np.nan)
         self.lag = (
             np.asarray(profile.effects.servo_lag_ms) / 1000.0 if stages.axis_comp else np.zeros(5)
         )
         self.reversal_s = profile.interpolation.get("reversal_ms", 1.0) / 1000.0
-        from .interpolate.geometry import REVERSAL_SHARE
-
         self.reversal_tol = REVERSAL_SHARE * self.limits.tolerance_mm
         # where each motor's driven part is, and the last commands (for _settle)
         self.play_y: dict[int, float] = {}
