@@ -702,9 +702,9 @@ class Pipeline:
             e_step.append(k)
             e_when.append(float(t_end[k] - pc.dt[k]))
             e_before.append(True)
-        if ins.mid and plan is not None:
-            ks = np.array([k for k, ts in sorted(ins.mid.items()) for _ in ts], dtype=int)
-            tt = np.array([t for _, ts in sorted(ins.mid.items()) for t in ts])
+        if len(ins.mid_k) and plan is not None:
+            ks = ins.mid_k
+            tt = ins.mid_t
             blk = s.block[ks]
             tau = s.tau[ks] - (t_end[ks] - tt)
             q, qdot = at_times(plan, blk, tau)
@@ -712,14 +712,12 @@ class Pipeline:
             v = np.where(v > 0, v, np.linalg.norm(qdot[:, 3:], axis=1))
             q_t, P, V, _ = self._solve(q, qdot, s.tool_length[ks], s.line[ks])
             m = len(ks)
-            seg = np.zeros(m)
-            for k in sorted(ins.mid):
-                sel = np.flatnonzero(ks == k)
-                t1 = float(t_end[k])
-                cuts = np.concatenate([[t1 - float(pc.dt[k])], tt[sel], [t1]])
-                d = np.diff(cuts)
-                seg[sel] = d[:-1]
-                dt[k] = d[-1]
+            # the steps cut at the new points (sorted by step, then time)
+            same = np.concatenate([[False], ks[1:] == ks[:-1]])
+            before_t = np.where(same, np.concatenate([[0.0], tt[:-1]]), t_end[ks] - pc.dt[ks])
+            seg = tt - before_t
+            last_in_step = np.concatenate([ks[1:] != ks[:-1], [True]])
+            dt[ks[last_in_step]] = t_end[ks[last_in_step]] - tt[last_in_step]
             parts.append(
                 PointChunk(
                     q=q,
