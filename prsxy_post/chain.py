@@ -625,8 +625,8 @@ class Pipeline:
 
         One pass with the commands as made finds where each part stands in each
         window (a crossing changes nothing before it, and once in contact the part
-        follows the command whichever way it got there); a second one, after the
-        corrections, carries the parts' positions on.
+        follows the command whichever way it got there); the part's position is then
+        carried on from the last contact, where it meets the corrected command.
         """
         prev_P = self.last_cmd[0] if self.last_cmd is not None else None
         prev_V = self.last_cmd[1] if self.last_cmd is not None else None
@@ -664,8 +664,21 @@ class Pipeline:
                 u = np.array(up)
                 cmd = np.where(u, table.lo_inv(y_s), table.hi_inv(y_s))
                 P_cmd[e, col] = cmd
-            y_end, _, _ = reversals.follow(table, y0, P0, V0, P_cmd[:, col], V_cmd[:, col], pc.dt)
-            self.play_y[col] = float(y_end[-1])
+                # at the last contact the part meets the motor where it stands; from
+                # there on, the corrected commands carry it
+                last = int(e.max())
+                k = int(np.argmax(e))
+                y0, P0, V0 = float(y_s[k]), float(P_cmd[last, col]), float(V_cmd[last, col])
+                rest = slice(last + 1, len(pc))
+            else:
+                rest = slice(0, len(pc))
+            if rest.start < len(pc):
+                y0 = float(
+                    reversals.follow(
+                        table, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest]
+                    )[0][-1]
+                )
+            self.play_y[col] = y0
         self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
 
     def _new_points(
