@@ -305,7 +305,6 @@ class Pipeline:
         # where each motor's driven part is, and the last commands (for _settle)
         self.play_y: dict[int, float] = {}
         self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
-        self.contacts: list[tuple[int, int, int]] = []
         self.last: PointChunk | None = None  # the last point made (before the lead)
         self.held: PointChunk | None = None  # points waiting for the servo lead
         self.prev_out: PointChunk | None = None  # the last point released
@@ -481,8 +480,11 @@ class Pipeline:
         )
         return self._points(None, s)
 
-    def _solve(self, q: np.ndarray, qdot: np.ndarray, tool: np.ndarray, line: np.ndarray):
-        """Virtual-axis map, IK and the IK's velocity for points."""
+    def _solve(
+        self, q: np.ndarray, qdot: np.ndarray, tool: np.ndarray, line: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+        """Virtual-axis map, IK and the IK's velocity for points: (q_target, P, V,
+        every point reachable)."""
         t0 = time.perf_counter()
         q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
         t1 = time.perf_counter()
@@ -528,9 +530,9 @@ class Pipeline:
         )
         t0 = time.perf_counter()
         side = np.tile(self.side, (len(pc), 1))
-        self.contacts = []
+        contacts: list[tuple[int, int, int]] = []
         if self.play_cols and reachable:
-            pc, side = self._reversals(plan, s, pc)
+            pc, side, contacts = self._reversals(plan, s, pc)
         # a running sum continued across chunks (not chunk offset + cumsum), so the
         # clock is the same bit for bit however the program was cut
         t = np.cumsum(np.concatenate([[self.t], pc.dt]))[1:]
@@ -545,7 +547,7 @@ class Pipeline:
                 P_cmd[:, col] = axiscomp.compensate_sided(table, pc.P_ideal[:, col], side[:, col])
                 V_cmd[:, col] = pc.V_ideal[:, col] / table.slope(P_cmd[:, col], side[:, col])
             if self.play_cols:
-                self._settle(pc, side, P_cmd, V_cmd)
+                self._settle(pc, side, contacts, P_cmd, V_cmd)
             pc.P_cmd, pc.V_cmd = P_cmd, V_cmd
         self.timings["axis_tables"] += time.perf_counter() - t0
         self.last = pc.take(slice(len(pc) - 1, len(pc)))
@@ -554,9 +556,11 @@ class Pipeline:
 
     def _reversals(
         self, plan: Plan | None, s: Samples, pc: PointChunk
-    ) -> tuple[PointChunk, np.ndarray]:
+    ) -> tuple[PointChunk, np.ndarray, list[tuple[int, int, int]]]:
         """Give every reversal of a motor with play its crossing window
-        (:mod:`.reversals`), and return the points with the side of every motor."""
+        (:mod:`.reversals`). Returns the points, the side every motor is on at each,
+        and the crossings (the point where each ends, the point where it began, the
+        motor's column)."""
         last = self.last
         prev = (
             None if last is None else (last.P_ideal[0], last.V_ideal[0], bool(last.speed[0] == 0))
@@ -610,11 +614,15 @@ class Pipeline:
         for k, col, _new in ins.stands:
             end = rows.standing(k)
             contacts.append((end, end - 1, col))
-        self.contacts = sorted(contacts)
-        return pc, side
+        return pc, side, sorted(contacts)
 
     def _settle(
-        self, pc: PointChunk, side: np.ndarray, P_cmd: np.ndarray, V_cmd: np.ndarray
+        self,
+        pc: PointChunk,
+        side: np.ndarray,
+        contacts: list[tuple[int, int, int]],
+        P_cmd: np.ndarray,
+        V_cmd: np.ndarray,
     ) -> None:
         """Follow every motor with play through the cubics of its own commands
         (:func:`.reversals.follow`) and end each crossing where the part really
@@ -639,7 +647,7 @@ class Pipeline:
             else:
                 y0 = self.play_y[col]
                 P0, V0 = float(prev_P[col]), float(prev_V[col])  # type: ignore[index]
-            mine = [(end, beg) for end, beg, c in self.contacts if c == col]
+            mine = [(end, beg) for end, beg, c in contacts if c == col]
             if mine:
                 y_pt, lo, hi = reversals.follow(
                     table, y0, P0, V0, P_cmd[:, col], V_cmd[:, col], pc.dt
