@@ -604,17 +604,13 @@ class Pipeline:
         side = reversals.sides(rows, pc.V_ideal, resting, ins, self.play_cols, self.side)
         self.side = side[-1].copy() if len(side) else self.side
         # where each crossing ends (the motor meets its part) and where it began
-        contacts: list[tuple[int, int, int]] = []
-        for k, col, ta, tb, _new in ins.windows:
-            end = rows.at(k, tb)
-            beg = rows.at(k, ta)
-            if beg < 0:  # the window starts at the point before the step
-                beg = rows.plain(k)[0] - 1
-            contacts.append((end, beg, col))
-        for k, col, _new in ins.stands:
-            end = rows.standing(k)
-            contacts.append((end, end - 1, col))
-        return pc, side, sorted(contacts)
+        ends = np.concatenate(
+            [rows.at(ins.w_tb), rows.first(np.array([k for k, _, _ in ins.stands], dtype=int))]
+        )
+        begs = np.concatenate([rows.at(ins.w_ta), ends[len(ins.w_tb) :] - 1])
+        cols = np.concatenate([ins.w_col, np.array([c for _, c, _ in ins.stands], dtype=int)])
+        contacts = sorted(zip(ends.tolist(), begs.tolist(), cols.tolist(), strict=True))
+        return pc, side, contacts
 
     def _settle(
         self,
@@ -652,24 +648,17 @@ class Pipeline:
                 y_pt, lo, hi = reversals.follow(
                     table, y0, P0, V0, P_cmd[:, col], V_cmd[:, col], pc.dt
                 )
-                lo_l, hi_l, y_l = lo.tolist(), hi.tolist(), y_pt.tolist()
-                ends, stuck, up = [], [], []
-                for end, beg in mine:
-                    first = beg + 1 if beg >= 0 else 0
-                    old = -int(side[end, col])
-                    # where the part stands when the crossing begins: the extreme it
-                    # reached on the old side (the window's start counts too)
-                    at_beg = y_l[beg] if beg >= 0 else y0
-                    if old < 0:
-                        y_at = min([at_beg, *lo_l[first : end + 1]])
-                    else:
-                        y_at = max([at_beg, *hi_l[first : end + 1]])
-                    ends.append(end)
-                    stuck.append(y_at)
-                    up.append(side[end, col] > 0)
-                e = np.array(ends)
-                y_s = np.array(stuck)
-                u = np.array(up)
+                e = np.array([c[0] for c in mine])
+                b = np.array([c[1] for c in mine])
+                # where the part stands when the crossing begins: the extreme it
+                # reached on the old side, over the window (its start included)
+                at_beg = np.where(b >= 0, y_pt[np.maximum(b, 0)], y0)
+                first = np.maximum(b + 1, 0)
+                cuts = np.column_stack([first, e + 1]).ravel()
+                lo_x = np.minimum.reduceat(np.append(lo, np.inf), cuts)[::2]
+                hi_x = np.maximum.reduceat(np.append(hi, -np.inf), cuts)[::2]
+                u = side[e, col] > 0  # the new side: up, so it was going down
+                y_s = np.where(u, np.minimum(lo_x, at_beg), np.maximum(hi_x, at_beg))
                 cmd = np.where(u, table.lo_inv(y_s), table.hi_inv(y_s))
                 P_cmd[e, col] = cmd
                 # at the last contact the part meets the motor where it stands; from

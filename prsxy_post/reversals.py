@@ -70,8 +70,9 @@ class Insertions:
 
     stand : row k -> duration of a standing point put before it
     stands : (k, col, new) motors that cross at the standing point before row k
-    windows : (k, col, t_a, t_b, new) crossing windows inside steps: the motor is on
-        its old side -new up to t_a and on the new side from t_b
+    w_k, w_col, w_ta, w_tb, w_new : (w,) crossing windows inside steps: in the step
+        ending at row w_k, motor w_col is on its old side −w_new up to w_ta and on
+        the new side from w_tb
     mid_k, mid_t : (m,) the points put inside steps: the row whose step they are in,
         and their time since the chunk's previous point; sorted by step, then time
     """
@@ -79,7 +80,11 @@ class Insertions:
     def __init__(self) -> None:
         self.stand: dict[int, float] = {}
         self.stands: list[tuple[int, int, int]] = []
-        self.windows: list[tuple[int, int, float, float, int]] = []
+        self.w_k = np.zeros(0, dtype=int)
+        self.w_col = np.zeros(0, dtype=int)
+        self.w_ta = np.zeros(0)
+        self.w_tb = np.zeros(0)
+        self.w_new = np.zeros(0, dtype=int)
         self.mid_k = np.zeros(0, dtype=int)
         self.mid_t = np.zeros(0)
 
@@ -280,11 +285,8 @@ def plan_insertions(
             np.concatenate([wk, wk]), np.concatenate([ta, tb]), np.tile(t0, 2), np.tile(t1, 2)
         )
         ta, tb = both[: len(wk)], both[len(wk) :]
-        cols_a = np.concatenate(w_col)
-        new_a = np.concatenate(w_new)
-        ins.windows = list(
-            zip(wk.tolist(), cols_a.tolist(), ta.tolist(), tb.tolist(), new_a.tolist(), strict=True)
-        )
+        ins.w_k, ins.w_col, ins.w_ta, ins.w_tb = wk, np.concatenate(w_col), ta, tb
+        ins.w_new = np.concatenate(w_new)
         # the points inside steps: each distinct window edge strictly inside its step
         ek = np.concatenate([wk, wk])
         et = both
@@ -297,36 +299,31 @@ def plan_insertions(
 
 class Rows:
     """Where each step's points are in a chunk with new points put in (ordered by
-    step, standing points first, then by time)."""
+    step, standing points first, then by time; the times never decrease).
+
+    step : (m,) the original row whose step each point belongs to
+    when : (m,) time of each point since the point before the chunk [s]
+    standing_before : (m,) the point is a standing point put before its row
+    """
 
     def __init__(self, step: np.ndarray, when: np.ndarray, standing_before: np.ndarray) -> None:
         self.step = step
-        n_steps = int(step[-1]) + 1 if len(step) else 0
-        ks = np.arange(n_steps)
-        self.first = np.searchsorted(step, ks, "left").tolist()
-        self.end = np.searchsorted(step, ks, "right").tolist()
-        self.before = standing_before.tolist()
-        self.when = when.tolist()
+        self.when = when
+        self.before = standing_before
 
-    def plain(self, k: int) -> tuple[int, int]:
-        """[first, end) of step k's points that are not standing points."""
-        a, e = self.first[k], self.end[k]
-        while a < e and self.before[a]:
-            a += 1
-        return a, e
+    def first(self, k: np.ndarray) -> np.ndarray:
+        """The first point of each step k (its standing point, if it has one)."""
+        return np.searchsorted(self.step, k, "left")
 
-    def standing(self, k: int) -> int:
-        """The standing point put before step k's end (−1 if none)."""
-        a = self.first[k]
-        return a if a < self.end[k] and self.before[a] else -1
+    def first_plain(self, k: np.ndarray) -> np.ndarray:
+        """The first point of each step k that is not a standing point."""
+        f = self.first(k)
+        return f + self.before[np.minimum(f, len(self.before) - 1)]
 
-    def at(self, k: int, t: float) -> int:
-        """The point of step k at time t (its end when t is the step's end)."""
-        f, e = self.plain(k)
-        for i in range(f, e):
-            if self.when[i] == t:
-                return i
-        return -1
+    def at(self, t: np.ndarray) -> np.ndarray:
+        """The point at each time t: a point put inside a step, a step's end, or (for
+        a step's start) the end of the step before."""
+        return np.searchsorted(self.when, t, "left")
 
 
 def sides(
@@ -340,7 +337,9 @@ def sides(
     """The side (+1, −1) every motor is on at every point of a chunk (new points
     included), and so which of lo⁻¹ and hi⁻¹ commands it: the direction of its
     planned velocity, held while it stands, switched inside a crossing window only
-    at the window's end.
+    at the window's end: the whole step up to the window's end is on the old side
+    (the velocity may turn a little before the window begins), and at the window's
+    end the motor has crossed, moving or not.
 
     rows : the chunk's points (:class:`Rows`)
     V, resting : (m, 5), (m,) planned motor velocities, path at rest
@@ -348,20 +347,21 @@ def sides(
     """
     m = len(rows.step)
     out = np.tile(np.asarray(side, dtype=int), (m, 1))
+    f_all = rows.first_plain(ins.w_k)
+    e_all = rows.at(ins.w_tb)
+    s_k = np.array([k for k, _, _ in ins.stands], dtype=int)
+    s_col = np.array([c for _, c, _ in ins.stands], dtype=int)
+    s_new = np.array([n for _, _, n in ins.stands], dtype=int)
     for col in cols:
         sg = np.where(resting, 0, signs(V[:, col]))
-        for k, c, _ta, tb, new in ins.windows:
-            if c == col:
-                f, _ = rows.plain(k)
-                end = rows.at(k, tb)
-                # the whole step up to the window's end is on the old side (the
-                # velocity may turn a little before the window begins); at the
-                # window's end the motor has crossed, moving or not
-                sg[f:end] = -new
-                sg[end] = new
-        for k, c, new in ins.stands:
-            if c == col:
-                sg[rows.standing(k)] = new
+        mine = ins.w_col == col
+        f, e, new = f_all[mine], e_all[mine], ins.w_new[mine]
+        length = np.maximum(e - f, 0)
+        idx = np.repeat(f - np.cumsum(length) + length, length) + np.arange(length.sum())
+        sg[idx] = np.repeat(-new, length)
+        sg[e] = new
+        here = s_col == col
+        sg[rows.first(s_k[here])] = s_new[here]
         idx = np.where(sg != 0, np.arange(m), -1)
         last = np.maximum.accumulate(idx)
         out[:, col] = np.where(last >= 0, sg[np.maximum(last, 0)], side[col])
