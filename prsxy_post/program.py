@@ -85,9 +85,7 @@ def motions(
     if profile is not None:
         cfg = chain.interpreter_config(profile, start, on_message=on_message)
     elif start is not None:
-        cfg = gcode.InterpreterConfig(
-            start=tuple(float(x) for x in start), on_message=on_message
-        )
+        cfg = gcode.InterpreterConfig(start=tuple(float(x) for x in start), on_message=on_message)
     else:
         cfg = gcode.InterpreterConfig(on_message=on_message)
     yield from gcode.iter_motions_batched(batches, cfg, source, lines_from=lines_from)

@@ -46,7 +46,14 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
     in locals over the run and is written back at its end.
     """
     st = it.st
-    if st.ended or st.inverse_time or st.comp_side or it.detached is not None or it.queue:
+    if (
+        st.ended
+        or st.inverse_time
+        or st.comp_side
+        or st.arc_not_allowed  # the full path clears it at the next straight move
+        or it.detached is not None
+        or it.queue
+    ):
         return i
     x, y, z, a, b = st.pos
     motion = st.motion
