@@ -309,7 +309,12 @@ def test_macros_messages_and_subroutine_files_through_convert(
 def test_inspect_json(runner: CliRunner) -> None:
     r = invoke(runner, "inspect", "samples/pocket.ngc", "--json")
     assert r.exit_code == 0
-    rows = [json.loads(x) for x in r.output.splitlines()]
+
+    def strict(name: str) -> None:  # NaN and Infinity are not JSON
+        raise AssertionError(f"{name} in the JSON")
+
+    rows = [json.loads(x, parse_constant=strict) for x in r.output.splitlines()]
+    assert rows[-1]["kind"] == "function" and rows[-1]["feed"] is None
     assert rows[0]["kind"] == "rapid" and rows[0]["line"] == 5
     arcs = [x for x in rows if x["kind"] == "arc"]
     assert arcs and {"plane", "center", "rotation"} <= set(arcs[0])

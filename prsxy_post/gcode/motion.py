@@ -67,7 +67,7 @@ def motion_to_json(m: Motion) -> dict[str, object]:
         "kind": m.kind,
         "end": [round(v, 9) + 0.0 for v in m.end],
     }
-    d["feed"] = None if m.kind in ("rapid", "dwell") else round(m.feed, 9)
+    d["feed"] = None if m.kind in ("rapid", "dwell", "function") else round(m.feed, 9)
     if m.kind == "arc":
         assert m.center is not None
         d["plane"] = m.plane
