@@ -16,11 +16,12 @@ Three programs of about the same number of motions:
   the general path with its expression evaluation and control flow.
 
 ``ours`` is :func:`prsxy_post.program.motions_of_file` taking every motion (the
-file read in batches of lines, as ``convert`` reads it; interpreter start-up
-included; Python's start and the imports are not, a warm-up takes them); ``rs274`` is the whole ``rs274 -g`` command with its
-output thrown away (its start-up is a few milliseconds). Each figure is the best
-of ``--repeat`` runs. It is a script, not a test: the figures depend on the
-machine; README shows the latest with the machine they were taken on.
+file read in batches of lines, as ``convert`` reads it; the interpreter's start-up
+included; Python's start and the imports are not, a warm-up takes them);
+``rs274`` is the whole ``rs274 -g`` command with its output thrown away (its
+start-up is a few milliseconds). Each figure is the best of ``--repeat`` runs, the
+two alternated. It is a script, not a test: the figures depend on the machine;
+README shows the latest with the machine they were taken on.
 """
 
 from __future__ import annotations
@@ -105,7 +106,7 @@ def time_rs274(path: Path) -> float | None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--lines", type=int, default=200_000, help="moves per program")
-    ap.add_argument("--repeat", type=int, default=3, help="best of this many runs")
+    ap.add_argument("--repeat", type=int, default=5, help="best of this many runs")
     args = ap.parse_args()
     programs = {
         "cam": generate(args.lines),
@@ -122,8 +123,12 @@ def main() -> None:
         for name, text in programs.items():
             path = Path(d) / f"{name}.ngc"
             path.write_text(text)
-            ours = min(time_ours(path) for _ in range(args.repeat))
-            runs = [time_rs274(path) for _ in range(args.repeat)]
+            # alternated, so a busy moment of a shared machine falls on both
+            ours_runs, runs = [], []
+            for _ in range(args.repeat):
+                ours_runs.append(time_ours(path))
+                runs.append(time_rs274(path))
+            ours = min(ours_runs)
             theirs = None if runs[0] is None else min(r for r in runs if r is not None)
             ratio = f"{ours[0] / theirs:.2f}" if theirs else "–"
             rs = f"{theirs:.2f}" if theirs else "–"
