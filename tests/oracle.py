@@ -33,6 +33,8 @@ class OracleMotion:
     duration: float = 0.0
     scale: float = 1.0  # 25.4 when the interpreter printed inches (4 decimals of them)
     control_points: int = 0  # curves (NURBS_FEED): how many
+    tool_length: float = 0.0  # Z of the tool length offset in effect (USE_TOOL_LENGTH_OFFSET) [mm]
+    tool_scale: float = 1.0  # 25.4 when that offset was printed in inches
 
 
 @dataclass
@@ -91,14 +93,19 @@ def run(
             for n, spec in (tools or {}).items():
                 length, diameter = spec if isinstance(spec, tuple) else (spec, 0.0)
                 fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D{diameter / 25.4:.9f} ;\n")
-        proc = subprocess.run(
-            [RS274, *extra, "-t", tbl, "-v", var, "-g", prog],
-            cwd=d,
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            stdin=subprocess.DEVNULL,
-        )
+        try:
+            proc = subprocess.run(
+                [RS274, *extra, "-t", tbl, "-v", var, "-g", prog],
+                cwd=d,
+                capture_output=True,
+                text=True,
+                timeout=timeout,
+                stdin=subprocess.DEVNULL,
+            )
+        except subprocess.TimeoutExpired:
+            # LinuxCNC's own tests hold a program it loops on for ever
+            # (tests/interp/g71-endless-loop): it does not run to the end
+            return OracleResult([], f"rs274 did not end within {timeout:g} s")
     return parse(proc.stdout, proc.stderr)
 
 
@@ -111,6 +118,8 @@ def parse(out: str, err: str = "") -> OracleResult:
     offset = [0.0] * 6  # G5x + G92: printed positions are program coordinates
     feed = 0.0
     plane = 17
+    tool_length = 0.0
+    tool_scale = 1.0
     motions: list[OracleMotion] = []
     last: tuple[float, ...] = (0.0,) * 5
     error = None
@@ -139,6 +148,9 @@ def parse(out: str, err: str = "") -> OracleResult:
         elif name == "SET_G92_OFFSET":
             g92 = [v * scale for v in vals[0:3]] + list(vals[3:6])
             offset = [a + b for a, b in zip(g5x, g92, strict=True)]
+        elif name == "USE_TOOL_LENGTH_OFFSET":
+            tool_length = vals[2] * scale  # printed in the length units in effect
+            tool_scale = scale
         elif name == "SELECT_PLANE":
             plane = {"CANON_PLANE_XY": 17, "CANON_PLANE_XZ": 18, "CANON_PLANE_YZ": 19}[args]
         elif name == "SET_FEED_RATE":
@@ -156,7 +168,17 @@ def parse(out: str, err: str = "") -> OracleResult:
             # the feed is in length units per minute when X, Y or Z move, else deg/min
             moved = math.dist(end[:3], last[:3]) > 1e-9 or end[3:] == last[3:]
             f = feed * (scale if moved else 1.0)
-            motions.append(OracleMotion(i, kind, end, None if kind == "rapid" else f, scale=scale))
+            motions.append(
+                OracleMotion(
+                    i,
+                    kind,
+                    end,
+                    None if kind == "rapid" else f,
+                    scale=scale,
+                    tool_length=tool_length,
+                    tool_scale=tool_scale,
+                )
+            )
             last = end
         elif name == "ARC_FEED":
             e1, e2, c1, c2, rot, ax, a, b = vals[:8]
@@ -169,18 +191,47 @@ def parse(out: str, err: str = "") -> OracleResult:
             end5 = (*(end[k] * scale + offset[k] for k in range(3)), a + offset[3], b + offset[4])
             center = tuple(cen[k] * scale + offset[k] for k in range(3))
             motions.append(
-                OracleMotion(i, "arc", end5, feed * scale, plane, center, int(rot), scale=scale)
+                OracleMotion(
+                    i,
+                    "arc",
+                    end5,
+                    feed * scale,
+                    plane,
+                    center,
+                    int(rot),
+                    scale=scale,
+                    tool_length=tool_length,
+                    tool_scale=tool_scale,
+                )
             )
             last = end5
         elif name == "NURBS_FEED":
             # the stand-in canon prints only how many control points there are
             # (and reads its new position from past the end of them)
             motions.append(
-                OracleMotion(i, "curve", last, feed * scale, control_points=int(vals[0]))
+                OracleMotion(
+                    i,
+                    "curve",
+                    last,
+                    feed * scale,
+                    control_points=int(vals[0]),
+                    tool_length=tool_length,
+                    tool_scale=tool_scale,
+                )
             )
         elif name == "DWELL":
             p = motions[-1].end if motions else None
-            motions.append(OracleMotion(i, "dwell", p or (math.nan,) * 5, None, duration=vals[0]))
+            motions.append(
+                OracleMotion(
+                    i,
+                    "dwell",
+                    p or (math.nan,) * 5,
+                    None,
+                    duration=vals[0],
+                    tool_length=tool_length,
+                    tool_scale=tool_scale,
+                )
+            )
     return OracleResult(motions, error, calls, prints)
 
 

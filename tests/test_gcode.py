@@ -12,6 +12,8 @@ from hypothesis import strategies as st
 from prsxy_post import gcode
 from prsxy_post.errors import GCodeError
 
+from .conftest import DATA
+
 CFG = gcode.InterpreterConfig(
     work_offsets={55: (100.0, 0.0, -5.0, 0.0, 0.0)},
     g28_position=(1.0, 2.0, 3.0, 0.0, 0.0),
@@ -449,3 +451,53 @@ def test_lines_read_in_pieces_are_the_lines_of_the_file(text: str, cuts: list[in
     pieces = [text[a:b] for a, b in itertools.pairwise(bounds)]
     want = [x.rstrip("\r\n") for x in io.StringIO(text, newline="")]
     assert [x for b in gcode.iter_line_batches(pieces) for x in b] == want
+
+
+# ---------------------------------------------------------------- plain lines
+
+_LETTERS = "abdefghijklmpqrstxyzABDEFGHIJKLMPQRSTXYZ"
+_NUMBER = st.from_regex(r"\A[+-]?(?:[0-9]{1,6}\.?[0-9]{0,6}|\.[0-9]{1,6})\Z")
+_PLAIN = st.lists(
+    st.tuples(st.sampled_from(_LETTERS), _NUMBER, st.sampled_from(["", " ", "\t", "  "])),
+    min_size=1,
+    max_size=12,
+).map(lambda ws: "".join(f"{letter}{num}{gap}" for letter, num, gap in ws))
+
+
+def _same_reading(line: str) -> None:
+    from prsxy_post.gcode import read
+
+    fast, slow = read.parse(line), read._parse(line)
+    assert (fast.kind, fast.m99, fast.oword, fast.problem, fast.always) == (
+        slow.kind,
+        slow.m99,
+        slow.oword,
+        slow.problem,
+        slow.always,
+    )
+    a = read.evaluate(fast, 1, None, "p.ngc", lambda name: None)  # type: ignore[arg-type]
+    b = read.evaluate(slow, 1, None, "p.ngc", lambda name: None)  # type: ignore[arg-type]
+    assert (a.words, a.sets, a.comment) == (b.words, b.sets, b.comment)
+
+
+@settings(max_examples=400, deadline=None)
+@given(_PLAIN, st.sampled_from(["", " ", "\t"]))
+def test_plain_lines_read_by_pattern_as_character_by_character(line: str, lead: str) -> None:
+    """A line of plain words goes through a regular expression, not LinuxCNC's
+    reading character by character: the same words, values, text and columns."""
+    if len(lead + line) <= 252:
+        _same_reading(lead + line)
+
+
+def test_plain_lines_of_the_corpus_read_the_same() -> None:
+    from prsxy_post.gcode import read
+
+    n = 0
+    for path in sorted((DATA / "gcode").rglob("*")):
+        if path.suffix.lower() not in (".ngc", ".nc", ".gcode", ".tap"):
+            continue
+        for line in gcode.split_lines(path.read_bytes().decode("utf-8", "surrogateescape")):
+            if read._PLAIN_LINE.fullmatch(line) and len(line) <= 252:
+                _same_reading(line)
+                n += 1
+    assert n > 100_000  # most CAM lines are plain

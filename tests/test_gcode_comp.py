@@ -65,6 +65,22 @@ PROGRAMS = {
     "shallow corners": (
         "G21 T1 M6\nG0 X-10 Y0\nG41 G1 X0 Y0 F100\nX10 Y0.1\nX20 Y0.3\nX30 Y0\nG40 X40\nM2\n"
     ),
+    # a straight move after G40 allows arcs again, on the fast path too
+    "arc after G40 and a straight move": (
+        "G21 T1 M6\nG0 X-10 Y0\nG41 G1 X0 F100\nX10\nG40 G1 X20\nG0 X30\nG0 X0 Y0\n"
+        "G2 X10 I5 J0\nM2\n"
+    ),
+    # a tool change reads the position back (read_inputs, refresh_actual_position):
+    # where G40 left the tool is the current position from there on
+    "tool change after G40": (
+        "G21 T1 M6\nG0 X-10 Y0\nG41 G1 X0 F100\nX10\nG40\nT2 M6\nG0 Z5\nG0 X0 Y0\nM2\n"
+    ),
+    # G93: the rate of a move is its programmed length times F
+    # (inverse_time_rate_straight from program_x), set before the corner's arc
+    "inverse time": (
+        "G20\nG0 X0 Y0\nG42.1 D0.4 G93 G1 X1 F30\nY1 F20\nX-1 F20\nY2 F40\nG94 X1 F33\n"
+        "G93 G3 Y3 J0.5 F6\nG40 G94 G1 Y4 F25\nM2\n"
+    ),
 }
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import pytest
 
 from prsxy_post import gcode
+from prsxy_post.errors import GCodeError
 
 from . import oracle
 from .test_gcode_macros import TOOLS, agree, ours
@@ -51,6 +52,8 @@ PROGRAMS = {
         "G21 F100\no<s> sub\nM73\nG20 G91 F5\nG1 X1\no<s> endsub\no<s> call\nG1 X2\nM2\n"
     ),
     "spindle modes": "G21\nG96 S100 D3000 M3\nG0 X10\nG97 S800\nM2\n",
+    # M99 in the main program ends it as M2 (convert_stop, loop_on_main_m99 unset)
+    "M99 ends the main program": "G21\nS100 M3\nG0 X1\nM99\n",
 }
 
 
@@ -113,3 +116,17 @@ def test_function_errors_refused_by_both(program: str) -> None:
     _, _, err = ours(program)
     assert ref.error is not None, "rs274 accepts it"
     assert err is not None, f"we accept what rs274 refuses: {ref.error}"
+
+
+def test_tapping_outside_g17_is_refused_because_linuxcnc_taps_sideways() -> None:
+    """LinuxCNC 2.9 feeds G84 in G18 along X instead of Y (convert_cycle_g74_g84
+    permutes the coordinates that cycle_feed permutes again, interp_cycles.cc);
+    its own tests/interp/g84/g18 record it. We refuse rather than tap sideways."""
+    _require_rs274()
+    text = "G21 G18 G0 X0 Y10 Z0\nS500 M3\nG84 X1 Z1 Y-5 R2 F100\nG80\nM2\n"
+    feeds = [m for m in oracle.run(text, tools=TOOLS).motions if m.kind == "feed"]
+    # the tap's depth (Y-5) went to X, the hole's X (1) to Y, the cycle's axis
+    assert feeds[0].end[:3] == pytest.approx((-5.0, 1.0, 1.0))
+    cfg = gcode.InterpreterConfig()
+    with pytest.raises(GCodeError, match="G84 in G18 is not supported"):
+        gcode.interpret(text, cfg, "p.ngc")

@@ -463,6 +463,24 @@ def test_a_skipped_line_is_not_read() -> None:
     assert err is None
 
 
+def test_a_definitions_return_value_is_read_but_may_name_undefined_parameters() -> None:
+    # interp_read.cc read_o_word: the endsub/return of the sub being defined is
+    # read with its expression; read_named_parameter lets an undefined named
+    # parameter pass while a sub is being defined (LinuxCNC's probe macros end
+    # "o<probe_x_minus> endsub [#<x_minus_zero_edge>]"); a division by zero does not
+    _, err = agree("o<a> sub\nG0 X1\no<a> endsub [#<undefined>]\nG0 X2\nM2\n")
+    assert err is None
+    _, err = agree("o<a> sub\nG0 X1\no<a> return [1/0]\no<a> endsub\nG0 X2\nM2\n")
+    assert err is not None and "division by zero" in str(err)
+    _, err = agree("o<a> sub\nG0 X1\no<a> endsub [#<u>]\no<a> call\nM2\n")
+    assert err is not None and "#<u> is not defined" in str(err)
+    # a label read from a parameter in a definition (LinuxCNC's tests/interp/oword-bug315-p2)
+    _, err = agree(
+        "o2 sub\nG0 X2\no2 endsub\no<m> sub\n#<s> = 2\no#<s> call\no<m> endsub\no<m> call\nM2\n"
+    )
+    assert err is None
+
+
 def test_a_loop_that_never_ends_is_stopped() -> None:
     """LinuxCNC would run these for ever; a conversion must end. The limit is on
     all passes of all loops together, so nested loops are bounded too."""

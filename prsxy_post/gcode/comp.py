@@ -220,7 +220,9 @@ def straight(
     cx, cy = st.pos[iu], st.pos[iv]
     radius = st.comp_radius
     side = st.comp_side
-    feed = _straight_feed(it, motion, st.pos, p, line, w)
+    # the inverse-time rate of a move after the first is that of the programmed
+    # path (inverse_time_rate_straight starts it at program_x, not current_x)
+    feed = _straight_feed(it, motion, st.pos if st.comp_first else st.program, p, line, w)
     q = it.queue
     if st.comp_first:
         q.cursor = it.take_position()

@@ -118,10 +118,15 @@ class Control:
         if o.kind == "m99":
             return self.frames[-1].name or ""
         if o.number is not None:
+            # read even while a sub is defined, when an undefined named parameter
+            # is no error (read_named_parameter): ``o#<sub> call`` in a definition
+            self.params.lenient_named = self.defining_sub
             try:
                 label = str(int(o.number(self.params)))
             except ExprError as exc:
                 raise fail(exc.message, source, line, exc.column, exc.expected) from None
+            finally:
+                self.params.lenient_named = False
         else:
             label = o.name
         if o.kind in ("sub", "bare", "endsub", "call", "return", "m98"):
@@ -161,7 +166,13 @@ class Control:
             if self.skipping_o is not None and self.skipping_o != name:
                 return
             if kind != "m99":
-                values = self._values(o, source, line)
+                # read while defining: an undefined named parameter is no error
+                # there (read_named_parameter), its value is none (here 0)
+                self.params.lenient_named = self.defining_sub
+                try:
+                    values = self._values(o, source, line)
+                finally:
+                    self.params.lenient_named = False
                 if values:
                     self.return_value = values[0]
                     self.value_returned = True

@@ -87,6 +87,18 @@ def cycle(
         raise it.err("G74 with the spindle not turning counterclockwise", line, gw, "M4 first")
     if motion == 86 and st.spindle_dir == 0:
         raise it.err("G86 with the spindle not turning", line, gw, "M3 or M4 first")
+    if motion in (74, 84) and st.plane != 17:
+        # LinuxCNC 2.9 (and master) feed these along the wrong axes outside G17:
+        # convert_cycle_g74_g84 permutes the coordinates before cycle_feed, which
+        # permutes them again (interp_cycles.cc), so G84 in G18 taps along X
+        # (its own tests/interp/g84/g18 record it); the tap would go sideways
+        raise it.err(
+            f"G{motion} in G{st.plane} is not supported (LinuxCNC feeds the tap along "
+            "the wrong axis there)",
+            line,
+            gw,
+            f"G{motion} in G17",
+        )
     off = it.offset()
     cur = list(st.pos)
     # work in program coordinates of the cycle axes, then add the offset back

@@ -34,6 +34,9 @@ class Interpreter:
         self.queue = comp.Queue(self)
         #: after G40 the tool is where compensation left it, not at st.pos
         self.detached: tuple[float, ...] | None = None
+        #: the feed rate the last inverse-time move set (LinuxCNC's feed_rate
+        #: becomes it), mm/min or deg/min
+        self.inverse_rate = 0.0
         self.tools = dict(self.cfg.tool_table)
         self.user_m: frozenset[int] = frozenset(self.cfg.user_m_codes)
         #: the main program's line of the call in progress (motions made in
@@ -290,7 +293,10 @@ class Interpreter:
         return tuple(self.st.pos)
 
     def feed_now(self) -> float:
-        """The feed in effect, mm/min (a move cutter compensation adds)."""
+        """The feed in effect, mm/min (a move cutter compensation adds): in G93 the
+        rate of the last inverse-time move (inverse_time_rate_* set feed_rate)."""
+        if self.st.inverse_time:
+            return self.inverse_rate
         return self.st.feed * self.scale()
 
     # -- one block
@@ -463,9 +469,18 @@ class Interpreter:
                 self.queue.move_endpoint_and_flush(st.pos[iu], st.pos[iv], line)
             p = tuple(st.pos)
             code = mgroups[4][0]
-            self.emit(line=line, kind="function", start=p, end=p, words=(("M", float(code)),))
+            # M99 in the main program ends it as M2 does (LinuxCNC 2.9's convert_stop;
+            # nothing in 2.9 sets loop_on_main_m99, Fanuc's endless loop)
+            word = 2.0 if code == 99 else float(code)
+            self.emit(line=line, kind="function", start=p, end=p, words=(("M", word),))
             if code in (2, 30, 99):
                 st.ended = True
+        # after a tool change (M6, M61) LinuxCNC reads the position back from the
+        # machine before the next block (read_inputs → refresh_actual_position):
+        # a tool G40 left off the programmed point is where it is from here on
+        if 6 in mgroups and self.detached is not None:
+            st.pos = list(self.detached)
+            self.detached = None
 
     def _path_control(self, g: tuple[float, Word], seen: dict[str, Word], line: int) -> None:
         """G61 (exact path), G61.1 (exact stop), G64 [P tolerance] [Q]: the blend

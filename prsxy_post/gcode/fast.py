@@ -45,8 +45,18 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
     goes the full way, which reports it with its column. The modal state lives
     in locals over the run and is written back at its end.
     """
+    first = matches[i]
+    if first[11] or not (first[1] or first[2] or first[3] or first[4] or first[5]):
+        return i  # not a move the fast path takes: no state to set up
     st = it.st
-    if st.ended or st.inverse_time or st.comp_side or it.detached is not None or it.queue:
+    if (
+        st.ended
+        or st.inverse_time
+        or st.comp_side
+        or st.arc_not_allowed  # the full path clears it at the next straight move
+        or it.detached is not None
+        or it.queue
+    ):
         return i
     x, y, z, a, b = st.pos
     motion = st.motion

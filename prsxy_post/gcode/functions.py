@@ -31,7 +31,8 @@ words                                 meaning
 ``("Q", q)``                          profile lists in ``[gcode] user_m_codes``
 ====================================  =========================================
 
-After the motion: ``("M", 0 | 1 | 60 | 2 | 30)`` (stops and ends).
+After the motion: ``("M", 0 | 1 | 60 | 2 | 30)`` (stops and ends; an M99 in
+the main program ends it as M2 and is written so).
 
 M70 (save the modal state), M71 (forget it), M72 (restore it) and M73 (save,
 restored when the subroutine returns) change only the interpreter's state: the

@@ -108,9 +108,13 @@ def feed_rate(
             )
         if st.feed <= 0:
             raise it.err("zero feed rate", line, it._seen["F"], "F > 0")
+        # inverse_time_rate_*: max(0.1, length * F) in program units per minute
         if lin > 1e-12:
-            return st.feed * lin
-        return st.feed * math.dist(start[3:], end[3:])
+            rate = max(0.1 * it.scale(), st.feed * lin)
+        else:
+            rate = max(0.1, st.feed * math.dist(start[3:], end[3:]))
+        it.inverse_rate = rate
+        return rate
     if st.feed <= 0:
         raise it.err(
             "feed move with no feed rate",

@@ -126,6 +126,9 @@ class Parameters:
         #: parameters whose value is not known before the program runs (#5399
         #: after M66): reading one is an error
         self.unknown: set[int] = set()
+        #: reading an undefined named parameter gives 0 instead of an error (the
+        #: value of an endsub/return read while a subroutine is being defined)
+        self.lenient_named = False
         self._system = system
         self._position = position
         self._comp_on = comp_on
@@ -163,6 +166,8 @@ class Parameters:
             return v
         if name in SYSTEM_NAMES:
             return self._system(name)
+        if self.lenient_named:
+            return 0.0
         raise ExprError(
             f"named parameter #<{name}> is not defined",
             column,

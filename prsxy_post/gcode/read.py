@@ -23,6 +23,7 @@ exponent (``1e3`` is 1 followed by an E word).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -115,6 +116,9 @@ class Parsed:
     has_text: bool = False  # anything but blanks, comments included
     always: Problem | None = None  # an error even where the line is skipped
     block_delete: bool = False
+    #: the words of a line of plain words (:func:`_parse_plain`), ready as they
+    #: are (``items`` is then empty)
+    words: tuple[Word, ...] | None = None
 
 
 @dataclass(slots=True)
@@ -451,8 +455,45 @@ def _to_integer(v: float, what: str, column: int) -> int:
 # ---------------------------------------------------------------- a line
 
 
+#: a word of the plainest kind: a letter this machine reads and a number with
+#: no blanks in it (``G1``, ``X-12.5``, ``F.5``)
+_PLAIN_WORD = r"([abdefghijklmpqrstxyzABDEFGHIJKLMPQRSTXYZ])([+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))"
+_PLAIN_LINE = re.compile(rf"[ \t]*(?:{_PLAIN_WORD}[ \t]*)+")
+_PLAIN_ITEM = re.compile(_PLAIN_WORD)
+_UPPER = {c: c.upper() for c in "abdefghijklmpqrstxyzABDEFGHIJKLMPQRSTXYZ"}
+
+
 def parse(raw: str) -> Parsed:
     """Read one line's text (without its end) into a :class:`Parsed`."""
+    if len(raw) <= MAX_LINE and _PLAIN_LINE.fullmatch(raw) is not None:
+        plain = _parse_plain(raw)
+        if plain is not None:
+            return plain
+    return _parse(raw)
+
+
+def _parse_plain(raw: str) -> Parsed | None:
+    """A line of plain words only (most of what CAM writes), read by a regular
+    expression into what :func:`_parse` reads from it character by character
+    (tests/test_gcode.py checks they agree); None for an M98, an O-word."""
+    words = []
+    for m in _PLAIN_ITEM.finditer(raw):
+        letter, number = m.groups()
+        letter = _UPPER[letter]
+        words.append(Word(letter, float(number), letter + number, m.start() + 1))
+    first = words[0]
+    m99 = False
+    if first.letter == "M":
+        v = first.value
+        if abs(v - round(v)) <= 0.0001:
+            if round(v) == 98:
+                return None
+            m99 = round(v) == 99
+    return Parsed(BLOCK, m99=m99, has_text=True, words=tuple(words))
+
+
+def _parse(raw: str) -> Parsed:
+    """:func:`parse` of any line, as LinuxCNC reads it (read_text, read_items)."""
     stripped = raw.strip()
     if not stripped:
         return Parsed(BLANK)
@@ -741,6 +782,8 @@ def evaluate(
     before the line; ``add_named`` is called for each ``#<name>=`` as it is read
     (LinuxCNC creates the parameter then, so a later reference on the same line
     reads 0, not an error)."""
+    if parsed.words is not None:
+        return Block(line, parsed.words)
     words: list[Word] = []
     sets: list[tuple[int | str, float]] = []
     try:
