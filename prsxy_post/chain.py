@@ -605,9 +605,12 @@ class Pipeline:
         self.side = side[-1].copy() if len(side) else self.side
         # where each crossing ends (the motor meets its part) and where it began
         ends = np.concatenate(
-            [rows.at(ins.w_tb), rows.first(np.array([k for k, _, _ in ins.stands], dtype=int))]
+            [
+                rows.at(ins.w_k, ins.w_tb, ins.w_t0),
+                rows.first(np.array([k for k, _, _ in ins.stands], dtype=int)),
+            ]
         )
-        begs = np.concatenate([rows.at(ins.w_ta), ends[len(ins.w_tb) :] - 1])
+        begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
         cols = np.concatenate([ins.w_col, np.array([c for _, c, _ in ins.stands], dtype=int)])
         contacts = sorted(zip(ends.tolist(), begs.tolist(), cols.tolist(), strict=True))
         return pc, side, contacts

@@ -73,6 +73,7 @@ class Insertions:
     w_k, w_col, w_ta, w_tb, w_new : (w,) crossing windows inside steps: in the step
         ending at row w_k, motor w_col is on its old side −w_new up to w_ta and on
         the new side from w_tb
+    w_t0 : (w,) the start of each window's step [s]
     mid_k, mid_t : (m,) the points put inside steps: the row whose step they are in,
         and their time since the chunk's previous point; sorted by step, then time
     """
@@ -85,6 +86,7 @@ class Insertions:
         self.w_ta = np.zeros(0)
         self.w_tb = np.zeros(0)
         self.w_new = np.zeros(0, dtype=int)
+        self.w_t0 = np.zeros(0)
         self.mid_k = np.zeros(0, dtype=int)
         self.mid_t = np.zeros(0)
 
@@ -287,6 +289,7 @@ def plan_insertions(
         ta, tb = both[: len(wk)], both[len(wk) :]
         ins.w_k, ins.w_col, ins.w_ta, ins.w_tb = wk, np.concatenate(w_col), ta, tb
         ins.w_new = np.concatenate(w_new)
+        ins.w_t0 = t0
         # the points inside steps: each distinct window edge strictly inside its step
         ek = np.concatenate([wk, wk])
         et = both
@@ -320,10 +323,20 @@ class Rows:
         f = self.first(k)
         return f + self.before[np.minimum(f, len(self.before) - 1)]
 
-    def at(self, t: np.ndarray) -> np.ndarray:
-        """The point at each time t: a point put inside a step, a step's end, or (for
-        a step's start) the end of the step before."""
-        return np.searchsorted(self.when, t, "left")
+    def at(self, k: np.ndarray, t: np.ndarray, t0: np.ndarray) -> np.ndarray:
+        """The point of each step k at time t: a point put inside the step or its
+        end; for t at the step's start t0, the point before the step's first plain
+        point (−1 before the chunk).
+
+        Window edges are either a step's ends or at least SNAP_S inside it
+        (:func:`_snap`), so the step's start is told by time, not by an equality
+        that the rounding of the times (relative to where a chunk begins) could
+        break; the search is kept inside the step for the same reason.
+        """
+        fp = self.first_plain(k)
+        last = np.searchsorted(self.step, k, "right") - 1
+        idx = np.clip(np.searchsorted(self.when, t - 0.5 * SNAP_S, "left"), fp, last)
+        return np.where(t - t0 < 0.5 * SNAP_S, fp - 1, idx)
 
 
 def sides(
@@ -348,7 +361,7 @@ def sides(
     m = len(rows.step)
     out = np.tile(np.asarray(side, dtype=int), (m, 1))
     f_all = rows.first_plain(ins.w_k)
-    e_all = rows.at(ins.w_tb)
+    e_all = rows.at(ins.w_k, ins.w_tb, ins.w_t0)
     s_k = np.array([k for k, _, _ in ins.stands], dtype=int)
     s_col = np.array([c for _, c, _ in ins.stands], dtype=int)
     s_new = np.array([n for _, _, n in ins.stands], dtype=int)
