@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import random
+import re
 import signal
 import sys
 import time
@@ -22,6 +23,10 @@ sys.path.insert(0, str(ROOT))
 
 from prsxy_post import gcode  # noqa: E402
 from prsxy_post.errors import GCodeError  # noqa: E402
+
+#: a low limit on loop passes: a mutated loop that never ends must be stopped
+#: by it, well within the time budget of a case
+FUZZ_CONFIG = gcode.InterpreterConfig(max_loop_passes=20_000)
 
 FRAGMENTS = [
     "G2",
@@ -60,6 +65,62 @@ FRAGMENTS = [
     "G18",
     "G19",
     "G90.1",
+    "#1=",
+    "#<a>=",
+    "#<_b>",
+    "[#1+",
+    "]",
+    "**",
+    " mod ",
+    " eq ",
+    "sin[",
+    "atan[1]/[",
+    "exists[#<a>]",
+    "#5420",
+    "o100 while [#1 lt 3]",
+    "o100 endwhile",
+    "o100 sub",
+    "o100 endsub",
+    "o100 call [1] [2]",
+    "o100 if [1]",
+    "o100 elseif [0]",
+    "o100 else",
+    "o100 endif",
+    "o<x> repeat [2]",
+    "o<x> endrepeat",
+    "o1 do",
+    "o1 while [#1]",
+    "o1 break",
+    "o1 continue",
+    "o1 return [2]",
+    "(DEBUG,#1 %d#2)",
+    "(PRINT,#<a>)",
+    "(MSG,hi)",
+    "M98 P1 L2",
+    "M99",
+    "O1",
+    "G5 X1 Y1 I1 J0 P1 Q0",
+    "G5.1 X1 I1 J1",
+    "G5.2 X1 Y1 P1 L3",
+    "G5.3",
+    "G41 D1",
+    "G42.1 D2 L3",
+    "G40",
+    "G10 L2 P1 X1",
+    "G10 L1 P1 R2",
+    "G10 L20 P0 X0",
+    "G92 X0",
+    "G92.1",
+    "G52 X1",
+    "@1 ^45",
+    "M61 Q1",
+    "M62 P0",
+    "M66 P0 L0",
+    "M67 E0 Q1",
+    "M70",
+    "M72",
+    "G96 S100 D1000",
+    "M100",
 ]
 
 
@@ -103,7 +164,11 @@ def main() -> int:
         for p in sorted((ROOT / "tests" / "data" / "gcode").rglob("*"))
         if p.suffix in (".ngc", ".nc", ".tap", ".gcode")
     ]
-    seeds = [s[:20000] for s in seeds]
+    # programs LinuxCNC would run to the end (an M2/M30 or '%' near the end): a
+    # mutation of one explores what the interpreter accepts, not only refusals
+    seeds = [s for s in seeds if re.search(r"(?i)(m0*2|m30|%)[^\n]*\s*$", s[-200:])]
+    # the first 20 000 characters of a long one, ended as it was
+    seeds = [s if len(s) <= 20000 else s[: s.rfind("\n", 0, 20000)] + "\nM2\n" for s in seeds]
     rng = random.Random(args.seed)
     signal.signal(signal.SIGALRM, _alarm)
     end = time.monotonic() + args.seconds
@@ -114,7 +179,7 @@ def main() -> int:
         n += 1
         signal.alarm(5)
         try:
-            gcode.interpret(text, source="fuzz.ngc")
+            gcode.interpret(text, FUZZ_CONFIG, source="fuzz.ngc")
             ok += 1
         except GCodeError as exc:
             if not str(exc).startswith("fuzz.ngc:"):

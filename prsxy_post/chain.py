@@ -26,9 +26,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import axiscomp, kinematics, reversals
+from . import check as checks
 from . import effects as registry
-from .errors import LimitError, PrsxyError, ReachError
-from .interpolate import Blocks, Limits, Plan, Planner, Samples, at_times, blocks_from_motions
+from .errors import LimitError, PrsxyError
+from .interpolate import Blocks, Plan, PlanLimits, Planner, Samples, at_times, blocks_from_motions
+from .interpolate.geometry import REVERSAL_SHARE
 from .interpolate.sampling import sample, steps
 from .profile import MOTORS, Profile, nominal_kinematics
 
@@ -57,26 +59,41 @@ class Stages:
         )
 
 
-def interpreter_config(profile: Profile, start: Sequence[float] | None = None) -> InterpreterConfig:
-    """The G-code interpreter's settings from a profile (offsets, tools, G28/G30, start)."""
+def interpreter_config(
+    profile: Profile,
+    start: Sequence[float] | None = None,
+    on_message: Callable[[str, int, str, str], None] | None = None,
+) -> InterpreterConfig:
+    """The G-code interpreter's settings from a profile (offsets, tools, G28/G30,
+    start, [gcode] subroutine path relative to the profile's folder, loop limit,
+    user M codes); ``on_message`` receives the program's (MSG/DEBUG/PRINT)."""
+    import os
+
     from .gcode import InterpreterConfig, ToolEntry
 
     st = tuple(float(x) for x in (profile.start if start is None else start))
+    g = profile.gcode
+    src = profile.source
+    here = os.path.dirname(os.path.abspath(src)) if os.path.isfile(src) else "."
     return InterpreterConfig(
         work_offsets=dict(profile.work_offsets),
         g28_position=tuple(profile.g28),
         g30_position=tuple(profile.g30),
         tool_table={n: ToolEntry(length=ln, diameter=d) for n, (ln, d) in profile.tools.items()},
         start=st,
+        subroutine_path=tuple(os.path.join(here, d) for d in g.get("subroutine_path", [])),
+        max_loop_passes=int(g.get("max_loop_passes", 10_000_000)),
+        user_m_codes=frozenset(g.get("user_m_codes", [])),
+        on_message=on_message,
     )
 
 
-def limits_of(profile: Profile, segment: str = "cubic") -> Limits:
+def limits_of(profile: Profile, segment: str = "cubic") -> PlanLimits:
     """The planner's limits from a profile; ``segment``: how the target controller
     moves between points ("cubic" or "chord", from the output dialect)."""
     lim = profile.limits
     ip = profile.interpolation
-    return Limits(
+    return PlanLimits(
         rapid_mm_min=lim["rapid_mm_min"],
         rapid_deg_min=lim["rapid_deg_min"],
         accel_mm_s2=lim["max_accel_mm_s2"],
@@ -88,7 +105,7 @@ def limits_of(profile: Profile, segment: str = "cubic") -> Limits:
     )
 
 
-def geometry_of(profile: Profile, stages: Stages) -> kinematics.Geometry:
+def ik_geometry(profile: Profile, stages: Stages) -> kinematics.Geometry:
     """The geometry the IK uses: calibrated, or the contract's nominal design."""
     if stages.calibrated:
         return kinematics.Geometry.from_params(
@@ -109,27 +126,7 @@ ErrorFunction = Callable[[np.ndarray], np.ndarray]
 
 def check_motions(motions: Sequence[Motion], profile: Profile) -> list[PrsxyError]:
     """Problems visible in the program itself: feed above the machine's maximum."""
-    out: list[PrsxyError] = []
-    fmax = profile.limits["max_feed_mm_min"]
-    for m in motions:
-        if m.kind in ("feed", "arc") and m.feed > fmax:
-            out.append(
-                LimitError(
-                    f"feed F{m.feed:g} mm/min is above the machine's maximum",
-                    line=m.line,
-                    expected=f"at most {fmax:g} mm/min (limits.max_feed_mm_min)",
-                )
-            )
-    return out
-
-
-def _first_per_line(bad: np.ndarray, lines: np.ndarray) -> list[int]:
-    """Indices of the first bad point of each distinct line, in order."""
-    idx = np.nonzero(bad)[0]
-    if idx.size == 0:
-        return []
-    _, first = np.unique(lines[idx], return_index=True)
-    return sorted(idx[first].tolist())
+    return [p.error(profile) for p in checks.feed_problems(profile, motions)]
 
 
 @dataclass
@@ -233,7 +230,7 @@ class Prepared:
     problems: list[PrsxyError]
 
 
-def prepare(motions: Sequence[Motion], profile: Profile, limits: Limits) -> Prepared:
+def prepare(motions: Sequence[Motion], profile: Profile, limits: PlanLimits) -> Prepared:
     """Planning arrays and program-level problems of a chunk of motions."""
     return Prepared(
         blocks_from_motions(motions, limits),
@@ -291,7 +288,7 @@ class Pipeline:
         self.collect = collect
         self.limits = limits_of(profile, segment)
         self.planner = Planner(self.limits)
-        self.geo = geometry_of(profile, stages)
+        self.geo = ik_geometry(profile, stages)
         self.tables = axiscomp.profile_tables(profile) if stages.axis_comp else {}
         self.table_cols = [
             (col, self.tables[m]) for col, m in enumerate(MOTORS) if m in self.tables
@@ -299,17 +296,14 @@ class Pipeline:
         self.play_cols = [col for col, t in self.table_cols if t.max_play > 1e-12]
         # the contract: the first point of a motion is approached from below (lo)
         self.side = np.ones(5, dtype=int)
-        # where each motor with play last moved with a direction (None: not yet)
+        # where each motor with play last moved with a direction (NaN: not yet)
         self.ref = np.full(5, np.nan)
         self.lag = registry.SERVO_LAG.lags_s(profile) if stages.axis_comp else np.zeros(5)
         self.reversal_s = profile.interpolation.get("reversal_ms", 1.0) / 1000.0
-        from .interpolate.geometry import REVERSAL_SHARE
-
         self.reversal_tol = REVERSAL_SHARE * self.limits.tolerance_mm
         # where each motor's driven part is, and the last commands (for _settle)
         self.play_y: dict[int, float] = {}
         self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
-        self.contacts: list[tuple[int, int, int]] = []
         self.last: PointChunk | None = None  # the last point made (before the lead)
         self.held: PointChunk | None = None  # points waiting for the servo lead
         self.prev_out: PointChunk | None = None  # the last point released
@@ -357,15 +351,24 @@ class Pipeline:
             # before any point is made: a long move to an unreachable place is an
             # error at its line, and a block of a billion points is never tried
             n_steps = steps(done, plan.law, self.limits).sum(axis=1)
-            long = n_steps > 256
-            if np.any(long):
-                self._check_ends(done.take(long))
+            long = np.flatnonzero(n_steps > 256)
+            late: list[PrsxyError] = []
+            if long.size:
+                late = self._end_problems(done.take(long))
+                if late and not self.collect:
+                    # the blocks before the first long one that cannot be done are
+                    # made and checked first: an earlier line's problem comes first
+                    worst_line = min(e.line or 0 for e in late)
+                    cut = int(long[np.flatnonzero(done.line[long] == worst_line)[0]])
+                    plan = plan.head(cut)
+                    n_steps = n_steps[:cut]
             self._guard(plan, n_steps)
             s = sample(plan, self.limits)
             self.timings["interpolate"] += time.perf_counter() - t0
             pc = self._points(plan, s)
             if pc is not None:
                 out.append(pc)
+            self._problem(late)
         if final:
             if not self.any_motion:
                 raise LimitError(
@@ -425,19 +428,20 @@ class Pipeline:
             return w.take(slice(0, 0))
         return Blocks.concat(out)
 
-    def _check_ends(self, b: Blocks) -> None:
+    def _end_problems(self, b: Blocks) -> list[PrsxyError]:
         """Reach and travel at the end points of long blocks, before interpolating them:
         a move to X1e9 is an error at its line, not a billion points. (Short blocks are
-        checked point by point, as every block is.)"""
-        if not len(b):
-            return
+        checked point by point, as every block is; the ends are judged before the
+        real-axis tables, which move a command by micrometres.)"""
         ends = b.end
         q_t = correct_virtual(ends, self.error_map) if self.error_map is not None else ends
         ik = kinematics.inverse(self.geo, q_t, b.tool_length)
-        errs = check_pose_problems(self.profile, ends, b.line, ik.reachable)
-        errs += check_travel(self.profile, ik.P, b.line)
-        if errs and not self.collect:
-            raise sorted(errs, key=lambda e: e.line or 0)[0]
+        found = [
+            *checks.tilt_problems(self.profile, ends, b.line),
+            *checks.reach_problems(self.geo, q_t, b.tool_length, ik.P, b.line),
+            *checks.travel_problems(self.profile, ik.P, b.line),
+        ]
+        return [p.error(self.profile) for p in found]
 
     def _guard(self, plan: Plan, n_steps: np.ndarray) -> None:
         """Refuse absurd work: more points or machining time than the profile allows,
@@ -475,13 +479,20 @@ class Pipeline:
         )
         return self._points(None, s)
 
-    def _solve(self, q: np.ndarray, qdot: np.ndarray, tool: np.ndarray, line: np.ndarray):
-        """Virtual-axis map, IK and the IK's velocity for points."""
+    def _solve(
+        self, q: np.ndarray, qdot: np.ndarray, tool: np.ndarray, line: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+        """Virtual-axis map, IK and the IK's velocity for points: (q_target, P, V,
+        every point reachable)."""
         t0 = time.perf_counter()
         q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
         t1 = time.perf_counter()
         ik = kinematics.inverse(self.geo, q_t, tool)
-        self._problem(check_pose_problems(self.profile, q, line, ik.reachable))
+        pose = [
+            *checks.tilt_problems(self.profile, q, line),
+            *checks.reach_problems(self.geo, q_t, tool, ik.P, line),
+        ]
+        self._problem([p.error(self.profile) for p in pose])
         V = np.zeros_like(ik.P)
         moving = np.flatnonzero(np.any(qdot != 0.0, axis=1))
         if moving.size:
@@ -518,9 +529,9 @@ class Pipeline:
         )
         t0 = time.perf_counter()
         side = np.tile(self.side, (len(pc), 1))
-        self.contacts = []
+        contacts: list[tuple[int, int, int]] = []
         if self.play_cols and reachable:
-            pc, side = self._reversals(plan, s, pc)
+            pc, side, contacts = self._reversals(plan, s, pc)
         # a running sum continued across chunks (not chunk offset + cumsum), so the
         # clock is the same bit for bit however the program was cut
         t = np.cumsum(np.concatenate([[self.t], pc.dt]))[1:]
@@ -535,7 +546,7 @@ class Pipeline:
                 P_cmd[:, col] = axiscomp.compensate_sided(table, pc.P_ideal[:, col], side[:, col])
                 V_cmd[:, col] = pc.V_ideal[:, col] / table.slope(P_cmd[:, col], side[:, col])
             if self.play_cols:
-                self._settle(pc, side, P_cmd, V_cmd)
+                self._settle(pc, side, contacts, P_cmd, V_cmd)
             pc.P_cmd, pc.V_cmd = P_cmd, V_cmd
         self.timings["axis_tables"] += time.perf_counter() - t0
         self.last = pc.take(slice(len(pc) - 1, len(pc)))
@@ -544,9 +555,11 @@ class Pipeline:
 
     def _reversals(
         self, plan: Plan | None, s: Samples, pc: PointChunk
-    ) -> tuple[PointChunk, np.ndarray]:
+    ) -> tuple[PointChunk, np.ndarray, list[tuple[int, int, int]]]:
         """Give every reversal of a motor with play its crossing window
-        (:mod:`.reversals`), and return the points with the side of every motor."""
+        (:mod:`.reversals`). Returns the points, the side every motor is on at each,
+        and the crossings (the point where each ends, the point where it began, the
+        motor's column)."""
         last = self.last
         prev = (
             None if last is None else (last.P_ideal[0], last.V_ideal[0], bool(last.speed[0] == 0))
@@ -590,21 +603,24 @@ class Pipeline:
         side = reversals.sides(rows, pc.V_ideal, resting, ins, self.play_cols, self.side)
         self.side = side[-1].copy() if len(side) else self.side
         # where each crossing ends (the motor meets its part) and where it began
-        contacts: list[tuple[int, int, int]] = []
-        for k, col, ta, tb, _new in ins.windows:
-            end = rows.at(k, tb)
-            beg = rows.at(k, ta)
-            if beg < 0:  # the window starts at the point before the step
-                beg = rows.plain(k)[0] - 1
-            contacts.append((end, beg, col))
-        for k, col, _new in ins.stands:
-            end = rows.standing(k)
-            contacts.append((end, end - 1, col))
-        self.contacts = sorted(contacts)
-        return pc, side
+        ends = np.concatenate(
+            [
+                rows.at(ins.w_k, ins.w_tb, ins.w_t0),
+                rows.first(np.array([k for k, _, _ in ins.stands], dtype=int)),
+            ]
+        )
+        begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
+        cols = np.concatenate([ins.w_col, np.array([c for _, c, _ in ins.stands], dtype=int)])
+        contacts = sorted(zip(ends.tolist(), begs.tolist(), cols.tolist(), strict=True))
+        return pc, side, contacts
 
     def _settle(
-        self, pc: PointChunk, side: np.ndarray, P_cmd: np.ndarray, V_cmd: np.ndarray
+        self,
+        pc: PointChunk,
+        side: np.ndarray,
+        contacts: list[tuple[int, int, int]],
+        P_cmd: np.ndarray,
+        V_cmd: np.ndarray,
     ) -> None:
         """Follow every motor with play through the cubics of its own commands
         (:func:`.reversals.follow`) and end each crossing where the part really
@@ -615,8 +631,8 @@ class Pipeline:
 
         One pass with the commands as made finds where each part stands in each
         window (a crossing changes nothing before it, and once in contact the part
-        follows the command whichever way it got there); a second one, after the
-        corrections, carries the parts' positions on.
+        follows the command whichever way it got there); the part's position is then
+        carried on from the last contact, where it meets the corrected command.
         """
         prev_P = self.last_cmd[0] if self.last_cmd is not None else None
         prev_V = self.last_cmd[1] if self.last_cmd is not None else None
@@ -629,33 +645,39 @@ class Pipeline:
             else:
                 y0 = self.play_y[col]
                 P0, V0 = float(prev_P[col]), float(prev_V[col])  # type: ignore[index]
-            mine = [(end, beg) for end, beg, c in self.contacts if c == col]
+            mine = [(end, beg) for end, beg, c in contacts if c == col]
             if mine:
                 y_pt, lo, hi = reversals.follow(
                     table, y0, P0, V0, P_cmd[:, col], V_cmd[:, col], pc.dt
                 )
-                lo_l, hi_l, y_l = lo.tolist(), hi.tolist(), y_pt.tolist()
-                ends, stuck, up = [], [], []
-                for end, beg in mine:
-                    first = beg + 1 if beg >= 0 else 0
-                    old = -int(side[end, col])
-                    # where the part stands when the crossing begins: the extreme it
-                    # reached on the old side (the window's start counts too)
-                    at_beg = y_l[beg] if beg >= 0 else y0
-                    if old < 0:
-                        y_at = min([at_beg, *lo_l[first : end + 1]])
-                    else:
-                        y_at = max([at_beg, *hi_l[first : end + 1]])
-                    ends.append(end)
-                    stuck.append(y_at)
-                    up.append(side[end, col] > 0)
-                e = np.array(ends)
-                y_s = np.array(stuck)
-                u = np.array(up)
+                e = np.array([c[0] for c in mine])
+                b = np.array([c[1] for c in mine])
+                # where the part stands when the crossing begins: the extreme it
+                # reached on the old side, over the window (its start included)
+                at_beg = np.where(b >= 0, y_pt[np.maximum(b, 0)], y0)
+                first = np.maximum(b + 1, 0)
+                cuts = np.column_stack([first, e + 1]).ravel()
+                lo_x = np.minimum.reduceat(np.append(lo, np.inf), cuts)[::2]
+                hi_x = np.maximum.reduceat(np.append(hi, -np.inf), cuts)[::2]
+                u = side[e, col] > 0  # the new side: up, so it was going down
+                y_s = np.where(u, np.minimum(lo_x, at_beg), np.maximum(hi_x, at_beg))
                 cmd = np.where(u, table.lo_inv(y_s), table.hi_inv(y_s))
                 P_cmd[e, col] = cmd
-            y_end, _, _ = reversals.follow(table, y0, P0, V0, P_cmd[:, col], V_cmd[:, col], pc.dt)
-            self.play_y[col] = float(y_end[-1])
+                # at the last contact the part meets the motor where it stands; from
+                # there on, the corrected commands carry it
+                last = int(e.max())
+                k = int(np.argmax(e))
+                y0, P0, V0 = float(y_s[k]), float(P_cmd[last, col]), float(V_cmd[last, col])
+                rest = slice(last + 1, len(pc))
+            else:
+                rest = slice(0, len(pc))
+            if rest.start < len(pc):
+                y0 = float(
+                    reversals.follow(
+                        table, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest]
+                    )[0][-1]
+                )
+            self.play_y[col] = y0
         self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
 
     def _new_points(
@@ -692,9 +714,9 @@ class Pipeline:
             e_step.append(k)
             e_when.append(float(t_end[k] - pc.dt[k]))
             e_before.append(True)
-        if ins.mid and plan is not None:
-            ks = np.array([k for k, ts in sorted(ins.mid.items()) for _ in ts], dtype=int)
-            tt = np.array([t for _, ts in sorted(ins.mid.items()) for t in ts])
+        if len(ins.mid_k) and plan is not None:
+            ks = ins.mid_k
+            tt = ins.mid_t
             blk = s.block[ks]
             tau = s.tau[ks] - (t_end[ks] - tt)
             q, qdot = at_times(plan, blk, tau)
@@ -702,14 +724,12 @@ class Pipeline:
             v = np.where(v > 0, v, np.linalg.norm(qdot[:, 3:], axis=1))
             q_t, P, V, _ = self._solve(q, qdot, s.tool_length[ks], s.line[ks])
             m = len(ks)
-            seg = np.zeros(m)
-            for k in sorted(ins.mid):
-                sel = np.flatnonzero(ks == k)
-                t1 = float(t_end[k])
-                cuts = np.concatenate([[t1 - float(pc.dt[k])], tt[sel], [t1]])
-                d = np.diff(cuts)
-                seg[sel] = d[:-1]
-                dt[k] = d[-1]
+            # the steps cut at the new points (sorted by step, then time)
+            same = np.concatenate([[False], ks[1:] == ks[:-1]])
+            before_t = np.where(same, np.concatenate([[0.0], tt[:-1]]), t_end[ks] - pc.dt[ks])
+            seg = tt - before_t
+            last_in_step = np.concatenate([ks[1:] != ks[:-1], [True]])
+            dt[ks[last_in_step]] = t_end[ks[last_in_step]] - tt[last_in_step]
             parts.append(
                 PointChunk(
                     q=q,
@@ -775,56 +795,9 @@ class Pipeline:
             ready.P_cmd = ready.P_cmd + self.lag[None, :] * ready.V_cmd
             ready.V_cmd = ready.V_cmd + self.lag[None, :] * acc
         self.held = None if k == len(h) else h.take(slice(k, len(h)))
-        self._problem(check_travel(self.profile, ready.P_cmd, ready.line))
+        travel = checks.travel_problems(self.profile, ready.P_cmd, ready.line)
+        self._problem([p.error(self.profile) for p in travel])
         return ready
-
-
-def check_pose_problems(
-    profile: Profile, q: np.ndarray, line: np.ndarray, reachable: np.ndarray
-) -> list[PrsxyError]:
-    """Tilt beyond the limit and poses out of reach, one per G-code line and kind."""
-    out: list[PrsxyError] = []
-    max_tilt = profile.limits["max_tilt_deg"]
-    cos_tilt = np.cos(np.radians(q[:, 3])) * np.cos(np.radians(q[:, 4]))
-    tilt = np.degrees(np.arccos(np.clip(cos_tilt, -1.0, 1.0)))
-    for i in _first_per_line(tilt > max_tilt + 1e-9, line):
-        out.append(
-            LimitError(
-                f"tool axis tilted {tilt[i]:.3f}° at A{q[i, 3]:.4f} B{q[i, 4]:.4f}",
-                line=int(line[i]),
-                expected=f"at most {max_tilt:g}° (limits.max_tilt_deg)",
-            )
-        )
-    for i in _first_per_line(~reachable, line):
-        out.append(
-            ReachError(
-                "pose out of the machine's reach at X{:.4f} Y{:.4f} Z{:.4f} A{:.4f} B{:.4f}".format(
-                    *q[i]
-                ),
-                line=int(line[i]),
-                expected="a pose the struts can reach (see the profile's [kinematics])",
-            )
-        )
-    return out
-
-
-def check_travel(profile: Profile, P_cmd: np.ndarray, line: np.ndarray) -> list[PrsxyError]:
-    """Motors commanded beyond their travel, one per G-code line and motor."""
-    out: list[PrsxyError] = []
-    ok = np.all(np.isfinite(P_cmd), axis=1)
-    for col, m in enumerate(MOTORS):
-        mc = profile.motor(m)
-        p = P_cmd[:, col]
-        bad = ok & ((p < mc.min - 1e-9) | (p > mc.max + 1e-9))
-        for i in _first_per_line(bad, line):
-            out.append(
-                ReachError(
-                    f"motor {m} ({mc.axis}) commanded to {p[i]:.4f} mm, beyond its travel",
-                    line=int(line[i]),
-                    expected=f"{mc.min:g} to {mc.max:g} mm (motors[{m}].min/max)",
-                )
-            )
-    return out
 
 
 def run_chain(

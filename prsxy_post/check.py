@@ -23,7 +23,7 @@ from __future__ import annotations
 import contextlib
 import itertools
 import math
-from collections.abc import Generator, Iterable, Iterator, Sequence
+from collections.abc import Callable, Generator, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -36,7 +36,7 @@ from .profile import MOTORS, Profile
 
 if TYPE_CHECKING:
     from . import chain  # imported where used: the chain may use this module's rules
-    from .gcode import Motion
+    from .gcode import FileLines, Motion
 
 #: the kinds of problem, in the order they are listed for a line
 KINDS = ("feed", "reach", "tilt", "travel")
@@ -169,6 +169,8 @@ def check_batches(
     stages: chain.Stages | None = None,
     start: Sequence[float] | None = None,
     source: str = "<program>",
+    on_message: Callable[[str, int, str, str], None] | None = None,
+    lines_from: FileLines | None = None,
 ) -> CheckReport:
     """Run a program through the conversion chain and find what the machine cannot do.
 
@@ -179,6 +181,7 @@ def check_batches(
     stages : which compensation stages run (default: all, as ``convert``)
     start : (x, y, z, A, B) [mm, deg] start pose instead of the profile's
     source : the program's name in errors
+    on_message, lines_from : as :func:`prsxy_post.program.motions`
 
     Returns
     -------
@@ -194,7 +197,9 @@ def check_batches(
     pipe = chain.Pipeline(profile, stages, emap, start=start, collect=True)
     judge = _Judge(profile, pipe.geo)
     it = iter(batches)
-    motions = program.motions(it, profile, start=start, source=source)
+    motions = program.motions(
+        it, profile, start=start, source=source, on_message=on_message, lines_from=lines_from
+    )
     stopped: PrsxyError | None = None
     n_motions = 0
     with few_gc_passes(), contextlib.closing(motions):
@@ -229,7 +234,12 @@ def check_file(
     from . import program
 
     return check_batches(
-        program.file_batches(path), profile, stages=stages, start=start, source=str(path)
+        program.file_batches(path),
+        profile,
+        stages=stages,
+        start=start,
+        source=str(path),
+        lines_from=program.lines_of(path),
     )
 
 

@@ -67,6 +67,13 @@ def fail(err: PrsxyError) -> NoReturn:
     sys.exit(err.exit_code)
 
 
+def say(source: str, line: int, kind: str, text: str) -> None:
+    """A program's (MSG,…), (DEBUG,…), (PRINT,…) on standard error, as LinuxCNC
+    shows them to the operator (module level: it crosses to worker processes)."""
+    sys.stderr.write(f"{source}:{line}: ({kind}) {text.strip()}\n")
+    sys.stderr.flush()
+
+
 def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
     """Run a command: user errors become one located line, bugs exit 3."""
 
@@ -235,7 +242,9 @@ def inspect(program: str, profile_path: str | None, start: str | None, as_json: 
     else:
         batches = prog.file_batches(program)
     out = sys.stdout
-    for m in prog.motions(batches, prof, start=st, source=program):
+    for m in prog.motions(
+        batches, prof, start=st, source=program, on_message=say, lines_from=prog.lines_of(program)
+    ):
         d = gcode.motion_to_json(m)
         if as_json:
             out.write(json.dumps(d) + "\n")
@@ -397,6 +406,7 @@ def convert(
                 stages,
                 " ".join(opts),
                 parallel=not pooled and conv.worth_a_second_process(prog),
+                on_message=say,
             )
         )
     if pooled:
@@ -483,7 +493,15 @@ def check(
         batches = prog.text_batches(read_text(program, "G-code program"))
     else:
         batches = prog.file_batches(program)
-    report = chk.check_batches(batches, prof, stages=stages, start=st, source=program)
+    report = chk.check_batches(
+        batches,
+        prof,
+        stages=stages,
+        start=st,
+        source=program,
+        on_message=say,
+        lines_from=prog.lines_of(program),
+    )
     if each_line:
         for p in report.problems:
             click.echo(str(p.error(prof, program)))

@@ -61,6 +61,7 @@ class ConvertJob:
     parallel : read and interpret the program in a second process while this one
         runs the rest of the chain (the output is the same; only the wall time
         changes)
+    on_message : receives the program's messages (gcode.InterpreterConfig)
     """
 
     program: str
@@ -72,6 +73,8 @@ class ConvertJob:
     options: str = ""
     chunk: int = 4096
     parallel: bool = False
+    #: the program's (MSG/DEBUG/PRINT): on_message(source, line, kind, text)
+    on_message: Callable[[str, int, str, str], None] | None = None
 
 
 def iter_program_batches(
@@ -139,7 +142,7 @@ def _prepare_here(
     """The program's motions, chunk by chunk, through :func:`chain.prepare`."""
     from . import chain, gcode
 
-    cfg = chain.interpreter_config(prof, job.start)
+    cfg = chain.interpreter_config(prof, job.start, on_message=job.on_message)
 
     def counted(batches: Iterator[list[str]]) -> Iterator[list[str]]:
         for batch in batches:
@@ -151,7 +154,9 @@ def _prepare_here(
         if job.program != "-"
         else gcode.batches_of(gcode.split_lines(read_text("-", "G-code program")))
     )
-    motions = gcode.iter_motions_batched(counted(batches), cfg, job.program)
+    # a program whose loops and calls jump back reads those lines again from the file
+    lines_from = gcode.FileLines(job.program) if job.program != "-" else None
+    motions = gcode.iter_motions_batched(counted(batches), cfg, job.program, lines_from=lines_from)
     from . import writers
 
     limits = chain.limits_of(prof, writers.dialect(job.fmt).segment)

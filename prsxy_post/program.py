@@ -14,14 +14,14 @@ Example
 
 from __future__ import annotations
 
-from collections.abc import Generator, Iterable, Sequence
+from collections.abc import Callable, Generator, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .files import inspect_source
 
 if TYPE_CHECKING:
-    from .gcode import Motion
+    from .gcode import FileLines, Motion
     from .profile import Profile
 
 
@@ -33,6 +33,14 @@ def file_batches(path: str | Path) -> Generator[list[str], None, None]:
 
     inspect_source(str(path))
     yield from iter_program_batches(str(path))
+
+
+def lines_of(path: str | Path) -> FileLines | None:
+    """The program's lines read again from its file when a loop or a call jumps
+    back (``None`` for standard input, ``-``, which is held in memory instead)."""
+    from . import gcode
+
+    return None if str(path) == "-" else gcode.FileLines(str(path))
 
 
 def text_batches(text: str) -> Generator[list[str], None, None]:
@@ -48,6 +56,8 @@ def motions(
     *,
     start: Sequence[float] | None = None,
     source: str = "<string>",
+    on_message: Callable[[str, int, str, str], None] | None = None,
+    lines_from: FileLines | None = None,
 ) -> Generator[Motion, None, None]:
     """Interpret a program's lines into motions, as they come.
 
@@ -58,6 +68,11 @@ def motions(
         one, none of these and the start at the workpiece origin
     start : (x, y, z, A, B) [mm, deg] start pose instead of the profile's
     source : the program's name in error messages
+    on_message : receives the program's (MSG,…), (DEBUG,…), (PRINT,…) as
+        ``on_message(source, line, kind, text)``; without it they are ignored
+    lines_from : the program's lines read again by position (:func:`lines_of`)
+        when a loop or a call jumps back; without it the lines already read
+        are kept in memory from the first O-word on
 
     Raises
     ------
@@ -68,19 +83,21 @@ def motions(
     from . import chain, gcode
 
     if profile is not None:
-        cfg = chain.interpreter_config(profile, start)
+        cfg = chain.interpreter_config(profile, start, on_message=on_message)
     elif start is not None:
-        cfg = gcode.InterpreterConfig(start=tuple(float(x) for x in start))
+        cfg = gcode.InterpreterConfig(start=tuple(float(x) for x in start), on_message=on_message)
     else:
-        cfg = gcode.InterpreterConfig()
-    yield from gcode.iter_motions_batched(batches, cfg, source)
+        cfg = gcode.InterpreterConfig(on_message=on_message)
+    yield from gcode.iter_motions_batched(batches, cfg, source, lines_from=lines_from)
 
 
 def motions_of_file(
     path: str | Path, profile: Profile | None = None, *, start: Sequence[float] | None = None
 ) -> Generator[Motion, None, None]:
     """:func:`motions` of a program file, streamed."""
-    yield from motions(file_batches(path), profile, start=start, source=str(path))
+    yield from motions(
+        file_batches(path), profile, start=start, source=str(path), lines_from=lines_of(path)
+    )
 
 
 def motions_of_text(

@@ -20,8 +20,6 @@ of it while the path goes on. So the jump gets a window of its own:
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 #: A planned motor velocity below this [mm/s] gives no direction: a motor creeping
@@ -40,63 +38,6 @@ SNAP_S = 0.1e-3
 def signs(V: np.ndarray) -> np.ndarray:
     """Direction of each planned velocity: +1, −1, or 0 (standing)."""
     return np.where(V > V_EPS, 1, np.where(V < -V_EPS, -1, 0))
-
-
-def velocity_root(P0: float, V0: float, P1: float, V1: float, h: float) -> tuple[float, float]:
-    """Where the cubic through (P0, V0) and (P1, V1) over time h has zero velocity.
-
-    The Hermite cubic's velocity is a quadratic a s² + b s + c in s = t / h, with
-    c = V0, a = 6 (P0 − P1)/h + 3 (V0 + V1), b = −6 (P0 − P1)/h − 4 V0 − 2 V1.
-
-    Returns
-    -------
-    s : the root in [0, 1] where the velocity changes sign
-    accel : the cubic's acceleration there [mm/s²]
-    """
-    d = (P0 - P1) / h
-    a = 6.0 * d + 3.0 * (V0 + V1)
-    b = -6.0 * d - 4.0 * V0 - 2.0 * V1
-    c = V0
-    roots: list[float] = []
-    if abs(a) < 1e-12 * (abs(b) + abs(c) + 1e-300):
-        if b != 0:
-            roots = [-c / b]
-    else:
-        disc = b * b - 4.0 * a * c
-        if disc >= 0:
-            # the numerically stable pair of roots
-            qq = -0.5 * (b + math.copysign(math.sqrt(disc), b))
-            roots = [qq / a, c / qq] if qq != 0 else [-b / (2 * a)]
-    inside = [r for r in roots if -1e-9 <= r <= 1.0 + 1e-9]
-    if not inside:
-        # the velocities at the ends have opposite signs, so a root exists; only
-        # rounding can hide it: take the linear estimate
-        s = V0 / (V0 - V1) if V0 != V1 else 0.5
-    else:
-        # the root where the sign changes from V0's: the first one
-        s = min(inside)
-    s = min(max(s, 0.0), 1.0)
-    return s, (2.0 * a * s + b) / h
-
-
-def window(
-    t0: float, t1: float, t_root: float, accel: float, tol: float, longest: float
-) -> tuple[float, float]:
-    """The crossing window around a reversal at ``t_root`` inside the step [t0, t1]."""
-    width = longest if accel == 0 else math.sqrt(8.0 * tol / abs(accel))
-    width = min(max(width, MIN_WINDOW_S), longest)
-    if width >= t1 - t0:
-        return t0, t1
-    a = min(max(t_root - 0.5 * width, t0), t1 - width)
-    b = a + width
-    # no sliver of a step beside the window: a step much shorter than the window
-    # makes the rounding of the written positions a large velocity error; the
-    # window grows by at most half its width on that side (its error by 2.25 x)
-    if a - t0 < 0.5 * width:
-        a = t0
-    if t1 - b < 0.5 * width:
-        b = t1
-    return a, b
 
 
 def _creeps(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) -> np.ndarray:
@@ -127,38 +68,108 @@ def _creeps(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) 
 class Insertions:
     """What a chunk of points needs for its reversals (:func:`plan_insertions`).
 
-    stand : row k → duration of a standing point put before it
-    mid : row k → times (since the chunk's previous point) of points put inside
-        the step that ends at row k
-    windows : (k, col, t_a, t_b, new) crossing windows inside steps: the motor is on
-        its old side −new up to t_a and on the new side from t_b
+    stand : row k -> duration of a standing point put before it
     stands : (k, col, new) motors that cross at the standing point before row k
+    w_k, w_col, w_ta, w_tb, w_new : (w,) crossing windows inside steps: in the step
+        ending at row w_k, motor w_col is on its old side −w_new up to w_ta and on
+        the new side from w_tb
+    w_t0 : (w,) the start of each window's step [s]
+    mid_k, mid_t : (m,) the points put inside steps: the row whose step they are in,
+        and their time since the chunk's previous point; sorted by step, then time
     """
 
     def __init__(self) -> None:
         self.stand: dict[int, float] = {}
-        self.mid: dict[int, list[float]] = {}
-        self.windows: list[tuple[int, int, float, float, int]] = []
         self.stands: list[tuple[int, int, int]] = []
+        self.w_k = np.zeros(0, dtype=int)
+        self.w_col = np.zeros(0, dtype=int)
+        self.w_ta = np.zeros(0)
+        self.w_tb = np.zeros(0)
+        self.w_new = np.zeros(0, dtype=int)
+        self.w_t0 = np.zeros(0)
+        self.mid_k = np.zeros(0, dtype=int)
+        self.mid_t = np.zeros(0)
 
     def __bool__(self) -> bool:
-        return bool(self.stand or self.mid)
+        return bool(self.stand) or len(self.mid_k) > 0
 
 
-def _add(
-    ins: Insertions, k: int, col: int, ta: float, tb: float, new: int, t0: float, t1: float
-) -> None:
-    """A crossing window in step k (t0..t1); motors reversing together (a path
-    reversing) share their points: an edge within SNAP_S of one already there is it."""
-    got = ins.mid.setdefault(k, [])
-    edges = []
-    for t in (ta, tb):
-        near = min([t0, t1, *got], key=lambda x: abs(x - t))
-        t = near if abs(near - t) < SNAP_S else t
-        edges.append(t)
-        if t0 < t < t1 and t not in got:
-            got.append(t)
-    ins.windows.append((k, col, edges[0], edges[1], new))
+def velocity_roots(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where the cubic through (P0, V0) and (P1, V1) over time h has zero velocity,
+    for arrays of steps.
+
+    The Hermite cubic's velocity is a quadratic a s² + b s + c in s = t / h, with
+    c = V0, a = 6 (P0 − P1)/h + 3 (V0 + V1), b = −6 (P0 − P1)/h − 4 V0 − 2 V1.
+
+    Returns
+    -------
+    s : (n,) the first root in [0, 1] (where the velocity changes sign from V0's)
+    accel : (n,) the cubic's acceleration there [mm/s²]
+    """
+    d = (P0 - P1) / h
+    a = 6.0 * d + 3.0 * (V0 + V1)
+    b = -6.0 * d - 4.0 * V0 - 2.0 * V1
+    c = V0
+    disc = b * b - 4.0 * a * c
+    lin = np.abs(a) < 1e-12 * (np.abs(b) + np.abs(c) + 1e-300)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        qq = -0.5 * (b + np.copysign(np.sqrt(np.maximum(disc, 0.0)), b))
+        r1 = np.where(lin, np.where(b != 0, -c / b, np.nan), qq / a)
+        r2 = np.where(lin, np.nan, np.where(qq != 0, c / qq, -b / (2 * a)))
+        r1 = np.where(disc >= 0, r1, np.nan)
+        r2 = np.where(disc >= 0, r2, np.nan)
+        ok1 = (r1 >= -1e-9) & (r1 <= 1 + 1e-9)
+        ok2 = (r2 >= -1e-9) & (r2 <= 1 + 1e-9)
+        best = np.where(ok1 & ok2, np.minimum(r1, r2), np.where(ok1, r1, np.where(ok2, r2, np.nan)))
+        # the velocities at the ends have opposite signs, so a root exists; only
+        # rounding can hide it: take the linear estimate
+        linear = np.where(V0 != V1, V0 / (V0 - V1), 0.5)
+    s = np.clip(np.where(np.isnan(best), linear, best), 0.0, 1.0)
+    return s, (2.0 * a * s + b) / h
+
+
+def windows(
+    t0: np.ndarray,
+    t1: np.ndarray,
+    t_root: np.ndarray,
+    accel: np.ndarray,
+    tol: float,
+    longest: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The crossing windows about reversals at ``t_root`` inside steps [t0, t1].
+
+    Width sqrt(8 tol / |A|) (the part stands at the extreme meanwhile and misses
+    the path by |A| (δ/2)² / 2), between MIN_WINDOW_S and ``longest``; no sliver of
+    a step is left beside a window (a step much shorter than the window makes the
+    rounding of the written positions a large velocity error): the window grows by
+    at most half its width on that side (its error by 2.25 x).
+    """
+    with np.errstate(divide="ignore"):
+        width = np.where(accel == 0, longest, np.sqrt(8.0 * tol / np.abs(accel)))
+    width = np.clip(width, MIN_WINDOW_S, longest)
+    whole = width >= t1 - t0
+    a = np.minimum(np.maximum(t_root - 0.5 * width, t0), t1 - width)
+    b = a + width
+    a = np.where(a - t0 < 0.5 * width, t0, a)
+    b = np.where(t1 - b < 0.5 * width, t1, b)
+    return np.where(whole, t0, a), np.where(whole, t1, b)
+
+
+def _snap(k: np.ndarray, t: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
+    """Window edges of one step within SNAP_S of each other (or of the step's ends)
+    made one point: motors reversing together (a path reversing) share their
+    points."""
+    t = np.where(t - t0 < SNAP_S, t0, np.where(t1 - t < SNAP_S, t1, t))
+    order = np.lexsort((t, k))
+    ks, ts = k[order], t[order]
+    new_group = np.ones(len(ts), dtype=bool)
+    new_group[1:] = (ks[1:] != ks[:-1]) | (ts[1:] - ts[:-1] >= SNAP_S)
+    first = np.maximum.accumulate(np.where(new_group, np.arange(len(ts)), 0))
+    out = np.empty_like(t)
+    out[order] = ts[first]
+    return out
 
 
 def plan_insertions(
@@ -200,9 +211,11 @@ def plan_insertions(
         rest_all = np.concatenate([[prev[2]], resting])
         off = 1
     drift = DRIFT_SHARE * tol
-    te = t_end.tolist()
-    dts = dt.tolist()
-    rest = rest_all.tolist()
+    w_k: list[np.ndarray] = []
+    w_col: list[np.ndarray] = []
+    w_ta: list[np.ndarray] = []
+    w_tb: list[np.ndarray] = []
+    w_new: list[np.ndarray] = []
     for col in cols:
         sg = np.where(rest_all, 0, signs(V_all[:, col]))
         crept = _creeps(sg, P_all[:, col], int(side[col]), float(ref[col]), drift)
@@ -216,91 +229,114 @@ def plan_insertions(
         moving_rows = np.flatnonzero(sg != 0)
         if moving_rows.size:
             ref[col] = float(P_all[moving_rows[-1], col])
-        flips = np.flatnonzero((sg != 0) & (sg != came)).tolist()
-        if not flips:
+        r = np.flatnonzero((sg != 0) & (sg != came))
+        r = r[(r - off >= 0) & (r - off < n)]
+        if not r.size:
             continue
-        Pc = P_all[:, col].tolist()
-        Vc = V_all[:, col].tolist()
-        sgl = sg.tolist()
-        crl = crept.tolist()
-        for r in flips:
-            k = r - off
-            if k < 0 or k >= n:
-                continue
-            new = sgl[r]
-            at_rest = r == 0 or rest[r - 1]
-            if crl[r] != 0 and not at_rest:
-                # a creeping motor has drifted back past the allowance: it crosses
-                # over the end of this step (its speed makes the crossing's error tiny)
-                t1 = te[k]
-                t0 = t1 - dts[k]
-                ta = max(t0, t1 - longest)
-                _add(ins, k, col, ta, t1, new, t0, t1)
-                continue
-            if at_rest:
-                ins.stand[k] = max(ins.stand.get(k, 0.0), longest)
-                ins.stands.append((k, col, new))
-                continue
-            if (
-                k >= 1
-                and r >= 2
-                and sgl[r - 1] == 0
-                and sgl[r - 2] == 0
-                and (abs(Pc[r - 1] - Pc[r - 2]) < 1e-9)
-            ):
-                # the motor stood through the step before while the path moved on: it
-                # crosses at that step's end, standing, and leaves from contact
-                t1 = te[k - 1]
-                t0 = t1 - dts[k - 1]
-                ta = t0 if t1 - t0 <= 1.5 * longest else t1 - longest
-                _add(ins, k - 1, col, ta, t1, new, t0, t1)
-                continue
-            h = dts[k]
-            sr, acc = velocity_root(Pc[r - 1], Vc[r - 1], Pc[r], Vc[r], h)
-            t1 = te[k]
-            t0 = t1 - h
-            ta, tb = window(t0, t1, t0 + sr * h, acc, tol, longest)
-            _add(ins, k, col, ta, tb, new, t0, t1)
-    for k in list(ins.mid):
-        if ins.mid[k]:
-            ins.mid[k].sort()
-        else:
-            del ins.mid[k]
+        k = r - off
+        new = sg[r]
+        at_rest = (r == 0) | rest_all[np.maximum(r - 1, 0)]
+        crept_f = (crept[r] != 0) & ~at_rest
+        p = P_all[:, col]
+        stood = (
+            ~at_rest
+            & ~crept_f
+            & (k >= 1)
+            & (r >= 2)
+            & (sg[np.maximum(r - 1, 0)] == 0)
+            & (sg[np.maximum(r - 2, 0)] == 0)
+            & (np.abs(p[np.maximum(r - 1, 0)] - p[np.maximum(r - 2, 0)]) < 1e-9)
+        )
+        mid = ~(at_rest | crept_f | stood)
+        for kk, nn in zip(k[at_rest].tolist(), new[at_rest].tolist(), strict=True):
+            ins.stand[kk] = longest
+            ins.stands.append((kk, col, nn))
+        # a creeping motor has drifted back past the allowance: it crosses over the
+        # end of this step (its speed makes the crossing's error tiny)
+        kc = k[crept_f]
+        t1 = t_end[kc]
+        w_k.append(kc)
+        w_ta.append(np.maximum(t1 - dt[kc], t1 - longest))
+        w_tb.append(t1)
+        # the motor stood through the step before while the path moved on: it crosses
+        # at that step's end, standing, and leaves from contact
+        ks = k[stood] - 1
+        t1 = t_end[ks]
+        t0 = t1 - dt[ks]
+        w_k.append(ks)
+        w_ta.append(np.where(t1 - t0 <= 1.5 * longest, t0, t1 - longest))
+        w_tb.append(t1)
+        # a reversal in motion: the window about the root of the step's cubic
+        km, rm = k[mid], r[mid]
+        h = dt[km]
+        sr, acc = velocity_roots(p[rm - 1], V_all[rm - 1, col], p[rm], V_all[rm, col], h)
+        t1 = t_end[km]
+        t0 = t1 - h
+        ta, tb = windows(t0, t1, t0 + sr * h, acc, tol, longest)
+        w_k.append(km)
+        w_ta.append(ta)
+        w_tb.append(tb)
+        w_col.append(np.full(len(kc) + len(ks) + len(km), col))
+        w_new.append(np.concatenate([new[crept_f], new[stood], new[mid]]))
+    if w_col:
+        wk = np.concatenate(w_k)
+        ta, tb = np.concatenate(w_ta), np.concatenate(w_tb)
+        t1 = t_end[wk]
+        t0 = t1 - dt[wk]
+        both = _snap(
+            np.concatenate([wk, wk]), np.concatenate([ta, tb]), np.tile(t0, 2), np.tile(t1, 2)
+        )
+        ta, tb = both[: len(wk)], both[len(wk) :]
+        ins.w_k, ins.w_col, ins.w_ta, ins.w_tb = wk, np.concatenate(w_col), ta, tb
+        ins.w_new = np.concatenate(w_new)
+        ins.w_t0 = t0
+        # the points inside steps: each distinct window edge strictly inside its step
+        ek = np.concatenate([wk, wk])
+        et = both
+        inside = (et > np.tile(t0, 2)) & (et < np.tile(t1, 2))
+        pairs = np.unique(np.column_stack([ek[inside], et[inside]]), axis=0)
+        ins.mid_k = pairs[:, 0].astype(int)
+        ins.mid_t = pairs[:, 1]
     return ins
 
 
 class Rows:
     """Where each step's points are in a chunk with new points put in (ordered by
-    step, standing points first, then by time)."""
+    step, standing points first, then by time; the times never decrease).
+
+    step : (m,) the original row whose step each point belongs to
+    when : (m,) time of each point since the point before the chunk [s]
+    standing_before : (m,) the point is a standing point put before its row
+    """
 
     def __init__(self, step: np.ndarray, when: np.ndarray, standing_before: np.ndarray) -> None:
         self.step = step
-        n_steps = int(step[-1]) + 1 if len(step) else 0
-        ks = np.arange(n_steps)
-        self.first = np.searchsorted(step, ks, "left").tolist()
-        self.end = np.searchsorted(step, ks, "right").tolist()
-        self.before = standing_before.tolist()
-        self.when = when.tolist()
+        self.when = when
+        self.before = standing_before
 
-    def plain(self, k: int) -> tuple[int, int]:
-        """[first, end) of step k's points that are not standing points."""
-        a, e = self.first[k], self.end[k]
-        while a < e and self.before[a]:
-            a += 1
-        return a, e
+    def first(self, k: np.ndarray) -> np.ndarray:
+        """The first point of each step k (its standing point, if it has one)."""
+        return np.searchsorted(self.step, k, "left")
 
-    def standing(self, k: int) -> int:
-        """The standing point put before step k's end (−1 if none)."""
-        a = self.first[k]
-        return a if a < self.end[k] and self.before[a] else -1
+    def first_plain(self, k: np.ndarray) -> np.ndarray:
+        """The first point of each step k that is not a standing point."""
+        f = self.first(k)
+        return f + self.before[np.minimum(f, len(self.before) - 1)]
 
-    def at(self, k: int, t: float) -> int:
-        """The point of step k at time t (its end when t is the step's end)."""
-        f, e = self.plain(k)
-        for i in range(f, e):
-            if self.when[i] == t:
-                return i
-        return -1
+    def at(self, k: np.ndarray, t: np.ndarray, t0: np.ndarray) -> np.ndarray:
+        """The point of each step k at time t: a point put inside the step or its
+        end; for t at the step's start t0, the point before the step's first plain
+        point (−1 before the chunk).
+
+        Window edges are either a step's ends or at least SNAP_S inside it
+        (:func:`_snap`), so the step's start is told by time, not by an equality
+        that the rounding of the times (relative to where a chunk begins) could
+        break; the search is kept inside the step for the same reason.
+        """
+        fp = self.first_plain(k)
+        last = np.searchsorted(self.step, k, "right") - 1
+        idx = np.clip(np.searchsorted(self.when, t - 0.5 * SNAP_S, "left"), fp, last)
+        return np.where(t - t0 < 0.5 * SNAP_S, fp - 1, idx)
 
 
 def sides(
@@ -314,7 +350,9 @@ def sides(
     """The side (+1, −1) every motor is on at every point of a chunk (new points
     included), and so which of lo⁻¹ and hi⁻¹ commands it: the direction of its
     planned velocity, held while it stands, switched inside a crossing window only
-    at the window's end.
+    at the window's end: the whole step up to the window's end is on the old side
+    (the velocity may turn a little before the window begins), and at the window's
+    end the motor has crossed, moving or not.
 
     rows : the chunk's points (:class:`Rows`)
     V, resting : (m, 5), (m,) planned motor velocities, path at rest
@@ -322,20 +360,21 @@ def sides(
     """
     m = len(rows.step)
     out = np.tile(np.asarray(side, dtype=int), (m, 1))
+    f_all = rows.first_plain(ins.w_k)
+    e_all = rows.at(ins.w_k, ins.w_tb, ins.w_t0)
+    s_k = np.array([k for k, _, _ in ins.stands], dtype=int)
+    s_col = np.array([c for _, c, _ in ins.stands], dtype=int)
+    s_new = np.array([n for _, _, n in ins.stands], dtype=int)
     for col in cols:
         sg = np.where(resting, 0, signs(V[:, col]))
-        for k, c, _ta, tb, new in ins.windows:
-            if c == col:
-                f, _ = rows.plain(k)
-                end = rows.at(k, tb)
-                # the whole step up to the window's end is on the old side (the
-                # velocity may turn a little before the window begins); at the
-                # window's end the motor has crossed, moving or not
-                sg[f:end] = -new
-                sg[end] = new
-        for k, c, new in ins.stands:
-            if c == col:
-                sg[rows.standing(k)] = new
+        mine = ins.w_col == col
+        f, e, new = f_all[mine], e_all[mine], ins.w_new[mine]
+        length = np.maximum(e - f, 0)
+        idx = np.repeat(f - np.cumsum(length) + length, length) + np.arange(length.sum())
+        sg[idx] = np.repeat(-new, length)
+        sg[e] = new
+        here = s_col == col
+        sg[rows.first(s_k[here])] = s_new[here]
         idx = np.where(sg != 0, np.arange(m), -1)
         last = np.maximum.accumulate(idx)
         out[:, col] = np.where(last >= 0, sg[np.maximum(last, 0)], side[col])

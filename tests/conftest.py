@@ -13,6 +13,9 @@ from prsxy_post import profile as profile_mod
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data"
 VECTORS = DATA / "vectors"
+#: the project's shared folder (contract, paper, corpus) when a parent folder has
+#: it (beside the main work tree, or above a worktree); the tests run without it
+SHARED = next((p / "shared" for p in ROOT.parents if (p / "shared" / "corpus").is_dir()), None)
 
 
 def read_vector_csv(path: Path) -> dict[str, np.ndarray]:

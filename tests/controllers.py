@@ -218,7 +218,7 @@ def judge(
     for m in motions:
         if m.kind in ("dwell", "function"):
             continue
-        if m.kind == "arc" or m.start != m.end:
+        if m.kind in ("arc", "curve") or m.start != m.end:
             by_line.setdefault(m.line, []).append(m)
     la = point_line[np.maximum(seg - 1, 0)]
     lb = point_line[seg]

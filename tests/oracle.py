@@ -1,9 +1,10 @@
 """LinuxCNC's ``rs274 -g`` as a test oracle: run it, read its canonical calls back as motions.
 
-rs274 prints positions in program coordinates (the work offset is printed apart,
-by SET_G5X_OFFSET) and in the length units in effect (USE_LENGTH_UNITS); this
-turns them into the workpiece frame in mm, the frame of ``inspect --json``.
-Its standalone tool table and parameter file are in inches.
+rs274 prints positions in program coordinates (the work offset and the G92
+offset are printed apart, by SET_G5X_OFFSET and SET_G92_OFFSET) and in the
+length units in effect (USE_LENGTH_UNITS); this turns them into the workpiece
+frame in mm, the frame of ``inspect --json``. Its standalone tool table and
+parameter file are in inches.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import re
 import shutil
 import subprocess
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 RS274 = shutil.which("rs274")
 NUM = r"(-?\d+\.\d+)"
@@ -31,12 +32,19 @@ class OracleMotion:
     rotation: int = 0
     duration: float = 0.0
     scale: float = 1.0  # 25.4 when the interpreter printed inches (4 decimals of them)
+    control_points: int = 0  # curves (NURBS_FEED): how many
+    tool_length: float = 0.0  # Z of the tool length offset in effect (USE_TOOL_LENGTH_OFFSET) [mm]
+    tool_scale: float = 1.0  # 25.4 when that offset was printed in inches
 
 
 @dataclass
 class OracleResult:
     motions: list[OracleMotion]
     error: str | None
+    #: every canonical call in order: (name, argument text)
+    calls: list[tuple[str, str]] = field(default_factory=list)
+    #: what (PRINT,...) wrote (rs274 prints it among the calls)
+    prints: list[str] = field(default_factory=list)
 
 
 def run(
@@ -44,13 +52,29 @@ def run(
     offsets: dict[int, tuple[float, ...]] | None = None,
     g28: tuple[float, ...] = (0, 0, 0, 0, 0),
     g30: tuple[float, ...] = (0, 0, 0, 0, 0),
-    tools: dict[int, float] | None = None,
+    tools: dict[int, float] | dict[int, tuple[float, float]] | None = None,
     timeout: float = 60.0,
+    subroutines: dict[str, str] | None = None,
 ) -> OracleResult:
-    """Interpret a program with rs274; offsets/positions in mm (converted to its inches)."""
+    """Interpret a program with rs274; offsets/positions in mm (converted to its inches).
+
+    ``subroutines``: files ``name.ngc`` → text, put in a folder rs274 searches
+    (``[RS274NGC] SUBROUTINE_PATH`` of an INI file); see :func:`subroutine_dir`.
+    """
     assert RS274 is not None
     with tempfile.TemporaryDirectory() as d:
         prog = os.path.join(d, "p.ngc")
+        extra: list[str] = []
+        if subroutines:
+            subs = os.path.join(d, "subs")
+            os.mkdir(subs)
+            for name, body in subroutines.items():
+                with open(os.path.join(subs, name), "w", encoding="utf-8", newline="") as fh:
+                    fh.write(body)
+            ini = os.path.join(d, "p.ini")
+            with open(ini, "w") as fh:
+                fh.write(f"[RS274NGC]\nSUBROUTINE_PATH = {subs}\n")
+            extra = ["-i", ini]
         with open(prog, "w", encoding="utf-8", newline="") as fh:
             fh.write(program_text)
         var = os.path.join(d, "p.var")
@@ -66,42 +90,67 @@ def run(
             fh.write("\n".join(sorted(lines, key=lambda s: int(s.split()[0]))) + "\n")
         tbl = os.path.join(d, "p.tbl")
         with open(tbl, "w") as fh:
-            for n, length in (tools or {}).items():
-                fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D0 ;\n")
-        proc = subprocess.run(
-            [RS274, "-t", tbl, "-v", var, "-g", prog],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            stdin=subprocess.DEVNULL,
-        )
-    return parse(proc.stdout + proc.stderr)
+            for n, spec in (tools or {}).items():
+                length, diameter = spec if isinstance(spec, tuple) else (spec, 0.0)
+                fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D{diameter / 25.4:.9f} ;\n")
+        try:
+            proc = subprocess.run(
+                [RS274, *extra, "-t", tbl, "-v", var, "-g", prog],
+                cwd=d,
+                capture_output=True,
+                text=True,
+                timeout=timeout,
+                stdin=subprocess.DEVNULL,
+            )
+        except subprocess.TimeoutExpired:
+            # LinuxCNC's own tests hold a program it loops on for ever
+            # (tests/interp/g71-endless-loop): it does not run to the end
+            return OracleResult([], f"rs274 did not end within {timeout:g} s")
+    return parse(proc.stdout, proc.stderr)
 
 
-def parse(out: str) -> OracleResult:
+def parse(out: str, err: str = "") -> OracleResult:
+    """Canonical calls from rs274's standard output; the error (the first line
+    of standard error after "executing") from its standard error."""
     scale = 1.0
-    offset = [0.0] * 6
+    g5x = [0.0] * 6
+    g92 = [0.0] * 6
+    offset = [0.0] * 6  # G5x + G92: printed positions are program coordinates
     feed = 0.0
     plane = 17
+    tool_length = 0.0
+    tool_scale = 1.0
     motions: list[OracleMotion] = []
     last: tuple[float, ...] = (0.0,) * 5
     error = None
+    for ln in err.splitlines():
+        if ln.strip() and ln.strip() != "executing":
+            error = ln.strip()  # the message; the offending line follows
+            break
+    calls: list[tuple[str, str]] = []
+    prints: list[str] = []
     lines = out.splitlines()
     for i, ln in enumerate(lines):
         m = re.match(r"\s*\d+ N[\d.]+\s+(\w+)\((.*)\)\s*$", ln)
         if not m:
-            if ln.strip() and not ln.startswith("executing") and not re.match(r"\s*\d+ N", ln):
-                # an error message, followed by the offending line
-                if error is None:
-                    error = ln.strip()
+            if not re.match(r"\s*\d+ N", ln):
+                prints.append(ln)
             continue
         name, args = m.group(1), m.group(2)
+        calls.append((name, args))
         vals = [float(v) for v in re.findall(r"-?\d+\.\d+|-?\d+", args)] if args else []
         if name == "USE_LENGTH_UNITS":
             scale = 25.4 if "INCHES" in args else 1.0
         elif name == "SET_G5X_OFFSET":
             # printed in the length units in effect when it is set
-            offset = [v * scale for v in vals[1:4]] + list(vals[4:7])
+            g5x = [v * scale for v in vals[1:4]] + list(vals[4:7])
+            offset = [a + b for a, b in zip(g5x, g92, strict=True)]
+        elif name == "SET_G92_OFFSET":
+            g92 = [v * scale for v in vals[0:3]] + list(vals[3:6])
+            offset = [a + b for a, b in zip(g5x, g92, strict=True)]
+        elif name == "USE_TOOL_LENGTH_OFFSET":
+            tool_length = vals[2] * scale  # printed in the length units in effect
+            tool_scale = scale
         elif name == "SELECT_PLANE":
             plane = {"CANON_PLANE_XY": 17, "CANON_PLANE_XZ": 18, "CANON_PLANE_YZ": 19}[args]
         elif name == "SET_FEED_RATE":
@@ -119,7 +168,17 @@ def parse(out: str) -> OracleResult:
             # the feed is in length units per minute when X, Y or Z move, else deg/min
             moved = math.dist(end[:3], last[:3]) > 1e-9 or end[3:] == last[3:]
             f = feed * (scale if moved else 1.0)
-            motions.append(OracleMotion(i, kind, end, None if kind == "rapid" else f, scale=scale))
+            motions.append(
+                OracleMotion(
+                    i,
+                    kind,
+                    end,
+                    None if kind == "rapid" else f,
+                    scale=scale,
+                    tool_length=tool_length,
+                    tool_scale=tool_scale,
+                )
+            )
             last = end
         elif name == "ARC_FEED":
             e1, e2, c1, c2, rot, ax, a, b = vals[:8]
@@ -132,10 +191,116 @@ def parse(out: str) -> OracleResult:
             end5 = (*(end[k] * scale + offset[k] for k in range(3)), a + offset[3], b + offset[4])
             center = tuple(cen[k] * scale + offset[k] for k in range(3))
             motions.append(
-                OracleMotion(i, "arc", end5, feed * scale, plane, center, int(rot), scale=scale)
+                OracleMotion(
+                    i,
+                    "arc",
+                    end5,
+                    feed * scale,
+                    plane,
+                    center,
+                    int(rot),
+                    scale=scale,
+                    tool_length=tool_length,
+                    tool_scale=tool_scale,
+                )
             )
             last = end5
+        elif name == "NURBS_FEED":
+            # the stand-in canon prints only how many control points there are
+            # (and reads its new position from past the end of them)
+            motions.append(
+                OracleMotion(
+                    i,
+                    "curve",
+                    last,
+                    feed * scale,
+                    control_points=int(vals[0]),
+                    tool_length=tool_length,
+                    tool_scale=tool_scale,
+                )
+            )
         elif name == "DWELL":
             p = motions[-1].end if motions else None
-            motions.append(OracleMotion(i, "dwell", p or (math.nan,) * 5, None, duration=vals[0]))
-    return OracleResult(motions, error)
+            motions.append(
+                OracleMotion(
+                    i,
+                    "dwell",
+                    p or (math.nan,) * 5,
+                    None,
+                    duration=vals[0],
+                    tool_length=tool_length,
+                    tool_scale=tool_scale,
+                )
+            )
+    return OracleResult(motions, error, calls, prints)
+
+
+#: canonical calls of one machine function each: call → our words as text
+_SIMPLE = {
+    "START_SPINDLE_CLOCKWISE": "M3",
+    "START_SPINDLE_COUNTERCLOCKWISE": "M4",
+    "MIST_ON": "M7",
+    "FLOOD_ON": "M8",
+    "OPTIONAL_PROGRAM_STOP": "M1",
+}
+
+
+def function_tokens(calls: list[tuple[str, str]]) -> list[str]:
+    """rs274's canonical calls as our machine functions (``M3``, ``S1000``,
+    ``M62 P1``, …), in order, for the ones a stand-in canon shows: spindle,
+    coolant, tools, outputs, overrides, stops and ends. An S or T that repeats
+    the one before is none (as in our events); the resets of M2/M30 are part
+    of the end."""
+    out: list[str] = []
+    speed = 0.0
+    tool = 0
+    in_change = False
+    reset_from: int | None = None
+    prev = ""
+    for name, args in calls:
+        nums = [float(v) for v in re.findall(r"-?\d+\.\d+|-?\d+", args)] if args else []
+        if name == "SET_SPINDLE_SPEED":
+            if nums[1] != speed:
+                out.append(f"S{nums[1]:g}")
+            speed = nums[1]
+        elif name == "SELECT_TOOL":
+            if int(nums[0]) != tool:
+                out.append(f"T{int(nums[0])}")
+            tool = int(nums[0])
+        elif name == "START_CHANGE":
+            in_change = True
+        elif name == "CHANGE_TOOL":
+            in_change = False
+            out.append("M6")
+        elif name == "CHANGE_TOOL_NUMBER":
+            out.append(f"M61 Q{int(nums[0])}")
+        elif name == "STOP_SPINDLE_TURNING":
+            if not in_change:
+                out.append("M5")
+        elif name == "MIST_OFF":
+            out.append("M9")
+        elif name == "FLOOD_OFF":
+            if prev != "MIST_OFF":
+                out.append("M9")
+        elif name in _SIMPLE:
+            out.append(_SIMPLE[name])
+        elif name == "ENABLE_FEED_OVERRIDE":
+            out.append("M48")
+        elif name == "DISABLE_FEED_OVERRIDE":
+            out.append("M49")
+        elif name in ("SET_MOTION_OUTPUT_BIT", "CLEAR_MOTION_OUTPUT_BIT"):
+            out.append(f"M{62 if name.startswith('SET') else 63} P{int(nums[0])}")
+        elif name in ("SET_AUX_OUTPUT_BIT", "CLEAR_AUX_OUTPUT_BIT"):
+            out.append(f"M{64 if name.startswith('SET') else 65} P{int(nums[0])}")
+        elif name in ("SET_MOTION_OUTPUT_VALUE", "SET_AUX_OUTPUT_VALUE"):
+            code = 67 if "MOTION" in name else 68
+            out.append(f"M{code} E{int(nums[0])} Q{nums[1]:g}")
+        elif name == "PROGRAM_STOP":
+            out.append("M60" if prev == "PALLET_SHUTTLE" else "M0")
+        elif name == "SET_FEED_MODE":
+            reset_from = len(out)  # M2/M30 reset from here on, if PROGRAM_END follows
+        elif name == "PROGRAM_END":
+            del out[reset_from if reset_from is not None else len(out) :]
+            out.append("M30" if prev == "PALLET_SHUTTLE" else "M2")
+        prev = name
+    return out

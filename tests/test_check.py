@@ -103,7 +103,7 @@ def test_reach_figure_is_how_much_longer_the_strut_must_be() -> None:
             dict(leg, strut_length=leg["strut_length"] + extra) for leg in doc["kinematics"]["legs"]
         ]
         p2 = profile_mod.profile_from_dict(doc)
-        geo = chain.geometry_of(p2, chain.Stages())
+        geo = chain.ik_geometry(p2, chain.Stages())
         return bool(kinematics.inverse(geo, q).reachable[0])
 
     assert not reachable(lack - 1e-4)
@@ -176,11 +176,6 @@ def test_check_and_convert_give_the_same_figure_for_a_long_move(
     assert str(first.error(nominal, str(tmp_path / "p.ngc"))) == str(conv)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="chain.check_travel names the first point beyond travel of a line, and "
-    "Pipeline._check_ends raises before earlier short blocks are checked (lead's chain.py)",
-)
 def test_check_and_convert_give_the_same_figure_for_a_rapid(
     tmp_path: Path, nominal: profile_mod.Profile
 ) -> None:

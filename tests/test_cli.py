@@ -268,10 +268,53 @@ def test_stages_can_be_switched_off(runner: CliRunner, tmp_path: Path) -> None:
     assert len(set(outs.values())) == 3
 
 
+def test_macros_messages_and_subroutine_files_through_convert(
+    runner: CliRunner, tmp_path: Path
+) -> None:
+    """A program with loops and a call by name to a file on the profile's
+    subroutine path converts, in one process or two, to the same output; its
+    (MSG,...) and (PRINT,...) reach standard error with their lines."""
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    (subs / "ring.ngc").write_text(
+        "o<ring> sub\nG0 X#1 Y0\nG3 X#1 Y0 I[-#1] J0 F600\no<ring> endsub\n"
+    )
+    prof = tmp_path / "shop.toml"
+    prof.write_text(
+        (ROOT / SHOP).read_text().replace("subroutine_path = []", 'subroutine_path = ["subs"]')
+    )
+    body = "G21 G90\nG0 Z5\n(MSG, rings next)\n#1 = 1\no1 while [#1 le 3]\n"
+    body += "  o<ring> call [#1 * 10]\n  (PRINT, ring %d#1 done)\n  #1 = [#1 + 1]\no1 endwhile\n"
+    program = tmp_path / "rings.ngc"
+    program.write_text(body + "G1 X0 Y0 F500\n" * 30000 + "M2\n")  # large: two processes
+    # the command itself, in its own process: a large program is interpreted in a
+    # forked second process, whose messages go to the same standard error
+    import subprocess
+    import sys
+
+    out = tmp_path / "rings.pmc"
+    args = ["convert", str(program), "--profile", str(prof), "-o", str(out), "--quiet"]
+    r = subprocess.run(
+        [sys.executable, "-m", "prsxy_post.cli", *args], capture_output=True, text=True, cwd=ROOT
+    )
+    assert r.returncode == 0, r.stderr
+    assert f"{program}:3: (MSG) rings next" in r.stderr
+    assert f"{program}:7: (PRINT) ring 3 done" in r.stderr
+    one = _convert(tmp_path, str(program), str(prof), "pmac", False, 4096)
+    two = _convert(tmp_path, str(program), str(prof), "pmac", True, 4096)
+    assert not one.startswith("error") and one == two
+    assert out.read_text().split("\n")[3:] == one.split("\n")[3:]  # but the header's options
+
+
 def test_inspect_json(runner: CliRunner) -> None:
     r = invoke(runner, "inspect", "samples/pocket.ngc", "--json")
     assert r.exit_code == 0
-    rows = [json.loads(x) for x in r.output.splitlines()]
+
+    def strict(name: str) -> None:  # NaN and Infinity are not JSON
+        raise AssertionError(f"{name} in the JSON")
+
+    rows = [json.loads(x, parse_constant=strict) for x in r.output.splitlines()]
+    assert rows[-1]["kind"] == "function" and rows[-1]["feed"] is None
     assert rows[0]["kind"] == "rapid" and rows[0]["line"] == 5
     arcs = [x for x in rows if x["kind"] == "arc"]
     assert arcs and {"plane", "center", "rotation"} <= set(arcs[0])
@@ -314,7 +357,7 @@ def test_check_streams_long_programs_and_lists_problems_in_line_order(
 # ---------------------------------------------------------------- errors
 
 BAD_PROGRAMS = [
-    ("G21\nG1 X1 Y1 Z#1 F100\nM2\n", ":2:11:", "parameters"),
+    ("G21\nG1 X1 Y1 Z#<depth> F100\nM2\n", ":2:11:", "#<depth> is not defined"),
     ("G21\nG0 X1\n", ":2:", "ends without M2"),
     ("G21\nG1 X10\nM2\n", ":2:4:", "no feed rate"),
     ("G21\nG0 X9000\nM2\n", ":2:", "beyond its travel"),
@@ -408,7 +451,7 @@ def test_malformed_measurement_names_file_and_row(runner: CliRunner, tmp_path: P
 
 NUMERIC = [
     ("G21\nG1 Xnan F100\nM2\n", ":2:", "no number"),
-    ("G21\nG1 X1e308 F100\nM2\n", ":2:", "unknown word letter 'E'"),
+    ("G21\nG1 X1e308 F100\nM2\n", ":2:", "E word with no M66"),
     ("G21\nG1 X999999999 F100\nM2\n", ":2:", "beyond its travel"),
     ("G21\nG1 X1 F-5\nM2\n", ":2:", "negative F"),
     ("G21\nG1 X1 F0\nM2\n", ":2:", "no feed rate"),

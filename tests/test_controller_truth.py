@@ -336,3 +336,42 @@ def test_dls_pmacanalyse_reads_the_same_program(path) -> None:
     np.testing.assert_array_equal(got[:, 0::2], run.P[moved])
     np.testing.assert_array_equal(got[:, 1::2], run.V[moved])
     assert lines
+
+
+# ------------------------------------------------------------------ splines and NURBS
+
+CURVES = """G21 G90 G17
+G0 X0 Y0 Z1
+G1 Z0 F600
+G5 I0 J10 P10 Q-10 X20 Y0
+G5.1 I5 J5 X30 Y0
+G5.2 X40 Y10 P1 L3
+X50 Y0 P2
+X60 Y10 P1
+G5.3
+G1 X70 F1500
+G0 Z5
+M2
+"""
+
+
+@pytest.mark.parametrize(("kind", "seed"), MACHINES[:2])
+@pytest.mark.parametrize("fmt", ["pmac", "gcode"])
+def test_splines_and_nurbs_are_followed_on_the_curve(kind: str, seed: int | None, fmt: str) -> None:
+    """G5, G5.1 and G5.2 are interpolated on the exact curve (not LinuxCNC's lines
+    and arcs approximating it), and the controller's motion between the points stays
+    on it too."""
+    truth = truth_machine(kind, seed)
+    motions, res, texts = convert(truth, CURVES, fmt)
+    assert sum(m.kind == "curve" for m in motions) == 3
+    if fmt == "pmac":
+        assert_within(judge_pmac(truth, motions, res, texts), None)
+        return
+    run = ctl.run_gcode(texts[0])
+    tool = _tool_of_lines(res, run.line[run.seg])
+    P = kinematics.inverse(chain.controller_geometry(truth), run.q_dense).P
+    q = ctl.machine_executes(truth, run.t_dense, P, tool)
+    tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits["rapid_mm_min"])
+    assert run.blend is not None
+    assert tr.path_mm <= TOL_MM - run.blend
+    assert tr.speed_ratio <= 1 + SPEED_ROUNDING

@@ -12,10 +12,10 @@ from prsxy_post.interpolate.geometry import CORNER_SHARE
 
 from .conftest import ROOT
 
-LIM = interpolate.Limits(rapid_mm_min=6000.0, accel_mm_s2=1000.0, period_s=0.01)
+LIM = interpolate.PlanLimits(rapid_mm_min=6000.0, accel_mm_s2=1000.0, period_s=0.01)
 
 
-def _plan(text: str, lim: interpolate.Limits = LIM):
+def _plan(text: str, lim: interpolate.PlanLimits = LIM):
     ms = gcode.interpret(text)
     b = interpolate.blocks_from_motions(ms, lim)
     plan = interpolate.Planner(lim).push(b, final=True)

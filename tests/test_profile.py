@@ -39,6 +39,8 @@ def test_contract_only_profile_gets_documented_defaults() -> None:
     np.testing.assert_array_equal(p.start, np.zeros(5))
     assert p.work_offsets == {}
     assert p.controller_kinematics is None
+    assert p.gcode["subroutine_path"] == [] and p.gcode["user_m_codes"] == []
+    assert p.gcode["max_loop_passes"] == 10_000_000
 
 
 def _documented_defaults(section: str) -> dict[str, float]:
@@ -105,6 +107,17 @@ def _err(text: str) -> str:
             "guide_angle = 330.0",
             "kinematics.legs[3].guide_radius: missing key",
         ),
+        (
+            "[machine]",
+            "[gcode]\nsubroutine_path = [3]\n[machine]",
+            "gcode.subroutine_path[0]: is 3 (expected a folder name)",
+        ),
+        (
+            "[machine]",
+            "[gcode]\nuser_m_codes = [101, 99]\n[machine]",
+            "gcode.user_m_codes[1]: is 99 (expected an M code from 100 to 199)",
+        ),
+        ("[machine]", "[gcode]\nmax_loop_passes = -1\n[machine]", "gcode.max_loop_passes: is -1"),
     ],
 )
 def test_bad_profiles_name_the_key(old: str, new: str, expect: str) -> None:

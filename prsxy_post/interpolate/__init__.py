@@ -15,6 +15,7 @@ the bounds).
 from .geometry import (
     ANGULAR_EPS_DEG,
     KIND_ARC,
+    KIND_CURVE,
     KIND_DWELL,
     KIND_FEED,
     KIND_FUNCTION,
@@ -22,9 +23,9 @@ from .geometry import (
     LINEAR_EPS_MM,
     PLANE_AXES,
     Blocks,
-    Limits,
+    PlanLimits,
     blocks_from_motions,
-    evaluate,
+    pose_at,
 )
 from .lookahead import Plan, Planner, backward_pass, forward_pass, junction_limits
 from .sampling import Samples, at_times, sample
@@ -33,6 +34,7 @@ from .timelaw import TimeLaw, time_law
 __all__ = [
     "ANGULAR_EPS_DEG",
     "KIND_ARC",
+    "KIND_CURVE",
     "KIND_DWELL",
     "KIND_FEED",
     "KIND_FUNCTION",
@@ -40,17 +42,17 @@ __all__ = [
     "LINEAR_EPS_MM",
     "PLANE_AXES",
     "Blocks",
-    "Limits",
     "Plan",
+    "PlanLimits",
     "Planner",
     "Samples",
     "TimeLaw",
     "at_times",
     "backward_pass",
     "blocks_from_motions",
-    "evaluate",
     "forward_pass",
     "junction_limits",
+    "pose_at",
     "sample",
     "time_law",
 ]

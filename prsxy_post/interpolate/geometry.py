@@ -9,6 +9,8 @@ degrees), parametrised by the path length s ∈ [0, L]:
 - arcs and helices lie exactly on the programmed arc (radius linear in s from the
   start radius to the end radius, as LinuxCNC's spiral tolerance allows, the axial
   coordinate and A/B linear in s);
+- curves (G5, G5.1, G5.2 splines and NURBS) lie exactly on the curve
+  (:class:`prsxy_post.curves.Nurbs`, walked by arc length), A/B linear in s;
 - dwells and machine functions are stops of a given duration (zero for functions).
 
 :func:`evaluate` gives q(s) and the tangent dq/ds anywhere on a block; the planner
@@ -18,6 +20,7 @@ told at each point.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
@@ -26,14 +29,17 @@ import numpy as np
 
 from ..gcode import EXACT_STOP, Motion
 
-KIND_RAPID, KIND_FEED, KIND_ARC, KIND_DWELL, KIND_FUNCTION = 0, 1, 2, 3, 4
+KIND_RAPID, KIND_FEED, KIND_ARC, KIND_DWELL, KIND_FUNCTION, KIND_CURVE = 0, 1, 2, 3, 4, 5
 _KIND = {
     "rapid": KIND_RAPID,
     "feed": KIND_FEED,
     "arc": KIND_ARC,
     "dwell": KIND_DWELL,
     "function": KIND_FUNCTION,
+    "curve": KIND_CURVE,
 }
+#: points of a curve where its curvature is looked at, per knot span
+CURVATURE_SAMPLES = 64
 
 #: in-plane axes (u, v) and normal w of G17, G18, G19 as LinuxCNC orders them:
 #: each is a right-handed triple, so a positive rotation is counter-clockwise
@@ -52,7 +58,7 @@ ARC_TANGENTIAL_SHARE = 0.5
 
 
 @dataclass(frozen=True)
-class Limits:
+class PlanLimits:
     """What the planner must respect (profile ``[limits]`` and ``[interpolation]``).
 
     rapid_mm_min, rapid_deg_min : G0 speeds along XYZ, and of A/B-only moves
@@ -89,6 +95,8 @@ class Limits:
 CORNER_SHARE = 0.5
 CURVE_SHARE = 0.2
 REVERSAL_SHARE = 0.1
+#: How far the cubic's speed may stray from the plan's on a curve (a share of it).
+SPEED_SHARE = 5e-4
 
 
 @dataclass
@@ -112,6 +120,7 @@ class Blocks:
     tol_deg : (n,) the same for A/B [deg]
     curv_r : (n,) smallest radius of curvature of the path [mm] (inf on lines)
     fn : (n,) object, the machine-function words of function blocks, else None
+    curve : (n,) object, the :class:`~prsxy_post.curves.Nurbs` of curve blocks, else None
     split_after : (n,) int8, a split program's part ends at rest after this block:
         1 at a stop the program makes, 2 at a stop put there for the split
     """
@@ -138,6 +147,7 @@ class Blocks:
     tol_deg: np.ndarray
     curv_r: np.ndarray
     fn: np.ndarray
+    curve: np.ndarray
     split_after: np.ndarray
 
     def __len__(self) -> int:
@@ -155,7 +165,7 @@ class Blocks:
     @property
     def stops(self) -> np.ndarray:
         """(n,) bool: blocks the path stands still in (dwells, machine functions)."""
-        return self.kind >= KIND_DWELL
+        return (self.kind == KIND_DWELL) | (self.kind == KIND_FUNCTION)
 
 
 def _arc_geometry(
@@ -195,7 +205,7 @@ def _plane_axes(plane: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return iu, iv, iw
 
 
-def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
+def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks:
     """Turn interpreted motions into planning arrays (vectorised); no-motion moves are dropped.
 
     Speed limits: F (mm/min) along XYZ, or degrees/min for rotary-only moves;
@@ -224,6 +234,13 @@ def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
         words = cols[f("words")]
         for i in np.flatnonzero(is_fn).tolist():
             fn[i] = words[i]
+    curve = np.empty(n, dtype=object)
+    is_curve = kind == KIND_CURVE
+    curves = np.flatnonzero(is_curve).tolist()
+    if curves:
+        col = cols[f("curve")]
+        for i in curves:
+            curve[i] = col[i]
     is_arc = kind == KIND_ARC
     plane = np.zeros(n, dtype=int)
     center = np.zeros((n, 3))
@@ -252,7 +269,11 @@ def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
         # the tightest radius of curvature of the helix: r (1 + (pitch/r)²) ≥ r
         curv_r[is_arc] = np.minimum(r0[is_arc], r1[is_arc])
 
-    stop = kind >= KIND_DWELL
+    for i in curves:
+        length[i] = curve[i].length
+        curv_r[i] = _least_radius(curve[i])
+    bends = is_arc | is_curve  # paths with a centripetal acceleration
+    stop = (kind == KIND_DWELL) | (kind == KIND_FUNCTION)
     rapid = kind == KIND_RAPID
     angular = ~stop & (length <= LINEAR_EPS_MM)
     keep = stop | ~angular | (ang > ANGULAR_EPS_DEG)
@@ -269,9 +290,9 @@ def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
         # a spiral's speed along its XYZ path exceeds ds/dt by up to r_max / r_mean
         spiral = np.where(is_arc, np.maximum(r0, r1) / np.maximum(0.5 * (r0 + r1), 1e-300), 1.0)
         v_lin = np.where(
-            is_arc, np.minimum(v_lin, np.sqrt(a_normal * curv_r)) / np.maximum(spiral, 1.0), v_lin
+            bends, np.minimum(v_lin, np.sqrt(a_normal * curv_r)) / np.maximum(spiral, 1.0), v_lin
         )
-        a_lin = np.where(is_arc, a_lin * ARC_TANGENTIAL_SHARE, a_lin)
+        a_lin = np.where(bends, a_lin * ARC_TANGENTIAL_SHARE, a_lin)
     vmax = np.where(stop, 1.0, np.where(angular, v_ang, v_lin))
     accel = np.where(stop, 1.0, np.where(angular, limits.accel_deg_s2, a_lin))
 
@@ -307,6 +328,7 @@ def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
         ),
         curv_r=curv_r,
         fn=fn,
+        curve=curve,
         split_after=np.zeros(n, dtype=np.int8),
     )
     if not keep.all():
@@ -314,12 +336,12 @@ def blocks_from_motions(motions: Sequence[Motion], limits: Limits) -> Blocks:
     moving = ~b.stops
     if np.any(moving):
         k = np.flatnonzero(moving)
-        _, b.dq_in[k] = evaluate(b, k, np.zeros(len(k)))
-        _, b.dq_out[k] = evaluate(b, k, b.length[k])
+        _, b.dq_in[k] = pose_at(b, k, np.zeros(len(k)))
+        _, b.dq_out[k] = pose_at(b, k, b.length[k])
     return b
 
 
-def evaluate(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pose q(s) and tangent dq/ds at path distance ``s`` into blocks ``k``.
 
     Returns
@@ -356,16 +378,44 @@ def evaluate(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.nd
         # the exact end point, not cos/sin of an angle that lands a rounding off it
         end_hit = fa >= 1.0
         q[rows[end_hit]] = en[arc][end_hit]
+    on_curve = b.kind[k] == KIND_CURVE
+    if np.any(on_curve):
+        rows = np.flatnonzero(on_curve)
+        for kb in np.unique(k[rows]).tolist():
+            sel = rows[k[rows] == kb]
+            c = b.curve[kb]
+            u = c.u_at(s[sel])
+            _, d1, _ = c.derivatives(u)
+            q[sel, :3] = c.point(u)
+            norm = np.linalg.norm(d1, axis=1)
+            dq[sel, :3] = d1 / np.where(norm > 0, norm, 1.0)[:, None]
+            end_hit = frac[sel] >= 1.0
+            q[sel[end_hit]] = en[sel[end_hit]]
     return q, dq
 
 
-def segment_limit(b: Blocks, limits: Limits) -> np.ndarray:
+def _least_radius(curve: object) -> float:
+    """The tightest radius of curvature of a curve [mm]: 1 / max κ, κ = |C' × C''| / |C'|³,
+    looked at on :data:`CURVATURE_SAMPLES` points of every knot span."""
+    t = np.unique(curve.knots)  # type: ignore[attr-defined]
+    u = np.concatenate([np.linspace(a, b_, CURVATURE_SAMPLES) for a, b_ in itertools.pairwise(t)])
+    _, d1, d2 = curve.derivatives(u)  # type: ignore[attr-defined]
+    sp = np.linalg.norm(d1, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kappa = np.linalg.norm(np.cross(d1, d2), axis=1) / sp**3
+    kappa = kappa[np.isfinite(kappa)]
+    top = float(kappa.max()) if kappa.size else 0.0
+    return 1.0 / top if top > 0 else math.inf
+
+
+def segment_limit(b: Blocks, limits: PlanLimits) -> np.ndarray:
     """Longest time step [s] on each block at speed 1 (divide by the speed).
 
     Between two points a controller moves along a cubic (PVT) or a chord. On a
     circle of radius r traversed at speed v a Hermite cubic over a step h errs by
     at most h⁴ max|q''''| / 384 = (h v)⁴ / (384 r³), a chord by (h v)² / (8 r);
-    keeping that within :data:`CURVE_SHARE` of the tolerance gives h v.
+    keeping that within :data:`CURVE_SHARE` of the tolerance gives h v. The cubic's
+    speed errs too, and on tight curves that bounds h v first.
     """
     tol = CURVE_SHARE * limits.tolerance_mm
     r = b.curv_r
@@ -373,11 +423,13 @@ def segment_limit(b: Blocks, limits: Limits) -> np.ndarray:
         if limits.segment == "chord":
             hv = np.sqrt(8.0 * r * tol)
         else:
-            hv = (384.0 * tol * r**3) ** 0.25
+            # the cubic's velocity errs by up to h^3 max|q''''| / (72 sqrt 3), about
+            # (h v)^3 v / (125 r^3): within SPEED_SHARE of the speed on tight curves
+            hv = np.minimum((384.0 * tol * r**3) ** 0.25, r * (125.0 * SPEED_SHARE) ** (1 / 3))
     return np.where(np.isfinite(hv), hv, np.inf)
 
 
-def point_bound(b: Blocks, limits: Limits) -> np.ndarray:
+def point_bound(b: Blocks, limits: PlanLimits) -> np.ndarray:
     """An upper bound on the points each block can become, whatever the plan.
 
     The slowest a block can be is from rest to rest: τ ≤ L / v + v / a (v, a: the

@@ -35,7 +35,7 @@ import math
 import numpy as np
 
 from ..gcode import EXACT_STOP
-from .geometry import CORNER_SHARE, Blocks, Limits, segment_limit
+from .geometry import CORNER_SHARE, Blocks, PlanLimits, segment_limit
 from .timelaw import TimeLaw, time_law
 
 #: Share of the acceleration limit a corner's blend may use (module docstring).
@@ -45,7 +45,7 @@ KAPPA = 0.5
 TANGENT_EPS = 1e-9
 
 
-def junction_limits(b: Blocks, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
+def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarray]:
     """Speed limit at the end of each block (its junction with the next one).
 
     Returns
@@ -190,7 +190,7 @@ class Planner:
     The result is the same, bit for bit, as planning the whole program at once.
     """
 
-    def __init__(self, limits: Limits) -> None:
+    def __init__(self, limits: PlanLimits) -> None:
         self.limits = limits
         self.pending: Blocks | None = None
         self.v_start = 0.0
@@ -257,7 +257,7 @@ class Planner:
         done.vmax = vmax[: c + 1]
         law = time_law(done, v_out, self.v_start, self.limits.min_phase_s)
         nxt = b.dq_in[c + 1] if c + 1 < n else np.zeros(5)
-        plan = Plan(done, law, bool(corner[c + 1]) if c + 1 < n else False, nxt)
+        plan = Plan(done, law, nxt)
         self.v_start = float(v_out[-1])
         self.start_corner = bool(corner[c + 1])
         self.start_bend = float(bend[c + 1])
@@ -269,18 +269,24 @@ class Planner:
 class Plan:
     """Committed blocks with their time law.
 
-    blocks : Blocks (accel is the effective tangential acceleration)
+    blocks : Blocks (accel and vmax are the effective ones the plan used)
     law : TimeLaw
-    end_corner : the last block ends in a corner taken at speed
-    next_dq_in : (5,) tangent of the block after the last one (for that corner's
-        mean velocity)
+    next_dq_in : (5,) tangent of the block after the last one (for the mean velocity
+        of the junction at the last block's end)
     """
 
-    def __init__(self, blocks: Blocks, law: TimeLaw, end_corner: bool, next_dq_in: np.ndarray):
+    def __init__(self, blocks: Blocks, law: TimeLaw, next_dq_in: np.ndarray):
         self.blocks = blocks
         self.law = law
-        self.end_corner = end_corner
         self.next_dq_in = next_dq_in
+
+    def head(self, k: int) -> Plan:
+        """The plan of its first k blocks (where the rest is cut off)."""
+        from dataclasses import fields
+
+        law = TimeLaw(**{f.name: getattr(self.law, f.name)[:k] for f in fields(self.law)})
+        nxt = self.blocks.dq_in[k] if k < len(self.blocks) else self.next_dq_in
+        return Plan(self.blocks.take(slice(0, k)), law, nxt)
 
 
 __all__ = [

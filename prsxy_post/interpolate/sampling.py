@@ -15,7 +15,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .geometry import KIND_DWELL, KIND_FUNCTION, Blocks, Limits, evaluate, segment_limit
+from .geometry import KIND_DWELL, KIND_FUNCTION, Blocks, PlanLimits, pose_at, segment_limit
 from .lookahead import Plan
 from .timelaw import TimeLaw, distance, speed
 
@@ -61,7 +61,7 @@ class Samples:
         return Samples(**{f.name: getattr(self, f.name)[sel] for f in fields(self)})
 
 
-def steps(b: Blocks, law: TimeLaw, limits: Limits) -> np.ndarray:
+def steps(b: Blocks, law: TimeLaw, limits: PlanLimits) -> np.ndarray:
     """(n, 3) steps in each phase of each block (0 for a phase that is absent)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         h = np.minimum(limits.period_s, segment_limit(b, limits) / np.maximum(law.vp, 1e-300))
@@ -73,7 +73,7 @@ def steps(b: Blocks, law: TimeLaw, limits: Limits) -> np.ndarray:
     return n
 
 
-def sample(plan: Plan, limits: Limits) -> Samples:
+def sample(plan: Plan, limits: PlanLimits) -> Samples:
     """Points of a plan's blocks, in time order, each block's end point last."""
     b, law = plan.blocks, plan.law
     n_ph = steps(b, law, limits)
@@ -97,7 +97,7 @@ def sample(plan: Plan, limits: Limits) -> Samples:
 
     stand = b.stops[blk]
     s = np.where(last_of_block | stand, b.length[blk], distance(law, blk, tau))
-    q, dq = evaluate(b, blk, s)
+    q, dq = pose_at(b, blk, s)
     v = np.where(stand, 0.0, speed(law, blk, tau))
     v = np.where(last_of_block & ~stand, law.v1[blk], v)
     qdot = v[:, None] * dq
@@ -134,6 +134,6 @@ def at_times(plan: Plan, k: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np
     averaging: for points strictly inside a block)."""
     b, law = plan.blocks, plan.law
     s = distance(law, k, tau)
-    q, dq = evaluate(b, k, s)
+    q, dq = pose_at(b, k, s)
     v = speed(law, k, tau)
     return q, v[:, None] * dq

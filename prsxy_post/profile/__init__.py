@@ -100,7 +100,13 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "reversal_ms": 1.0,
     },
     "start": {"pose": [0.0, 0.0, 0.0, 0.0, 0.0]},
-    "gcode": {"g28": [0.0, 0.0, 0.0, 0.0, 0.0], "g30": [0.0, 0.0, 0.0, 0.0, 0.0]},
+    "gcode": {
+        "g28": [0.0, 0.0, 0.0, 0.0, 0.0],
+        "g30": [0.0, 0.0, 0.0, 0.0, 0.0],
+        "subroutine_path": [],  # directories (relative: to the profile's folder)
+        "max_loop_passes": 10_000_000,
+        "user_m_codes": [],  # M100..M199 the controller has
+    },
 }
 
 DEFAULT_MOTOR_LIMITS = {1: (-200.0, 200.0), 2: (-200.0, 200.0), 3: (-200.0, 200.0)}
@@ -227,6 +233,8 @@ class Profile:
     #: what the user should know about the file: deprecated keys and where they went
     notes: tuple[str, ...] = ()
     source: str = "<profile>"
+    #: the [gcode] section as read (with its defaults)
+    gcode: Mapping[str, Any] = field(default_factory=dict)
     #: the TOML text it was read from ("" when made from a document), for
     #: :func:`prsxy_post.profile.update.update_text`
     text: str = field(default="", repr=False)
@@ -539,13 +547,32 @@ def _section_with_defaults(c: _Checker, doc: Mapping[str, Any], name: str) -> di
     c.unknown(sec, set(defaults), name)
     out: dict[str, Any] = {}
     for k, d in defaults.items():
-        if isinstance(d, list):
+        if isinstance(d, list) and not d:  # a list of any length, of strings or codes
+            out[k] = _any_length_list(c, sec, k, name)
+        elif isinstance(d, list):
             out[k] = [float(x) for x in c.vector(sec, k, name, len(d), d)]
         elif isinstance(d, int) and not isinstance(d, bool):
             out[k] = c.integer(sec, k, name, d, lo=0)
         else:
             out[k] = c.number(sec, k, name, d, lo=0.0)
     return out
+
+
+def _any_length_list(c: _Checker, sec: Mapping[str, Any], k: str, path: str) -> list[Any]:
+    """[gcode] subroutine_path (strings) and user_m_codes (100..199)."""
+    key = _join(path, k)
+    value = sec.get(k, [])
+    if not isinstance(value, list):
+        raise c.fail(key, f"is a {_tname(value)}", "an array")
+    if k == "subroutine_path":
+        for i, v in enumerate(value):
+            if not isinstance(v, str) or not v:
+                raise c.fail(f"{key}[{i}]", f"is {v!r}", "a folder name")
+        return list(value)
+    for i, v in enumerate(value):
+        if isinstance(v, bool) or not isinstance(v, int) or not 100 <= v <= 199:
+            raise c.fail(f"{key}[{i}]", f"is {v!r}", "an M code from 100 to 199")
+    return list(value)
 
 
 def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Profile:
@@ -663,6 +690,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         source=source,
         interpolation=interp,
         notes=tuple(notes),
+        gcode=g,
     )
     _check_reach(prof)
     return prof

@@ -3,7 +3,7 @@
 (source: samples/pocket.ngc)
 (source sha256: 0f999217469b6e1517f180bd1d8d36c783b3d537628f473044ee05ff2ec6122d)
 (profile: PRS-XY nominal, shop settings [profiles/prsxy-shop.toml])
-(profile sha256: b505a1c3a535fad80a3d7a74b9743ad147a49cffbbc2a3b0c8a71e4628d2a4ed)
+(profile sha256: c6e88ade0c34681acc3482f7fc9b577a9d5fcc83774e6dd4c2cff1fb547ef3a8)
 (options: --format gcode)
 (interpolation period: 10 ms; path tolerance 0.0005 mm and 0.5 arcsec where the program sets none [a G64 P in the program sets its own])
 (For a controller whose inverse kinematics is the nominal design, with an ideal table.)

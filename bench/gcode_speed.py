@@ -1,0 +1,142 @@
+"""The interpreter alone beside LinuxCNC's ``rs274 -g``, on the same files, in one run.
+
+Usage::
+
+    python bench/gcode_speed.py                  # 200 k lines, three programs
+    python bench/gcode_speed.py --lines 50000 --repeat 3
+
+Three programs of about the same number of motions:
+
+- ``cam``: bench/bench.py's generated five-axis finishing program (G1 with
+  X Y Z A B, small R arcs): plain CAM output, the fast path's;
+- ``cam+comp``: the same in cutter radius compensation (``G41.1 D0.01``): every
+  block on the general path, held in the compensation queue;
+- ``macro``: the same number of moves from a loop (``o100 while``, named and
+  numbered parameters, ``SIN``/``COS`` expressions, a subroutine call per move):
+  the general path with its expression evaluation and control flow.
+
+``ours`` is :func:`prsxy_post.program.motions_of_file` taking every motion (the
+file read in batches of lines, as ``convert`` reads it; the interpreter's start-up
+included; Python's start and the imports are not, a warm-up takes them);
+``rs274`` is the whole ``rs274 -g`` command with its output thrown away (its
+start-up is a few milliseconds). Each figure is the best of ``--repeat`` runs, the
+two alternated. It is a script, not a test: the figures depend on the machine;
+README shows the latest with the machine they were taken on.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+from bench import generate  # noqa: E402
+
+
+def cam_with_comp(n_lines: int) -> str:
+    """The generated program, compensated: G41.1 with a 0.01 mm tool on its path."""
+    lines = generate(n_lines).splitlines()
+    # after "G1 Z0 F2000" (line 4): compensation on from the next move to the end
+    head, body = lines[:4], lines[4:-2]
+    return "\n".join([*head, "G41.1 D0.01", *body, "G40", "G0 Z5", "M2"]) + "\n"
+
+
+def macro(n_moves: int) -> str:
+    """A loop of n_moves moves computed by expressions, one subroutine call each."""
+    return (
+        "(generated macro program: loop, parameters, expressions, calls)\n"
+        "G21 G90 G17 G94\n"
+        "#<r> = 40\n"
+        "#100 = 0\n"
+        "o<step> sub\n"
+        "  #<a> = [#1 * 0.05]\n"
+        "  G1 X[#<_r> * COS[#<a>]] Y[#<_r> * SIN[#<a>]] Z[-0.0001 * #1] "
+        "A[5 * SIN[#<a> / 3]] B[5 * COS[#<a> / 7]]\n"
+        "o<step> endsub\n"
+        "#<_r> = #<r>\n"
+        "G0 X#<r> Y0 Z5\n"
+        "G1 Z0 F2000\n"
+        f"o100 while [#100 lt {n_moves}]\n"
+        "  o<step> call [#100]\n"
+        "  #100 = [#100 + 1]\n"
+        "o100 endwhile\n"
+        "G0 Z5\n"
+        "M2\n"
+    )
+
+
+def time_ours(path: Path) -> tuple[float, int]:
+    from prsxy_post import program
+
+    t0 = time.perf_counter()
+    n = sum(1 for _ in program.motions_of_file(path))
+    return time.perf_counter() - t0, n
+
+
+def time_rs274(path: Path) -> float | None:
+    exe = shutil.which("rs274")
+    if exe is None:
+        return None
+    with tempfile.TemporaryDirectory() as d:
+        tbl = Path(d) / "tool.tbl"
+        tbl.write_text("T1 P1 Z0 D6 ;\n")
+        t0 = time.perf_counter()
+        proc = subprocess.run(
+            [exe, "-t", str(tbl), "-g", str(path)],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            stdin=subprocess.DEVNULL,
+            check=False,
+        )
+        seconds = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise SystemExit(f"rs274 failed on {path}: {proc.stderr.decode()[-300:]}")
+    return seconds
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--lines", type=int, default=200_000, help="moves per program")
+    ap.add_argument("--repeat", type=int, default=5, help="best of this many runs")
+    args = ap.parse_args()
+    programs = {
+        "cam": generate(args.lines),
+        "cam+comp": cam_with_comp(args.lines),
+        "macro": macro(args.lines),
+    }
+    print(f"{platform.processor() or platform.machine()}, Python {platform.python_version()}")
+    print("| program | lines | motions | ours s | rs274 -g s | ours / rs274 |")
+    print("|---|---:|---:|---:|---:|---:|")
+    with tempfile.TemporaryDirectory() as d:
+        warm = Path(d) / "warm.ngc"  # imports and first calls out of the figures
+        warm.write_text(macro(100) + cam_with_comp(100))
+        time_ours(warm)
+        for name, text in programs.items():
+            path = Path(d) / f"{name}.ngc"
+            path.write_text(text)
+            # alternated, so a busy moment of a shared machine falls on both
+            ours_runs, runs = [], []
+            for _ in range(args.repeat):
+                ours_runs.append(time_ours(path))
+                runs.append(time_rs274(path))
+            ours = min(ours_runs)
+            theirs = None if runs[0] is None else min(r for r in runs if r is not None)
+            ratio = f"{ours[0] / theirs:.2f}" if theirs else "–"
+            rs = f"{theirs:.2f}" if theirs else "–"
+            print(
+                f"| {name} | {text.count(chr(10))} | {ours[1]} | {ours[0]:.2f} | {rs} | {ratio} |",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()

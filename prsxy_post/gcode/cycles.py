@@ -1,0 +1,261 @@
+"""Canned cycles (G73, G74, G81-G86, G89) as LinuxCNC expands them into moves.
+
+Tapping (G74, G84) and boring with a stopped retract (G86) turn the spindle
+about within the cycle; those functions are events among the cycle's moves
+(functions.py word forms), as LinuxCNC's cycle issues them."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from .codes import CYCLE_SHAPE
+from .motion import MM_PER_INCH
+from .read import Word
+
+if TYPE_CHECKING:
+    from .execute import Interpreter
+
+
+#: G73/G83 back-off before the next peck (LinuxCNC's G83_RAPID_DELTA, inch).
+G83_RAPID_DELTA_INCH = 0.010
+
+
+def cycle(
+    it: Interpreter,
+    motion: int,
+    axis_words: dict[str, Word],
+    seen: dict[str, Word],
+    line: int,
+    new: bool,
+) -> None:
+    st = it.st
+    gw = next(iter(axis_words.values()), None)
+    if st.inverse_time:
+        raise it.err("canned cycle in inverse time mode (G93)", line, gw, "G94")
+    if st.feed <= 0:
+        raise it.err(
+            "canned cycle with no feed rate",
+            line,
+            gw or seen.get("R"),
+            "an F word before the cycle",
+        )
+    for a in ("A", "B"):
+        if a in axis_words:
+            raise it.err(
+                "A/B words in a canned cycle",
+                line,
+                axis_words[a],
+                "X Y Z R only: rotary axes may not move in a cycle",
+            )
+    first = st.motion != motion
+    sc = it.scale()
+    iu, iv, iw = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[st.plane]
+    ax = "XYZ"
+    name_w = ax[iw]
+    if first and name_w not in axis_words:
+        raise it.err(
+            f"{name_w} missing in the first block of a canned cycle",
+            line,
+            gw,
+            f"{name_w}<bottom> with G{motion} in G{st.plane}",
+        )
+    if "R" not in seen and first:
+        raise it.err("R missing in the first block of a canned cycle", line, gw, "R<retract plane>")
+    if "L" in seen:
+        lv = seen["L"].value
+        if lv != int(lv) or lv < 1:
+            raise it.err("L must be a positive integer", line, seen["L"], "L1, L2, ...")
+        repeats = int(lv)
+    else:
+        repeats = 1
+    if motion in (73, 83):
+        if "Q" in seen:
+            st.cycle_q = seen["Q"].value * sc
+        elif first:
+            raise it.err(f"Q missing with G{motion}", line, gw, "Q<peck depth>")
+        if st.cycle_q <= 0:
+            raise it.err("Q must be positive", line, seen.get("Q"), "Q > 0")
+    if motion in (74, 82, 84, 86, 89):
+        if "P" in seen:
+            st.cycle_p = seen["P"].value
+        elif first and motion not in (74, 84):
+            raise it.err(f"P (dwell) missing with G{motion}", line, gw, "P<seconds>")
+    if motion == 84 and st.spindle_dir != 1:
+        raise it.err("G84 with the spindle not turning clockwise", line, gw, "M3 first")
+    if motion == 74 and st.spindle_dir != -1:
+        raise it.err("G74 with the spindle not turning counterclockwise", line, gw, "M4 first")
+    if motion == 86 and st.spindle_dir == 0:
+        raise it.err("G86 with the spindle not turning", line, gw, "M3 or M4 first")
+    if motion in (74, 84) and st.plane != 17:
+        # LinuxCNC 2.9 (and master) feed these along the wrong axes outside G17:
+        # convert_cycle_g74_g84 permutes the coordinates before cycle_feed, which
+        # permutes them again (interp_cycles.cc), so G84 in G18 taps along X
+        # (its own tests/interp/g84/g18 record it); the tap would go sideways
+        raise it.err(
+            f"G{motion} in G{st.plane} is not supported (LinuxCNC feeds the tap along "
+            "the wrong axis there)",
+            line,
+            gw,
+            f"G{motion} in G17",
+        )
+    off = it.offset()
+    cur = list(st.pos)
+    # work in program coordinates of the cycle axes, then add the offset back
+    cur_w = (cur[iw] - off[iw]) / sc
+    # positions are kept in mm: a level reached in inches comes back a rounding
+    # off (38.1 / 25.4); LinuxCNC, in program units, compares it exactly
+    for level in (st.cycle_r, st.cycle_z, *(w.value for w in (seen.get("R"),) if w)):
+        if abs(cur_w - level) <= 1e-9 * max(1.0, abs(level)):
+            cur_w = level
+    if st.cycle_il is None:
+        st.cycle_il = cur_w
+    old_cc = st.cycle_il
+    z_given = axis_words[name_w].value if name_w in axis_words else None
+    if "R" in seen:
+        st.cycle_r = seen["R"].value
+    if z_given is not None:
+        st.cycle_z = z_given
+    z_num = st.cycle_z
+    # polar words (G17 only): @ radius, ^ angle about the program origin; in G91
+    # they add to the radius and the angle at every repeat (LinuxCNC's CYCLE_MACRO)
+    d2r = math.pi / 180.0
+    polar = "@" in seen or "^" in seen
+    inc_r = inc_t = 0.0
+    if st.absolute:
+        r = st.cycle_r
+        cc = z_num
+        aa = axis_words[ax[iu]].value if ax[iu] in axis_words else (cur[iu] - off[iu]) / sc
+        bb = axis_words[ax[iv]].value if ax[iv] in axis_words else (cur[iv] - off[iv]) / sc
+        if polar:
+            here_a, here_b = (cur[iu] - off[iu]) / sc, (cur[iv] - off[iv]) / sc
+            radius = seen["@"].value if "@" in seen else math.hypot(here_b, here_a)
+            theta = seen["^"].value * d2r if "^" in seen else math.atan2(here_b, here_a)
+            aa, bb = radius * math.cos(theta), radius * math.sin(theta)
+        inc_a = inc_b = 0.0
+    else:
+        inc_a = axis_words[ax[iu]].value if ax[iu] in axis_words else 0.0
+        inc_b = axis_words[ax[iv]].value if ax[iv] in axis_words else 0.0
+        inc_r = seen["@"].value if "@" in seen else 0.0
+        inc_t = seen["^"].value * d2r if "^" in seen else 0.0
+        r = st.cycle_r + old_cc
+        cc = r + z_num
+        aa = (cur[iu] - off[iu]) / sc
+        bb = (cur[iv] - off[iv]) / sc
+    if r < cc:
+        raise it.err(
+            f"R below the bottom of the cycle in G{st.plane}",
+            line,
+            seen.get("R") or axis_words.get(name_w),
+            f"R >= {name_w} (the retract plane above the bottom)",
+        )
+
+    def pt(a: float, b: float, w: float) -> list[float]:
+        p = list(st.pos)
+        p[iu], p[iv], p[iw] = a * sc + off[iu], b * sc + off[iv], w * sc + off[iw]
+        return p
+
+    def traverse(a: float, b: float, w: float) -> None:
+        end = pt(a, b, w)
+        it.emit(line=line, kind="rapid", start=tuple(st.pos), end=tuple(end))
+        st.pos = end
+
+    def feed(a: float, b: float, w: float) -> None:
+        end = pt(a, b, w)
+        f = st.feed * (MM_PER_INCH if st.units == "inch" else 1.0)
+        it.emit(line=line, kind="feed", start=tuple(st.pos), end=tuple(end), feed=f)
+        st.pos = end
+
+    def dwell(t: float) -> None:
+        p = tuple(st.pos)
+        it.emit(line=line, kind="dwell", start=p, end=p, duration=t)
+
+    def function(*words: tuple[str, float]) -> None:
+        p = tuple(st.pos)
+        it.emit(line=line, kind="function", start=p, end=p, words=words)
+
+    # LinuxCNC: below the R plane (judged by the level the cycles started at),
+    # rise straight up to it first; the first move of each hole goes across at
+    # the higher of where the tool is and the clearance level
+    current_cc = cur_w
+    if old_cc < r:
+        traverse((cur[iu] - off[iu]) / sc, (cur[iv] - off[iv]) / sc, r)
+        old_cc = r
+        current_cc = r
+    clear = r if st.retract_r else old_cc
+    delta = G83_RAPID_DELTA_INCH * (1.0 if st.units == "inch" else MM_PER_INCH)
+    for _ in range(repeats):
+        aa += inc_a
+        bb += inc_b
+        if inc_r or inc_t:
+            if aa == 0 and bb == 0:
+                raise it.err(
+                    "incremental polar motion at the origin",
+                    line,
+                    seen.get("@") or seen.get("^"),
+                    "G90 or a start off the origin",
+                )
+            if inc_r:
+                theta = math.atan2(bb, aa)
+                radius = math.hypot(bb, aa) + inc_r
+                aa, bb = radius * math.cos(theta), radius * math.sin(theta)
+            if inc_t:
+                theta = math.atan2(bb, aa) + inc_t
+                radius = math.hypot(bb, aa)
+                aa, bb = radius * math.cos(theta), radius * math.sin(theta)
+        first_w = max(current_cc, clear)
+        traverse(aa, bb, first_w)
+        if first_w != r:
+            traverse(aa, bb, r)
+        if motion in (73, 83):
+            q = st.cycle_q / sc
+            depth = r - q
+            while depth > cc:
+                feed(aa, bb, depth)
+                if motion == 83:
+                    traverse(aa, bb, r)
+                traverse(aa, bb, depth + delta)
+                depth -= q
+            feed(aa, bb, cc)
+            traverse(aa, bb, clear)
+        elif motion == 85:
+            feed(aa, bb, cc)
+            feed(aa, bb, r)
+            traverse(aa, bb, clear)
+        elif motion in (74, 84):
+            # tapping (convert_cycle_g74_g84): overrides off, in, reverse the
+            # spindle, dwell, out, turn it back, overrides back on
+            forward = 1 if motion == 84 else -1
+            f_on, s_on = st.feed_override, st.speed_override
+            function(("M", 49.0))
+            feed(aa, bb, cc)
+            st.spindle_dir = -forward
+            function(("M", 5.0), ("M", 4.0 if motion == 84 else 3.0))
+            dwell(st.cycle_p)
+            feed(aa, bb, clear)
+            st.spindle_dir = forward
+            function(("M", 5.0), ("M", 3.0 if motion == 84 else 4.0))
+            st.feed_override, st.speed_override = f_on, s_on
+            if f_on and s_on:
+                function(("M", 48.0))
+            elif f_on or s_on:
+                function(("M", 50.0 if f_on else 51.0), ("P", 1.0))
+        elif motion == 86:
+            # boring, spindle stopped for the way out (convert_cycle_g86)
+            turning = st.spindle_dir
+            feed(aa, bb, cc)
+            dwell(st.cycle_p)
+            st.spindle_dir = 0
+            function(("M", 5.0))
+            traverse(aa, bb, clear)
+            st.spindle_dir = turning
+            function(("M", 3.0 if turning > 0 else 4.0))
+        else:
+            # feed to the bottom, dwell or not, retract at rapid or at feed
+            # (G89 bores out)
+            dwells, feed_out = CYCLE_SHAPE[motion]
+            feed(aa, bb, cc)
+            if dwells:
+                dwell(st.cycle_p)
+            (feed if feed_out else traverse)(aa, bb, clear)
+        current_cc = clear

@@ -1,0 +1,169 @@
+"""Offsets a program sets: work offsets (G10 L2/L20), tool table entries (G10
+L1/L10/L11), the G92/G52 offset (G92, G92.1, G92.2, G92.3, G52), stored
+positions (G28.1/G30.1), as LinuxCNC's ``convert_setup``,
+``convert_setup_tool``, ``convert_axis_offsets`` and ``convert_savehome`` keep
+them: in the numbered parameters (#5161.., #5181.., #5211.., #5221.., machine
+units: mm and degrees here).
+
+The frames (all mm and degrees, x y z a b): the tool tip in the workpiece frame
+``tip`` (the interpreter's position), the work offset ``origin`` of the active
+system, the G92 offset ``g92``; program coordinates are
+``(tip - origin - g92) / units``. The spindle's gauge point is the tip plus the
+tool length in z. Changing an offset never moves the machine: the program
+coordinates of the same tip change.
+
+Not on this machine: rotated coordinate systems (G10 L2 R not 0), and tool
+offsets other than the length (X, Y, A, B in G10 L1/L10/L11).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .config import ToolEntry
+from .read import Word
+
+if TYPE_CHECKING:
+    from .execute import Interpreter
+
+_AXES = ("X", "Y", "Z", "A", "B")
+
+
+def system_base(index: int) -> int:
+    """The first parameter of coordinate system ``index`` (1: G54 .. 9: G59.3)."""
+    return 5201 + 20 * index
+
+
+def g10(it: Interpreter, seen: dict[str, Word], w: Word, line: int) -> None:
+    """G10 L0/L1/L2/L10/L11/L20 (the L and P words are checked already)."""
+    lv = int(seen["L"].value)
+    if lv in (1, 10, 11):
+        _setup_tool(it, lv, seen, w, line)
+    elif lv == 0:
+        if it.st.tool > 0:
+            raise it.err(
+                f"G10 L0 (reload the tool table) with tool {it.st.tool} loaded",
+                line,
+                w,
+                "T0 M6 first",
+            )
+    else:
+        _setup_system(it, lv, seen, w, line)
+
+
+def _setup_system(it: Interpreter, lv: int, seen: dict[str, Word], w: Word, line: int) -> None:
+    """G10 L2 P… sets a system's offsets; L20 so that the current position
+    becomes the given one in that system."""
+    st = it.st
+    for bad in ("I", "J"):
+        if bad in seen:
+            raise it.err("I and J words with G10 L2", line, seen[bad], "X Y Z A B (and R)")
+    p = int(seen["P"].value + 0.0001)
+    index = p or st.coord
+    if index == st.coord:
+        it.no_comp("a change of the active coordinate system", line, w)
+    base = system_base(index)
+    pars = it.params.values
+    if "R" in seen:
+        if lv == 20:
+            raise it.err("R word with G10 L20", line, seen["R"], "R with G10 L2 only")
+        if seen["R"].value != 0.0:
+            raise it.err(
+                "rotated coordinate systems (G10 L2 R) are not supported",
+                line,
+                seen["R"],
+                "R0: rotated coordinate systems are not supported",
+            )
+        pars[base + 9] = 0.0
+    sc = it.scale()
+    for i, a in enumerate(_AXES):
+        if a not in seen:
+            continue
+        v = seen[a].value * (sc if i < 3 else 1.0)
+        if lv == 20:
+            # the offset that puts the tip at v in that system, the G92 offset
+            # still applied when it is (LinuxCNC's find_current_in_system)
+            v = st.pos[i] - (pars[5211 + i] if pars[5210] else 0.0) - v
+        pars[base + i] = v
+    if index == st.coord:
+        st.origin = it.stored_origin(index)
+
+
+def _setup_tool(it: Interpreter, lv: int, seen: dict[str, Word], w: Word, line: int) -> None:
+    """G10 L1 P<tool> Z<length> R<radius>: the tool table entry; L10: the
+    length that makes the current position Z in the active system; L11: the same
+    in G59.3, the G92 offset aside."""
+    st = it.st
+    tool = round(seen["P"].value)
+    entry = it.tool(tool, line, seen["P"])
+    if not any(a in seen for a in ("X", "Y", "Z", "A", "B", "R", "Q", "I", "J")):
+        raise it.err("G10 L1 without offsets has no effect", line, w, "Z<length> or R<radius>")
+    for a in ("X", "Y", "A", "B"):
+        if a in seen and (lv != 1 or seen[a].value != 0.0):
+            raise it.err(
+                f"tool offsets in {a} are not supported",
+                line,
+                seen[a],
+                "the tool length (Z) and radius (R) only on this machine",
+            )
+    if "Q" in seen:
+        q = seen["Q"].value
+        if abs(q - round(q)) > 0.0001:
+            raise it.err("Q of G10 not an integer", line, seen["Q"], "a tool orientation 0..9")
+        if round(q) > 9:
+            raise it.err("tool orientation above 9", line, seen["Q"], "a tool orientation 0..9")
+    sc = it.scale()
+    length, diameter = entry.length, entry.diameter
+    if "Z" in seen:
+        z = seen["Z"].value * sc
+        if lv == 1:
+            length = z
+        else:
+            # the gauge point's z in the destination system (LinuxCNC's
+            # find_current_in_system_without_tlo: the active one less the G92
+            # offset for L10, G59.3 for L11)
+            gauge = st.pos[2] + st.tool_length
+            pars = it.params.values
+            if lv == 10:
+                here = gauge - st.origin[2] - (pars[5213] if pars[5210] else 0.0)
+            else:
+                here = gauge - pars[system_base(9) + 2]
+            length = here - z
+    if "R" in seen:
+        diameter = 2.0 * seen["R"].value * sc
+    it.tools[tool] = ToolEntry(length, diameter)
+    if tool == st.tool:
+        it.tool_parameters()
+
+
+def axis_offsets(it: Interpreter, code: float, seen: dict[str, Word]) -> None:
+    """G92 (the current position becomes the given one), G52 (a local offset),
+    G92.1 (cancel, parameters zeroed), G92.2 (cancel, parameters kept), G92.3
+    (apply the parameters again)."""
+    st = it.st
+    pars = it.params.values
+    sc = it.scale()
+    if code in (92, 52):
+        pars[5210] = 1.0
+        for i, a in enumerate(_AXES):
+            if a in seen:
+                v = seen[a].value * (sc if i < 3 else 1.0)
+                st.g92[i] = v if code == 52 else st.pos[i] - st.origin[i] - v
+        pars[5211:5216] = st.g92
+    elif code in (92.1, 92.2):
+        pars[5210] = 0.0
+        st.g92 = [0.0] * 5
+        if code == 92.1:
+            pars[5211:5220] = [0.0] * 9
+    else:  # 92.3
+        pars[5210] = 1.0
+        st.g92 = pars[5211:5216]
+
+
+def save_home(it: Interpreter, code: float) -> None:
+    """G28.1 / G30.1: the gauge point's position, stored for G28 / G30."""
+    st = it.st
+    base = 5161 if code == 28.1 else 5181
+    gauge = list(st.pos)
+    gauge[2] += st.tool_length
+    it.params.values[base : base + 5] = gauge

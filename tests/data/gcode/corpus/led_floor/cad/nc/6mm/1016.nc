@@ -1,0 +1,146 @@
+(1016)
+(T1  D=1.8 CR=0 - ZMIN=-6.25 - flat end mill)
+G90 G94
+G17
+G21
+(When using Fusion 360 for Personal Use, the feedrate of)
+(rapid moves is reduced to match the feedrate of cutting)
+(moves, which can increase machining time. Unrestricted rapid)
+(moves are available with a Fusion 360 Subscription.)
+
+(2D Contour5)
+S5000 M3
+G54
+G0 X-0.9 Y0
+Z10.25
+G1 Z5.25 F1000
+Z2.25 F333.3
+Z-0.75
+Y80 F1000
+Y80.9
+X25
+X25.9
+Y60
+Y59.1
+X13.9
+Y40.9
+X25
+X25.9
+Y19.1
+X13.9
+Y0
+Y-0.9
+X0
+X-0.9
+Y0
+Z-1.75 F333.3
+Y80 F1000
+Y80.9
+X25
+X25.9
+Y60
+Y59.1
+X13.9
+Y40.9
+X25
+X25.9
+Y19.1
+X13.9
+Y0
+Y-0.9
+X0
+X-0.9
+Y0
+Z-2.75 F333.3
+Y80 F1000
+Y80.9
+X25
+X25.9
+Y60
+Y59.1
+X13.9
+Y40.9
+X25
+X25.9
+Y19.1
+X13.9
+Y0
+Y-0.9
+X0
+X-0.9
+Y0
+Z-3.75 F333.3
+Y80 F1000
+Y80.9
+X25
+X25.9
+Y60
+Y59.1
+X13.9
+Y40.9
+X25
+X25.9
+Y19.1
+X13.9
+Y0
+Y-0.9
+X0
+X-0.9
+Y0
+Z-4.75 F333.3
+Y80 F1000
+Y80.9
+X25
+X25.9
+Y60
+Y59.1
+X13.9
+Y40.9
+X25
+X25.9
+Y19.1
+X13.9
+Y0
+Y-0.9
+X0
+X-0.9
+Y0
+Z-5.75 F333.3
+Y80 F1000
+Y80.9
+X25
+X25.9
+Y60
+Y59.1
+X13.9
+Y40.9
+X25
+X25.9
+Y19.1
+X13.9
+Y0
+Y-0.9
+X0
+X-0.9
+Y0
+Z-6.25 F333.3
+Y80 F1000
+Y80.9
+X25
+X25.9
+Y60
+Y59.1
+X13.9
+Y40.9
+X25
+X25.9
+Y19.1
+X13.9
+Y0
+Y-0.9
+X0
+X-0.9
+Y0
+Z10.25
+M5
+M30

@@ -1,0 +1,122 @@
+"""Cutter radius compensation against rs274: entries, exits, corners of every
+kind, arcs inside and outside, errors.
+
+Tools (length, diameter) as in test_gcode_macros.TOOLS: T1 6 mm, T2 3 mm,
+T3 12.7 mm in diameter. Every program runs through both; the motions (ends,
+arc centres and turns, feeds) and the refusals must agree.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from . import oracle
+from .test_gcode_macros import TOOLS, agree, ours
+from .test_gcode_oracle import _require_rs274
+
+pytestmark = pytest.mark.linuxcnc
+
+SQUARE = "X0 Y0 F100\nX20\nY20\nX0\nY0\n"
+
+PROGRAMS = {
+    "left outside square": "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 " + SQUARE + "G40 G0 X-10 Y-10\nM2\n",
+    "right outside square": "G21 T1 M6\nG0 X-10 Y-10\nG42 G1 " + SQUARE + "G40 G0 X-10\nM2\n",
+    "left inside (concave)": (
+        "G21 T2 M6\nG0 X5 Y5\nG42 G1 X0 Y0 F100\nX20\nY20\nX0\nY0\nG40 G1 X5 Y5\nM2\n"
+    ),
+    "D word, G41.1 diameter": "G21\nG0 X-10 Y-10\nG41.1 D4 G1 " + SQUARE + "G40 X-10\nM2\n",
+    "D from the table": "G21\nG0 X-10 Y-10\nG42 D3 G1 " + SQUARE + "G40 X-10\nM2\n",
+    "negative diameter swaps sides": "G21\nG0 X-10 Y-10\nG41.1 D-4 G1 " + SQUARE + "G40 X-10\nM2\n",
+    "circle outside": (
+        "G21 T1 M6\nG0 X-20 Y0\nG41 G1 X-10 Y0 F200\nG2 X-10 Y0 I10 J0\nG40 G1 X-20\nM2\n"
+    ),
+    "circle inside": "G21 T1 M6\nG0 X0 Y0\nG41 G1 X10 Y0 F200\nG3 X10 Y0 I-10 J0\nG40 G1 X0\nM2\n",
+    "arc entry": "G21 T2 M6\nG0 X-10 Y0\nG42 G2 X0 Y10 R10 F100\nG1 X10\nG40 G1 Y20\nM2\n",
+    "line to arc to line": (
+        "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\nX10\nG3 X20 Y10 I0 J10\nG1 Y20\n"
+        "G2 X30 Y30 R10\nG1 X40\nG40 G1 X50 Y50\nM2\n"
+    ),
+    "concave arc corners": (
+        "G21 T2 M6\nG0 X0 Y-10\nG42 G1 X0 Y0 F100\nG2 X20 Y0 R10\nG2 X40 Y0 R10\n"
+        "G1 Y-10\nG40 G1 Y-20\nM2\n"
+    ),
+    "arc to line concave": (
+        "G21 T2 M6\nG0 X0 Y-10\nG41 G1 X0 Y0 F100\nG3 X10 Y10 I10 J0\nG1 X0 Y20\nG40 G1 Y30\nM2\n"
+    ),
+    "z and rotary during comp": (
+        "G21 T1 M6\nG0 X-10 Y-10 Z5\nG41 G1 X0 Y0 Z0 F100\nX20 Z-1 A10\nY20 B5\nX0 Z-2\n"
+        "G40 G0 Z10\nM2\n"
+    ),
+    "g0 corners": "G21 T1 M6\nG0 X-10 Y-10\nG41 G0 X0 Y0\nX20\nY20\nG40 G0 X30 Y30\nM2\n",
+    "incremental": (
+        "G21 T1 M6\nG0 X-10 Y-10\nG91 G41 G1 X10 Y10 F100\nX20\nY20\nX-20\nG40 X-10\nM2\n"
+    ),
+    "inch": "G20 T1 M6\nG0 X-1 Y-1\nG41 G1 X0 Y0 F10\nX2\nY2\nG40 X3\nM2\n",
+    "xz plane": "G21 G18 T1 M6\nG0 X-10 Z-10\nG41 G1 X0 Z0 F100\nX20\nZ20\nG40 X30\nM2\n",
+    "functions while comp holds a move": (
+        "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\nX20 M8\nG4 P0.5\nY20 S1000\nG40 X30\nM2\n"
+    ),
+    "program end with comp on": "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\nX20\nY20\nM2\n",
+    "comp of zero radius": "G21\nG0 X-10 Y-10\nG41 G1 " + SQUARE + "G40 X-10\nM2\n",
+    "reentry": (
+        "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\nX20\nG40 G0 X30\nG42 G1 X40 Y0\nY10\n"
+        "G40 G0 X50\nM2\n"
+    ),
+    "shallow corners": (
+        "G21 T1 M6\nG0 X-10 Y0\nG41 G1 X0 Y0 F100\nX10 Y0.1\nX20 Y0.3\nX30 Y0\nG40 X40\nM2\n"
+    ),
+    # a straight move after G40 allows arcs again, on the fast path too
+    "arc after G40 and a straight move": (
+        "G21 T1 M6\nG0 X-10 Y0\nG41 G1 X0 F100\nX10\nG40 G1 X20\nG0 X30\nG0 X0 Y0\n"
+        "G2 X10 I5 J0\nM2\n"
+    ),
+    # a tool change reads the position back (read_inputs, refresh_actual_position):
+    # where G40 left the tool is the current position from there on
+    "tool change after G40": (
+        "G21 T1 M6\nG0 X-10 Y0\nG41 G1 X0 F100\nX10\nG40\nT2 M6\nG0 Z5\nG0 X0 Y0\nM2\n"
+    ),
+    # G93: the rate of a move is its programmed length times F
+    # (inverse_time_rate_straight from program_x), set before the corner's arc
+    "inverse time": (
+        "G20\nG0 X0 Y0\nG42.1 D0.4 G93 G1 X1 F30\nY1 F20\nX-1 F20\nY2 F40\nG94 X1 F33\n"
+        "G93 G3 Y3 J0.5 F6\nG40 G94 G1 Y4 F25\nM2\n"
+    ),
+}
+
+
+@pytest.mark.parametrize("program", list(PROGRAMS.values()), ids=list(PROGRAMS))
+def test_compensated_paths_agree_with_linuxcnc(program: str) -> None:
+    _, err = agree(program)
+    assert err is None, err
+
+
+ERRORS = {
+    "entry shorter than the radius": "G21 T3 M6\nG0 X0 Y0\nG41 G1 X3 Y0 F100\nG40 X10\nM2\n",
+    "tool bigger than the inside arc": (
+        "G21 T3 M6\nG0 X0 Y0\nG41 G1 X10 Y0 F100\nG3 X10 Y0 I-5 J0\nG40 X0\nM2\n"
+    ),
+    "gouging concave corner": "G21 T3 M6\nG0 X-10 Y5\nG42 G1 X0 Y0 F100\nX2\nY-10\nG40 X10\nM2\n",
+    "arc right after G40": (
+        "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\nX10\nG40 G2 X20 Y0 R10\nM2\n"
+    ),
+    "on twice": "G21 T1 M6\nG41 G1 X10 F100\nG42 X20\nM2\n",
+    "in G19": "G21 G19 T1 M6\nG41 G1 Y10 F100\nM2\n",
+    "canned cycle": "G21 T1 M6\nG0 X-10 Y-10 Z5\nG41 G1 X0 Y0 F100\nG81 X5 Z-1 R1\nM2\n",
+    "G28": "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\nG28\nM2\n",
+    "tool change": "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\nT2 M6\nM2\n",
+    "G92": "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\nG92 X0\nM2\n",
+    "coordinate system": "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\nG55\nM2\n",
+    "reading the position": "G21 T1 M6\nG0 X-10 Y-10\nG41 G1 X0 Y0 F100\n#1=#5420\nM2\n",
+    "G41.1 without D": "G21\nG41.1 G1 X10 F100\nM2\n",
+    "D word without comp": "G21\nG1 X10 D1 F100\nM2\n",
+    "no such tool": "G21\nG41 D9 G1 X10 F100\nM2\n",
+}
+
+
+@pytest.mark.parametrize("program", list(ERRORS.values()), ids=list(ERRORS))
+def test_compensation_errors_refused_by_both(program: str) -> None:
+    _require_rs274()
+    ref = oracle.run(program, tools=TOOLS)
+    _, _, err = ours(program)
+    assert ref.error is not None, "rs274 accepts it"
+    assert err is not None, f"we accept what rs274 refuses: {ref.error}"
