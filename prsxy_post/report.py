@@ -357,8 +357,8 @@ def ballbar_report(analysis: Analysis) -> dict[str, str | bytes]:
     page.image(
         "ballbar.png",
         plot_runs(analysis.results, analysis.runs, analysis.predicted),
-        "Polar plots, one per circle: ccw (blue) and cw (red) overlaid on one scale, "
-        "µm per division in each title; dashed: the fitted terms"
+        "Polar plots, one per circle: ccw (blue) and cw (red) overlaid on one scale "
+        "(µm/div in each title); dashed: the fitted terms"
         + ("; dotted: the model's simulation." if analysis.predicted else "."),
     )
     page.heading("Runs")
