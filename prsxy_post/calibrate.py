@@ -636,7 +636,7 @@ def stage_error_map(
 # ---------------------------------------------------------------- the physical stage
 
 
-def _axis_doc(tables: Sequence[Any]) -> list[dict[str, Any]]:
+def _axis_doc(tables: Sequence[AxisComp]) -> list[dict[str, Any]]:
     """``[[axis_comp]]`` entries of tables."""
     return [
         {
@@ -661,8 +661,8 @@ def _kind_stats(
 def stage_effects(
     now: Profile,
     commanded: Profile,
-    poses: Sequence[Any],
-    runs: Sequence[Any],
+    poses: Sequence[PoseData],
+    runs: Sequence[BallbarRun],
     *,
     alpha: float = 1e-3,
     max_rel_stderr: float = 0.25,
@@ -727,7 +727,9 @@ def stage_effects(
     return doc, found, rep
 
 
-def _retable(doc: dict[str, Any], now: Profile, axis: Sequence[Any], found: Sequence[Any]) -> None:
+def _retable(
+    doc: dict[str, Any], now: Profile, axis: Sequence[AxisData], found: Sequence[Any]
+) -> None:
     """Tables from the laser runs less the periodic terms now modelled, with the
     ballbar's extra backlash put back: the table holds what no named effect does."""
     from . import iso230_2
@@ -803,9 +805,9 @@ class Calibration:
 def calibrate(
     start: Profile,
     commanded: Profile,
-    poses: Sequence[Any],
-    runs: Sequence[Any],
-    axis: Sequence[Any],
+    poses: Sequence[PoseData],
+    runs: Sequence[BallbarRun],
+    axis: Sequence[AxisData],
     *,
     stages: Sequence[str] = STAGES,
     max_rel_stderr: float = 0.25,

@@ -570,7 +570,10 @@ def fingerprint(path: str) -> Any:
 
 
 def check_provenance(
-    data: Sequence[Any], profile_path: str, commanded_with: str | None, ignore: bool
+    data: Sequence[PoseData | BallbarRun | AxisData],
+    profile_path: str,
+    commanded_with: str | None,
+    ignore: bool,
 ) -> None:
     """Refuse data commanded with another profile than the command was told."""
     from . import measure
@@ -726,9 +729,7 @@ def _print_stage(rep: Any) -> None:
             )
         elif "change" in c:  # an effect of the library added
             period = f", period {c['period_mm']:g} mm" if c.get("period_mm") else ""
-            click.echo(
-                f"  {c['name']}: {c['change']:+.4g} ± {c['stderr']:.2g} {c['unit']}{period}"
-            )
+            click.echo(f"  {c['name']}: {c['change']:+.4g} ± {c['stderr']:.2g} {c['unit']}{period}")
         elif "cv_rms" in c:
             scale = 3600.0 if c["unit"] == "deg" else 1000.0
             u = "arcsec" if c["unit"] == "deg" else "um"

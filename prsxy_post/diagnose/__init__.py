@@ -308,23 +308,53 @@ def refine(
     if not X.shape[1]:
         rw = (r * w)[ok]
         return _Fit(free, keys, x, dims, prof, lin, np.zeros((0, 0)), float(rw @ rw) / len(rw))
+
+    def cost(lin: Linearised) -> float:
+        rw = ((measured - lin.pred) * w)[ok]
+        return float(rw @ rw)
+
+    def step(
+        x: np.ndarray, dx: np.ndarray, c0: float, columns: bool
+    ) -> tuple[np.ndarray, Profile, Linearised] | None:
+        """x + dx, halved while the model cannot be evaluated there (a geometry
+        whose forward kinematics misses measured poses, a size a profile cannot
+        hold) or the residual grows; None when no share of the step helps."""
+        for _ in range(8):
+            try:
+                prof, lin = model_at(x + dx, columns)
+            except (ProfileError, FitError):
+                dx = dx / 2
+                continue
+            if cost(lin) <= c0 * (1 + 1e-9):
+                return x + dx, prof, lin
+            dx = dx / 2
+        return None
+
     for _ in range(iterations):
         dx, cov, sigma2 = solve(X, (r * w)[ok])
-        x = x + dx
-        prof, lin = model_at(x, False)
+        moved = step(x, dx, cost(lin), False)
+        if moved is None:
+            break
+        x, prof, lin = moved
         r = measured - lin.pred
         se = np.sqrt(np.maximum(np.diag(cov), 1e-300))
         if np.max(np.abs(dx) / se, initial=0.0) < 0.01:
             break
+    # linearised again where it converged, for the covariance; while the new
+    # Jacobian still moves the sizes by more than a tenth of their standard error
+    # (large or strongly coupled effects), more steps with it
     prof, lin = model_at(x, True)
-    r = measured - lin.pred
-    dx, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
-    if np.max(np.abs(dx) / np.sqrt(np.maximum(np.diag(cov), 1e-300)), initial=0.0) > 0.1:
-        # not yet there with the start's Jacobian: one more step with the new one
-        x = x + dx
-        prof, lin = model_at(x, True)
+    for _ in range(4):
         r = measured - lin.pred
-        _, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
+        dx, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
+        if np.max(np.abs(dx) / np.sqrt(np.maximum(np.diag(cov), 1e-300)), initial=0.0) <= 0.1:
+            break
+        moved = step(x, dx, cost(lin), True)
+        if moved is None:
+            break
+        x, prof, lin = moved
+    r = measured - lin.pred
+    _, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
     return _Fit(free, keys, x, dims, prof, lin, cov, sigma2)
 
 
