@@ -118,7 +118,7 @@ def test_windows_stay_in_their_step_and_bound_the_error(
     assert t0[0] <= ta[0] < tb[0] <= t1[0]
     width = tb[0] - ta[0]
     assert width >= min(reversals.MIN_WINDOW_S, h) - 1e-15
-    assert width <= max(1.5 * longest, 0) + 1e-15 or (ta[0] == t0[0] and tb[0] == t1[0])
+    assert width <= 1.5 * longest + 1e-15 or (ta[0] == t0[0] and tb[0] == t1[0])
     natural = np.sqrt(8 * tol / accel)
     if reversals.MIN_WINDOW_S < natural < longest and width < h:
         assert accel * (width / 2) ** 2 / 2 <= 2.25 * tol * (1 + 1e-9)

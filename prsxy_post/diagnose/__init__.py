@@ -17,8 +17,8 @@ The loop an engineer runs with a ballbar plot, made a procedure
 4. **Add** them: the sizes are refined by Gauss–Newton through the full
    (nonlinear) model; the model is linearised again at the result and the
    selection repeated on it until it no longer changes. Standard errors come
-   from the joint fit at the end; an estimate that moves by more than its
-   standard error when another named effect is left out says so
+   from the joint fit at the end; an estimate that moves by more than two
+   standard errors (and 2 %) when another named effect is left out says so
    (:attr:`Effect.depends_on`).
 5. **Say what is left** (:mod:`.leftover`): every data kind still above its
    noise, where, by how much, and how much of it any library member could take.
