@@ -483,6 +483,8 @@ class StageReport:
     max_after: dict[str, float]
     notes: list[str] = field(default_factory=list)
     details: dict[str, Any] = field(default_factory=dict)
+    #: what the user should act on (the data could not support a result fully)
+    warnings: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -727,6 +729,42 @@ def stage_effects(
     return doc, found, rep
 
 
+def aliased_cyclic(found: Sequence[Any], axis: Sequence[AxisData]) -> list[str]:
+    """Warnings for periodic errors found at a pitch the laser runs cannot resolve.
+
+    A real-axis table is made from laser targets spaced s apart and interpolated
+    linearly between them; a periodic error of pitch p < 2 s (Nyquist: two
+    samples a pitch at least) appears in it as a pattern of the alias frequency
+    f_a = |1/p − k/s|, k the nearest integer, which the physical stage, judging
+    the tables as measured, may take for other effects (long-pitch periodic
+    terms, bows). A pitch that divides the spacing aliases to a constant (f_a = 0),
+    which the kinematic parameters absorb: no warning. One sentence per term.
+    """
+    out = []
+    for e in found:
+        fam = registry.family(e.name)
+        if not isinstance(fam, registry.CyclicError) or not e.period:
+            continue
+        motor = fam.motor(e.name)
+        targets = np.unique(
+            np.concatenate([a.target[a.motor == motor] for a in axis] or [np.zeros(0)])
+        )
+        if len(targets) < 2:
+            continue
+        spacing = float(np.max(np.diff(targets)))
+        f, fs = 1.0 / e.period, 1.0 / spacing
+        f_alias = abs(f - round(f / fs) * fs)
+        if e.period < 2.0 * spacing and f_alias > 1e-9 * f:
+            out.append(
+                f"{e.name} has a {e.period:g} mm pitch, but the laser runs of motor "
+                f"{motor} are spaced up to {spacing:g} mm: its table holds that error "
+                f"as a {1.0 / f_alias:.4g} mm pattern (at least two targets a pitch are "
+                "needed), and the effects found beside it may be taking that pattern; "
+                f"measure the motor with targets at most {e.period / 2:g} mm apart"
+            )
+    return out
+
+
 def _retable(
     doc: dict[str, Any], now: Profile, axis: Sequence[AxisData], found: Sequence[Any]
 ) -> None:
@@ -860,6 +898,7 @@ def calibrate(
         )
         if axis and "tables" in want and found:
             _retable(doc, now, axis, found)
+        rep.warnings.extend(aliased_cyclic(found, axis))
         reports.append(rep)
     if "map" in want and poses:
         now = profile_from_dict(doc, start.source)

@@ -872,6 +872,9 @@ def calibrate(
         for r in result.reports:
             _print_stage(r)
         click.echo(f"wrote {output}")
+    for r in result.reports:
+        for w in r.warnings:
+            click.echo(f"warning: {r.name}: {w}", err=True)
 
 
 def _json_default(x: Any) -> Any:

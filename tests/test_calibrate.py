@@ -155,3 +155,53 @@ def test_the_physical_stage_names_sizes_and_compensates_effects(
     assert note["stages"][-1].startswith("physical effects")
     q = random_poses(np.random.default_rng(98), 300)
     assert _tip_error(truth, prof, q).max() < 1.5e-3
+
+
+def test_a_cyclic_pitch_the_laser_spacing_aliases_is_warned_of() -> None:
+    """Laser targets 20 mm apart cannot resolve a 16 mm pitch (Nyquist: two targets
+    a pitch): the table made from them, interpolated linearly as the contract's
+    tables are, misses the sinusoid by most of its amplitude, so the physical stage
+    warns of it, naming the motor and the spacing needed; a 50 mm pitch there, or a
+    16 mm pitch on a motor measured every 5 mm, is resolved and not warned of; a 4 mm
+    pitch at 20 mm falls on the same phase at every target, a constant the kinematic
+    parameters take, and is not warned of either."""
+    from prsxy_post.diagnose import Effect
+    from prsxy_post.measure import AxisData
+
+    amp, pitch = 0.0027, 16.0
+    coarse = np.arange(-200.0, 200.1, 20.0)
+    fine = np.arange(-200.0, 200.1, 5.0)
+    # the reason for the warning, from the closed form: the aliased table is wrong
+    p = np.linspace(-200, 200, 4001)
+    wave = amp * np.sin(2 * np.pi * p / pitch)
+    table = np.interp(p, coarse, amp * np.sin(2 * np.pi * coarse / pitch))
+    assert np.max(np.abs(table - wave)) > 0.8 * amp
+    at_targets = amp * np.sin(2 * np.pi * coarse / 4.0)  # a 4 mm pitch: one phase
+    assert np.ptp(at_targets) < 1e-12
+
+    def run(motor: int, targets: np.ndarray) -> AxisData:
+        n = len(targets)
+        return AxisData(
+            "axis.csv",
+            np.full(n, motor),
+            targets,
+            targets.copy(),
+            np.ones(n, dtype=int),
+            np.zeros(n, dtype=int),
+            np.arange(n),
+        )
+
+    axis = [run(6, coarse), run(2, fine)]
+    found = [
+        Effect("cyclic[6]", amp, 1e-6, "mm", period=16.0),
+        Effect("cyclic[6]", amp, 1e-6, "mm", period=50.0),
+        Effect("cyclic[6]", amp, 1e-6, "mm", period=4.0),
+        Effect("cyclic[2]", amp, 1e-6, "mm", period=16.0),
+        Effect("effects.guide_bow[1]", 0.01, 1e-4, "mm"),
+    ]
+    warnings = calibrate.aliased_cyclic(found, axis)
+    assert len(warnings) == 1
+    assert warnings[0].startswith("cyclic[6] has a 16 mm pitch")
+    assert "motor 6 are spaced up to 20 mm" in warnings[0]
+    assert "as a 80 mm pattern" in warnings[0]  # |1/16 - 1/20| = 1/80
+    assert "at most 8 mm apart" in warnings[0]
