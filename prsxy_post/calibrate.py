@@ -729,8 +729,10 @@ def stage_effects(
     return doc, found, rep
 
 
-def aliased_cyclic(found: Sequence[Any], axis: Sequence[AxisData]) -> list[str]:
-    """Warnings for periodic errors found at a pitch the laser runs cannot resolve.
+def aliased_cyclic(
+    found: Sequence[Any], axis: Sequence[AxisData], min_amplitude_mm: float = 0.00025
+) -> list[str]:
+    """Warnings for periodic errors found at pitches the laser runs cannot resolve.
 
     A real-axis table is made from laser targets spaced s apart and interpolated
     linearly between them; a periodic error of pitch p < 2 s (Nyquist: two
@@ -738,12 +740,17 @@ def aliased_cyclic(found: Sequence[Any], axis: Sequence[AxisData]) -> list[str]:
     f_a = |1/p − k/s|, k the nearest integer, which the physical stage, judging
     the tables as measured, may take for other effects (long-pitch periodic
     terms, bows). A pitch that divides the spacing aliases to a constant (f_a = 0),
-    which the kinematic parameters absorb: no warning. One sentence per term.
+    which the kinematic parameters absorb, and a term smaller than
+    ``min_amplitude_mm`` (default: half the default path tolerance) cannot move
+    the path by much: neither is warned of. One sentence per motor.
     """
-    out = []
+    by_motor: dict[int, list[tuple[float, float, float]]] = {}
+    spacing_of: dict[int, float] = {}
     for e in found:
         fam = registry.family(e.name)
         if not isinstance(fam, registry.CyclicError) or not e.period:
+            continue
+        if abs(e.estimate) < min_amplitude_mm:
             continue
         motor = fam.motor(e.name)
         targets = np.unique(
@@ -755,13 +762,23 @@ def aliased_cyclic(found: Sequence[Any], axis: Sequence[AxisData]) -> list[str]:
         f, fs = 1.0 / e.period, 1.0 / spacing
         f_alias = abs(f - round(f / fs) * fs)
         if e.period < 2.0 * spacing and f_alias > 1e-9 * f:
-            out.append(
-                f"{e.name} has a {e.period:g} mm pitch, but the laser runs of motor "
-                f"{motor} are spaced up to {spacing:g} mm: its table holds that error "
-                f"as a {1.0 / f_alias:.4g} mm pattern (at least two targets a pitch are "
-                "needed), and the effects found beside it may be taking that pattern; "
-                f"measure the motor with targets at most {e.period / 2:g} mm apart"
-            )
+            by_motor.setdefault(motor, []).append((e.period, abs(e.estimate), 1.0 / f_alias))
+            spacing_of[motor] = spacing
+    out = []
+    for motor, terms in sorted(by_motor.items()):
+        terms.sort(key=lambda t: -t[1])
+        listed = ", ".join(
+            f"{p:g} mm pitch ({a * 1000:.2f} µm, seen as a {al:.4g} mm pattern)"
+            for p, a, al in terms
+        )
+        finest = min(p for p, _, _ in terms)
+        out.append(
+            f"motor {motor}: periodic errors at {listed}, but its laser targets are "
+            f"up to {spacing_of[motor]:g} mm apart: its table holds them aliased (at "
+            "least two targets a pitch are needed), and the effects found beside them "
+            "may be taking those patterns; measure the motor with targets at most "
+            f"{finest / 2:g} mm apart"
+        )
     return out
 
 
@@ -898,7 +915,8 @@ def calibrate(
         )
         if axis and "tables" in want and found:
             _retable(doc, now, axis, found)
-        rep.warnings.extend(aliased_cyclic(found, axis))
+        tol = start.interpolation.get("path_tolerance_mm", 0.0005)
+        rep.warnings.extend(aliased_cyclic(found, axis, min_amplitude_mm=tol / 2))
         reports.append(rep)
     if "map" in want and poses:
         now = profile_from_dict(doc, start.source)

@@ -196,12 +196,17 @@ def test_a_cyclic_pitch_the_laser_spacing_aliases_is_warned_of() -> None:
         Effect("cyclic[6]", amp, 1e-6, "mm", period=16.0),
         Effect("cyclic[6]", amp, 1e-6, "mm", period=50.0),
         Effect("cyclic[6]", amp, 1e-6, "mm", period=4.0),
+        Effect("cyclic[6]", 0.0001, 1e-6, "mm", period=32.0),  # 0.1 µm: too small
         Effect("cyclic[2]", amp, 1e-6, "mm", period=16.0),
         Effect("effects.guide_bow[1]", 0.01, 1e-4, "mm"),
     ]
     warnings = calibrate.aliased_cyclic(found, axis)
-    assert len(warnings) == 1
-    assert warnings[0].startswith("cyclic[6] has a 16 mm pitch")
-    assert "motor 6 are spaced up to 20 mm" in warnings[0]
-    assert "as a 80 mm pattern" in warnings[0]  # |1/16 - 1/20| = 1/80
-    assert "at most 8 mm apart" in warnings[0]
+    assert warnings == [
+        "motor 6: periodic errors at 16 mm pitch (2.70 µm, seen as a 80 mm pattern), "
+        "but its laser targets are up to 20 mm apart: its table holds them aliased (at "
+        "least two targets a pitch are needed), and the effects found beside them may "
+        "be taking those patterns; measure the motor with targets at most 8 mm apart"
+    ]  # |1/16 - 1/20| = 1/80
+    # the smaller term is warned of when the threshold lets it through
+    two = calibrate.aliased_cyclic(found, axis, min_amplitude_mm=0.00005)
+    assert "16 mm pitch (2.70 µm, seen as a 80 mm pattern), 32 mm pitch (0.10 µm" in two[0]
