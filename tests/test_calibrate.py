@@ -164,7 +164,8 @@ def test_a_cyclic_pitch_the_laser_spacing_aliases_is_warned_of() -> None:
     warns of it, naming the motor and the spacing needed; a 50 mm pitch there, or a
     16 mm pitch on a motor measured every 5 mm, is resolved and not warned of; a 4 mm
     pitch at 20 mm falls on the same phase at every target, a constant the kinematic
-    parameters take, and is not warned of either."""
+    parameters take, and is not warned of either, nor a term below half the path
+    tolerance."""
     from prsxy_post.diagnose import Effect
     from prsxy_post.measure import AxisData
 
