@@ -49,7 +49,7 @@ def at_points(motions, q: np.ndarray, line: np.ndarray) -> float:
 def measure(path: Path, fmt: str, kind: str, seed: int | None) -> dict[str, float]:
     truth = truth_machine(kind, seed)
     motions, res, texts = convert(truth, path.read_text(), fmt)
-    rapid = truth.limits["rapid_mm_min"]
+    rapid = truth.limits.rapid_mm_min
     if fmt == "pmac":
         run = ctl.run_pmac(texts)
         tool = _tool_of_lines(res, run.line[run.seg])

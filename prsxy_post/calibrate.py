@@ -915,7 +915,7 @@ def calibrate(
         )
         if axis and "tables" in want and found:
             _retable(doc, now, axis, found)
-        tol = start.interpolation.get("path_tolerance_mm", 0.0005)
+        tol = start.interpolation.path_tolerance_mm
         rep.warnings.extend(aliased_cyclic(found, axis, min_amplitude_mm=tol / 2))
         reports.append(rep)
     if "map" in want and poses:

@@ -94,13 +94,13 @@ def limits_of(profile: Profile, segment: str = "cubic") -> PlanLimits:
     lim = profile.limits
     ip = profile.interpolation
     return PlanLimits(
-        rapid_mm_min=lim["rapid_mm_min"],
-        rapid_deg_min=lim["rapid_deg_min"],
-        accel_mm_s2=lim["max_accel_mm_s2"],
-        accel_deg_s2=lim["max_accel_deg_s2"],
+        rapid_mm_min=lim.rapid_mm_min,
+        rapid_deg_min=lim.rapid_deg_min,
+        accel_mm_s2=lim.max_accel_mm_s2,
+        accel_deg_s2=lim.max_accel_deg_s2,
         period_s=profile.period_ms / 1000.0,
-        tolerance_mm=ip.get("path_tolerance_mm", 0.0005),
-        tolerance_deg=ip.get("path_tolerance_arcsec", 0.5) / 3600.0,
+        tolerance_mm=ip.path_tolerance_mm,
+        tolerance_deg=ip.path_tolerance_arcsec / 3600.0,
         segment=segment,
     )
 
@@ -299,7 +299,7 @@ class Pipeline:
         # where each motor with play last moved with a direction (NaN: not yet)
         self.ref = np.full(5, np.nan)
         self.lag = registry.SERVO_LAG.lags_s(profile) if stages.axis_comp else np.zeros(5)
-        self.reversal_s = profile.interpolation.get("reversal_ms", 1.0) / 1000.0
+        self.reversal_s = profile.interpolation.reversal_ms / 1000.0
         self.reversal_tol = REVERSAL_SHARE * self.limits.tolerance_mm
         # where each motor's driven part is, and the last commands (for _settle)
         self.play_y: dict[int, float] = {}
@@ -449,12 +449,12 @@ class Pipeline:
         lim = self.profile.limits
         n_after = self.n_points + np.cumsum(n_steps)
         t_after = self.t + np.cumsum(plan.law.duration)
-        over = np.nonzero((n_after > lim["max_points"]) | (t_after > lim["max_time_s"]))[0]
+        over = np.nonzero((n_after > lim.max_points) | (t_after > lim.max_time_s))[0]
         if over.size:
             k = int(over[0])
             raise LimitError(
-                f"the program would interpolate to more than {int(lim['max_points'])} points or "
-                f"run longer than {lim['max_time_s']:g} s (reached here)",
+                f"the program would interpolate to more than {int(lim.max_points)} points or "
+                f"run longer than {lim.max_time_s:g} s (reached here)",
                 line=int(plan.blocks.line[k]),
                 expected="a shorter program, or larger limits.max_points / limits.max_time_s",
             )

@@ -49,7 +49,7 @@ def execute_pmac(truth, texts: list[str], res: chain.ChainResult):
 
 def judge_pmac(truth, motions, res, texts) -> ctl.Trace:
     run, q, tool = execute_pmac(truth, texts, res)
-    return ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits["rapid_mm_min"])
+    return ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits.rapid_mm_min)
 
 
 def assert_within(tr: ctl.Trace, accel: float | None, path_mm: float = TOL_MM) -> None:
@@ -83,7 +83,7 @@ def test_pvt_cubics_keep_to_the_acceleration_limit(kind: str, seed: int | None, 
     motion (blends, arcs, phases) stays within the profile's limit."""
     truth = truth_machine(kind, seed, play=False)
     motions, res, texts = convert(truth, path.read_text())
-    assert_within(judge_pmac(truth, motions, res, texts), truth.limits["max_accel_mm_s2"])
+    assert_within(judge_pmac(truth, motions, res, texts), truth.limits.max_accel_mm_s2)
 
 
 @pytest.mark.parametrize(("kind", "seed"), MACHINES[:3])
@@ -100,7 +100,7 @@ def test_linuxcnc_lines_stay_on_the_path(kind: str, seed: int | None, path) -> N
     tool = _tool_of_lines(res, run.line[run.seg])
     P = kinematics.inverse(chain.controller_geometry(truth), run.q_dense).P
     q = ctl.machine_executes(truth, run.t_dense, P, tool)
-    tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits["rapid_mm_min"])
+    tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits.rapid_mm_min)
     # LinuxCNC's blends stay within G64 P of the corner; the polyline gets the rest
     assert tr.path_mm <= TOL_MM - run.blend, f"{tr.path_mm * 1000:.3f} µm"
     assert tr.ab_deg <= TOL_DEG
@@ -151,7 +151,7 @@ def test_any_corner_any_speed_stays_on_the_path(text: str, seed: int | None) -> 
     truth = truth_machine("random" if seed else "nominal", seed)
     motions, res, texts = convert(truth, text)
     tr = judge_pmac(truth, motions, res, texts)
-    assert_within(tr, None if seed else truth.limits["max_accel_mm_s2"])
+    assert_within(tr, None if seed else truth.limits.max_accel_mm_s2)
 
 
 # ------------------------------------------------------------------ velocities
@@ -201,7 +201,7 @@ def test_split_parts_end_at_rest_and_run_as_one_program(seed: int | None) -> Non
     # run one after the other (run_pmac checks each RAPID moves nothing), they trace
     # the path as one program does
     tr = judge_pmac(truth, motions, res, texts)
-    assert_within(tr, None if seed else truth.limits["max_accel_mm_s2"])
+    assert_within(tr, None if seed else truth.limits.max_accel_mm_s2)
     ends = [re.search(r"; end of part \d+: at rest after line (\d+), (.*)", t) for t in texts[:-1]]
     assert all(ends), "every part but the last says where and why it ends"
 
@@ -249,7 +249,7 @@ def test_rotary_buffer_is_sized_in_words_and_set_up_in_order() -> None:
     row = next(c for c in code if c.startswith("U") and ":" in c)
     assert len(re.findall(r"-?\d+\.\d+", row)) == 10
     tr = judge_pmac(truth, motions, res, texts)
-    assert_within(tr, truth.limits["max_accel_mm_s2"])
+    assert_within(tr, truth.limits.max_accel_mm_s2)
 
 
 # ------------------------------------------------------------------ machine functions
@@ -371,7 +371,7 @@ def test_splines_and_nurbs_are_followed_on_the_curve(kind: str, seed: int | None
     tool = _tool_of_lines(res, run.line[run.seg])
     P = kinematics.inverse(chain.controller_geometry(truth), run.q_dense).P
     q = ctl.machine_executes(truth, run.t_dense, P, tool)
-    tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits["rapid_mm_min"])
+    tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits.rapid_mm_min)
     assert run.blend is not None
     assert tr.path_mm <= TOL_MM - run.blend
     assert tr.speed_ratio <= 1 + SPEED_ROUNDING

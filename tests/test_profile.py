@@ -56,11 +56,18 @@ def test_documented_limits_are_every_limit() -> None:
     assert set(_documented_defaults("limits")) == set(profile_mod.DEFAULTS["limits"])
 
 
-def test_limits_read_typed_and_by_key() -> None:
-    p = profile_mod.loads(NOMINAL_TEXT + "\n[limits]\nmax_tilt_deg = 12.5\n", "t")
-    assert p.limits.max_tilt_deg == 12.5 and p.limits["max_tilt_deg"] == 12.5
-    with pytest.raises(KeyError):
-        p.limits["max_tilt"]
+def test_limits_and_interpolation_read_typed() -> None:
+    """Set keys are read as numbers into the typed sections; unset ones keep the
+    documented defaults."""
+    p = profile_mod.loads(
+        NOMINAL_TEXT
+        + "\n[limits]\nmax_tilt_deg = 12.5\n[interpolation]\npath_tolerance_mm = 0.002\n",
+        "t",
+    )
+    assert p.limits.max_tilt_deg == 12.5
+    assert p.interpolation.path_tolerance_mm == 0.002
+    assert p.interpolation.reversal_ms == profile_mod.DEFAULTS["interpolation"]["reversal_ms"]
+    assert isinstance(p.interpolation, profile_mod.Interpolation)
 
 
 def test_tools_are_typed() -> None:

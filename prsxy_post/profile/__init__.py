@@ -5,7 +5,8 @@ fixes the sections ``[machine]``, ``[work]``, ``[kinematics]`` (three ``legs``),
 ``[table]``, ``[[axis_comp]]`` and ``[controller_kinematics]``. Everything else is
 this project's and optional; a profile holding only the contract's keys is valid.
 The project's sections, with their defaults, are documented in
-``profiles/README.md`` and in the section dataclasses (:class:`MachineLimits`, …).
+``profiles/README.md`` and in the section dataclasses (:class:`MachineLimits`,
+:class:`Interpolation`, …).
 
 Reading is :func:`loads` (``tomllib``); the tool changes a profile file only
 through :mod:`prsxy_post.profile.update`, which keeps the user's comments and
@@ -72,15 +73,22 @@ class MachineLimits:
     max_points: int = 50_000_000
     max_time_s: float = 360_000.0
 
-    def __getitem__(self, key: str) -> float:
-        """``limits["rapid_mm_min"]``: the mapping form chain.py still reads
-        (until it reads the attributes; then this goes)."""
-        if key not in _LIMIT_KEYS:
-            raise KeyError(key)
-        return float(getattr(self, key))
 
+@dataclass(frozen=True)
+class Interpolation:
+    """``[interpolation]``: how programs become points.
 
-_LIMIT_KEYS = frozenset(f.name for f in fields(MachineLimits))
+    period_ms : the coarse interpolation period [ms]
+    path_tolerance_mm : how far the motion the controller runs between points may
+        leave the programmed path where the program sets no ``G64 P`` [mm]
+    path_tolerance_arcsec : the same for the tool axis [arcsec]
+    reversal_ms : the longest window in which a motor with play crosses it [ms]
+    """
+
+    period_ms: float = 10.0
+    path_tolerance_mm: float = 0.0005
+    path_tolerance_arcsec: float = 0.5
+    reversal_ms: float = 1.0
 
 
 class Tool(NamedTuple):
@@ -93,12 +101,7 @@ class Tool(NamedTuple):
 #: Defaults of the project's own sections. Each key is documented in profiles/README.md.
 DEFAULTS: dict[str, dict[str, Any]] = {
     "limits": {f.name: f.default for f in fields(MachineLimits)},
-    "interpolation": {
-        "period_ms": 10.0,
-        "path_tolerance_mm": 0.0005,
-        "path_tolerance_arcsec": 0.5,
-        "reversal_ms": 1.0,
-    },
+    "interpolation": {f.name: f.default for f in fields(Interpolation)},
     "start": {"pose": [0.0, 0.0, 0.0, 0.0, 0.0]},
     "gcode": {
         "g28": [0.0, 0.0, 0.0, 0.0, 0.0],
@@ -228,8 +231,8 @@ class Profile:
     #: ``[output.<dialect>]`` sections, validated, with their defaults
     output: Mapping[str, Mapping[str, Any]]
     raw: dict[str, Any] = field(repr=False)
-    #: ``[interpolation]`` with its defaults (period_ms, path_tolerance_mm, …)
-    interpolation: Mapping[str, float] = field(default_factory=dict)
+    #: ``[interpolation]`` with its defaults
+    interpolation: Interpolation = field(default_factory=Interpolation)
     #: what the user should know about the file: deprecated keys and where they went
     notes: tuple[str, ...] = ()
     source: str = "<profile>"
@@ -688,7 +691,9 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         output=out_sec,
         raw=raw,
         source=source,
-        interpolation=interp,
+        interpolation=Interpolation(
+            **{f.name: float(interp[f.name]) for f in fields(Interpolation)}
+        ),
         notes=tuple(notes),
         gcode=g,
     )

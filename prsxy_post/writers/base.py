@@ -101,8 +101,8 @@ def header(prov: Provenance, profile: Profile, extra: Sequence[str]) -> list[str
         f"profile sha256: {prov.profile_sha256}",
         f"options: {prov.options}",
         f"interpolation period: {profile.period_ms:g} ms; path tolerance "
-        f"{ip.get('path_tolerance_mm', 0.0005):g} mm and "
-        f"{ip.get('path_tolerance_arcsec', 0.5):g} arcsec where the program sets "
+        f"{ip.path_tolerance_mm:g} mm and "
+        f"{ip.path_tolerance_arcsec:g} arcsec where the program sets "
         "none (a G64 P in the program sets its own)",
         *extra,
     ]

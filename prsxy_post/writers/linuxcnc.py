@@ -56,7 +56,7 @@ class GcodeWriter:
         self.tol = float(settings["tolerance_mm"])
         self.dec = int(settings["decimals"])
         self.cgeo = controller_geometry(profile)
-        self.blend = CORNER_SHARE * profile.interpolation.get("path_tolerance_mm", 0.0005)
+        self.blend = CORNER_SHARE * profile.interpolation.path_tolerance_mm
         self.n = 0
         self.t_total = 0.0
         self.last_line: int | None = None
