@@ -617,6 +617,17 @@ def stage_error_map(
     after = resid - emap(obs.q_pose)
     rb, mb = _stats({"pose_tip": resid[:, :3], "pose_axis": resid[:, 3:]})
     ra, ma = _stats({"pose_tip": after[:, :3], "pose_axis": after[:, 3:]})
+    return emap, _map_report(emap, rb, ra, mb, ma)
+
+
+def _map_report(
+    emap: errormap.ErrorMap,
+    rms_before: dict[str, float],
+    rms_after: dict[str, float],
+    max_before: dict[str, float],
+    max_after: dict[str, float],
+) -> StageReport:
+    """The error-map stage's report: each component's degree, ridge and errors."""
     changed = [
         {
             "name": f"error_map.{c}",
@@ -632,7 +643,15 @@ def stage_error_map(
         "cv_rms: cross-validated prediction error on poses left out of the fit; "
         "fit_rms below it by much would mean the map follows noise"
     ]
-    return emap, StageReport("virtual-axis error map (Eq. 5)", changed, rb, ra, mb, ma, notes)
+    return StageReport(
+        "virtual-axis error map (Eq. 5)",
+        changed,
+        rms_before,
+        rms_after,
+        max_before,
+        max_after,
+        notes,
+    )
 
 
 # ---------------------------------------------------------------- the physical stage
@@ -931,24 +950,7 @@ def calibrate(
         )
         rb, mb = _kind_stats(before, segs)
         ra, ma = _kind_stats(after, segs)
-        changed = [
-            {
-                "name": f"error_map.{c}",
-                "degree": emap.degree[c],
-                "lambda": emap.lam[c],
-                "cv_rms": emap.cv_rms[c],
-                "fit_rms": emap.fit_rms[c],
-                "unit": errormap.UNITS[c],
-            }
-            for c in emap.coef
-        ]
-        notes = [
-            "cv_rms: cross-validated prediction error on poses left out of the fit; "
-            "fit_rms below it by much would mean the map follows noise"
-        ]
-        reports.append(
-            StageReport("virtual-axis error map (Eq. 5)", changed, rb, ra, mb, ma, notes)
-        )
+        reports.append(_map_report(emap, rb, ra, mb, ma))
     if not reports:
         raise FitError(
             "no stage had data to work on",
