@@ -353,8 +353,9 @@ def refine(
         if moved is None:
             break
         x, prof, lin = moved
-    r = measured - lin.pred
-    _, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
+    else:  # every pass moved x: the covariance where it ended
+        r = measured - lin.pred
+        _, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
     return _Fit(free, keys, x, dims, prof, lin, cov, sigma2)
 
 
