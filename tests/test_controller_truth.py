@@ -145,14 +145,17 @@ def programs(draw: st.DrawFn) -> str:
     return "\n".join(lines) + "\n"
 
 
-# derandomized: the same programs on every run, so that CI judges the code and not
-# the draw
-@settings(
+#: the corner searches, derandomized: the same programs on every run, so that CI
+#: judges the code and not the draw
+CORNER_SEARCH = settings(
     max_examples=25,
     deadline=None,
     derandomize=True,
     suppress_health_check=[HealthCheck.too_slow],
 )
+
+
+@CORNER_SEARCH
 @given(programs())
 def test_any_corner_any_speed_stays_on_the_path(text: str) -> None:
     truth = truth_machine("nominal", None)
@@ -188,12 +191,7 @@ def test_short_tight_blocks_where_a_motor_with_play_reverses(text: str) -> None:
 
 
 @pytest.mark.xfail(strict=False, reason=KNOWN)
-@settings(
-    max_examples=25,
-    deadline=None,
-    derandomize=True,
-    suppress_health_check=[HealthCheck.too_slow],
-)
+@CORNER_SEARCH
 @given(programs())
 def test_any_corner_any_speed_on_a_machine_with_play(text: str) -> None:
     truth = truth_machine("random", 21)
