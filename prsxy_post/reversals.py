@@ -114,7 +114,7 @@ def velocity_roots(
     c = V0
     disc = b * b - 4.0 * a * c
     lin = np.abs(a) < 1e-12 * (np.abs(b) + np.abs(c) + 1e-300)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         qq = -0.5 * (b + np.copysign(np.sqrt(np.maximum(disc, 0.0)), b))
         r1 = np.where(lin, np.where(b != 0, -c / b, np.nan), qq / a)
         r2 = np.where(lin, np.nan, np.where(qq != 0, c / qq, -b / (2 * a)))
@@ -141,20 +141,100 @@ def windows(
     """The crossing windows about reversals at ``t_root`` inside steps [t0, t1].
 
     Width sqrt(8 tol / |A|) (the part stands at the extreme meanwhile and misses
-    the path by |A| (δ/2)² / 2), between MIN_WINDOW_S and ``longest``; no sliver of
-    a step is left beside a window (a step much shorter than the window makes the
-    rounding of the written positions a large velocity error): the window grows by
-    at most half its width on that side (its error by 2.25 x).
+    the path by |A| (δ/2)² / 2), between MIN_WINDOW_S and ``longest``. A window
+    that would reach past an end of its step is cut there, not shifted: shifted,
+    the part would stand for a whole width on one side of the extreme and meet the
+    motor 4 x as far behind the path, to be caught up by the next segment (a
+    corner's point is often the root itself). No sliver of a step is left beside a
+    window (a step much shorter than the window makes the rounding of the written
+    positions a large velocity error): the window grows by at most half its width
+    on that side.
     """
     with np.errstate(divide="ignore"):
         width = np.where(accel == 0, longest, np.sqrt(8.0 * tol / np.abs(accel)))
     width = np.clip(width, MIN_WINDOW_S, longest)
     whole = width >= t1 - t0
-    a = np.minimum(np.maximum(t_root - 0.5 * width, t0), t1 - width)
-    b = a + width
+    a = np.maximum(t_root - 0.5 * width, t0)
+    b = np.minimum(t_root + 0.5 * width, t1)
+    # never shorter than a servo cycle: grown into the step where it was cut
+    short = b - a < MIN_WINDOW_S
+    b = np.where(short & (a <= t0), np.minimum(a + MIN_WINDOW_S, t1), b)
+    a = np.where(short & (a > t0), np.maximum(b - MIN_WINDOW_S, t0), a)
     a = np.where(a - t0 < 0.5 * width, t0, a)
     b = np.where(t1 - b < 0.5 * width, t1, b)
     return np.where(whole, t0, a), np.where(whole, t1, b)
+
+
+def turning_points(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Both roots of the cubic's velocity (:func:`velocity_roots`) where both lie
+    strictly inside the step, in time order; NaN elsewhere."""
+    d = (P0 - P1) / h
+    a = 6.0 * d + 3.0 * (V0 + V1)
+    b = -6.0 * d - 4.0 * V0 - 2.0 * V1
+    c = V0
+    disc = b * b - 4.0 * a * c
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        sq = np.sqrt(np.maximum(disc, 0.0))
+        qq = -0.5 * (b + np.copysign(sq, b))
+        r1, r2 = qq / a, c / qq
+    lo, hi = np.minimum(r1, r2), np.maximum(r1, r2)
+    ok = (disc > 0) & (np.abs(a) > 0) & (lo > 0) & (hi < 1) & (hi > lo)
+    return np.where(ok, lo, np.nan), np.where(ok, hi, np.nan)
+
+
+def _dips(
+    k: np.ndarray,
+    sg: np.ndarray,
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    t_end: np.ndarray,
+    dt: np.ndarray,
+    tol: float,
+    longest: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The two crossings of every step ``k`` whose cubic turns back and on again
+    while the motor moves the same way (``sg``) at both of its ends.
+
+    A dip shallower than ``tol`` is left alone: the part stands at the first
+    turning point while the motor goes back and forth within its play, and misses
+    the path by the dip's depth at most. Each of the two windows keeps to its own
+    half of the step (cut between the two turning points), so that they never
+    overlap.
+
+    Returns (step, new side, window start, window end) for 2 m windows, the first
+    crossing of every dip before the second.
+    """
+    h = dt[k]
+    s1, s2 = turning_points(P0, V0, P1, V1, h)
+    turns = np.isfinite(s1)
+    k, sg, h, s1, s2 = k[turns], sg[turns], h[turns], s1[turns], s2[turns]
+    P0, V0, P1, V1 = P0[turns], V0[turns], P1[turns], V1[turns]
+    s = np.column_stack([s1, s2])
+    h00 = 2 * s**3 - 3 * s**2 + 1
+    h10 = s**3 - 2 * s**2 + s
+    h01 = -2 * s**3 + 3 * s**2
+    h11 = s**3 - s**2
+    p = h00 * P0[:, None] + h10 * (h * V0)[:, None] + h01 * P1[:, None] + h11 * (h * V1)[:, None]
+    deep = np.abs(p[:, 1] - p[:, 0]) > tol
+    k, sg, h, s1, s2 = k[deep], sg[deep], h[deep], s1[deep], s2[deep]
+    d = (P0[deep] - P1[deep]) / h
+    a = 6.0 * d + 3.0 * (V0[deep] + V1[deep])
+    b = -6.0 * d - 4.0 * V0[deep] - 2.0 * V1[deep]
+    t1 = t_end[k]
+    t0 = t1 - h
+    tm = t0 + 0.5 * (s1 + s2) * h
+    ta1, tb1 = windows(t0, tm, t0 + s1 * h, (2 * a * s1 + b) / h, tol, longest)
+    ta2, tb2 = windows(tm, t1, t0 + s2 * h, (2 * a * s2 + b) / h, tol, longest)
+    return (
+        np.concatenate([k, k]),
+        np.concatenate([-sg, sg]),
+        np.concatenate([ta1, ta2]),
+        np.concatenate([tb1, tb2]),
+    )
 
 
 def _snap(k: np.ndarray, t: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
@@ -231,12 +311,13 @@ def plan_insertions(
             ref[col] = float(P_all[moving_rows[-1], col])
         r = np.flatnonzero((sg != 0) & (sg != came))
         r = r[(r - off >= 0) & (r - off < n)]
-        if not r.size:
-            continue
         k = r - off
         new = sg[r]
         at_rest = (r == 0) | rest_all[np.maximum(r - 1, 0)]
         crept_f = (crept[r] != 0) & ~at_rest
+        # drifted back within a step that began moving the old way (it ends at rest,
+        # or creeping): the step's cubic turns inside it, and the window goes there
+        crept_f &= sg[np.maximum(r - 1, 0)] != -new
         p = P_all[:, col]
         stood = (
             ~at_rest
@@ -276,8 +357,28 @@ def plan_insertions(
         w_k.append(km)
         w_ta.append(ta)
         w_tb.append(tb)
-        w_col.append(np.full(len(kc) + len(ks) + len(km), col))
-        w_new.append(np.concatenate([new[crept_f], new[stood], new[mid]]))
+        # a dip: the motor moves the same way at both ends of a step, but the step's
+        # cubic turns twice inside it (the extreme of a tight curve between two
+        # points, or a corner whose point carries the mean of its sides' velocities)
+        j = np.flatnonzero((sg[1:] == sg[:-1]) & (sg[1:] != 0)) + 1
+        j = j[(j - off >= 0) & (j - off < n)]
+        kd, new_d, ta_d, tb_d = _dips(
+            j - off,
+            sg[j],
+            p[j - 1],
+            V_all[j - 1, col],
+            p[j],
+            V_all[j, col],
+            t_end,
+            dt,
+            tol,
+            longest,
+        )
+        w_k.append(kd)
+        w_ta.append(ta_d)
+        w_tb.append(tb_d)
+        w_col.append(np.full(len(kc) + len(ks) + len(km) + len(kd), col))
+        w_new.append(np.concatenate([new[crept_f], new[stood], new[mid], new_d]))
     if w_col:
         wk = np.concatenate(w_k)
         ta, tb = np.concatenate(w_ta), np.concatenate(w_tb)
@@ -367,8 +468,12 @@ def sides(
     s_new = np.array([n for _, _, n in ins.stands], dtype=int)
     for col in cols:
         sg = np.where(resting, 0, signs(V[:, col]))
-        mine = ins.w_col == col
+        mine = np.flatnonzero(ins.w_col == col)
+        mine = mine[np.argsort(e_all[mine], kind="stable")]
         f, e, new = f_all[mine], e_all[mine], ins.w_new[mine]
+        # two crossings in one step (a dip): the second's old side starts after the
+        # first's end
+        f = np.maximum(f, np.concatenate([[0], e[:-1] + 1]))
         length = np.maximum(e - f, 0)
         idx = np.repeat(f - np.cumsum(length) + length, length) + np.arange(length.sum())
         sg[idx] = np.repeat(-new, length)

@@ -3,7 +3,7 @@
 (source: samples/five-axis.ngc)
 (source sha256: a30460f0f55439e4c21c3e2781c190dc5d201104b394d737cb509379db11b488)
 (profile: PRS-XY nominal, shop settings [profiles/prsxy-shop.toml])
-(profile sha256: c6e88ade0c34681acc3482f7fc9b577a9d5fcc83774e6dd4c2cff1fb547ef3a8)
+(profile sha256: 729932412e491ec0e802ac1bdfa41e24f67381744b2352f0aa41e6032a7ae67d)
 (options: --format gcode)
 (interpolation period: 10 ms; path tolerance 0.0005 mm and 0.5 arcsec where the program sets none [a G64 P in the program sets its own])
 (For a controller whose inverse kinematics is the nominal design, with an ideal table.)

@@ -3,7 +3,7 @@
 (source: samples/pocket.ngc)
 (source sha256: 0f999217469b6e1517f180bd1d8d36c783b3d537628f473044ee05ff2ec6122d)
 (profile: PRS-XY nominal, shop settings [profiles/prsxy-shop.toml])
-(profile sha256: c6e88ade0c34681acc3482f7fc9b577a9d5fcc83774e6dd4c2cff1fb547ef3a8)
+(profile sha256: 729932412e491ec0e802ac1bdfa41e24f67381744b2352f0aa41e6032a7ae67d)
 (options: --format gcode)
 (interpolation period: 10 ms; path tolerance 0.0005 mm and 0.5 arcsec where the program sets none [a G64 P in the program sets its own])
 (For a controller whose inverse kinematics is the nominal design, with an ideal table.)
