@@ -185,10 +185,35 @@ SHORT_ARCS_WITH_PLAY = (
     "G2 X2.1025 Y-0.2796 I-0.5333 J-0.8459 F60\nG0 Z2\nM2\n"
 )
 
+#: Machine 21: a 0.2 mm arc at F6000 ends in a stop just past the top of the circle,
+#: where the Y motor turns: it was taken for a motor creeping back at rest and
+#: crossed in the last millisecond before the stop, the part standing at the top
+#: meanwhile (0.68 µm off the arc).
+ARC_INTO_A_STOP = (
+    "G21 G90 G17 G94\nG0 X0 Y0 Z2\nG1 Z0 F300\n"
+    "G2 X1.6400 Y-1.2215 I-5.2671 J-8.7835 F3000\nG3 X18.2306 Y2.6439 I6.9680 J7.6293 F6000\n"
+    "G2 X18.2705 Y2.6446 I0.0235 J-0.1986 F6000\n"
+    "G3 X34.8413 Y-14.8855 I13.9134 J-3.4451 F3000\nG0 Z2\nM2\n"
+)
+#: Machine 22: a crossing at F60; written to 6 decimals, the 1 nm rounding over the
+#: 1 ms window moved the other motor 0.14 % faster than F.
+SLOW_CROSSING = (
+    "G21 G90 G17 G94\nG0 X0 Y0 Z2\nG1 Z0 F300\nG1 X-2.4231 Y-0.6152 F60\n"
+    "G3 X-0.6186 Y1.6262 I0.7142 J1.2721 F3000\nG1 X-0.8388 Y2.0750 F60\n"
+    "G1 X9.2946 Y0.6012 F3000\nG3 X15.4189 Y-1.3482 I3.1773 J-0.6130 F60\n"
+    "G1 X15.4396 Y-1.3027 F3000\nG0 Z2\nM2\n"
+)
+FOUND = [
+    (21, TIGHT_ARC_WITH_PLAY),
+    (21, SHORT_ARCS_WITH_PLAY),
+    (21, ARC_INTO_A_STOP),
+    (22, SLOW_CROSSING),
+]
 
-@pytest.mark.parametrize("text", [TIGHT_ARC_WITH_PLAY, SHORT_ARCS_WITH_PLAY])
-def test_short_tight_blocks_where_a_motor_with_play_reverses(text: str) -> None:
-    truth = truth_machine("random", 21)
+
+@pytest.mark.parametrize(("seed", "text"), FOUND, ids=["dip", "corner-root", "stop", "slow"])
+def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, text: str) -> None:
+    truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text)
     assert_within(judge_pmac(truth, motions, res, texts), None)
 
