@@ -15,7 +15,11 @@ of it while the path goes on. So the jump gets a window of its own:
   profile's ``reversal_ms``;
 - a reversal at rest (the path stood still at the previous point, the motor
   leaves the other way): one more point at the same pose, δ later, at which the
-  motor has crossed; the path waits for it.
+  motor has crossed; the path waits for it;
+- a dip (the motor moves the same way at both ends of a step, but the step's
+  cubic turns back and on again inside it: a tight curve's extreme between two
+  points): two windows, one at each turning point, when the dip is deeper than
+  the tolerance.
 """
 
 from __future__ import annotations
@@ -72,7 +76,7 @@ class Insertions:
     stands : (k, col, new) motors that cross at the standing point before row k
     w_k, w_col, w_ta, w_tb, w_new : (w,) crossing windows inside steps: in the step
         ending at row w_k, motor w_col is on its old side −w_new up to w_ta and on
-        the new side from w_tb
+        the new side from w_tb (a dip gives one motor two windows in one step)
     w_t0 : (w,) the start of each window's step [s]
     mid_k, mid_t : (m,) the points put inside steps: the row whose step they are in,
         and their time since the chunk's previous point; sorted by step, then time
