@@ -98,24 +98,42 @@ class Insertions:
         return bool(self.stand) or len(self.mid_k) > 0
 
 
+def _velocity_quadratic(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(a, b, c) of the Hermite cubic's velocity a s² + b s + c in s = t / h:
+    c = V0, a = 6 (P0 − P1)/h + 3 (V0 + V1), b = −6 (P0 − P1)/h − 4 V0 − 2 V1.
+    """
+    d = (P0 - P1) / h
+    return 6.0 * d + 3.0 * (V0 + V1), -6.0 * d - 4.0 * V0 - 2.0 * V1, V0
+
+
+def _hermite(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray, s: np.ndarray
+) -> np.ndarray:
+    """The cubic through (P0, V0) and (P1, V1) over time h (n,) at fractions s (n, k)
+    of each step: (n, k) positions."""
+    h00 = 2 * s**3 - 3 * s**2 + 1
+    h10 = s**3 - 2 * s**2 + s
+    h01 = -2 * s**3 + 3 * s**2
+    h11 = s**3 - s**2
+    return h00 * P0[:, None] + h10 * (h * V0)[:, None] + h01 * P1[:, None] + h11 * (h * V1)[:, None]
+
+
 def velocity_roots(
     P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Where the cubic through (P0, V0) and (P1, V1) over time h has zero velocity,
     for arrays of steps.
 
-    The Hermite cubic's velocity is a quadratic a s² + b s + c in s = t / h, with
-    c = V0, a = 6 (P0 − P1)/h + 3 (V0 + V1), b = −6 (P0 − P1)/h − 4 V0 − 2 V1.
+    The Hermite cubic's velocity is a quadratic (:func:`_velocity_quadratic`).
 
     Returns
     -------
     s : (n,) the first root in [0, 1] (where the velocity changes sign from V0's)
     accel : (n,) the cubic's acceleration there [mm/s²]
     """
-    d = (P0 - P1) / h
-    a = 6.0 * d + 3.0 * (V0 + V1)
-    b = -6.0 * d - 4.0 * V0 - 2.0 * V1
-    c = V0
+    a, b, c = _velocity_quadratic(P0, V0, P1, V1, h)
     disc = b * b - 4.0 * a * c
     lin = np.abs(a) < 1e-12 * (np.abs(b) + np.abs(c) + 1e-300)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -174,10 +192,7 @@ def turning_points(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Both roots of the cubic's velocity (:func:`velocity_roots`) where both lie
     strictly inside the step, in time order; NaN elsewhere."""
-    d = (P0 - P1) / h
-    a = 6.0 * d + 3.0 * (V0 + V1)
-    b = -6.0 * d - 4.0 * V0 - 2.0 * V1
-    c = V0
+    a, b, c = _velocity_quadratic(P0, V0, P1, V1, h)
     disc = b * b - 4.0 * a * c
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         sq = np.sqrt(np.maximum(disc, 0.0))
@@ -217,17 +232,10 @@ def _dips(
     turns = np.isfinite(s1)
     k, sg, h, s1, s2 = k[turns], sg[turns], h[turns], s1[turns], s2[turns]
     P0, V0, P1, V1 = P0[turns], V0[turns], P1[turns], V1[turns]
-    s = np.column_stack([s1, s2])
-    h00 = 2 * s**3 - 3 * s**2 + 1
-    h10 = s**3 - 2 * s**2 + s
-    h01 = -2 * s**3 + 3 * s**2
-    h11 = s**3 - s**2
-    p = h00 * P0[:, None] + h10 * (h * V0)[:, None] + h01 * P1[:, None] + h11 * (h * V1)[:, None]
+    p = _hermite(P0, V0, P1, V1, h, np.column_stack([s1, s2]))
     deep = np.abs(p[:, 1] - p[:, 0]) > tol
     k, sg, h, s1, s2 = k[deep], sg[deep], h[deep], s1[deep], s2[deep]
-    d = (P0[deep] - P1[deep]) / h
-    a = 6.0 * d + 3.0 * (V0[deep] + V1[deep])
-    b = -6.0 * d - 4.0 * V0[deep] - 2.0 * V1[deep]
+    a, b, _ = _velocity_quadratic(P0[deep], V0[deep], P1[deep], V1[deep], h)
     t1 = t_end[k]
     t0 = t1 - h
     tm = t0 + 0.5 * (s1 + s2) * h
@@ -520,11 +528,8 @@ def follow(
     Pa = np.concatenate([[P0], P[:-1]])
     Va = np.concatenate([[V0], V[:-1]])
     h = dt
-    with np.errstate(divide="ignore", invalid="ignore"):
-        d = np.where(h > 0, (Pa - P) / h, 0.0)
-    a = 6.0 * d + 3.0 * (Va + V)
-    b = -6.0 * d - 4.0 * Va - 2.0 * V
-    c = Va
+    # a step of no time (a standing point's twin) has no cubic: h = ∞ makes it flat
+    a, b, c = _velocity_quadratic(Pa, Va, P, V, np.where(h > 0, h, np.inf))
     disc = b * b - 4.0 * a * c
     with np.errstate(divide="ignore", invalid="ignore"):
         sq = np.sqrt(np.maximum(disc, 0.0))
@@ -534,11 +539,7 @@ def follow(
     ok2 = (disc >= 0) & (r2 > 0) & (r2 < 1) & (h > 0) & (np.abs(r2 - r1) > 0)
     s = np.column_stack([np.where(ok1, r1, np.nan), np.where(ok2, r2, np.nan), np.ones(n)])
     s = np.sort(s, axis=1)  # the turning points in time order (NaN last), the end last
-    h00 = 2 * s**3 - 3 * s**2 + 1
-    h10 = s**3 - 2 * s**2 + s
-    h01 = -2 * s**3 + 3 * s**2
-    h11 = s**3 - s**2
-    cmd = h00 * Pa[:, None] + h10 * (h * Va)[:, None] + h01 * P[:, None] + h11 * (h * V)[:, None]
+    cmd = _hermite(Pa, Va, P, V, h, s)
     keep = ~np.isnan(s)
     flat = cmd[keep]
     row = np.repeat(np.arange(n), keep.sum(axis=1))

@@ -29,6 +29,14 @@ def hermite(P0: float, V0: float, P1: float, V1: float, h: float, s: np.ndarray)
     )
 
 
+def velocity_poly(p0: float, v0: float, p1: float, v1: float, h: float) -> list[float]:
+    """The cubic's coefficients in s expanded and differentiated (highest power
+    first, for numpy.roots): independent of the module's algebra."""
+    c3 = 2 * p0 + h * v0 - 2 * p1 + h * v1
+    c2 = -3 * p0 - 2 * h * v0 + 3 * p1 - h * v1
+    return [3 * c3, 2 * c2, h * v0]
+
+
 @settings(max_examples=200, deadline=None)
 @given(
     p0=st.floats(-5, 5),
@@ -46,16 +54,13 @@ def test_velocity_root_is_the_cubics_turning_point(
     s, acc = reversals.velocity_roots(
         np.array([p0]), np.array([v0]), np.array([p0 + dp]), np.array([V1]), np.array([h])
     )
-    # the cubic's coefficients in s, differentiated: independent of the module's algebra
-    c3 = 2 * p0 + h * v0 - 2 * (p0 + dp) + h * V1
-    c2 = -3 * p0 - 2 * h * v0 + 3 * (p0 + dp) - h * V1
-    c1 = h * v0
-    roots = np.roots([3 * c3, 2 * c2, c1])
+    poly = velocity_poly(p0, v0, p0 + dp, V1, h)
+    roots = np.roots(poly)
     real = np.sort(roots[np.isreal(roots)].real)
     first = real[(real >= -1e-9) & (real <= 1 + 1e-9)][0]
     assert abs(s[0] - first) < 1e-7
     # the acceleration from the same expanded polynomial: d²x/dt² = x''(s) / h²
-    a_ref = float(np.polyval([6 * c3, 2 * c2], first)) / h**2
+    a_ref = float(np.polyval(np.polyder(poly), first)) / h**2
     assert abs(acc[0] - a_ref) <= 1e-6 * max(1.0, abs(a_ref))
 
 
@@ -151,9 +156,7 @@ def test_turning_points_are_the_cubics_both_roots_inside_the_step(
     s1, s2 = reversals.turning_points(
         np.array([p0]), np.array([v0]), np.array([p0 + dp]), np.array([v1]), np.array([h])
     )
-    c3 = 2 * p0 + h * v0 - 2 * (p0 + dp) + h * v1
-    c2 = -3 * p0 - 2 * h * v0 + 3 * (p0 + dp) - h * v1
-    roots = np.roots([3 * c3, 2 * c2, h * v0])
+    roots = np.roots(velocity_poly(p0, v0, p0 + dp, v1, h))
     real = np.sort(roots[np.abs(roots.imag) < 1e-12].real)
     inside = real[(real > 1e-9) & (real < 1 - 1e-9)]
     if len(inside) == 2 and inside[1] - inside[0] > 1e-6:
