@@ -125,6 +125,7 @@ def child_convert(program: str, prof: str, out: str) -> None:
 
 
 def time_rs274(program: Path) -> float | None:
+    """``rs274 -g`` on a program, as a whole command [s]; None where not installed."""
     exe = shutil.which("rs274")
     if exe is None:
         return None
@@ -132,14 +133,17 @@ def time_rs274(program: Path) -> float | None:
         tbl = Path(d) / "tool.tbl"
         tbl.write_text("T1 P1 Z0 D6 ;\n")
         t0 = time.perf_counter()
-        subprocess.run(
+        proc = subprocess.run(
             [exe, "-t", str(tbl), "-g", str(program)],
             stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
             stdin=subprocess.DEVNULL,
             check=False,
         )
-        return time.perf_counter() - t0
+        seconds = time.perf_counter() - t0
+    if proc.returncode != 0:  # a failed run's time is no figure
+        raise SystemExit(f"rs274 failed on {program}: {proc.stderr.decode()[-300:]}")
+    return seconds
 
 
 def time_command(program: Path, prof: Path, out: Path) -> float:

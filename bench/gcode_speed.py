@@ -28,8 +28,6 @@ from __future__ import annotations
 
 import argparse
 import platform
-import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -39,7 +37,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from bench import generate  # noqa: E402
+from bench import generate, time_rs274  # noqa: E402
 
 
 def cam_with_comp(n_lines: int) -> str:
@@ -80,27 +78,6 @@ def time_ours(path: Path) -> tuple[float, int]:
     t0 = time.perf_counter()
     n = sum(1 for _ in program.motions_of_file(path))
     return time.perf_counter() - t0, n
-
-
-def time_rs274(path: Path) -> float | None:
-    exe = shutil.which("rs274")
-    if exe is None:
-        return None
-    with tempfile.TemporaryDirectory() as d:
-        tbl = Path(d) / "tool.tbl"
-        tbl.write_text("T1 P1 Z0 D6 ;\n")
-        t0 = time.perf_counter()
-        proc = subprocess.run(
-            [exe, "-t", str(tbl), "-g", str(path)],
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE,
-            stdin=subprocess.DEVNULL,
-            check=False,
-        )
-        seconds = time.perf_counter() - t0
-    if proc.returncode != 0:
-        raise SystemExit(f"rs274 failed on {path}: {proc.stderr.decode()[-300:]}")
-    return seconds
 
 
 def main() -> None:
