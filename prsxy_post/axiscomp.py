@@ -158,10 +158,11 @@ def _clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     n = len(a)
     off = 1
     while off < n:
-        a_prev = a[:-off]
-        b_prev = b[:-off]
-        a_new = np.clip(a_prev, a[off:], b[off:])
-        b_new = np.clip(b_prev, a[off:], b[off:])
+        # clamp(x, lo, hi) = min(max(x, lo), hi), as np.clip defines it, without
+        # its per-call dispatch (this loop runs for every chunk and motor)
+        lo_k, hi_k = a[off:], b[off:]
+        a_new = np.minimum(np.maximum(a[:-off], lo_k), hi_k)
+        b_new = np.minimum(np.maximum(b[:-off], lo_k), hi_k)
         a[off:] = a_new
         b[off:] = b_new
         off *= 2

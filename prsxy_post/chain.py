@@ -529,7 +529,7 @@ class Pipeline:
         )
         t0 = time.perf_counter()
         side = np.tile(self.side, (len(pc), 1))
-        contacts: list[tuple[int, int, int]] = []
+        contacts = np.zeros((0, 3), dtype=int)
         if self.play_cols and reachable:
             pc, side, contacts = self._reversals(plan, s, pc)
         # a running sum continued across chunks (not chunk offset + cumsum), so the
@@ -555,11 +555,11 @@ class Pipeline:
 
     def _reversals(
         self, plan: Plan | None, s: Samples, pc: PointChunk
-    ) -> tuple[PointChunk, np.ndarray, list[tuple[int, int, int]]]:
+    ) -> tuple[PointChunk, np.ndarray, np.ndarray]:
         """Give every reversal of a motor with play its crossing window
         (:mod:`.reversals`). Returns the points, the side every motor is on at each,
-        and the crossings (the point where each ends, the point where it began, the
-        motor's column)."""
+        and the crossings (M, 3) ints: the point where each ends, the point where it
+        began, the motor's column; in that order."""
         last = self.last
         prev = (
             None if last is None else (last.P_ideal[0], last.V_ideal[0], bool(last.speed[0] == 0))
@@ -611,14 +611,14 @@ class Pipeline:
         )
         begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
         cols = np.concatenate([ins.w_col, np.array([c for _, c, _ in ins.stands], dtype=int)])
-        contacts = sorted(zip(ends.tolist(), begs.tolist(), cols.tolist(), strict=True))
-        return pc, side, contacts
+        contacts = np.column_stack([ends, begs, cols]).astype(int)
+        return pc, side, contacts[np.lexsort((cols, begs, ends))]
 
     def _settle(
         self,
         pc: PointChunk,
         side: np.ndarray,
-        contacts: list[tuple[int, int, int]],
+        contacts: np.ndarray,
         P_cmd: np.ndarray,
         V_cmd: np.ndarray,
     ) -> None:
@@ -645,13 +645,12 @@ class Pipeline:
             else:
                 y0 = self.play_y[col]
                 P0, V0 = float(prev_P[col]), float(prev_V[col])  # type: ignore[index]
-            mine = [(end, beg) for end, beg, c in contacts if c == col]
-            if mine:
+            mine = contacts[contacts[:, 2] == col]
+            if len(mine):
                 y_pt, lo, hi = reversals.follow(
                     table, y0, P0, V0, P_cmd[:, col], V_cmd[:, col], pc.dt
                 )
-                e = np.array([c[0] for c in mine])
-                b = np.array([c[1] for c in mine])
+                e, b = mine[:, 0], mine[:, 1]
                 # where the part stands when the crossing begins: the extreme it
                 # reached on the old side, over the window (its start included)
                 at_beg = np.where(b >= 0, y_pt[np.maximum(b, 0)], y0)
@@ -695,10 +694,15 @@ class Pipeline:
         e_when: list[float] = []
         e_before: list[bool] = []
         dt = pc.dt.copy()
-        for k, hold in sorted(ins.stand.items()):
-            src = pc.take(slice(k - 1, k)) if k > 0 else self.last
-            assert src is not None  # a stand needs a point to stand at
-            dup = PointChunk(**{f.name: getattr(src, f.name).copy() for f in fields(src)})
+        if ins.stand:
+            ks_stand = np.array(sorted(ins.stand), dtype=int)
+            hold = np.array([ins.stand[k] for k in ks_stand.tolist()])
+            # each stands at the point before it (the chunk's first at the last one made)
+            inner = pc.take(np.maximum(ks_stand - 1, 0))
+            if ks_stand[0] == 0:
+                assert self.last is not None  # a stand needs a point to stand at
+                inner = PointChunk.concat([self.last, inner.take(slice(1, None))])
+            dup = inner
             dup.qdot[:] = 0.0
             dup.V_ideal[:] = 0.0
             dup.V_cmd[:] = 0.0
@@ -709,11 +713,11 @@ class Pipeline:
             dup.first[:] = False
             dup.fn[:] = None
             dup.dt[:] = hold
-            dup.line[:] = pc.line[k]
+            dup.line[:] = pc.line[ks_stand]
             parts.append(dup)
-            e_step.append(k)
-            e_when.append(float(t_end[k] - pc.dt[k]))
-            e_before.append(True)
+            e_step += ks_stand.tolist()
+            e_when += (t_end[ks_stand] - pc.dt[ks_stand]).tolist()
+            e_before += [True] * len(ks_stand)
         if len(ins.mid_k) and plan is not None:
             ks = ins.mid_k
             tt = ins.mid_t

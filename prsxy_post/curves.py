@@ -24,10 +24,13 @@ A and B (which G5 cannot move) go linearly from the motion's start to its end.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.polynomial.legendre import leggauss
-from scipy.interpolate import BSpline
+
+if TYPE_CHECKING:
+    from scipy.interpolate import BSpline
 
 #: arc-length accuracy of :meth:`Nurbs.u_at` [mm]
 LENGTH_TOLERANCE = 1e-9
@@ -66,6 +69,10 @@ class Nurbs:
         for name, v in (("control", c), ("weights", w), ("knots", t)):
             v.setflags(write=False)
             object.__setattr__(self, name, v)
+        # imported here: scipy.interpolate takes 0.4 s to import, and only
+        # programs with splines (G5.x) need it
+        from scipy.interpolate import BSpline
+
         hom = np.column_stack([c * w[:, None], w])
         spline = BSpline(t, hom, self.degree, extrapolate=False)
         object.__setattr__(self, "_spline", spline)

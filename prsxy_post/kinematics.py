@@ -28,6 +28,7 @@ Then c = M⁺ r(γ) exactly. No iteration, no warm start, and vectorised.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -226,33 +227,80 @@ def solve_platform(
     PlatformPose; rows with no solution hold NaN.
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
+    return _solve(geo, q, tool_length_offset).pose()
+
+
+@dataclass(frozen=True)
+class _Solved:
+    """The platform solution in components (N,) each, as :func:`inverse` uses it:
+    sines and cosines of A, B and γ, the centre c and the tool vector t."""
+
+    ca: np.ndarray
+    sa: np.ndarray
+    cb: np.ndarray
+    sb: np.ndarray
+    cg: np.ndarray
+    sg: np.ndarray
+    gamma: np.ndarray
+    c: np.ndarray  # (N, 3)
+    t: np.ndarray  # (N, 3)
+
+    def rotate(self, w0: np.ndarray, w1: np.ndarray, w2: np.ndarray) -> tuple[np.ndarray, ...]:
+        """R w = Ry(B) Rx(A) Rz(γ) w for w in components, each (N,) or (N, k)."""
+        cg, sg, ca, sa, cb, sb = self.cg, self.sg, self.ca, self.sa, self.cb, self.sb
+        if w0.ndim == 2:
+            cg, sg, ca, sa, cb, sb = (v[:, None] for v in (cg, sg, ca, sa, cb, sb))
+        x = cg * w0 - sg * w1
+        y = sg * w0 + cg * w1
+        # then Rx(A), then Ry(B)
+        y2 = ca * y - sa * w2
+        z2 = sa * y + ca * w2
+        return cb * x + sb * z2, y2, -sb * x + cb * z2
+
+    def pose(self) -> PlatformPose:
+        R = _rot_yx_cs(self.ca, self.sa, self.cb, self.sb)
+        Rab0, Rab1 = R[:, :, 0].copy(), R[:, :, 1].copy()
+        cg, sg = self.cg[:, None], self.sg[:, None]
+        # R = Rab Rz(γ): Rz mixes the first two columns only
+        R[:, :, 0] = Rab0 * cg + Rab1 * sg
+        R[:, :, 1] = Rab1 * cg - Rab0 * sg
+        return PlatformPose(self.c, self.gamma, R)
+
+
+def _solve(
+    geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float | None
+) -> _Solved:
+    """The closed-form platform solution (module docstring), written in components:
+    the same equations as matrices, without (N, 3, 3) products (the chain solves
+    every interpolated point twice)."""
     n = q.shape[0]
     t = _tool_vectors(geo, n, tool_length_offset)
-    Rab = _rot_yx(np.radians(q[:, 3]), np.radians(q[:, 4]))  # Ry(B) Rx(A), (N, 3, 3)
+    a, b_ = np.radians(q[:, 3]), np.radians(q[:, 4])
+    ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b_), np.sin(b_)
     nul, Mp = geo._m
+    # u_i · (Rab w) = (Rab^T u_i) · w, Rab = Ry(B) Rx(A) with columns
+    # (cb, 0, −sb), (sb sa, ca, cb sa), (sb ca, −sa, cb ca)
+    ux, uy, uz = geo.u[:, 0], geo.u[:, 1], geo.u[:, 2]
+    C = (ca[:, None], sa[:, None], cb[:, None], sb[:, None])
+    cA, sA, cB, sB = C
+    uR0 = cB * ux - sB * uz  # (N, 3 legs)
+    uR1 = sB * sA * ux + cA * uy + cB * sA * uz
+    uR2 = sB * cA * ux - sA * uy + cB * cA * uz
+    bx, by, bz = geo.b[:, 0], geo.b[:, 1], geo.b[:, 2]
+    gu = np.sum(geo.g * geo.u, axis=1)  # (3,)
     # R b = cos γ · Rab (bx, by, 0) + sin γ · Rab (−by, bx, 0) + Rab (0, 0, bz)
-    bxy = geo.b.copy()
-    bxy[:, 2] = 0.0
-    bperp = np.stack([-geo.b[:, 1], geo.b[:, 0], np.zeros(3)], -1)
-    bz = np.zeros_like(geo.b)
-    bz[:, 2] = geo.b[:, 2]
-    # u_i · (Rab w) = (Rab^T u_i) · w : project hinge axes into the tilted frame once.
-    uR = np.einsum("nji,kj->nki", Rab, geo.u)  # (N, 3 legs, 3)
-    gu = np.einsum("ij,ij->i", geo.g, geo.u)  # (3,)
-    const_legs = gu[None, :] - np.einsum("nkj,kj->nk", uR, bz)
-    cos_legs = -np.einsum("nkj,kj->nk", uR, bxy)
-    sin_legs = -np.einsum("nkj,kj->nk", uR, bperp)
-    rz = Rab[:, 2, :]  # row giving the z component of Rab w
-    txy = t.copy()
-    txy[:, 2] = 0.0
-    tperp = np.stack([-t[:, 1], t[:, 0], np.zeros(n)], -1)
-    const_z = geo.origin[2] + q[:, 2] - rz[:, 2] * t[:, 2]
-    cos_z = -np.einsum("nj,nj->n", rz, txy)
-    sin_z = -np.einsum("nj,nj->n", rz, tperp)
-    r0 = np.column_stack([const_legs, const_z])  # (N, 4)
-    rc = np.column_stack([cos_legs, cos_z])
-    rs = np.column_stack([sin_legs, sin_z])
-    K0, Kc, Ks = r0 @ nul, rc @ nul, rs @ nul
+    const_legs = gu - uR2 * bz
+    cos_legs = -(uR0 * bx + uR1 * by)
+    sin_legs = -(uR1 * bx - uR0 * by)
+    # the row of Rab giving the z component: (−sb, cb sa, cb ca)
+    rz0, rz1, rz2 = -sb, cb * sa, cb * ca
+    tx, ty, tz = t[:, 0], t[:, 1], t[:, 2]
+    const_z = geo.origin[2] + q[:, 2] - rz2 * tz
+    cos_z = -(rz0 * tx + rz1 * ty)
+    sin_z = -(rz1 * tx - rz0 * ty)
+    K0 = const_legs @ nul[:3] + const_z * nul[3]
+    Kc = cos_legs @ nul[:3] + cos_z * nul[3]
+    Ks = sin_legs @ nul[:3] + sin_z * nul[3]
     rho = np.hypot(Kc, Ks)
     phi = np.arctan2(Ks, Kc)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -261,20 +309,15 @@ def solve_platform(
     g2 = _wrap(phi - delta)
     gamma = np.where(np.abs(g1) <= np.abs(g2), g1, g2)
     cg, sg = np.cos(gamma), np.sin(gamma)
-    r = r0 + rc * cg[:, None] + rs * sg[:, None]
-    c = r @ Mp.T
-    # R = Rab Rz(γ), written out: Rz mixes the first two columns only
-    R = np.empty_like(Rab)
-    R[:, :, 0] = Rab[:, :, 0] * cg[:, None] + Rab[:, :, 1] * sg[:, None]
-    R[:, :, 1] = Rab[:, :, 1] * cg[:, None] - Rab[:, :, 0] * sg[:, None]
-    R[:, :, 2] = Rab[:, :, 2]
-    return PlatformPose(c, gamma, R)
+    r_legs = const_legs + cos_legs * cg[:, None] + sin_legs * sg[:, None]
+    r_z = const_z + cos_z * cg + sin_z * sg
+    c = r_legs @ Mp[:, :3].T + r_z[:, None] * Mp[:, 3]
+    return _Solved(ca, sa, cb, sb, cg, sg, gamma, c, t)
 
 
-def _rot_yx(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Ry(b) Rx(a) written out, shape (N, 3, 3); radians."""
-    ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
-    R = np.empty((len(a), 3, 3))
+def _rot_yx_cs(ca: np.ndarray, sa: np.ndarray, cb: np.ndarray, sb: np.ndarray) -> np.ndarray:
+    """Ry(b) Rx(a) from cosines and sines, shape (N, 3, 3)."""
+    R = np.empty((len(ca), 3, 3))
     R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = cb, sb * sa, sb * ca
     R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = 0.0, ca, -sa
     R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = -sb, cb * sa, cb * ca
@@ -298,13 +341,17 @@ class IKResult:
     """Motor positions and what the solution went through.
 
     P : (N, 5) [P1, P2, P3, P5, P6] mm; NaN where unreachable
-    pose : PlatformPose
+    pose : PlatformPose (made when asked for: the chain needs only P)
     reachable : (N,) bool
     """
 
     P: np.ndarray
-    pose: PlatformPose
+    _solved: _Solved
     reachable: np.ndarray
+
+    @cached_property
+    def pose(self) -> PlatformPose:
+        return self._solved.pose()
 
 
 def inverse(
@@ -328,23 +375,29 @@ def inverse(
     IKResult
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    pose = solve_platform(geo, q, tool_length_offset)
-    s = pose.c[:, None, :] + np.einsum("nij,kj->nki", pose.R, geo.b)
-    v = s - geo.g[None]
-    dv = np.einsum("nki,ki->nk", v, geo.d)
-    disc = dv**2 - np.einsum("nki,nki->nk", v, v) + geo.L[None] ** 2
+    sol = _solve(geo, q, tool_length_offset)
+    # s_i = c + R b_i, v_i = s_i − g_i, all legs at once: (N, 3 legs) per component
+    n = q.shape[0]
+    b = geo.b
+    Rb = sol.rotate(
+        np.broadcast_to(b[:, 0], (n, 3)),
+        np.broadcast_to(b[:, 1], (n, 3)),
+        np.broadcast_to(b[:, 2], (n, 3)),
+    )
+    v = [sol.c[:, j : j + 1] + Rb[j] - geo.g[:, j] for j in range(3)]
+    dv = v[0] * geo.d[:, 0] + v[1] * geo.d[:, 1] + v[2] * geo.d[:, 2]
+    disc = dv**2 - (v[0] ** 2 + v[1] ** 2 + v[2] ** 2) + geo.L**2
     with np.errstate(invalid="ignore"):
         p_head = dv + np.sqrt(disc)
     if geo.guide_bow is not None and np.any(geo.guide_bow):
-        p_head = _bowed_guides(geo, v, p_head)
-    t = _tool_vectors(geo, q.shape[0], tool_length_offset)
-    T = pose.c + np.einsum("nij,nj->ni", pose.R, t)
-    Dx = geo.origin[0] + q[:, 0] - T[:, 0]
-    Dy = geo.origin[1] + q[:, 1] - T[:, 1]
+        p_head = _bowed_guides(geo, np.stack(v, -1), p_head)
+    Rt = sol.rotate(sol.t[:, 0], sol.t[:, 1], sol.t[:, 2])
+    Dx = geo.origin[0] + q[:, 0] - (sol.c[:, 0] + Rt[0])
+    Dy = geo.origin[1] + q[:, 1] - (sol.c[:, 1] + Rt[1])
     p5, p6 = table_motors(geo, Dx, Dy)
     P = np.column_stack([p_head, p5, p6])
     reachable = np.all(np.isfinite(P), axis=1)
-    return IKResult(P, pose, reachable)
+    return IKResult(P, sol, reachable)
 
 
 def _bowed_guides(geo: Geometry, v: np.ndarray, p: np.ndarray) -> np.ndarray:

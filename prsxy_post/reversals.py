@@ -537,15 +537,28 @@ def follow(
         r2 = np.where(np.abs(a) > 1e-300, (-b + sq) / (2 * a), -1.0)
     ok1 = (disc >= 0) & (r1 > 0) & (r1 < 1) & (h > 0)
     ok2 = (disc >= 0) & (r2 > 0) & (r2 < 1) & (h > 0) & (np.abs(r2 - r1) > 0)
-    s = np.column_stack([np.where(ok1, r1, np.nan), np.where(ok2, r2, np.nan), np.ones(n)])
-    s = np.sort(s, axis=1)  # the turning points in time order (NaN last), the end last
-    cmd = _hermite(Pa, Va, P, V, h, s)
-    keep = ~np.isnan(s)
-    flat = cmd[keep]
-    row = np.repeat(np.arange(n), keep.sum(axis=1))
+    # samples of each step in time order: its turning points, then its end. Most
+    # steps have none, so the cubic is evaluated only where it turns (the end of a
+    # step is its point, P).
+    count = 1 + ok1.astype(np.int64) + ok2.astype(np.int64)
+    last_of = np.cumsum(count) - 1
+    flat = np.empty(int(last_of[-1]) + 1 if n else 0)
+    flat[last_of] = P
+    turns = np.flatnonzero(count > 1)
+    if turns.size:
+        a1, a2 = ok1[turns], ok2[turns]
+        q1, q2 = r1[turns], r2[turns]
+        early = np.where(a1 & a2, np.minimum(q1, q2), np.where(a1, q1, q2))
+        late = np.where(a1 & a2, np.maximum(q1, q2), np.nan)
+        cmd = _hermite(
+            Pa[turns], Va[turns], P[turns], V[turns], h[turns], np.column_stack([early, late])
+        )
+        start = (last_of - count + 1)[turns]
+        flat[start] = cmd[:, 0]
+        two = count[turns] == 3
+        flat[start[two] + 1] = cmd[two, 1]
     lo = table.lo(flat)  # type: ignore[attr-defined]
     hi = table.hi(flat)  # type: ignore[attr-defined]
     y = _clamp_scan(np.concatenate([[y0], lo]), np.concatenate([[y0], hi]))[1:]
-    bounds = np.flatnonzero(np.concatenate([[True], row[1:] != row[:-1]]))
-    y_end = y[np.concatenate([bounds[1:] - 1, [len(y) - 1]])]
-    return y_end, np.minimum.reduceat(y, bounds), np.maximum.reduceat(y, bounds)
+    bounds = last_of - count + 1
+    return y[last_of], np.minimum.reduceat(y, bounds), np.maximum.reduceat(y, bounds)
