@@ -18,13 +18,11 @@ Example
 from __future__ import annotations
 
 import contextlib
-import functools
 import gc
 import itertools
 import os
 import queue
 import sys
-import tempfile
 import threading
 import time
 import traceback
@@ -33,6 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from . import sinks
 from .chain import Stages
 from .errors import PrsxyError
 from .files import (
@@ -101,13 +100,6 @@ def iter_program_batches(
                     progress(chars)
 
         yield from gcode.iter_line_batches(pieces())
-
-
-def _part_path(out: str, part: int, nparts_hint: bool) -> str:
-    if not nparts_hint:
-        return out
-    base, ext = os.path.splitext(out)
-    return f"{base}.part{part + 1}{ext}"
 
 
 @dataclass
@@ -332,36 +324,10 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
         def bar(done: int) -> None:
             progress(done, size)
 
-    sinks: dict[int, Any] = {}
-    temps: dict[int, str] = {}
-    memory: dict[int, list[str]] = {}
-    split = False
-
-    def emit(pieces: list[tuple[int, str]]) -> None:
-        for part, text in pieces:
-            if job.output == "-":
-                memory.setdefault(part, []).append(text)
-                continue
-            if part not in sinks:
-                target = Path(_part_path(job.output, part, split))
-                target.parent.mkdir(parents=True, exist_ok=True)
-                fd, tmp = tempfile.mkstemp(
-                    prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
-                )
-                temps[part] = tmp
-                sinks[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
-            sinks[part].write(text)
-
     n_points = 0
-    t_write = 0.0
     counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
-
-    def write(make: Callable[[], list[tuple[int, str]]]) -> None:
-        nonlocal t_write
-        t0 = time.perf_counter()
-        emit(make())
-        t_write += time.perf_counter() - t0
-
+    out: sinks.WriterHere | sinks.WriterProcess | None = None
+    written_parts: sinks.Written | None = None
     try:
         # the interpreter starts first: with a second process, everything below
         # up to the first chunk happens while it reads
@@ -391,21 +357,26 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                 segment=dialect.segment,
                 max_part_points=dialect.parts(settings),
             )
-            write(writer.begin)
+            parts = sinks.Parts(job.output, split)
+            # a large program's text is formatted and written by a third process
+            # while this one runs the chain (the interpreter has the second)
+            out = (
+                sinks.WriterProcess(writer, parts)
+                if job.parallel and job.output != "-" and _can_fork()
+                else sinks.WriterHere(writer, parts)
+            )
+            out.begin()
             for prepared in source:
                 for pc in pipe.feed_prepared(prepared):
                     n_points += len(pc)
-                    write(functools.partial(writer.feed, pc))
+                    out.feed(pc)
         tail = pipe.finish()
         n_points += sum(len(pc) for pc in tail)
         for pc in tail:
-            write(functools.partial(writer.feed, pc))
-        write(writer.finish)
-        for fh in sinks.values():
-            fh.flush()
-            os.fsync(fh.fileno())
-            fh.close()
-        targets = [_part_path(job.output, part, split) for part in sorted(temps)]
+            out.feed(pc)
+        written_parts = out.finish()
+        temps = written_parts.temps
+        targets = [sinks.part_path(job.output, part, split) for part in sorted(temps)]
         for target in targets:  # a part's name (x.part1.pmc) too, before any is published
             refuse_to_overwrite(target, inputs)
         written = []
@@ -413,9 +384,10 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
             publish(temps[part], target)
             written.append(target)
         if job.output == "-":
+            memory = written_parts.memory
             sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))
             written = ["-"]
-        timings = {"parse": counts["parse"], **pipe.timings, "write": t_write}
+        timings = {"parse": counts["parse"], **pipe.timings, "write": written_parts.seconds}
         return ConvertStats(
             written,
             int(counts["lines"]),
@@ -425,7 +397,10 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
             counts.get("helper_peak_rss_mb"),
         )
     except PrsxyError as err:
-        raise err.located(source=job.program) from None
+        # the writer may be behind the chain: its error on an earlier chunk is
+        # the earlier one in the program
+        earlier = out.earlier_error() if out is not None else None
+        raise (earlier or err).located(source=job.program) from None
     except OSError as exc:
         raise PrsxyError(
             f"cannot write output: {exc.strerror}",
@@ -433,12 +408,18 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
             expected="a writable location",
         ) from None
     finally:
-        for fh in sinks.values():
-            if not fh.closed:
-                fh.close()
-        for tmp in temps.values():
-            if os.path.exists(tmp):
-                os.unlink(tmp)
+        if out is not None:
+            out.discard()
+        if written_parts is not None:
+            for tmp in written_parts.temps.values():
+                if os.path.exists(tmp):
+                    os.unlink(tmp)
+
+
+def _can_fork() -> bool:
+    import multiprocessing
+
+    return "fork" in multiprocessing.get_all_start_methods()
 
 
 def _run_job(job: ConvertJob) -> tuple[list[str] | None, PrsxyError | None]:

@@ -89,21 +89,25 @@ def time_law(b: Blocks, v_out: np.ndarray, v_start: float, min_phase: float) -> 
     vmax = np.maximum(b.vmax, np.maximum(v0, v1))
     lo = np.maximum(v0, v1)
 
-    def room(vp: np.ndarray) -> np.ndarray:
-        _, _, s1, s3 = _phases(vp, v0, v1, a, min_phase)
-        return L - s1 - s3
+    def room(vp: np.ndarray, k: slice | np.ndarray = slice(None)) -> np.ndarray:
+        """What blocks k leave for the cruise at peaks vp [mm]."""
+        _, _, s1, s3 = _phases(vp, v0[k], v1[k], a[k], min_phase)
+        return L[k] - s1 - s3
 
-    # highest peak with the rising and falling phases fitting in the block
-    fits = room(vmax) >= 0
-    top = vmax if fits.all() else np.where(fits, vmax, _bisect(lo, vmax, lambda x: room(x) >= 0))
+    # highest peak with the rising and falling phases fitting in the block; each
+    # bisection runs over the blocks that need it only (elementwise: the same bits)
+    top = vmax.copy()
+    k = np.flatnonzero(~(room(vmax) >= 0))
+    if k.size:
+        top[k] = _bisect(lo[k], vmax[k], lambda x: room(x, k) >= 0)
     # the cruise between them: none, or at least min_phase long
     with np.errstate(invalid="ignore", divide="ignore"):
         t2_top = np.where(top > 0, room(top) / top, np.inf)
         short_cruise = (t2_top * top > 1e-9 * np.maximum(1.0, L)) & (t2_top < min_phase)
-    if np.any(short_cruise):
+    k = np.flatnonzero(short_cruise)
+    if k.size:
         with np.errstate(invalid="ignore", divide="ignore"):
-            lowered = _bisect(lo, top, lambda x: room(x) >= min_phase * x)
-        top = np.where(short_cruise, lowered, top)
+            top[k] = _bisect(lo[k], top[k], lambda x: room(x, k) >= min_phase * x)
     vp = top
     t1, t3, s1, s3 = _phases(vp, v0, v1, a, min_phase)
     # what the bisection leaves of the block at the top of a triangle is rounding

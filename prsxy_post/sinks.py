@@ -1,0 +1,240 @@
+"""Where a conversion's text goes: the writer and the output's files.
+
+A dialect's writer turns point chunks into text pieces ``(part, text)``; the
+pieces go to temp files beside their targets (``x.pmc``, or ``x.part1.pmc`` …
+for split programs), or are held for standard output. Nothing is published
+here: the conversion renames the temp files onto their targets once the whole
+program has gone through (:func:`prsxy_post.files.publish`).
+
+The writing runs in this process (:class:`WriterHere`) or, for large programs
+where processes can fork, in a process of its own (:class:`WriterProcess`),
+so formatting and writing the text overlap with the chain. The bytes are the
+same either way, and so is the error a user sees: the earliest in the program.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import PrsxyError
+
+Piece = tuple[int, str]
+
+
+def part_path(out: str, part: int, split: bool) -> str:
+    """The file of one part: the output itself, or ``base.partN.ext`` when split."""
+    if not split:
+        return out
+    base, ext = os.path.splitext(out)
+    return f"{base}.part{part + 1}{ext}"
+
+
+@dataclass
+class Parts:
+    """The output's parts as temp files beside their targets (or in memory for
+    standard output, ``output == "-"``)."""
+
+    output: str
+    split: bool
+    temps: dict[int, str] = field(default_factory=dict)
+    memory: dict[int, list[str]] = field(default_factory=dict)
+    _files: dict[int, Any] = field(default_factory=dict)
+
+    def emit(self, pieces: list[Piece]) -> None:
+        for part, text in pieces:
+            if self.output == "-":
+                self.memory.setdefault(part, []).append(text)
+                continue
+            if part not in self._files:
+                target = Path(part_path(self.output, part, self.split))
+                target.parent.mkdir(parents=True, exist_ok=True)
+                fd, tmp = tempfile.mkstemp(
+                    prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
+                )
+                self.temps[part] = tmp
+                self._files[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
+            self._files[part].write(text)
+
+    def close(self) -> None:
+        """Every part complete on disk."""
+        for fh in self._files.values():
+            fh.flush()
+            os.fsync(fh.fileno())
+            fh.close()
+
+    def discard(self) -> None:
+        """Close and remove every temp file (a failed conversion leaves none)."""
+        for fh in self._files.values():
+            if not fh.closed:
+                fh.close()
+        for tmp in self.temps.values():
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+
+
+@dataclass
+class Written:
+    """What the writing left: temp file per part, the text per part for standard
+    output, and the seconds the writer took."""
+
+    temps: dict[int, str]
+    memory: dict[int, list[str]]
+    seconds: float
+
+
+class WriterHere:
+    """The writer in this process: each chunk is written as it comes."""
+
+    def __init__(self, writer: Any, parts: Parts) -> None:
+        self.writer = writer
+        self.parts = parts
+        self.seconds = 0.0
+
+    def _run(self, method: str, *args: Any) -> None:
+        t0 = time.perf_counter()
+        self.parts.emit(getattr(self.writer, method)(*args))
+        self.seconds += time.perf_counter() - t0
+
+    def begin(self) -> None:
+        self._run("begin")
+
+    def feed(self, chunk: Any) -> None:
+        self._run("feed", chunk)
+
+    def finish(self) -> Written:
+        """Write the end and close every part; raises the writer's error."""
+        self._run("finish")
+        self.parts.close()
+        return Written(self.parts.temps, self.parts.memory, self.seconds)
+
+    def earlier_error(self) -> PrsxyError | None:
+        """The writer's error on a chunk before the one the chain failed on: none
+        here, every chunk was written (or failed) as it came."""
+        return None
+
+    def discard(self) -> None:
+        self.parts.discard()
+
+
+def _serve(conn: Any, here: WriterHere) -> None:
+    """The writer process: ("begin",), ("feed", chunk)… then ("finish",), answered
+    with ("done", Written) or ("error", PrsxyError) / ("crash", text); or
+    ("check",), answered with the first error so far or ("ok",); or
+    ("discard",). After an error the chunks still coming are read and dropped,
+    so the chain never writes into a closed pipe."""
+    failed: tuple[str, Any] | None = None
+    try:
+        while True:
+            msg = conn.recv()
+            kind = msg[0]
+            if kind == "discard":
+                here.discard()
+                return
+            if kind == "check":
+                conn.send(failed or ("ok",))
+                continue
+            if failed is None:
+                try:
+                    if kind == "begin":
+                        here.begin()
+                    elif kind == "feed":
+                        here.feed(msg[1])
+                    elif kind == "finish":
+                        conn.send(("done", here.finish()))
+                        return
+                except PrsxyError as err:
+                    failed = ("error", err)
+                except Exception:
+                    failed = ("crash", traceback.format_exc())
+            if kind == "finish":
+                assert failed is not None
+                here.discard()
+                conn.send(failed)
+                return
+    except BaseException:
+        here.discard()
+        raise
+    finally:
+        conn.close()
+
+
+class WriterProcess:
+    """The writer in a process of its own (forked with the writer and parts as
+    made here, before any text): the chain sends each chunk down a pipe and goes
+    on. The pipe's buffer is the only queue, and the writer keeps up with the
+    chain, so memory stays bounded."""
+
+    def __init__(self, writer: Any, parts: Parts) -> None:
+        import multiprocessing
+
+        ctx = multiprocessing.get_context("fork")
+        self.conn, child = ctx.Pipe(duplex=True)
+        sys.stdout.flush()
+        sys.stderr.flush()
+        self.proc = ctx.Process(target=_serve, args=(child, WriterHere(writer, parts)), daemon=True)
+        self.proc.start()
+        child.close()
+        self.done = False
+
+    def _send(self, *msg: Any) -> None:
+        self.conn.send(msg)
+
+    def begin(self) -> None:
+        self._send("begin")
+
+    def feed(self, chunk: Any) -> None:
+        self._send("feed", chunk)
+
+    def _answer(self) -> tuple[Any, ...]:
+        try:
+            return self.conn.recv()
+        except (EOFError, OSError):
+            return ("crash", "the writer process ended without a result")
+
+    def finish(self) -> Written:
+        self._send("finish")
+        msg = self._answer()
+        self.done = True
+        self.proc.join()
+        if msg[0] == "done":
+            return msg[1]
+        if msg[0] == "error":
+            raise msg[1]
+        raise RuntimeError("in the writer process:\n" + msg[1])
+
+    def earlier_error(self) -> PrsxyError | None:
+        """The writer's error on a chunk sent before the one the chain failed on
+        (it is earlier in the program, so it is the one to report)."""
+        if self.done or not self.proc.is_alive():
+            return None
+        try:
+            self._send("check")
+        except OSError:
+            return None
+        msg = self._answer()
+        if msg[0] == "error":
+            return msg[1]
+        if msg[0] == "crash":
+            raise RuntimeError("in the writer process:\n" + msg[1])
+        return None
+
+    def discard(self) -> None:
+        """Stop the writer and remove its temp files (after ``finish`` the temp
+        files are this process's to remove)."""
+        if not self.done and self.proc.is_alive():
+            try:
+                self._send("discard")
+            except OSError:
+                pass
+            self.proc.join(timeout=10.0)
+        if self.proc.is_alive():
+            self.proc.terminate()
+            self.proc.join()
+        self.conn.close()
