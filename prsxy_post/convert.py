@@ -5,8 +5,9 @@ The library's conversion engine (the ``convert`` command is a thin shell over
 line batches, interpreted, and fed chunk by chunk through the compensation
 chain (:mod:`prsxy_post.chain`) into the dialect's writer; memory stays flat on
 programs of millions of lines. A program of :data:`PARALLEL_FROM_BYTES` or more
-may be read and interpreted in a second process while this one runs the chain;
-the output is byte for byte the same.
+may be read and interpreted in a second process while this one runs the chain,
+and its text formatted and written in a third (:mod:`prsxy_post.sinks`); the
+output is byte for byte the same.
 
 Example
 -------
@@ -57,9 +58,9 @@ class ConvertJob:
     stages : which compensation stages run
     options : how it was asked for, for the output's header
     chunk : motions per chunk through the chain (the output does not depend on it)
-    parallel : read and interpret the program in a second process while this one
-        runs the rest of the chain (the output is the same; only the wall time
-        changes)
+    parallel : read and interpret the program in a second process, and write the
+        output in a third, while this one runs the rest of the chain (the output
+        is the same; only the wall time changes)
     on_message : receives the program's messages (gcode.InterpreterConfig)
     """
 

@@ -1,0 +1,99 @@
+"""Where a conversion's text goes (prsxy_post.sinks): the writer in this process
+or in its own, the same bytes and the same first error either way, and nothing
+left on disk by a conversion that fails."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import tomlkit
+
+from prsxy_post import sinks
+from prsxy_post.chain import Stages
+from prsxy_post.convert import ConvertJob, convert_file
+from prsxy_post.errors import PrsxyError
+
+ROOT = Path(__file__).resolve().parent.parent
+SHOP = ROOT / "profiles" / "prsxy-shop.toml"
+
+
+def _profile(tmp_path: Path, **pmac: int) -> str:
+    doc = tomlkit.parse(SHOP.read_text())
+    for key, value in pmac.items():
+        doc["output"]["pmac"][key] = value  # type: ignore[index]
+    path = tmp_path / "shop.toml"
+    path.write_text(tomlkit.dumps(doc))
+    return str(path)
+
+
+def _program(tmp_path: Path, n: int, tail: list[str]) -> str:
+    body = ["G21 G90 G1 F1500"] + [
+        f"X{(i % 40) * 0.25:.2f} Y{(i % 9) * 0.5:.1f}" + (" G4 P0.01" if i % 500 == 0 else "")
+        for i in range(1, n)
+    ]
+    path = tmp_path / "job.ngc"
+    path.write_text("\n".join([*body, *tail, "M2"]) + "\n")
+    return str(path)
+
+
+def _run(program: str, prof: str, out: Path, parallel: bool) -> dict[str, bytes] | str:
+    """The files written (name → bytes), or the error's text."""
+    job = ConvertJob(program, prof, "pmac", str(out), None, Stages(), "", 700, parallel)
+    try:
+        written = convert_file(job).written
+    except PrsxyError as err:
+        return str(err)
+    return {Path(w).name: Path(w).read_bytes() for w in written}
+
+
+def _leftovers(d: Path) -> list[str]:
+    return sorted(p.name for p in d.iterdir() if p.name.endswith(".tmp"))
+
+
+@pytest.mark.parametrize("max_points", [0, 4000])
+def test_the_writer_process_writes_the_same_bytes(tmp_path: Path, max_points: int) -> None:
+    """One file, or a split program's parts: byte for byte the same."""
+    prof = _profile(tmp_path, max_points_per_program=max_points)
+    program = _program(tmp_path, 6000, [])
+    here = _run(program, prof, tmp_path / "a" / "job.pmc", parallel=False)
+    apart = _run(program, prof, tmp_path / "b" / "job.pmc", parallel=True)
+    assert isinstance(here, dict) and isinstance(apart, dict)
+    assert here == apart
+    assert (len(here) > 1) == (max_points > 0)
+    assert _leftovers(tmp_path / "a") == _leftovers(tmp_path / "b") == []
+
+
+def test_the_writers_earlier_error_wins_over_the_chains_later_one(tmp_path: Path) -> None:
+    """The writer refuses the third part (it would be PROG 1000, which Turbo PMAC
+    calls for G codes); the chain finds a move out of reach at the program's end.
+    In one process the writer's error comes first, as it is earlier in the
+    program; with the writer behind in its own process, still the same error,
+    and no file, part or temp file is left."""
+    prof = _profile(tmp_path, max_points_per_program=3000, program=998)
+    program = _program(tmp_path, 6000, ["G1 X900"])
+    here = _run(program, prof, tmp_path / "a" / "job.pmc", parallel=False)
+    apart = _run(program, prof, tmp_path / "b" / "job.pmc", parallel=True)
+    assert isinstance(here, str) and "PROG 1000" in here
+    assert apart == here
+    for d in ("a", "b"):
+        assert not (tmp_path / d).exists() or list((tmp_path / d).iterdir()) == []
+
+
+def test_a_chain_error_stops_the_writer_process_and_leaves_nothing(tmp_path: Path) -> None:
+    prof = _profile(tmp_path)
+    program = _program(tmp_path, 6000, ["G1 X900"])
+    out = tmp_path / "out" / "job.pmc"
+    out.parent.mkdir()
+    out.write_text("keep me")
+    here = _run(program, prof, tmp_path / "a" / "job.pmc", parallel=False)
+    apart = _run(program, prof, out, parallel=True)
+    assert isinstance(here, str) and "job.ngc:6001:" in here
+    assert apart == here
+    assert out.read_text() == "keep me"
+    assert _leftovers(out.parent) == []
+
+
+def test_part_paths() -> None:
+    assert sinks.part_path("a/x.pmc", 0, False) == "a/x.pmc"
+    assert sinks.part_path("a/x.pmc", 2, True) == "a/x.part3.pmc"
