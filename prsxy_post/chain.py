@@ -647,10 +647,13 @@ class Pipeline:
                 P0, V0 = float(prev_P[col]), float(prev_V[col])  # type: ignore[index]
             mine = contacts[contacts[:, 2] == col]
             if len(mine):
-                y_pt, lo, hi = reversals.follow(
-                    table, y0, P0, V0, P_cmd[:, col], V_cmd[:, col], pc.dt
-                )
                 e, b = mine[:, 0], mine[:, 1]
+                # followed up to the last contact only (the part's path is causal);
+                # from there the corrected commands carry it, below
+                upto = slice(0, int(e.max()) + 1)
+                y_pt, lo, hi = reversals.follow(
+                    table, y0, P0, V0, P_cmd[upto, col], V_cmd[upto, col], pc.dt[upto]
+                )
                 # where the part stands when the crossing begins: the extreme it
                 # reached on the old side, over the window (its start included)
                 at_beg = np.where(b >= 0, y_pt[np.maximum(b, 0)], y0)
@@ -698,11 +701,10 @@ class Pipeline:
             ks_stand = np.array(sorted(ins.stand), dtype=int)
             hold = np.array([ins.stand[k] for k in ks_stand.tolist()])
             # each stands at the point before it (the chunk's first at the last one made)
-            inner = pc.take(np.maximum(ks_stand - 1, 0))
+            dup = pc.take(np.maximum(ks_stand - 1, 0))  # fancy indexing: copies
             if ks_stand[0] == 0:
                 assert self.last is not None  # a stand needs a point to stand at
-                inner = PointChunk.concat([self.last, inner.take(slice(1, None))])
-            dup = inner
+                dup = PointChunk.concat([self.last, dup.take(slice(1, None))])
             dup.qdot[:] = 0.0
             dup.V_ideal[:] = 0.0
             dup.V_cmd[:] = 0.0

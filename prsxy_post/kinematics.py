@@ -267,22 +267,19 @@ class _Solved:
         return PlatformPose(self.c, self.gamma, R)
 
 
-def _solve(
-    geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float | None
-) -> _Solved:
+def _solve(geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float | None) -> _Solved:
     """The closed-form platform solution (module docstring), written in components:
     the same equations as matrices, without (N, 3, 3) products (the chain solves
     every interpolated point twice)."""
     n = q.shape[0]
     t = _tool_vectors(geo, n, tool_length_offset)
-    a, b_ = np.radians(q[:, 3]), np.radians(q[:, 4])
-    ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b_), np.sin(b_)
+    a_rad, b_rad = np.radians(q[:, 3]), np.radians(q[:, 4])
+    ca, sa, cb, sb = np.cos(a_rad), np.sin(a_rad), np.cos(b_rad), np.sin(b_rad)
     nul, Mp = geo._m
     # u_i · (Rab w) = (Rab^T u_i) · w, Rab = Ry(B) Rx(A) with columns
     # (cb, 0, −sb), (sb sa, ca, cb sa), (sb ca, −sa, cb ca)
     ux, uy, uz = geo.u[:, 0], geo.u[:, 1], geo.u[:, 2]
-    C = (ca[:, None], sa[:, None], cb[:, None], sb[:, None])
-    cA, sA, cB, sB = C
+    cA, sA, cB, sB = ca[:, None], sa[:, None], cb[:, None], sb[:, None]
     uR0 = cB * ux - sB * uz  # (N, 3 legs)
     uR1 = sB * sA * ux + cA * uy + cB * sA * uz
     uR2 = sB * cA * ux - sA * uy + cB * cA * uz
