@@ -295,9 +295,13 @@ def _solve(geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float 
     const_z = geo.origin[2] + q[:, 2] - rz2 * tz
     cos_z = -(rz0 * tx + rz1 * ty)
     sin_z = -(rz1 * tx - rz0 * ty)
-    K0 = const_legs @ nul[:3] + const_z * nul[3]
-    Kc = cos_legs @ nul[:3] + cos_z * nul[3]
-    Ks = sin_legs @ nul[:3] + sin_z * nul[3]
+    # n · r(γ) = K0 + Kc cos γ + Ks sin γ, written out (no BLAS call: a threaded
+    # BLAS would spin on the core the interpreter process runs on)
+
+    def dot_n(legs: np.ndarray, z: np.ndarray) -> np.ndarray:
+        return legs[:, 0] * nul[0] + legs[:, 1] * nul[1] + legs[:, 2] * nul[2] + z * nul[3]
+
+    K0, Kc, Ks = dot_n(const_legs, const_z), dot_n(cos_legs, cos_z), dot_n(sin_legs, sin_z)
     rho = np.hypot(Kc, Ks)
     phi = np.arctan2(Ks, Kc)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -308,7 +312,9 @@ def _solve(geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float 
     cg, sg = np.cos(gamma), np.sin(gamma)
     r_legs = const_legs + cos_legs * cg[:, None] + sin_legs * sg[:, None]
     r_z = const_z + cos_z * cg + sin_z * sg
-    c = r_legs @ Mp[:, :3].T + r_z[:, None] * Mp[:, 3]
+    c = np.column_stack(
+        [r_legs[:, 0] * m[0] + r_legs[:, 1] * m[1] + r_legs[:, 2] * m[2] + r_z * m[3] for m in Mp]
+    )  # c = M⁺ r
     return _Solved(ca, sa, cb, sb, cg, sg, gamma, c, t)
 
 
