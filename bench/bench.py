@@ -15,8 +15,9 @@ inside the process (what ``convert_file`` takes: read, interpret, plan, compensa
 write), ``command`` is the whole ``prsxy-post convert`` command as a user runs it
 (Python's start and imports included). In the same run and on the same file it
 times LinuxCNC's ``rs274 -g`` (a whole command too) and pygcode's ``Machine`` when
-they are installed. Large programs are interpreted in a second process (see
-README); peak memory is reported for both processes.
+they are installed. Large programs are interpreted in a second process and
+written by a third (see README); peak memory is reported for each: main +
+interpreter + writer.
 
 It is a script, not a test: the figures depend on the machine. README shows the
 latest figures with the machine they were taken on.
@@ -119,6 +120,7 @@ def child_convert(program: str, prof: str, out: str) -> None:
                 "timings": st.timings,
                 "peak_rss_mb": rss,
                 "helper_peak_rss_mb": st.helper_peak_rss_mb,
+                "writer_peak_rss_mb": st.writer_peak_rss_mb,
             }
         )
     )
@@ -228,9 +230,10 @@ def report(results: list[dict]) -> str:
     for r in results:
         rs, pg, cmd, tot = r["rs274_s"], r["pygcode_s"], r["command_s"], r["total_s"]
         helper = r.get("helper_peak_rss_mb") or 0.0
+        writer = r.get("writer_peak_rss_mb") or 0.0
         lines.append(
             f"| {r['lines']:,} | {tot:.2f} | {cmd:.2f} | {r['lines'] / cmd:,.0f} | "
-            f"{r['points'] / cmd:,.0f} | {r['peak_rss_mb']:.0f} + {helper:.0f} | "
+            f"{r['points'] / cmd:,.0f} | {r['peak_rss_mb']:.0f} + {helper:.0f} + {writer:.0f} | "
             f"{f(rs, '.2f')} | {f(pg, '.1f')} | {f(rs and tot / rs, '.2f')} | "
             f"{f(rs and cmd / rs, '.2f')} | {f(pg and pg / cmd, '.1f')} |"
         )

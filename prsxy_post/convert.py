@@ -114,6 +114,8 @@ class ConvertStats:
     timings: dict[str, float] | None = None
     #: peak resident memory of the interpreter process [MB] when one ran
     helper_peak_rss_mb: float | None = None
+    #: peak resident memory of the writer process [MB] when one ran
+    writer_peak_rss_mb: float | None = None
 
 
 def peak_rss_mb() -> float | None:
@@ -396,6 +398,7 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
             n_points,
             timings,
             counts.get("helper_peak_rss_mb"),
+            written_parts.peak_rss_mb,
         )
     except PrsxyError as err:
         # the writer may be behind the chain: its error on an earlier chunk is

@@ -82,11 +82,13 @@ class Parts:
 @dataclass
 class Written:
     """What the writing left: temp file per part, the text per part for standard
-    output, and the seconds the writer took."""
+    output, the seconds the writer took, and the writer process's peak memory
+    [MB] (None when it wrote in this process)."""
 
     temps: dict[int, str]
     memory: dict[int, list[str]]
     seconds: float
+    peak_rss_mb: float | None = None
 
 
 class WriterHere:
@@ -147,7 +149,11 @@ def _serve(conn: Any, here: WriterHere) -> None:
                     elif kind == "feed":
                         here.feed(msg[1])
                     elif kind == "finish":
-                        conn.send(("done", here.finish()))
+                        from .convert import peak_rss_mb
+
+                        written = here.finish()
+                        written.peak_rss_mb = peak_rss_mb()
+                        conn.send(("done", written))
                         return
                 except PrsxyError as err:
                     failed = ("error", err)
