@@ -246,25 +246,37 @@ def prepare(motions: Sequence[Motion], profile: Profile, limits: PlanLimits) -> 
 VEL_STEP_S = 1e-6
 
 
-class Pipeline:
-    """The compensation chain over a stream of motions, chunk by chunk.
+@dataclass
+class Planned:
+    """A chunk through the planner (:meth:`Planning.plan`), ready for its points.
 
-    Feed it prepared chunks of motions; it returns :class:`PointChunk` s as they
-    become final. State carried across chunks: the planner's pending blocks and
-    speed, each motor's side of its play and real-axis compensation, the last
-    point (reversals, servo lead), the clock, and the counters of the work guard.
+    problems : the chunk's program-level problems (raised, or collected, first)
+    start_line : the first chunk's line, where the start point is given
+    plan, samples : the planned blocks and their points (None when nothing is
+        ready: the look-ahead holds the blocks)
+    late : problems at the ends of long blocks, reported after the points before
+        them are made (an earlier line's problem comes first)
+    final : the program's last chunk; moves_nothing: and nothing moved
+    seconds : the planner's time on it
+    """
 
-    Parameters
-    ----------
-    profile : Profile
-    stages : Stages
-    error_map : the fitted virtual-axis error, applied as Q' = Q − e(Q') when
-        ``stages.error_map``
-    start : (5,) start pose; default the profile's
-    collect : gather every problem in ``problems`` instead of raising the first
-    segment : how the target controller moves between points, "cubic" or "chord"
-    max_part_points : > 0: the program is split into parts of at most this many
-        points, each ending at rest at a block end (:meth:`_parts`)
+    problems: list[PrsxyError]
+    start_line: int | None = None
+    plan: Plan | None = None
+    samples: Samples | None = None
+    late: list[PrsxyError] = field(default_factory=list)
+    final: bool = False
+    moves_nothing: bool = False
+    seconds: float = 0.0
+
+
+class Planning:
+    """The planner's half of the chain: look-ahead, time law, where split parts
+    end, the work guard, and the points' times and poses. It carries no state
+    that the points' half changes, so it may run in another process (the
+    conversion runs it in the interpreter's) with the same result.
+
+    Parameters as :class:`Pipeline`.
     """
 
     def __init__(
@@ -273,74 +285,36 @@ class Pipeline:
         stages: Stages = Stages(),
         error_map: ErrorFunction | None = None,
         *,
-        start: Sequence[float] | None = None,
         collect: bool = False,
         segment: str = "cubic",
         max_part_points: int = 0,
     ) -> None:
         self.profile = profile
-        self.max_part = max_part_points
-        self.window: Blocks | None = None  # blocks held to choose where a part ends
-        self.part_used = 1  # the start point belongs to the first part
-        self.stages = stages
         self.error_map = error_map if stages.error_map else None
-        self.start = np.asarray(profile.start if start is None else start, dtype=float)
         self.collect = collect
         self.limits = limits_of(profile, segment)
         self.planner = Planner(self.limits)
         self.geo = ik_geometry(profile, stages)
-        self.tables = axiscomp.profile_tables(profile) if stages.axis_comp else {}
-        self.table_cols = [
-            (col, self.tables[m]) for col, m in enumerate(MOTORS) if m in self.tables
-        ]
-        self.play_cols = [col for col, t in self.table_cols if t.max_play > 1e-12]
-        # the contract: the first point of a motion is approached from below (lo)
-        self.side = np.ones(5, dtype=int)
-        # where each motor with play last moved with a direction (NaN: not yet)
-        self.ref = np.full(5, np.nan)
-        self.lag = registry.SERVO_LAG.lags_s(profile) if stages.axis_comp else np.zeros(5)
-        self.reversal_s = profile.interpolation.reversal_ms / 1000.0
-        self.reversal_tol = REVERSAL_SHARE * self.limits.tolerance_mm
-        # where each motor's driven part is, and the last commands (for _settle)
-        self.play_y: dict[int, float] = {}
-        self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
-        self.last: PointChunk | None = None  # the last point made (before the lead)
-        self.held: PointChunk | None = None  # points waiting for the servo lead
-        self.prev_out: PointChunk | None = None  # the last point released
-        self.problems: list[PrsxyError] = []
-        self.t = 0.0
-        self.n_points = 0
+        self.max_part = max_part_points
+        self.window: Blocks | None = None  # blocks held to choose where a part ends
+        self.part_used = 1  # the start point belongs to the first part
         self.started = False
         self.any_motion = False
-        #: seconds spent per stage (for the benchmark and profiling)
-        self.timings = {"interpolate": 0.0, "error_map": 0.0, "kinematics": 0.0, "axis_tables": 0.0}
+        # the work guard's counters: the points and time planned so far
+        self.n_planned = 0
+        self.t_planned = 0.0
 
-    # -- problems
-    def _problem(self, errs: list[PrsxyError]) -> None:
-        if not errs:
-            return
-        if not self.collect:
-            raise sorted(errs, key=lambda e: e.line or 0)[0]
-        self.problems += errs
-
-    def feed(self, motions: Sequence[Motion], final: bool = False) -> list[PointChunk]:
+    def plan(self, prepared: Prepared, final: bool = False) -> Planned:
+        """Plan a prepared chunk (the last one with ``final``)."""
         t0 = time.perf_counter()
-        prepared = prepare(motions, self.profile, self.limits)
-        self.timings["interpolate"] += time.perf_counter() - t0
-        return self.feed_prepared(prepared, final)
-
-    def feed_prepared(self, prepared: Prepared, final: bool = False) -> list[PointChunk]:
-        """:meth:`feed` for motions already through :func:`prepare`."""
-        t0 = time.perf_counter()
-        self._problem(prepared.problems)
+        out = Planned(prepared.problems, final=final)
+        if prepared.problems and not self.collect:
+            return out  # its first problem stops the program before anything of it
         b = prepared.blocks
-        out: list[PointChunk] = []
         if not self.started:
-            line0 = int(b.line[0]) if len(b) else prepared.first_line
-            first = self._start_point(line0)
-            if first is not None:
-                out.append(first)
+            out.start_line = int(b.line[0]) if len(b) else prepared.first_line
             self.started = True
+            self.n_planned += 1
         if self.max_part:
             b = self._parts(b, final)
         plan = self.planner.push(b, final)
@@ -352,36 +326,20 @@ class Pipeline:
             # error at its line, and a block of a billion points is never tried
             n_steps = steps(done, plan.law, self.limits).sum(axis=1)
             long = np.flatnonzero(n_steps > 256)
-            late: list[PrsxyError] = []
             if long.size:
-                late = self._end_problems(done.take(long))
-                if late and not self.collect:
+                out.late = self._end_problems(done.take(long))
+                if out.late and not self.collect:
                     # the blocks before the first long one that cannot be done are
                     # made and checked first: an earlier line's problem comes first
-                    worst_line = min(e.line or 0 for e in late)
+                    worst_line = min(e.line or 0 for e in out.late)
                     cut = int(long[np.flatnonzero(done.line[long] == worst_line)[0]])
                     plan = plan.head(cut)
                     n_steps = n_steps[:cut]
             self._guard(plan, n_steps)
-            s = sample(plan, self.limits)
-            self.timings["interpolate"] += time.perf_counter() - t0
-            pc = self._points(plan, s)
-            if pc is not None:
-                out.append(pc)
-            self._problem(late)
-        if final:
-            if not self.any_motion:
-                raise LimitError(
-                    "the program moves nothing",
-                    expected="at least one move (G0, G1, G2, G3) or dwell",
-                )
-            tail = self._release(final=True)
-            if tail is not None:
-                out.append(tail)
+            out.plan, out.samples = plan, sample(plan, self.limits)
+        out.moves_nothing = final and not self.any_motion
+        out.seconds = time.perf_counter() - t0
         return out
-
-    def finish(self) -> list[PointChunk]:
-        return self.feed([], final=True)
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:
         """Where a split program's parts end: at rest after a block, the last place
@@ -445,10 +403,11 @@ class Pipeline:
 
     def _guard(self, plan: Plan, n_steps: np.ndarray) -> None:
         """Refuse absurd work: more points or machining time than the profile allows,
-        judged from the time law, before the points are made."""
+        judged from the plan before its points are made (the few points and
+        standing times a motor's crossing of its play adds are not counted)."""
         lim = self.profile.limits
-        n_after = self.n_points + np.cumsum(n_steps)
-        t_after = self.t + np.cumsum(plan.law.duration)
+        n_after = self.n_planned + np.cumsum(n_steps)
+        t_after = self.t_planned + np.cumsum(plan.law.duration)
         over = np.nonzero((n_after > lim.max_points) | (t_after > lim.max_time_s))[0]
         if over.size:
             k = int(over[0])
@@ -458,6 +417,127 @@ class Pipeline:
                 line=int(plan.blocks.line[k]),
                 expected="a shorter program, or larger limits.max_points / limits.max_time_s",
             )
+        self.n_planned += int(n_steps.sum())
+        self.t_planned += float(plan.law.duration.sum())
+
+
+class Pipeline:
+    """The compensation chain over a stream of motions, chunk by chunk.
+
+    Feed it prepared chunks of motions; it returns :class:`PointChunk` s as they
+    become final. State carried across chunks: the planner's pending blocks and
+    speed, each motor's side of its play and real-axis compensation, the last
+    point (reversals, servo lead), the clock, and the counters of the work guard.
+
+    Parameters
+    ----------
+    profile : Profile
+    stages : Stages
+    error_map : the fitted virtual-axis error, applied as Q' = Q − e(Q') when
+        ``stages.error_map``
+    start : (5,) start pose; default the profile's
+    collect : gather every problem in ``problems`` instead of raising the first
+    segment : how the target controller moves between points, "cubic" or "chord"
+    max_part_points : > 0: the program is split into parts of at most this many
+        points, each ending at rest at a block end (:meth:`_parts`)
+    """
+
+    def __init__(
+        self,
+        profile: Profile,
+        stages: Stages = Stages(),
+        error_map: ErrorFunction | None = None,
+        *,
+        start: Sequence[float] | None = None,
+        collect: bool = False,
+        segment: str = "cubic",
+        max_part_points: int = 0,
+    ) -> None:
+        self.profile = profile
+        self.stages = stages
+        self.error_map = error_map if stages.error_map else None
+        self.start = np.asarray(profile.start if start is None else start, dtype=float)
+        self.collect = collect
+        self.planning = Planning(
+            profile,
+            stages,
+            error_map,
+            collect=collect,
+            segment=segment,
+            max_part_points=max_part_points,
+        )
+        self.limits = self.planning.limits
+        self.geo = self.planning.geo
+        self.tables = axiscomp.profile_tables(profile) if stages.axis_comp else {}
+        self.table_cols = [
+            (col, self.tables[m]) for col, m in enumerate(MOTORS) if m in self.tables
+        ]
+        self.play_cols = [col for col, t in self.table_cols if t.max_play > 1e-12]
+        # the contract: the first point of a motion is approached from below (lo)
+        self.side = np.ones(5, dtype=int)
+        # where each motor with play last moved with a direction (NaN: not yet)
+        self.ref = np.full(5, np.nan)
+        self.lag = registry.SERVO_LAG.lags_s(profile) if stages.axis_comp else np.zeros(5)
+        self.reversal_s = profile.interpolation.reversal_ms / 1000.0
+        self.reversal_tol = REVERSAL_SHARE * self.limits.tolerance_mm
+        # where each motor's driven part is, and the last commands (for _settle)
+        self.play_y: dict[int, float] = {}
+        self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
+        self.last: PointChunk | None = None  # the last point made (before the lead)
+        self.held: PointChunk | None = None  # points waiting for the servo lead
+        self.prev_out: PointChunk | None = None  # the last point released
+        self.problems: list[PrsxyError] = []
+        self.t = 0.0
+        self.n_points = 0
+        #: seconds spent per stage (for the benchmark and profiling)
+        self.timings = {"interpolate": 0.0, "error_map": 0.0, "kinematics": 0.0, "axis_tables": 0.0}
+
+    # -- problems
+    def _problem(self, errs: list[PrsxyError]) -> None:
+        if not errs:
+            return
+        if not self.collect:
+            raise sorted(errs, key=lambda e: e.line or 0)[0]
+        self.problems += errs
+
+    def feed(self, motions: Sequence[Motion], final: bool = False) -> list[PointChunk]:
+        t0 = time.perf_counter()
+        prepared = prepare(motions, self.profile, self.planning.limits)
+        self.timings["interpolate"] += time.perf_counter() - t0
+        return self.feed_prepared(prepared, final)
+
+    def feed_prepared(self, prepared: Prepared, final: bool = False) -> list[PointChunk]:
+        """:meth:`feed` for motions already through :func:`prepare`."""
+        return self.feed_planned(self.planning.plan(prepared, final))
+
+    def feed_planned(self, planned: Planned) -> list[PointChunk]:
+        """:meth:`feed` for a chunk already through :meth:`Planning.plan` (here or
+        in another process): its points, compensated, as they become final."""
+        self.timings["interpolate"] += planned.seconds
+        self._problem(planned.problems)
+        out: list[PointChunk] = []
+        if planned.start_line is not None:
+            first = self._start_point(planned.start_line)
+            if first is not None:
+                out.append(first)
+        if planned.plan is not None and planned.samples is not None:
+            pc = self._points(planned.plan, planned.samples)
+            if pc is not None:
+                out.append(pc)
+        self._problem(planned.late)
+        if planned.final:
+            if planned.moves_nothing:
+                raise LimitError(
+                    "the program moves nothing",
+                    expected="at least one move (G0, G1, G2, G3) or dwell",
+                )
+            tail = self._release(final=True)
+            if tail is not None:
+                out.append(tail)
+        return out
+
+    def finish(self) -> list[PointChunk]:
+        return self.feed([], final=True)
 
     # -- points
     def _start_point(self, line0: int) -> PointChunk | None:

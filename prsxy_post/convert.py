@@ -5,8 +5,8 @@ The library's conversion engine (the ``convert`` command is a thin shell over
 line batches, interpreted, and fed chunk by chunk through the compensation
 chain (:mod:`prsxy_post.chain`) into the dialect's writer; memory stays flat on
 programs of millions of lines. A program of :data:`PARALLEL_FROM_BYTES` or more
-may be read and interpreted in a second process while this one runs the chain,
-and its text formatted and written in a third (:mod:`prsxy_post.sinks`); the
+may be read, interpreted and planned in a second process while this one runs the
+rest of the chain, and its text formatted and written in a third (:mod:`prsxy_post.sinks`); the
 output is byte for byte the same.
 
 Example
@@ -58,8 +58,8 @@ class ConvertJob:
     stages : which compensation stages run
     options : how it was asked for, for the output's header
     chunk : motions per chunk through the chain (the output does not depend on it)
-    parallel : read and interpret the program in a second process, and write the
-        output in a third, while this one runs the rest of the chain (the output
+    parallel : read, interpret and plan the program in a second process, and write
+        the output in a third, while this one runs the rest of the chain (the output
         is the same; only the wall time changes)
     on_message : receives the program's messages (gcode.InterpreterConfig)
     """
@@ -131,10 +131,11 @@ def peak_rss_mb() -> float | None:
     return None
 
 
-def _prepare_here(
+def _planned_here(
     job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any = None
 ) -> Iterator[Any]:
-    """The program's motions, chunk by chunk, through :func:`chain.prepare`."""
+    """The program's motions, chunk by chunk, through :func:`chain.prepare` and the
+    planner (:class:`chain.Planning`), the last one final."""
     from . import chain, gcode
 
     cfg = chain.interpreter_config(prof, job.start, on_message=job.on_message)
@@ -152,22 +153,31 @@ def _prepare_here(
     # a program whose loops and calls jump back reads those lines again from the file
     lines_from = gcode.FileLines(job.program) if job.program != "-" else None
     motions = gcode.iter_motions_batched(counted(batches), cfg, job.program, lines_from=lines_from)
-    from . import writers
+    from . import errormap, writers
 
-    limits = chain.limits_of(prof, writers.dialect(job.fmt).segment)
+    dialect = writers.dialect(job.fmt)
+    planning = chain.Planning(
+        prof,
+        job.stages,
+        errormap.from_profile(prof) if job.stages.error_map else None,
+        segment=dialect.segment,
+        max_part_points=dialect.parts(writers.settings_of(prof, job.fmt)),
+    )
+    limits = planning.limits
     while True:
         t0 = time.perf_counter()
         batch = list(itertools.islice(motions, job.chunk))
         prepared = chain.prepare(batch, prof, limits)
         counts["parse"] += time.perf_counter() - t0
         counts["motions"] += len(batch)
-        yield prepared
+        yield planning.plan(prepared)
         if len(batch) < job.chunk:
+            yield planning.plan(chain.prepare([], prof, limits), final=True)
             return
 
 
-def _prepare_child(conn: Any, job: ConvertJob, prof: Any) -> None:
-    """Runs in the interpreter process: sends ("chunk", prepared, chars read),
+def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
+    """Runs in the interpreter process: sends ("chunk", planned, chars read),
     then ("done", counts, peak MB), or ("error", PrsxyError) / ("crash", text)."""
     chars = [0]
 
@@ -176,8 +186,8 @@ def _prepare_child(conn: Any, job: ConvertJob, prof: Any) -> None:
 
     counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
     try:
-        for prepared in _prepare_here(job, prof, counts, progress):
-            conn.send(("chunk", prepared, chars[0]))
+        for planned in _planned_here(job, prof, counts, progress):
+            conn.send(("chunk", planned, chars[0]))
         conn.send(("done", counts, peak_rss_mb()))
     except PrsxyError as err:
         conn.send(("error", err, counts))
@@ -188,11 +198,12 @@ def _prepare_child(conn: Any, job: ConvertJob, prof: Any) -> None:
 
 
 @contextlib.contextmanager
-def _prepared_chunks(
+def _planned_chunks(
     job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any
 ) -> Iterator[Iterator[Any]]:
-    """Prepared chunks of the program, made here or, with ``job.parallel`` where
-    processes can fork, by a second process that runs ahead, at most
+    """Planned chunks of the program (read, interpreted, planned and sampled), made
+    here or, with ``job.parallel`` where processes can fork, by a second process
+    that runs ahead, at most
     :data:`AHEAD` chunks (a bounded queue, then the pipe, hold it back), so memory
     stays bounded. Errors arrive in program order: every chunk before a G-code
     error is delivered first, as when run here."""
@@ -203,13 +214,13 @@ def _prepared_chunks(
         or job.program == "-"
         or ("fork" not in multiprocessing.get_all_start_methods())
     ):
-        yield _prepare_here(job, prof, counts, bar)
+        yield _planned_here(job, prof, counts, bar)
         return
     ctx = multiprocessing.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
     sys.stdout.flush()
     sys.stderr.flush()
-    proc = ctx.Process(target=_prepare_child, args=(send, job, prof), daemon=True)
+    proc = ctx.Process(target=_planning_child, args=(send, job, prof), daemon=True)
     proc.start()
     send.close()
 
@@ -334,7 +345,7 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
     try:
         # the interpreter starts first: with a second process, everything below
         # up to the first chunk happens while it reads
-        with _prepared_chunks(job, prof, counts, bar) as source:
+        with _planned_chunks(job, prof, counts, bar) as source:
             from . import chain, errormap, writers
 
             sha = inspect_source(job.program) if job.program != "-" else ""
@@ -369,14 +380,10 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                 else sinks.WriterHere(writer, parts)
             )
             out.begin()
-            for prepared in source:
-                for pc in pipe.feed_prepared(prepared):
+            for planned in source:
+                for pc in pipe.feed_planned(planned):
                     n_points += len(pc)
                     out.feed(pc)
-        tail = pipe.finish()
-        n_points += sum(len(pc) for pc in tail)
-        for pc in tail:
-            out.feed(pc)
         written_parts = out.finish()
         temps = written_parts.temps
         targets = [sinks.part_path(job.output, part, split) for part in sorted(temps)]
