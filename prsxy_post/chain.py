@@ -276,7 +276,7 @@ class Planning:
     that the points' half changes, so it may run in another process (the
     conversion runs it in the interpreter's) with the same result.
 
-    Parameters as :class:`Pipeline`.
+    Parameters as :class:`Pipeline`'s (the start pose is the points' half's).
     """
 
     def __init__(
@@ -424,10 +424,11 @@ class Planning:
 class Pipeline:
     """The compensation chain over a stream of motions, chunk by chunk.
 
-    Feed it prepared chunks of motions; it returns :class:`PointChunk` s as they
-    become final. State carried across chunks: the planner's pending blocks and
-    speed, each motor's side of its play and real-axis compensation, the last
-    point (reversals, servo lead), the clock, and the counters of the work guard.
+    Feed it prepared chunks of motions (or chunks its :class:`Planning` half
+    planned, perhaps in another process: :meth:`feed_planned`); it returns
+    :class:`PointChunk` s as they become final. State carried across chunks: the
+    planner's (in ``planning``), each motor's side of its play and real-axis
+    compensation, the last point (reversals, servo lead) and the clock.
 
     Parameters
     ----------

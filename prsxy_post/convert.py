@@ -6,8 +6,8 @@ line batches, interpreted, and fed chunk by chunk through the compensation
 chain (:mod:`prsxy_post.chain`) into the dialect's writer; memory stays flat on
 programs of millions of lines. A program of :data:`PARALLEL_FROM_BYTES` or more
 may be read, interpreted and planned in a second process while this one runs the
-rest of the chain, and its text formatted and written in a third (:mod:`prsxy_post.sinks`); the
-output is byte for byte the same.
+rest of the chain, and its text formatted and written in a third
+(:mod:`prsxy_post.sinks`); the output is byte for byte the same.
 
 Example
 -------
@@ -203,9 +203,8 @@ def _planned_chunks(
 ) -> Iterator[Iterator[Any]]:
     """Planned chunks of the program (read, interpreted, planned and sampled), made
     here or, with ``job.parallel`` where processes can fork, by a second process
-    that runs ahead, at most
-    :data:`AHEAD` chunks (a bounded queue, then the pipe, hold it back), so memory
-    stays bounded. Errors arrive in program order: every chunk before a G-code
+    that runs ahead, at most :data:`AHEAD` chunks (a bounded queue, then the pipe,
+    hold it back), so memory stays bounded. Errors arrive in program order: every chunk before a G-code
     error is delivered first, as when run here."""
     import multiprocessing
 
