@@ -204,8 +204,8 @@ def _planned_chunks(
     """Planned chunks of the program (read, interpreted, planned and sampled), made
     here or, with ``job.parallel`` where processes can fork, by a second process
     that runs ahead, at most :data:`AHEAD` chunks (a bounded queue, then the pipe,
-    hold it back), so memory stays bounded. Errors arrive in program order: every chunk before a G-code
-    error is delivered first, as when run here."""
+    hold it back), so memory stays bounded. Errors arrive in program order: every
+    chunk before a G-code error is delivered first, as when run here."""
     import multiprocessing
 
     if (
