@@ -10,7 +10,8 @@ For each size it generates a five-axis finishing program (short G1 moves at F200
 five-axis passes, small R arcs), converts it with every compensation stage on and
 PMAC output (a calibrated profile with real-axis tables and an error map), in a child
 process so peak resident memory is that conversion's alone, and reports per stage:
-seconds, lines/s, interpolation points/s. Two times: ``chain`` is the conversion
+seconds, lines/s, interpolation points/s, and the CPU time of the conversion's
+processes together (``chain CPU``). Two times: ``chain`` is the conversion
 inside the process (what ``convert_file`` takes: read, interpret, plan, compensate,
 write), ``command`` is the whole ``prsxy-post convert`` command as a user runs it
 (Python's start and imports included). In the same run and on the same file it
@@ -106,14 +107,17 @@ def child_convert(program: str, prof: str, out: str) -> None:
     sys.path.insert(0, str(ROOT))
     from prsxy_post.convert import ConvertJob, convert_file, peak_rss_mb
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), os.times()
     st = convert_file(ConvertJob(program, prof, "pmac", out, options="bench", parallel=True))
-    total = time.perf_counter() - t0
+    total, c1 = time.perf_counter() - t0, os.times()
+    # CPU of this process and of the interpreter and writer processes it waited for
+    cpu = sum(c1[k] - c0[k] for k in range(4))
     rss = peak_rss_mb() or resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     print(
         json.dumps(
             {
                 "total_s": total,
+                "cpu_s": cpu,
                 "lines": st.lines,
                 "motions": st.motions,
                 "points": st.points,
@@ -219,9 +223,9 @@ def report(results: list[dict]) -> str:
         "",
     ]
     lines += [
-        "| lines | chain s | command s | lines/s | points/s | peak RSS MB | rs274 -g s | "
-        "pygcode Machine s | chain / rs274 | command / rs274 | pygcode / command |",
-        "|" + "---:|" * 11,
+        "| lines | chain s | chain CPU s | command s | lines/s | points/s | peak RSS MB | "
+        "rs274 -g s | pygcode Machine s | chain / rs274 | command / rs274 | pygcode / command |",
+        "|" + "---:|" * 12,
     ]
 
     def f(x: float | None, fmt: str) -> str:
@@ -232,7 +236,8 @@ def report(results: list[dict]) -> str:
         helper = r.get("helper_peak_rss_mb") or 0.0
         writer = r.get("writer_peak_rss_mb") or 0.0
         lines.append(
-            f"| {r['lines']:,} | {tot:.2f} | {cmd:.2f} | {r['lines'] / cmd:,.0f} | "
+            f"| {r['lines']:,} | {tot:.2f} | {r['cpu_s']:.2f} | {cmd:.2f} | "
+            f"{r['lines'] / cmd:,.0f} | "
             f"{r['points'] / cmd:,.0f} | {r['peak_rss_mb']:.0f} + {helper:.0f} + {writer:.0f} | "
             f"{f(rs, '.2f')} | {f(pg, '.1f')} | {f(rs and tot / rs, '.2f')} | "
             f"{f(rs and cmd / rs, '.2f')} | {f(pg and pg / cmd, '.1f')} |"
