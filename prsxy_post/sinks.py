@@ -157,6 +157,16 @@ def _serve(conn: Any, here: WriterHere) -> None:
                         return
                 except PrsxyError as err:
                     failed = ("error", err)
+                except OSError as exc:
+                    # as the conversion says it when it writes in its own process
+                    failed = (
+                        "error",
+                        PrsxyError(
+                            f"cannot write output: {exc.strerror}",
+                            source=here.parts.output,
+                            expected="a writable location",
+                        ),
+                    )
                 except Exception:
                     failed = ("crash", traceback.format_exc())
             if kind == "finish":

@@ -97,3 +97,31 @@ def test_a_chain_error_stops_the_writer_process_and_leaves_nothing(tmp_path: Pat
 def test_part_paths() -> None:
     assert sinks.part_path("a/x.pmc", 0, False) == "a/x.pmc"
     assert sinks.part_path("a/x.pmc", 2, True) == "a/x.part3.pmc"
+
+
+def test_a_full_disk_reads_the_same_from_the_writer_process(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The disk fills up while the text is written: the same message (no
+    traceback) whichever process writes, and no temp file is left. The forked
+    writer inherits the patched method."""
+    emit = sinks.Parts.emit
+    calls = [0]
+
+    def filling(self: sinks.Parts, pieces: list[sinks.Piece]) -> None:
+        calls[0] += 1
+        if calls[0] > 3:
+            raise OSError(28, "No space left on device")
+        emit(self, pieces)
+
+    monkeypatch.setattr(sinks.Parts, "emit", filling)
+    prof = _profile(tmp_path)
+    program = _program(tmp_path, 6000, [])
+    out = tmp_path / "out"
+    here = _run(program, prof, out / "a.pmc", parallel=False)
+    calls[0] = 0
+    apart = _run(program, prof, out / "b.pmc", parallel=True)
+    full = "cannot write output: No space left on device (expected a writable location)"
+    assert here == f"{out / 'a.pmc'}: {full}"
+    assert apart == here.replace("a.pmc", "b.pmc")
+    assert list(out.iterdir()) == []
