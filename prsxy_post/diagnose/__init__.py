@@ -365,9 +365,12 @@ def _select(
     free: Sequence[str],
     candidates: Sequence[str],
     alpha: float,
+    max_rel_stderr: float = selection.UNDETERMINED,
 ) -> tuple[selection.Gram, selection.Test, list[int]]:
     priors = {k: registry.prior(split_key(k)[0]) for k in candidates}
-    g = selection.Gram.build(normal, noise, candidates, free, priors=priors)
+    g = selection.Gram.build(
+        normal, noise, candidates, free, priors=priors, max_rel_stderr=max_rel_stderr
+    )
     # the noise scale of the whole library's fit: 1 when the whitening is right
     sse, used, _ = normal.full_fit(noise)
     sigma2 = sum(sse.values()) / max(sum(normal.n.values()) - sum(used.values()), 1.0)
@@ -548,7 +551,7 @@ def _effects_of(fit: _Fit, g: selection.Gram | None, sel: list[int], test: Any) 
         pos.append((j, j + d))
         j += d
     x, C = fit.x, fit.cov
-    groups = selection.undetermined(g) if g is not None else {}
+    groups = selection.undetermined(g, test.sigma2) if g is not None else {}
     for t, (k, (a, b)) in enumerate(zip(fit.keys, pos, strict=True)):
         name, period = split_key(k)
         v = x[a:b]
@@ -630,6 +633,10 @@ def find_effects(
     candidates : member names to choose from (default: every member not in ``free``)
     free : members always fitted, never reported as effects (calibration frees
         the contract parameters)
+    max_rel_stderr : a combination the data determine worse than this fraction
+        of its prior is undetermined: the free members stay put along it, and
+        among the candidates the sparsest explanation of it is taken
+        (:mod:`.selection`, step 1)
     """
     measured, segs = data.measured()
     if not segs:
@@ -655,7 +662,7 @@ def find_effects(
             # only roughly (the play after a reversal) no longer inflate it
             noise = estimate_noise(data, z, segs, normal)
             w = _whiten(segs, noise, len(resid0))
-        g, test, sel = _select(normal, noise, free, keys, alpha)
+        g, test, sel = _select(normal, noise, free, keys, alpha, max_rel_stderr)
         same = chosen is not None and {g.keys[i] for i in sel} == set(chosen)
         while True:
             picked = [g.keys[i] for i in sel]

@@ -7,10 +7,16 @@ the Gram matrix of the unit-normalised columns, G = AᵀA, b = Aᵀr:
 
     SSE(S) = rᵀr − b_Sᵀ G_S⁻¹ b_S
 
-1. **Dependencies.** Members whose signatures are exact combinations of others
-   (the tool length and the three ball-joint heights; on poses alone a motor's
-   backlash and its guide height) show as eigenvalues ~0 of G_S. Of each such
-   set the member that explains least on its own leaves first.
+1. **Undetermined combinations.** With each column scaled to its member's prior
+   (z = size / prior), a combination v of members is determined by the data to
+   ± σ/√λ of its prior, λ its eigenvalue of the prior-scaled Gram matrix (as
+   calibration's identifiability). Combinations determined worse than
+   ``max_rel_stderr`` of their prior (λ < σ² / max_rel_stderr²) are not told
+   apart by the data: exact ones (the tool length and the three ball-joint
+   heights; the platform frame's definition) and nearly exact ones (a servo lag
+   common to every motor, which moves a circle only as far as the path departs
+   from one). Along them the sparsest explanation is taken, and the data's
+   estimate there, which is mostly the linearisation's error, is not used.
 2. **Backward elimination from the full model.** With every candidate in,
    β = G_S⁻¹ b_S and C = G_S⁻¹; the member with the largest p-value of its partial
    F-test F_k = β_kᵀ (C_kk)⁻¹ β_k / (d_k σ²) leaves while it fails the test:
@@ -41,8 +47,10 @@ from scipy import stats
 
 #: An effect moving no data kind by this fraction of its noise (RMS) is not named.
 NEGLIGIBLE = 0.1
-#: Eigenvalue of the normalised Gram matrix below which members are dependent.
-DEPENDENT = 1e-8
+#: A combination of members the data determine worse than this fraction of its
+#: prior is undetermined (module docstring, step 1); calibration's identifiability
+#: threshold (``max_rel_stderr``).
+UNDETERMINED = 0.25
 
 
 @dataclass
@@ -136,6 +144,9 @@ class Gram:
     #: (p,) RMS of each whitened column over the rows of the data kind it moves
     #: most: a size β moves that kind by |β| · reach noise standard deviations
     reach: np.ndarray
+    #: combinations determined worse than this fraction of their prior are
+    #: undetermined (:data:`UNDETERMINED`)
+    max_rel_stderr: float = UNDETERMINED
 
     @classmethod
     def build(
@@ -147,6 +158,7 @@ class Gram:
         *,
         priors: Mapping[str, float] | None = None,
         invisible: float = 1e-9,
+        max_rel_stderr: float = UNDETERMINED,
     ) -> Gram:
         """Whitened normal equations of ``candidates`` with the ``free`` columns
         projected out (Schur complement). A candidate whose whitened columns are all
@@ -224,6 +236,7 @@ class Gram:
             n_free,
             prior,
             reach_all[sel],
+            max_rel_stderr,
         )
 
     def effect(self, S: Sequence[int], beta: np.ndarray) -> np.ndarray:
@@ -300,30 +313,43 @@ def _block_dsse(beta: np.ndarray, C: np.ndarray, dims: Sequence[int]) -> np.ndar
     return out
 
 
-def _drop_dependent(g: Gram, S: list[int]) -> list[int]:
+def weak_directions(
+    g: Gram, c: np.ndarray, sigma2: float = 1.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Combinations of the columns c that the data do not determine (module
+    docstring, step 1), in prior units z = β / (norm · prior).
+
+    Returns sc (the columns' norm · prior: β_normalised = sc · z), the eigenvalues
+    w and eigenvectors V of the prior-scaled Gram matrix diag(sc) G diag(sc), and
+    the mask of those below σ² / max_rel_stderr² (standard error above
+    max_rel_stderr of the prior)."""
+    sc = g.norm[c] * g.prior[c]
+    w, V = np.linalg.eigh(g.G[np.ix_(c, c)] * np.outer(sc, sc))
+    return sc, w, V, w < sigma2 / g.max_rel_stderr**2
+
+
+def _drop_dependent(g: Gram, S: list[int], sigma2: float = 1.0) -> list[int]:
     """The members of S less those the data cannot tell from combinations of others.
 
-    Combinations of members that the data do not determine (eigenvalues of the
-    normalised G_S below :data:`DEPENDENT`: the platform frame's definition, a
-    common servo lag, a strut's length against its guide's height) are resolved
-    towards the sparsest explanation (:func:`_sparsest`): along those directions
-    the sizes are chosen so that the fewest members keep a size worth naming, and
-    the members set to zero leave.
+    Combinations of members that the data do not determine (:func:`weak_directions`:
+    the platform frame's definition, a common servo lag, a strut's length against
+    its guide's height) are resolved towards the sparsest explanation
+    (:func:`_sparsest`): along those directions the sizes are chosen so that the
+    fewest members keep a size worth naming, and the members set to zero leave.
     """
     S = list(S)
     for _ in range(len(S)):
-        if len(S) < 2:
+        if not S:
             return S
         c = g.columns(S)
-        w, V = np.linalg.eigh(g.G[np.ix_(c, c)])
-        null = w <= DEPENDENT
+        sc, w, V, null = weak_directions(g, c, sigma2)
         if not null.any():
             return S
         N = V[:, null]
         keep = ~null
-        beta0 = V[:, keep] @ ((V[:, keep].T @ g.b[c]) / w[keep])
-        u = 1.0 / (g.norm[c] * g.prior[c])  # |β| u: size in units of the member's prior
-        zero = _sparsest(beta0, N, u)
+        # the estimate with the undetermined part set to zero, in prior units
+        z0 = V[:, keep] @ ((V[:, keep].T @ (g.b[c] * sc)) / w[keep])
+        zero = _sparsest(z0, N, np.ones(len(c)))
         owner = np.repeat(np.arange(len(S)), [g.dims[k] for k in S])
         gone = {int(owner[j]) for j in zero}
         S = [k for i, k in enumerate(S) if i not in gone]
@@ -392,7 +418,7 @@ def backward(g: Gram, S: Sequence[int], test: Test) -> list[int]:
 
     The inverse C = G_S⁻¹ is downdated as members leave (C ← C_rr − C_rk C_kk⁻¹ C_kr),
     and recomputed every 16 removals against drift."""
-    S = _drop_dependent(g, list(S))
+    S = _drop_dependent(g, list(S), test.sigma2)
     removed = 0
     C = beta = np.zeros(0)
     while S:
@@ -527,19 +553,20 @@ def aliases(g: Gram, S: Sequence[int], i: int, corr: float) -> list[int]:
     return [int(j) for j, cc in zip(out, c, strict=True) if abs(cc) > corr]
 
 
-def undetermined(g: Gram) -> dict[int, set[int]]:
+def undetermined(g: Gram, sigma2: float = 1.0) -> dict[int, set[int]]:
     """For each candidate taking part in a combination the data do not determine
-    (the null space N of the normalised G: eigenvalues below :data:`DEPENDENT`),
-    the candidates it is tied to there.
+    (:func:`weak_directions` over every candidate: the space N they span), the
+    candidates it is tied to there.
 
-    With P = N Nᵀ the projector onto that space, candidates i and j are tied when
-    both lie in it by more than 1 % (P_ii, P_jj > 0.01) and |P_ij| exceeds a tenth of
-    √(P_ii P_jj). P does not depend on how the null space's basis happens to be
-    chosen, so nearly degenerate combinations of different legs stay apart."""
+    With P = N Nᵀ the projector onto that space (in prior units), candidates i and
+    j are tied when both lie in it by more than 1 % (P_ii, P_jj > 0.01) and |P_ij|
+    exceeds a tenth of √(P_ii P_jj). P does not depend on how the space's basis
+    happens to be chosen, so nearly degenerate combinations of different legs stay
+    apart."""
     if not g.keys:
         return {}
-    w, V = np.linalg.eigh(g.G)
-    N = V[:, w <= DEPENDENT]
+    _, _, V, null = weak_directions(g, np.arange(len(g.b)), sigma2)
+    N = V[:, null]
     if not N.shape[1]:
         return {}
     P = N @ N.T
