@@ -103,6 +103,11 @@ class Family:
         either sign."""
         return Change(name, _signed(rng) * _magnitude(rng, self.prior * scale))
 
+    def lower_bound(self, name: str, profile: Profile) -> float:
+        """The least change ``profile`` can take for this member: below it the
+        model does not go on (it folds back), so no estimate may lie there."""
+        return -np.inf
+
     # geometry families
     def value(self, parts: Parts, name: str) -> float:
         raise NotImplementedError
@@ -444,6 +449,19 @@ class Backlash(MotorFamily):
     def random_change(self, name: str, rng: np.random.Generator, scale: float = 1.0) -> Change:
         return Change(name, _magnitude(rng, self.prior * scale))  # play is never negative
 
+    def lower_bound(self, name: str, profile: Profile) -> float:
+        """Minus the least play of the motor's table (0 without one): a table's
+        play is |reverse − forward| (:meth:`prsxy_post.axiscomp.MotorTable.from_comp`),
+        so a change taking reverse − forward below zero anywhere does not take
+        play away but adds it on the other side, where the signature −direction/2
+        is of the wrong sign."""
+        m = self.motor(name)
+        comp = next((c for c in profile.axis_comp if c.motor == m), None)
+        if comp is None:
+            return 0.0
+        play = np.asarray(comp.reverse, dtype=float) - np.asarray(comp.forward, dtype=float)
+        return -max(float(np.min(play)), 0.0)
+
     def sentence(self, name: str, size: float, period: float | None = None) -> str:
         return (
             f"Motor {self.motor(name)} has {size * 1000:.2f} µm "
@@ -748,6 +766,11 @@ def unit(name: str) -> str:
 
 def prior(name: str) -> float:
     return family(name).prior
+
+
+def lower_bound(name: str, profile: Profile) -> float:
+    """The least change of a member ``profile`` can take (:meth:`Family.lower_bound`)."""
+    return family(name).lower_bound(name, profile)
 
 
 #: The contract's parameters, in calibration's θ order (tool, legs 1..3, table).

@@ -126,3 +126,26 @@ def test_diagnose_units_and_priors_come_from_the_registry() -> None:
     assert calibrate.PRIOR[calibrate.PARAMS.index("table.squareness")] == effects.prior(
         "table.squareness"
     )
+
+
+def test_play_below_zero_folds_back_so_backlash_is_bounded(
+    nominal: profile_mod.Profile,
+) -> None:
+    """A change of −δ to a motor without play gives the same machine as +δ (a
+    table's play is |reverse − forward|): the model folds at zero play, where the
+    signature −direction/2 changes sign. The bound is minus the least play the
+    motor's table holds, 0 without a table."""
+    from prsxy_post import axiscomp
+
+    assert effects.lower_bound("backlash[2]", nominal) == 0.0
+    plus = simulate.plant(nominal, [effects.Change("backlash[2]", 0.004)])
+    minus = simulate.plant(nominal, [effects.Change("backlash[2]", -0.004)])
+    p = np.linspace(-50, 50, 11)
+    for side in (1, -1):
+        np.testing.assert_allclose(
+            axiscomp.approach(axiscomp.profile_tables(minus)[2], p, side),
+            axiscomp.approach(axiscomp.profile_tables(plus)[2], p, side),
+            atol=1e-12,
+        )
+    assert effects.lower_bound("backlash[2]", plus) == pytest.approx(-0.004)
+    assert effects.lower_bound("kinematics.tool_length", plus) == -np.inf

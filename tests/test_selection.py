@@ -118,3 +118,24 @@ def test_a_nearly_undetermined_combination_takes_the_sparsest_explanation() -> N
     g = selection.Gram.build(selection.Normal.of(cols, r, rows), {"k": 1.0}, list(cols))
     tied = selection.undetermined(g)
     assert {g.keys[j] for j in tied[g.keys.index("m3")]} == {"m0", "m1", "m2", "m4"}
+
+
+def test_a_size_the_model_does_not_go_to_is_not_named() -> None:
+    """A member bounded below at 0 (a motor's play) that the data would fit at
+    −0.3 is not named, by elimination or by the forward check; a member present
+    beside it still is. Without the bound it would be (the check that the case
+    bites)."""
+    rng = np.random.default_rng(5)
+    n = 2000
+    X = rng.normal(size=(n, 6))
+    r = -0.3 * X[:, 0] + 0.4 * X[:, 1] + rng.normal(size=n)
+    cols = {f"m{j}": X[:, j : j + 1] for j in range(6)}
+    rows = {"k": np.ones(n, dtype=bool)}
+    normal = selection.Normal.of(cols, r, rows)
+    for lower, want in (({"m0": 0.0}, ["m1"]), (None, ["m0", "m1"])):
+        g = selection.Gram.build(normal, {"k": 1.0}, list(cols), lower=lower)
+        test = selection.Test(1e-3, len(g.keys), 1.0, g.n)
+        assert sorted(g.keys[i] for i in selection.select(g, test)) == want
+        # nor is it the forward check's candidate beside the member present
+        k = selection.forward_candidate(g, [g.keys.index("m1")], test)
+        assert (k is not None and g.keys[k] == "m0") == (lower is None)

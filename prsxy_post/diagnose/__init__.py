@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -258,12 +258,16 @@ def refine(
     with_map: bool = False,
     iterations: int = 6,
     max_rel_stderr: float = 0.25,
+    lower: Mapping[str, float] | None = None,
 ) -> _Fit:
     """Gauss–Newton on the sizes through the full (nonlinear) model.
 
     keys : column keys of the chosen terms; x0 : starting sizes (free deltas,
     then each term's values). Directions of the free members the data cannot
     determine to ``max_rel_stderr`` of their prior stay where they are.
+    lower : key -> the least size of a term's model
+    (:func:`prsxy_post.effects.lower_bound`); steps stop there (projected
+    Gauss–Newton).
 
     Raises
     ------
@@ -273,7 +277,13 @@ def refine(
     free = list(free)
     keys = list(keys)
     dims = [2 if split_key(k)[1] is not None else 1 for k in keys]
-    x = np.array(x0, dtype=float)
+    lo = np.full(len(free) + sum(dims), -np.inf)
+    j = len(free)
+    for k, d in zip(keys, dims, strict=True):
+        if d == 1:
+            lo[j] = (lower or {}).get(k, -np.inf)
+        j += d
+    x = np.maximum(np.array(x0, dtype=float), lo)
     s = _priors(free, keys, dims)
     all_keys = free + keys
 
@@ -320,18 +330,20 @@ def refine(
         whose forward kinematics misses measured poses, a size a profile cannot
         hold) or the residual grows; None when no share of the step helps."""
         for _ in range(8):
+            x_new = np.maximum(x + dx, lo)  # halving a projected step stays inside
             try:
-                prof, lin = model_at(x + dx, columns)
+                prof, lin = model_at(x_new, columns)
             except (ProfileError, FitError):
                 dx = dx / 2
                 continue
             if cost(lin) <= c0 * (1 + 1e-9):
-                return x + dx, prof, lin
+                return x_new, prof, lin
             dx = dx / 2
         return None
 
     for _ in range(iterations):
         dx, cov, sigma2 = solve(X, (r * w)[ok])
+        dx = np.maximum(x + dx, lo) - x  # a size at its bound stays there
         moved = step(x, dx, cost(lin), False)
         if moved is None:
             break
@@ -347,6 +359,7 @@ def refine(
     for _ in range(4):
         r = measured - lin.pred
         dx, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
+        dx = np.maximum(x + dx, lo) - x
         if np.max(np.abs(dx) / np.sqrt(np.maximum(np.diag(cov), 1e-300)), initial=0.0) <= 0.1:
             break
         moved = step(x, dx, cost(lin), True)
@@ -366,10 +379,17 @@ def _select(
     candidates: Sequence[str],
     alpha: float,
     max_rel_stderr: float = selection.UNDETERMINED,
+    lower: dict[str, float] | None = None,
 ) -> tuple[selection.Gram, selection.Test, list[int]]:
     priors = {k: registry.prior(split_key(k)[0]) for k in candidates}
     g = selection.Gram.build(
-        normal, noise, candidates, free, priors=priors, max_rel_stderr=max_rel_stderr
+        normal,
+        noise,
+        candidates,
+        free,
+        priors=priors,
+        max_rel_stderr=max_rel_stderr,
+        lower=lower,
     )
     # the noise scale of the whole library's fit: 1 when the whitening is right
     sse, used, _ = normal.full_fit(noise)
@@ -644,6 +664,11 @@ def find_effects(
     free = list(free)
     names = [n for n in (registry.members() if candidates is None else candidates) if n not in free]
     keys = column_keys(names)
+    # the least change each member's model goes to (a motor's play stays >= 0)
+    lower = {
+        k: registry.lower_bound(split_key(k)[0], current) for k in keys if split_key(k)[1] is None
+    }
+    lower = {k: v for k, v in lower.items() if np.isfinite(v)}
     lin0 = predict(current, data, free + keys, with_map=with_map)
     resid0 = measured - lin0.pred
     rows = _kind_rows(segs, len(resid0))
@@ -662,7 +687,7 @@ def find_effects(
             # only roughly (the play after a reversal) no longer inflate it
             noise = estimate_noise(data, z, segs, normal)
             w = _whiten(segs, noise, len(resid0))
-        g, test, sel = _select(normal, noise, free, keys, alpha, max_rel_stderr)
+        g, test, sel = _select(normal, noise, free, keys, alpha, max_rel_stderr, lower)
         same = chosen is not None and {g.keys[i] for i in sel} == set(chosen)
         while True:
             picked = [g.keys[i] for i in sel]
@@ -686,6 +711,7 @@ def find_effects(
                     free=free,
                     with_map=with_map,
                     max_rel_stderr=max_rel_stderr,
+                    lower=lower,
                 )
                 break
             except ProfileError:

@@ -25,9 +25,13 @@ the Gram matrix of the unit-normalised columns, G = AᵀA, b = Aᵀr:
    its noise (thousands of samples make a 0.05 µm term significant; it is not
    worth naming). Starting from the full model, every effect that is present is
    in the model while the others are judged, so two effects that together
-   resemble a third do not pull the selection towards the third.
-3. **Forward check.** A member outside whose addition passes the same test is
-   added and the elimination rerun (stepwise in both directions).
+   resemble a third do not pull the selection towards the third. A member whose
+   estimate lies where its model does not go (a motor's play below zero: the
+   model folds back there, :func:`prsxy_post.effects.lower_bound`) explains
+   nothing and leaves first (the active-set step of bounded least squares).
+3. **Forward check.** A member outside whose addition passes the same test (at a
+   size its model goes to) is added and the elimination rerun (stepwise in both
+   directions).
 4. **Sparsest explanation.** A member outside that, added, lets the elimination
    end with fewer members (or the same number and a better fit) without a
    significantly worse fit replaces them (three ball-joint heights that are one
@@ -144,6 +148,9 @@ class Gram:
     #: (p,) RMS of each whitened column over the rows of the data kind it moves
     #: most: a size β moves that kind by |β| · reach noise standard deviations
     reach: np.ndarray
+    #: (k,) the least size of each member (its own units) the model goes on to
+    #: (``effects.lower_bound``: a motor's play cannot go below zero); -inf if none
+    lower: np.ndarray
     #: combinations determined worse than this fraction of their prior are
     #: undetermined (:data:`UNDETERMINED`)
     max_rel_stderr: float = UNDETERMINED
@@ -159,12 +166,14 @@ class Gram:
         priors: Mapping[str, float] | None = None,
         invisible: float = 1e-9,
         max_rel_stderr: float = UNDETERMINED,
+        lower: Mapping[str, float] | None = None,
     ) -> Gram:
         """Whitened normal equations of ``candidates`` with the ``free`` columns
         projected out (Schur complement). A candidate whose whitened columns are all
         shorter than ``invisible`` (a unit size moves the data by a billionth of
         their noise), or lie in the span of the free columns, is left out: the data
-        do not see it."""
+        do not see it. ``lower``: the least size of single-column members (none
+        where not given)."""
         Mw = normal.whitened(noise)
         p = Mw.shape[0] - 1
         cand = [k for k in candidates if k in set(normal.keys)]
@@ -236,6 +245,7 @@ class Gram:
             n_free,
             prior,
             reach_all[sel],
+            np.array([(lower or {}).get(k, -np.inf) for k in keys], dtype=float),
             max_rel_stderr,
         )
 
@@ -248,6 +258,17 @@ class Gram:
         pos = 0
         for i, k in enumerate(S):
             out[i] = float(np.sqrt(np.sum(moved[pos : pos + self.dims[k]] ** 2)))
+            pos += self.dims[k]
+        return out
+
+    def feasible(self, S: Sequence[int], beta: np.ndarray) -> np.ndarray:
+        """(len(S),) bool: each block of S at sizes β (normalised) at or above its
+        member's least size."""
+        out = np.ones(len(S), dtype=bool)
+        pos = 0
+        for i, k in enumerate(S):
+            if self.dims[k] == 1 and np.isfinite(self.lower[k]):
+                out[i] = beta[pos] / self.norm[self.start[k]] >= self.lower[k]
             pos += self.dims[k]
         return out
 
@@ -428,6 +449,11 @@ def backward(g: Gram, S: Sequence[int], test: Test) -> list[int]:
         dsse = _block_dsse(beta, C, dims)
         ok, p = test.passes(dsse, np.array(dims), g.dof(S))
         ok &= g.effect(S, beta) >= NEGLIGIBLE
+        # a size the model does not go to (negative play) explains nothing: such
+        # members leave first, as if their p-value were 1
+        feasible = g.feasible(S, beta)
+        ok &= feasible
+        p = np.where(feasible, p, 1.0)
         if np.all(ok):
             break
         bad = np.nonzero(~ok)[0]
@@ -468,6 +494,8 @@ def forward_candidate(g: Gram, S: Sequence[int], test: Test) -> int | None:
         except np.linalg.LinAlgError:
             continue
         d = float(q[a:b] @ step)
+        if not g.feasible([k], step)[0]:
+            continue
         if d > best_d and g.effect([k], step)[0] >= NEGLIGIBLE:
             best, best_d = k, d
     if best is None:
