@@ -40,7 +40,7 @@ identified subspace) and reported as groups of parameters.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -687,6 +687,7 @@ def stage_effects(
     *,
     alpha: float = 1e-3,
     max_rel_stderr: float = 0.25,
+    tables_measured: Collection[int] = (),
 ) -> tuple[dict[str, Any], list[Any], StageReport]:
     """The physical stage: the library's effects outside the contract (bowed guides,
     curved table axes, backlash, cyclic error, servo lag), named, sized and written
@@ -694,7 +695,13 @@ def stage_effects(
 
     The selection is diagnose's (:func:`prsxy_post.diagnose.find_effects`) with the
     contract parameters free, on the pose and ballbar data (the laser runs made
-    the tables). Returns the profile document, the effects and the report.
+    the tables). ``tables_measured``: the motors whose tables in ``now`` the
+    laser runs of the same machine made: they hold every static position error
+    at their targets (a cyclic error among them, aliased when its pitch is under
+    twice the spacing), so an effect is judged by what it adds beyond that and
+    taken out of the table as it is written, as making the table again from the
+    runs less the effect would. Returns the profile document, the effects and
+    the report.
     """
     from . import diagnose
 
@@ -709,8 +716,9 @@ def stage_effects(
         free=list(registry.CONTRACT),
         alpha=alpha,
         max_rel_stderr=max_rel_stderr,
+        tables_measured=tables_measured,
     )
-    doc = registry.apply(now.raw, now, fit.changes())
+    doc = registry.apply(now.raw, now, fit.changes(), fit.tables_measured)
     after = measured - diagnose.predict(fit.profile, data, []).pred
     rb, mb = _kind_stats(before, segs)
     ra, ma = _kind_stats(after, segs)
@@ -799,33 +807,6 @@ def aliased_cyclic(
             f"{finest / 2:g} mm apart"
         )
     return out
-
-
-def _retable(
-    doc: dict[str, Any], now: Profile, axis: Sequence[AxisData], found: Sequence[Any]
-) -> None:
-    """Tables from the laser runs less the periodic terms now modelled, with the
-    ballbar's extra backlash put back: the table holds what no named effect does."""
-    from . import iso230_2
-    from .profile import profile_from_dict
-
-    prof = profile_from_dict(doc, now.source)
-    cyc = axiscomp.tables_by_motor((), prof.effects)
-    motor = np.concatenate([a.motor for a in axis])
-    target = np.concatenate([a.target for a in axis])
-    measured = np.concatenate([a.measured for a in axis]).copy()
-    for m, t in cyc.items():
-        sel = motor == m
-        measured[sel] -= t.lo(target[sel]) - target[sel]  # the cyclic part alone
-    direction = np.concatenate([a.direction for a in axis])
-    run = np.concatenate([a.run for a in axis])
-    new = iso230_2.tables_from_axis(motor, target, measured, direction, run)
-    merged = {c["motor"]: c for c in doc.get("axis_comp", [])}
-    merged.update({c["motor"]: c for c in _axis_doc(new)})
-    doc["axis_comp"] = [merged[m] for m in sorted(merged)]
-    extra = [e.change() for e in found if registry.family(e.name).key == "backlash"]
-    if extra:
-        doc.update(registry.apply(doc, prof, extra))
 
 
 def fit_error_map(profile: Profile, data: Any, seed: int, sources: Sequence[str]) -> Any:
@@ -929,11 +910,17 @@ def calibrate(
         doc = apply_theta(doc, theta)
     if "effects" in want and (poses or runs):
         now = profile_from_dict(doc, start.source)
+        # the tables the laser runs just made hold the cyclic errors at their targets
+        laser = {int(m) for a in axis for m in np.unique(a.motor)} if "tables" in want else set()
         doc, found, rep = stage_effects(
-            now, commanded, poses, runs, alpha=alpha, max_rel_stderr=max_rel_stderr
+            now,
+            commanded,
+            poses,
+            runs,
+            alpha=alpha,
+            max_rel_stderr=max_rel_stderr,
+            tables_measured=laser,
         )
-        if axis and "tables" in want and found:
-            _retable(doc, now, axis, found)
         tol = start.interpolation.path_tolerance_mm
         rep.warnings.extend(aliased_cyclic(found, axis, min_amplitude_mm=tol / 2))
         reports.append(rep)

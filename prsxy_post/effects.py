@@ -27,7 +27,7 @@ one :class:`Family` entry in :data:`FAMILIES` (see ``docs/architecture.md``,
 from __future__ import annotations
 
 import copy
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -355,13 +355,17 @@ class TableStraightness(Family):
 @dataclass(frozen=True)
 class MotorContext:
     """What a motor term may need beyond the part's positions: the motor's
-    commands (N,) [mm], the model's table of that motor (its play model), and how
+    commands (N,) [mm], the model's table of that motor (its play model), how
     the points were approached (None: one continuous motion; ±1: each point on its
-    own from that side)."""
+    own from that side), and the points of the motor's table when that table was
+    measured on the machine as it is (calibration's laser runs: the table holds
+    every static position error sampled at its points and interpolated between
+    them; None when the table is the profile's own, whatever the machine does)."""
 
     commands: np.ndarray
     table: axiscomp.MotorTable | None
     approach: int | None
+    measured_at: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -396,6 +400,13 @@ class MotorFamily(Family):
 
     def columns(self) -> int:
         return 1
+
+    def held_by_table(self, change: Change, points: np.ndarray) -> np.ndarray | None:
+        """What a table measured at ``points`` [mm] holds of ``change`` (N,) [mm],
+        forward and reverse alike: the static position error it adds there; None
+        for an effect a laser run does not see as such (the play is held as the
+        table's reversal value, and an extra backlash is what the table lacks)."""
+        return None
 
 
 @dataclass(frozen=True)
@@ -488,8 +499,26 @@ class CyclicError(MotorFamily):
         context: MotorContext | None = None,
     ) -> np.ndarray:
         assert period is not None
-        ph = 2 * np.pi * position / period
-        return np.column_stack([np.sin(ph), np.cos(ph)])
+
+        def term(p: np.ndarray) -> np.ndarray:
+            ph = 2 * np.pi * p / period
+            return np.column_stack([np.sin(ph), np.cos(ph)])
+
+        out = term(position)
+        pts = context.measured_at if context is not None else None
+        if pts is not None and len(pts) > 1:
+            # a table measured with the error present holds it at its points and
+            # interpolates linearly between them (constant beyond them), and the
+            # table is made again without it once it is named: what the term adds
+            # is the error less that interpolation (a pitch shorter than twice the
+            # spacing of the points shows in the table as its alias)
+            at = term(pts)
+            out = out - np.column_stack([np.interp(position, pts, at[:, j]) for j in range(2)])
+        return out
+
+    def held_by_table(self, change: Change, points: np.ndarray) -> np.ndarray | None:
+        period = float(change.period or 0.0)
+        return change.delta * np.sin(2 * np.pi * points / period + np.radians(change.phase or 0.0))
 
     def write(self, doc: dict[str, Any], profile: Profile, change: Change) -> None:
         eff = doc.setdefault("effects", {})
@@ -813,11 +842,21 @@ def fd_steps(names: Sequence[str], theta: np.ndarray) -> np.ndarray:
     return np.array([family(n).fd_step(float(t)) for n, t in zip(names, theta, strict=True)])
 
 
-def apply(doc: Mapping[str, Any], profile: Profile, changes: Sequence[Change]) -> dict[str, Any]:
+def apply(
+    doc: Mapping[str, Any],
+    profile: Profile,
+    changes: Sequence[Change],
+    tables_measured: Collection[int] = (),
+) -> dict[str, Any]:
     """A copy of profile document ``doc`` (of ``profile``) with ``changes`` added.
 
     Geometry members are set to their value in ``profile`` plus the change (all
     changes to one member add up); motor members add their term at their home.
+    ``tables_measured``: motors whose ``[[axis_comp]]`` tables were measured on
+    the machine as it is (calibration's laser runs); a motor term such a table
+    holds at its points (:meth:`MotorFamily.held_by_table`: a cyclic error) is
+    taken out of the table as it is added, as making the table again from the
+    same runs without it would.
     """
     out = copy.deepcopy(dict(doc))
     total: dict[str, float] = {}
@@ -825,8 +864,16 @@ def apply(doc: Mapping[str, Any], profile: Profile, changes: Sequence[Change]) -
         fam = family(ch.name)
         if fam.stage == "geometry":
             total[ch.name] = total.get(ch.name, 0.0) + ch.delta
-        else:
-            fam.write(out, profile, ch)
+            continue
+        fam.write(out, profile, ch)
+        assert isinstance(fam, MotorFamily)
+        m = fam.motor(ch.name)
+        entry = next((c for c in out.get("axis_comp", []) if c["motor"] == m), None)
+        if m in tables_measured and entry is not None:
+            held = fam.held_by_table(ch, np.asarray(entry["positions"], dtype=float))
+            if held is not None:
+                entry["forward"] = (np.asarray(entry["forward"], dtype=float) - held).tolist()
+                entry["reverse"] = (np.asarray(entry["reverse"], dtype=float) - held).tolist()
     if total:
         out.setdefault("kinematics", {}).setdefault("legs", [{}, {}, {}])
         for n, d in total.items():

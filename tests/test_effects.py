@@ -149,3 +149,44 @@ def test_play_below_zero_folds_back_so_backlash_is_bounded(
         )
     assert effects.lower_bound("backlash[2]", plus) == pytest.approx(-0.004)
     assert effects.lower_bound("kinematics.tool_length", plus) == -np.inf
+
+
+def test_a_table_measured_with_a_cyclic_error_holds_it_at_its_points(
+    nominal: profile_mod.Profile,
+) -> None:
+    """Laser targets 20 mm apart on a motor with a 16 mm cyclic error: the table
+    made from them holds the error at the targets and interpolates between them
+    (an 80 mm alias). Adding the cyclic term to such a table takes out what the
+    table held (as making the table again without it would), so at the targets
+    nothing changes; between them the change is the error less its interpolation,
+    and the term's signature is that, per unit of its sine and cosine parts."""
+    from prsxy_post import axiscomp
+
+    pts = np.arange(-200.0, 201.0, 20.0)
+    doc = dict(nominal.raw)
+    doc["axis_comp"] = [
+        {"motor": 5, "positions": pts.tolist(), "forward": [0.0] * 21, "reverse": [0.0] * 21}
+    ]
+    prof = profile_mod.profile_from_dict(doc, "t.toml")
+    ch = effects.Change("cyclic[5]", 0.003, 16.0, 30.0)
+    new = profile_mod.profile_from_dict(effects.apply(prof.raw, prof, [ch], {5}), "n.toml")
+    table = axiscomp.profile_tables(new)[5]
+    p = np.linspace(-190.0, 190.0, 777)
+    err = 0.003 * np.sin(2 * np.pi * p / 16.0 + np.radians(30.0))
+    held = np.interp(p, pts, 0.003 * np.sin(2 * np.pi * pts / 16.0 + np.radians(30.0)))
+    for side in (1, -1):
+        np.testing.assert_allclose(axiscomp.approach(table, pts, side), pts, atol=1e-12)
+        np.testing.assert_allclose(axiscomp.approach(table, p, side) - p, err - held, atol=1e-12)
+    # the profile's own table (not measured so) keeps what it holds: the term adds all
+    plain = profile_mod.profile_from_dict(effects.apply(prof.raw, prof, [ch]), "p.toml")
+    np.testing.assert_allclose(
+        axiscomp.approach(axiscomp.profile_tables(plain)[5], p, 1) - p, err, atol=1e-12
+    )
+    fam = effects.family("cyclic[5]")
+    assert isinstance(fam, effects.MotorFamily)
+    ctx = effects.MotorContext(p, table, 1, pts)
+    sig = fam.motor_term(p, np.ones_like(p), np.zeros_like(p), 16.0, ctx)
+    ph = np.radians(30.0)  # amplitude · sin(θ + φ) = a cos φ · sin θ + a sin φ · cos θ
+    np.testing.assert_allclose(
+        sig @ [0.003 * np.cos(ph), 0.003 * np.sin(ph)], err - held, atol=1e-12
+    )

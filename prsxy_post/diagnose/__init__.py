@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -210,6 +210,8 @@ class _Fit:
     lin: Linearised
     cov: np.ndarray
     sigma2: float
+    #: motors whose tables were measured with the effects present (:func:`refine`)
+    tables_measured: tuple[int, ...] = ()
 
     def changes(self) -> list[registry.Change]:
         return _changes(self.free, self.keys, self.dims, self.x)
@@ -259,6 +261,7 @@ def refine(
     iterations: int = 6,
     max_rel_stderr: float = 0.25,
     lower: Mapping[str, float] | None = None,
+    tables_measured: Collection[int] = (),
 ) -> _Fit:
     """Gauss–Newton on the sizes through the full (nonlinear) model.
 
@@ -268,6 +271,9 @@ def refine(
     lower : key -> the least size of a term's model
     (:func:`prsxy_post.effects.lower_bound`); steps stop there (projected
     Gauss–Newton).
+    tables_measured : motors whose tables in ``current`` were measured on the
+    machine as it is: what such a table holds of a term is taken out of it as the
+    term is added (:func:`prsxy_post.effects.apply`).
 
     Raises
     ------
@@ -287,11 +293,19 @@ def refine(
     s = _priors(free, keys, dims)
     all_keys = free + keys
 
+    measured_motors = tuple(sorted(tables_measured))
+
     def model_at(x: np.ndarray, columns: bool) -> tuple[Profile, Linearised]:
-        prof = profile_from_dict(
-            registry.apply(current.raw, current, _changes(free, keys, dims, x)), current.source
+        doc = registry.apply(current.raw, current, _changes(free, keys, dims, x), measured_motors)
+        prof = profile_from_dict(doc, current.source)
+        lin = predict(
+            prof,
+            data,
+            all_keys if columns else [],
+            with_map=with_map,
+            tables_measured=measured_motors,
         )
-        return prof, predict(prof, data, all_keys if columns else [], with_map=with_map)
+        return prof, lin
 
     def solve(X: np.ndarray, rw: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
         """Step, covariance and σ̂² of the linear model X at residual rw."""
@@ -317,7 +331,17 @@ def refine(
     X = _design(lin, all_keys, w, ok)
     if not X.shape[1]:
         rw = (r * w)[ok]
-        return _Fit(free, keys, x, dims, prof, lin, np.zeros((0, 0)), float(rw @ rw) / len(rw))
+        return _Fit(
+            free,
+            keys,
+            x,
+            dims,
+            prof,
+            lin,
+            np.zeros((0, 0)),
+            float(rw @ rw) / len(rw),
+            measured_motors,
+        )
 
     def cost(lin: Linearised) -> float:
         rw = ((measured - lin.pred) * w)[ok]
@@ -369,7 +393,7 @@ def refine(
     else:  # every pass moved x: the covariance where it ended
         r = measured - lin.pred
         _, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
-    return _Fit(free, keys, x, dims, prof, lin, cov, sigma2)
+    return _Fit(free, keys, x, dims, prof, lin, cov, sigma2, measured_motors)
 
 
 def _select(
@@ -501,7 +525,12 @@ def _intervals(
     X = _design(fit.lin, keys, w, ok)
 
     def pred_at(x: np.ndarray) -> np.ndarray:
-        doc = registry.apply(current.raw, current, _changes(fit.free, fit.keys, fit.dims, x))
+        doc = registry.apply(
+            current.raw,
+            current,
+            _changes(fit.free, fit.keys, fit.dims, x),
+            fit.tables_measured,
+        )
         return predict(profile_from_dict(doc, current.source), data, [], with_map=with_map).pred
 
     by_key = {e.key: e for e in found}
@@ -647,6 +676,7 @@ def find_effects(
     rounds: int = 3,
     with_map: bool = False,
     max_rel_stderr: float = 0.25,
+    tables_measured: Collection[int] = (),
 ) -> tuple[list[Effect], _Fit, dict[str, float], np.ndarray]:
     """Steps 2-4 of the module docstring: (effects, fit, noise, whitening weights).
 
@@ -657,6 +687,10 @@ def find_effects(
         of its prior is undetermined: the free members stay put along it, and
         among the candidates the sparsest explanation of it is taken
         (:mod:`.selection`, step 1)
+    tables_measured : motors whose tables in ``current`` were measured (laser runs)
+        on the machine as it is, its effects present (calibration's physical
+        stage): a member is judged by what it adds beyond what such a table holds,
+        and taken out of the table as it is added (:func:`refine`)
     """
     measured, segs = data.measured()
     if not segs:
@@ -669,7 +703,7 @@ def find_effects(
         k: registry.lower_bound(split_key(k)[0], current) for k in keys if split_key(k)[1] is None
     }
     lower = {k: v for k, v in lower.items() if np.isfinite(v)}
-    lin0 = predict(current, data, free + keys, with_map=with_map)
+    lin0 = predict(current, data, free + keys, with_map=with_map, tables_measured=tables_measured)
     resid0 = measured - lin0.pred
     rows = _kind_rows(segs, len(resid0))
     normal = selection.Normal.of(lin0.columns, resid0, rows)
@@ -712,6 +746,7 @@ def find_effects(
                     with_map=with_map,
                     max_rel_stderr=max_rel_stderr,
                     lower=lower,
+                    tables_measured=tables_measured,
                 )
                 break
             except ProfileError:
@@ -725,7 +760,9 @@ def find_effects(
         chosen = [g.keys[i] for i in sel]
         # the working response at the new model: the data as its linearisation sees
         # them, relative to ``current`` (the sizes found are added back)
-        lin = predict(fit.profile, data, free + keys, with_map=with_map)
+        lin = predict(
+            fit.profile, data, free + keys, with_map=with_map, tables_measured=tables_measured
+        )
         z = measured - lin.pred
         j = 0
         for k, d in zip(free + fit.keys, [1] * len(free) + fit.dims, strict=True):

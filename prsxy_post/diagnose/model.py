@@ -29,7 +29,7 @@ sample.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -179,11 +179,15 @@ def predict(
     keys: Sequence[str] | None = None,
     *,
     with_map: bool = False,
+    tables_measured: Collection[int] = (),
 ) -> Linearised:
     """Every measurement as ``model`` predicts it, and the signatures of ``keys``.
 
     keys : column keys (:func:`column_keys`); None for every member of the library
     with_map : add the model's virtual-axis error map to the predicted poses
+    tables_measured : motors whose tables in ``model`` were measured on the machine
+        as it is (calibration's laser runs): a member's signature is what it adds
+        beyond what such a table already holds (:class:`prsxy_post.effects.MotorContext`)
     """
     keys = column_keys() if keys is None else list(keys)
     geo_names = [k for k in keys if registry.family(split_key(k)[0]).stage == "geometry"]
@@ -198,6 +202,11 @@ def predict(
 
     emap = errormap.from_profile(model) if with_map else None
     tables = axiscomp.profile_tables(model)
+    points = {
+        c.motor: np.asarray(c.positions, dtype=float)
+        for c in model.axis_comp
+        if c.motor in tables_measured
+    }
     preds: list[np.ndarray] = []
     cols: dict[str, list[np.ndarray]] = {k: [] for k in keys}
 
@@ -216,7 +225,9 @@ def predict(
             fam = motor_fams[k]
             assert isinstance(fam, registry.MotorFamily)
             i = MOTORS.index(fam.motor(name))
-            ctx = registry.MotorContext(P_cmd[:, i], tables.get(MOTORS[i]), approach)
+            ctx = registry.MotorContext(
+                P_cmd[:, i], tables.get(MOTORS[i]), approach, points.get(MOTORS[i])
+            )
             term = fam.motor_term(P[:, i], direction[:, i], velocity[:, i], period, ctx)
             out[k] = sens[:, :, i, None] * term[:, None, :]
         return out
@@ -297,7 +308,7 @@ def predict(
             for d in (1, -1):
                 sel = (a.motor == m) & (a.direction == d)
                 if np.any(sel):
-                    ctx = registry.MotorContext(a.target[sel], tables.get(m), d)
+                    ctx = registry.MotorContext(a.target[sel], tables.get(m), d, points.get(m))
                     c[sel] = fam.motor_term(
                         a.target[sel],
                         np.full(int(sel.sum()), float(d)),
