@@ -764,12 +764,14 @@ def aliased_cyclic(
     A real-axis table is made from laser targets spaced s apart and interpolated
     linearly between them; a periodic error of pitch p < 2 s (Nyquist: two
     samples a pitch at least) appears in it as a pattern of the alias frequency
-    f_a = |1/p − k/s|, k the nearest integer, which the physical stage, judging
-    the tables as measured, may take for other effects (long-pitch periodic
-    terms, bows). A pitch that divides the spacing aliases to a constant (f_a = 0),
-    which the kinematic parameters absorb, and a term smaller than
-    ``min_amplitude_mm`` (default: half the default path tolerance) cannot move
-    the path by much: neither is warned of. One sentence per motor.
+    f_a = |1/p − k/s|, k the nearest integer. The physical stage models that (a
+    cyclic member's signature is the error less what the table holds of it, and
+    the table is made again without it), but the term is then sized from the
+    ballbar and pose data alone and the laser runs cannot check it. A pitch that
+    divides the spacing aliases to a constant (f_a = 0), which the kinematic
+    parameters absorb, and a term smaller than ``min_amplitude_mm`` (default:
+    half the default path tolerance) cannot move the path by much: neither is
+    warned of. One sentence per motor.
     """
     by_motor: dict[int, list[tuple[float, float, float]]] = {}
     spacing_of: dict[int, float] = {}
@@ -802,9 +804,9 @@ def aliased_cyclic(
         out.append(
             f"motor {motor}: periodic errors at {listed}, but its laser targets are "
             f"up to {spacing_of[motor]:g} mm apart: its table holds them aliased (at "
-            "least two targets a pitch are needed), and the effects found beside them "
-            "may be taking those patterns; measure the motor with targets at most "
-            f"{finest / 2:g} mm apart"
+            "least two targets a pitch are needed); they were sized from the ballbar "
+            "and pose data and taken out of the table, which the laser runs cannot "
+            f"check; measure the motor with targets at most {finest / 2:g} mm apart"
         )
     return out
 
