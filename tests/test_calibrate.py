@@ -224,7 +224,7 @@ def test_a_cyclic_error_the_laser_targets_alias_is_sized_and_taken_out_of_the_ta
     the cyclic member by what it adds beyond that table (issue 13, seed 11 of the
     loop: judged as if the table held nothing of it, the alias was taken for long
     pitches and bows, 3-5 µm off): it names the two effects alone, sizes them, takes
-    the error out of the table, and the tip lands within 1 µm at fresh poses."""
+    the error out of the table, and the tip lands within 1.5 µm at fresh poses."""
     from prsxy_post import effects
 
     rng = np.random.default_rng(21)
@@ -244,4 +244,4 @@ def test_a_cyclic_error_the_laser_targets_alias_is_sized_and_taken_out_of_the_ta
     t6 = next(c for c in prof.axis_comp if c.motor == 6)
     assert np.max(np.abs(np.asarray(t6.forward))) < 0.6e-3  # laser noise: 0.13 µm a target
     q = random_poses(np.random.default_rng(99), 300)
-    assert _tip_error(truth, prof, q).max() < 1.0e-3
+    assert _tip_error(truth, prof, q).max() < 1.5e-3  # as the physical stage's test above
