@@ -108,12 +108,24 @@ class Family:
         model does not go on (it folds back), so no estimate may lie there."""
         return -np.inf
 
-    # geometry families
-    def value(self, parts: Parts, name: str) -> float:
+    # geometry families: a member is a number of the profile, held in a list or
+    # dict of Parts (``slot``) and of the profile document (``doc_slot``)
+    def slot(self, parts: Parts, name: str) -> tuple[Any, Any]:
+        """The container in ``parts`` holding member ``name``, and its key there."""
         raise NotImplementedError
 
-    def set_value(self, parts: Parts, name: str, value: float) -> None:
+    def doc_slot(self, doc: dict[str, Any], name: str) -> tuple[Any, Any]:
+        """The container in a profile document holding member ``name`` (made where
+        missing), and its key there."""
         raise NotImplementedError
+
+    def value(self, parts: Parts, name: str) -> float:
+        c, k = self.slot(parts, name)
+        return float(c[k])
+
+    def set_value(self, parts: Parts, name: str, value: float) -> None:
+        c, k = self.slot(parts, name)
+        c[k] = value
 
     def fd_step(self, value: float) -> float:
         """Central-difference step for its signature."""
@@ -121,8 +133,10 @@ class Family:
 
     # every family
     def write(self, doc: dict[str, Any], profile: Profile, change: Change) -> None:
-        """Add ``change`` to a profile document, at the family's profile home."""
-        raise NotImplementedError
+        """Add ``change`` to a profile document, at the family's profile home (a
+        geometry member: its value in ``profile`` plus the change)."""
+        c, k = self.doc_slot(doc, change.name)
+        c[k] = float(self.value(Parts.of(profile), change.name) + change.delta)
 
     # [effects] section
     def parse(self, checker: Any, section: Mapping[str, Any]) -> dict[str, Any]:
@@ -203,6 +217,14 @@ _CONTRACT_SIM = "kinematics.Geometry.from_params"
 _CONTRACT_COMP = "kinematics.inverse"
 
 
+def _effects_vector(doc: dict[str, Any], key: str, n: int) -> list[float]:
+    """The ``[effects]`` vector ``key`` of a profile document as a list of floats
+    (n zeros where absent), put back into the document."""
+    eff = doc.setdefault("effects", {})
+    eff[key] = [float(x) for x in eff.get(key, [0.0] * n)]
+    return eff[key]
+
+
 @dataclass(frozen=True)
 class ToolTerm(Family):
     """``kinematics.tool_length``, ``tool_offset_x``, ``tool_offset_y`` (contract)."""
@@ -210,18 +232,14 @@ class ToolTerm(Family):
     def members(self) -> tuple[str, ...]:
         return (f"kinematics.{self.key}",)
 
-    def value(self, parts: Parts, name: str) -> float:
-        return parts.tool[self.key]
+    def slot(self, parts: Parts, name: str) -> tuple[Any, Any]:
+        return parts.tool, self.key
 
-    def set_value(self, parts: Parts, name: str, value: float) -> None:
-        parts.tool[self.key] = value
+    def doc_slot(self, doc: dict[str, Any], name: str) -> tuple[Any, Any]:
+        return doc.setdefault("kinematics", {}), self.key
 
     def fd_step(self, value: float) -> float:
         return 1e-6 * max(1.0, abs(value))
-
-    def write(self, doc: dict[str, Any], profile: Profile, change: Change) -> None:
-        kin = doc.setdefault("kinematics", {})
-        kin[self.key] = float(self.value(Parts.of(profile), change.name) + change.delta)
 
     def sentence(self, name: str, size: float, period: float | None = None) -> str:
         return f"The tool's {self.key.replace('_', ' ')} is off by {size:+.4f} mm."
@@ -234,19 +252,14 @@ class LegTerm(Family):
     def members(self) -> tuple[str, ...]:
         return tuple(f"kinematics.legs[{i}].{self.key}" for i in (1, 2, 3))
 
-    def value(self, parts: Parts, name: str) -> float:
-        return parts.legs[self.index(name)][self.key]
+    def slot(self, parts: Parts, name: str) -> tuple[Any, Any]:
+        return parts.legs[self.index(name)], self.key
 
-    def set_value(self, parts: Parts, name: str, value: float) -> None:
-        parts.legs[self.index(name)][self.key] = value
+    def doc_slot(self, doc: dict[str, Any], name: str) -> tuple[Any, Any]:
+        return doc["kinematics"]["legs"][self.index(name)], self.key
 
     def fd_step(self, value: float) -> float:
         return 1e-6 * max(1.0, abs(value))
-
-    def write(self, doc: dict[str, Any], profile: Profile, change: Change) -> None:
-        i = self.index(change.name)
-        legs = doc["kinematics"]["legs"]
-        legs[i][self.key] = float(self.value(Parts.of(profile), change.name) + change.delta)
 
     def sentence(self, name: str, size: float, period: float | None = None) -> str:
         leg = self.index(name) + 1
@@ -266,18 +279,14 @@ class TableTerm(Family):
     def members(self) -> tuple[str, ...]:
         return (f"table.{self.key}",)
 
-    def value(self, parts: Parts, name: str) -> float:
-        return parts.table[self.key]
+    def slot(self, parts: Parts, name: str) -> tuple[Any, Any]:
+        return parts.table, self.key
 
-    def set_value(self, parts: Parts, name: str, value: float) -> None:
-        parts.table[self.key] = value
+    def doc_slot(self, doc: dict[str, Any], name: str) -> tuple[Any, Any]:
+        return doc.setdefault("table", {}), self.key
 
     def fd_step(self, value: float) -> float:
         return 1e-7
-
-    def write(self, doc: dict[str, Any], profile: Profile, change: Change) -> None:
-        tb = doc.setdefault("table", {})
-        tb[self.key] = float(self.value(Parts.of(profile), change.name) + change.delta)
 
     def sentence(self, name: str, size: float, period: float | None = None) -> str:
         if self.key == "squareness":
@@ -299,17 +308,11 @@ class GuideBow(Family):
     def members(self) -> tuple[str, ...]:
         return tuple(f"effects.guide_bow[{i}]" for i in (1, 2, 3))
 
-    def value(self, parts: Parts, name: str) -> float:
-        return parts.guide_bow[self.index(name)]
+    def slot(self, parts: Parts, name: str) -> tuple[Any, Any]:
+        return parts.guide_bow, self.index(name)
 
-    def set_value(self, parts: Parts, name: str, value: float) -> None:
-        parts.guide_bow[self.index(name)] = value
-
-    def write(self, doc: dict[str, Any], profile: Profile, change: Change) -> None:
-        eff = doc.setdefault("effects", {})
-        v = [float(x) for x in eff.get("guide_bow", [0.0, 0.0, 0.0])]
-        v[self.index(change.name)] += change.delta
-        eff["guide_bow"] = v
+    def doc_slot(self, doc: dict[str, Any], name: str) -> tuple[Any, Any]:
+        return _effects_vector(doc, "guide_bow", 3), self.index(name)
 
     def parse(self, checker: Any, section: Mapping[str, Any]) -> dict[str, Any]:
         v = _bounded_vector(checker, section, "guide_bow", 3, 1.0)
@@ -331,17 +334,11 @@ class TableStraightness(Family):
     def members(self) -> tuple[str, ...]:
         return ("effects.table_straightness[1]", "effects.table_straightness[2]")
 
-    def value(self, parts: Parts, name: str) -> float:
-        return parts.table_straightness[self.index(name)]
+    def slot(self, parts: Parts, name: str) -> tuple[Any, Any]:
+        return parts.table_straightness, self.index(name)
 
-    def set_value(self, parts: Parts, name: str, value: float) -> None:
-        parts.table_straightness[self.index(name)] = value
-
-    def write(self, doc: dict[str, Any], profile: Profile, change: Change) -> None:
-        eff = doc.setdefault("effects", {})
-        v = [float(x) for x in eff.get("table_straightness", [0.0, 0.0])]
-        v[self.index(change.name)] += change.delta
-        eff["table_straightness"] = v
+    def doc_slot(self, doc: dict[str, Any], name: str) -> tuple[Any, Any]:
+        return _effects_vector(doc, "table_straightness", 2), self.index(name)
 
     def parse(self, checker: Any, section: Mapping[str, Any]) -> dict[str, Any]:
         v = _bounded_vector(checker, section, "table_straightness", 2, 1.0)
