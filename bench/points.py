@@ -34,7 +34,6 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import bench  # noqa: E402
-
 from prsxy_post import chain, gcode, profile  # noqa: E402
 from prsxy_post.interpolate.geometry import segment_limit  # noqa: E402
 from prsxy_post.interpolate.sampling import steps  # noqa: E402
