@@ -4,6 +4,7 @@ Usage::
 
     python bench/gcode_speed.py                  # 200 k lines, three programs
     python bench/gcode_speed.py --lines 50000 --repeat 3
+    python bench/gcode_speed.py --convert        # and the whole convert command
 
 Three programs of about the same number of motions:
 
@@ -19,9 +20,12 @@ Three programs of about the same number of motions:
 file read in batches of lines, as ``convert`` reads it; the interpreter's start-up
 included; Python's start and the imports are not, a warm-up takes them);
 ``rs274`` is the whole ``rs274 -g`` command with its output thrown away (its
-start-up is a few milliseconds). Each figure is the best of ``--repeat`` runs, the
-two alternated. It is a script, not a test: the figures depend on the machine;
-README shows the latest with the machine they were taken on.
+start-up is a few milliseconds). With ``--convert``, also the whole ``prsxy-post
+convert`` command on each program (bench.py's profile and stages: every
+compensation stage, PMAC output; Python's start included), against the same
+``rs274 -g``. Each figure is the best of ``--repeat`` runs, all alternated. It is
+a script, not a test: the figures depend on the machine; README shows the latest
+with the machine they were taken on.
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from bench import generate, time_rs274  # noqa: E402
+from bench import bench_profile, generate, time_command, time_rs274  # noqa: E402
 
 
 def cam_with_comp(n_lines: int) -> str:
@@ -84,6 +88,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--lines", type=int, default=200_000, help="moves per program")
     ap.add_argument("--repeat", type=int, default=5, help="best of this many runs")
+    ap.add_argument("--convert", action="store_true", help="time the convert command too")
     args = ap.parse_args()
     programs = {
         "cam": generate(args.lines),
@@ -91,9 +96,15 @@ def main() -> None:
         "macro": macro(args.lines),
     }
     print(f"{platform.processor() or platform.machine()}, Python {platform.python_version()}")
-    print("| program | lines | motions | ours s | rs274 -g s | ours / rs274 |")
-    print("|---|---:|---:|---:|---:|---:|")
+    head = "| program | lines | motions | ours s | rs274 -g s | ours / rs274 |"
+    rule = "|---|---:|---:|---:|---:|---:|"
+    if args.convert:
+        head += " convert s | convert / rs274 |"
+        rule += "---:|---:|"
+    print(head)
+    print(rule)
     with tempfile.TemporaryDirectory() as d:
+        prof = bench_profile(Path(d) / "bench.toml") if args.convert else None
         warm = Path(d) / "warm.ngc"  # imports and first calls out of the figures
         warm.write_text(macro(100) + cam_with_comp(100))
         time_ours(warm)
@@ -101,18 +112,21 @@ def main() -> None:
             path = Path(d) / f"{name}.ngc"
             path.write_text(text)
             # alternated, so a busy moment of a shared machine falls on both
-            ours_runs, runs = [], []
+            ours_runs, runs, commands = [], [], []
             for _ in range(args.repeat):
                 ours_runs.append(time_ours(path))
                 runs.append(time_rs274(path))
+                if prof is not None:
+                    commands.append(time_command(path, prof, Path(d) / "out.pmc"))
             ours = min(ours_runs)
             theirs = None if runs[0] is None else min(r for r in runs if r is not None)
             ratio = f"{ours[0] / theirs:.2f}" if theirs else "–"
             rs = f"{theirs:.2f}" if theirs else "–"
-            print(
-                f"| {name} | {text.count(chr(10))} | {ours[1]} | {ours[0]:.2f} | {rs} | {ratio} |",
-                flush=True,
-            )
+            row = f"| {name} | {text.count(chr(10))} | {ours[1]} | {ours[0]:.2f} | {rs} | {ratio} |"
+            if commands:
+                cmd = min(commands)
+                row += f" {cmd:.2f} | {f'{cmd / theirs:.2f}' if theirs else '–'} |"
+            print(row, flush=True)
 
 
 if __name__ == "__main__":
