@@ -184,6 +184,22 @@ def summarise(out: list[dict]) -> str:
             f"{_pct(sum(not r['false'] for r in rs), len(rs))} | "
             f"{_pct(sum(h['covered'] for h in cov), len(cov))} | {cpu:.0f} |"
         )
+    # z = (estimate - truth) / SE over every estimate with a standard error
+    z = np.array(
+        [
+            (h["estimate"] - h["true"]) / h["stderr"]
+            for r in out
+            for h in r["hidden"]
+            if h.get("covered") is not None and h.get("stderr")
+        ]
+    )
+    if z.size:
+        rms, within = np.sqrt(np.mean(z**2)), 100.0 * np.mean(np.abs(z) <= 2)
+        lines += [
+            "",
+            f"z = (estimate - truth) / SE over {z.size} estimates: "
+            f"rms {rms:.2f}, |z| <= 2 for {within:.1f} %",
+        ]
     misses = []
     for r in out:
         for h in r["hidden"]:
@@ -196,6 +212,8 @@ def summarise(out: list[dict]) -> str:
                     else "not covered"
                 )
                 est = f" est {h['estimate']:.4g} ± {h['stderr']:.2g}" if h.get("estimate") else ""
+                if h.get("estimate") and h.get("stderr"):
+                    est += f" (z {(h['estimate'] - h['true']) / h['stderr']:+.2f})"
                 misses.append(
                     f"  n={r['n']} seed {r['seed']}: {h['name']}"
                     + (f"@{h['period']:g}" if h.get("period") else "")
