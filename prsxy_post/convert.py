@@ -34,7 +34,7 @@ from typing import Any
 
 from . import sinks
 from .chain import Stages
-from .errors import PrsxyError
+from .errors import PrsxyError, write_failed
 from .files import (
     inspect_source,
     load_profile,
@@ -412,11 +412,7 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
         earlier = out.earlier_error() if out is not None else None
         raise (earlier or err).located(source=job.program) from None
     except OSError as exc:
-        raise PrsxyError(
-            f"cannot write output: {exc.strerror}",
-            source=job.output,
-            expected="a writable location",
-        ) from None
+        raise write_failed(exc, job.output) from None
     finally:
         if out is not None:
             out.discard()

@@ -80,6 +80,14 @@ class PrsxyError(Exception):
         return f"{prefix}: {text}" if prefix else text
 
 
+def write_failed(exc: OSError, source: str | None) -> PrsxyError:
+    """The error of an output that could not be written (disk full, no permission),
+    worded the same wherever the writing happens."""
+    return PrsxyError(
+        f"cannot write output: {exc.strerror}", source=source, expected="a writable location"
+    )
+
+
 class GCodeError(PrsxyError):
     """The G-code program cannot be read or is outside the supported dialect."""
 

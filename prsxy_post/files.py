@@ -15,7 +15,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from .errors import PrsxyError, UsageError
+from .errors import PrsxyError, UsageError, write_failed
 from .profile import Profile, loads
 
 
@@ -123,11 +123,7 @@ def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | b
         for tmp, _ in temps:
             if os.path.exists(tmp):
                 os.unlink(tmp)
-        raise PrsxyError(
-            f"cannot write output: {exc.strerror}",
-            source=str(exc.filename or ""),
-            expected="a writable location",
-        ) from None
+        raise write_failed(exc, str(exc.filename or "")) from None
 
 
 def load_profile(path: str) -> Profile:

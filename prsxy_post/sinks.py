@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import PrsxyError
+from .errors import PrsxyError, write_failed
 
 Piece = tuple[int, str]
 
@@ -159,14 +159,7 @@ def _serve(conn: Any, here: WriterHere) -> None:
                     failed = ("error", err)
                 except OSError as exc:
                     # as the conversion says it when it writes in its own process
-                    failed = (
-                        "error",
-                        PrsxyError(
-                            f"cannot write output: {exc.strerror}",
-                            source=here.parts.output,
-                            expected="a writable location",
-                        ),
-                    )
+                    failed = ("error", write_failed(exc, here.parts.output))
                 except Exception:
                     failed = ("crash", traceback.format_exc())
             if kind == "finish":
