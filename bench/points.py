@@ -35,8 +35,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 
 import bench  # noqa: E402
 from prsxy_post import chain, gcode, profile  # noqa: E402
-from prsxy_post.interpolate.geometry import segment_limit  # noqa: E402
-from prsxy_post.interpolate.sampling import steps  # noqa: E402
+from prsxy_post.interpolate.sampling import longest_step, steps  # noqa: E402
 
 CHUNK = 4096
 
@@ -58,8 +57,7 @@ def count(text: str, prof: profile.Profile) -> dict[str, float]:
             b, law = planned.plan.blocks, planned.plan.law
             moving = ~b.stops
             n = steps(b, law, lim).sum(axis=1)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                h = np.minimum(lim.period_s, segment_limit(b, lim) / np.maximum(law.vp, 1e-300))
+            h = longest_step(b, law, lim)
             floor = np.where(moving, np.maximum(1, np.ceil(law.duration / h - 1e-9)), n)
             out["blocks"] += float(moving.sum())
             out["planned"] += float(n.sum())

@@ -61,10 +61,15 @@ class Samples:
         return Samples(**{f.name: getattr(self, f.name)[sel] for f in fields(self)})
 
 
+def longest_step(b: Blocks, law: TimeLaw, limits: PlanLimits) -> np.ndarray:
+    """(n,) [s] the longest step in each block: the period, shorter on a tight curve."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.minimum(limits.period_s, segment_limit(b, limits) / np.maximum(law.vp, 1e-300))
+
+
 def steps(b: Blocks, law: TimeLaw, limits: PlanLimits) -> np.ndarray:
     """(n, 3) steps in each phase of each block (0 for a phase that is absent)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        h = np.minimum(limits.period_s, segment_limit(b, limits) / np.maximum(law.vp, 1e-300))
+    h = longest_step(b, law, limits)
     t = np.column_stack([law.t1, law.t2, law.t3])
     n = np.where(t > 0, np.ceil(t / h[:, None] - 1e-9), 0).astype(np.int64)
     n = np.where(t > 0, np.maximum(n, 1), 0)
