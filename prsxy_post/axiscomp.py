@@ -31,6 +31,17 @@ from .profile import AxisComp, Effects, Profile
 STAND_TOL_MM = 1e-9
 
 
+def cyclic_error(
+    p: np.ndarray, terms: tuple[tuple[float, float, float], ...]
+) -> np.ndarray | float:
+    """Position error [mm] of periodic terms (amplitude mm, period mm, phase deg) at
+    motor positions ``p`` [mm]: Σ amplitude · sin(2π p / period + phase)."""
+    out: np.ndarray | float = 0.0
+    for amp, period, phase in terms:
+        out = out + amp * np.sin(2 * np.pi * p / period + np.radians(phase))
+    return out
+
+
 @dataclass(frozen=True)
 class MotorTable:
     """lo/hi envelopes of one motor as piecewise-linear functions.
@@ -48,10 +59,7 @@ class MotorTable:
 
     def _cyc(self, p: np.ndarray) -> np.ndarray | float:
         """Periodic error terms (profile ``[[effects.cyclic]]``), both directions alike."""
-        out: np.ndarray | float = 0.0
-        for amp, period, phase in self.cyclic:
-            out = out + amp * np.sin(2 * np.pi * p / period + np.radians(phase))
-        return out
+        return cyclic_error(p, self.cyclic)
 
     def with_cyclic(self, terms: tuple[tuple[float, float, float], ...]) -> MotorTable:
         return MotorTable(self.motor, self.breaks, self.lo_err, self.hi_err, terms)

@@ -514,8 +514,10 @@ class CyclicError(MotorFamily):
         return out
 
     def held_by_table(self, change: Change, points: np.ndarray) -> np.ndarray | None:
-        period = float(change.period or 0.0)
-        return change.delta * np.sin(2 * np.pi * points / period + np.radians(change.phase or 0.0))
+        from . import axiscomp
+
+        term = (change.delta, float(change.period or 0.0), float(change.phase or 0.0))
+        return np.asarray(axiscomp.cyclic_error(points, (term,)))
 
     def write(self, doc: dict[str, Any], profile: Profile, change: Change) -> None:
         eff = doc.setdefault("effects", {})
