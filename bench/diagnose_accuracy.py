@@ -39,6 +39,9 @@ from prsxy_post import diagnose, effects, experiments, measure, profile, simulat
 from prsxy_post.diagnose import model, selection  # noqa: E402
 
 NOMINAL = ROOT / "profiles" / "prsxy-nominal.toml"
+#: The instruments' noise in the campaign [mm, deg] (experiments.measurement_files'
+#: defaults; the pose axis noise is simulate.measure_poses').
+NOISE = {"ballbar": 0.5e-3, "pose_tip": 1e-3, "pose_axis": 3e-4, "axis": 0.3e-3}
 
 
 def campaign(truth: profile.Profile, nominal: profile.Profile, seed: int) -> diagnose.Data:
@@ -64,8 +67,7 @@ def confounded(nominal: profile.Profile, seed: int = 12345) -> dict[str, set[str
     keys = model.column_keys(names)
     lin = model.predict(nominal, d, keys)
     meas, segs = d.measured()
-    noise = {"pose_tip": 1e-3, "pose_axis": 3e-4, "ballbar": 0.5e-3, "axis": 0.3e-3}
-    w = diagnose._whiten(segs, noise, len(meas))
+    w = diagnose._whiten(segs, NOISE, len(meas))
     ok = np.isfinite(meas)
     single = [k for k in keys if lin.columns[k].shape[1] == 1]
     X = np.column_stack([lin.columns[k][:, 0] * w for k in single])[ok]
@@ -81,7 +83,7 @@ def confounded(nominal: profile.Profile, seed: int = 12345) -> dict[str, set[str
                 groups[a].add(b)
     rows = diagnose._kind_rows(segs, len(meas))
     normal = selection.Normal.of(lin.columns, np.where(ok, 0.0, np.nan), rows)
-    g = selection.Gram.build(normal, {k: noise[k] for k in rows}, keys)
+    g = selection.Gram.build(normal, {k: NOISE[k] for k in rows}, keys)
     for i, tied in selection.undetermined(g).items():
         a = model.split_key(g.keys[i])[0]
         groups[a] |= {model.split_key(g.keys[j])[0] for j in tied}

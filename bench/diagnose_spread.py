@@ -34,9 +34,6 @@ import diagnose_accuracy as da  # noqa: E402
 
 from prsxy_post import diagnose, effects, experiments, measure, profile, simulate  # noqa: E402
 
-#: The instruments' noise in the campaign [mm, deg] (experiments.measurement_files).
-NOISE = {"ballbar": 0.5e-3, "pose_tip": 1e-3, "pose_axis": 3e-4, "axis": 0.3e-3}
-
 
 def campaign(truth: profile.Profile, nominal: profile.Profile, seed: int, scale: float):
     """The campaign of ``diagnose_accuracy.campaign`` with every noise scaled."""
@@ -75,7 +72,7 @@ def known(
             truth += [c.delta * np.cos(ph), c.delta * np.sin(ph)]
     x_true = np.array(truth)
     measured, segs = data.measured()
-    w = diagnose._whiten(segs, {k: v * scale for k, v in NOISE.items()}, len(measured))
+    w = diagnose._whiten(segs, {k: v * scale for k, v in da.NOISE.items()}, len(measured))
     fit = diagnose.refine(nominal, data, measured, w, keys, x_true)
     z = (fit.x - x_true) / np.sqrt(np.diag(fit.cov))
     names = []
