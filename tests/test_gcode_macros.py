@@ -15,7 +15,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from prsxy_post import gcode
@@ -542,8 +542,20 @@ def test_the_random_expressions_program_runs() -> None:
     assert err is None and printed == ["1.625000000"]
 
 
+def test_abs_keeps_a_negative_zero_as_linuxcnc_does() -> None:
+    """LinuxCNC's ABS negates only a value below 0.0 (interp_execute.cc,
+    execute_unary: ``if (*double_ptr < 0.0) *double_ptr = -1.0 * *double_ptr``), so
+    ABS of -0 (here -1 MOD 0.125, fmod's -0) stays -0 and ATAN[0]/[-0] is 180:
+    found by the random expressions below."""
+    printed, err = agree(
+        "G21\n#<_g>=0.125\n#3 = [ATAN[0]/[ABS[[-1 MOD #<_g>]]]]\n(PRINT,%.3f#3)\nM2\n"
+    )
+    assert err is None and printed == ["180.000"]
+
+
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(_expr(3))
+@example("atan[0]/[abs[[-1 mod #<_g>]]]")
 def test_random_expressions_evaluate_as_linuxcnc_evaluates_them(e: str) -> None:
     text = f"G21\n#1=1.5 #2=-3 #<a>=7 #<_g>=0.125\n#3 = [{e}]\n(PRINT,%.9f#3)\nM2\n"
     _require_rs274()

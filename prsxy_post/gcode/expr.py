@@ -208,7 +208,14 @@ FUNCTIONS = (
 def unary(name: str, arg: Value, column: int) -> Value:
     """The closure of ``NAME[arg]`` (not ATAN, not EXISTS: see :func:`atan`)."""
     if name == "abs":
-        return lambda p: abs(arg(p))
+
+        def absolute(p: Params) -> float:
+            # LinuxCNC's execute_unary negates only a value below 0.0, so ABS[-0]
+            # stays -0 (which ATAN's quadrant then sees: ATAN[0]/[ABS[-0]] = 180)
+            x = arg(p)
+            return -x if x < 0.0 else x
+
+        return absolute
     if name in ("acos", "asin"):
         f = math.acos if name == "acos" else math.asin
 
