@@ -553,9 +553,48 @@ def test_abs_keeps_a_negative_zero_as_linuxcnc_does() -> None:
     assert err is None and printed == ["180.000"]
 
 
+#: expressions whose value is a signed zero, each seen by ATAN's quadrant: the
+#: sign must come out as C's arithmetic gives it in LinuxCNC
+_SIGNED_ZEROS = (
+    "fup[-0.25]",  # C's ceil(-0.25) is -0.0 (found by the random expressions below)
+    "fix[-0.0]",  # floor(-0.0) is -0.0
+    "round[-0.25]",  # (double)(int)(-0.75) is +0
+    "sqrt[-0.0]",
+    "-0.0 * 5",
+    "0 - 0",
+    "-0 + 0",
+    "-0 + -0",
+    "-1 mod 1",
+    "-0 mod 1",
+    "-0 ** 3",
+    "-0.0 / 3",
+    "sin[-0.0]",
+    "tan[-0.0]",
+    "asin[-0.0]",
+    "atan[-0.0]/[1]",
+    "-0.0 and 1",
+    "-0.0 eq 1",
+    "-#5",
+    "-[0]",
+    "exp[-1000]",
+    "fix[-0.5] * 0",
+    "abs[-0]",
+)
+
+
+def test_signed_zeros_reach_atan_as_in_linuxcnc() -> None:
+    """A zero's sign decides ATAN[0]/[-1] (180 or -180); each way to make a zero,
+    and a -0 kept in a parameter, agrees with rs274 (the values are printed)."""
+    body = "\n".join(f"#3 = [ATAN[{e}]/[-1]]\n(PRINT,%.3f#3)" for e in _SIGNED_ZEROS)
+    printed, err = agree(f"G21\n#5=-0.0\n{body}\nM2\n")
+    assert err is None and len(printed) == len(_SIGNED_ZEROS)
+    assert set(printed) == {"180.000", "-180.000"}  # both quadrants are met
+
+
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(_expr(3))
 @example("atan[0]/[abs[[-1 mod #<_g>]]]")
+@example("atan[fup[-0.25]]/[-1]")
 def test_random_expressions_evaluate_as_linuxcnc_evaluates_them(e: str) -> None:
     text = f"G21\n#1=1.5 #2=-3 #<a>=7 #<_g>=0.125\n#3 = [{e}]\n(PRINT,%.9f#3)\nM2\n"
     _require_rs274()

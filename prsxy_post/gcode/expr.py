@@ -18,7 +18,8 @@ The arithmetic is LinuxCNC's (``interp_execute.cc``: ``execute_binary1/2``,
   convert their double result with ``(r * 180.0) / M_PIl``, as LinuxCNC does, so
   that ``SIN[30]`` and ``TAN[9143008]`` are to the bit what they are there;
 - ``ROUND`` is C's ``(int)(x ± 0.5)``: 32-bit, half away from zero;
-  ``FIX``/``FUP`` are floor/ceil; ``ATAN[y]/[x]`` is atan2 in degrees;
+  ``FIX``/``FUP`` are C's floor/ceil (a zero result keeps the argument's
+  sign); ``ATAN[y]/[x]`` is atan2 in degrees;
 - a value that comes out NaN or infinite is an error where it is read (every
   bracketed expression, function and parameter value), not later.
 
@@ -97,6 +98,20 @@ def c_round(x: float) -> float:
     if not -2147483648 <= t <= 2147483647:
         return -2147483648.0
     return float(t)
+
+
+def c_floor(x: float) -> float:
+    """C's ``floor``: a zero result keeps the argument's sign (``floor(-0.0)`` is
+    -0.0), which Python's int-valued ``math.floor`` loses; ATAN's quadrant sees it."""
+    r = math.floor(x)
+    return float(r) if r else math.copysign(0.0, x)
+
+
+def c_ceil(x: float) -> float:
+    """C's ``ceil``: ``ceil(-0.25)`` is -0.0 (a zero result keeps the argument's
+    sign), so ``ATAN[FUP[-0.25]]/[-1]`` is -180 in LinuxCNC."""
+    r = math.ceil(x)
+    return float(r) if r else math.copysign(0.0, x)
 
 
 # ---------------------------------------------------------------- binary operators
@@ -243,9 +258,9 @@ def unary(name: str, arg: Value, column: int) -> Value:
 
         return exp
     if name == "fix":
-        return lambda p: float(math.floor(arg(p)))
+        return lambda p: c_floor(arg(p))
     if name == "fup":
-        return lambda p: float(math.ceil(arg(p)))
+        return lambda p: c_ceil(arg(p))
     if name == "ln":
 
         def ln(p: Params) -> float:
