@@ -18,6 +18,10 @@ import tempfile
 from dataclasses import dataclass, field
 
 RS274 = shutil.which("rs274")
+#: rs274 runs killed by a signal before a verdict is refused: several rs274 at once
+#: on one machine die of SIGBUS now and then (seen with three in parallel), and an
+#: empty output would otherwise read as a program without motions
+CRASH_RETRIES = 3
 NUM = r"(-?\d+\.\d+)"
 
 
@@ -93,19 +97,27 @@ def run(
             for n, spec in (tools or {}).items():
                 length, diameter = spec if isinstance(spec, tuple) else (spec, 0.0)
                 fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D{diameter / 25.4:.9f} ;\n")
-        try:
-            proc = subprocess.run(
-                [RS274, *extra, "-t", tbl, "-v", var, "-g", prog],
-                cwd=d,
-                capture_output=True,
-                text=True,
-                timeout=timeout,
-                stdin=subprocess.DEVNULL,
+        for _ in range(CRASH_RETRIES):
+            try:
+                proc = subprocess.run(
+                    [RS274, *extra, "-t", tbl, "-v", var, "-g", prog],
+                    cwd=d,
+                    capture_output=True,
+                    text=True,
+                    timeout=timeout,
+                    stdin=subprocess.DEVNULL,
+                )
+            except subprocess.TimeoutExpired:
+                # LinuxCNC's own tests hold a program it loops on for ever
+                # (tests/interp/g71-endless-loop): it does not run to the end
+                return OracleResult([], f"rs274 did not end within {timeout:g} s")
+            if proc.returncode >= 0:
+                break
+        else:
+            raise RuntimeError(
+                f"rs274 was killed by signal {-proc.returncode} {CRASH_RETRIES} times: "
+                "no verdict (another rs274 running at the same time?)"
             )
-        except subprocess.TimeoutExpired:
-            # LinuxCNC's own tests hold a program it loops on for ever
-            # (tests/interp/g71-endless-loop): it does not run to the end
-            return OracleResult([], f"rs274 did not end within {timeout:g} s")
     return parse(proc.stdout, proc.stderr)
 
 
