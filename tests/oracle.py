@@ -18,9 +18,9 @@ import tempfile
 from dataclasses import dataclass, field
 
 RS274 = shutil.which("rs274")
-#: rs274 runs killed by a signal before a verdict is refused: several rs274 at once
-#: on one machine die of SIGBUS now and then (seen with three in parallel), and an
-#: empty output would otherwise read as a program without motions
+#: an rs274 killed by a signal is run again, then refused: its empty output would
+#: read as a program without motions (several rs274 sharing one $HOME died of
+#: SIGBUS on the tool table file they share; each run now has its own, below)
 CRASH_RETRIES = 3
 NUM = r"(-?\d+\.\d+)"
 
@@ -106,6 +106,10 @@ def run(
                     text=True,
                     timeout=timeout,
                     stdin=subprocess.DEVNULL,
+                    # LinuxCNC 2.9 keeps the tool table in a file mapped into
+                    # memory at $HOME/.tool.mmap (tooldata_mmap.cc); each run
+                    # gets its own, or runs at the same time share and truncate it
+                    env={**os.environ, "HOME": d},
                 )
             except subprocess.TimeoutExpired:
                 # LinuxCNC's own tests hold a program it loops on for ever
