@@ -111,10 +111,16 @@ def run(
                     # gets its own, or runs at the same time share and truncate it
                     env={**os.environ, "HOME": d},
                 )
-            except subprocess.TimeoutExpired:
+            except subprocess.TimeoutExpired as exc:
                 # LinuxCNC's own tests hold a program it loops on for ever
-                # (tests/interp/g71-endless-loop): it does not run to the end
-                return OracleResult([], f"rs274 did not end within {timeout:g} s")
+                # (tests/interp/g71-endless-loop): it does not run to the end.
+                # What it wrote up to then is kept, to its last whole line
+                # (TimeoutExpired holds bytes whatever ``text`` says)
+                out = exc.stdout or b""
+                text = out.decode(errors="replace") if isinstance(out, bytes) else out
+                result = parse(text[: text.rfind("\n") + 1])
+                result.error = f"rs274 did not end within {timeout:g} s"
+                return result
             if proc.returncode >= 0:
                 break
         else:

@@ -327,6 +327,16 @@ M2
     assert err is None and printed == ["1"]
 
 
+def test_break_and_continue_in_repeat_are_errors() -> None:
+    """LinuxCNC takes ``break`` and ``continue`` with the label of a while or do
+    loop only; with a repeat's label both are errors where they are reached."""
+    for word in ("break", "continue"):
+        text = f"G21\no1 repeat [2]\n(PRINT,r)\no1 {word}\no1 endrepeat\nM2\n"
+        printed, err = agree(text)
+        assert printed == ["r"] and err is not None
+        assert str(err).startswith(f"p.ngc:4:1: '{word}' with the label of a 'repeat'")
+
+
 def test_nested_loops() -> None:
     printed, _err = agree(
         """G21
@@ -607,3 +617,128 @@ def test_random_expressions_evaluate_as_linuxcnc_evaluates_them(e: str) -> None:
             assert mine == theirs, e
         else:
             assert math.isclose(float(mine), float(theirs), rel_tol=1e-12, abs_tol=2e-9), e
+
+
+# ---------------------------------------------------------------- random control flow
+
+_CONDITION = st.sampled_from(
+    ["[#1 GT 2]", "[#2 LT 0]", "[#<a> EQ 1]", "[#1 MOD 2 EQ 0]", "[#<_g> NE 0]", "[1]", "[0]"]
+)
+_STEP = st.sampled_from(
+    [
+        "#1 = [#1 + 1]",
+        "#2 = [#2 - 0.5]",
+        "#<a> = [#<a> * -1]",
+        "#3 = [#1 + #2]",
+        "#<_g> = [#<_g> + 1]",
+        "#1 = 0",
+        "G1 X[#1] Y[#2]",
+        "G0 Z[#3 / 10]",
+        "G1 Y[#<_g>]",
+        "(PRINT,#1 #2 #3 #<_g>)",
+        "(DEBUG,g=#<_g>)",
+    ]
+)
+
+
+@st.composite
+def _flow(
+    draw: st.DrawFn,
+    depth: int,
+    loop: tuple[int, str] | None,
+    sub: str | None,
+    subs: list[str],
+    n: list[int],
+) -> list[str]:
+    """Blocks of steps, if/elseif/else, repeat, while, do-while, calls, and (inside
+    a loop or a subroutine) break, continue and return: labels numbered by ``n``.
+    ``loop``: the label and kind of the loop the blocks are in. ``break`` and
+    ``continue`` go to while and do loops only (LinuxCNC refuses them for a repeat:
+    test_break_and_continue_in_repeat_are_errors), and no ``continue`` in a do:
+    there LinuxCNC may never end (the test after this one)."""
+    out: list[str] = []
+    kinds = ["step", "step", "if", "repeat", "while", "do", "call"] if depth < 3 else ["step"]
+    kinds += ["break"] if loop is not None and loop[1] != "repeat" else []
+    kinds += ["continue"] if loop is not None and loop[1] == "while" else []
+    kinds += ["return"] if sub is not None else []
+    for _ in range(draw(st.integers(1, 4))):
+        kind = draw(st.sampled_from(kinds))
+        if kind == "step":
+            out.append(draw(_STEP))
+            continue
+        if kind == "call":
+            if subs:
+                out.append(f"o<{draw(st.sampled_from(subs))}> call [{draw(st.integers(-2, 3))}]")
+            continue
+        if kind in ("break", "continue"):
+            assert loop is not None
+            out.append(f"o{loop[0]} {kind}")
+            continue
+        if kind == "return":
+            out.append(f"o<{sub}> return [#1 * 2]")
+            continue
+        n[0] += 1
+        label, times = 100 + n[0], draw(st.integers(0, 3))
+        count = f"#<n{label}>"
+        inner = draw(_flow(depth + 1, loop if kind == "if" else (label, kind), sub, subs, n))
+        if kind == "if":
+            out += [f"o{label} if {draw(_CONDITION)}", *inner]
+            if draw(st.booleans()):
+                out += [f"o{label} elseif {draw(_CONDITION)}"]
+                out += draw(_flow(depth + 1, loop, sub, subs, n))
+            if draw(st.booleans()):
+                out += [f"o{label} else", *draw(_flow(depth + 1, loop, sub, subs, n))]
+            out.append(f"o{label} endif")
+        elif kind == "repeat":
+            out += [f"o{label} repeat [{times}]", *inner, f"o{label} endrepeat"]
+        elif kind == "while":
+            out += [f"{count} = 0", f"o{label} while [{count} LT {times}]"]
+            out += [f"{count} = [{count} + 1]", *inner, f"o{label} endwhile"]
+        else:
+            out += [f"{count} = 0", f"o{label} do", f"{count} = [{count} + 1]", *inner]
+            out.append(f"o{label} while [{count} LT {times}]")
+    return out
+
+
+@st.composite
+def _flow_program(draw: st.DrawFn) -> str:
+    n = [0]
+    subs: list[str] = []
+    text = ["G21 G90 G17 G94 F200", "#1=1 #2=-1 #3=2 #<_g>=0"]
+    for name in ("s1", "s2")[: draw(st.integers(0, 2))]:
+        body = draw(_flow(1, None, name, list(subs), n))
+        text += [f"o<{name}> sub", "#<a> = 1", "#1 = [#1 + 1]", *body, f"o<{name}> endsub"]
+        subs.append(name)
+    text += ["#<a> = 1", *draw(_flow(0, None, None, subs, n))]
+    return "\n".join([*text, "(PRINT,#1 #2 #3 #<a> #<_g> #<_value>)", "M2"]) + "\n"
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_flow_program())
+def test_random_control_flow_runs_as_in_linuxcnc(program: str) -> None:
+    """Nested if/elseif/else, repeat, while and do-while loops (break and continue
+    included), subroutines calling subroutines with arguments and return values:
+    the same motions and the same printed values, or both refuse. Run with
+    max_examples=1500 while writing it: all ran in both, none differed (the first
+    version, with ``continue`` in do loops, found the program of the next test)."""
+    agree(program)
+
+
+def test_a_continue_in_a_do_loop_inside_another_loop_never_ends_in_either() -> None:
+    """In LinuxCNC 2.9 this program never ends: the do loop's ``continue`` sends
+    it back to the line before the do (its counter is set to 0 again and "pass 1"
+    printed again) instead of to the ``while`` test. Ours goes the same way, and
+    its loop limit stops it with a located error where rs274 runs until killed."""
+    _require_rs274()
+    text = (
+        "G21\no101 repeat [1]\n#<n> = 0\no102 do\n#<n> = [#<n> + 1]\n(PRINT,pass #<n>)\n"
+        "o102 continue\no102 while [#<n> LT 0]\no101 endrepeat\n(PRINT,end)\nM2\n"
+    )
+    ref = oracle.run(text, timeout=2.0)
+    assert ref.error is not None and "did not end" in ref.error
+    assert ref.prints[:5] == ["pass 1.000000"] * 5
+    cfg = gcode.InterpreterConfig(max_loop_passes=100, on_message=lambda *a: said.append(a[3]))
+    said: list[str] = []
+    with pytest.raises(GCodeError, match=r"p\.ngc:\d+:1: the program's loops have gone round 100"):
+        gcode.interpret(text, cfg, "p.ngc")
+    assert said[:50] == ["pass 1.000000"] * 50 and "end" not in said
