@@ -107,8 +107,9 @@ def run(
                     timeout=timeout,
                     stdin=subprocess.DEVNULL,
                     # LinuxCNC 2.9 keeps the tool table in a file mapped into
-                    # memory at $HOME/.tool.mmap (tooldata_mmap.cc); each run
-                    # gets its own, or runs at the same time share and truncate it
+                    # memory, $HOME/.tool.mmap (rs274 makes it there on each run:
+                    # its tool_mmap_creator); each run gets its own, or runs at
+                    # the same time share and truncate it
                     env={**os.environ, "HOME": d},
                 )
             except subprocess.TimeoutExpired as exc:
