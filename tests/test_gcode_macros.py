@@ -725,10 +725,12 @@ def test_random_control_flow_runs_as_in_linuxcnc(program: str) -> None:
 
 
 def test_a_continue_in_a_do_loop_inside_another_loop_never_ends_in_either() -> None:
-    """In LinuxCNC 2.9 this program never ends: the do loop's ``continue`` sends
-    it back to the line before the do (its counter is set to 0 again and "pass 1"
-    printed again) instead of to the ``while`` test. Ours goes the same way, and
-    its loop limit stops it with a located error where rs274 runs until killed."""
+    """In LinuxCNC 2.9 this program never ends: inside the repeat, the do loop's
+    ``continue`` sends it back before the do (its counter is set to 0 again and
+    "pass 1" printed again) instead of to the ``while`` test, where the same do
+    loop alone goes (it then ends: test_while_do_repeat_break_continue has the
+    plain loops). Ours goes the same way, and its loop limit stops it with a
+    located error where rs274 runs until killed."""
     _require_rs274()
     text = (
         "G21\no101 repeat [1]\n#<n> = 0\no102 do\n#<n> = [#<n> + 1]\n(PRINT,pass #<n>)\n"
