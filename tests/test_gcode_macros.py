@@ -728,10 +728,14 @@ def test_a_continue_in_a_do_loop_inside_another_loop_never_ends_in_either() -> N
     """In LinuxCNC 2.9 this program never ends: inside the repeat, the do loop's
     ``continue`` sends it back before the do (its counter is set to 0 again and
     "pass 1" printed again) instead of to the ``while`` test, where the same do
-    loop alone goes (it then ends: test_while_do_repeat_break_continue has the
-    plain loops). Ours goes the same way, and its loop limit stops it with a
-    located error where rs274 runs until killed."""
-    _require_rs274()
+    loop alone goes (and ends). Ours goes the same way both times, and its loop
+    limit stops the first with a located error where rs274 runs until killed."""
+    alone = (
+        "G21\n#<n> = 0\no102 do\n#<n> = [#<n> + 1]\n(PRINT,pass #<n>)\n"
+        "o102 continue\no102 while [#<n> LT 0]\n(PRINT,end)\nM2\n"
+    )
+    printed, err = agree(alone)
+    assert err is None and printed == ["pass 1.000000", "end"]
     text = (
         "G21\no101 repeat [1]\n#<n> = 0\no102 do\n#<n> = [#<n> + 1]\n(PRINT,pass #<n>)\n"
         "o102 continue\no102 while [#<n> LT 0]\no101 endrepeat\n(PRINT,end)\nM2\n"
