@@ -327,6 +327,28 @@ M2
     assert err is None and printed == ["1"]
 
 
+def test_the_feed_rate_in_each_feed_mode_is_linuxcncs() -> None:
+    """convert_feed_mode: G94 sets the feed rate to 0 even in G94 (an F in its
+    block comes after), G93 keeps it; convert_feed_rate runs in G94 only, and in
+    G93 each move's inverse-time rate (program units, or degrees, per minute)
+    becomes the feed rate that ``#<_feed>`` reads and M70 saves. Found by the
+    random programs (a plain ``G94`` before a G1 without F: rs274 refuses it)."""
+    printed, err = agree(
+        "G20 G94 F20\n(PRINT,a #<_feed>)\nG93 G1 X1 F2\n(PRINT,b #<_feed>)\n"
+        "G1 A90 F0.5\n(PRINT,c #<_feed>)\nG2 X2 Y1 R1 F3\n(PRINT,d #<_feed>)\nM70\n"
+        "G94 F7\n(PRINT,e #<_feed>)\nM72\n(PRINT,f #<_feed> #<_inverse_time>)\n"
+        "G1 X3 F1\n(PRINT,g #<_feed>)\nG21 G94\nG1 X0 F100\n(PRINT,h #<_feed>)\nM2\n"
+    )
+    assert err is None
+    assert [p.split()[1] for p in printed] == [
+        "20.000000", "2.000000", "45.000000", "4.712389", "7.000000", "7.000000",
+        "1.000000", "100.000000",
+    ]  # fmt: skip
+    printed, err = agree("G21 G94 F500\nG93\n(PRINT,#<_feed>)\nG94\nG1 X1\nM2\n")
+    assert printed == ["500.000000"]
+    assert err is not None and str(err).startswith("p.ngc:5:")
+
+
 def test_break_and_continue_in_repeat_are_errors() -> None:
     """LinuxCNC takes ``break`` and ``continue`` with the label of a while or do
     loop only; with a repeat's label both are errors where they are reached."""

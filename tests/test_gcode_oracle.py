@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from prsxy_post import gcode
@@ -341,6 +341,7 @@ _LINE = st.one_of(
 @pytest.mark.linuxcnc
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(_LINE, min_size=1, max_size=20))
+@example(["G94", "G1 X-2.5"])  # G94 sets the feed rate to 0: found in CI
 def test_random_programs_agree_with_linuxcnc(body: list[str]) -> None:
     """Random blocks of the dialect's motion, modal, offset, tool, compensation and
     cycle codes (tool table, work offsets, G28/G30 as the corpus test has them):

@@ -335,11 +335,14 @@ class Interpreter:
         seen, groups, mgroups = w.seen, w.g, w.m
         # LinuxCNC's execute_block: feed mode, F, S, T, M codes, G codes, stops
         if 5 in groups:
-            new_it = groups[5][0] == 93
-            if new_it != st.inverse_time:
+            # convert_feed_mode: G94 sets the feed rate to 0 (in effect already or
+            # not; an F in the block comes after it), G93 leaves it
+            st.inverse_time = groups[5][0] == 93
+            if not st.inverse_time:
                 st.feed = 0.0
-            st.inverse_time = new_it
-        if "F" in seen:
+        if "F" in seen and not st.inverse_time:
+            # convert_feed_rate runs in G94 only: in G93 the F word is the block's
+            # own, and the feed rate is the rate of the last move (moves.feed_rate)
             st.feed = seen["F"].value
             st.feed_units = st.units
         # machine functions before the motion, in LinuxCNC's order of execution

@@ -106,13 +106,17 @@ def feed_rate(
                 word,
                 "an F word on every G1/G2/G3 block in G93",
             )
-        if st.feed <= 0:
+        f = it._seen["F"].value
+        if f <= 0:
             raise it.err("zero feed rate", line, it._seen["F"], "F > 0")
-        # inverse_time_rate_*: max(0.1, length * F) in program units per minute
+        # inverse_time_rate_*: max(0.1, length * F) in program units per minute,
+        # which becomes the feed rate (#<_feed>, what M70 saves)
         if lin > 1e-12:
-            rate = max(0.1 * it.scale(), st.feed * lin)
+            rate = max(0.1 * it.scale(), f * lin)
+            st.feed = rate / it.scale()
         else:
-            rate = max(0.1, st.feed * math.dist(start[3:], end[3:]))
+            rate = max(0.1, f * math.dist(start[3:], end[3:]))
+            st.feed = rate
         it.inverse_rate = rate
         return rate
     if st.feed <= 0:
