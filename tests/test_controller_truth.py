@@ -30,9 +30,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from prsxy_post import chain, kinematics
+from prsxy_post.errors import GCodeError
 
 from . import controllers as ctl
 from .conftest import ROOT
+from .test_gcode_comp import _compensated_path
+from .test_gcode_oracle import _cycles
 from .test_tracking import TOL_DEG, TOL_MM, _tool_of_lines, convert, truth_machine
 
 SAMPLES = sorted((ROOT / "samples").glob("*.ngc"))
@@ -221,6 +224,56 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 @CORNER_SEARCH
 @given(programs())
 def test_any_corner_any_speed_on_a_machine_with_play(text: str) -> None:
+    truth = truth_machine("random", 21)
+    motions, res, texts = convert(truth, text)
+    assert_within(judge_pmac(truth, motions, res, texts), None)
+
+
+@settings(CORNER_SEARCH, max_examples=50)
+@given(st.one_of(_cycles(), _compensated_path()))
+def test_canned_cycles_and_compensated_paths_stay_on_the_path(text: str) -> None:
+    """The dialect's own motion, executed: canned cycles (plunges, pecks, dwells and
+    retracts in every plane, stops with a motor turning back at the bottom of a
+    hole) and compensated paths (the corner arcs the compensation adds, entries and
+    exits), from the generators the rs274 oracle tests use, the same 50 on every
+    run. A program the interpreter refuses is skipped here (the oracle tests hold
+    the refusals): 25 of the 50 run. On the nominal machine; on machines with
+    play the same search found the programs of the next test."""
+    truth = truth_machine("nominal", None)
+    try:
+        motions, res, texts = convert(truth, text)
+    except GCodeError:
+        return
+    assert_within(judge_pmac(truth, motions, res, texts), truth.limits.max_accel_mm_s2)
+
+
+#: Found by the search above on machine 21 (backlash in every motor), 2026-11-24;
+#: not fixed yet (the note of that day). Each with what it measured.
+FOUND_WITH_PLAY = {
+    # 0.609 µm off the path about line 7: Y turns back (7.5 -> -30) as A starts
+    "reversal with a tilt": (
+        "G21 G90 G17 G94 G40 G49 G54 G80 F500\nT1 M6\nG0 X-40 Y-40 Z0\nG1 X-30 Y-30\n"
+        "G1 X-5\nG1 X-30\nG1 Y7.5\nG1 Y-30 A5\nM3 S100\nG0 X50 Y50\nM2\n"
+    ),
+    # 1.00151 x F (limit 1.001): a compensated path, then a helix, a move with B
+    "compensated, then a helix": (
+        "G21 G90 G17 G94 G40 G49 G54 G80 F500\nT1 M6\nG0 X-40 Y-40 Z0\nG1 X-30 Y-30\n"
+        "G41.1 D2\nG1 Y0 Z-1\nG1 Y30 F300\nG40\nG1 X-29.5 Y5\n"
+        "G2 X-29.5000 Y5.0000 I-10 J-10 Z-0.5\nG1 X-30 Y-30 B-2\nG0 X50 Y50\nM2\n"
+    ),
+    # 1.128 arcsec off the tool axis: the compensation's corner arc turns A; arcs
+    # are judged at the parameter nearest in XYZ (path_distance), so this may be
+    # the judge's as much as the machine's
+    "corner arc with a tilt": (
+        "G21 G90 G17 G94 G40 G49 G54 G80 F500\nT1 M6\nG0 X-40 Y-40 Z0\nG41.1 D2\n"
+        "G1 X-30 Y-30\nG1 X-20 A5\nG40\nG0 X50 Y50\nM2\n"
+    ),
+}
+
+
+@pytest.mark.xfail(strict=True, reason="found 2026-11-24, open: see FOUND_WITH_PLAY")
+@pytest.mark.parametrize("text", list(FOUND_WITH_PLAY.values()), ids=list(FOUND_WITH_PLAY))
+def test_dialect_programs_found_on_a_machine_with_play(text: str) -> None:
     truth = truth_machine("random", 21)
     motions, res, texts = convert(truth, text)
     assert_within(judge_pmac(truth, motions, res, texts), None)
