@@ -249,3 +249,22 @@ def test_a_window_at_its_steps_start_is_found_whatever_the_rounding() -> None:
     assert begs.tolist() == [1, 1, -1]
     ends = rows.at(k[:2], np.array([when[2], when[2]]), t0[:2])
     assert ends.tolist() == [2, 2]
+
+
+def test_a_creep_back_is_measured_from_the_farthest_the_motor_went() -> None:
+    """A motor moving down reaches its stop through rows without a direction (the
+    last steps of its deceleration, the stop itself), then creeps back up while the
+    path moves on (a table axis following the other's squareness). Its part stands
+    at the farthest point down; a creep back of 0.1 µm past the allowance from there
+    is a reversal, though the motor is still below where it last had a direction."""
+    drift = 0.05e-3
+    sg = np.array([-1, -1, 0, 0, 0, 0, 0, 0])
+    P = np.array([-1.0, -1.010, -1.017, -1.0170, -1.01699, -1.01694, -1.01690, -1.01680])
+    out = reversals._creeps(sg, P, side=-1, ref=np.nan, drift=drift)
+    # back by more than 0.05 µm from -1.017 first at -1.01694 (0.06 µm back)
+    assert out.tolist() == [0, 0, 0, 0, 0, 1, 0, 0]
+    # carried to the next chunk: the farthest, not the last row with a direction
+    assert reversals.farthest(sg[:4], P[:4], -1, np.nan) == -1.017
+    # a motor creeping on its way is no reversal
+    ahead = np.array([-1.0, -1.010, -1.017, -1.0171, -1.0172])
+    assert not reversals._creeps(sg[:5], ahead, -1, np.nan, drift).any()
