@@ -272,7 +272,11 @@ def test_canned_cycles_and_compensated_paths_stay_on_the_path(text: str) -> None
 #: Found by the search above on machine 21 (backlash in every motor), 2026-11-24;
 #: not fixed yet (the note of that day). Each with what it measured.
 FOUND_WITH_PLAY = {
-    # 1.00151 x F (limit 1.001): a compensated path, then a helix, a move with B
+    # 1.00151 x F (limit 1.001) for 8 ms at the start of line 11 (F300): motor U,
+    # creeping back at 0.6 µm/s, crosses its play once it has drifted 0.05 µm (the
+    # creep allowance); the settle then puts the part back on the path within one
+    # step, 0.05 µm in 10 ms, which is 0.1 % of 5 mm/s. At F60 it would be 0.5 %.
+    # The catch-up wants spreading over the steps after the crossing.
     "compensated, then a helix": (
         "G21 G90 G17 G94 G40 G49 G54 G80 F500\nT1 M6\nG0 X-40 Y-40 Z0\nG1 X-30 Y-30\n"
         "G41.1 D2\nG1 Y0 Z-1\nG1 Y30 F300\nG40\nG1 X-29.5 Y5\n"
