@@ -56,6 +56,8 @@ def _creeps(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) 
     moves alone) was seen to stay 17 µm "ahead" of it and left its part 0.61 µm
     behind (test_controller_truth's found programs)."""
     out = np.zeros(len(sg), dtype=int)
+    if not _may_creep_back(sg, P, side, ref, drift):
+        return out
     start = 0
     cur_side, cur_ref = side, ref
     while start < len(sg):
@@ -79,6 +81,29 @@ def _creeps(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) 
         cur_side, cur_ref = out[r], float(P[r])
         start = r + 1
     return out
+
+
+def _may_creep_back(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) -> bool:
+    """Whether any row may have crept back past the allowance (:func:`_creeps` then
+    finds which, row by row): all rows at once, the farthest of each stretch from a
+    row with a direction as a running maximum offset per stretch (a running maximum
+    that starts afresh at each stretch), with a margin over its rounding."""
+    n = len(sg)
+    if n == 0 or not np.any(sg == 0):
+        return False
+    idx = np.where(sg != 0, np.arange(n), -1)
+    last = np.maximum.accumulate(idx)
+    came = np.where(last >= 0, sg[np.maximum(last, 0)], side)
+    v = came * P
+    stretch = np.cumsum(np.concatenate([[0], np.diff(last) != 0]))
+    span = float(np.max(v) - np.min(v)) + 1.0
+    lift = stretch * span
+    far = np.maximum.accumulate(v + lift) - lift
+    first = last < 0  # before any row with a direction: from where it came in
+    if np.any(first):
+        # no reference yet (NaN): nothing to creep back from
+        far[first] = np.maximum(far[first], side * ref) if not np.isnan(ref) else -np.inf
+    return bool(np.any((sg == 0) & (v - far < -drift + 1e-7)))
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
