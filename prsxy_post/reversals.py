@@ -24,6 +24,8 @@ of it while the path goes on. So the jump gets a window of its own:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 #: A planned motor velocity below this [mm/s] gives no direction: a motor creeping
@@ -56,24 +58,12 @@ def _creeps(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) 
     moves alone) was seen to stay 17 µm "ahead" of it and left its part 0.61 µm
     behind (test_controller_truth's found programs)."""
     out = np.zeros(len(sg), dtype=int)
-    if not _may_creep_back(sg, P, side, ref, drift):
-        return out
     start = 0
     cur_side, cur_ref = side, ref
     while start < len(sg):
-        seg = sg[start:]
-        p = P[start:]
-        # the direction each row comes from, and how far that way the motor got
-        idx = np.where(seg != 0, np.arange(len(seg)), -1)
-        last = np.maximum.accumulate(idx)
-        came = np.where(last >= 0, seg[np.maximum(last, 0)], cur_side)
-        farthest = came * np.where(last >= 0, p[np.maximum(last, 0)], cur_ref)
-        for a, b in _runs(seg == 0):
-            # a run after a row with a direction starts from that row's position
-            before = farthest[a] if a == 0 else came[a] * p[a - 1]
-            farthest[a:b] = np.maximum.accumulate(np.maximum(before, came[a] * p[a:b]))
-        back = (seg == 0) & (came * p - farthest < -drift)
-        hits = np.flatnonzero(back)
+        seg, p = sg[start:], P[start:]
+        came, far = _farthest(seg, p, cur_side, cur_ref)
+        hits = np.flatnonzero((seg == 0) & (came * p - far < -drift))
         if not hits.size:
             break
         r = start + int(hits[0])
@@ -83,46 +73,39 @@ def _creeps(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) 
     return out
 
 
-def _may_creep_back(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) -> bool:
-    """Whether any row may have crept back past the allowance (:func:`_creeps` then
-    finds which, row by row): all rows at once, the farthest of each stretch from a
-    row with a direction as a running maximum offset per stretch (a running maximum
-    that starts afresh at each stretch), with a margin over its rounding."""
+def _farthest(
+    sg: np.ndarray, P: np.ndarray, side: int, ref: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The direction each row comes from (the last row's with one, else ``side``)
+    and how far that way the motor has got by then, as ``direction · position``
+    (−inf before any row with a direction when ``ref`` is NaN: nothing to measure
+    from). A running maximum that starts afresh at each row with a direction, made
+    in one pass by lifting each stretch above the one before (rounding: below a
+    picometre)."""
     n = len(sg)
-    if n == 0 or not np.any(sg == 0):
-        return False
     idx = np.where(sg != 0, np.arange(n), -1)
     last = np.maximum.accumulate(idx)
     came = np.where(last >= 0, sg[np.maximum(last, 0)], side)
     v = came * P
+    if n == 0:
+        return came, v
     stretch = np.cumsum(np.concatenate([[0], np.diff(last) != 0]))
-    span = float(np.max(v) - np.min(v)) + 1.0
-    lift = stretch * span
+    lift = stretch * (float(np.max(v) - np.min(v)) + 1.0)
     far = np.maximum.accumulate(v + lift) - lift
     first = last < 0  # before any row with a direction: from where it came in
     if np.any(first):
-        # no reference yet (NaN): nothing to creep back from
-        far[first] = np.maximum(far[first], side * ref) if not np.isnan(ref) else -np.inf
-    return bool(np.any((sg == 0) & (v - far < -drift + 1e-7)))
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(start, end) of each run of True in ``mask``."""
-    edges = np.flatnonzero(np.diff(np.concatenate([[False], mask, [False]]).astype(np.int8)))
-    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+        far[first] = -np.inf if np.isnan(ref) else np.maximum(far[first], side * ref)
+    return came, far
 
 
 def farthest(sg: np.ndarray, P: np.ndarray, side: int, ref: float) -> float:
     """Where the motor got farthest its last way by the last row (the creep's
-    reference carried to the next chunk: see :func:`_creeps`)."""
-    moving = np.flatnonzero(sg != 0)
-    if moving.size:
-        j = int(moving[-1])
-        d = int(sg[j])
-        return float(d * np.max(d * P[j:]))
-    if np.isnan(ref):
+    reference carried to the next chunk: see :func:`_creeps`); NaN while it has
+    had no direction."""
+    if len(sg) == 0:
         return ref
-    return float(side * max(side * ref, float(np.max(side * P)) if len(P) else side * ref))
+    came, far = _farthest(sg, P, side, ref)
+    return float(came[-1] * far[-1]) if np.isfinite(far[-1]) else math.nan
 
 
 class Insertions:
