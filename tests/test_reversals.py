@@ -11,6 +11,7 @@ windows against their stated bounds.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -255,7 +256,7 @@ def test_a_creep_back_is_measured_from_the_farthest_the_motor_went() -> None:
     """A motor moving down reaches its stop through rows without a direction (the
     last steps of its deceleration, the stop itself), then creeps back up while the
     path moves on (a table axis following the other's squareness). Its part stands
-    at the farthest point down; a creep back of 0.1 µm past the allowance from there
+    at the farthest point down; a creep back past the allowance (0.05 µm) from there
     is a reversal, though the motor is still below where it last had a direction."""
     drift = 0.05e-3
     sg = np.array([-1, -1, 0, 0, 0, 0, 0, 0])
@@ -264,7 +265,8 @@ def test_a_creep_back_is_measured_from_the_farthest_the_motor_went() -> None:
     # back by more than 0.05 µm from -1.017 first at -1.01694 (0.06 µm back)
     assert out.tolist() == [0, 0, 0, 0, 0, 1, 0, 0]
     # carried to the next chunk: the farthest, not the last row with a direction
-    assert reversals.farthest(sg[:4], P[:4], -1, np.nan) == -1.017
+    assert reversals.farthest(sg[:4], P[:4], -1, np.nan) == pytest.approx(-1.017, abs=1e-12)
+    assert np.isnan(reversals.farthest(np.zeros(3, int), P[:3], -1, np.nan))
     # a motor creeping on its way is no reversal
     ahead = np.array([-1.0, -1.010, -1.017, -1.0171, -1.0172])
     assert not reversals._creeps(sg[:5], ahead, -1, np.nan, drift).any()
