@@ -46,10 +46,14 @@ def signs(V: np.ndarray) -> np.ndarray:
     return np.where(V > V_EPS, 1, np.where(V < -V_EPS, -1, 0))
 
 
-def _creeps(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) -> np.ndarray:
+def _creeps(
+    sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float
+) -> tuple[np.ndarray, float]:
     """Rows where a creeping motor (no direction) has drifted back by more than
     ``drift`` from the farthest it went its last way: each becomes a reversal (the
-    new sign), and the drift is measured afresh from there.
+    new sign), and the drift is measured afresh from there. Also where the motor
+    got farthest its last way by the last row, with those reversals (the reference
+    carried to the next chunk; NaN while it has had no direction).
 
     The farthest, not where it last had a direction: a motor stopping at a block
     end goes on its way through the rows that stand (speed 0) or creep forward, and
@@ -65,12 +69,13 @@ def _creeps(sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float) 
         came, far = _farthest(seg, p, cur_side, cur_ref)
         hits = np.flatnonzero((seg == 0) & (came * p - far < -drift))
         if not hits.size:
-            break
+            # the rows from here on keep their signs: the last one's reach holds
+            return out, float(came[-1] * far[-1]) if np.isfinite(far[-1]) else math.nan
         r = start + int(hits[0])
         out[r] = -int(came[hits[0]])
         cur_side, cur_ref = out[r], float(P[r])
         start = r + 1
-    return out
+    return out, cur_ref  # no rows, or the last row a reversal: it reaches there
 
 
 def _farthest(
@@ -96,16 +101,6 @@ def _farthest(
     if np.any(first):
         far[first] = -np.inf if np.isnan(ref) else np.maximum(far[first], side * ref)
     return came, far
-
-
-def farthest(sg: np.ndarray, P: np.ndarray, side: int, ref: float) -> float:
-    """Where the motor got farthest its last way by the last row (the creep's
-    reference carried to the next chunk: see :func:`_creeps`); NaN while it has
-    had no direction."""
-    if len(sg) == 0:
-        return ref
-    came, far = _farthest(sg, P, side, ref)
-    return float(came[-1] * far[-1]) if np.isfinite(far[-1]) else math.nan
 
 
 class Insertions:
@@ -349,15 +344,14 @@ def plan_insertions(
     w_new: list[np.ndarray] = []
     for col in cols:
         sg = np.where(rest_all, 0, signs(V_all[:, col]))
-        crept = _creeps(sg, P_all[:, col], int(side[col]), float(ref[col]), drift)
+        # creeps back become reversals; the reach is carried to the next chunk
+        crept, ref[col] = _creeps(sg, P_all[:, col], int(side[col]), float(ref[col]), drift)
         sg = np.where(crept != 0, crept, sg)
         # the side a row comes from: the last direction before it, or the carried one
         idx = np.where(sg != 0, np.arange(len(sg)), -1)
         last = np.maximum.accumulate(idx)
         before = np.concatenate([[-1], last[:-1]])
         came = np.where(before >= 0, sg[np.maximum(before, 0)], side[col])
-        # how far the motor got its last way (for the creep in the next chunk)
-        ref[col] = farthest(sg, P_all[:, col], int(side[col]), float(ref[col]))
         r = np.flatnonzero((sg != 0) & (sg != came))
         r = r[(r - off >= 0) & (r - off < n)]
         k = r - off

@@ -261,12 +261,14 @@ def test_a_creep_back_is_measured_from_the_farthest_the_motor_went() -> None:
     drift = 0.05e-3
     sg = np.array([-1, -1, 0, 0, 0, 0, 0, 0])
     P = np.array([-1.0, -1.010, -1.017, -1.0170, -1.01699, -1.01694, -1.01690, -1.01680])
-    out = reversals._creeps(sg, P, side=-1, ref=np.nan, drift=drift)
+    out, _ = reversals._creeps(sg, P, side=-1, ref=np.nan, drift=drift)
     # back by more than 0.05 µm from -1.017 first at -1.01694 (0.06 µm back)
     assert out.tolist() == [0, 0, 0, 0, 0, 1, 0, 0]
     # carried to the next chunk: the farthest, not the last row with a direction
-    assert reversals.farthest(sg[:4], P[:4], -1, np.nan) == pytest.approx(-1.017, abs=1e-12)
-    assert np.isnan(reversals.farthest(np.zeros(3, int), P[:3], -1, np.nan))
+    assert reversals._creeps(sg[:4], P[:4], -1, np.nan, drift)[1] == pytest.approx(
+        -1.017, abs=1e-12
+    )
+    assert np.isnan(reversals._creeps(np.zeros(3, int), P[:3], -1, np.nan, drift)[1])
     # a motor creeping on its way is no reversal
     ahead = np.array([-1.0, -1.010, -1.017, -1.0171, -1.0172])
-    assert not reversals._creeps(sg[:5], ahead, -1, np.nan, drift).any()
+    assert not reversals._creeps(sg[:5], ahead, -1, np.nan, drift)[0].any()
