@@ -35,6 +35,8 @@ from .interpolate.sampling import sample, steps
 from .profile import MOTORS, Profile, nominal_kinematics
 
 if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
     from .gcode import InterpreterConfig, Motion
 
 
@@ -483,6 +485,8 @@ class Pipeline:
         self.reversal_tol = REVERSAL_SHARE * self.limits.tolerance_mm
         # where each motor's driven part is, and the last commands (for _settle)
         self.play_y: dict[int, float] = {}
+        # how far each part still is from where it is wanted, after a crossing
+        self.catch: dict[int, float] = {}
         self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
         self.last: PointChunk | None = None  # the last point made (before the lead)
         self.held: PointChunk | None = None  # points waiting for the servo lead
@@ -714,9 +718,20 @@ class Pipeline:
         window (a crossing changes nothing before it, and once in contact the part
         follows the command whichever way it got there); the part's position is then
         carried on from the last contact, where it meets the corrected command.
+
+        A part meets its motor off its wanted position (where it stood, behind the
+        path by up to the reversal allowance) and is brought back along the path
+        (:func:`.reversals.catch_up`), before the motor's next crossing begins; what
+        is left at the chunk's end goes on in the next.
         """
         prev_P = self.last_cmd[0] if self.last_cmd is not None else None
         prev_V = self.last_cmd[1] if self.last_cmd is not None else None
+        # path length run by each point since the point before the chunk: the
+        # slower end of each step, so that a catch-up never outruns the path
+        sp_prev = float(self.last.speed[0]) if self.last is not None else 0.0
+        sp = np.minimum(np.concatenate([[sp_prev], pc.speed[:-1]]), pc.speed)
+        s_path = np.cumsum(np.where(pc.dwell, 0.0, sp * pc.dt))
+        n = len(pc)
         for col in self.play_cols:
             table = self.tables[MOTORS[col]]
             if prev_P is None:
@@ -727,6 +742,10 @@ class Pipeline:
                 y0 = self.play_y[col]
                 P0, V0 = float(prev_P[col]), float(prev_V[col])  # type: ignore[index]
             mine = contacts[contacts[:, 2] == col]
+            carried = self.catch.pop(col, 0.0)
+            if carried:
+                stop = int(mine[0, 1]) if len(mine) else n
+                self._catch_up(pc, side, col, [carried], [-1], [stop], P_cmd, V_cmd, s_path)
             if len(mine):
                 e, b = mine[:, 0], mine[:, 1]
                 # followed up to the last contact only (the part's path is causal);
@@ -746,6 +765,8 @@ class Pipeline:
                 y_s = np.where(u, np.minimum(lo_x, at_beg), np.maximum(hi_x, at_beg))
                 cmd = np.where(u, table.lo_inv(y_s), table.hi_inv(y_s))
                 P_cmd[e, col] = cmd
+                off0 = y_s - pc.P_ideal[e, col]
+                self._catch_up(pc, side, col, off0, e, np.append(b[1:], n), P_cmd, V_cmd, s_path)
                 # at the last contact the part meets the motor where it stands; from
                 # there on, the corrected commands carry it
                 last = int(e.max())
@@ -762,6 +783,39 @@ class Pipeline:
                 )
             self.play_y[col] = y0
         self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
+
+    def _catch_up(
+        self,
+        pc: PointChunk,
+        side: np.ndarray,
+        col: int,
+        off0: ArrayLike,
+        start: ArrayLike,
+        stop: ArrayLike,
+        P_cmd: np.ndarray,
+        V_cmd: np.ndarray,
+        s_path: np.ndarray,
+    ) -> None:
+        """Command motor ``col`` to bring its part back onto its wanted position
+        after crossings that end at ``start`` with the part off by ``off0``
+        (:func:`.reversals.catch_up`); what the last leaves at the chunk's end is
+        kept for the next chunk."""
+        off0 = np.asarray(off0, dtype=float)
+        start = np.asarray(start, dtype=int)
+        way = side[np.maximum(start, 0), col]
+        idx, off, slope, left = reversals.catch_up(
+            off0, way, start, np.asarray(stop, dtype=int), s_path
+        )
+        if len(left) and left[-1] != 0.0:
+            self.catch[col] = float(left[-1])
+        if not len(idx):
+            return
+        table = self.tables[MOTORS[col]]
+        sd = side[idx, col]
+        P_cmd[idx, col] = axiscomp.compensate_sided(table, pc.P_ideal[idx, col] + off, sd)
+        V_cmd[idx, col] = (pc.V_ideal[idx, col] + slope * pc.speed[idx]) / table.slope(
+            P_cmd[idx, col], sd
+        )
 
     def _new_points(
         self,

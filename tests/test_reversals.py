@@ -272,3 +272,73 @@ def test_a_creep_back_is_measured_from_the_farthest_the_motor_went() -> None:
     # a motor creeping on its way is no reversal
     ahead = np.array([-1.0, -1.010, -1.017, -1.0171, -1.0172])
     assert not reversals._creeps(sg[:5], ahead, -1, np.nan, drift)[0].any()
+
+
+def test_a_part_behind_its_motor_is_brought_back_at_a_share_of_the_path_speed() -> None:
+    """A crossing at point 2 leaves the part 0.05 µm behind a motor moving down
+    (above it: offset +0.05 µm, side −1). Steps of 10 ms at 5 mm/s (0.05 mm of path
+    each): the offset shrinks by 2e-4 of the path, 0.01 µm a step, and is gone 5
+    steps later (0.25 mm); at 5 mm/s its rate is 1 µm/s, 0.02 % of the speed where
+    the one step it took before made it 5 µm/s (0.1 %)."""
+    share = 2e-4
+    s_path = 0.05 * np.arange(1, 21)
+    idx, off, slope, left = reversals.catch_up(
+        np.array([0.05e-3]), np.array([-1]), np.array([2]), np.array([20]), s_path, share
+    )
+    assert idx.tolist() == [3, 4, 5, 6]
+    np.testing.assert_allclose(off, [0.04e-3, 0.03e-3, 0.02e-3, 0.01e-3], atol=1e-15)
+    np.testing.assert_allclose(slope * 5.0, -1e-3)  # mm/s: 1 µm/s, back up
+    assert left.tolist() == [0.0]
+    # the same part ahead of its motor (a blend carried it past): left alone, it waits
+    assert (
+        len(
+            reversals.catch_up(
+                np.array([0.05e-3]), np.array([1]), np.array([2]), np.array([20]), s_path, share
+            )[0]
+        )
+        == 0
+    )
+
+
+def test_a_catch_up_is_gone_where_the_next_crossing_begins() -> None:
+    """The motor's next crossing begins at point 5, 3 steps (0.15 mm of path) after
+    this one ends: the offset must be gone there (the next crossing's extreme is
+    reckoned from the wanted position), faster than the share where it has to,
+    never faster than the one step it took before."""
+    share = 2e-4
+    s_path = 0.05 * np.arange(1, 21)
+    idx, off, _slope, _left = reversals.catch_up(
+        np.array([-0.06e-3]), np.array([1]), np.array([2]), np.array([5]), s_path, share
+    )
+    assert idx.tolist() == [3, 4]
+    np.testing.assert_allclose(off, [-0.04e-3, -0.02e-3], atol=1e-15)
+    # no path run before it (the path stands): nothing to spread it over
+    stand = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
+    assert (
+        len(
+            reversals.catch_up(
+                np.array([-0.06e-3]), np.array([1]), np.array([1]), np.array([4]), stand, share
+            )[0]
+        )
+        == 0
+    )
+
+
+def test_a_catch_up_goes_on_over_the_chunks_end_and_waits_while_the_path_stands() -> None:
+    """A catch-up not done by the chunk's last point is left for the next chunk
+    (start −1: the point before it); points where the path stands keep the offset."""
+    share = 2e-4
+    s_path = np.array([0.05, 0.10, 0.10, 0.10])  # the path stands after point 1
+    idx, off, _slope, left = reversals.catch_up(
+        np.array([0.05e-3]), np.array([-1]), np.array([0]), np.array([4]), s_path, share
+    )
+    assert idx.tolist() == [1, 2, 3]
+    np.testing.assert_allclose(off, [0.04e-3] * 3, atol=1e-15)
+    assert left[0] == pytest.approx(0.04e-3, abs=1e-15)
+    # the next chunk: from the point before it
+    idx, off, _slope, left = reversals.catch_up(
+        left, np.array([-1]), np.array([-1]), np.array([3]), 0.05 * np.arange(1, 4), share
+    )
+    assert idx.tolist() == [0, 1, 2]
+    np.testing.assert_allclose(off, [0.03e-3, 0.02e-3, 0.01e-3], atol=1e-15)
+    assert left[0] == pytest.approx(0.01e-3, abs=1e-15)
