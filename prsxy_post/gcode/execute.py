@@ -344,7 +344,6 @@ class Interpreter:
             # convert_feed_rate runs in G94 only: in G93 the F word is the block's
             # own, and the feed rate is the rate of the last move (moves.feed_rate)
             st.feed = seen["F"].value
-            st.feed_units = st.units
         # machine functions before the motion, in LinuxCNC's order of execution
         # (functions.py): an S or T that changes nothing is no function
         pre: list[tuple[str, float]] = []

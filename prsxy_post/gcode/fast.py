@@ -66,7 +66,7 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
     ox, oy, oz, oa, ob = it.offset()
     extra = (st.tool_length, st.tool, st.spindle * st.spindle_dir, False, st.path_tol, (), None)
     append = it.out.append
-    new_motion = new_feed = False
+    new_motion = False
     k = i
     for words in itertools.islice(matches, i, None):
         g, xs, ys, zs, as_, bs, is_, js, ks, rs, fs, rest = words
@@ -107,7 +107,6 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
             eb = b + float(bs) if bs else b
         if fs:
             feed = f
-            new_feed = True
         if g:
             motion = m
             new_motion = True
@@ -139,8 +138,6 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
         st.pos = [x, y, z, a, b]
         st.motion = motion
         st.feed = feed
-        if new_feed:
-            st.feed_units = st.units
         if new_motion:
             st.cycle_il = None
         it.started = True
@@ -162,15 +159,14 @@ def _fast_arc(it: Interpreter, motion: int, words: tuple[str, ...], n: int) -> b
         if text
     }
     axis_words = {a: seen[a] for a in AXES if a in seen}
-    saved = (st.feed, st.feed_units, st.motion, st.cycle_il)
+    saved = (st.feed, st.motion, st.cycle_il)
     if "F" in seen:
         st.feed = seen["F"].value
-        st.feed_units = st.units
     it._seen = seen
     try:
         moves.arc(it, motion, axis_words, seen, n)
     except GCodeError:
-        st.feed, st.feed_units, st.motion, st.cycle_il = saved
+        st.feed, st.motion, st.cycle_il = saved
         return False
     if words[0]:
         st.cycle_il = None

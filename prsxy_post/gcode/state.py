@@ -17,7 +17,6 @@ class State:
     inverse_time: bool = False
     motion: float | None = None  # LinuxCNC starts in G80
     feed: float = 0.0  # F as written (current units or deg per min)
-    feed_units: str = "mm"
     spindle: float = 0.0
     spindle_dir: int = 0
     tool: int = 0
