@@ -581,6 +581,9 @@ def catch_up(
     """
     n = len(s_path)
     off0 = np.where(off0 * way < 0, off0, 0.0)
+    if n == 0:
+        none = np.zeros(0)
+        return none.astype(int), none, none, off0
     first = start + 1
     length = np.maximum(stop - first, 0)
     s0 = np.where(start >= 0, s_path[np.maximum(start, 0)], 0.0)

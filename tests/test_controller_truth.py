@@ -320,7 +320,7 @@ def test_canned_cycles_and_compensated_paths_stay_on_the_path(text: str) -> None
     A program refused (by the interpreter, out of reach, or moving nothing) is
     drawn again (the oracle tests hold the refusals): 25 run, and hypothesis fails
     the test if nearly all are refused. On the nominal machine; on machines with
-    play the same search found four programs of FOUND."""
+    play the same search found four programs of FOUND and the one of FOUND_OPEN."""
     truth = truth_machine("nominal", None)
     try:
         motions, res, texts = convert(truth, text)
