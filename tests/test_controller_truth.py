@@ -275,16 +275,26 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 
 
 #: Found by the search of the random compensated paths on machine 12, 2026-11-24 (the
-#: search's program, shrunk); not fixed yet. Motor U stands through the arc (the
-#: head holds Z and A; the error map moves it 16 nm) with its part on the up side,
-#: and goes down from the arc's end, a corner whose point carries the mean of its
-#: sides' velocities. It crosses standing at the end of the step before the corner's
-#: (reversals.plan_insertions: "stood"); the corner's step cubic then bulges back up
-#: 118 nm (0 -> -0.083 mm/s over 16 nm), leaving the part where it stood, and comes
-#: down to push it the 16 nm in its last 0.2 ms: U alone tilts the head, 1.0032 x F
-#: (limit 1.001). A crossing at the bulge's turning point with points on the plan
-#: reshapes the cubic and gives the same; what would: the crossing's points on the
-#: step's own cubic, or the re-meeting treated as a contact and caught up.
+#: search's program, shrunk); not fixed yet. 1.0032 x F (limit 1.001) for about
+#: 0.6 ms where line 6 sets off from the arc's end, a corner whose point carries the
+#: mean of its sides' velocities. The head stands through the arc (it holds Z and A;
+#: the error map moves its motors by nanometres) and goes down from the corner;
+#: two things make its motors' parts set off at different instants, which tilts
+#: the head and runs the tip fast:
+#: - motor U crosses standing at the end of the step before the corner's
+#:   (plan_insertions: "stood"); that step's cubic bulges back up 118 nm (0 to
+#:   -0.083 mm/s over 16 nm), leaves the part where the crossing left it, and comes
+#:   down to push it 22 nm within its last 0.2 ms. Tried: a contact of its own
+#:   where the motor meets the part again, caught up like a crossing (the part
+#:   then stands still until the corner): U's jump is gone, the verdict the same;
+#: - motors V and W crept back up within the creep allowance before the arc's end,
+#:   so their parts stand 16.7 nm ahead and wait while U sets off. A part ahead of
+#:   its wanted position waits for its motor (reversals.catch_up brings back only
+#:   parts behind): bringing it back too means commanding the motor at the part,
+#:   with the offset shrinking no faster than the motor's own travel.
+#: Also tried: the crossing at the bulge's turning point, with the root picked by
+#: the way the velocity turns; the points put in come from the plan and reshape the
+#: cubic (1.0033 x F).
 FOUND_OPEN = {
     "stand-then-corner-bulge": (
         12,

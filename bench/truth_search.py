@@ -1,0 +1,80 @@
+"""Search for programs whose executed motion leaves the G-code's geometry.
+
+Random programs from the rs274 oracle tests' generators (canned cycles,
+compensated paths, single lines of the dialect) go through the whole chain for
+a truth machine; the PMAC output is run as the controller runs it and judged as
+tests/test_controller_truth.py judges it (path, tool axis, speed; the
+acceleration on the nominal machine). Programs the chain refuses are counted by
+their message and skipped. Stops at the first program out of bounds, shrunk by
+hypothesis, and prints it.
+
+    python bench/truth_search.py --generator comp --machine 12 --examples 300
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from prsxy_post.errors import PrsxyError  # noqa: E402
+from tests import test_gcode_comp, test_gcode_oracle  # noqa: E402
+from tests.test_controller_truth import assert_within, judge_pmac  # noqa: E402
+from tests.test_tracking import convert, truth_machine  # noqa: E402
+
+HEADER = "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
+
+
+def generator(name: str) -> st.SearchStrategy[str]:
+    if name == "cycles":
+        return test_gcode_oracle._cycles()
+    if name == "comp":
+        return test_gcode_comp._compensated_path()
+    return st.lists(test_gcode_oracle._LINE, min_size=1, max_size=20).map(
+        lambda lines: HEADER + "\n".join(lines) + "\nM2\n"
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
+    ap.add_argument("--generator", choices=["cycles", "comp", "lines"], default="comp")
+    ap.add_argument("--machine", default="21", help="a random machine's seed, or 'nominal'")
+    ap.add_argument("--examples", type=int, default=300)
+    args = ap.parse_args()
+    seed = None if args.machine == "nominal" else int(args.machine)
+    truth = truth_machine("random" if seed is not None else "nominal", seed)
+    accel = truth.limits.max_accel_mm_s2 if seed is None else None
+    seen: collections.Counter[str] = collections.Counter()
+
+    @settings(
+        max_examples=args.examples,
+        deadline=None,
+        database=None,
+        suppress_health_check=list(HealthCheck),
+    )
+    @given(generator(args.generator))
+    def search(text: str) -> None:
+        try:
+            motions, res, texts = convert(truth, text)
+        except PrsxyError as e:
+            seen["refused: " + str(e).split(": ", 1)[-1][:60]] += 1
+            return
+        seen["judged (shrinking included)"] += 1
+        assert_within(judge_pmac(truth, motions, res, texts), accel)
+
+    try:
+        search()
+    finally:
+        for what, n in seen.most_common(10):
+            print(f"{n:6d}  {what}")
+
+
+if __name__ == "__main__":
+    main()
