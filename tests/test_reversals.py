@@ -290,14 +290,10 @@ def test_a_part_behind_its_motor_is_brought_back_at_a_share_of_the_path_speed() 
     np.testing.assert_allclose(slope * 5.0, -1e-3)  # mm/s: 1 µm/s, back up
     assert left.tolist() == [0.0]
     # the same part ahead of its motor (a blend carried it past): left alone, it waits
-    assert (
-        len(
-            reversals.catch_up(
-                np.array([0.05e-3]), np.array([1]), np.array([2]), np.array([20]), s_path, share
-            )[0]
-        )
-        == 0
+    ahead = reversals.catch_up(
+        np.array([0.05e-3]), np.array([1]), np.array([2]), np.array([20]), s_path, share
     )
+    assert len(ahead[0]) == 0
 
 
 def test_a_catch_up_is_gone_where_the_next_crossing_begins() -> None:
@@ -314,14 +310,10 @@ def test_a_catch_up_is_gone_where_the_next_crossing_begins() -> None:
     np.testing.assert_allclose(off, [-0.04e-3, -0.02e-3], atol=1e-15)
     # no path run before it (the path stands): nothing to spread it over
     stand = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
-    assert (
-        len(
-            reversals.catch_up(
-                np.array([-0.06e-3]), np.array([1]), np.array([1]), np.array([4]), stand, share
-            )[0]
-        )
-        == 0
+    spread = reversals.catch_up(
+        np.array([-0.06e-3]), np.array([1]), np.array([1]), np.array([4]), stand, share
     )
+    assert len(spread[0]) == 0
 
 
 def test_a_catch_up_goes_on_over_the_chunks_end_and_waits_while_the_path_stands() -> None:
