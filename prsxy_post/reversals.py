@@ -585,22 +585,23 @@ def catch_up(
         none = np.zeros(0)
         return none.astype(int), none, none, off0
     first = start + 1
-    length = np.maximum(stop - first, 0)
     s0 = np.where(start >= 0, s_path[np.maximum(start, 0)], 0.0)
     inside = stop < n
     room = np.where(inside, s_path[np.minimum(stop, n - 1)] - s0, np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
         rate = np.maximum(share, np.where(room > 0, np.abs(off0) / room, 0.0))
-    # no path to the next crossing: the whole offset goes in its step, as it must
-    length = np.where(room > 0, length, 0)
+    # the points up to where the offset is gone, or the next crossing begins; none
+    # where there is no path to that crossing (the offset goes in its step, as it must)
+    gone = np.searchsorted(s_path, s0 + np.abs(off0) / rate, "left")
+    length = np.where(room > 0, np.maximum(np.minimum(stop, gone) - first, 0), 0)
     idx = np.repeat(first - np.cumsum(length) + length, length) + np.arange(int(length.sum()))
     run = s_path[idx] - np.repeat(s0, length)
     mag = np.maximum(np.repeat(np.abs(off0), length) - np.repeat(rate, length) * run, 0.0)
     off = np.copysign(mag, np.repeat(off0, length))
-    left = np.where(inside, 0.0, off0)
-    ends = np.cumsum(length) - 1
-    some = (length > 0) & ~inside
-    left[some] = off[ends[some]]
+    # left at the chunk's last point (where no crossing comes first)
+    s_last = np.where(start < n - 1, s_path[n - 1], s0)
+    left_mag = np.maximum(np.abs(off0) - rate * (s_last - s0), 0.0)
+    left = np.where(inside, 0.0, np.copysign(left_mag, off0))
     keep = mag > 0
     # its slope at each point: over the step after it (a last bit of offset gone
     # early in that step gives the point a velocity to match, not the whole rate)
