@@ -25,6 +25,7 @@ from prsxy_post import chain, kinematics  # noqa: E402
 from tests import controllers as ctl  # noqa: E402
 from tests.test_tracking import (  # noqa: E402
     _tool_of_lines,
+    _tool_of_segments,
     convert,
     path_distance,
     truth_machine,
@@ -52,7 +53,7 @@ def measure(path: Path, fmt: str, kind: str, seed: int | None) -> dict[str, floa
     rapid = truth.limits.rapid_mm_min
     if fmt == "pmac":
         run = ctl.run_pmac(texts)
-        tool = _tool_of_lines(res, run.line[run.seg])
+        tool = _tool_of_segments(res, run.line, run.seg)
         q = ctl.machine_executes(truth, run.t_dense, run.P_dense, tool)
         tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, rapid)
         pts = ctl.machine_executes(truth, run.t, run.P, _tool_of_lines(res, run.line))

@@ -415,6 +415,23 @@ def _tool_of_lines(res: chain.ChainResult, lines: np.ndarray) -> np.ndarray:
     return np.array([by_line.get(int(ln), 0.0) for ln in lines])
 
 
+def _tool_of_segments(
+    res: chain.ChainResult, point_line: np.ndarray, seg: np.ndarray
+) -> np.ndarray:
+    """The tool length along each sample of a motor-space run: that of the line of
+    its segment's end point, whose motion the segment runs; or, where that line
+    makes no move (a function's point, the program's end), the start point's. A
+    G43 without a move takes effect at the next point made: a segment that ends at
+    a function's point does not move, and its tip is still the old tool's (read
+    with the new one, it stood a tool length off the move before it)."""
+    pts = res.points
+    standing = pts.dwell | np.array([f is not None for f in pts.fn], dtype=bool)
+    moving = np.unique(pts.line[~standing])
+    end = point_line[seg]
+    start = point_line[np.maximum(seg - 1, 0)]
+    return _tool_of_lines(res, np.where(np.isin(end, moving), end, start))
+
+
 def test_a_pose_is_judged_where_position_and_tilt_are_both_nearest() -> None:
     """On G1 Z-0.5 A3 (6° per mm) a pose whose Z lags its A by 0.03 µm is within
     0.03 µm and 0.03 arcsec of a pose of the path; read at the parameter nearest in
