@@ -48,6 +48,12 @@ SNAP_S = 0.1e-3
 CATCH_UP_SHARE = 2e-4
 
 
+def _ranges(first: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """The indices first[i], first[i] + 1, … (length[i] of them) of every range, one
+    after another: one array for all the ranges, without a loop."""
+    return np.repeat(first - np.cumsum(length) + length, length) + np.arange(int(length.sum()))
+
+
 def signs(V: np.ndarray) -> np.ndarray:
     """Direction of each planned velocity: +1, −1, or 0 (standing)."""
     return np.where(V > V_EPS, 1, np.where(V < -V_EPS, -1, 0))
@@ -525,7 +531,7 @@ def sides(
         # first's end
         f = np.maximum(f, np.concatenate([[0], e[:-1] + 1]))
         length = np.maximum(e - f, 0)
-        idx = np.repeat(f - np.cumsum(length) + length, length) + np.arange(length.sum())
+        idx = _ranges(f, length)
         sg[idx] = np.repeat(-new, length)
         sg[e] = new
         here = s_col == col
@@ -594,7 +600,7 @@ def catch_up(
     # where there is no path to that crossing (the offset goes in its step, as it must)
     gone = np.searchsorted(s_path, s0 + np.abs(off0) / rate, "left")
     length = np.where(room > 0, np.maximum(np.minimum(stop, gone) - first, 0), 0)
-    idx = np.repeat(first - np.cumsum(length) + length, length) + np.arange(int(length.sum()))
+    idx = _ranges(first, length)
     run = s_path[idx] - np.repeat(s0, length)
     mag = np.maximum(np.repeat(np.abs(off0), length) - np.repeat(rate, length) * run, 0.0)
     off = np.copysign(mag, np.repeat(off0, length))
