@@ -15,9 +15,10 @@ makes them. Of the planned points (:mod:`prsxy_post.interpolate.sampling`):
   changes of acceleration inside a block (the controller's cubic is exact only
   while the acceleration is constant over a step);
 
-and the points the real-axis stage adds where a motor with play reverses (its
-crossing of the play and the standing that takes it up), the chain's points less
-the planned ones. Prints one Markdown table.
+and the points the real-axis stage adds for the motors with play, the chain's
+points less the planned ones: where a motor reverses (its crossing of the play and
+the standing that takes it up), and the middle of the step where a motor sets off
+or stops at a corner taken at speed (``reversals.corners``). Prints one Markdown table.
 """
 
 from __future__ import annotations
@@ -79,7 +80,7 @@ def main() -> None:
         ("floor: block ends and steps of at most the period", c["floor"]),
         ("phase boundaries", c["planned"] - c["floor"]),
         ("planned", c["planned"]),
-        ("added where a motor with play reverses", c["chain"] - c["planned"]),
+        ("added for the motors with play (reversals, corners)", c["chain"] - c["planned"]),
         ("chain", c["chain"]),
     ]
     print(

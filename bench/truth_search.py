@@ -9,6 +9,7 @@ their message and skipped. Stops at the first program out of bounds, shrunk by
 hypothesis, and prints it.
 
     python bench/truth_search.py --generator comp --machine 12 --examples 300
+    python bench/truth_search.py --found   # the programs found so far, judged
 """
 
 from __future__ import annotations
@@ -26,7 +27,12 @@ from hypothesis import strategies as st  # noqa: E402
 
 from prsxy_post.errors import PrsxyError  # noqa: E402
 from tests import test_gcode_comp, test_gcode_oracle  # noqa: E402
-from tests.test_controller_truth import assert_within, judge_pmac  # noqa: E402
+from tests.test_controller_truth import (  # noqa: E402
+    FOUND,
+    FOUND_IDS,
+    assert_within,
+    judge_pmac,
+)
 from tests.test_tracking import convert, truth_machine  # noqa: E402
 
 HEADER = "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
@@ -42,12 +48,31 @@ def generator(name: str) -> st.SearchStrategy[str]:
     )
 
 
+def found() -> None:
+    """The programs the searches found (test_controller_truth.FOUND), each on its
+    machine, as the test judges them: one Markdown table."""
+    print("| program | machine | path µm | tool axis arcsec | speed / F |")
+    print("|---|---:|---:|---:|---:|")
+    for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True):
+        truth = truth_machine("random", seed)
+        motions, res, texts = convert(truth, text)
+        tr = judge_pmac(truth, motions, res, texts)
+        print(
+            f"| {name} | {seed} | {tr.path_mm * 1000:.3f} | {tr.ab_deg * 3600:.3f} "
+            f"| {tr.speed_ratio:.5f} |"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--generator", choices=["cycles", "comp", "lines"], default="comp")
     ap.add_argument("--machine", default="21", help="a random machine's seed, or 'nominal'")
     ap.add_argument("--examples", type=int, default=300)
+    ap.add_argument("--found", action="store_true", help="judge the programs found so far")
     args = ap.parse_args()
+    if args.found:
+        found()
+        return
     seed = None if args.machine == "nominal" else int(args.machine)
     truth = truth_machine("random" if seed is not None else "nominal", seed)
     accel = truth.limits.max_accel_mm_s2 if seed is None else None

@@ -29,7 +29,17 @@ from . import axiscomp, kinematics, reversals
 from . import check as checks
 from . import effects as registry
 from .errors import LimitError, PrsxyError
-from .interpolate import Blocks, Plan, PlanLimits, Planner, Samples, at_times, blocks_from_motions
+from .interpolate import (
+    Blocks,
+    Plan,
+    PlanLimits,
+    Planner,
+    Samples,
+    at_times,
+    blocks_from_motions,
+    junctions,
+    next_tangent,
+)
 from .interpolate.geometry import REVERSAL_SHARE
 from .interpolate.sampling import sample, steps
 from .profile import MOTORS, Profile, nominal_kinematics
@@ -487,6 +497,9 @@ class Pipeline:
         self.play_y: dict[int, float] = {}
         # how far each part still is from where it is wanted, after a crossing
         self.catch: dict[int, float] = {}
+        # the last point made is a corner where a motor sets off (_corners): the
+        # next chunk's first step is split at its middle
+        self.split_next = False
         self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
         self.last: PointChunk | None = None  # the last point made (before the lead)
         self.held: PointChunk | None = None  # points waiting for the servo lead
@@ -642,14 +655,16 @@ class Pipeline:
         self, plan: Plan | None, s: Samples, pc: PointChunk
     ) -> tuple[PointChunk, np.ndarray, np.ndarray]:
         """Give every reversal of a motor with play its crossing window
-        (:mod:`.reversals`). Returns the points, the side every motor is on at each,
-        and the crossings (M, 3) ints: the point where each ends, the point where it
-        began, the motor's column; in that order."""
+        (:mod:`.reversals`), after its corners (:meth:`_corners`). Returns the
+        points, the side every motor is on at each, and the crossings (M, 3) ints:
+        the point where each ends, the point where it began, the motor's column; in
+        that order."""
         last = self.last
         prev = (
             None if last is None else (last.P_ideal[0], last.V_ideal[0], bool(last.speed[0] == 0))
         )
         self.ref = np.where(np.isnan(self.ref), pc.P_ideal[0], self.ref)
+        halves = self._corners(plan, s, pc)
         t_end = np.cumsum(pc.dt)
         resting = pc.speed == 0.0
         ins = reversals.plan_insertions(
@@ -664,7 +679,10 @@ class Pipeline:
             self.ref,
             self.reversal_tol,
             self.reversal_s,
+            halves,
+            self.split_next,
         )
+        self.split_next = ins.split_next
         n = len(pc)
         step = np.arange(n)
         when = t_end
@@ -698,6 +716,42 @@ class Pipeline:
         cols = np.concatenate([ins.w_col, np.array([c for _, c, _ in ins.stands], dtype=int)])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
         return pc, side, contacts[np.lexsort((cols, begs, ends))]
+
+    def _corners(self, plan: Plan | None, s: Samples, pc: PointChunk) -> np.ndarray:
+        """At every corner taken at speed where a motor with play stands on one side
+        and moves on the other, tell it the standing side's velocity instead of the
+        mean of both (:func:`.reversals.corners`; in ``pc.V_ideal``). Returns the
+        rows whose step is to be split at its middle (n: the next chunk's first).
+
+        The decision takes the period for both sides' steps, not the steps
+        themselves: the step past a chunk's last point is not made yet, and the
+        points must not depend on where the program was cut into chunks."""
+        none = np.zeros(0, dtype=int)
+        if plan is None:
+            return none
+        J = junctions(s)
+        # a tangent junction has one velocity on both sides: no corner
+        nxt = next_tangent(plan, s.block[J])
+        bent = np.any(nxt != plan.blocks.dq_out[s.block[J]], axis=1)
+        J, nxt = J[bent], nxt[bent]
+        if not J.size:
+            return none
+        # the motors' velocities on the far side: the IK's velocity (as _solve) along
+        # the next block's tangent; the near side's is then what the mean leaves
+        qdot_out = s.speed[J, None] * nxt
+        ahead = kinematics.inverse(
+            self.geo, pc.q_target[J] + VEL_STEP_S * qdot_out, s.tool_length[J]
+        ).P
+        V_out = (ahead - pc.P_ideal[J]) / VEL_STEP_S
+        V_in = 2.0 * pc.V_ideal[J] - V_out
+        period = np.full(len(J), self.limits.period_s)
+        halves = [none]
+        for col in self.play_cols:
+            V, split = reversals.corners(V_in[:, col], V_out[:, col], period, period)
+            act = split != 0
+            pc.V_ideal[J[act], col] = V[act]
+            halves.append(np.where(split[act] < 0, J[act], J[act] + 1))
+        return np.unique(np.concatenate(halves))
 
     def _settle(
         self,

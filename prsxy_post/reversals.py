@@ -43,9 +43,17 @@ SNAP_S = 0.1e-3
 #: by up to the reversal allowance; it is brought back no faster than this share of
 #: the path speed. Brought back within the next step, it would be the allowance per
 #: step: 0.05 µm in 10 ms, 0.1 % of F300 and 0.5 % of F60 (test_controller_truth's
-#: found programs); this share leaves most of the 0.1 % that the rounding of the
-#: written numbers may take.
-CATCH_UP_SHARE = 2e-4
+#: found programs). A part brought back runs that share faster than its motor's
+#: path; the points of the written program keep within 1e-4 of F (the rounding of
+#: their numbers: test_tracking), so the share is half of that: 0.05 µm takes 1 mm
+#: of path. (2e-4 was seen to take a point 2e-4 over F in a corrected G-code.)
+CATCH_UP_SHARE = 5e-5
+#: At a corner taken at speed a point carries the mean of its sides' velocities; a
+#: motor with play that stands on one side and moves on the other would then turn
+#: back inside the standing side's step, by up to (4/27) h |V| / 2, and leave its
+#: part (:func:`corners`). Below this [mm] that turn is left alone: the part stands
+#: while its motor turns back by a nanometre.
+CORNER_TURN_MM = 1e-6
 
 
 def _ranges(first: np.ndarray, length: np.ndarray) -> np.ndarray:
@@ -127,6 +135,8 @@ class Insertions:
     w_t0 : (w,) the start of each window's step [s]
     mid_k, mid_t : (m,) the points put inside steps: the row whose step they are in,
         and their time since the chunk's previous point; sorted by step, then time
+    split_next : the chunk's last row is a corner where a motor sets off
+        (:func:`corners`): the next chunk's first step is split at its middle
     """
 
     def __init__(self) -> None:
@@ -140,6 +150,7 @@ class Insertions:
         self.w_t0 = np.zeros(0)
         self.mid_k = np.zeros(0, dtype=int)
         self.mid_t = np.zeros(0)
+        self.split_next = False
 
     def __bool__(self) -> bool:
         return bool(self.stand) or len(self.mid_k) > 0
@@ -296,6 +307,47 @@ def _dips(
     )
 
 
+def corners(
+    V_in: np.ndarray, V_out: np.ndarray, h_in: np.ndarray, h_out: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Corners taken at speed where a motor with play stands on one side and moves
+    on the other: its velocity there, and which side's step to split.
+
+    The corner's point carries the mean of its sides' velocities (the planner's
+    blend, :mod:`.interpolate.lookahead`), so the cubic of the standing side's step
+    turns back first by up to (4/27) h |V| / 2: setting off, the motor leaves its
+    part, which is pushed on only when the motor comes back, later than the other
+    motors' parts; stopping, it pushes its part past the corner and leaves it there.
+    Either way a head tilts and its tip runs fast (test_controller_truth's found
+    programs). So the motor is told the standing side's velocity at the corner: the
+    standing side's cubic then keeps still, and the moving side's starts (or ends)
+    slower than the path by |V|. Split at its middle, that step misses the path by
+    (4/27) (h/2) |V|: what the mean missed by over the whole step, within the
+    corner's share of the tolerance.
+
+    Parameters
+    ----------
+    V_in, V_out : (k,) the motor's planned velocity just before and just past each
+        corner [mm/s]
+    h_in, h_out : (k,) the steps ending and starting at it [s]
+
+    Returns
+    -------
+    V : (k,) the motor's velocity at each corner: the standing side's, or NaN where
+        nothing is to change
+    split : (k,) −1: split the step ending at the corner (the motor stops there), +1:
+        the step starting there (it sets off), 0: none
+    """
+    stop = (np.abs(V_in) >= V_EPS) & (np.abs(V_out) < V_EPS)
+    go = (np.abs(V_in) < V_EPS) & (np.abs(V_out) >= V_EPS)
+    # the turn back of the standing side's cubic with the mean velocity at its end
+    turn = (4.0 / 27.0) * np.where(stop, h_out, h_in) * np.abs(V_in - V_out) / 2.0
+    act = (stop | go) & (turn > CORNER_TURN_MM)
+    V = np.where(act, np.where(stop, V_out, V_in), np.nan)
+    split = np.where(act, np.where(stop, -1, 1), 0)
+    return V, split
+
+
 def _snap(k: np.ndarray, t: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
     """Window edges of one step within SNAP_S of each other (or of the step's ends)
     made one point: motors reversing together (a path reversing) share their
@@ -323,6 +375,8 @@ def plan_insertions(
     ref: np.ndarray,
     tol: float,
     longest: float,
+    halves: np.ndarray | None = None,
+    split_first: bool = False,
 ) -> Insertions:
     """Find every reversal of the motors ``cols`` in a chunk of points and its window.
 
@@ -339,6 +393,10 @@ def plan_insertions(
         updated in place (a creeping motor's drift is measured from it)
     tol : path error allowed to a crossing [mm]
     longest : the longest crossing window [s]
+    halves : rows whose step is to be split at its middle (:func:`corners`); a row
+        n: the next chunk's first step (``split_next``)
+    split_first : the chunk before ended at a corner where a motor sets off (its
+        ``split_next``): this chunk's first step is split at its middle
     """
     ins = Insertions()
     n = len(dt)
@@ -451,7 +509,19 @@ def plan_insertions(
         ek = np.concatenate([wk, wk])
         et = both
         inside = (et > np.tile(t0, 2)) & (et < np.tile(t1, 2))
-        pairs = np.unique(np.column_stack([ek[inside], et[inside]]), axis=0)
+        ek, et = ek[inside], et[inside]
+        # the steps split at their middle (corners): not a step with a window or a
+        # standing point of its own, which splits it already
+        half = np.unique(np.zeros(0, dtype=int) if halves is None else halves)
+        ins.split_next = bool(np.any(half == n))
+        if split_first:
+            half = np.concatenate([[0], half])
+        half = half[(half < n) & ~np.isin(half, wk)]
+        half = half[~np.isin(half, list(ins.stand))]
+        half = half[dt[half] >= 2 * MIN_WINDOW_S]
+        ek = np.concatenate([ek, half])
+        et = np.concatenate([et, t_end[half] - 0.5 * dt[half]])
+        pairs = np.unique(np.column_stack([ek, et]), axis=0)
         ins.mid_k = pairs[:, 0].astype(int)
         ins.mid_t = pairs[:, 1]
     return ins

@@ -334,3 +334,34 @@ def test_a_catch_up_goes_on_over_the_chunks_end_and_waits_while_the_path_stands(
     assert idx.tolist() == [0, 1, 2]
     np.testing.assert_allclose(off, [0.03e-3, 0.02e-3, 0.01e-3], atol=1e-15)
     assert left[0] == pytest.approx(0.01e-3, abs=1e-15)
+
+
+def test_a_corner_where_a_motor_stands_on_one_side_turns_it_back_with_the_mean() -> None:
+    """The closed form behind reversals.corners: a corner's point carrying the mean
+    of its sides' velocities, V/2, after a step over which the motor stood, makes
+    that step's cubic turn back by (4/27) h V/2 (the basis s³ − s² peaks at 4/27);
+    the standing side's velocity (0) keeps it still; and the step past the corner,
+    split at its middle and starting at rest, misses the path's straight line by
+    (4/27) (h/2) V, what the mean missed by over the whole step."""
+    h, V = 0.01, 0.1666
+    s = np.linspace(0.0, 1.0, 20001)
+    standing_mean = hermite(0.0, 0.0, 0.0, -V / 2, h, s)  # sets off downwards
+    assert standing_mean.max() == pytest.approx(4 / 27 * h * V / 2, rel=1e-6)
+    assert np.all(hermite(0.0, 0.0, 0.0, 0.0, h, s) == 0.0)
+    moving_mean = hermite(0.0, -V / 2, -V * h, -V, h, s)
+    half = hermite(0.0, 0.0, -V * h / 2, -V, h / 2, s)
+    assert np.max(np.abs(moving_mean - (-V * h * s))) == pytest.approx(4 / 27 * h * V / 2, 1e-6)
+    assert np.max(np.abs(half - (-V * h / 2 * s))) == pytest.approx(4 / 27 * h * V / 2, 1e-6)
+
+
+def test_a_motor_standing_on_one_side_of_a_corner_is_told_that_sides_velocity() -> None:
+    h = np.full(5, 0.01)
+    V_in = np.array([0.0, -0.1666, 0.2, 0.2, 0.0])
+    V_out = np.array([-0.1666, 0.0, 0.3, -0.2, 1e-3])
+    V, split = reversals.corners(V_in, V_out, h, h)
+    # sets off: the step after is split; stops: the step before; a motor moving on
+    # both sides (or reversing: a crossing's) is left alone, and so is a turn back
+    # of (4/27) h 1e-3 / 2 = 0.74 nm
+    assert split.tolist() == [1, -1, 0, 0, 0]
+    assert V[:2].tolist() == [0.0, 0.0]
+    assert np.all(np.isnan(V[2:]))

@@ -28,7 +28,7 @@ from .geometry import (
     pose_at,
 )
 from .lookahead import Plan, Planner, backward_pass, forward_pass, junction_limits
-from .sampling import Samples, at_times, sample
+from .sampling import Samples, at_times, junctions, next_tangent, sample
 from .timelaw import TimeLaw, time_law
 
 __all__ = [
@@ -52,6 +52,8 @@ __all__ = [
     "blocks_from_motions",
     "forward_pass",
     "junction_limits",
+    "junctions",
+    "next_tangent",
     "pose_at",
     "sample",
     "time_law",

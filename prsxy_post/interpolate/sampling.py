@@ -78,6 +78,19 @@ def steps(b: Blocks, law: TimeLaw, limits: PlanLimits) -> np.ndarray:
     return n
 
 
+def junctions(s: Samples) -> np.ndarray:
+    """(k,) the points of junctions taken at speed: their velocity is the mean of
+    their two sides' (:func:`sample`)."""
+    return np.flatnonzero(s.block_end & ~s.dwell & (s.speed > 0))
+
+
+def next_tangent(plan: Plan, blk: np.ndarray) -> np.ndarray:
+    """(k, 5) the tangent dq/ds just past the end of blocks ``blk``: the next
+    block's at its start (the plan knows the one past its last block)."""
+    nxt = np.vstack([plan.blocks.dq_in[1:], plan.next_dq_in[None, :]])
+    return nxt[blk]
+
+
 def sample(plan: Plan, limits: PlanLimits) -> Samples:
     """Points of a plan's blocks, in time order, each block's end point last."""
     b, law = plan.blocks, plan.law
@@ -108,11 +121,10 @@ def sample(plan: Plan, limits: PlanLimits) -> Samples:
     qdot = v[:, None] * dq
     # a junction taken at speed: the mean of the velocities on its two sides (the
     # same vector where the path is tangent)
-    nxt = np.vstack([b.dq_in[1:], plan.next_dq_in[None, :]])
     at_end = np.flatnonzero(last_of_block & ~stand & (v > 0))
     if at_end.size:
         kb = blk[at_end]
-        qdot[at_end] = 0.5 * v[at_end, None] * (b.dq_out[kb] + nxt[kb])
+        qdot[at_end] = 0.5 * v[at_end, None] * (b.dq_out[kb] + next_tangent(plan, kb))
     dt = np.where(stand, np.where(b.kind[blk] == KIND_DWELL, b.duration[blk], 0.0), step)
     fn = np.empty(len(blk), dtype=object)
     is_fn = b.kind[blk] == KIND_FUNCTION
