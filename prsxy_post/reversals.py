@@ -528,9 +528,13 @@ def plan_insertions(
         half = half[dt[half] >= 2 * MIN_WINDOW_S]
         ek = np.concatenate([ek, half])
         et = np.concatenate([et, t_end[half] - 0.5 * dt[half]])
-        pairs = np.unique(np.column_stack([ek, et]), axis=0)
-        ins.mid_k = pairs[:, 0].astype(int)
-        ins.mid_t = pairs[:, 1]
+        # each distinct (step, time) once, sorted by step, then time
+        order = np.lexsort((et, ek))
+        ek, et = ek[order], et[order]
+        new = np.ones(len(ek), dtype=bool)
+        new[1:] = (ek[1:] != ek[:-1]) | (et[1:] != et[:-1])
+        ins.mid_k = ek[new].astype(int)
+        ins.mid_t = et[new]
     return ins
 
 
