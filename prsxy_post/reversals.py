@@ -20,6 +20,11 @@ of it while the path goes on. So the jump gets a window of its own:
   cubic turns back and on again inside it: a tight curve's extreme between two
   points): two windows, one at each turning point, when the dip is deeper than
   the tolerance.
+
+After a crossing the part is brought back onto its wanted position along the path
+(:func:`catch_up`). At a corner taken at speed where the motor stands on one side,
+it is told that side's velocity, so that the standing side's cubic does not turn
+back (:func:`corners`).
 """
 
 from __future__ import annotations
