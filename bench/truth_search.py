@@ -1,7 +1,8 @@
 """Search for programs whose executed motion leaves the G-code's geometry.
 
 Random programs from the rs274 oracle tests' generators (canned cycles,
-compensated paths, single lines of the dialect) go through the whole chain for
+compensated paths, single lines of the dialect), or polylines that hold and move
+the head at corners taken at speed (``heads``), go through the whole chain for
 a truth machine; the PMAC output is run as the controller runs it and judged as
 tests/test_controller_truth.py judges it (path, tool axis, speed; the
 acceleration on the nominal machine). Programs the chain refuses are counted by
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import math
 import sys
 from pathlib import Path
 
@@ -38,7 +40,37 @@ from tests.test_tracking import convert, truth_machine  # noqa: E402
 HEADER = "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
 
 
+@st.composite
+def _heads(draw: st.DrawFn) -> str:
+    """Polylines whose segments, at slight angles in XY (corners taken at speed),
+    now hold the head and now move it a little in Z, A or B: its motors stand on
+    one side of a corner and move on the other (reversals.corners)."""
+    out = [HEADER.strip(), "G0 X-20 Y-20 Z0 A0 B0"]
+    x, y, z, a, b = -20.0, -20.0, 0.0, 0.0, 0.0
+    heading = draw(st.floats(0, 6.283))
+    for _ in range(draw(st.integers(2, 8))):
+        heading += draw(st.floats(-0.3, 0.3))
+        length = draw(st.floats(0.5, 8.0))
+        x = min(max(x + length * math.cos(heading), -40.0), 40.0)
+        y = min(max(y + length * math.sin(heading), -40.0), 40.0)
+        words = f"G1 X{x:.4f} Y{y:.4f}"
+        what = draw(st.sampled_from(["hold", "z", "a", "b"]))
+        if what == "z":
+            z = min(max(z + draw(st.floats(-0.3, 0.3)), -2.0), 0.0)
+            words += f" Z{z:.4f}"
+        elif what == "a":
+            a = min(max(a + draw(st.floats(-1.0, 1.0)), -5.0), 5.0)
+            words += f" A{a:.4f}"
+        elif what == "b":
+            b = min(max(b + draw(st.floats(-1.0, 1.0)), -5.0), 5.0)
+            words += f" B{b:.4f}"
+        out.append(words + f" F{draw(st.sampled_from([60, 300, 1200, 3000]))}")
+    return "\n".join([*out, "M2"]) + "\n"
+
+
 def generator(name: str) -> st.SearchStrategy[str]:
+    if name == "heads":
+        return _heads()
     if name == "cycles":
         return test_gcode_oracle._cycles()
     if name == "comp":
@@ -65,7 +97,7 @@ def found() -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
-    ap.add_argument("--generator", choices=["cycles", "comp", "lines"], default="comp")
+    ap.add_argument("--generator", choices=["cycles", "comp", "lines", "heads"], default="comp")
     ap.add_argument("--machine", default="21", help="a random machine's seed, or 'nominal'")
     ap.add_argument("--examples", type=int, default=300)
     ap.add_argument("--found", action="store_true", help="judge the programs found so far")

@@ -41,6 +41,7 @@ from .interpolate import (
     next_tangent,
 )
 from .interpolate.geometry import REVERSAL_SHARE
+from .interpolate.lookahead import KAPPA
 from .interpolate.sampling import sample, steps
 from .profile import MOTORS, Profile, nominal_kinematics
 
@@ -497,9 +498,9 @@ class Pipeline:
         self.play_y: dict[int, float] = {}
         # how far each part still is from where it is wanted, after a crossing
         self.catch: dict[int, float] = {}
-        # the last point made is a corner where a motor sets off (_corners): the
-        # next chunk's first step is split at its middle
-        self.split_next = False
+        # the last point made is a corner where a motor stops (_corners): the next
+        # chunk's first step gets a point this long [s] after its start
+        self.near_next = 0.0
         self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
         self.last: PointChunk | None = None  # the last point made (before the lead)
         self.held: PointChunk | None = None  # points waiting for the servo lead
@@ -664,7 +665,7 @@ class Pipeline:
             None if last is None else (last.P_ideal[0], last.V_ideal[0], bool(last.speed[0] == 0))
         )
         self.ref = np.where(np.isnan(self.ref), pc.P_ideal[0], self.ref)
-        halves = self._corners(plan, s, pc)
+        near = self._corners(plan, s, pc)
         t_end = np.cumsum(pc.dt)
         resting = pc.speed == 0.0
         ins = reversals.plan_insertions(
@@ -679,10 +680,10 @@ class Pipeline:
             self.ref,
             self.reversal_tol,
             self.reversal_s,
-            halves,
-            self.split_next,
+            near,
+            self.near_next,
         )
-        self.split_next = ins.split_next
+        self.near_next = ins.near_next
         n = len(pc)
         step = np.arange(n)
         when = t_end
@@ -717,16 +718,18 @@ class Pipeline:
         contacts = np.column_stack([ends, begs, cols]).astype(int)
         return pc, side, contacts[np.lexsort((cols, begs, ends))]
 
-    def _corners(self, plan: Plan | None, s: Samples, pc: PointChunk) -> np.ndarray:
-        """At every corner taken at speed where a motor with play stands on one side
-        and moves on the other, tell it the standing side's velocity instead of the
-        mean of both (:func:`.reversals.corners`; in ``pc.V_ideal``). Returns the
-        rows whose step is to be split at its middle (n: the next chunk's first).
+    def _corners(
+        self, plan: Plan | None, s: Samples, pc: PointChunk
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The corners taken at speed where a motor with play stands on one side and
+        moves on the other (:func:`.reversals.corners`, with the blend's share of
+        the acceleration, lookahead.KAPPA): (rows, where, tau) for
+        :func:`.reversals.plan_insertions`.
 
-        The decision takes the period for both sides' steps, not the steps
-        themselves: the step past a chunk's last point is not made yet, and the
-        points must not depend on where the program was cut into chunks."""
-        none = np.zeros(0, dtype=int)
+        The decision takes the period for the standing side's step, not the step
+        itself: the step past a chunk's last point is not made yet, and the points
+        must not depend on where the program was cut into chunks."""
+        none = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0))
         if plan is None:
             return none
         J = junctions(s)
@@ -742,16 +745,13 @@ class Pipeline:
         ahead = kinematics.inverse(
             self.geo, pc.q_target[J] + VEL_STEP_S * qdot_out, s.tool_length[J]
         ).P
-        V_out = (ahead - pc.P_ideal[J]) / VEL_STEP_S
-        V_in = 2.0 * pc.V_ideal[J] - V_out
+        cols = self.play_cols
+        V_out = (ahead[:, cols] - pc.P_ideal[J][:, cols]) / VEL_STEP_S
+        V_in = 2.0 * pc.V_ideal[J][:, cols] - V_out
         period = np.full(len(J), self.limits.period_s)
-        halves = [none]
-        for col in self.play_cols:
-            V, split = reversals.corners(V_in[:, col], V_out[:, col], period, period)
-            act = split != 0
-            pc.V_ideal[J[act], col] = V[act]
-            halves.append(np.where(split[act] < 0, J[act], J[act] + 1))
-        return np.unique(np.concatenate(halves))
+        where, tau = reversals.corners(V_in, V_out, period, KAPPA * self.limits.accel_mm_s2)
+        act = where != 0
+        return J[act], where[act], tau[act]
 
     def _settle(
         self,

@@ -23,8 +23,8 @@ of it while the path goes on. So the jump gets a window of its own:
 
 After a crossing the part is brought back onto its wanted position along the path
 (:func:`catch_up`). At a corner taken at speed where the motor stands on one side,
-it is told that side's velocity, so that the standing side's cubic does not turn
-back (:func:`corners`).
+the standing side's step gets a point near the corner, so that its cubic barely
+turns back (:func:`corners`).
 """
 
 from __future__ import annotations
@@ -54,9 +54,9 @@ SNAP_S = 0.1e-3
 #: of path. (2e-4 was seen to take a point 2e-4 over F in a corrected G-code.)
 CATCH_UP_SHARE = 5e-5
 #: At a corner taken at speed a point carries the mean of its sides' velocities; a
-#: motor with play that stands on one side and moves on the other would then turn
-#: back inside the standing side's step, by up to (4/27) h |V| / 2, and leave its
-#: part (:func:`corners`). Below this [mm] that turn is left alone: the part stands
+#: motor with play that stands on one side and moves on the other then turns back
+#: inside the standing side's step, by up to (4/27) h |V| / 2, and leaves its part
+#: (:func:`corners`). Below this [mm] that turn is left alone: the part stands
 #: while its motor turns back by a nanometre.
 CORNER_TURN_MM = 1e-6
 
@@ -140,8 +140,9 @@ class Insertions:
     w_t0 : (w,) the start of each window's step [s]
     mid_k, mid_t : (m,) the points put inside steps: the row whose step they are in,
         and their time since the chunk's previous point; sorted by step, then time
-    split_next : the chunk's last row is a corner where a motor sets off
-        (:func:`corners`): the next chunk's first step is split at its middle
+    near_next : the chunk's last row is a corner where a motor stops
+        (:func:`corners`): the next chunk's first step gets a point this long [s]
+        after its start (0: none)
     """
 
     def __init__(self) -> None:
@@ -155,7 +156,7 @@ class Insertions:
         self.w_t0 = np.zeros(0)
         self.mid_k = np.zeros(0, dtype=int)
         self.mid_t = np.zeros(0)
-        self.split_next = False
+        self.near_next = 0.0
 
     def __bool__(self) -> bool:
         return bool(self.stand) or len(self.mid_k) > 0
@@ -313,44 +314,52 @@ def _dips(
 
 
 def corners(
-    V_in: np.ndarray, V_out: np.ndarray, h_in: np.ndarray, h_out: np.ndarray
+    V_in: np.ndarray, V_out: np.ndarray, h: np.ndarray, accel: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Corners taken at speed where a motor with play stands on one side and moves
-    on the other: its velocity there, and which side's step to split.
+    on the other: which side it stands on, and how near the corner a point of that
+    side goes.
 
     The corner's point carries the mean of its sides' velocities (the planner's
     blend, :mod:`.interpolate.lookahead`), so the cubic of the standing side's step
-    turns back first by up to (4/27) h |V| / 2: setting off, the motor leaves its
-    part, which is pushed on only when the motor comes back, later than the other
-    motors' parts; stopping, it pushes its part past the corner and leaves it there.
-    Either way a head tilts and its tip runs fast (test_controller_truth's found
-    programs). So the motor is told the standing side's velocity at the corner: the
-    standing side's cubic then keeps still, and the moving side's starts (or ends)
-    slower than the path by |V|. Split at its middle, that step misses the path by
-    (4/27) (h/2) |V|: what the mean missed by over the whole step, within the
-    corner's share of the tolerance.
+    turns back by (4/27) h |ΔV| / 2 (the basis s³ − s² peaks at 4/27): setting off,
+    the motor leaves its part, which is pushed on only when the motor comes back,
+    later than the other motors' parts; stopping, it pushes its part past the corner
+    and leaves it there. Either way a head tilts and its tip runs fast
+    (test_controller_truth's found programs). A point of the path at τ from the
+    corner on the standing side, where the motor stands, leaves the turn to that
+    short step: (4/27) τ |ΔV| / 2. The cubic over it reaches 2 |ΔV| / τ in
+    acceleration, so τ is the servo cycle (MIN_WINDOW_S) or as long as ``accel``
+    needs, τ = max(MIN_WINDOW_S, 2 |ΔV| / accel); none where τ reaches half the
+    step. The corner keeps the mean: told the standing side's velocity instead, the
+    motor's cubic on the moving side runs up to 4/3 of its speed to make up its lag
+    (a corner in XY at F60 ran 1.0106 x F).
 
     Parameters
     ----------
-    V_in, V_out : (k,) the motor's planned velocity just before and just past each
-        corner [mm/s]
-    h_in, h_out : (k,) the steps ending and starting at it [s]
+    V_in, V_out : (k, m) the motors' planned velocities just before and just past
+        each corner [mm/s]
+    h : (k,) the standing side's step [s]
+    accel : the acceleration the short step may take [mm/s²]
 
     Returns
     -------
-    V : (k,) the motor's velocity at each corner: the standing side's, or NaN where
-        nothing is to change
-    split : (k,) −1: split the step ending at the corner (the motor stops there), +1:
-        the step starting there (it sets off), 0: none
+    where : (k,) int: −1 where a motor stands before the corner (the point goes τ
+        before it), +1 where one stands past it (τ after it), 0 where nothing is to
+        be done (where motors stand on both sides, the side of the deepest turn)
+    tau : (k,) [s] τ, the longest any of the corner's motors needs
     """
-    stop = (np.abs(V_in) >= V_EPS) & (np.abs(V_out) < V_EPS)
-    go = (np.abs(V_in) < V_EPS) & (np.abs(V_out) >= V_EPS)
-    # the turn back of the standing side's cubic with the mean velocity at its end
-    turn = (4.0 / 27.0) * np.where(stop, h_out, h_in) * np.abs(V_in - V_out) / 2.0
-    act = (stop | go) & (turn > CORNER_TURN_MM)
-    V = np.where(act, np.where(stop, V_out, V_in), np.nan)
-    split = np.where(act, np.where(stop, -1, 1), 0)
-    return V, split
+    dV = np.abs(V_in - V_out)
+    before = (np.abs(V_in) < V_EPS) & (np.abs(V_out) >= V_EPS)
+    after = (np.abs(V_in) >= V_EPS) & (np.abs(V_out) < V_EPS)
+    turn = (4.0 / 27.0) * h[:, None] * dV / 2.0
+    act = (before | after) & (turn > CORNER_TURN_MM)
+    tau = np.maximum(MIN_WINDOW_S, 2.0 * np.max(np.where(act, dV, 0.0), axis=1) / accel)
+    deep_b = np.max(np.where(act & before, turn, 0.0), axis=1)
+    deep_a = np.max(np.where(act & after, turn, 0.0), axis=1)
+    where = np.where(deep_b >= deep_a, -1, 1) * np.any(act, axis=1)
+    where = np.where(tau <= 0.5 * h, where, 0)
+    return where, tau
 
 
 def _snap(k: np.ndarray, t: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
@@ -380,8 +389,8 @@ def plan_insertions(
     ref: np.ndarray,
     tol: float,
     longest: float,
-    halves: np.ndarray | None = None,
-    split_first: bool = False,
+    near: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    near_first: float = 0.0,
 ) -> Insertions:
     """Find every reversal of the motors ``cols`` in a chunk of points and its window.
 
@@ -398,10 +407,12 @@ def plan_insertions(
         updated in place (a creeping motor's drift is measured from it)
     tol : path error allowed to a crossing [mm]
     longest : the longest crossing window [s]
-    halves : rows whose step is to be split at its middle (:func:`corners`); a row
-        n: the next chunk's first step (``split_next``)
-    split_first : the chunk before ended at a corner where a motor sets off (its
-        ``split_next``): this chunk's first step is split at its middle
+    near : (rows, where, tau) of corners (:func:`corners`): row k's step gets a
+        point tau before its end (where −1), or row k + 1's tau after its start
+        (+1; k = n − 1: the next chunk's first step, ``near_next``)
+    near_first : the chunk before ended at a corner where a motor stops (its
+        ``near_next``): this chunk's first step gets a point that long [s] after its
+        start
     """
     ins = Insertions()
     n = len(dt)
@@ -522,17 +533,32 @@ def plan_insertions(
         et = both
         inside = (et > np.tile(t0, 2)) & (et < np.tile(t1, 2))
         ek, et = ek[inside], et[inside]
-        # the steps split at their middle (corners): not a step with a window or a
-        # standing point of its own, which splits it already
-        half = np.unique(np.zeros(0, dtype=int) if halves is None else halves)
-        ins.split_next = bool(np.any(half == n))
-        if split_first:
-            half = np.concatenate([[0], half])
-        half = half[(half < n) & ~np.isin(half, wk)]
-        half = half[~np.isin(half, list(ins.stand))]
-        half = half[dt[half] >= 2 * MIN_WINDOW_S]
-        ek = np.concatenate([ek, half])
-        et = np.concatenate([et, t_end[half] - 0.5 * dt[half]])
+        # the points near a corner, on its standing side (corners); none where a
+        # window's edge is that near already, inside a window (another motor's
+        # crossing), or after a standing point at the corner
+        if near is None:
+            near = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0))
+        rows, where, tau = near
+        late, t_late = rows[where < 0], t_end[rows[where < 0]] - tau[where < 0]
+        early, tau_e = rows[where > 0] + 1, tau[where > 0]
+        ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
+        if near_first:
+            early, tau_e = np.concatenate([[0], early]), np.concatenate([[near_first], tau_e])
+        keep = (early < n) & ~np.isin(early, list(ins.stand))
+        early, tau_e = early[keep], tau_e[keep]
+        t_early = t_end[early] - dt[early] + tau_e
+        edges, starts, stops = np.sort(et), np.sort(ta), np.sort(tb)
+
+        def free(t_new: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+            no_edge = np.searchsorted(edges, lo, "left") == np.searchsorted(edges, hi, "right")
+            within = np.searchsorted(starts, t_new, "left") - np.searchsorted(stops, t_new, "right")
+            return no_edge & (within <= 0)
+
+        tau_l = tau[where < 0]
+        ok_l = (dt[late] >= 2 * tau_l) & free(t_late, t_late - tau_l, t_end[late])
+        ok_e = (dt[early] >= 2 * tau_e) & free(t_early, t_early - tau_e, t_early + tau_e)
+        ek = np.concatenate([ek, late[ok_l], early[ok_e]])
+        et = np.concatenate([et, t_late[ok_l], t_early[ok_e]])
         # each distinct (step, time) once, sorted by step, then time
         order = np.lexsort((et, ek))
         ek, et = ek[order], et[order]

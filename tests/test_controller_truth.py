@@ -259,8 +259,8 @@ TOOL_LENGTH_WITHOUT_A_MOVE = "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 A-2.5\nG4
 #: points carried the mean of their sides' velocities to the head's motors: the
 #: cubic after the stop overshot and pushed parts V and W 16.8 nm past it (left
 #: there), the cubic before the set-off turned back 118 nm, and the motors' parts
-#: set off at different instants: 1.0032 x F. Each motor is now told the velocity
-#: of the side where it stands (reversals.corners): 1.00008 x.
+#: set off at different instants: 1.0032 x F. A point of the path a servo cycle
+#: from each corner on the side where the head stands (reversals.corners): 1.00029 x.
 STAND_THEN_A_CORNER = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG1 X-30 Y-30\n"
     "G2 X-30.0000 Y-30.0000 I-10 J-10 Z-0.5\nG41.1 D2\nG1 Y-5 A5\nG1 Y-30 Z-1\nM2\n"
@@ -301,11 +301,11 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 
 
 def test_a_corner_at_a_chunks_end_gives_the_same_program(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A head that sets off at a corner has the step past it split at its middle
-    (reversals.corners); where that corner is a chunk's last point, the split is
-    carried into the next chunk's first step. A polyline whose head stands and sets
-    off at every other corner, cut after every motion and every other one: the same
-    bytes as in one chunk, and it still holds to the path."""
+    """A head that stops at a corner taken at speed gets a point of the path near
+    the corner past it (reversals.corners); where that corner is a chunk's last
+    point, the point goes into the next chunk's first step. A polyline whose head
+    stands and sets off at every other corner, cut after every motion and every
+    other one: the same bytes as in one chunk, and it still holds to the path."""
     text = "G21 G90 G17 G94 F1000\nG1 X-30 Y-30 Z0\n" + "".join(
         f"G1 X{-25 + 10 * i}\nG1 X{-20 + 10 * i} Z{-0.1 * (i + 1):.1f}\n" for i in range(8)
     )
@@ -315,15 +315,15 @@ def test_a_corner_at_a_chunks_end_gives_the_same_program(monkeypatch: pytest.Mon
 
     def spy(self, plan, s, pc):  # type: ignore[no-untyped-def]
         out = reversals_of(self, plan, s, pc)
-        carried.append(self.split_next)
+        carried.append(self.near_next > 0)
         return out
 
     monkeypatch.setattr(chain.Pipeline, "_reversals", spy)
     motions, res, whole = convert(truth, text + "M2\n")
-    for chunk in (1, 2):
+    for chunk in (1, 3):
         carried.clear()
         assert convert(truth, text + "M2\n", chunk=chunk)[2] == whole
-        assert any(carried), "no chunk ended at a corner where the head sets off"
+        assert any(carried), "no chunk ended at a corner where the head stops"
     assert_within(judge_pmac(truth, motions, res, whole), None)
 
 

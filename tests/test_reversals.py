@@ -338,33 +338,37 @@ def test_a_catch_up_goes_on_over_the_chunks_end_and_waits_while_the_path_stands(
 
 def test_a_corner_where_a_motor_stands_on_one_side_turns_it_back_with_the_mean() -> None:
     """The closed form behind reversals.corners: a corner's point carrying the mean
-    of its sides' velocities, V/2, after a step over which the motor stood, makes
+    of its sides' velocities, V/2, after a step h over which the motor stood, makes
     that step's cubic turn back by (4/27) h V/2 (the basis s³ − s² peaks at 4/27);
-    the standing side's velocity (0) keeps it still; and the step past the corner,
-    split at its middle and starting at rest, misses the path's straight line by
-    (4/27) (h/2) V, what the mean missed by over the whole step."""
-    h, V = 0.01, 0.1666
+    a point of the standing side at τ from the corner leaves the turn to the step
+    τ, (4/27) τ V/2, whose cubic's acceleration peaks at 2 V / τ (4 (V/2) / τ, at
+    its end)."""
+    h, tau, V = 0.01, 0.25e-3, 0.1666
     s = np.linspace(0.0, 1.0, 20001)
     standing_mean = hermite(0.0, 0.0, 0.0, -V / 2, h, s)  # sets off downwards
     assert standing_mean.max() == pytest.approx(4 / 27 * h * V / 2, rel=1e-6)
-    assert np.all(hermite(0.0, 0.0, 0.0, 0.0, h, s) == 0.0)
-    moving_mean = hermite(0.0, -V / 2, -V * h, -V, h, s)
-    half = hermite(0.0, 0.0, -V * h / 2, -V, h / 2, s)
-    assert np.max(np.abs(moving_mean - (-V * h * s))) == pytest.approx(4 / 27 * h * V / 2, 1e-6)
-    assert np.max(np.abs(half - (-V * h / 2 * s))) == pytest.approx(4 / 27 * h * V / 2, 1e-6)
+    near = hermite(0.0, 0.0, 0.0, -V / 2, tau, s)
+    assert near.max() == pytest.approx(4 / 27 * tau * V / 2, rel=1e-6)
+    accel = np.gradient(np.gradient(near, s * tau), s * tau)
+    assert np.abs(accel[5:-5]).max() == pytest.approx(2 * V / tau, rel=1e-3)
 
 
-def test_a_motor_standing_on_one_side_of_a_corner_is_told_that_sides_velocity() -> None:
-    h = np.full(5, 0.01)
-    V_in = np.array([0.0, -0.1666, 0.2, 0.2, 0.0])
-    V_out = np.array([-0.1666, 0.0, 0.3, -0.2, 1e-3])
-    V, split = reversals.corners(V_in, V_out, h, h)
-    # sets off: the step after is split; stops: the step before; a motor moving on
-    # both sides (or reversing: a crossing's) is left alone, and so is a turn back
-    # of (4/27) h 1e-3 / 2 = 0.74 nm
-    assert split.tolist() == [1, -1, 0, 0, 0]
-    assert V[:2].tolist() == [0.0, 0.0]
-    assert np.all(np.isnan(V[2:]))
+def test_a_motor_standing_on_one_side_of_a_corner_gets_a_point_near_it() -> None:
+    h = np.full(6, 0.01)
+    V_in = np.array([0.0, -0.1666, 0.2, 0.2, 0.0, 0.0])[:, None]
+    V_out = np.array([-0.1666, 0.0, 0.3, -0.2, 1e-3, 30.0])[:, None]
+    where, tau = reversals.corners(V_in, V_out, h, 2000.0)
+    # sets off: a point before the corner; stops: after it; a motor moving on both
+    # sides (or reversing: a crossing's) is left alone, and so is a turn back of
+    # (4/27) h 1e-3 / 2 = 0.74 nm; a jump of 30 mm/s would need τ = 30 ms at
+    # 2000 mm/s², more than half the step: nothing
+    assert where.tolist() == [-1, 1, 0, 0, 0, 0]
+    assert tau[:2].tolist() == [reversals.MIN_WINDOW_S] * 2
+    # a jump of 1 mm/s takes 2 ms at 1000 mm/s²; of two motors, the larger
+    where, tau = reversals.corners(
+        np.array([[0.0, 0.0]]), np.array([[1.0, 0.1666]]), np.array([0.01]), 1000.0
+    )
+    assert where.tolist() == [-1] and tau[0] == pytest.approx(2e-3)
 
 
 def test_a_motor_that_crept_through_a_step_crosses_at_its_end_before_setting_off() -> None:
