@@ -456,14 +456,7 @@ def plan_insertions(
             & (r >= 2)
             & (sg[np.maximum(r - 1, 0)] == 0)
             & (sg[np.maximum(r - 2, 0)] == 0)
-            # stood, or crept no faster than V_EPS over the step (a standing side of a
-            # corner, corners()): crossing there misses the path by a nanometre, where
-            # a window at the root of the next step's cubic, which sets off from the
-            # corner's point, would miss it by the path's travel
-            & (
-                np.abs(p[np.maximum(r - 1, 0)] - p[np.maximum(r - 2, 0)])
-                <= V_EPS * dt[np.maximum(k - 1, 0)]
-            )
+            & (np.abs(p[np.maximum(r - 1, 0)] - p[np.maximum(r - 2, 0)]) < 1e-9)
         )
         mid = ~(at_rest | crept_f | stood)
         for kk, nn in zip(k[at_rest].tolist(), new[at_rest].tolist(), strict=True):

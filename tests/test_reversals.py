@@ -369,35 +369,3 @@ def test_a_motor_standing_on_one_side_of_a_corner_gets_a_point_near_it() -> None
         np.array([[0.0, 0.0]]), np.array([[1.0, 0.1666]]), np.array([0.01]), 1000.0
     )
     assert where.tolist() == [-1] and tau[0] == pytest.approx(2e-3)
-
-
-def test_a_motor_that_crept_through_a_step_crosses_at_its_end_before_setting_off() -> None:
-    """A motor creeping up (2e-4 mm/s, below V_EPS) through a step whose end is a
-    corner where it is told its standing side's velocity (0), then setting off down:
-    it crosses its play standing, over the end of the step it crept through, not in
-    a window at the root of the next step's cubic (0 at the corner's point: the
-    window would sit at the start of a step in which the path runs on, and miss it by
-    the path's travel; drill.ngc missed it by 0.081 µm at a point, 0.052 with this).
-    Crossing there misses the path by the creep, 2 nm over the whole step."""
-    dt = np.full(4, 0.01)
-    t_end = np.cumsum(dt)
-    P = np.zeros((4, 5))
-    V = np.zeros((4, 5))
-    P[:, 0] = [0.0, 2e-6, 4e-6, 4e-6 - 1e-3]
-    V[:, 0] = [0.0, 2e-4, 0.0, -0.2]
-    ins = reversals.plan_insertions(
-        t_end,
-        dt,
-        P,
-        V,
-        np.zeros(4, dtype=bool),
-        None,
-        [0],
-        np.array([1] * 5),
-        np.full(5, np.nan),
-        0.05e-3,
-        1e-3,
-    )
-    assert ins.w_k.tolist() == [2] and ins.w_new.tolist() == [-1]
-    assert ins.w_tb.tolist() == [t_end[2]]
-    assert ins.w_ta[0] == pytest.approx(t_end[2] - 1e-3)
