@@ -624,6 +624,7 @@ def sides(
     out = np.tile(np.asarray(side, dtype=int), (m, 1))
     f_all = rows.first_plain(ins.w_k)
     e_all = rows.at(ins.w_k, ins.w_tb, ins.w_t0)
+    last_row = np.searchsorted(rows.step, ins.w_k, "right") - 1  # each step's end
     s_k = np.array([k for k, _, _ in ins.stands], dtype=int)
     s_col = np.array([c for _, c, _ in ins.stands], dtype=int)
     s_new = np.array([n for _, _, n in ins.stands], dtype=int)
@@ -632,6 +633,11 @@ def sides(
         mine = np.flatnonzero(ins.w_col == col)
         mine = mine[np.argsort(e_all[mine], kind="stable")]
         f, e, new = f_all[mine], e_all[mine], ins.w_new[mine]
+        # the points after a window's end inside its step (another motor's window,
+        # a point near a corner) are on the new side: where the path turns a corner
+        # the cubic's root is before the corner, the plan's velocity turns at it
+        after = np.maximum(last_row[mine] - e - 1, 0)
+        sg[_ranges(e + 1, after)] = np.repeat(new, after)
         # two crossings in one step (a dip): the second's old side starts after the
         # first's end
         f = np.maximum(f, np.concatenate([[0], e[:-1] + 1]))

@@ -265,6 +265,21 @@ STAND_THEN_A_CORNER = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG1 X-30 Y-30\n"
     "G2 X-30.0000 Y-30.0000 I-10 J-10 Z-0.5\nG41.1 D2\nG1 Y-5 A5\nG1 Y-30 Z-1\nM2\n"
 )
+#: Machine 12, found by bench/truth_search.py's polylines that hold and move the head
+#: (--generator heads), each while corners got reversals.corners' treatment:
+#: - an XY corner at F60 where motor Y sets off: told the standing side's velocity
+#:   (a first version), its cubic past the corner ran 4/3 of its speed: 1.0106 x F;
+#: - an XY move, then a plunge at F60: the point near the corner came after motor X's
+#:   window in the same step and, read with the old side, X crossed its play three
+#:   times in 3 ms: 1.0125 x F (reversals.sides).
+XY_CORNER_AT_F60 = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-19.0000 Y-20.0000 F60\nG1 X-18.0311 Y-19.7526 F60\nM2\n"
+)
+XY_THEN_A_PLUNGE = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-19.9917 Y-19.0000 F60\nG1 X-20.1081 Y-18.0068 Z-0.2500 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -277,6 +292,8 @@ FOUND = [
     (21, STEEP_HELIX_AFTER_A_CIRCLE),
     (12, TOOL_LENGTH_WITHOUT_A_MOVE),
     (12, STAND_THEN_A_CORNER),
+    (12, XY_CORNER_AT_F60),
+    (12, XY_THEN_A_PLUNGE),
 ]
 FOUND_IDS = [
     "creep",
@@ -290,6 +307,8 @@ FOUND_IDS = [
     "steep-helix",
     "tool-length-without-a-move",
     "stand-then-corner",
+    "xy-corner-F60",
+    "xy-then-plunge",
 ]
 
 

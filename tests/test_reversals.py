@@ -369,3 +369,26 @@ def test_a_motor_standing_on_one_side_of_a_corner_gets_a_point_near_it() -> None
         np.array([[0.0, 0.0]]), np.array([[1.0, 0.1666]]), np.array([0.01]), 1000.0
     )
     assert where.tolist() == [-1] and tau[0] == pytest.approx(2e-3)
+
+
+def test_a_point_after_a_window_in_its_step_is_on_the_new_side() -> None:
+    """Where the path turns a corner, a motor reversing there has its window at the
+    root of the step's cubic, before the corner, while the plan's velocity turns
+    only at the corner. A point after the window's end in the same step (another
+    motor's window, a point near the corner) is on the new side whatever the sign
+    of its velocity: read as the old side, the motor crossed its play back and
+    forth three times in 3 ms (1.0125 x F; test_controller_truth, xy-then-plunge)."""
+    ins = reversals.Insertions()
+    ins.w_k, ins.w_col, ins.w_new = np.array([1]), np.array([0]), np.array([-1])
+    ins.w_t0, ins.w_ta, ins.w_tb = np.array([0.01]), np.array([0.012]), np.array([0.013])
+    # the end of step 0; in step 1 the window's ends, a point near the corner, and
+    # the corner (the step's end, carrying the mean of its sides' velocities)
+    rows = reversals.Rows(
+        np.array([0, 1, 1, 1, 1]),
+        np.array([0.01, 0.012, 0.013, 0.0195, 0.02]),
+        np.zeros(5, dtype=bool),
+    )
+    V = np.zeros((5, 5))
+    V[:, 0] = [0.01, 0.008, 0.008, 0.008, -0.05]
+    side = reversals.sides(rows, V, np.zeros(5, dtype=bool), ins, [0], np.ones(5, dtype=int))
+    assert side[:, 0].tolist() == [1, 1, -1, -1, -1]
