@@ -346,6 +346,35 @@ def test_a_corner_at_a_chunks_end_gives_the_same_program(monkeypatch: pytest.Mon
     assert_within(judge_pmac(truth, motions, res, whole), None)
 
 
+#: Found by bench/truth_search.py --generator heads on machine 12, 2026-11-24, and
+#: open (the code before this stop's corners gives the same): 1.129 x F (21: 1.129
+#: x) for about 0.3 ms where line 3 (X and a tilt of B) meets line 4 (X and a
+#: plunge) at F60. Head motor V reverses there, its velocity jumping from +0.15 to
+#: -0.24 mm/s at the corner; its crossing window (0.66 ms) sits at the root of the
+#: step's cubic, and while V's part stands the others move on: the head tilts and
+#: the tip runs 0.13 mm/s fast, 13 % of F60. A table motor reversing at a corner
+#: only slows the tip (the XY corner searches find nothing); a head motor tilts the
+#: head. What it needs: a head motor with play that reverses at a corner crosses
+#: at rest, so the planner stops there (as at a corner of 90° or more), which
+#: needs the motors' directions on both sides of each junction before the time
+#: law; a change to the planning of every program on a machine with play.
+FOUND_OPEN = {
+    "head-reverses-at-a-corner-F60": (
+        12,
+        "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+        "G1 X-15.0000 Y-20.0000 B0.5000 F60\nG1 X-14.0000 Y-20.0000 Z-0.2500 F60\nM2\n",
+    ),
+}
+
+
+@pytest.mark.xfail(strict=True, reason="found 2026-11-24, open: see FOUND_OPEN")
+@pytest.mark.parametrize(("seed", "text"), list(FOUND_OPEN.values()), ids=list(FOUND_OPEN))
+def test_programs_found_and_still_open(seed: int, text: str) -> None:
+    truth = truth_machine("random", seed)
+    motions, res, texts = convert(truth, text)
+    assert_within(judge_pmac(truth, motions, res, texts), None)
+
+
 @CORNER_SEARCH
 @given(programs())
 def test_any_corner_any_speed_on_a_machine_with_play(text: str) -> None:
