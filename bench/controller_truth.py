@@ -61,7 +61,7 @@ def measure(path: Path, fmt: str, kind: str, seed: int | None) -> dict[str, floa
         blend = 0.0
     else:
         grun = ctl.run_gcode(texts[0])
-        tool = _tool_of_lines(res, grun.line[grun.seg])
+        tool = _tool_of_segments(res, grun.line, grun.seg)
         cgeo = chain.controller_geometry(truth)
         P = kinematics.inverse(cgeo, grun.q_dense).P
         q = ctl.machine_executes(truth, grun.t_dense, P, tool)

@@ -65,6 +65,21 @@ def judge_pmac(truth, motions, res, texts) -> ctl.Trace:
     return ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits.rapid_mm_min)
 
 
+def judge_gcode(truth, motions, res, texts) -> tuple[ctl.Trace, float]:
+    """Run corrected G-code as LinuxCNC does (straight lines between the written
+    points in its Cartesian space, its own kinematics to the joints); the truth
+    machine's tip poses judged, and the G64 P blend it was told. A segment's tool is
+    that of its end point's line where that line moves, else of its start's
+    (test_tracking._tool_of_segments)."""
+    run = ctl.run_gcode(texts[0])
+    assert run.blend is not None and run.blend < TOL_MM, "no G64 P before the first motion"
+    tool = _tool_of_segments(res, run.line, run.seg)
+    P = kinematics.inverse(chain.controller_geometry(truth), run.q_dense).P
+    q = ctl.machine_executes(truth, run.t_dense, P, tool)
+    rapid = truth.limits.rapid_mm_min
+    return ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, rapid), run.blend
+
+
 def assert_within(tr: ctl.Trace, accel: float | None, path_mm: float = TOL_MM) -> None:
     """Path, tool axis and speed; the acceleration where ``accel`` is given (a
     machine without play: with play, the contract's model takes a part up with a
@@ -106,18 +121,11 @@ def test_linuxcnc_lines_stay_on_the_path(kind: str, seed: int | None, path) -> N
     its own kinematics turn them into joint commands."""
     truth = truth_machine(kind, seed)
     motions, res, texts = convert(truth, path.read_text(), "gcode")
-    run = ctl.run_gcode(texts[0])
-    assert run.blend is not None and run.blend < TOL_MM, "no G64 P before the first motion"
+    tr, blend = judge_gcode(truth, motions, res, texts)
     first_move = texts[0].index("\nG0 ")
-    assert texts[0].index(f"G64 P{run.blend:g}") < first_move
-    tool = _tool_of_lines(res, run.line[run.seg])
-    P = kinematics.inverse(chain.controller_geometry(truth), run.q_dense).P
-    q = ctl.machine_executes(truth, run.t_dense, P, tool)
-    tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits.rapid_mm_min)
+    assert texts[0].index(f"G64 P{blend:g}") < first_move
     # LinuxCNC's blends stay within G64 P of the corner; the polyline gets the rest
-    assert tr.path_mm <= TOL_MM - run.blend, f"{tr.path_mm * 1000:.3f} µm"
-    assert tr.ab_deg <= TOL_DEG
-    assert tr.speed_ratio <= 1 + SPEED_ROUNDING
+    assert_within(tr, None, TOL_MM - blend)
 
 
 # ------------------------------------------------------------------ generated corners
@@ -317,6 +325,37 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text)
     assert_within(judge_pmac(truth, motions, res, texts), None)
+
+
+#: found programs that the corrected G-code does not yet run within bounds: the
+#: catch-up after motor U's creep crossing, spread over 1 mm of path in the motors'
+#: commands, reaches LinuxCNC as points of its straight lines, and at F60 those ran
+#: 1.0062 x F (1.0062 x with last stop's code too; the PMAC program: 1.0007 x). Not
+#: analysed further.
+FOUND_GCODE_OPEN = {"creep-then-helix-F60"}
+
+
+@pytest.mark.parametrize(
+    ("seed", "text"),
+    [
+        pytest.param(
+            *found,
+            marks=[pytest.mark.xfail(strict=True, reason="open: see FOUND_GCODE_OPEN")]
+            if name in FOUND_GCODE_OPEN
+            else [],
+        )
+        for name, found in zip(FOUND_IDS, FOUND, strict=True)
+    ],
+    ids=FOUND_IDS,
+)
+def test_programs_the_search_found_run_as_linuxcnc_runs_them(seed: int, text: str) -> None:
+    """The same programs as corrected G-code: a G43 with no move before the program
+    end read a standing segment with the new tool, 35 mm off (the judge's, as for
+    PMAC: test_tracking._tool_of_segments)."""
+    truth = truth_machine("random", seed)
+    motions, res, texts = convert(truth, text, "gcode")
+    tr, blend = judge_gcode(truth, motions, res, texts)
+    assert_within(tr, None, TOL_MM - blend)
 
 
 def test_a_corner_at_a_chunks_end_gives_the_same_program(monkeypatch: pytest.MonkeyPatch) -> None:
