@@ -597,13 +597,18 @@ class Pipeline:
         if moving.size:
             # e(Q) changes by µm over mm: its share of the velocity (1e-4 of it)
             # moves the cubic by far less than the rounding of the written numbers
-            ahead = kinematics.inverse(
-                self.geo, q_t[moving] + VEL_STEP_S * qdot[moving], tool[moving]
-            ).P
-            V[moving] = (ahead - ik.P[moving]) / VEL_STEP_S
+            V[moving] = self._ik_velocity(q_t[moving], qdot[moving], tool[moving], ik.P[moving])
         self.timings["error_map"] += t1 - t0
         self.timings["kinematics"] += time.perf_counter() - t1
         return q_t, ik.P, V, bool(np.all(ik.reachable))
+
+    def _ik_velocity(
+        self, q_t: np.ndarray, qdot: np.ndarray, tool: np.ndarray, P: np.ndarray
+    ) -> np.ndarray:
+        """(N, 5) [mm/s] the motors' velocity moving along ``qdot`` from poses ``q_t``
+        (whose IK is ``P``): the IK's difference over VEL_STEP_S."""
+        ahead = kinematics.inverse(self.geo, q_t + VEL_STEP_S * qdot, tool).P
+        return (ahead - P) / VEL_STEP_S
 
     def _points(self, plan: Plan | None, s: Samples) -> PointChunk | None:
         q_t, P, V, reachable = self._solve(s.q, s.qdot, s.tool_length, s.line)
@@ -742,11 +747,9 @@ class Pipeline:
         # the motors' velocities on the far side: the IK's velocity (as _solve) along
         # the next block's tangent; the near side's is then what the mean leaves
         qdot_out = s.speed[J, None] * nxt
-        ahead = kinematics.inverse(
-            self.geo, pc.q_target[J] + VEL_STEP_S * qdot_out, s.tool_length[J]
-        ).P
         cols = self.play_cols
-        V_out = (ahead[:, cols] - pc.P_ideal[J][:, cols]) / VEL_STEP_S
+        V_out = self._ik_velocity(pc.q_target[J], qdot_out, s.tool_length[J], pc.P_ideal[J])
+        V_out = V_out[:, cols]
         V_in = 2.0 * pc.V_ideal[J][:, cols] - V_out
         period = np.full(len(J), self.limits.period_s)
         where, tau = reversals.corners(V_in, V_out, period, KAPPA * self.limits.accel_mm_s2)

@@ -532,7 +532,8 @@ def plan_insertions(
         if near is None:
             near = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0))
         rows, where, tau = near
-        late, t_late = rows[where < 0], t_end[rows[where < 0]] - tau[where < 0]
+        late, tau_l = rows[where < 0], tau[where < 0]
+        t_late = t_end[late] - tau_l
         early, tau_e = rows[where > 0] + 1, tau[where > 0]
         ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
         if near_first:
@@ -547,7 +548,6 @@ def plan_insertions(
             within = np.searchsorted(starts, t_new, "left") - np.searchsorted(stops, t_new, "right")
             return no_edge & (within <= 0)
 
-        tau_l = tau[where < 0]
         ok_l = (dt[late] >= 2 * tau_l) & free(t_late, t_late - tau_l, t_end[late])
         ok_e = (dt[early] >= 2 * tau_e) & free(t_early, t_early - tau_e, t_early + tau_e)
         ek = np.concatenate([ek, late[ok_l], early[ok_e]])
