@@ -418,10 +418,16 @@ FOUND_OPEN = {
     # swing back (their play: they stand) and Y's bulge, (V_in - V_out) / 6 = 0.036
     # mm/s, reaches the tip. The corner's point (reversals.corners) shortens the
     # swing back to a servo cycle but not the velocities in it: a cubic's bulge in
-    # velocity is the same over any step. What it needs: the same as the program
-    # above (the standing motors' velocity at the corner left at zero with every
-    # motor's blend made on the moving side, or a slower corner), measured against
-    # the tip's bulge that the corner's speed bound allows.
+    # velocity is the same over any step. Tried and dropped (2026-11-24): the
+    # corner keeping the standing side's velocities for every motor, the moving
+    # side's short step taking the whole blend: 1.0122 x F, since Y's own swing
+    # there, (V_in - V_out) / 3 past its new velocity, turned it back through zero.
+    # What it needs: a blend in which every motor's velocity goes monotonically
+    # from one side's to the other's, e.g. a parabolic blend (points at the
+    # corner's -tau and +tau whose chords are the mean of their end velocities:
+    # each motor's velocity is then linear across the corner, and the tip's speed a
+    # mean of its sides', never above either), with the standing motor's step
+    # before it moving back by tau (V_in - V_out) / 4 to be dealt with.
     "tilt-starts-on-a-straight-F60": (
         21,
         "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
