@@ -435,6 +435,25 @@ FOUND_OPEN = {
         "G1 X-16.1244 Y-19.0104 F60\nG1 X-15.1554 Y-18.7630 F60\n"
         "G1 X-12.2487 Y-18.0208 A0.2500 F60\nM2\n",
     ),
+    # machine 12, the heads search on this stop's code (2026-11-24): 1.0013 x F
+    # (1.00004 x before the windows' edges went onto the cubics) at line 5's last
+    # step, which decelerates into the corner with line 6 (X and a tilt of B) at
+    # F60. Head motor W reverses in that step; its window (1.3 ms) begins at the
+    # step's first point, where W still moves at 0.016 mm/s, and its part stops
+    # there: the tip's speed steps up by about 1 % of F60 for the servo cycles
+    # after it. The window's edges as points of the path hid it (the path's
+    # deceleration over the window's short step); on the cubic, the step's own
+    # blend shows it. The window's size bounds the path error its crossing makes
+    # (|A| (delta/2)^2 / 2 within the allowance), not the velocity the part stops
+    # from, |A| delta / 2: at F60 that velocity, through a head motor's lever, is
+    # a per cent of F. What it needs: windows sized by that velocity too, against
+    # the speed the path has there.
+    "head-reverses-before-a-tilting-corner-F60": (
+        12,
+        "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+        "G1 X-19.0000 Y-20.0000 F60\nG1 X-18.0000 Y-20.0000 F60\n"
+        "G1 X-17.0000 Y-20.0000 Z-0.0156 F60\nG1 X-15.0000 Y-20.0000 B0.5000 F60\nM2\n",
+    ),
 }
 
 
