@@ -501,6 +501,9 @@ class Pipeline:
         # the last point made is a corner where a motor stops (_corners): the next
         # chunk's first step gets a point this long [s] after its start
         self.near_next = 0.0
+        # the last point's wanted position before a blend moved it (_reversals): the
+        # reversals of the next chunk are found from it
+        self.last_plain = np.zeros(5)
         self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
         self.last: PointChunk | None = None  # the last point made (before the lead)
         self.held: PointChunk | None = None  # points waiting for the servo lead
@@ -634,6 +637,7 @@ class Pipeline:
         t0 = time.perf_counter()
         side = np.tile(self.side, (len(pc), 1))
         contacts = np.zeros((0, 3), dtype=int)
+        plain_last = pc.P_ideal[-1].copy() if len(pc) else self.last_plain
         if self.play_cols and reachable:
             pc, side, contacts = self._reversals(plan, s, pc)
         # a running sum continued across chunks (not chunk offset + cumsum), so the
@@ -654,6 +658,7 @@ class Pipeline:
             pc.P_cmd, pc.V_cmd = P_cmd, V_cmd
         self.timings["axis_tables"] += time.perf_counter() - t0
         self.last = pc.take(slice(len(pc) - 1, len(pc)))
+        self.last_plain = plain_last
         self.held = pc if self.held is None else PointChunk.concat([self.held, pc])
         return self._release(final=False)
 
@@ -666,11 +671,15 @@ class Pipeline:
         the point where each ends, the point where it began, the motor's column; in
         that order."""
         last = self.last
+        # the last point as the reversals saw it: a blended corner's before it moved
+        # onto its blend (the same positions however the program was cut)
         prev = (
-            None if last is None else (last.P_ideal[0], last.V_ideal[0], bool(last.speed[0] == 0))
+            None
+            if last is None
+            else (self.last_plain, last.V_ideal[0], bool(last.speed[0] == 0))
         )
         self.ref = np.where(np.isnan(self.ref), pc.P_ideal[0], self.ref)
-        near = self._corners(plan, s, pc)
+        near, shift = self._corners(plan, s, pc)
         t_end = np.cumsum(pc.dt)
         resting = pc.speed == 0.0
         ins = reversals.plan_insertions(
@@ -689,6 +698,11 @@ class Pipeline:
             self.near_next,
         )
         self.near_next = ins.near_next
+        if ins.blended.size:
+            # the blended corners' points onto their parabolas (P_cmd is made from
+            # P_ideal after this)
+            pc.P_ideal = pc.P_ideal.copy()
+            pc.P_ideal[ins.blended] += shift[np.searchsorted(near[0], ins.blended)]
         n = len(pc)
         step = np.arange(n)
         when = t_end
@@ -725,7 +739,7 @@ class Pipeline:
 
     def _corners(
         self, plan: Plan | None, s: Samples, pc: PointChunk
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
         """The corners taken at speed where a motor with play stands on one side and
         moves on the other (:func:`.reversals.corners`, with the blend's share of
         the acceleration, lookahead.KAPPA): (rows, where, tau) for
@@ -736,25 +750,32 @@ class Pipeline:
         must not depend on where the program was cut into chunks."""
         none = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0))
         if plan is None:
-            return none
+            return none, np.zeros((0, 5))
         J = junctions(s)
         # a tangent junction has one velocity on both sides: no corner
         nxt = next_tangent(plan, s.block[J])
         bent = np.any(nxt != plan.blocks.dq_out[s.block[J]], axis=1)
         J, nxt = J[bent], nxt[bent]
         if not J.size:
-            return none
+            return none, np.zeros((0, 5))
         # the motors' velocities on the far side: the IK's velocity (as _solve) along
         # the next block's tangent; the near side's is then what the mean leaves
         qdot_out = s.speed[J, None] * nxt
         cols = self.play_cols
         V_out = self._ik_velocity(pc.q_target[J], qdot_out, s.tool_length[J], pc.P_ideal[J])
-        V_out = V_out[:, cols]
-        V_in = 2.0 * pc.V_ideal[J][:, cols] - V_out
+        V_in = 2.0 * pc.V_ideal[J] - V_out
         period = np.full(len(J), self.limits.period_s)
-        where, tau = reversals.corners(V_in, V_out, period, KAPPA * self.limits.accel_mm_s2)
+        accel = KAPPA * self.limits.accel_mm_s2
+        where, tau = reversals.corners(V_in[:, cols], V_out[:, cols], period, accel)
+        if self.limits.segment == "cubic":
+            # a PVT cubic can blend the corner as a parabola over ±τ, every motor's
+            # velocity linear across it (reversals.blend_shift), at |ΔV| / (2τ)
+            dV = np.max(np.abs(V_out - V_in), axis=1)
+            tau = np.maximum(reversals.MIN_WINDOW_S, dV / (2.0 * accel))
+            where = np.where((where != 0) & (tau <= 0.5 * period), reversals.BLEND, 0)
         act = where != 0
-        return J[act], where[act], tau[act]
+        shift = reversals.blend_shift(V_in[act], V_out[act], tau[act])
+        return (J[act], where[act], tau[act]), shift
 
     def _settle(
         self,

@@ -27,9 +27,11 @@ moves otherwise than without them. Points of the path would carry the plan's
 velocities, which next to a corner taken at speed are not the cubic's (its blend).
 
 After a crossing the part is brought back onto its wanted position along the path
-(:func:`catch_up`). At a corner taken at speed where the motor stands on one side,
-the standing side's step gets a point near the corner, so that its cubic barely
-turns back (:func:`corners`).
+(:func:`catch_up`). At a corner taken at speed where the motor stands on one side
+(:func:`corners`), a PVT program blends the corner as a parabola over a servo cycle
+or so each side, every motor's velocity linear across it (:func:`blend_shift`); a
+program of straight lines gets a point near the corner on the standing side, so
+that its step barely turns back.
 """
 
 from __future__ import annotations
@@ -148,6 +150,9 @@ class Insertions:
     mid_near : (m,) bool, the point is a corner's (:func:`corners`), a point of the
         path; the others are window edges, points of the cubic they cut
         (:func:`on_cubic`)
+    blended : rows of the corners blended (``where`` BLEND in :func:`plan_insertions`)
+        whose point before the corner was put in: the corner's point moves onto
+        the blend (:func:`blend_shift`)
     near_next : the chunk's last row is a corner where a motor stops
         (:func:`corners`): the next chunk's first step gets a point this long [s]
         after its start (0: none)
@@ -166,6 +171,7 @@ class Insertions:
         self.mid_t = np.zeros(0)
         self.mid_near = np.zeros(0, dtype=bool)
         self.near_next = 0.0
+        self.blended = np.zeros(0, dtype=int)
 
     def __bool__(self) -> bool:
         return bool(self.stand) or len(self.mid_k) > 0
@@ -404,6 +410,31 @@ def corners(
     return where, tau
 
 
+#: ``where`` of a corner blended over τ on both sides (:func:`blend_shift`)
+BLEND = 2
+
+
+def blend_shift(V_in: np.ndarray, V_out: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """How far a corner's point moves onto its parabolic blend [mm], (k, m).
+
+    Two points of the path, τ before and τ after the corner, carry their sides'
+    velocities V_in and V_out; the corner's point between them carries the mean.
+    The cubics through them are then one parabola whose velocity goes linearly
+    from V_in to V_out (each step's chord is the mean of its ends' velocities): no
+    motor swings back or bulges past its sides' velocities, and the tip's velocity
+    is a mean of its sides', never faster than either. The parabola passes the
+    corner at x(−τ) + τ V_in + τ (V_out − V_in) / 4, so the corner's point, on the
+    path at x(−τ) + τ V_in, moves by τ (V_out − V_in) / 4: inside the corner by
+    τ |ΔV| / 4, a few nanometres at τ of a servo cycle.
+
+    With the mean's cubics over whole steps instead, a motor standing on one side
+    swings back by (V_in − V_out)/6 in velocity however short the step, and with
+    play its part cannot: the other motors' blend then reaches the tip
+    (test_controller_truth's found programs).
+    """
+    return tau[:, None] * (V_out - V_in) / 4.0
+
+
 def _snap(k: np.ndarray, t: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
     """Window edges of one step within SNAP_S of each other (or of the step's ends)
     made one point: motors reversing together (a path reversing) share their
@@ -451,7 +482,8 @@ def plan_insertions(
     longest : the longest crossing window [s]
     near : (rows, where, tau) of corners (:func:`corners`): row k's step gets a
         point tau before its end (where −1), or row k + 1's tau after its start
-        (+1; k = n − 1: the next chunk's first step, ``near_next``)
+        (+1; k = n − 1: the next chunk's first step, ``near_next``), or both
+        (BLEND, :func:`blend_shift`)
     near_first : the chunk before ended at a corner where a motor stops (its
         ``near_next``): this chunk's first step gets a point that long [s] after its
         start
@@ -574,7 +606,8 @@ def plan_insertions(
         if near is None:
             near = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0))
         rows, where, tau = near
-        late, tau_l = rows[where < 0], tau[where < 0]
+        lw = (where < 0) | (where == BLEND)
+        late, tau_l, blend_l = rows[lw], tau[lw], where[lw] == BLEND
         t_late = t_end[late] - tau_l
         early, tau_e = rows[where > 0] + 1, tau[where > 0]
         ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
@@ -592,6 +625,7 @@ def plan_insertions(
 
         ok_l = (dt[late] >= 2 * tau_l) & free(t_late, t_late - tau_l, t_end[late])
         ok_e = (dt[early] >= 2 * tau_e) & free(t_early, t_early - tau_e, t_early + tau_e)
+        ins.blended = late[ok_l & blend_l]
         is_near = np.repeat([False, True], [len(ek), int(ok_l.sum() + ok_e.sum())])
         ek = np.concatenate([ek, late[ok_l], early[ok_e]])
         et = np.concatenate([et, t_late[ok_l], t_early[ok_e]])
