@@ -10,6 +10,8 @@ windows against their stated bounds.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -419,3 +421,43 @@ def test_a_point_on_the_cubic_cuts_it_into_the_same_motion(
     np.testing.assert_allclose(
         second, hermite(P0, V0, P1, V1, h, s_cut + s * (1 - s_cut)), rtol=0, atol=1e-15
     )
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    st.lists(st.floats(-50.0, 50.0), min_size=3, max_size=3),
+    st.lists(st.floats(-50.0, 50.0), min_size=3, max_size=3),
+    st.floats(0.25e-3, 5e-3),
+)
+def test_a_blended_corner_is_one_parabola_through_its_three_points(
+    v_in: list[float], v_out: list[float], tau: float
+) -> None:
+    """reversals.blend_shift: points of a straight motor path τ before and after a
+    corner, with their sides' velocities, and the corner's point moved by the
+    shift, with the mean velocity. The controller's two cubics through them (the
+    Hermite form, this file's own) are one parabola: the acceleration is the same
+    everywhere, (V_out − V_in) / 2τ, so each motor's velocity runs linearly from one
+    side's to the other's and never past either."""
+    V_in, V_out = np.array([v_in]), np.array([v_out])
+    P_c = np.array([1.0, -2.0, 3.0])
+    shift = reversals.blend_shift(V_in, V_out, np.array([tau]))[0]
+    pts = [
+        (P_c - tau * V_in[0], V_in[0]),
+        (P_c + shift, (V_in[0] + V_out[0]) / 2),
+        (P_c + tau * V_out[0], V_out[0]),
+    ]
+    s = np.linspace(0.0, 1.0, 201)
+    for (Pa, Va), (Pb, Vb) in itertools.pairwise(pts):
+        # the Hermite form's first and second derivatives, in closed form
+        d = (Pa - Pb)[:, None] / tau
+        v = (
+            6 * (s**2 - s) * d
+            + (3 * s**2 - 4 * s + 1) * Va[:, None]
+            + (3 * s**2 - 2 * s) * Vb[:, None]
+        )
+        a = ((12 * s - 6) * d + (6 * s - 4) * Va[:, None] + (6 * s - 2) * Vb[:, None]) / tau
+        want = (V_out[0] - V_in[0])[:, None] / (2 * tau)
+        np.testing.assert_allclose(a, np.broadcast_to(want, a.shape), rtol=1e-6, atol=1e-3)
+        lo = np.minimum(V_in[0], V_out[0])[:, None]
+        hi = np.maximum(V_in[0], V_out[0])[:, None]
+        assert np.all(v >= lo - 1e-9) and np.all(v <= hi + 1e-9)
