@@ -942,8 +942,6 @@ class Pipeline:
             v = np.linalg.norm(qdot[:, :3], axis=1)
             v = np.where(v > 0, v, np.linalg.norm(qdot[:, 3:], axis=1))
             q_t, P, V, _ = self._solve(q, qdot, s.tool_length[ks], s.line[ks])
-            if self.limits.segment == "cubic":
-                P, V = self._on_cubics(pc, t_end, ins, P, V)
             m = len(ks)
             # the steps cut at the new points (sorted by step, then time)
             same = np.concatenate([[False], ks[1:] == ks[:-1]])
@@ -982,60 +980,6 @@ class Pipeline:
             np.array(e_before, dtype=bool),
             dt,
         )
-
-    def _on_cubics(
-        self,
-        pc: PointChunk,
-        t_end: np.ndarray,
-        ins: reversals.Insertions,
-        P: np.ndarray,
-        V: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """The window edges moved onto the cubic they cut (:func:`.reversals.on_cubic`),
-        between the step's ends or a corner's point in it; ``P``, ``V`` (m, 5) are the
-        path's values at every point put inside a step.
-
-        A window sits at the root of its motor's cubic, where that motor's velocity
-        passes zero and its part may stand. A point of the path there would carry
-        the plan's velocities instead: next to a corner taken at speed, whose point
-        carries the mean of its sides' (the blend), the plan runs at one side's
-        velocities up to the corner, so a window edge of the path squeezes the whole
-        blend into the window. The reversing motor then moves at its old speed
-        inside its window while its part stands, and the other motors blend within
-        a fraction of a millisecond (a head motor reversing at a corner ran the tip
-        13 % over F60, test_controller_truth's found programs). On the cubic, the
-        edges change no motor's motion."""
-        ks = ins.mid_k
-        m = len(ks)
-        idx = np.arange(m)
-        near = ins.mid_near
-        win = np.flatnonzero(~near)
-        if not win.size:
-            return P, V
-        # the nearest corner's point on each side inside the same step, if any
-        left = np.maximum.accumulate(np.where(near, idx, -1))[win]
-        right = np.minimum.accumulate(np.where(near, idx, m)[::-1])[::-1][win]
-        k = ks[win]
-        has_l = (left >= 0) & (ks[np.maximum(left, 0)] == k)
-        has_r = (right < m) & (ks[np.minimum(right, m - 1)] == k)
-        # the step's own ends: the row before it (the last point made, before the
-        # chunk) and its row
-        P_prev = np.vstack(
-            [self.last.P_ideal if self.last is not None else pc.P_ideal[:1], pc.P_ideal[:-1]]
-        )
-        V_prev = np.vstack(
-            [self.last.V_ideal if self.last is not None else pc.V_ideal[:1], pc.V_ideal[:-1]]
-        )
-        t0 = np.where(has_l, ins.mid_t[np.maximum(left, 0)], t_end[k] - pc.dt[k])
-        t1 = np.where(has_r, ins.mid_t[np.minimum(right, m - 1)], t_end[k])
-        P0 = np.where(has_l[:, None], P[np.maximum(left, 0)], P_prev[k])
-        V0 = np.where(has_l[:, None], V[np.maximum(left, 0)], V_prev[k])
-        P1 = np.where(has_r[:, None], P[np.minimum(right, m - 1)], pc.P_ideal[k])
-        V1 = np.where(has_r[:, None], V[np.minimum(right, m - 1)], pc.V_ideal[k])
-        h = t1 - t0
-        P, V = P.copy(), V.copy()
-        P[win], V[win] = reversals.on_cubic(P0, V0, P1, V1, h, (ins.mid_t[win] - t0) / h)
-        return P, V
 
     def _release(self, final: bool) -> PointChunk | None:
         """Points whose servo lead is final.

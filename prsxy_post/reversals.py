@@ -21,11 +21,6 @@ of it while the path goes on. So the jump gets a window of its own:
   points): two windows, one at each turning point, when the dip is deeper than
   the tolerance.
 
-A window's edges are points of the cubic they cut, position and velocity
-(:func:`on_cubic`): the cubics through them are that cubic's pieces, so no motor
-moves otherwise than without them. Points of the path would carry the plan's
-velocities, which next to a corner taken at speed are not the cubic's (its blend).
-
 After a crossing the part is brought back onto its wanted position along the path
 (:func:`catch_up`). At a corner taken at speed where the motor stands on one side
 (:func:`corners`), a PVT program blends the corner as a parabola over a servo cycle
@@ -147,9 +142,6 @@ class Insertions:
     w_t0 : (w,) the start of each window's step [s]
     mid_k, mid_t : (m,) the points put inside steps: the row whose step they are in,
         and their time since the chunk's previous point; sorted by step, then time
-    mid_near : (m,) bool, the point is a corner's (:func:`corners`), a point of the
-        path; the others are window edges, points of the cubic they cut
-        (:func:`on_cubic`)
     blended : rows of the corners blended (``where`` BLEND in :func:`plan_insertions`)
         whose point before the corner was put in: the corner's point moves onto
         the blend (:func:`blend_shift`)
@@ -169,7 +161,6 @@ class Insertions:
         self.w_t0 = np.zeros(0)
         self.mid_k = np.zeros(0, dtype=int)
         self.mid_t = np.zeros(0)
-        self.mid_near = np.zeros(0, dtype=bool)
         self.near_next = 0.0
         self.blended = np.zeros(0, dtype=int)
 
@@ -197,39 +188,6 @@ def _hermite(
     h01 = -2 * s**3 + 3 * s**2
     h11 = s**3 - s**2
     return h00 * P0[:, None] + h10 * (h * V0)[:, None] + h01 * P1[:, None] + h11 * (h * V1)[:, None]
-
-
-def on_cubic(
-    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray, s: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Position and velocity of the cubic through (P0, V0) and (P1, V1) over time
-    h, at fraction s of it: the Hermite form, for n steps of m motors.
-
-    Parameters
-    ----------
-    P0, V0, P1, V1 : (n, m) [mm, mm/s]
-    h : (n,) [s]
-    s : (n,) in [0, 1]
-
-    Returns
-    -------
-    P, V : (n, m) [mm, mm/s]. Cut there, the cubic's two pieces are the cubics
-    through their ends: a point put there changes nothing of the motion.
-    """
-    s2 = s[:, None]
-    hh = h[:, None]
-    P = (
-        (2 * s2**3 - 3 * s2**2 + 1) * P0
-        + (s2**3 - 2 * s2**2 + s2) * hh * V0
-        + (3 * s2**2 - 2 * s2**3) * P1
-        + (s2**3 - s2**2) * hh * V1
-    )
-    V = (
-        (6 * (s2**2 - s2) * (P0 - P1)) / hh
-        + (3 * s2**2 - 4 * s2 + 1) * V0
-        + (3 * s2**2 - 2 * s2) * V1
-    )
-    return P, V
 
 
 def velocity_roots(
@@ -626,18 +584,15 @@ def plan_insertions(
         ok_l = (dt[late] >= 2 * tau_l) & free(t_late, t_late - tau_l, t_end[late])
         ok_e = (dt[early] >= 2 * tau_e) & free(t_early, t_early - tau_e, t_early + tau_e)
         ins.blended = late[ok_l & blend_l]
-        is_near = np.repeat([False, True], [len(ek), int(ok_l.sum() + ok_e.sum())])
         ek = np.concatenate([ek, late[ok_l], early[ok_e]])
         et = np.concatenate([et, t_late[ok_l], t_early[ok_e]])
-        # each distinct (step, time) once, sorted by step, then time (a window's
-        # edge first where a corner's point falls on it: it stays on the cubic)
-        order = np.lexsort((is_near, et, ek))
-        ek, et, is_near = ek[order], et[order], is_near[order]
+        # each distinct (step, time) once, sorted by step, then time
+        order = np.lexsort((et, ek))
+        ek, et = ek[order], et[order]
         new = np.ones(len(ek), dtype=bool)
         new[1:] = (ek[1:] != ek[:-1]) | (et[1:] != et[:-1])
         ins.mid_k = ek[new].astype(int)
         ins.mid_t = et[new]
-        ins.mid_near = is_near[new]
     return ins
 
 

@@ -396,33 +396,6 @@ def test_a_point_after_a_window_in_its_step_is_on_the_new_side() -> None:
     assert side[:, 0].tolist() == [1, 1, -1, -1, -1]
 
 
-@settings(max_examples=200, deadline=None)
-@given(
-    st.lists(st.floats(-5.0, 5.0), min_size=4, max_size=4),
-    st.floats(1e-4, 0.02),
-    st.floats(0.05, 0.95),
-)
-def test_a_point_on_the_cubic_cuts_it_into_the_same_motion(
-    ends: list[float], h: float, s_cut: float
-) -> None:
-    """reversals.on_cubic: the point it gives at fraction s of a cubic, with its
-    velocity, cuts the cubic into two whose own cubics (the controller's PVT
-    segments through their ends) are the first one's pieces: a window's edge put
-    there changes no motor's motion. Held against the Hermite form (this file's
-    own) on a dense grid of both pieces."""
-    P0, V0, P1, V1 = ends[0] * 1e-3, ends[1], ends[2] * 1e-3, ends[3]  # mm, mm/s
-    Pc, Vc = reversals.on_cubic(
-        *(np.array([[x]]) for x in (P0, V0, P1, V1)), np.array([h]), np.array([s_cut])
-    )
-    s = np.linspace(0.0, 1.0, 101)
-    first = hermite(P0, V0, Pc[0, 0], Vc[0, 0], s_cut * h, s)
-    second = hermite(Pc[0, 0], Vc[0, 0], P1, V1, (1 - s_cut) * h, s)
-    np.testing.assert_allclose(first, hermite(P0, V0, P1, V1, h, s * s_cut), rtol=0, atol=1e-15)
-    np.testing.assert_allclose(
-        second, hermite(P0, V0, P1, V1, h, s_cut + s * (1 - s_cut)), rtol=0, atol=1e-15
-    )
-
-
 @settings(max_examples=100, deadline=None)
 @given(
     st.lists(st.floats(-50.0, 50.0), min_size=3, max_size=3),
