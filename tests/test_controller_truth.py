@@ -375,9 +375,11 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 #: catch-up after motor U's creep crossing, spread over 1 mm of path in the motors'
 #: commands, reaches LinuxCNC as points of its straight lines, and at F60 those ran
 #: 1.0062 x F (1.0062 x with last stop's code too; the PMAC program: 1.0007 x). Not
-#: analysed further. tilt-starts-on-a-straight-F60: 1.0025 x F, judged at line 2
-#: (the same on the code before the blends, which are the PMAC output's alone: the
-#: G-code's windows and corners did not change; not analysed yet).
+#: analysed further. tilt-starts-on-a-straight-F60: 1.0025 x F (the same on the code
+#: before the blends, which are the PMAC output's alone) in motor U's crossing
+#: window, 1 ms before the corner: LinuxCNC runs the window as one straight line, so
+#: U crosses its 4.85 µm of play at 4.85 mm/s and takes its part up at that speed
+#: for the window's last servo cycle (PMAC's cubic ends at the plan's velocity).
 FOUND_GCODE_OPEN = {"creep-then-helix-F60", "tilt-starts-on-a-straight-F60"}
 
 
