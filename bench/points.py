@@ -17,8 +17,9 @@ makes them. Of the planned points (:mod:`prsxy_post.interpolate.sampling`):
 
 and the points the real-axis stage adds for the motors with play, the chain's
 points less the planned ones: where a motor reverses (its crossing of the play and
-the standing that takes it up), and near a corner taken at speed where a motor
-stands on one side (``reversals.corners``). Prints one Markdown table.
+the standing that takes it up), and the two points that blend a corner taken at
+speed where a motor stands on one side (``reversals.corners``,
+``reversals.blend_shift``). Prints one Markdown table.
 """
 
 from __future__ import annotations

@@ -257,6 +257,8 @@ def prepare(motions: Sequence[Motion], profile: Profile, limits: PlanLimits) -> 
 #: velocity: the IK moves by ~v·1e-6 s (under a µm), where its curvature makes an
 #: error of 1e-9 of the velocity and rounding one of 1e-8 mm/s.
 VEL_STEP_S = 1e-6
+#: The same along the path [mm], for the motors' directions at the blocks' ends.
+DIR_STEP_MM = 1e-4
 
 
 @dataclass
@@ -308,6 +310,14 @@ class Planning:
         self.limits = limits_of(profile, segment)
         self.planner = Planner(self.limits)
         self.geo = ik_geometry(profile, stages)
+        # the head's motors with play (their reversals at junctions are stops; a
+        # PVT program's only: G-code's corners are LinuxCNC's to blend)
+        tables = axiscomp.profile_tables(profile) if stages.axis_comp else {}
+        self.head_play = [
+            col
+            for col, m in enumerate(MOTORS[:3])
+            if m in tables and tables[m].max_play > 1e-12 and segment == "cubic"
+        ]
         self.max_part = max_part_points
         self.window: Blocks | None = None  # blocks held to choose where a part ends
         self.part_used = 1  # the start point belongs to the first part
@@ -328,6 +338,8 @@ class Planning:
             out.start_line = int(b.line[0]) if len(b) else prepared.first_line
             self.started = True
             self.n_planned += 1
+        if self.head_play:
+            self._directions(b)
         if self.max_part:
             b = self._parts(b, final)
         plan = self.planner.push(b, final)
@@ -353,6 +365,24 @@ class Planning:
         out.moves_nothing = final and not self.any_motion
         out.seconds = time.perf_counter() - t0
         return out
+
+    def _directions(self, b: Blocks) -> None:
+        """The head's motors with play: dP/ds at each moving block's ends (the IK's
+        difference over DIR_STEP_MM along its tangents), into ``b.dP_in`` and
+        ``b.dP_out`` for the look-ahead."""
+        k = np.flatnonzero(~b.stops)
+        if not k.size:
+            return
+        tool = np.tile(b.tool_length[k], 2)
+        q = np.vstack([b.start[k], b.end[k]])
+        dq = np.vstack([b.dq_in[k], -b.dq_out[k]])
+        P = kinematics.inverse(self.geo, q, tool).P
+        ahead = kinematics.inverse(self.geo, q + DIR_STEP_MM * dq, tool).P
+        d = (ahead - P) / DIR_STEP_MM
+        cols = self.head_play
+        n = len(k)
+        b.dP_in[k[:, None], cols] = d[:n, cols]
+        b.dP_out[k[:, None], cols] = -d[n:, cols]
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:
         """Where a split program's parts end: at rest after a block, the last place
@@ -674,9 +704,7 @@ class Pipeline:
         # the last point as the reversals saw it: a blended corner's before it moved
         # onto its blend (the same positions however the program was cut)
         prev = (
-            None
-            if last is None
-            else (self.last_plain, last.V_ideal[0], bool(last.speed[0] == 0))
+            None if last is None else (self.last_plain, last.V_ideal[0], bool(last.speed[0] == 0))
         )
         self.ref = np.where(np.isnan(self.ref), pc.P_ideal[0], self.ref)
         near, shift = self._corners(plan, s, pc)
@@ -771,7 +799,7 @@ class Pipeline:
             # a PVT cubic can blend the corner as a parabola over ±τ, every motor's
             # velocity linear across it (reversals.blend_shift), at |ΔV| / (2τ)
             dV = np.max(np.abs(V_out - V_in), axis=1)
-            tau = np.maximum(reversals.MIN_WINDOW_S, dV / (2.0 * accel))
+            tau = np.maximum(reversals.BLEND_MIN_S, dV / (2.0 * accel))
             where = np.where((where != 0) & (tau <= 0.5 * period), reversals.BLEND, 0)
         act = where != 0
         shift = reversals.blend_shift(V_in[act], V_out[act], tau[act])

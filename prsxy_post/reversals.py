@@ -370,6 +370,12 @@ def corners(
 
 #: ``where`` of a corner blended over τ on both sides (:func:`blend_shift`)
 BLEND = 2
+#: The shortest τ of a blend [s]. Its steps' chords are written to 1e-7 mm (the
+#: PMAC default): over a servo cycle that is 4e-4 mm/s of velocity, and a blend at
+#: F60 ran 1.0011 x F (test_controller_truth's found programs); over 1 ms, 1e-4.
+#: The blend cuts the corner by τ |Δv| / 4, (27/8) (τ / period) of the mean's
+#: cubics' (4/27) period |Δv| / 2: a third of it at 1 ms.
+BLEND_MIN_S = 1e-3
 
 
 def blend_shift(V_in: np.ndarray, V_out: np.ndarray, tau: np.ndarray) -> np.ndarray:

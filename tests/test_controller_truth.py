@@ -309,7 +309,7 @@ TILT_STARTS_ON_A_STRAIGHT = (
     "G1 X-12.2487 Y-18.0208 A0.2500 F60\nM2\n"
 )
 #: Machines 12 and 21, found by the heads search while a window's edges were points
-#: of the step's cubic (tried and dropped, FOUND_OPEN): a head motor reverses in the
+#: of the step's cubic (tried and dropped, HEAD_REVERSES_AT_A_CORNER): a head motor reverses in the
 #: step that decelerates into a tilting corner (W, 1.0013 x F), or at the corner
 #: where a tilt starts after a plunge (U, 1.0089 x F). The window began where the
 #: motor still moved on the cubic (0.016 and 0.031 mm/s) and its part stopped from
@@ -325,6 +325,33 @@ HEAD_REVERSES_AS_A_TILT_STARTS = (
     "G1 X-19.4597 Y-19.1585 F60\nG1 X-18.9194 Y-18.3171 F60\nG1 X-18.3791 Y-17.4756 F60\n"
     "G1 X-17.8388 Y-16.6341 F60\nG1 X-17.2985 Y-15.7926 Z-0.2500 F60\n"
     "G1 X-16.7582 Y-14.9512 A0.0625 F60\nM2\n"
+)
+#: Machine 12, found by the heads search, 2026-11-24: 1.129 x F for about 0.3 ms
+#: where line 3 (X and a tilt of B) meets line 4 (X and a plunge) at F60. Head motor
+#: V reverses at that corner, its planned velocity jumping from +0.15 to -0.24 mm/s;
+#: its crossing window (0.66 ms) sat at the root of the step's cubic, which blends
+#: the corner, and its edges, points of the path, carried the plan's velocities: V
+#: ran at 0.14 mm/s into its window and its part stopped dead there while the other
+#: head motors moved on. The head tilted and the tip ran 0.13 mm/s fast, 13 % of
+#: F60 (a table motor standing only slows the tip: the XY corner searches found
+#: nothing). Tried: the window's edges as points of the cubic (1.047 x, and two
+#: programs that passed failed: HEAD_REVERSES_BEFORE_A_TILTING_CORNER). The velocity
+#: a part stops from is the motor's acceleration through zero times half its
+#: window, whatever the speed, so no blend makes it small at speed: a head motor
+#: with play that reverses at a junction now crosses at rest, the planner stopping
+#: there (lookahead.junction_limits, with the motors' directions at the blocks'
+#: ends, chain.Planning._directions): 1.00007 x.
+HEAD_REVERSES_AT_A_CORNER = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-15.0000 Y-20.0000 B0.5000 F60\nG1 X-14.0000 Y-20.0000 Z-0.2500 F60\nM2\n"
+)
+#: Machine 12, the heads search on the parabolic blends while their τ was a servo
+#: cycle: a tilt starting where the path goes straight on, 1.0011 x F. The blend's
+#: two steps of 0.25 ms had their chords written to 1e-7 mm, 4e-4 mm/s of velocity
+#: each (reversals.BLEND_MIN_S): with τ of 1 ms, 1.00016 x.
+TILT_STARTS_AFTER_ONE_LINE = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-19.0000 Y-20.0000 F60\nG1 X-16.0000 Y-20.0000 A0.2500 F60\nM2\n"
 )
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
@@ -343,6 +370,8 @@ FOUND = [
     (21, TILT_STARTS_ON_A_STRAIGHT),
     (12, HEAD_REVERSES_BEFORE_A_TILTING_CORNER),
     (21, HEAD_REVERSES_AS_A_TILT_STARTS),
+    (12, HEAD_REVERSES_AT_A_CORNER),
+    (12, TILT_STARTS_AFTER_ONE_LINE),
 ]
 FOUND_IDS = [
     "creep",
@@ -361,6 +390,8 @@ FOUND_IDS = [
     "tilt-starts-on-a-straight-F60",
     "head-reverses-before-a-tilting-corner-F60",
     "head-reverses-as-a-tilt-starts-F60",
+    "head-reverses-at-a-corner-F60",
+    "tilt-starts-after-one-line-F60",
 ]
 
 
@@ -380,7 +411,14 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 #: window, 1 ms before the corner: LinuxCNC runs the window as one straight line, so
 #: U crosses its 4.85 µm of play at 4.85 mm/s and takes its part up at that speed
 #: for the window's last servo cycle (PMAC's cubic ends at the plan's velocity).
-FOUND_GCODE_OPEN = {"creep-then-helix-F60", "tilt-starts-on-a-straight-F60"}
+#: head-reverses-at-a-corner-F60: 1.0706 x F, the same before the planner's stops
+#: (the PMAC output's alone): V's window as one straight line takes its part up at
+#: the crossing's speed, as above.
+FOUND_GCODE_OPEN = {
+    "creep-then-helix-F60",
+    "tilt-starts-on-a-straight-F60",
+    "head-reverses-at-a-corner-F60",
+}
 
 
 @pytest.mark.parametrize(
@@ -431,44 +469,6 @@ def test_a_corner_at_a_chunks_end_gives_the_same_program(monkeypatch: pytest.Mon
         assert convert(truth, text + "M2\n", chunk=chunk)[2] == whole
         assert any(carried), "no chunk ended at a corner where the head stops"
     assert_within(judge_pmac(truth, motions, res, whole), None)
-
-
-#: Found by bench/truth_search.py --generator heads on machine 12, 2026-11-24, and
-#: open: 1.129 x F (machine 21 the same) for about 0.3 ms where line 3 (X and a tilt
-#: of B) meets line 4 (X and a plunge) at F60. Head motor V reverses at that corner,
-#: its planned velocity jumping from +0.15 to -0.24 mm/s. Its crossing window (0.66
-#: ms) sits at the root of the step's cubic, which blends the corner (the mean,
-#: -0.044, at its point). The window's edges are points of the path, so they carry
-#: the plan's velocities: V runs at 0.14 mm/s into its window and its part stops
-#: dead there, while the other head motors move on; the head tilts and the tip runs
-#: 0.13 mm/s fast, 13 % of F60. A table motor standing only slows the tip (the XY
-#: corner searches find nothing); a head motor tilts the head.
-#: Tried (2026-11-24): the window's edges as points of the step's cubic (position
-#: and velocity: the cubics through them are its pieces). 1.047 x here: the blend
-#: still takes V through zero steeply just before the corner, and V moves at 0.11
-#: mm/s where its window begins. And two programs that passed failed with it
-#: (HEAD_REVERSES_BEFORE_A_TILTING_CORNER, HEAD_REVERSES_AS_A_TILT_STARTS): dropped.
-#: The velocity a part stops from is the motor's acceleration through zero times
-#: half the window, whatever the speed, so no blend makes it small at speed. What
-#: it needs: a head motor with play that reverses at a corner crosses at rest (the
-#: planner stops there, as at a corner of 90° or more), or the corner is slowed
-#: until that velocity keeps the tip within F; either needs the motors' directions
-#: on both sides of each junction before the time law.
-FOUND_OPEN = {
-    "head-reverses-at-a-corner-F60": (
-        12,
-        "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
-        "G1 X-15.0000 Y-20.0000 B0.5000 F60\nG1 X-14.0000 Y-20.0000 Z-0.2500 F60\nM2\n",
-    ),
-}
-
-
-@pytest.mark.xfail(strict=True, reason="found 2026-11-24, open: see FOUND_OPEN")
-@pytest.mark.parametrize(("seed", "text"), list(FOUND_OPEN.values()), ids=list(FOUND_OPEN))
-def test_programs_found_and_still_open(seed: int, text: str) -> None:
-    truth = truth_machine("random", seed)
-    motions, res, texts = convert(truth, text)
-    assert_within(judge_pmac(truth, motions, res, texts), None)
 
 
 @CORNER_SEARCH

@@ -107,3 +107,39 @@ def test_planner_streams_like_one_shot(chunk: int) -> None:
     assert np.array_equal(one.dt, streamed.dt)
     assert np.array_equal(one.P_cmd, streamed.P_cmd)
     assert np.array_equal(one.V_cmd, streamed.V_cmd)
+
+
+def _junction_speeds(text: str, prof: profile_mod.Profile, segment: str) -> dict[int, float]:
+    """Planned speed at the end of each moving line's block, through the chain's
+    planning (which tells the look-ahead the head motors' directions)."""
+    planning = chain.Planning(prof, segment=segment)
+    motions = list(gcode.iter_motions(gcode.split_lines(text), chain.interpreter_config(prof), "x"))
+    planned = planning.plan(chain.prepare(motions, prof, planning.limits), final=True)
+    assert planned.plan is not None
+    b, law = planned.plan.blocks, planned.plan.law
+    return {int(ln): float(v) for ln, v, st in zip(b.line, law.v1, b.stops, strict=True) if not st}
+
+
+def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
+    """Line 3 tilts B, line 4 plunges: head motor V moves up along line 3 and down
+    along line 4, and the XY path bends by 14° in XZ, a corner the tolerance lets
+    through at F60. With play in V (a random machine with backlash), a PVT program
+    stops there so that V crosses its play at rest; G-code (LinuxCNC blends its own
+    corners) and a machine without play take the corner at speed. A tilt that
+    starts where the path goes straight on (no motor reverses: the head sets off
+    from standing) is no stop."""
+    from .test_tracking import truth_machine
+
+    reverses = (
+        "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\n"
+        "G1 X-15 Y-20 B0.5 F60\nG1 X-14 Y-20 Z-0.25 F60\nM2\n"
+    )
+    sets_off = (
+        "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\n"
+        "G1 X-19 Y-20 F60\nG1 X-16 Y-20 A0.25 F60\nM2\n"
+    )
+    play = truth_machine("random", 12)
+    assert _junction_speeds(reverses, play, "cubic")[3] == 0.0
+    assert _junction_speeds(reverses, play, "chord")[3] > 0.9
+    assert _junction_speeds(reverses, truth_machine("random", 12, play=False), "cubic")[3] > 0.9
+    assert _junction_speeds(sets_off, play, "cubic")[3] > 0.9

@@ -115,6 +115,10 @@ class Blocks:
     plane, center, sweep, r0, r1, theta0 : arc data (sweep signed, rad)
     dq_in, dq_out : (n, 5) tangents dq/ds at the start and the end [mm/mm, deg/mm]
         (zero for dwells and functions)
+    dP_in, dP_out : (n, 5) the motors' dP/ds at the start and the end [mm/mm], for the
+        head's motors with play where the planner is told them (else zero:
+        :meth:`~prsxy_post.chain.Planning.plan`); a junction where one reverses is
+        a stop (:func:`.lookahead.junction_limits`)
     tol : (n,) corner tolerance at the block's end [mm] for the blend with the next
         block; 0: exact path (G61), :data:`EXACT_STOP`: stop (G61.1)
     tol_deg : (n,) the same for A/B [deg]
@@ -143,6 +147,8 @@ class Blocks:
     theta0: np.ndarray
     dq_in: np.ndarray
     dq_out: np.ndarray
+    dP_in: np.ndarray
+    dP_out: np.ndarray
     tol: np.ndarray
     tol_deg: np.ndarray
     curv_r: np.ndarray
@@ -315,6 +321,8 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
         theta0=theta0,
         dq_in=np.zeros((n, 5)),
         dq_out=np.zeros((n, 5)),
+        dP_in=np.zeros((n, 5)),
+        dP_out=np.zeros((n, 5)),
         tol=np.where(np.isnan(path_tol), limits.tolerance_mm, path_tol),
         tol_deg=np.where(
             np.isnan(path_tol),
