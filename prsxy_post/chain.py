@@ -771,7 +771,9 @@ class Pipeline:
         """The corners taken at speed where a motor with play stands on one side and
         moves on the other (:func:`.reversals.corners`, with the blend's share of
         the acceleration, lookahead.KAPPA): (rows, where, tau) for
-        :func:`.reversals.plan_insertions`.
+        :func:`.reversals.plan_insertions`, and (k, 5) how far each corner's point
+        moves onto its blend where a PVT program blends it
+        (:func:`.reversals.blend_shift`).
 
         The decision takes the period for the standing side's step, not the step
         itself: the step past a chunk's last point is not made yet, and the points

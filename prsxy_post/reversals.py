@@ -23,7 +23,7 @@ of it while the path goes on. So the jump gets a window of its own:
 
 After a crossing the part is brought back onto its wanted position along the path
 (:func:`catch_up`). At a corner taken at speed where the motor stands on one side
-(:func:`corners`), a PVT program blends the corner as a parabola over a servo cycle
+(:func:`corners`), a PVT program blends the corner as a parabola over a millisecond
 or so each side, every motor's velocity linear across it (:func:`blend_shift`); a
 program of straight lines gets a point near the corner on the standing side, so
 that its step barely turns back.
@@ -389,7 +389,7 @@ def blend_shift(V_in: np.ndarray, V_out: np.ndarray, tau: np.ndarray) -> np.ndar
     is a mean of its sides', never faster than either. The parabola passes the
     corner at x(−τ) + τ V_in + τ (V_out − V_in) / 4, so the corner's point, on the
     path at x(−τ) + τ V_in, moves by τ (V_out − V_in) / 4: inside the corner by
-    τ |ΔV| / 4, a few nanometres at τ of a servo cycle.
+    τ |ΔV| / 4: tens of nanometres at τ of a millisecond (BLEND_MIN_S).
 
     With the mean's cubics over whole steps instead, a motor standing on one side
     swings back by (V_in − V_out)/6 in velocity however short the step, and with
