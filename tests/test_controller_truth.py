@@ -353,6 +353,17 @@ TILT_STARTS_AFTER_ONE_LINE = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
     "G1 X-19.0000 Y-20.0000 F60\nG1 X-16.0000 Y-20.0000 A0.2500 F60\nM2\n"
 )
+#: Machine 12, the heads search on the planner's stops while they took a motor
+#: creeping on one side (under REVERSAL_SLOPE) for one standing: line 3 descends by
+#: 3.9 µm over 4 mm, so the head's motors creep down at 1e-3 mm per mm, and line 4
+#: tilts B, V going up. V's crossing window took the place of the corner's blend
+#: and the table's X, speeding up for the tilt, ran the tip 1.0332 x F (the same
+#: on the code before this stop). A reversal from a creep is a stop too
+#: (lookahead.STAND_SLOPE): 1.00007 x.
+CREEP_THEN_A_TILT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-16.0000 Y-20.0000 Z-0.0039 F60\nG1 X-11.0000 Y-20.0000 B0.5000 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -372,6 +383,7 @@ FOUND = [
     (21, HEAD_REVERSES_AS_A_TILT_STARTS),
     (12, HEAD_REVERSES_AT_A_CORNER),
     (12, TILT_STARTS_AFTER_ONE_LINE),
+    (12, CREEP_THEN_A_TILT),
 ]
 FOUND_IDS = [
     "creep",
@@ -392,6 +404,7 @@ FOUND_IDS = [
     "head-reverses-as-a-tilt-starts-F60",
     "head-reverses-at-a-corner-F60",
     "tilt-starts-after-one-line-F60",
+    "creep-then-tilt-F60",
 ]
 
 

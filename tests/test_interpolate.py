@@ -127,7 +127,8 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     stops there so that V crosses its play at rest; G-code (LinuxCNC blends its own
     corners) and a machine without play take the corner at speed. A tilt that
     starts where the path goes straight on (no motor reverses: the head sets off
-    from standing) is no stop."""
+    from standing) is no stop; one after a descent of 1e-3 mm per mm (the head's
+    motors creep down, under REVERSAL_SLOPE, and V goes up on) is."""
     from .test_tracking import truth_machine
 
     reverses = (
@@ -138,7 +139,12 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
         "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\n"
         "G1 X-19 Y-20 F60\nG1 X-16 Y-20 A0.25 F60\nM2\n"
     )
+    creeps = (
+        "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\n"
+        "G1 X-16 Y-20 Z-0.0039 F60\nG1 X-11 Y-20 B0.5 F60\nM2\n"
+    )
     play = truth_machine("random", 12)
+    assert _junction_speeds(creeps, play, "cubic")[3] == 0.0
     assert _junction_speeds(reverses, play, "cubic")[3] == 0.0
     assert _junction_speeds(reverses, play, "chord")[3] > 0.9
     assert _junction_speeds(reverses, truth_machine("random", 12, play=False), "cubic")[3] > 0.9

@@ -46,10 +46,15 @@ KAPPA = 0.5
 #: Tangents closer than this are one direction (a tangent junction).
 TANGENT_EPS = 1e-9
 
-#: A motor moving less than this [mm per mm of path] on a side of a junction stands
-#: there (a part standing costs the tip under 1e-3 of its speed, even through the
-#: head's lever); where it moves more on both sides, the other way, it reverses.
+#: A motor that moves more than this [mm per mm of path] on one side of a junction,
+#: and the other way on the other side (by more than STAND_SLOPE: it creeps there,
+#: and its part is on that side), reverses there: it crosses its play at rest. A
+#: part standing while its motor moves slower costs the tip under 1e-3 of its speed,
+#: even through the head's lever.
 REVERSAL_SLOPE = 1e-3
+#: A motor moving less than this [mm per mm of path] on a side of a junction stands
+#: there (the blend of reversals.corners, not a stop).
+STAND_SLOPE = 1e-6
 
 
 def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarray]:
@@ -123,8 +128,10 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
     # a head motor with play that reverses at a junction crosses its play at rest:
     # its part stands while it crosses, and at speed the other motors tilt the head
     # meanwhile (test_controller_truth's found programs: 13 % over F60)
-    reverses = (b.dP_out[:-1] * b.dP_in[1:] < 0.0) & (
-        np.minimum(np.abs(b.dP_out[:-1]), np.abs(b.dP_in[1:])) > REVERSAL_SLOPE
+    reverses = (
+        (b.dP_out[:-1] * b.dP_in[1:] < 0.0)
+        & (np.maximum(np.abs(b.dP_out[:-1]), np.abs(b.dP_in[1:])) > REVERSAL_SLOPE)
+        & (np.minimum(np.abs(b.dP_out[:-1]), np.abs(b.dP_in[1:])) > STAND_SLOPE)
     )
     stop |= np.any(reverses, axis=1)
     v = np.where(stop, 0.0, v)
