@@ -871,7 +871,13 @@ class Pipeline:
                 hi_x = np.maximum.reduceat(np.append(hi, -np.inf), cuts)[::2]
                 u = side[e, col] > 0  # the new side: up, so it was going down
                 y_s = np.where(u, np.minimum(lo_x, at_beg), np.maximum(hi_x, at_beg))
-                cmd = np.where(u, table.lo_inv(y_s), table.hi_inv(y_s))
+                # a written digit short of the contact: rounded past it, the motor
+                # would push its part within the window's last servo cycles
+                cmd = np.where(
+                    u,
+                    table.lo_inv(y_s) - reversals.CROSSING_SHORT_MM,
+                    table.hi_inv(y_s) + reversals.CROSSING_SHORT_MM,
+                )
                 P_cmd[e, col] = cmd
                 off0 = y_s - pc.P_ideal[e, col]
                 self._catch_up(pc, side, col, off0, e, np.append(b[1:], n), P_cmd, V_cmd, s_path)

@@ -364,6 +364,18 @@ CREEP_THEN_A_TILT = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
     "G1 X-16.0000 Y-20.0000 Z-0.0039 F60\nG1 X-11.0000 Y-20.0000 B0.5000 F60\nM2\n"
 )
+#: Machine 21, the heads search on this stop's code: a tilt of A starts on a straight
+#: XY path after a tilt of B held for five lines. Motors U and W cross their play
+#: standing in the step before; the end of W's crossing, written to 1e-7 mm, fell
+#: 0.1 nm past its part and pushed it in the window's last 62 µs: 1.00135 x F
+#: (1.0006 x on the code before this stop, where it fell 0.04 nm past). A crossing
+#: ends a written digit short of the contact (reversals.CROSSING_SHORT_MM): 1.0001 x.
+TILT_AFTER_A_HELD_TILT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-20.4161 Y-19.0907 B-0.5000 F60\nG1 X-20.8323 Y-18.1814 F60\n"
+    "G1 X-21.2484 Y-17.2721 F60\nG1 X-21.6646 Y-16.3628 F60\nG1 X-22.0807 Y-15.4535 F60\n"
+    "G1 X-22.4969 Y-14.5442 F60\nG1 X-22.9130 Y-13.6349 A1.0000 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -384,6 +396,7 @@ FOUND = [
     (12, HEAD_REVERSES_AT_A_CORNER),
     (12, TILT_STARTS_AFTER_ONE_LINE),
     (12, CREEP_THEN_A_TILT),
+    (21, TILT_AFTER_A_HELD_TILT),
 ]
 FOUND_IDS = [
     "creep",
@@ -405,6 +418,7 @@ FOUND_IDS = [
     "head-reverses-at-a-corner-F60",
     "tilt-starts-after-one-line-F60",
     "creep-then-tilt-F60",
+    "tilt-after-a-held-tilt-F60",
 ]
 
 
@@ -415,20 +429,17 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
     assert_within(judge_pmac(truth, motions, res, texts), None)
 
 
-#: found programs that the corrected G-code does not yet run within bounds: the
-#: catch-up after motor U's creep crossing, spread over 1 mm of path in the motors'
-#: commands, reaches LinuxCNC as points of its straight lines, and at F60 those ran
-#: 1.0062 x F (1.0062 x with last stop's code too; the PMAC program: 1.0007 x). Not
-#: analysed further. tilt-starts-on-a-straight-F60: 1.0025 x F (the same on the code
-#: before the blends, which are the PMAC output's alone) in motor U's crossing
+#: found programs that the corrected G-code does not yet run within bounds.
+#: tilt-starts-on-a-straight-F60: 1.0025 x F (the same on the code before this
+#: stop's blends and stops, which are the PMAC output's alone) in motor U's crossing
 #: window, 1 ms before the corner: LinuxCNC runs the window as one straight line, so
 #: U crosses its 4.85 µm of play at 4.85 mm/s and takes its part up at that speed
 #: for the window's last servo cycle (PMAC's cubic ends at the plan's velocity).
-#: head-reverses-at-a-corner-F60: 1.0706 x F, the same before the planner's stops
-#: (the PMAC output's alone): V's window as one straight line takes its part up at
-#: the crossing's speed, as above.
+#: head-reverses-at-a-corner-F60: 1.0706 x F, the same before (V's window as one
+#: straight line takes its part up at the crossing's speed, as above).
+#: (creep-then-helix-F60 ran 1.0062 x F here until a crossing ended a written digit
+#: short of its contact, reversals.CROSSING_SHORT_MM: 1.00016 x.)
 FOUND_GCODE_OPEN = {
-    "creep-then-helix-F60",
     "tilt-starts-on-a-straight-F60",
     "head-reverses-at-a-corner-F60",
 }
