@@ -310,12 +310,12 @@ class Planning:
         self.limits = limits_of(profile, segment)
         self.planner = Planner(self.limits)
         self.geo = ik_geometry(profile, stages)
-        # the head's motors with play (their reversals at junctions are stops; a
-        # PVT program's only: G-code's corners are LinuxCNC's to blend)
+        # the motors with play, whose directions at the junctions the look-ahead is
+        # told (a PVT program's only: G-code's corners are LinuxCNC's to blend)
         tables = axiscomp.profile_tables(profile) if stages.axis_comp else {}
-        self.head_play = [
+        self.play_cols = [
             col
-            for col, m in enumerate(MOTORS[:3])
+            for col, m in enumerate(MOTORS)
             if m in tables and tables[m].max_play > 1e-12 and segment == "cubic"
         ]
         self.max_part = max_part_points
@@ -338,7 +338,7 @@ class Planning:
             out.start_line = int(b.line[0]) if len(b) else prepared.first_line
             self.started = True
             self.n_planned += 1
-        if self.head_play:
+        if self.play_cols:
             self._directions(b)
         if self.max_part:
             b = self._parts(b, final)
@@ -367,7 +367,7 @@ class Planning:
         return out
 
     def _directions(self, b: Blocks) -> None:
-        """The head's motors with play: dP/ds at each moving block's ends (the IK's
+        """The motors with play: dP/ds at each moving block's ends (the IK's
         difference over DIR_STEP_MM along its tangents), into ``b.dP_in`` and
         ``b.dP_out`` for the look-ahead."""
         k = np.flatnonzero(~b.stops)
@@ -379,7 +379,7 @@ class Planning:
         P = kinematics.inverse(self.geo, q, tool).P
         ahead = kinematics.inverse(self.geo, q + DIR_STEP_MM * dq, tool).P
         d = (ahead - P) / DIR_STEP_MM
-        cols = self.head_play
+        cols = self.play_cols
         n = len(k)
         b.dP_in[k[:, None], cols] = d[:n, cols]
         b.dP_out[k[:, None], cols] = -d[n:, cols]

@@ -376,6 +376,19 @@ TILT_AFTER_A_HELD_TILT = (
     "G1 X-21.2484 Y-17.2721 F60\nG1 X-21.6646 Y-16.3628 F60\nG1 X-22.0807 Y-15.4535 F60\n"
     "G1 X-22.4969 Y-14.5442 F60\nG1 X-22.9130 Y-13.6349 A1.0000 F60\nM2\n"
 )
+#: Machine 21, the heads search on this stop's code: an XY polyline whose Y motor
+#: reverses at line 9's corner, where the head sets off to tilt B. Y's crossing
+#: window took the place of the head's blend (reversals.blend_shift), the head's
+#: parts stood through their swing back, and the table's X, speeding up for the
+#: tilt, ran the tip 1.0796 x F (the same on the code before this stop). A junction
+#: where a table motor with play reverses and the head sets off or stops is a stop
+#: (lookahead.junction_limits): 1.00007 x.
+TABLE_REVERSES_AS_THE_HEAD_SETS_OFF = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-19.0000 Y-20.0000 F60\nG1 X-18.0078 Y-20.1247 F60\nG1 X-17.0156 Y-20.2493 F60\n"
+    "G1 X-16.0234 Y-20.3740 F60\nG1 X-15.0356 Y-20.2184 F60\nG1 X-14.0361 Y-20.1872 F60\n"
+    "G1 X-13.0405 Y-20.2808 F60\nG1 X-10.0770 Y-19.8139 B0.2500 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -397,6 +410,7 @@ FOUND = [
     (12, TILT_STARTS_AFTER_ONE_LINE),
     (12, CREEP_THEN_A_TILT),
     (21, TILT_AFTER_A_HELD_TILT),
+    (21, TABLE_REVERSES_AS_THE_HEAD_SETS_OFF),
 ]
 FOUND_IDS = [
     "creep",
@@ -419,6 +433,7 @@ FOUND_IDS = [
     "tilt-starts-after-one-line-F60",
     "creep-then-tilt-F60",
     "tilt-after-a-held-tilt-F60",
+    "table-reverses-as-the-head-sets-off-F60",
 ]
 
 

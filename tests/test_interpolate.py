@@ -128,7 +128,8 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     corners) and a machine without play take the corner at speed. A tilt that
     starts where the path goes straight on (no motor reverses: the head sets off
     from standing) is no stop; one after a descent of 1e-3 mm per mm (the head's
-    motors creep down, under REVERSAL_SLOPE, and V goes up on) is."""
+    motors creep down, under REVERSAL_SLOPE, and V goes up on) is. A table motor
+    reversing at a slight XY corner is no stop, unless the head sets off there."""
     from .test_tracking import truth_machine
 
     reverses = (
@@ -149,3 +150,6 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     assert _junction_speeds(reverses, play, "chord")[3] > 0.9
     assert _junction_speeds(reverses, truth_machine("random", 12, play=False), "cubic")[3] > 0.9
     assert _junction_speeds(sets_off, play, "cubic")[3] > 0.9
+    table = "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\nG1 X-19 Y-20.1 F60\n"
+    assert _junction_speeds(table + "G1 X-18 Y-20 F60\nM2\n", play, "cubic")[3] > 0.5
+    assert _junction_speeds(table + "G1 X-18 Y-20 B0.25 F60\nM2\n", play, "cubic")[3] == 0.0

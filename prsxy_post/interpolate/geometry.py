@@ -116,9 +116,9 @@ class Blocks:
     dq_in, dq_out : (n, 5) tangents dq/ds at the start and the end [mm/mm, deg/mm]
         (zero for dwells and functions)
     dP_in, dP_out : (n, 5) the motors' dP/ds at the start and the end [mm/mm], for the
-        head's motors with play where the planner is told them (else zero:
-        :meth:`~prsxy_post.chain.Planning.plan`); a junction where one reverses is
-        a stop (:func:`.lookahead.junction_limits`)
+        motors with play where the planner is told them (else zero:
+        :meth:`~prsxy_post.chain.Planning.plan`); a junction where one reverses may
+        be a stop (:func:`.lookahead.junction_limits`)
     tol : (n,) corner tolerance at the block's end [mm] for the blend with the next
         block; 0: exact path (G61), :data:`EXACT_STOP`: stop (G61.1)
     tol_deg : (n,) the same for A/B [deg]
