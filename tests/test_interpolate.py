@@ -111,7 +111,7 @@ def test_planner_streams_like_one_shot(chunk: int) -> None:
 
 def _junction_speeds(text: str, prof: profile_mod.Profile, segment: str) -> dict[int, float]:
     """Planned speed at the end of each moving line's block, through the chain's
-    planning (which tells the look-ahead the head motors' directions)."""
+    planning (which tells the look-ahead the motors' directions)."""
     planning = chain.Planning(prof, segment=segment)
     motions = list(gcode.iter_motions(gcode.split_lines(text), chain.interpreter_config(prof), "x"))
     planned = planning.plan(chain.prepare(motions, prof, planning.limits), final=True)
@@ -122,7 +122,7 @@ def _junction_speeds(text: str, prof: profile_mod.Profile, segment: str) -> dict
 
 def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     """Line 3 tilts B, line 4 plunges: head motor V moves up along line 3 and down
-    along line 4, and the XY path bends by 14° in XZ, a corner the tolerance lets
+    along line 4, and the path bends by 14° in XZ, a corner the tolerance lets
     through at F60. With play in V (a random machine with backlash), a PVT program
     stops there so that V crosses its play at rest; G-code (LinuxCNC blends its own
     corners) and a machine without play take the corner at speed. A tilt that
