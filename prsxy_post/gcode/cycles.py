@@ -174,9 +174,12 @@ def cycle(
         p = tuple(st.pos)
         it.emit(line=line, kind="function", start=p, end=p, words=words)
 
-    # LinuxCNC: below the R plane (judged by the level the cycles started at),
-    # rise straight up to it first; the first move of each hole goes across at
-    # the higher of where the tool is and the clearance level
+    # LinuxCNC (interp_internal.hh, CYCLE_MACRO): below the R plane (judged by the
+    # level the cycles started at), rise straight up to it first; the first hole is
+    # gone to across at the tool's height where that is above R, every other one at
+    # the clearance level. The level the cycles started at is kept as a number, so
+    # after G20/G21 it is read in the new units while the tool's height is not: the
+    # first hole then goes across at the tool's height, not at that level
     current_cc = cur_w
     if old_cc < r:
         traverse((cur[iu] - off[iu]) / sc, (cur[iv] - off[iv]) / sc, r)
@@ -184,6 +187,7 @@ def cycle(
         current_cc = r
     clear = r if st.retract_r else old_cc
     delta = G83_RAPID_DELTA_INCH * (1.0 if st.units == "inch" else MM_PER_INCH)
+    first = True
     for _ in range(repeats):
         aa += inc_a
         bb += inc_b
@@ -203,7 +207,8 @@ def cycle(
                 theta = math.atan2(bb, aa) + inc_t
                 radius = math.hypot(bb, aa)
                 aa, bb = radius * math.cos(theta), radius * math.sin(theta)
-        first_w = max(current_cc, clear)
+        first_w = current_cc if (first and current_cc > r) else clear
+        first = False
         traverse(aa, bb, first_w)
         if first_w != r:
             traverse(aa, bb, r)
