@@ -269,7 +269,7 @@ TOOL_LENGTH_WITHOUT_A_MOVE = "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 A-2.5\nG4
 #: there), the cubic before the set-off turned back 118 nm, and the motors' parts
 #: set off at different instants: 1.0032 x F. A point of the path a servo cycle
 #: from each corner on the side where the head stands (reversals.corners): 1.00029 x;
-#: the corner blended over a servo cycle each side (reversals.blend_shift): 1.00010 x.
+#: the corner blended over a millisecond each side (reversals.blend_shift): 1.00008 x.
 STAND_THEN_A_CORNER = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG1 X-30 Y-30\n"
     "G2 X-30.0000 Y-30.0000 I-10 J-10 Z-0.5\nG41.1 D2\nG1 Y-5 A5\nG1 Y-30 Z-1\nM2\n"
@@ -300,8 +300,8 @@ XY_THEN_A_PLUNGE = (
 #: short step shortens the swing but not its velocity). Keeping the standing
 #: side's velocities at the corner and blending on the moving side (tried): Y's
 #: swing, (V_in - V_out) / 3, turned it back through zero, 1.0122 x F. A parabolic
-#: blend over a servo cycle each side (reversals.blend_shift: every motor's velocity
-#: linear across the corner): 1.00038 x.
+#: blend over a millisecond each side (reversals.blend_shift: every motor's velocity
+#: linear across the corner): 1.00014 x.
 TILT_STARTS_ON_A_STRAIGHT = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
     "G1 X-19.0311 Y-19.7526 F60\nG1 X-18.0622 Y-19.5052 F60\nG1 X-17.0933 Y-19.2578 F60\n"
