@@ -153,3 +153,21 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     table = "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\nG1 X-19 Y-20.1 F60\n"
     assert _junction_speeds(table + "G1 X-18 Y-20 F60\nM2\n", play, "cubic")[3] > 0.5
     assert _junction_speeds(table + "G1 X-18 Y-20 B0.25 F60\nM2\n", play, "cubic")[3] == 0.0
+
+
+def test_a_short_block_between_two_stops_rises_and_falls() -> None:
+    """A block that starts and ends at rest, so short that its peak's cruise comes
+    out a rounding short of min_phase (0.1224 mm at 399 mm/s², vmax 6.65 mm/s: a
+    tilt between two junctions where a head motor reverses, bench.py's 2 M-line
+    program), was made one phase from v0 to v1, both zero: it took forever. It rises
+    and falls within the block and the acceleration limit."""
+    from prsxy_post.interpolate.timelaw import distance, time_law
+
+    b = interpolate.blocks_from_motions(gcode.interpret("G21 G1 X1 F2000\nM2\n"), LIM)
+    b = b.take(np.flatnonzero(~b.stops))
+    b.length[:], b.vmax[:], b.accel[:] = 0.1224000000000025, 6.654608352581903, 399.2765011549142
+    law = time_law(b, np.zeros(1), 0.0, LIM.min_phase_s)
+    assert np.isfinite(law.duration[0]) and law.vp[0] > 0
+    assert law.a1[0] <= b.accel[0] * (1 + 1e-12) and law.a3[0] <= b.accel[0] * (1 + 1e-12)
+    end = distance(law, np.zeros(1, dtype=int), law.duration)
+    assert end[0] == pytest.approx(b.length[0], rel=1e-12)
