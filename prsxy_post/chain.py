@@ -261,6 +261,20 @@ VEL_STEP_S = 1e-6
 DIR_STEP_MM = 1e-4
 
 
+def ik_derivative(
+    geo: kinematics.Geometry,
+    q: np.ndarray,
+    dq: np.ndarray,
+    tool: np.ndarray,
+    P: np.ndarray,
+    step: float,
+) -> np.ndarray:
+    """(N, 5) the motors' derivative along ``dq`` from poses ``q`` (whose IK is
+    ``P``): the IK's one-sided difference over ``step`` (VEL_STEP_S along a
+    velocity, DIR_STEP_MM along a tangent)."""
+    return (kinematics.inverse(geo, q + step * dq, tool).P - P) / step
+
+
 @dataclass
 class Planned:
     """A chunk through the planner (:meth:`Planning.plan`), ready for its points.
@@ -377,8 +391,7 @@ class Planning:
         q = np.vstack([b.start[k], b.end[k]])
         dq = np.vstack([b.dq_in[k], -b.dq_out[k]])
         P = kinematics.inverse(self.geo, q, tool).P
-        ahead = kinematics.inverse(self.geo, q + DIR_STEP_MM * dq, tool).P
-        d = (ahead - P) / DIR_STEP_MM
+        d = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
         cols = self.play_cols
         n = len(k)
         b.dP_in[k[:, None], cols] = d[:n, cols]
@@ -639,9 +652,8 @@ class Pipeline:
         self, q_t: np.ndarray, qdot: np.ndarray, tool: np.ndarray, P: np.ndarray
     ) -> np.ndarray:
         """(N, 5) [mm/s] the motors' velocity moving along ``qdot`` from poses ``q_t``
-        (whose IK is ``P``): the IK's difference over VEL_STEP_S."""
-        ahead = kinematics.inverse(self.geo, q_t + VEL_STEP_S * qdot, tool).P
-        return (ahead - P) / VEL_STEP_S
+        (whose IK is ``P``): :func:`ik_derivative` over VEL_STEP_S."""
+        return ik_derivative(self.geo, q_t, qdot, tool, P, VEL_STEP_S)
 
     def _points(self, plan: Plan | None, s: Samples) -> PointChunk | None:
         q_t, P, V, reachable = self._solve(s.q, s.qdot, s.tool_length, s.line)
