@@ -5,11 +5,14 @@ compensated paths, single lines of the dialect), or polylines that hold and move
 the head at corners taken at speed (``heads``), go through the whole chain for
 a truth machine; the PMAC output is run as the controller runs it and judged as
 tests/test_controller_truth.py judges it (path, tool axis, speed; the
-acceleration on the nominal machine). Programs the chain refuses are counted by
+acceleration on the nominal machine), or with ``--format gcode`` the corrected
+G-code, run as LinuxCNC runs it (straight lines, its own kinematics; the path
+tolerance less the G64 P blend it was told). Programs the chain refuses are counted by
 their message and skipped. Stops at the first program out of bounds, shrunk by
 hypothesis, and prints it.
 
     python bench/truth_search.py --generator comp --machine 12 --examples 300
+    python bench/truth_search.py --generator heads --machine 22 --format gcode
     python bench/truth_search.py --found   # the programs found so far, judged
 """
 
@@ -33,9 +36,10 @@ from tests.test_controller_truth import (  # noqa: E402
     FOUND,
     FOUND_IDS,
     assert_within,
+    judge_gcode,
     judge_pmac,
 )
-from tests.test_tracking import convert, truth_machine  # noqa: E402
+from tests.test_tracking import TOL_MM, convert, truth_machine  # noqa: E402
 
 HEADER = "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
 
@@ -80,15 +84,28 @@ def generator(name: str) -> st.SearchStrategy[str]:
     )
 
 
-def found() -> None:
+def judged(truth, text: str, fmt: str, accel: float | None) -> None:  # type: ignore[no-untyped-def]
+    """Convert ``text`` for ``fmt`` and assert it runs within the test's bounds."""
+    motions, res, texts = convert(truth, text, fmt)
+    if fmt == "gcode":
+        tr, blend = judge_gcode(truth, motions, res, texts)
+        assert_within(tr, accel, TOL_MM - blend)
+    else:
+        assert_within(judge_pmac(truth, motions, res, texts), accel)
+
+
+def found(fmt: str) -> None:
     """The programs the searches found (test_controller_truth.FOUND), each on its
     machine, as the test judges them: one Markdown table."""
     print("| program | machine | path µm | tool axis arcsec | speed / F |")
     print("|---|---:|---:|---:|---:|")
     for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True):
         truth = truth_machine("random", seed)
-        motions, res, texts = convert(truth, text)
-        tr = judge_pmac(truth, motions, res, texts)
+        motions, res, texts = convert(truth, text, fmt)
+        if fmt == "gcode":
+            tr = judge_gcode(truth, motions, res, texts)[0]
+        else:
+            tr = judge_pmac(truth, motions, res, texts)
         print(
             f"| {name} | {seed} | {tr.path_mm * 1000:.3f} | {tr.ab_deg * 3600:.3f} "
             f"| {tr.speed_ratio:.5f} |"
@@ -100,10 +117,11 @@ def main() -> None:
     ap.add_argument("--generator", choices=["cycles", "comp", "lines", "heads"], default="comp")
     ap.add_argument("--machine", default="21", help="a random machine's seed, or 'nominal'")
     ap.add_argument("--examples", type=int, default=300)
+    ap.add_argument("--format", choices=["pmac", "gcode"], default="pmac")
     ap.add_argument("--found", action="store_true", help="judge the programs found so far")
     args = ap.parse_args()
     if args.found:
-        found()
+        found(args.format)
         return
     seed = None if args.machine == "nominal" else int(args.machine)
     truth = truth_machine("random" if seed is not None else "nominal", seed)
@@ -119,12 +137,12 @@ def main() -> None:
     @given(generator(args.generator))
     def search(text: str) -> None:
         try:
-            motions, res, texts = convert(truth, text)
+            convert(truth, text, args.format)
         except PrsxyError as e:
             seen["refused: " + str(e).split(": ", 1)[-1][:60]] += 1
             return
         seen["judged (shrinking included)"] += 1
-        assert_within(judge_pmac(truth, motions, res, texts), accel)
+        judged(truth, text, args.format, accel)
 
     try:
         search()

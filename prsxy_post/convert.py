@@ -369,6 +369,7 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                 start=job.start,
                 segment=dialect.segment,
                 max_part_points=dialect.parts(settings),
+                written=dialect.written(settings),
             )
             parts = sinks.Parts(job.output, split)
             # a large program's text is formatted and written by a third process

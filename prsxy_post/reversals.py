@@ -55,12 +55,6 @@ SNAP_S = 0.1e-3
 #: their numbers: test_tracking), so the share is half of that: 0.05 µm takes 1 mm
 #: of path. (2e-4 was seen to take a point 2e-4 over F in a corrected G-code.)
 CATCH_UP_SHARE = 5e-5
-#: A crossing ends this far [mm] short of where its motor meets the part: one digit
-#: of a written PMAC position (seven decimals). Ended at the contact, the rounding of
-#: the written number put it up to half a digit past, and the motor pushed its part
-#: by 0.1 nm in the window's last 62 µs: 1.0013 x F60 through the head's lever
-#: (test_controller_truth's found programs). The part is met that much later.
-CROSSING_SHORT_MM = 1e-7
 #: At a corner taken at speed a point carries the mean of its sides' velocities; a
 #: motor with play that stands on one side and moves on the other then turns back
 #: inside the standing side's step, by up to (4/27) h |V| / 2, and leaves its part

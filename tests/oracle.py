@@ -96,7 +96,11 @@ def run(
         with open(tbl, "w") as fh:
             for n, spec in (tools or {}).items():
                 length, diameter = spec if isinstance(spec, tuple) else (spec, 0.0)
-                fh.write(f"T{n} P{n} Z{length / 25.4:.9f} D{diameter / 25.4:.9f} ;\n")
+                # (nearly) every digit of the double, in inches as rs274 keeps them:
+                # at 9 decimals a 6 mm tool came back 5.6e-9 mm small in radius, which
+                # a nearly straight compensation entry arc (its centre 1400 mm away)
+                # turned into 4e-4 mm on the centre (test_gcode_comp)
+                fh.write(f"T{n} P{n} Z{length / 25.4:.17f} D{diameter / 25.4:.17f} ;\n")
         for _ in range(CRASH_RETRIES):
             try:
                 proc = subprocess.run(

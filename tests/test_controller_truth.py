@@ -34,6 +34,7 @@ from prsxy_post.errors import PrsxyError
 
 from . import controllers as ctl
 from .conftest import ROOT
+from .synthetic import random_poses
 from .test_gcode_comp import _compensated_path
 from .test_gcode_oracle import _cycles
 from .test_tracking import (
@@ -369,7 +370,7 @@ CREEP_THEN_A_TILT = (
 #: standing in the step before; the end of W's crossing, written to 1e-7 mm, fell
 #: 0.1 nm past its part and pushed it in the window's last 62 µs: 1.00135 x F
 #: (1.0006 x on the code before this stop, where it fell 0.04 nm past). A crossing
-#: ends a written digit short of the contact (reversals.CROSSING_SHORT_MM): 1.0001 x.
+#: ends a written digit short of the contact (chain.Pipeline._crossing_short): 1.0001 x.
 TILT_AFTER_A_HELD_TILT = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
     "G1 X-20.4161 Y-19.0907 B-0.5000 F60\nG1 X-20.8323 Y-18.1814 F60\n"
@@ -444,43 +445,49 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
     assert_within(judge_pmac(truth, motions, res, texts), None)
 
 
-#: found programs that the corrected G-code does not yet run within bounds.
-#: tilt-starts-on-a-straight-F60: 1.0025 x F (the same on the code before this
-#: stop's blends and stops, which are the PMAC output's alone) in motor U's crossing
-#: window, 1 ms before the corner: LinuxCNC runs the window as one straight line, so
-#: U crosses its 4.85 µm of play at 4.85 mm/s and takes its part up at that speed
-#: for the window's last servo cycle (PMAC's cubic ends at the plan's velocity).
-#: head-reverses-at-a-corner-F60: 1.0706 x F, the same before (V's window as one
-#: straight line takes its part up at the crossing's speed, as above).
-#: (creep-then-helix-F60 ran 1.0062 x F here until a crossing ended a written digit
-#: short of its contact, reversals.CROSSING_SHORT_MM: 1.00016 x.)
-FOUND_GCODE_OPEN = {
-    "tilt-starts-on-a-straight-F60",
-    "head-reverses-at-a-corner-F60",
-}
-
-
-@pytest.mark.parametrize(
-    ("seed", "text"),
-    [
-        pytest.param(
-            *found,
-            marks=[pytest.mark.xfail(strict=True, reason="open: see FOUND_GCODE_OPEN")]
-            if name in FOUND_GCODE_OPEN
-            else [],
-        )
-        for name, found in zip(FOUND_IDS, FOUND, strict=True)
-    ],
-    ids=FOUND_IDS,
-)
+@pytest.mark.parametrize(("seed", "text"), FOUND, ids=FOUND_IDS)
 def test_programs_the_search_found_run_as_linuxcnc_runs_them(seed: int, text: str) -> None:
     """The same programs as corrected G-code: a G43 with no move before the program
     end read a standing segment with the new tool, 35 mm off (the judge's, as for
-    PMAC: test_tracking._tool_of_segments)."""
+    PMAC: test_tracking._tool_of_segments).
+
+    head-reverses-at-a-corner-F60 ran 1.0706 x F: LinuxCNC runs V's crossing window
+    as one straight line at the corner, and V's part stood through it while the
+    others moved on; its junction is now a stop for G-code too
+    (lookahead.junction_limits): 1.00007 x. tilt-starts-on-a-straight-F60 ran
+    1.0025 x F: six decimals of the pose put U's crossing end 1 nm past its part,
+    pushed at 4.85 mm/s in the window's last servo cycle; a crossing now ends a
+    digit of every written coordinate short (chain.Pipeline._crossing_short):
+    1.00033 x. (creep-then-helix-F60, 1.0062 x F, was the same rounding.)"""
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text, "gcode")
     tr, blend = judge_gcode(truth, motions, res, texts)
     assert_within(tr, None, TOL_MM - blend)
+
+
+def test_a_crossing_ends_short_of_its_part_however_the_written_pose_rounds() -> None:
+    """Corrected G-code writes the pose, six decimals of mm and deg, and the
+    controller's own IK turns it into motor positions: a crossing's end must stay
+    short of the part at every corner of the rounding's box (all 32 signs of half
+    a digit on x y z A B), through the controller's IK (the judge's), and be no
+    more than twice as short as the worst of them (the part is met that much
+    later)."""
+    truth = truth_machine("random", 21)
+    digit = 1e-6
+    pipe = chain.Pipeline(truth, segment="chord", written=chain.Written("pose", digit))
+    rng = np.random.default_rng(5)
+    q = random_poses(rng, 100)
+    tool = rng.uniform(0.0, 80.0, len(q))
+    cgeo = chain.controller_geometry(truth)
+    P0 = kinematics.inverse(cgeo, q, tool).P
+    corners = 0.5 * digit * np.array(list(itertools.product((-1.0, 1.0), repeat=5)))
+    moved = np.max(
+        [np.abs(kinematics.inverse(cgeo, q + c, tool).P - P0) for c in corners], axis=0
+    )
+    for col in range(5):
+        short = pipe._crossing_short(q, tool, col)
+        assert np.all(moved[:, col] < short)
+        assert np.all(short <= 2.2 * moved[:, col])
 
 
 def test_a_corner_at_a_chunks_end_gives_the_same_program(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -366,7 +366,12 @@ def convert(
     d = writers.dialect(fmt)
     settings = writers.settings_of(profile, fmt)
     res = chain.run_chain(
-        motions, profile, segment=d.segment, chunk=chunk, max_part_points=d.parts(settings)
+        motions,
+        profile,
+        segment=d.segment,
+        chunk=chunk,
+        max_part_points=d.parts(settings),
+        written=d.written(settings),
     )
     w = d.make(profile, settings, PROV)
     parts: dict[int, list[str]] = {}

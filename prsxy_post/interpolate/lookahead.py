@@ -26,7 +26,7 @@ sum stays within the profile's limit.
 Junctions next to a dwell, a machine function, a rotary-only move, a change of
 tool length or a G61.1 block are stops, and so are those where a head motor with
 play reverses, or a table motor with play where the head sets off or stops
-(``Blocks.dP_in``/``dP_out``, told for PVT programs): it crosses its play at rest.
+(``Blocks.dP_in``/``dP_out``, told by the chain): it crosses its play at rest.
 Then a backward and a forward pass make every block able to slow down and speed up
 in time (v² changes by at most 2aL).
 """

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from .. import __version__
 
 if TYPE_CHECKING:
-    from ..chain import PointChunk
+    from ..chain import PointChunk, Written
     from ..profile import Profile
 
 Piece = tuple[int, str]  # (output part, text)
@@ -79,6 +79,8 @@ class Dialect:
     make : (profile, settings, provenance) → Writer
     parts : settings → the most points a part may hold (0: one part); the chain
         ends each part at rest at a block end
+    space : what its numbers are: "motor" positions or the tip's "pose" (rounded
+        to the setting ``decimals``: :meth:`written`)
     """
 
     name: str
@@ -88,6 +90,13 @@ class Dialect:
     settings: Mapping[str, Setting]
     make: Callable[[Profile, Mapping[str, Any], Provenance], Writer]
     parts: Callable[[Mapping[str, Any]], int] = lambda s: 0
+    space: str = "motor"
+
+    def written(self, settings: Mapping[str, Any]) -> Written:
+        """How the chain's numbers are rounded on the way out (:class:`chain.Written`)."""
+        from ..chain import Written
+
+        return Written(self.space, 10.0 ** -int(settings["decimals"]))
 
 
 def header(prov: Provenance, profile: Profile, extra: Sequence[str]) -> list[str]:

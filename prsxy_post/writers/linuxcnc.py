@@ -179,5 +179,6 @@ DIALECT = Dialect(
     summary="corrected Cartesian G-code for LinuxCNC running the machine's kinematics",
     segment="chord",
     settings=SETTINGS,
+    space="pose",
     make=_make,
 )
