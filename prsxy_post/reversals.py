@@ -24,9 +24,9 @@ of it while the path goes on. So the jump gets a window of its own:
 After a crossing the part is brought back onto its wanted position along the path
 (:func:`catch_up`). At a corner taken at speed where the motor stands on one side
 (:func:`corners`), a PVT program blends the corner as a parabola over a millisecond
-or so each side, every motor's velocity linear across it (:func:`blend_shift`); a
-program of straight lines gets a point near the corner on the standing side, so
-that its step barely turns back.
+or so each side, every motor's velocity linear across it (:func:`blend_shift`). A
+program of straight lines needs nothing there: a motor standing at both ends of a
+chord stands all along it.
 """
 
 from __future__ import annotations

@@ -390,6 +390,17 @@ TABLE_REVERSES_AS_THE_HEAD_SETS_OFF = (
     "G1 X-16.0234 Y-20.3740 F60\nG1 X-15.0356 Y-20.2184 F60\nG1 X-14.0361 Y-20.1872 F60\n"
     "G1 X-13.0405 Y-20.2808 F60\nG1 X-10.0770 Y-19.8139 B0.2500 F60\nM2\n"
 )
+#: found by truth_search.py --format gcode (heads, machine 12), 2026-11-24: a tilt
+#: of A that starts after 1 mm of straight X. As corrected G-code a point 0.41 ms
+#: before the corner, where the head sets off (reversals.corners, made for PVT
+#: cubics, which turn back within the standing side's step; a chord cannot), made
+#: a chord of 410 nm whose six written decimals ran it 1.00146 x F (the same on the
+#: code before this stop). Straight lines get no such point: 1.00004 x. As PVT:
+#: 1.00016 x.
+SHORT_TILT_AFTER_A_STRAIGHT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-19.0000 Y-20.0000 F60\nG1 X-18.5000 Y-20.0000 A0.0391 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -412,6 +423,7 @@ FOUND = [
     (12, CREEP_THEN_A_TILT),
     (21, TILT_AFTER_A_HELD_TILT),
     (21, TABLE_REVERSES_AS_THE_HEAD_SETS_OFF),
+    (12, SHORT_TILT_AFTER_A_STRAIGHT),
 ]
 FOUND_IDS = [
     "creep",
@@ -435,6 +447,7 @@ FOUND_IDS = [
     "creep-then-tilt-F60",
     "tilt-after-a-held-tilt-F60",
     "table-reverses-as-the-head-sets-off-F60",
+    "short-tilt-after-a-straight-F60",
 ]
 
 
