@@ -944,7 +944,8 @@ class Pipeline:
         and the motor pushed its part with the crossing's speed in the window's
         last servo cycles, through the head's lever: 1.0013 x F60 from 0.1 nm in
         a PVT program (seven decimals), 1.0025 x F60 from 1 nm in a corrected
-        G-code (six) (test_controller_truth's found programs). The part is met that much later, on the path's own speed."""
+        G-code (six) (test_controller_truth's found programs). The part is met
+        that much later, at the path's own speed."""
         digit = self.written.digit
         if self.written.space == "motor" or not len(q):
             return np.full(len(q), digit)

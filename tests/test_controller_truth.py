@@ -494,9 +494,7 @@ def test_a_crossing_ends_short_of_its_part_however_the_written_pose_rounds() -> 
     cgeo = chain.controller_geometry(truth)
     P0 = kinematics.inverse(cgeo, q, tool).P
     corners = 0.5 * digit * np.array(list(itertools.product((-1.0, 1.0), repeat=5)))
-    moved = np.max(
-        [np.abs(kinematics.inverse(cgeo, q + c, tool).P - P0) for c in corners], axis=0
-    )
+    moved = np.max([np.abs(kinematics.inverse(cgeo, q + c, tool).P - P0) for c in corners], axis=0)
     for col in range(5):
         short = pipe._crossing_short(q, tool, col)
         assert np.all(moved[:, col] < short)
