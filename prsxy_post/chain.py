@@ -852,8 +852,8 @@ class Pipeline:
         P_cmd: np.ndarray,
         V_cmd: np.ndarray,
     ) -> None:
-        """Follow every motor with play through the cubics of its own commands
-        (:func:`.reversals.follow`) and end each crossing where the part really
+        """Follow every motor with play through the cubics (or chords) of its own
+        commands (:func:`.reversals.follow`) and end each crossing where the part really
         stands: a corner's blend may have carried it a little past the wanted
         extreme (within the corner tolerance), and a motor that met it at the wanted
         position would then push it with the crossing's speed. Updates the commands
@@ -877,6 +877,7 @@ class Pipeline:
         sp = np.minimum(np.concatenate([[sp_prev], pc.speed[:-1]]), pc.speed)
         s_path = np.cumsum(np.where(pc.dwell, 0.0, sp * pc.dt))
         n = len(pc)
+        cubic = self.limits.segment == "cubic"
         for col in self.play_cols:
             table = self.tables[MOTORS[col]]
             if prev_P is None:
@@ -897,7 +898,7 @@ class Pipeline:
                 # from there the corrected commands carry it, below
                 upto = slice(0, int(e.max()) + 1)
                 y_pt, lo, hi = reversals.follow(
-                    table, y0, P0, V0, P_cmd[upto, col], V_cmd[upto, col], pc.dt[upto]
+                    table, y0, P0, V0, P_cmd[upto, col], V_cmd[upto, col], pc.dt[upto], cubic
                 )
                 # where the part stands when the crossing begins: the extreme it
                 # reached on the old side, over the window (its start included)
@@ -926,7 +927,7 @@ class Pipeline:
             if rest.start < len(pc):
                 y0 = float(
                     reversals.follow(
-                        table, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest]
+                        table, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest], cubic
                     )[0][-1]
                 )
             self.play_y[col] = y0

@@ -778,10 +778,13 @@ def follow(
     P: np.ndarray,
     V: np.ndarray,
     dt: np.ndarray,
+    cubic: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where a motor's driven part is along the cubics the controller runs through
     commands (P, V) from (P0, V0), starting at y0: the contract's play model on the
-    continuous command.
+    continuous command. With ``cubic`` false the controller runs straight lines
+    between the points (corrected G-code), and the points alone are the command's
+    extremes.
 
     The play model is rate-independent: its result after a monotone stretch of
     commands depends only on where the stretch ends. So the command's cubic in each
@@ -807,8 +810,8 @@ def follow(
         sq = np.sqrt(np.maximum(disc, 0.0))
         r1 = np.where(np.abs(a) > 1e-300, (-b - sq) / (2 * a), np.where(b != 0, -c / b, -1.0))
         r2 = np.where(np.abs(a) > 1e-300, (-b + sq) / (2 * a), -1.0)
-    ok1 = (disc >= 0) & (r1 > 0) & (r1 < 1) & (h > 0)
-    ok2 = (disc >= 0) & (r2 > 0) & (r2 < 1) & (h > 0) & (np.abs(r2 - r1) > 0)
+    ok1 = (disc >= 0) & (r1 > 0) & (r1 < 1) & (h > 0) & cubic
+    ok2 = (disc >= 0) & (r2 > 0) & (r2 < 1) & (h > 0) & (np.abs(r2 - r1) > 0) & cubic
     # samples of each step in time order: its turning points, then its end. Most
     # steps have none, so the cubic is evaluated only where it turns (the end of a
     # step is its point, P).

@@ -401,6 +401,16 @@ SHORT_TILT_AFTER_A_STRAIGHT = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
     "G1 X-19.0000 Y-20.0000 F60\nG1 X-18.5000 Y-20.0000 A0.0391 F60\nM2\n"
 )
+#: found by truth_search.py --format gcode (heads, machine 21) on this stop's code
+#: before chain.Pipeline._settle followed chords: U crosses its play in the window
+#: before the tilt starts, and the chain ended the crossing where the part would be
+#: after the cubics it followed, 59 nm past where LinuxCNC's straight lines had
+#: left it: U met its part late and the tip ran 1.0278 x F. Followed along chords
+#: (reversals.follow, ``cubic=False``): 1.0001 x; as PVT 1.0001 x.
+TILT_STARTS_ON_A_DIAGONAL = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-20.6536 Y-20.7568 F60\nG1 X-23.2682 Y-23.7840 A0.5000 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -424,6 +434,7 @@ FOUND = [
     (21, TILT_AFTER_A_HELD_TILT),
     (21, TABLE_REVERSES_AS_THE_HEAD_SETS_OFF),
     (12, SHORT_TILT_AFTER_A_STRAIGHT),
+    (21, TILT_STARTS_ON_A_DIAGONAL),
 ]
 FOUND_IDS = [
     "creep",
@@ -448,6 +459,7 @@ FOUND_IDS = [
     "tilt-after-a-held-tilt-F60",
     "table-reverses-as-the-head-sets-off-F60",
     "short-tilt-after-a-straight-F60",
+    "tilt-starts-on-a-diagonal-F60",
 ]
 
 

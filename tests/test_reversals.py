@@ -106,6 +106,35 @@ def test_follow_is_the_play_model_on_the_dense_cubics() -> None:
         y_start = ys[-1]
 
 
+def test_follow_along_chords_is_the_play_model_on_the_straight_lines() -> None:
+    """The same commands run as straight lines between the points (LinuxCNC's
+    G1s): the play model stepped over 200 samples of every chord. The velocities
+    are ignored, and the cubics through them would give another part: the
+    velocities here swing each step's cubic well past its points."""
+    rng = np.random.default_rng(6)
+    table = _table(0.004)
+    n = 40
+    dt = rng.uniform(0.002, 0.01, n)
+    V = rng.normal(0, 20, n)
+    P = 1.0 + np.cumsum(rng.normal(0, 0.05, n))
+    P0, V0, y0 = 1.0, 0.0, float(table.lo(np.array([1.0]))[0])
+    y_end, y_min, y_max = reversals.follow(table, y0, P0, V0, P, V, dt, cubic=False)
+    Pa = np.concatenate([[P0], P[:-1]])
+    y = y_start = y0
+    for k in range(n):
+        c = Pa[k] + (P[k] - Pa[k]) * np.linspace(0, 1, 201)[1:]
+        ys = []
+        for a, b in zip(table.lo(c), table.hi(c), strict=True):
+            y = min(max(y, a), b)
+            ys.append(y)
+        assert abs(y_end[k] - ys[-1]) < 1e-12
+        assert abs(min(y_min[k], y_start) - min([y_start, *ys])) < 1e-12
+        assert abs(max(y_max[k], y_start) - max([y_start, *ys])) < 1e-12
+        y_start = ys[-1]
+    cubics = reversals.follow(table, y0, P0, V0, P, V, dt)[0]
+    assert np.max(np.abs(cubics - y_end)) > 1e-3
+
+
 @settings(max_examples=300, deadline=None)
 @given(
     h=st.floats(0.002, 0.02),
