@@ -411,6 +411,16 @@ TILT_STARTS_ON_A_DIAGONAL = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
     "G1 X-20.6536 Y-20.7568 F60\nG1 X-23.2682 Y-23.7840 A0.5000 F60\nM2\n"
 )
+#: found by truth_search.py --format gcode (heads, machine 22), 2026-11-24: U
+#: crosses its play in a 1 ms window as the tilt starts after three lines of XY.
+#: Written to six decimals (the default then), the 1 nm rounding of x and y ran
+#: the table 1.0018 x F over the window (1.0011 x on the code before this stop);
+#: corrected G-code is now written to seven, as PVT: 1.00003 x. As PVT: 1.00009 x.
+TILT_AFTER_THREE_LINES = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-20.6575 Y-18.9369 F60\nG1 X-21.1835 Y-18.0864 F60\nG1 X-21.7095 Y-17.2359 F60\n"
+    "G1 X-22.2355 Y-16.3854 A0.2500 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -435,6 +445,7 @@ FOUND = [
     (21, TABLE_REVERSES_AS_THE_HEAD_SETS_OFF),
     (12, SHORT_TILT_AFTER_A_STRAIGHT),
     (21, TILT_STARTS_ON_A_DIAGONAL),
+    (22, TILT_AFTER_THREE_LINES),
 ]
 FOUND_IDS = [
     "creep",
@@ -460,6 +471,7 @@ FOUND_IDS = [
     "table-reverses-as-the-head-sets-off-F60",
     "short-tilt-after-a-straight-F60",
     "tilt-starts-on-a-diagonal-F60",
+    "tilt-after-three-lines-F60",
 ]
 
 
@@ -480,7 +492,8 @@ def test_programs_the_search_found_run_as_linuxcnc_runs_them(seed: int, text: st
     as one straight line at the corner, and V's part stood through it while the
     others moved on; its junction is now a stop for G-code too
     (lookahead.junction_limits): 1.00007 x. tilt-starts-on-a-straight-F60 ran
-    1.0025 x F: six decimals of the pose put U's crossing end 1 nm past its part,
+    1.0025 x F: six decimals of the pose (then the default) put U's crossing end
+    1 nm past its part,
     pushed at 4.85 mm/s in the window's last servo cycle; a crossing now ends a
     digit of every written coordinate short (chain.Pipeline._crossing_short):
     1.00033 x. (creep-then-helix-F60, 1.0062 x F, was the same rounding.)"""
@@ -491,8 +504,8 @@ def test_programs_the_search_found_run_as_linuxcnc_runs_them(seed: int, text: st
 
 
 def test_a_crossing_ends_short_of_its_part_however_the_written_pose_rounds() -> None:
-    """Corrected G-code writes the pose, six decimals of mm and deg, and the
-    controller's own IK turns it into motor positions: a crossing's end must stay
+    """Corrected G-code writes the pose, to d decimals of mm and deg (six here),
+    and the controller's own IK turns it into motor positions: a crossing's end must stay
     short of the part at every corner of the rounding's box (all 32 signs of half
     a digit on x y z A B), through the controller's IK (the judge's), and be no
     more than twice as short as the worst of them (the part is met that much

@@ -28,7 +28,10 @@ if TYPE_CHECKING:
     from ..profile import Profile
 
 SETTINGS = {
-    "decimals": Setting(6, 4, 9, "decimals of positions", "decimals"),
+    # 7: a 0.1 nm step, as the PMAC writer's. At 6 (1 nm) the rounding of x and y
+    # alone ran a 1 ms crossing window at F60 1.0018 x F (test_controller_truth's
+    # found programs). LinuxCNC reads the words as doubles.
+    "decimals": Setting(7, 4, 9, "decimals of positions", "decimals"),
     "tolerance_mm": Setting(
         0.0,
         0.0,
