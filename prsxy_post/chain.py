@@ -560,7 +560,7 @@ class Pipeline:
         self.play_y: dict[int, float] = {}
         # how far each part still is from where it is wanted, after a crossing
         self.catch: dict[int, float] = {}
-        # the last point made is a corner where a motor stops (_corners): the next
+        # the last point made is a blended corner (_corners): the next
         # chunk's first step gets a point this long [s] after its start
         self.near_next = 0.0
         # the last point's wanted position before a blend moved it (_reversals): the
@@ -738,7 +738,7 @@ class Pipeline:
             None if last is None else (self.last_plain, last.V_ideal[0], bool(last.speed[0] == 0))
         )
         self.ref = np.where(np.isnan(self.ref), pc.P_ideal[0], self.ref)
-        near, shift = self._corners(plan, s, pc)
+        blends, shift = self._corners(plan, s, pc)
         t_end = np.cumsum(pc.dt)
         resting = pc.speed == 0.0
         ins = reversals.plan_insertions(
@@ -753,7 +753,7 @@ class Pipeline:
             self.ref,
             self.reversal_tol,
             self.reversal_s,
-            near,
+            blends,
             self.near_next,
         )
         self.near_next = ins.near_next
@@ -761,7 +761,7 @@ class Pipeline:
             # the blended corners' points onto their parabolas (P_cmd is made from
             # P_ideal after this)
             pc.P_ideal = pc.P_ideal.copy()
-            pc.P_ideal[ins.blended] += shift[np.searchsorted(near[0], ins.blended)]
+            pc.P_ideal[ins.blended] += shift[np.searchsorted(blends[0], ins.blended)]
         n = len(pc)
         step = np.arange(n)
         when = t_end
@@ -798,12 +798,12 @@ class Pipeline:
 
     def _corners(
         self, plan: Plan | None, s: Samples, pc: PointChunk
-    ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
+    ) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
         """The corners taken at speed where a motor with play stands on one side and
-        moves on the other (:func:`.reversals.corners`, with the blend's share of
-        the acceleration, lookahead.KAPPA): (rows, where, tau) for
-        :func:`.reversals.plan_insertions`, and (k, 5) how far each corner's point
-        moves onto its blend where a PVT program blends it
+        moves on the other, which a PVT program blends as a parabola over ±τ
+        (:func:`.reversals.corners`, with the blend's share of the acceleration,
+        lookahead.KAPPA): (rows, tau) for :func:`.reversals.plan_insertions`, and
+        (k, 5) how far each corner's point moves onto its blend
         (:func:`.reversals.blend_shift`).
 
         The decision takes the period for the standing side's step, not the step
@@ -811,11 +811,11 @@ class Pipeline:
         must not depend on where the program was cut into chunks.
 
         None for straight lines between the points (corrected G-code): a motor
-        standing at both ends of a chord stands all along it, and the point near
-        the corner only made a short chord whose written digits ran its motion fast
+        standing at both ends of a chord stands all along it, and a point near the
+        corner only made a short chord whose written digits ran its motion fast
         (a 0.41 ms step at F60, 1 nm of rounding: 1.0015 x F, test_controller_truth's
         found programs)."""
-        none = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0))
+        none = (np.zeros(0, dtype=int), np.zeros(0))
         if plan is None or self.limits.segment != "cubic":
             return none, np.zeros((0, 5))
         J = junctions(s)
@@ -828,21 +828,13 @@ class Pipeline:
         # the motors' velocities on the far side: the IK's velocity (as _solve) along
         # the next block's tangent; the near side's is then what the mean leaves
         qdot_out = s.speed[J, None] * nxt
-        cols = self.play_cols
         V_out = self._ik_velocity(pc.q_target[J], qdot_out, s.tool_length[J], pc.P_ideal[J])
         V_in = 2.0 * pc.V_ideal[J] - V_out
         period = np.full(len(J), self.limits.period_s)
         accel = KAPPA * self.limits.accel_mm_s2
-        where, tau = reversals.corners(V_in[:, cols], V_out[:, cols], period, accel)
-        if self.limits.segment == "cubic":
-            # a PVT cubic can blend the corner as a parabola over ±τ, every motor's
-            # velocity linear across it (reversals.blend_shift), at |ΔV| / (2τ)
-            dV = np.max(np.abs(V_out - V_in), axis=1)
-            tau = np.maximum(reversals.BLEND_MIN_S, dV / (2.0 * accel))
-            where = np.where((where != 0) & (tau <= 0.5 * period), reversals.BLEND, 0)
-        act = where != 0
-        shift = reversals.blend_shift(V_in[act], V_out[act], tau[act])
-        return (J[act], where[act], tau[act]), shift
+        blend, tau = reversals.corners(V_in, V_out, self.play_cols, period, accel)
+        shift = reversals.blend_shift(V_in[blend], V_out[blend], tau[blend])
+        return (J[blend], tau[blend]), shift
 
     def _settle(
         self,

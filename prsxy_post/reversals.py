@@ -142,12 +142,11 @@ class Insertions:
     w_t0 : (w,) the start of each window's step [s]
     mid_k, mid_t : (m,) the points put inside steps: the row whose step they are in,
         and their time since the chunk's previous point; sorted by step, then time
-    blended : rows of the corners blended (``where`` BLEND in :func:`plan_insertions`)
-        whose point before the corner was put in: the corner's point moves onto
-        the blend (:func:`blend_shift`)
-    near_next : the chunk's last row is a corner where a motor stops
-        (:func:`corners`): the next chunk's first step gets a point this long [s]
-        after its start (0: none)
+    blended : rows of the corners blended (:func:`corners`) whose point before the
+        corner was put in: the corner's point moves onto the blend
+        (:func:`blend_shift`)
+    near_next : the chunk's last row is a blended corner: the next chunk's first
+        step gets a point this long [s] after its start (0: none)
     """
 
     def __init__(self) -> None:
@@ -320,56 +319,47 @@ def _dips(
 
 
 def corners(
-    V_in: np.ndarray, V_out: np.ndarray, h: np.ndarray, accel: float
+    V_in: np.ndarray, V_out: np.ndarray, cols: list[int], h: np.ndarray, accel: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Corners taken at speed where a motor with play stands on one side and moves
-    on the other: which side it stands on, and how near the corner a point of that
-    side goes.
+    on the other, which a PVT program blends (:func:`blend_shift`), and over how
+    long.
 
     The corner's point carries the mean of its sides' velocities (the planner's
     blend, :mod:`.interpolate.lookahead`), so the cubic of the standing side's step
     turns back by (4/27) h |ΔV| / 2 (the basis s³ − s² peaks at 4/27): setting off,
     the motor leaves its part, which is pushed on only when the motor comes back,
     later than the other motors' parts; stopping, it pushes its part past the corner
-    and leaves it there. Either way a head tilts and its tip runs fast
-    (test_controller_truth's found programs). A point of the path at τ from the
-    corner on the standing side, where the motor stands, leaves the turn to that
-    short step: (4/27) τ |ΔV| / 2. The cubic over it reaches 2 |ΔV| / τ in
-    acceleration, so τ is the servo cycle (MIN_WINDOW_S) or as long as ``accel``
-    needs, τ = max(MIN_WINDOW_S, 2 |ΔV| / accel); none where τ reaches half the
-    step. The corner keeps the mean: told the standing side's velocity instead, the
-    motor's cubic on the moving side runs up to 4/3 of its speed to make up its lag
-    (a corner in XY at F60 ran 1.0106 x F).
+    and leaves it there. Either way a head tilts and its tip runs fast. Worse, the
+    mean's cubics swing every motor past its sides' velocities by (V_in − V_out)/6
+    however short the step, and where a part cannot follow its motor's swing the
+    others' swings reach the tip (test_controller_truth's found programs). A blend
+    over ±τ makes every motor's velocity linear across the corner at |ΔV| / (2τ):
+    τ = max(BLEND_MIN_S, max |ΔV| / (2 ``accel``)) over all the motors. None where
+    the turn back is below CORNER_TURN_MM, or where τ reaches half the step.
 
     Parameters
     ----------
-    V_in, V_out : (k, m) the motors' planned velocities just before and just past
+    V_in, V_out : (k, 5) the motors' planned velocities just before and just past
         each corner [mm/s]
+    cols : the motors (columns) with play
     h : (k,) the standing side's step [s]
-    accel : the acceleration the short step may take [mm/s²]
+    accel : the acceleration the blend may take [mm/s²]
 
     Returns
     -------
-    where : (k,) int: −1 where a motor stands before the corner (the point goes τ
-        before it), +1 where one stands past it (τ after it), 0 where nothing is to
-        be done (where motors stand on both sides, the side of the deepest turn)
-    tau : (k,) [s] τ, the longest any of the corner's motors needs
+    blend : (k,) bool, the corner is blended
+    tau : (k,) [s] its τ
     """
-    dV = np.abs(V_in - V_out)
-    before = (np.abs(V_in) < V_EPS) & (np.abs(V_out) >= V_EPS)
-    after = (np.abs(V_in) >= V_EPS) & (np.abs(V_out) < V_EPS)
-    turn = (4.0 / 27.0) * h[:, None] * dV / 2.0
-    act = (before | after) & (turn > CORNER_TURN_MM)
-    tau = np.maximum(MIN_WINDOW_S, 2.0 * np.max(np.where(act, dV, 0.0), axis=1) / accel)
-    deep_b = np.max(np.where(act & before, turn, 0.0), axis=1)
-    deep_a = np.max(np.where(act & after, turn, 0.0), axis=1)
-    where = np.where(deep_b >= deep_a, -1, 1) * np.any(act, axis=1)
-    where = np.where(tau <= 0.5 * h, where, 0)
-    return where, tau
+    dV = np.abs(V_out - V_in)
+    vi, vo = np.abs(V_in[:, cols]), np.abs(V_out[:, cols])
+    stands = ((vi < V_EPS) & (vo >= V_EPS)) | ((vi >= V_EPS) & (vo < V_EPS))
+    turn = (4.0 / 27.0) * h[:, None] * dV[:, cols] / 2.0
+    tau = np.maximum(BLEND_MIN_S, np.max(dV, axis=1, initial=0.0) / (2.0 * accel))
+    blend = np.any(stands & (turn > CORNER_TURN_MM), axis=1) & (tau <= 0.5 * h)
+    return blend, tau
 
 
-#: ``where`` of a corner blended over τ on both sides (:func:`blend_shift`)
-BLEND = 2
 #: The shortest τ of a blend [s]. Its steps' chords are written to 1e-7 mm (the
 #: PMAC default): over a servo cycle that is 4e-4 mm/s of velocity, and a blend at
 #: F60 ran 1.0011 x F (test_controller_truth's found programs); over 1 ms, 1e-4.
@@ -426,7 +416,7 @@ def plan_insertions(
     ref: np.ndarray,
     tol: float,
     longest: float,
-    near: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    blends: tuple[np.ndarray, np.ndarray] | None = None,
     near_first: float = 0.0,
 ) -> Insertions:
     """Find every reversal of the motors ``cols`` in a chunk of points and its window.
@@ -444,13 +434,11 @@ def plan_insertions(
         updated in place (a creeping motor's drift is measured from it)
     tol : path error allowed to a crossing [mm]
     longest : the longest crossing window [s]
-    near : (rows, where, tau) of corners (:func:`corners`): row k's step gets a
-        point tau before its end (where −1), or row k + 1's tau after its start
-        (+1; k = n − 1: the next chunk's first step, ``near_next``), or both
-        (BLEND, :func:`blend_shift`)
-    near_first : the chunk before ended at a corner where a motor stops (its
-        ``near_next``): this chunk's first step gets a point that long [s] after its
-        start
+    blends : (rows, tau) of the corners blended (:func:`corners`): row k's step
+        gets a point tau before its end, and row k + 1's tau after its start (k =
+        n − 1: the next chunk's first step, ``near_next``)
+    near_first : the chunk before ended at a blended corner (its ``near_next``):
+        this chunk's first step gets a point that long [s] after its start
     """
     ins = Insertions()
     n = len(dt)
@@ -564,16 +552,15 @@ def plan_insertions(
         et = both
         inside = (et > np.tile(t0, 2)) & (et < np.tile(t1, 2))
         ek, et = ek[inside], et[inside]
-        # the points near a corner, on its standing side (corners); none where a
+        # the points τ each side of a blended corner (corners); none where a
         # window's edge is that near already, inside a window (another motor's
         # crossing), or after a standing point at the corner
-        if near is None:
-            near = (np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0))
-        rows, where, tau = near
-        lw = (where < 0) | (where == BLEND)
-        late, tau_l, blend_l = rows[lw], tau[lw], where[lw] == BLEND
+        if blends is None:
+            blends = (np.zeros(0, dtype=int), np.zeros(0))
+        rows, tau = blends
+        late, tau_l = rows, tau
         t_late = t_end[late] - tau_l
-        early, tau_e = rows[where > 0] + 1, tau[where > 0]
+        early, tau_e = rows + 1, tau
         ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
         if near_first:
             early, tau_e = np.concatenate([[0], early]), np.concatenate([[near_first], tau_e])
@@ -589,7 +576,7 @@ def plan_insertions(
 
         ok_l = (dt[late] >= 2 * tau_l) & free(t_late, t_late - tau_l, t_end[late])
         ok_e = (dt[early] >= 2 * tau_e) & free(t_early, t_early - tau_e, t_early + tau_e)
-        ins.blended = late[ok_l & blend_l]
+        ins.blended = late[ok_l]
         ek = np.concatenate([ek, late[ok_l], early[ok_e]])
         et = np.concatenate([et, t_late[ok_l], t_early[ok_e]])
         # each distinct (step, time) once, sorted by step, then time

@@ -384,22 +384,32 @@ def test_a_corner_where_a_motor_stands_on_one_side_turns_it_back_with_the_mean()
     assert np.abs(accel[5:-5]).max() == pytest.approx(2 * V / tau, rel=1e-3)
 
 
-def test_a_motor_standing_on_one_side_of_a_corner_gets_a_point_near_it() -> None:
-    h = np.full(6, 0.01)
-    V_in = np.array([0.0, -0.1666, 0.2, 0.2, 0.0, 0.0])[:, None]
-    V_out = np.array([-0.1666, 0.0, 0.3, -0.2, 1e-3, 30.0])[:, None]
-    where, tau = reversals.corners(V_in, V_out, h, 2000.0)
-    # sets off: a point before the corner; stops: after it; a motor moving on both
-    # sides (or reversing: a crossing's) is left alone, and so is a turn back of
-    # (4/27) h 1e-3 / 2 = 0.74 nm; a jump of 30 mm/s would need τ = 30 ms at
-    # 2000 mm/s², more than half the step: nothing
-    assert where.tolist() == [-1, 1, 0, 0, 0, 0]
-    assert tau[:2].tolist() == [reversals.MIN_WINDOW_S] * 2
-    # a jump of 1 mm/s takes 2 ms at 1000 mm/s²; of two motors, the larger
-    where, tau = reversals.corners(
-        np.array([[0.0, 0.0]]), np.array([[1.0, 0.1666]]), np.array([0.01]), 1000.0
+def test_a_corner_where_a_motor_with_play_stands_on_one_side_is_blended() -> None:
+    h = np.full(7, 0.01)
+    V_in = np.zeros((7, 5))
+    V_out = np.zeros((7, 5))
+    V_in[:6, 0] = [0.0, -0.1666, 0.2, 0.2, 0.0, 0.0]
+    V_out[:6, 0] = [-0.1666, 0.0, 0.3, -0.2, 1e-3, 30.0]
+    # the last: motor 0 stands on both sides while motor 3, without play, turns
+    V_in[6, 3], V_out[6, 3] = 2.0, -2.0
+    blend, tau = reversals.corners(V_in, V_out, [0], h, 2000.0)
+    # sets off, stops: blended; a motor moving on both sides (or reversing: a
+    # crossing's) is left alone, and so is a turn back of (4/27) h 1e-3 / 2 = 0.74
+    # nm; a jump of 30 mm/s would need τ = 7.5 ms at 2000 mm/s², more than half
+    # the step: none
+    assert blend.tolist() == [True, True, False, False, False, False, False]
+    assert tau[:2].tolist() == [reversals.BLEND_MIN_S] * 2
+    assert tau[5] == pytest.approx(7.5e-3)
+    # τ is for the largest jump of any motor, with play or not: 6 mm/s at 1000
+    # mm/s² takes 3 ms
+    blend, tau = reversals.corners(
+        np.array([[0.0, 0.0, 0.0, 0.0, 0.0]]),
+        np.array([[0.1666, 0.0, 0.0, 6.0, 0.0]]),
+        [0],
+        np.array([0.01]),
+        1000.0,
     )
-    assert where.tolist() == [-1] and tau[0] == pytest.approx(2e-3)
+    assert blend.tolist() == [True] and tau[0] == pytest.approx(3e-3)
 
 
 def test_a_point_after_a_window_in_its_step_is_on_the_new_side() -> None:
