@@ -661,7 +661,7 @@ def sides(
         mine = mine[np.argsort(e_all[mine], kind="stable")]
         f, e, new = f_all[mine], e_all[mine], ins.w_new[mine]
         # the points after a window's end inside its step (another motor's window,
-        # a point near a corner) are on the new side: where the path turns a corner
+        # a blend's point before a corner) are on the new side: where the path turns a corner
         # the cubic's root is before the corner, the plan's velocity turns at it
         after = np.maximum(last_row[mine] - e - 1, 0)
         sg[_ranges(e + 1, after)] = np.repeat(new, after)

@@ -416,13 +416,13 @@ def test_a_point_after_a_window_in_its_step_is_on_the_new_side() -> None:
     """Where the path turns a corner, a motor reversing there has its window at the
     root of the step's cubic, before the corner, while the plan's velocity turns
     only at the corner. A point after the window's end in the same step (another
-    motor's window, a point near the corner) is on the new side whatever the sign
+    motor's window, a blend's point before the corner) is on the new side whatever the sign
     of its velocity: read as the old side, the motor crossed its play back and
     forth three times in 3 ms (1.0125 x F; test_controller_truth, xy-then-plunge)."""
     ins = reversals.Insertions()
     ins.w_k, ins.w_col, ins.w_new = np.array([1]), np.array([0]), np.array([-1])
     ins.w_t0, ins.w_ta, ins.w_tb = np.array([0.01]), np.array([0.012]), np.array([0.013])
-    # the end of step 0; in step 1 the window's ends, a point near the corner, and
+    # the end of step 0; in step 1 the window's ends, a blend's point before the corner, and
     # the corner (the step's end, carrying the mean of its sides' velocities)
     rows = reversals.Rows(
         np.array([0, 1, 1, 1, 1]),
