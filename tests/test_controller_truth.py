@@ -421,6 +421,19 @@ TILT_AFTER_THREE_LINES = (
     "G1 X-20.6575 Y-18.9369 F60\nG1 X-21.1835 Y-18.0864 F60\nG1 X-21.7095 Y-17.2359 F60\n"
     "G1 X-22.2355 Y-16.3854 A0.2500 F60\nM2\n"
 )
+#: found by truth_search.py --format gcode (heads, machine 12), 2026-11-24: A
+#: tilts on through a slight XY corner, and table motor Y reverses there, from
+#: -0.078 to 0.152 mm/s, cancelling the tilt's motion of the tip along y. Its part
+#: stood through its crossing window and the tilt's motion reached the tip: 1.0287
+#: x F as PVT, 1.0144 x as corrected G-code (the same on the code before this
+#: stop). Such a junction is now a stop (lookahead.TABLE_STAND_SHARE): 1.0001 x
+#: and 1.00001 x.
+TABLE_REVERSES_BETWEEN_TWO_TILTS = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-19.0000 Y-20.0000 F60\nG1 X-18.0311 Y-19.7526 F60\nG1 X-17.0622 Y-19.5052 F60\n"
+    "G1 X-16.0933 Y-19.2578 F60\nG1 X-12.2176 Y-18.2682 A0.5000 F60\n"
+    "G1 X-8.7073 Y-16.3505 A1.0000 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -446,6 +459,7 @@ FOUND = [
     (12, SHORT_TILT_AFTER_A_STRAIGHT),
     (21, TILT_STARTS_ON_A_DIAGONAL),
     (22, TILT_AFTER_THREE_LINES),
+    (12, TABLE_REVERSES_BETWEEN_TWO_TILTS),
 ]
 FOUND_IDS = [
     "creep",
@@ -472,6 +486,7 @@ FOUND_IDS = [
     "short-tilt-after-a-straight-F60",
     "tilt-starts-on-a-diagonal-F60",
     "tilt-after-three-lines-F60",
+    "table-reverses-between-two-tilts-F60",
 ]
 
 

@@ -131,7 +131,8 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     starts where the path goes straight on (no motor reverses: the head sets off
     from standing) is no stop; one after a descent of 1e-3 mm per mm (the head's
     motors creep down, under REVERSAL_SLOPE, and V goes up on) is. A table motor
-    reversing at a slight XY corner is no stop, unless the head sets off there."""
+    reversing at a slight XY corner is no stop, unless the head sets off there, or
+    the table cancels the head's motion along its axis."""
     from .test_tracking import truth_machine
 
     reverses = (
@@ -155,6 +156,17 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     table = "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\nG1 X-19 Y-20.1 F60\n"
     assert _junction_speeds(table + "G1 X-18 Y-20 F60\nM2\n", play, "cubic")[3] > 0.5
     assert _junction_speeds(table + "G1 X-18 Y-20 B0.25 F60\nM2\n", play, "cubic")[3] == 0.0
+    # A tilts on through a slight XY corner where table motor Y reverses, cancelling
+    # the tilt's motion of the tip along y: its part standing through its crossing
+    # would let the tilt reach the tip (lookahead.TABLE_STAND_SHARE); without the
+    # tilt the same corner is taken at speed
+    corner = (
+        "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-16.0933 Y-19.2578 Z0 A0 B0\n"
+        "G1 X-12.2176 Y-18.2682 A{} F60\nG1 X-8.7073 Y-16.3505 A{} F60\nM2\n"
+    )
+    assert _junction_speeds(corner.format(0.5, 1.0), play, "cubic")[3] == 0.0
+    assert _junction_speeds(corner.format(0.5, 1.0), play, "chord")[3] == 0.0
+    assert _junction_speeds(corner.format(0, 0), play, "cubic")[3] > 0.5
 
 
 def test_a_short_block_between_two_stops_rises_and_falls() -> None:

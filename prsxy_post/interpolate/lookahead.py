@@ -58,6 +58,14 @@ REVERSAL_SLOPE = 1e-3
 STAND_SLOPE = 1e-6
 #: The motors (columns) that move the head: the contract's first three.
 HEAD_MOTORS = 3
+#: A table motor (X, Y: the contract's last two) whose part stands while it crosses
+#: its play takes its share out of the tip's velocity along its axis; where the
+#: head's tilt moves the tip along that axis the other way (the table cancelling
+#: it), the tip runs faster than the path, by sqrt(1 − 2 t p + p²) with t the
+#: path's tangent along the axis and p the motor's dP/ds: a junction where one
+#: reverses is a stop when that is more than this share on either side. (The
+#: points of a written program keep within 1e-4 of F: test_tracking.)
+TABLE_STAND_SHARE = 1e-4
 
 
 def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarray]:
@@ -131,9 +139,11 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
     # a head motor with play that reverses at a junction crosses its play at rest:
     # its part stands while it crosses, and at speed the other motors tilt the head
     # meanwhile (test_controller_truth's found programs: 13 % over F60). A table
-    # motor's crossing only slows the tip, unless the head sets off or stops there
-    # too: its crossing window then takes the place of the head's blend
-    # (reversals.blend_shift), and the table's blend reached the tip (8 % over F60)
+    # motor's crossing slows the tip, unless the head sets off or stops there too
+    # (its crossing window then takes the place of the head's blend,
+    # reversals.blend_shift, and the table's blend reached the tip: 8 % over F60),
+    # or the table cancels the head's motion along its axis (TABLE_STAND_SHARE:
+    # 2.9 % over F60)
     lo = np.minimum(np.abs(b.dP_out[:-1]), np.abs(b.dP_in[1:]))
     hi = np.maximum(np.abs(b.dP_out[:-1]), np.abs(b.dP_in[1:]))
     reverses = (b.dP_out[:-1] * b.dP_in[1:] < 0.0) & (hi > REVERSAL_SLOPE) & (lo > STAND_SLOPE)
@@ -142,6 +152,16 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
     stop |= np.any(reverses[:, HEAD_MOTORS:], axis=1) & np.any(
         head_sets_off[:, :HEAD_MOTORS], axis=1
     )
+    # the table motors X, Y move the tip along x, y one for one (the contract's
+    # table equation, to its scale and squareness errors)
+    faster = np.zeros(n - 1, dtype=bool)
+    for t, p in ((b.dq_out[:-1], b.dP_out[:-1]), (b.dq_in[1:], b.dP_in[1:])):
+        tt, pp = t[:, 0:2], p[:, HEAD_MOTORS:]
+        gain = 1.0 - 2.0 * tt * pp + pp * pp
+        faster |= np.any(
+            reverses[:, HEAD_MOTORS:] & (gain > (1.0 + TABLE_STAND_SHARE) ** 2), axis=1
+        )
+    stop |= faster
     v = np.where(stop, 0.0, v)
     vj[:-1] = v
     corner[1:-1] = ~stop & ((d_xyz > TANGENT_EPS) | (d_ab > TANGENT_EPS))
