@@ -434,6 +434,16 @@ TABLE_REVERSES_BETWEEN_TWO_TILTS = (
     "G1 X-16.0933 Y-19.2578 F60\nG1 X-12.2176 Y-18.2682 A0.5000 F60\n"
     "G1 X-8.7073 Y-16.3505 A1.0000 F60\nM2\n"
 )
+#: found by truth_search.py (heads, PVT, machine 31), 2026-11-24, failing on the
+#: code before this stop too: through the B tilt head motor U creeps at 0.9 µm/s,
+#: under reversals.V_EPS (then 1e-3 mm/s), so its part stood while its motor drifted
+#: through its play, and the tip lost U's share: 1.0008 x F60, and 1.0012 x in the
+#: drift's crossing window. V_EPS is now 5e-4: 1.00045 x.
+CREEP_THROUGH_A_TILT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-20.1535 Y-19.5241 F60\nG1 X-20.3070 Y-19.0483 F60\n"
+    "G1 X-20.6435 Y-18.1066 B0.5000 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -460,6 +470,7 @@ FOUND = [
     (21, TILT_STARTS_ON_A_DIAGONAL),
     (22, TILT_AFTER_THREE_LINES),
     (12, TABLE_REVERSES_BETWEEN_TWO_TILTS),
+    (31, CREEP_THROUGH_A_TILT),
 ]
 FOUND_IDS = [
     "creep",
@@ -487,6 +498,7 @@ FOUND_IDS = [
     "tilt-starts-on-a-diagonal-F60",
     "tilt-after-three-lines-F60",
     "table-reverses-between-two-tilts-F60",
+    "creep-through-a-tilt-F60",
 ]
 
 
