@@ -41,7 +41,7 @@ from .interpolate import (
     next_tangent,
 )
 from .interpolate.geometry import REVERSAL_SHARE
-from .interpolate.lookahead import KAPPA
+from .interpolate.lookahead import KAPPA, REVERSAL_SLOPE, STAND_SLOPE
 from .interpolate.sampling import sample, steps
 from .profile import MOTORS, Profile, nominal_kinematics
 
@@ -347,6 +347,10 @@ class Planning:
         self.play_cols = [
             col for col, m in enumerate(MOTORS) if m in tables and tables[m].max_play > 1e-12
         ]
+        # the way each motor with play last moved, and whether it stood at the last
+        # moving block's end (_directions)
+        self.way = np.ones(len(self.play_cols))
+        self.stood = np.ones(len(self.play_cols), dtype=bool)
         self.max_part = max_part_points
         self.window: Blocks | None = None  # blocks held to choose where a part ends
         self.part_used = 1  # the start point belongs to the first part
@@ -398,7 +402,13 @@ class Planning:
     def _directions(self, b: Blocks) -> None:
         """The motors with play: dP/ds at each moving block's ends (the IK's
         difference over DIR_STEP_MM along its tangents), into ``b.dP_in`` and
-        ``b.dP_out`` for the look-ahead."""
+        ``b.dP_out`` for the look-ahead; and ``b.cross_in``, where one that stood at
+        the end of the moving block before (under STAND_SLOPE) sets off, faster than
+        a creep at the block's speed limit, against the way it last moved by more
+        than REVERSAL_SLOPE (its side, carried across
+        chunks in ``self.way``: a creep does not set it, as the points' half
+        watches a creep's drift instead; at the start, up, the contract's
+        approach from below)."""
         k = np.flatnonzero(~b.stops)
         if not k.size:
             return
@@ -409,8 +419,26 @@ class Planning:
         d = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
         cols = self.play_cols
         n = len(k)
-        b.dP_in[k[:, None], cols] = d[:n, cols]
-        b.dP_out[k[:, None], cols] = -d[n:, cols]
+        d_in, d_out = d[:n, cols], -d[n:, cols]
+        b.dP_in[k[:, None], cols] = d_in
+        b.dP_out[k[:, None], cols] = d_out
+        # each moving block's start, then its end, in order: the way each motor
+        # last moved clearly before it (0: not yet), carried on from the chunk before
+        ends = np.empty((2 * n, len(cols)))
+        ends[0::2], ends[1::2] = d_in, d_out
+        way = np.where(np.abs(ends) > REVERSAL_SLOPE, np.sign(ends), 0.0)
+        idx = np.where(way != 0, np.arange(2 * n)[:, None], -1)
+        last = np.maximum.accumulate(idx, axis=0)
+        came = np.where(last >= 0, np.take_along_axis(way, np.maximum(last, 0), 0), self.way)
+        before = np.vstack([self.way[None], came[:-1]])
+        self.way = came[-1].copy()
+        stood = np.vstack([self.stood[None], np.abs(d_out[:-1]) <= STAND_SLOPE])
+        self.stood = np.abs(d_out[-1]) <= STAND_SLOPE
+        # setting off faster than a creep at the block's speed limit (the points'
+        # half takes a direction from V_EPS on)
+        sets_off = np.abs(d_in) * b.vmax[k, None] > reversals.V_EPS
+        against = sets_off & (np.sign(d_in) == -before[0::2]) & stood
+        b.cross_in[k] = np.any(against, axis=1)
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:
         """Where a split program's parts end: at rest after a block, the last place

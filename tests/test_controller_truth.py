@@ -444,6 +444,17 @@ CREEP_THROUGH_A_TILT = (
     "G1 X-20.1535 Y-19.5241 F60\nG1 X-20.3070 Y-19.0483 F60\n"
     "G1 X-20.6435 Y-18.1066 B0.5000 F60\nM2\n"
 )
+#: found by truth_search.py (heads, PVT, machine 31), 2026-11-24, failing on the
+#: code before this stop too: a tilt of B starts after 1 mm of straight X, at F300.
+#: Head motor U sets off up at 1 µm/s against the way it last moved (down, to Z0),
+#: and crosses its play in the last millisecond before the corner, where the
+#: blend of V and W, which set off too, would go (reversals.corners); the mean's
+#: cubics swung V and W back where their parts could not follow: 1.0461 x F60.
+#: Such a junction is now a stop (Blocks.cross_in): 1.00002 x.
+SETS_OFF_AGAINST_ITS_WAY = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-19.0000 Y-20.0000 F60\nG1 X-14.0000 Y-20.0000 B0.5000 F300\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -471,6 +482,7 @@ FOUND = [
     (22, TILT_AFTER_THREE_LINES),
     (12, TABLE_REVERSES_BETWEEN_TWO_TILTS),
     (31, CREEP_THROUGH_A_TILT),
+    (31, SETS_OFF_AGAINST_ITS_WAY),
 ]
 FOUND_IDS = [
     "creep",
@@ -499,6 +511,7 @@ FOUND_IDS = [
     "tilt-after-three-lines-F60",
     "table-reverses-between-two-tilts-F60",
     "creep-through-a-tilt-F60",
+    "sets-off-against-its-way-F300",
 ]
 
 

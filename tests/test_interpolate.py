@@ -127,12 +127,15 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     and a corrected G-code stop there so that V crosses its play at rest (taken at
     speed, V's part stood through its crossing while the other motors moved on:
     1.07 x F60 in LinuxCNC's straight line, test_controller_truth's found
-    programs); a machine without play takes the corner at speed. A tilt that
-    starts where the path goes straight on (no motor reverses: the head sets off
-    from standing) is no stop; one after a descent of 1e-3 mm per mm (the head's
-    motors creep down, under REVERSAL_SLOPE, and V goes up on) is. A table motor
-    reversing at a slight XY corner is no stop, unless the head sets off there, or
-    the table cancels the head's motion along its axis."""
+    programs); a machine without play takes the corner at speed. Where the head
+    sets off from standing as the path goes straight on, a descent (every head
+    motor the way it last moved, down from the start) is no stop, but a tilt is:
+    one of its motors sets off up against its last way, and its crossing would
+    take the place of the head's blend (Blocks.cross_in; 4.6 % over F60 found at
+    F300). A tilt after a descent of 1e-3 mm per mm (the head's motors creep down,
+    under REVERSAL_SLOPE, and V goes up on) is a stop. A table motor reversing at a
+    slight XY corner is no stop, unless the head sets off there, or the table
+    cancels the head's motion along its axis."""
     from .test_tracking import truth_machine
 
     reverses = (
@@ -141,7 +144,7 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     )
     sets_off = (
         "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\n"
-        "G1 X-19 Y-20 F60\nG1 X-16 Y-20 A0.25 F60\nM2\n"
+        "G1 X-19 Y-20 F60\nG1 X-16 Y-20 {} F60\nM2\n"
     )
     creeps = (
         "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\n"
@@ -152,7 +155,14 @@ def test_a_head_motor_reversing_at_a_junction_is_a_stop() -> None:
     assert _junction_speeds(reverses, play, "cubic")[3] == 0.0
     assert _junction_speeds(reverses, play, "chord")[3] == 0.0
     assert _junction_speeds(reverses, truth_machine("random", 12, play=False), "cubic")[3] > 0.9
-    assert _junction_speeds(sets_off, play, "cubic")[3] > 0.9
+    assert _junction_speeds(sets_off.format("Z-0.05"), play, "cubic")[3] > 0.9
+    assert _junction_speeds(sets_off.format("A0.25"), play, "cubic")[3] == 0.0
+    assert (
+        _junction_speeds(
+            sets_off.format("A0.25"), truth_machine("random", 12, play=False), "cubic"
+        )[3]
+        > 0.9
+    )
     table = "G21 G90 G17 G94 G40 G49 G54 G80\nG0 X-20 Y-20 Z0 A0 B0\nG1 X-19 Y-20.1 F60\n"
     assert _junction_speeds(table + "G1 X-18 Y-20 F60\nM2\n", play, "cubic")[3] > 0.5
     assert _junction_speeds(table + "G1 X-18 Y-20 B0.25 F60\nM2\n", play, "cubic")[3] == 0.0

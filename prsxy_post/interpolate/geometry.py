@@ -119,6 +119,9 @@ class Blocks:
         motors with play where the planner is told them (else zero:
         :meth:`~prsxy_post.chain.Planning.plan`); a junction where one reverses may
         be a stop (:func:`.lookahead.junction_limits`)
+    cross_in : (n,) bool, a motor with play that stood at the block before sets off
+        at this block's start against the way it last moved: it crosses its play
+        at the junction (told with ``dP_in``)
     tol : (n,) corner tolerance at the block's end [mm] for the blend with the next
         block; 0: exact path (G61), :data:`EXACT_STOP`: stop (G61.1)
     tol_deg : (n,) the same for A/B [deg]
@@ -149,6 +152,7 @@ class Blocks:
     dq_out: np.ndarray
     dP_in: np.ndarray
     dP_out: np.ndarray
+    cross_in: np.ndarray
     tol: np.ndarray
     tol_deg: np.ndarray
     curv_r: np.ndarray
@@ -323,6 +327,7 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
         dq_out=np.zeros((n, 5)),
         dP_in=np.zeros((n, 5)),
         dP_out=np.zeros((n, 5)),
+        cross_in=np.zeros(n, dtype=bool),
         tol=np.where(np.isnan(path_tol), limits.tolerance_mm, path_tol),
         tol_deg=np.where(
             np.isnan(path_tol),

@@ -162,6 +162,12 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
             reverses[:, HEAD_MOTORS:] & (gain > (1.0 + TABLE_STAND_SHARE) ** 2), axis=1
         )
     stop |= faster
+    # a motor with play that sets off against the way it last moved crosses its
+    # play at the junction; where the head sets off or stops there too, its window
+    # would take the place of the head's blend (reversals.corners), and the
+    # blend's mean cubics swing the head's motors back where their parts cannot
+    # follow (a tilt starting after a straight at F300: 4.6 % over F60)
+    stop |= b.cross_in[1:] & np.any(head_sets_off[:, :HEAD_MOTORS], axis=1)
     v = np.where(stop, 0.0, v)
     vj[:-1] = v
     corner[1:-1] = ~stop & ((d_xyz > TANGENT_EPS) | (d_ab > TANGENT_EPS))
