@@ -405,10 +405,9 @@ class Planning:
         ``b.dP_out`` for the look-ahead; and ``b.cross_in``, where one that stood at
         the end of the moving block before (under STAND_SLOPE) sets off, faster than
         a creep at the block's speed limit, against the way it last moved by more
-        than REVERSAL_SLOPE (its side, carried across
-        chunks in ``self.way``: a creep does not set it, as the points' half
-        watches a creep's drift instead; at the start, up, the contract's
-        approach from below)."""
+        than REVERSAL_SLOPE (its side, carried across chunks in ``self.way``: a
+        creep does not set it, as the points' half watches a creep's drift instead;
+        at the start, up, the contract's approach from below)."""
         k = np.flatnonzero(~b.stops)
         if not k.size:
             return
@@ -423,7 +422,7 @@ class Planning:
         b.dP_in[k[:, None], cols] = d_in
         b.dP_out[k[:, None], cols] = d_out
         # each moving block's start, then its end, in order: the way each motor
-        # last moved clearly before it (0: not yet), carried on from the chunk before
+        # last moved clearly up to it, carried on from the chunk before
         ends = np.empty((2 * n, len(cols)))
         ends[0::2], ends[1::2] = d_in, d_out
         way = np.where(np.abs(ends) > REVERSAL_SLOPE, np.sign(ends), 0.0)

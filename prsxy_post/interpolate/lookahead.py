@@ -24,9 +24,13 @@ tangential acceleration is limited to sqrt(1 − κ²) of the limit, so the vect
 sum stays within the profile's limit.
 
 Junctions next to a dwell, a machine function, a rotary-only move, a change of
-tool length or a G61.1 block are stops, and so are those where a head motor with
-play reverses, or a table motor with play where the head sets off or stops
-(``Blocks.dP_in``/``dP_out``, told by the chain): it crosses its play at rest.
+tool length or a G61.1 block are stops, and so are those where a motor with play
+must cross its play and its part, standing meanwhile, would run the tip off the
+path at speed (``Blocks.dP_in``/``dP_out``/``cross_in``, told by the chain): a head
+motor reversing; a table motor reversing where the head sets off or stops, or
+where the table cancels the head's motion along its axis; any of them setting off
+against the way it last moved where the head sets off or stops. It crosses its
+play at rest.
 Then a backward and a forward pass make every block able to slow down and speed up
 in time (v² changes by at most 2aL).
 """
