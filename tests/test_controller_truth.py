@@ -455,6 +455,18 @@ SETS_OFF_AGAINST_ITS_WAY = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
     "G1 X-19.0000 Y-20.0000 F60\nG1 X-14.0000 Y-20.0000 B0.5000 F300\nM2\n"
 )
+#: found by truth_search.py (heads, PVT, machine 22), 2026-11-24, failing on the
+#: code before this stop too: a slight descent, two straight lines, then a tilt of
+#: B. A head motor sets off up against the way it last moved (down) as the head
+#: sets off: 1.0053 x F. The stop of SETS_OFF_AGAINST_ITS_WAY (Blocks.cross_in):
+#: 1.00012 x.
+TILT_AFTER_A_DESCENT_AND_A_FLAT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-19.0000 Y-20.0000 F60\nG1 X-18.0000 Y-20.0000 F60\nG1 X-17.0000 Y-20.0000 F60\n"
+    "G1 X-16.0000 Y-20.0000 F60\nG1 X-13.0000 Y-20.0000 Z-0.0039 F60\n"
+    "G1 X-12.0000 Y-20.0000 F60\nG1 X-11.0000 Y-20.0000 F60\n"
+    "G1 X-5.0000 Y-20.0000 B0.5000 F60\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -483,6 +495,7 @@ FOUND = [
     (12, TABLE_REVERSES_BETWEEN_TWO_TILTS),
     (31, CREEP_THROUGH_A_TILT),
     (31, SETS_OFF_AGAINST_ITS_WAY),
+    (22, TILT_AFTER_A_DESCENT_AND_A_FLAT),
 ]
 FOUND_IDS = [
     "creep",
@@ -512,6 +525,7 @@ FOUND_IDS = [
     "table-reverses-between-two-tilts-F60",
     "creep-through-a-tilt-F60",
     "sets-off-against-its-way-F300",
+    "tilt-after-a-descent-and-a-flat-F60",
 ]
 
 
