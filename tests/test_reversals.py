@@ -75,17 +75,24 @@ def _table(backlash: float) -> MotorTable:
     return MotorTable.from_comp(AxisComp(1, np.array(pos), np.array(fwd), np.array(rev)))
 
 
-def test_follow_is_the_play_model_on_the_dense_cubics() -> None:
-    """Random commands with reversals: the part's position at each point and its
-    extremes within each step equal the contract's play model, y_k = clamp(y_{k-1},
-    lo(p_k), hi(p_k)), stepped over 2000 samples of every segment's cubic."""
-    rng = np.random.default_rng(5)
+def _random_commands(seed: int):  # type: ignore[no-untyped-def]
+    """40 random commands with reversals for a motor with 4 µm of play: (table, P,
+    V, dt, P0, V0, y0), from rest at 1 mm with its part on the low side."""
+    rng = np.random.default_rng(seed)
     table = _table(0.004)
     n = 40
     dt = rng.uniform(0.002, 0.01, n)
     V = rng.normal(0, 20, n)
     P = 1.0 + np.cumsum(rng.normal(0, 0.05, n))
-    P0, V0, y0 = 1.0, 0.0, float(table.lo(np.array([1.0]))[0])
+    return table, P, V, dt, 1.0, 0.0, float(table.lo(np.array([1.0]))[0])
+
+
+def test_follow_is_the_play_model_on_the_dense_cubics() -> None:
+    """Random commands with reversals: the part's position at each point and its
+    extremes within each step equal the contract's play model, y_k = clamp(y_{k-1},
+    lo(p_k), hi(p_k)), stepped over 2000 samples of every segment's cubic."""
+    table, P, V, dt, P0, V0, y0 = _random_commands(5)
+    n = len(P)
     y_end, y_min, y_max = reversals.follow(table, y0, P0, V0, P, V, dt)
     y = y_start = y0
     Pa, Va = np.concatenate([[P0], P[:-1]]), np.concatenate([[V0], V[:-1]])
@@ -111,13 +118,8 @@ def test_follow_along_chords_is_the_play_model_on_the_straight_lines() -> None:
     G1s): the play model stepped over 200 samples of every chord. The velocities
     are ignored, and the cubics through them would give another part: the
     velocities here swing each step's cubic well past its points."""
-    rng = np.random.default_rng(6)
-    table = _table(0.004)
-    n = 40
-    dt = rng.uniform(0.002, 0.01, n)
-    V = rng.normal(0, 20, n)
-    P = 1.0 + np.cumsum(rng.normal(0, 0.05, n))
-    P0, V0, y0 = 1.0, 0.0, float(table.lo(np.array([1.0]))[0])
+    table, P, V, dt, P0, V0, y0 = _random_commands(6)
+    n = len(P)
     y_end, y_min, y_max = reversals.follow(table, y0, P0, V0, P, V, dt, cubic=False)
     Pa = np.concatenate([[P0], P[:-1]])
     y = y_start = y0
