@@ -56,6 +56,21 @@ def test_documented_limits_are_every_limit() -> None:
     assert set(_documented_defaults("limits")) == set(profile_mod.DEFAULTS["limits"])
 
 
+def test_documented_output_settings_are_every_setting_with_its_default() -> None:
+    """profiles/README.md's table holds every dialect's `[output.<name>]` key with
+    the default its Setting has (the corrected G-code's decimals once stayed 6 in
+    the table after the default became 7)."""
+    from prsxy_post import writers
+
+    readme = (ROOT / "profiles" / "README.md").read_text()
+    for name, d in writers.DIALECTS.items():
+        rows = dict(re.findall(rf"^\| `\[output\.{name}\] (\w+)` \| ([\d.]+) \|", readme, re.M))
+        keys = {k for k in rows if k in d.settings}
+        assert keys == set(d.settings), name
+        for key, setting in d.settings.items():
+            assert float(rows[key]) == setting.default, f"[output.{name}] {key}"
+
+
 def test_limits_and_interpolation_read_typed() -> None:
     """Set keys are read as numbers into the typed sections; unset ones keep the
     documented defaults."""
