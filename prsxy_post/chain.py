@@ -426,9 +426,7 @@ class Planning:
         ends = np.empty((2 * n, len(cols)))
         ends[0::2], ends[1::2] = d_in, d_out
         way = np.where(np.abs(ends) > REVERSAL_SLOPE, np.sign(ends), 0.0)
-        idx = np.where(way != 0, np.arange(2 * n)[:, None], -1)
-        last = np.maximum.accumulate(idx, axis=0)
-        came = np.where(last >= 0, np.take_along_axis(way, np.maximum(last, 0), 0), self.way)
+        came = reversals.carried(way, self.way)
         before = np.vstack([self.way[None], came[:-1]])
         self.way = came[-1].copy()
         stood = np.vstack([self.stood[None], np.abs(d_out[:-1]) <= STAND_SLOPE])

@@ -78,6 +78,16 @@ def signs(V: np.ndarray) -> np.ndarray:
     return np.where(V > V_EPS, 1, np.where(V < -V_EPS, -1, 0))
 
 
+def carried(sg: np.ndarray, side: np.ndarray | float) -> np.ndarray:
+    """The last nonzero direction at or before each row of ``sg`` (along axis 0),
+    ``side`` before any: the side a motor is on, carried through the rows where it
+    has no direction. ``sg`` (m,) or (m, k); ``side`` a scalar or (k,)."""
+    n = len(sg)
+    rows = np.arange(n).reshape((n,) + (1,) * (sg.ndim - 1))
+    last = np.maximum.accumulate(np.where(sg != 0, rows, -1), axis=0)
+    return np.where(last >= 0, np.take_along_axis(sg, np.maximum(last, 0), 0), side)
+
+
 def _creeps(
     sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float
 ) -> tuple[np.ndarray, float]:
@@ -465,10 +475,7 @@ def plan_insertions(
         crept, ref[col] = _creeps(sg, P_all[:, col], int(side[col]), float(ref[col]), drift)
         sg = np.where(crept != 0, crept, sg)
         # the side a row comes from: the last direction before it, or the carried one
-        idx = np.where(sg != 0, np.arange(len(sg)), -1)
-        last = np.maximum.accumulate(idx)
-        before = np.concatenate([[-1], last[:-1]])
-        came = np.where(before >= 0, sg[np.maximum(before, 0)], side[col])
+        came = np.concatenate([[side[col]], carried(sg, side[col])[:-1]])
         r = np.flatnonzero((sg != 0) & (sg != came))
         r = r[(r - off >= 0) & (r - off < n)]
         k = r - off
@@ -678,9 +685,7 @@ def sides(
         sg[e] = new
         here = s_col == col
         sg[rows.first(s_k[here])] = s_new[here]
-        idx = np.where(sg != 0, np.arange(m), -1)
-        last = np.maximum.accumulate(idx)
-        out[:, col] = np.where(last >= 0, sg[np.maximum(last, 0)], side[col])
+        out[:, col] = carried(sg, side[col])
     return out
 
 
