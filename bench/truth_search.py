@@ -84,14 +84,14 @@ def generator(name: str) -> st.SearchStrategy[str]:
     )
 
 
-def judged(truth, text: str, fmt: str, accel: float | None) -> None:  # type: ignore[no-untyped-def]
-    """Convert ``text`` for ``fmt`` and assert it runs within the test's bounds."""
+def trace(truth, text: str, fmt: str):  # type: ignore[no-untyped-def]
+    """Convert ``text`` for ``fmt`` and run it as its controller does: the judged
+    trace and the path tolerance it is held to (less the G64 P blend for G-code)."""
     motions, res, texts = convert(truth, text, fmt)
     if fmt == "gcode":
         tr, blend = judge_gcode(truth, motions, res, texts)
-        assert_within(tr, accel, TOL_MM - blend)
-    else:
-        assert_within(judge_pmac(truth, motions, res, texts), accel)
+        return tr, TOL_MM - blend
+    return judge_pmac(truth, motions, res, texts), TOL_MM
 
 
 def found(fmt: str) -> None:
@@ -100,12 +100,7 @@ def found(fmt: str) -> None:
     print("| program | machine | path µm | tool axis arcsec | speed / F |")
     print("|---|---:|---:|---:|---:|")
     for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True):
-        truth = truth_machine("random", seed)
-        motions, res, texts = convert(truth, text, fmt)
-        if fmt == "gcode":
-            tr = judge_gcode(truth, motions, res, texts)[0]
-        else:
-            tr = judge_pmac(truth, motions, res, texts)
+        tr = trace(truth_machine("random", seed), text, fmt)[0]
         print(
             f"| {name} | {seed} | {tr.path_mm * 1000:.3f} | {tr.ab_deg * 3600:.3f} "
             f"| {tr.speed_ratio:.5f} |"
@@ -137,12 +132,12 @@ def main() -> None:
     @given(generator(args.generator))
     def search(text: str) -> None:
         try:
-            convert(truth, text, args.format)
+            tr, tol = trace(truth, text, args.format)
         except PrsxyError as e:
             seen["refused: " + str(e).split(": ", 1)[-1][:60]] += 1
             return
         seen["judged (shrinking included)"] += 1
-        judged(truth, text, args.format, accel)
+        assert_within(tr, accel, tol)
 
     try:
         search()
