@@ -1,8 +1,9 @@
 """Search for programs whose executed motion leaves the G-code's geometry.
 
 Random programs from the rs274 oracle tests' generators (canned cycles,
-compensated paths, single lines of the dialect), or polylines that hold and move
-the head at corners taken at speed (``heads``), go through the whole chain for
+compensated paths, single lines of the dialect), polylines that hold and move
+the head at corners taken at speed (``heads``), or windows of real CAM programs
+of the corpus with the tool tilting now and then (``cam``), go through the whole chain for
 a truth machine; the PMAC output is run as the controller runs it and judged as
 tests/test_controller_truth.py judges it (path, tool axis, speed; the
 acceleration on the nominal machine), or with ``--format gcode`` the corrected
@@ -13,6 +14,7 @@ hypothesis, and prints it.
 
     python bench/truth_search.py --generator comp --machine 12 --examples 300
     python bench/truth_search.py --generator heads --machine 22 --format gcode
+    python bench/truth_search.py --generator cam --machine 21
     python bench/truth_search.py --found   # the programs found so far, judged
 """
 
@@ -72,9 +74,101 @@ def _heads(draw: st.DrawFn) -> str:
     return "\n".join([*out, "M2"]) + "\n"
 
 
+#: CAM output and hand-written programs of the corpus (tests/data/gcode/corpus) whose
+#: windows ``cam`` draws from: 3-axis V-carving, 3D finishing, contours and pockets
+CAM_PROGRAMS = (
+    "CAMotics/examples/vcarve/vcarve.ngc",
+    "CAMotics/examples/botomata_bottom/botomata_bottom.nc",
+    "CAMotics/examples/compass/compass.ngc",
+    "CAMotics/examples/wave/wave.gcode",
+    "Universal-G-Code-Sender/test_files/enclosure.nc",
+    "cncjs/examples/gcode/tball/tball.gcode",
+    "led_floor/cad/nc/1078_wall_27bit_slower_feeds_wider_light_holder_hole.nc",
+    "pygcode/tests/test-files/linuxcnc/Horse2.tap",
+    "pygcode/tests/test-files/linuxcnc/Circular Pocket.tap",
+)
+#: a window fits the search's workspace: at most this span in x and y, in z [mm]
+CAM_SPAN_XY, CAM_SPAN_Z = 80.0, 30.0
+
+
+def _cam_pool() -> list[tuple[str, list]]:  # type: ignore[type-arg]
+    """(name, rapids, feeds and arcs) of each CAM program: the motions the
+    interpreter gives up to the end or to its first refusal (tools 1-99 of
+    length 0, so a tool change moves nothing)."""
+    from prsxy_post import gcode
+
+    base = ROOT / "tests" / "data" / "gcode" / "corpus"
+    cfg = gcode.InterpreterConfig(tool_table={n: gcode.ToolEntry(0.0, 6.0) for n in range(1, 100)})
+    pool = []
+    for rel in CAM_PROGRAMS:
+        text = (base / rel).read_text(errors="replace")
+        ms = []
+        try:
+            for m in gcode.iter_motions(gcode.split_lines(text), cfg, rel):
+                if m.kind in ("rapid", "feed", "arc"):
+                    ms.append(m)
+        except PrsxyError:
+            pass
+        if len(ms) > 20:
+            pool.append((rel, ms))
+    return pool
+
+
+@st.composite
+def _cam(draw: st.DrawFn, pool: list) -> str:  # type: ignore[type-arg]
+    """A window of a real CAM program's motions, moved into the workspace and
+    written as explicit moves (arcs in XY with I J, others as lines); the tool
+    tilts now and then, as a five-axis finish does (A, B a small random walk)."""
+    name, ms = pool[draw(st.integers(0, len(pool) - 1))]
+    i0 = draw(st.integers(0, len(ms) - 2))
+    window = [ms[i0]]
+    lo = list(ms[i0].start[:3])
+    hi = list(lo)
+    for m in ms[i0 : i0 + draw(st.integers(2, 40))]:
+        lo2 = [min(a, b) for a, b in zip(lo, m.end[:3], strict=True)]
+        hi2 = [max(a, b) for a, b in zip(hi, m.end[:3], strict=True)]
+        if max(hi2[0] - lo2[0], hi2[1] - lo2[1]) > CAM_SPAN_XY or hi2[2] - lo2[2] > CAM_SPAN_Z:
+            break
+        lo, hi = lo2, hi2
+        if m is not ms[i0]:
+            window.append(m)
+    # the window's box centred at x = y = 0, its top at z = 0
+    shift = (-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -hi[2])
+    tilt = draw(st.sampled_from(["none", "walk"]))
+    a = b = 0.0
+    s0 = window[0].start
+    out = [
+        f"({name} line {window[0].line})",
+        HEADER.strip(),
+        "G0 "
+        + " ".join(f"{w}{v + d:.6f}" for w, v, d in zip("XYZ", s0[:3], shift, strict=True))
+        + " A0 B0",
+    ]
+    for m in window:
+        xyz = " ".join(f"{w}{v + d:.6f}" for w, v, d in zip("XYZ", m.end[:3], shift, strict=True))
+        if tilt == "walk" and m.kind != "rapid":
+            a = min(max(a + draw(st.floats(-0.5, 0.5)), -10.0), 10.0)
+            b = min(max(b + draw(st.floats(-0.5, 0.5)), -10.0), 10.0)
+            xyz += f" A{a:.4f} B{b:.4f}"
+        if m.kind == "rapid":
+            out.append("G0 " + xyz)
+            continue
+        feed = f" F{min(max(m.feed, 30.0), 6000.0):.1f}"
+        if m.kind == "arc" and m.plane == 17 and m.center is not None:
+            code = "G3" if m.rotation > 0 else "G2"
+            turns = f" P{abs(m.rotation)}" if abs(m.rotation) > 1 else ""
+            ij = f" I{m.center[0] - m.start[0]:.6f} J{m.center[1] - m.start[1]:.6f}"
+            out.append(f"{code} {xyz}{ij}{turns}{feed}")
+        else:
+            out.append(f"G1 {xyz}{feed}")
+    return "\n".join([*out, "M2"]) + "\n"
+
+
 def generator(name: str) -> st.SearchStrategy[str]:
     if name == "heads":
         return _heads()
+    if name == "cam":
+        return _cam(_cam_pool())
     if name == "cycles":
         return test_gcode_oracle._cycles()
     if name == "comp":
@@ -109,7 +203,9 @@ def found(fmt: str) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
-    ap.add_argument("--generator", choices=["cycles", "comp", "lines", "heads"], default="comp")
+    ap.add_argument(
+        "--generator", choices=["cycles", "comp", "lines", "heads", "cam"], default="comp"
+    )
     ap.add_argument("--machine", default="21", help="a random machine's seed, or 'nominal'")
     ap.add_argument("--examples", type=int, default=300)
     ap.add_argument("--format", choices=["pmac", "gcode"], default="pmac")

@@ -780,6 +780,7 @@ class Pipeline:
             self.reversal_s,
             blends,
             self.near_next,
+            self._edge_speed(plan, s, pc),
         )
         self.near_next = ins.near_next
         if ins.blended.size:
@@ -820,6 +821,62 @@ class Pipeline:
         cols = np.concatenate([ins.w_col, np.array([c for _, c, _ in ins.stands], dtype=int)])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
         return pc, side, contacts[np.lexsort((cols, begs, ends))]
+
+    def _edge_speed(self, plan: Plan | None, s: Samples, pc: PointChunk) -> reversals.EdgeSpeed:
+        """How fast a motor may move while its part stands in a crossing window
+        (:data:`.reversals.EdgeSpeed`).
+
+        The part lacks the motor's motion u, and the tip goes at v t − J u instead
+        of v t (v the path's planned speed at the root, linear between the step's
+        ends, t its tangent at the step's end, J = ∂x/∂P the motor's lever on the
+        tip through the forward kinematics: the inverse of the IK's Jacobian
+        there). Held within the block's speed limit and CROSSING_SPEED_SHARE of it,
+        |v t − J u| ≤ v + r with r = vmax (1 + share) − v, the worst sign of u
+        gives |J|² u² + 2 v |t·J| u − (2 v r + r²) ≤ 0:
+
+            u ≤ (2 v r + r²) / (v |t·J| + sqrt(v² (t·J)² + |J|² (2 v r + r²)))
+
+        A motor moving the tip across the path (a table motor at an arc's extreme)
+        costs its speed only in the second order."""
+        vmax = plan.blocks.vmax[s.block] if plan is not None else pc.speed
+        # the path's speed at the point before the chunk (the first step's start)
+        v_before = float(self.last.speed[0]) if self.last is not None else 0.0
+
+        def edge_speed(k: np.ndarray, frac: np.ndarray, col: int) -> np.ndarray:
+            if not len(k):
+                return np.zeros(0)
+            q, tool = pc.q_target[k], pc.tool_length[k]
+            P = kinematics.inverse(self.geo, q, tool).P
+            jac = np.empty((len(k), 5, 5))  # ∂P_i / ∂q_j
+            for j in range(5):
+                dq = np.zeros_like(q)
+                dq[:, j] = 1.0
+                jac[:, :, j] = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
+            # pinv: a singular pose gives a long lever (the narrowest window), not
+            # an error
+            lever = np.full((len(k), 3), np.nan)  # J = ∂x_tip / ∂P_col
+            ok = np.all(np.isfinite(jac), axis=(1, 2))
+            if np.any(ok):
+                lever[ok] = np.linalg.pinv(jac[ok])[:, :3, col]
+            j2 = np.einsum("ij,ij->i", lever, lever)
+            v0 = np.where(k >= 1, pc.speed[np.maximum(k - 1, 0)], v_before)
+            v = v0 + frac * (pc.speed[k] - v0)
+            r = np.maximum(vmax[k] * (1.0 + reversals.CROSSING_SPEED_SHARE) - v, 0.0)
+            xyz = pc.qdot[k, :3]
+            norm = np.linalg.norm(xyz, axis=1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                # no tangent in xyz (a tilt alone): the worst direction
+                tj = np.where(
+                    norm > 0,
+                    np.abs(np.einsum("ij,ij->i", xyz, lever)) / norm,
+                    np.sqrt(j2),
+                )
+                c = 2.0 * v * r + r * r
+                out = np.where(c > 0, c / (v * tj + np.sqrt(v * v * tj * tj + j2 * c)), 0.0)
+            # an unreachable pose (no lever) leaves the tolerance to decide
+            return np.where(np.isfinite(out), out, np.inf)
+
+        return edge_speed
 
     def _corners(
         self, plan: Plan | None, s: Samples, pc: PointChunk

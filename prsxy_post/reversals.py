@@ -32,8 +32,13 @@ chord stands all along it.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
+
+#: ``edge_speed(k, s, col)``: the fastest [mm/s] motor ``col`` may move while its
+#: part stands, in step ``k`` at the fraction ``s`` of it (:func:`plan_insertions`)
+EdgeSpeed = Callable[[np.ndarray, np.ndarray, int], np.ndarray]
 
 #: A planned motor velocity below this [mm/s] gives no direction: a motor creeping
 #: (a table following the head's parasitic motion by nanometres) does not make the
@@ -65,6 +70,12 @@ CATCH_UP_SHARE = 5e-5
 #: (:func:`corners`). Below this [mm] that turn is left alone: the part stands
 #: while its motor turns back by a nanometre.
 CORNER_TURN_MM = 1e-6
+#: Inside a crossing window the part stands while its motor would have moved on
+#: at up to |A| δ / 2, and the tip lacks that motor's share of its velocity: its
+#: speed may go past F by this share at most (as a creep's, V_EPS at F60). From the
+#: path tolerance alone, a 1 ms window about a head motor's reversal on a tilting
+#: line at F400 ran 1.0010 x F (test_controller_truth's found programs).
+CROSSING_SPEED_SHARE = 5e-4
 
 
 def _ranges(first: np.ndarray, length: np.ndarray) -> np.ndarray:
@@ -242,11 +253,13 @@ def windows(
     accel: np.ndarray,
     tol: float,
     longest: float,
+    widest: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The crossing windows about reversals at ``t_root`` inside steps [t0, t1].
 
     Width sqrt(8 tol / |A|) (the part stands at the extreme meanwhile and misses
-    the path by |A| (δ/2)² / 2), between MIN_WINDOW_S and ``longest``. A window
+    the path by |A| (δ/2)² / 2), at most ``widest`` (the speed's bound,
+    :func:`plan_insertions`), between MIN_WINDOW_S and ``longest``. A window
     that would reach past an end of its step is cut there, not shifted: shifted,
     the part would stand for a whole width on one side of the extreme and meet the
     motor 4 x as far behind the path, to be caught up by the next segment (a
@@ -257,6 +270,8 @@ def windows(
     """
     with np.errstate(divide="ignore"):
         width = np.where(accel == 0, longest, np.sqrt(8.0 * tol / np.abs(accel)))
+    if widest is not None:
+        width = np.minimum(width, widest)
     width = np.clip(width, MIN_WINDOW_S, longest)
     whole = width >= t1 - t0
     a = np.maximum(t_root - 0.5 * width, t0)
@@ -297,6 +312,8 @@ def _dips(
     dt: np.ndarray,
     tol: float,
     longest: float,
+    edge_speed: EdgeSpeed | None = None,
+    col: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The two crossings of every step ``k`` whose cubic turns back and on again
     while the motor moves the same way (``sg``) at both of its ends.
@@ -322,8 +339,11 @@ def _dips(
     t1 = t_end[k]
     t0 = t1 - h
     tm = t0 + 0.5 * (s1 + s2) * h
-    ta1, tb1 = windows(t0, tm, t0 + s1 * h, (2 * a * s1 + b) / h, tol, longest)
-    ta2, tb2 = windows(tm, t1, t0 + s2 * h, (2 * a * s2 + b) / h, tol, longest)
+    A1, A2 = (2 * a * s1 + b) / h, (2 * a * s2 + b) / h
+    w1 = None if edge_speed is None else widest(edge_speed(k, s1, col), A1)
+    w2 = None if edge_speed is None else widest(edge_speed(k, s2, col), A2)
+    ta1, tb1 = windows(t0, tm, t0 + s1 * h, A1, tol, longest, w1)
+    ta2, tb2 = windows(tm, t1, t0 + s2 * h, A2, tol, longest, w2)
     return (
         np.concatenate([k, k]),
         np.concatenate([-sg, sg]),
@@ -332,12 +352,20 @@ def _dips(
     )
 
 
+def widest(allowed: np.ndarray, accel: np.ndarray) -> np.ndarray:
+    """The widest window [s] about a reversal whose motor, at acceleration
+    ``accel``, stays below ``allowed`` [mm/s] at its edges: |A| δ ≤ allowed (not
+    δ / 2: :func:`windows` may grow a window by half its width to a step's end)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(np.abs(accel) > 0, allowed / np.abs(accel), np.inf)
+
+
 def corners(
     V_in: np.ndarray, V_out: np.ndarray, cols: list[int], h: np.ndarray, accel: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Corners taken at speed where a motor with play stands on one side and moves
-    on the other, which a PVT program blends (:func:`blend_shift`), and over how
-    long.
+    on the other, or moves much slower on one side than on the other, which a PVT
+    program blends (:func:`blend_shift`), and over how long.
 
     The corner's point carries the mean of its sides' velocities (the planner's
     blend, :mod:`.interpolate.lookahead`), so the cubic of the standing side's step
@@ -351,6 +379,14 @@ def corners(
     over ±τ makes every motor's velocity linear across the corner at |ΔV| / (2τ):
     τ = max(BLEND_MIN_S, max |ΔV| / (2 ``accel``)) over all the motors. None where
     the turn back is below CORNER_TURN_MM, or where τ reaches half the step.
+
+    A motor moving the same way on both sides turns back too, where the slower
+    side's speed v is below |ΔV| / 6: that step's velocity, v − (|ΔV| / 2)(2s −
+    3s²), is negative between the roots s = (1 ± sqrt(1 − 6 v / |ΔV|)) / 3, and the
+    motor goes back by (4/27) h (|ΔV| / 2) (1 − 6 v / |ΔV|)^(3/2) (a tilt speeding
+    up eightfold at F60 along a straight line: 1.0045 x F, test_controller_truth's
+    found programs). A motor reversing at the corner is not blended: it crosses
+    its play in a window (:func:`plan_insertions`).
 
     Parameters
     ----------
@@ -366,11 +402,19 @@ def corners(
     tau : (k,) [s] its τ
     """
     dV = np.abs(V_out - V_in)
-    vi, vo = np.abs(V_in[:, cols]), np.abs(V_out[:, cols])
-    stands = ((vi < V_EPS) & (vo >= V_EPS)) | ((vi >= V_EPS) & (vo < V_EPS))
-    turn = (4.0 / 27.0) * h[:, None] * dV[:, cols] / 2.0
+    vi, vo = V_in[:, cols], V_out[:, cols]
+    # the slower side's velocity, signed along the faster side's way
+    fast = np.where(np.abs(vo) >= np.abs(vi), vo, vi)
+    slow = np.where(np.abs(vo) >= np.abs(vi), vi, vo) * np.where(fast < 0, -1.0, 1.0)
+    # a motor reversing at the corner (moving both ways) crosses its play in a
+    # window of its own (plan_insertions)
+    moves = (np.abs(fast) >= V_EPS) & (slow > -V_EPS)
+    d = dV[:, cols]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        left = np.clip(np.where(d > 0, 1.0 - 6.0 * slow / d, 0.0), 0.0, 1.0)
+    turn = (4.0 / 27.0) * h[:, None] * d / 2.0 * left**1.5
     tau = np.maximum(BLEND_MIN_S, np.max(dV, axis=1, initial=0.0) / (2.0 * accel))
-    blend = np.any(stands & (turn > CORNER_TURN_MM), axis=1) & (tau <= 0.5 * h)
+    blend = np.any(moves & (turn > CORNER_TURN_MM), axis=1) & (tau <= 0.5 * h)
     return blend, tau
 
 
@@ -432,6 +476,7 @@ def plan_insertions(
     longest: float,
     blends: tuple[np.ndarray, np.ndarray] | None = None,
     near_first: float = 0.0,
+    edge_speed: EdgeSpeed | None = None,
 ) -> Insertions:
     """Find every reversal of the motors ``cols`` in a chunk of points and its window.
 
@@ -453,6 +498,9 @@ def plan_insertions(
         n − 1: the next chunk's first step, ``near_next``)
     near_first : the chunk before ended at a blended corner (its ``near_next``):
         this chunk's first step gets a point that long [s] after its start
+    edge_speed : how fast a motor may move while its part stands, at a reversal in
+        motion (``edge_speed(k, s, col)``, :data:`EdgeSpeed`): its window is no
+        wider than :func:`widest` of that. None: the tolerance alone decides
     """
     ins = Insertions()
     n = len(dt)
@@ -520,7 +568,8 @@ def plan_insertions(
         sr, acc = velocity_roots(p[rm - 1], V_all[rm - 1, col], p[rm], V_all[rm, col], h)
         t1 = t_end[km]
         t0 = t1 - h
-        ta, tb = windows(t0, t1, t0 + sr * h, acc, tol, longest)
+        wide = None if edge_speed is None else widest(edge_speed(km, sr, col), acc)
+        ta, tb = windows(t0, t1, t0 + sr * h, acc, tol, longest, wide)
         w_k.append(km)
         w_ta.append(ta)
         w_tb.append(tb)
@@ -540,6 +589,8 @@ def plan_insertions(
             dt,
             tol,
             longest,
+            edge_speed,
+            col,
         )
         w_k.append(kd)
         w_ta.append(ta_d)

@@ -467,6 +467,41 @@ TILT_AFTER_A_DESCENT_AND_A_FLAT = (
     "G1 X-12.0000 Y-20.0000 F60\nG1 X-11.0000 Y-20.0000 F60\n"
     "G1 X-5.0000 Y-20.0000 B0.5000 F60\nM2\n"
 )
+#: found by truth_search.py (heads, PVT, machine 14), 2026-11-24, failing on the
+#: code before this stop too: two lines along one direction at F60, the second
+#: tilting A eight times as fast. No motor reverses, but U's velocity jumps from
+#: 0.022 to 0.17 mm/s at the junction, and the cubic before it, ending at the
+#: mean, dips to 0.022 − 0.148/6 < 0: U turned back and left its part for 4 ms,
+#: 1.0045 x F. Such a corner is now blended (reversals.corners): 1.00009 x.
+TILT_SPEEDS_UP_ALONG_A_LINE = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-20 Y-20 Z0 A0 B0\n"
+    "G1 X-17.2985 Y-15.7926 A0.0625 F60\nG1 X-14.5970 Y-11.5853 A0.5625 F60\nM2\n"
+)
+#: found by truth_search.py (cam, PVT, machine 12), 2026-11-24, failing on the code
+#: before this stop too: a window of CAMotics' compass.ngc (line 172 on, tests/data/
+#: gcode/corpus, GPL-2.0-or-later; moved to the origin) with B tilting by 0.25-0.5°
+#: on some lines, at F400. On the last line but one U reverses mid-line, and its 1
+#: ms crossing window (from the path tolerance alone) began and ended with U at
+#: 0.012 mm/s: its part stood while the others went on, 1.0010 x F (and 1.00095 x
+#: as corrected G-code). A window is now also no wider than keeps the tip within
+#: reversals.CROSSING_SPEED_SHARE of F: 1.00026 x.
+COMPASS_WITH_A_TILT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X0.456676 Y0.293710 Z0.000000 A0 B0\n"
+    "G1 X0.445053 Y0.289302 Z0.000000 A0.0000 B0.2500 F400.0\n"
+    "G1 X0.312157 Y0.234255 Z0.000000 A0.0000 B0.2500 F400.0\n"
+    "G1 X0.300810 Y0.229148 Z0.000000 A0.0000 B0.5000 F400.0\n"
+    "G1 X0.171524 Y0.166198 Z0.000000 A0.0000 B0.5000 F400.0\n"
+    "G1 X0.160467 Y0.160394 Z0.000000 A0.0000 B0.5000 F400.0\n"
+    "G1 X0.035222 Y0.089756 Z0.000000 A0.0000 B0.5000 F400.0\n"
+    "G1 X0.024523 Y0.083289 Z0.000000 A0.0000 B0.5000 F400.0\n"
+    "G1 X-0.096248 Y0.005204 Z0.000000 A0.0000 B0.5000 F400.0\n"
+    "G1 X-0.106469 Y-0.001851 Z0.000000 A0.0000 B0.5000 F400.0\n"
+    "G1 X-0.222332 Y-0.087105 Z0.000000 A0.0000 B0.7500 F400.0\n"
+    "G1 X-0.232151 Y-0.094798 Z0.000000 A0.0000 B0.7500 F400.0\n"
+    "G1 X-0.342618 Y-0.186860 Z0.000000 A0.0000 B0.7500 F400.0\n"
+    "G1 X-0.351943 Y-0.195121 Z0.000000 A0.0000 B0.2500 F400.0\n"
+    "G1 X-0.456676 Y-0.293710 Z0.000000 A0.0000 B-0.2500 F400.0\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -496,6 +531,8 @@ FOUND = [
     (31, CREEP_THROUGH_A_TILT),
     (31, SETS_OFF_AGAINST_ITS_WAY),
     (22, TILT_AFTER_A_DESCENT_AND_A_FLAT),
+    (14, TILT_SPEEDS_UP_ALONG_A_LINE),
+    (12, COMPASS_WITH_A_TILT),
 ]
 FOUND_IDS = [
     "creep",
@@ -526,6 +563,8 @@ FOUND_IDS = [
     "creep-through-a-tilt-F60",
     "sets-off-against-its-way-F300",
     "tilt-after-a-descent-and-a-flat-F60",
+    "tilt-speeds-up-along-a-line-F60",
+    "compass-with-a-tilt-F400",
 ]
 
 

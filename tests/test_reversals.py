@@ -386,6 +386,32 @@ def test_a_corner_where_a_motor_stands_on_one_side_turns_it_back_with_the_mean()
     assert np.abs(accel[5:-5]).max() == pytest.approx(2 * V / tau, rel=1e-3)
 
 
+@pytest.mark.parametrize(("v_slow", "v_fast"), [(0.0218, 0.17), (0.01, 0.5), (0.02, 0.1)])
+def test_a_corner_where_a_motor_with_play_speeds_up_steeply_is_blended(
+    v_slow: float, v_fast: float
+) -> None:
+    """The corner's point carries the mean of its sides' velocities, so the slow
+    side's step (its chord at v_slow) dips to v_slow − (v_fast − v_slow)/6: below
+    zero, the motor turns back inside the step and leaves its part (a tilt speeding
+    up eightfold at F60: 1.0045 x F, test_controller_truth's found programs). The
+    turn back, sampled on the step's cubic, is the closed form corners() decides
+    by; a dip that stays above zero turns nothing back and is not blended."""
+    h = 0.01
+    s = np.linspace(0.0, 1.0, 200001)
+    x = hermite(0.0, v_slow, v_slow * h, 0.5 * (v_slow + v_fast), h, s)
+    back = float(max(np.maximum.accumulate(x) - x))
+    dV = v_fast - v_slow
+    closed = 4 / 27 * h * dV / 2 * max(0.0, 1 - 6 * v_slow / dV) ** 1.5
+    assert back == pytest.approx(closed, rel=1e-3, abs=1e-12)
+    V_in = np.array([[v_slow, 0.0, 0.0, 0.0, 0.0]])
+    V_out = np.array([[v_fast, 0.0, 0.0, 0.0, 0.0]])
+    blend, _ = reversals.corners(V_in, V_out, [0], np.array([h]), 2000.0)
+    assert blend[0] == (closed > reversals.CORNER_TURN_MM)
+    # and the same corner the other way round (slowing down steeply), downwards
+    blend, _ = reversals.corners(-V_out, -V_in, [0], np.array([h]), 2000.0)
+    assert blend[0] == (closed > reversals.CORNER_TURN_MM)
+
+
 def test_a_corner_where_a_motor_with_play_stands_on_one_side_is_blended() -> None:
     h = np.full(7, 0.01)
     V_in = np.zeros((7, 5))
@@ -395,10 +421,10 @@ def test_a_corner_where_a_motor_with_play_stands_on_one_side_is_blended() -> Non
     # the last: motor 0 stands on both sides while motor 3, without play, turns
     V_in[6, 3], V_out[6, 3] = 2.0, -2.0
     blend, tau = reversals.corners(V_in, V_out, [0], h, 2000.0)
-    # sets off, stops: blended; a motor moving on both sides (or reversing: a
-    # crossing's) is left alone, and so is a turn back of (4/27) h 1e-3 / 2 = 0.74
-    # nm; a jump of 30 mm/s would need τ = 7.5 ms at 2000 mm/s², more than half
-    # the step: none
+    # sets off, stops: blended; a motor moving on both sides at 0.2 and 0.3 (its
+    # mean's cubic dips to 0.2 − 0.1/6 > 0), or reversing (a crossing's), is left
+    # alone, and so is a turn back of (4/27) h 1e-3 / 2 = 0.74 nm; a jump of 30
+    # mm/s would need τ = 7.5 ms at 2000 mm/s², more than half the step: none
     assert blend.tolist() == [True, True, False, False, False, False, False]
     assert tau[:2].tolist() == [reversals.BLEND_MIN_S] * 2
     assert tau[5] == pytest.approx(7.5e-3)
