@@ -215,16 +215,25 @@ def _hermite(
 
 
 def velocity_roots(
-    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    new: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Where the cubic through (P0, V0) and (P1, V1) over time h has zero velocity,
     for arrays of steps.
 
     The Hermite cubic's velocity is a quadratic (:func:`_velocity_quadratic`).
+    With ``new`` (n,) the direction the motor turns to, the first root where the
+    velocity turns that way: a motor standing at the step's start (V0 = 0) that
+    sets off the old way first turns at the later root, not at s = 0.
 
     Returns
     -------
-    s : (n,) the first root in [0, 1] (where the velocity changes sign from V0's)
+    s : (n,) the first root in [0, 1] (where the velocity changes sign from V0's,
+        or turns to ``new``)
     accel : (n,) the cubic's acceleration there [mm/s²]
     """
     a, b, c = _velocity_quadratic(P0, V0, P1, V1, h)
@@ -238,6 +247,13 @@ def velocity_roots(
         r2 = np.where(disc >= 0, r2, np.nan)
         ok1 = (r1 >= -1e-9) & (r1 <= 1 + 1e-9)
         ok2 = (r2 >= -1e-9) & (r2 <= 1 + 1e-9)
+        if new is not None:
+            # a root where the velocity turns the other way is not this reversal
+            # (where one of them does)
+            turn1 = ok1 & (new * (2.0 * a * r1 + b) >= 0)
+            turn2 = ok2 & (new * (2.0 * a * r2 + b) >= 0)
+            either = turn1 | turn2
+            ok1, ok2 = np.where(either, turn1, ok1), np.where(either, turn2, ok2)
         best = np.where(ok1 & ok2, np.minimum(r1, r2), np.where(ok1, r1, np.where(ok2, r2, np.nan)))
         # the velocities at the ends have opposite signs, so a root exists; only
         # rounding can hide it: take the linear estimate
@@ -542,6 +558,11 @@ def plan_insertions(
             & (sg[np.maximum(r - 1, 0)] == 0)
             & (sg[np.maximum(r - 2, 0)] == 0)
             & (np.abs(p[np.maximum(r - 1, 0)] - p[np.maximum(r - 2, 0)]) < 1e-9)
+            # and leaves the new way: a step whose chord goes the old way sets off
+            # that way first and turns inside the step (a reversal in motion: a head
+            # motor through the extreme of a tilt, 1.0022 x F, test_controller_
+            # truth's found programs)
+            & (new * (p[r] - p[np.maximum(r - 1, 0)]) >= 0.0)
         )
         mid = ~(at_rest | crept_f | stood)
         for kk, nn in zip(k[at_rest].tolist(), new[at_rest].tolist(), strict=True):
@@ -565,7 +586,7 @@ def plan_insertions(
         # a reversal in motion: the window about the root of the step's cubic
         km, rm = k[mid], r[mid]
         h = dt[km]
-        sr, acc = velocity_roots(p[rm - 1], V_all[rm - 1, col], p[rm], V_all[rm, col], h)
+        sr, acc = velocity_roots(p[rm - 1], V_all[rm - 1, col], p[rm], V_all[rm, col], h, new[mid])
         t1 = t_end[km]
         t0 = t1 - h
         wide = None if edge_speed is None else widest(edge_speed(km, sr, col), acc)

@@ -502,6 +502,44 @@ COMPASS_WITH_A_TILT = (
     "G1 X-0.351943 Y-0.195121 Z0.000000 A0.0000 B0.2500 F400.0\n"
     "G1 X-0.456676 Y-0.293710 Z0.000000 A0.0000 B-0.2500 F400.0\nM2\n"
 )
+#: found by truth_search.py (cam, PVT, machine 21), 2026-11-24, failing on the code
+#: before this stop too: a window of cncjs' tball.gcode (line 659 on, tests/data/
+#: gcode/corpus, MIT; moved to the origin) at F1016, the last line tilting B by
+#: 0.5°. U stands through the line before and the tilt takes it up, then down
+#: through the extreme of its motion, all in the first step; the points alone said
+#: "stood, then down", so U crossed down before the corner, went up with its part
+#: left behind, and came down through its play at the path's pace: 1.0022 x F
+#: (1.0017 x as corrected G-code). A step whose chord goes the old way is now a
+#: reversal in motion, its window at the cubic's root: 1.00001 x.
+TBALL_WITH_A_TILT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-5.417950 Y-5.048650 Z0.000000 A0 B0\n"
+    "G1 X-4.913450 Y-4.646550 Z0.000000 A0.0000 B-0.2500 F1016.0\n"
+    "G1 X-4.494150 Y-4.307150 Z0.000000 A0.0000 B-0.1250 F1016.0\n"
+    "G1 X-4.117150 Y-3.998350 Z0.000000 A0.0000 B-0.1250 F1016.0\n"
+    "G1 X-3.657450 Y-3.616550 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X-3.114950 Y-3.158850 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X-2.739750 Y-2.837850 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X-2.239650 Y-2.404250 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X-1.739750 Y-1.964250 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X-1.281550 Y-1.555150 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X-0.864750 Y-1.178450 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X-0.364050 Y-0.719950 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X0.053750 Y-0.332650 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X0.639750 Y0.218050 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X1.227250 Y0.778650 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X1.437550 Y0.981350 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X1.901050 Y1.431950 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X2.366150 Y1.889150 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X2.667150 Y2.188850 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X2.968350 Y2.491350 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X3.309750 Y2.837350 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X3.690250 Y3.226750 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X4.150250 Y3.702950 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X4.646050 Y4.223350 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X5.094850 Y4.700950 Z0.000000 A0.0000 B-0.0625 F1016.0\n"
+    "G1 X5.417950 Y5.048650 Z0.000000 A0.0000 B0.4375 F1016.0\n"
+    "M2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -533,6 +571,7 @@ FOUND = [
     (22, TILT_AFTER_A_DESCENT_AND_A_FLAT),
     (14, TILT_SPEEDS_UP_ALONG_A_LINE),
     (12, COMPASS_WITH_A_TILT),
+    (21, TBALL_WITH_A_TILT),
 ]
 FOUND_IDS = [
     "creep",
@@ -565,6 +604,7 @@ FOUND_IDS = [
     "tilt-after-a-descent-and-a-flat-F60",
     "tilt-speeds-up-along-a-line-F60",
     "compass-with-a-tilt-F400",
+    "tball-with-a-tilt-F1016",
 ]
 
 

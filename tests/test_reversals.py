@@ -42,6 +42,59 @@ def velocity_poly(p0: float, v0: float, p1: float, v1: float, h: float) -> list[
 
 @settings(max_examples=200, deadline=None)
 @given(
+    h=st.floats(1e-3, 0.02),
+    s_root=st.floats(0.0, 1.0),
+    accel=st.floats(1e-3, 1e4),
+    allowed=st.floats(1e-5, 1.0),
+)
+def test_a_window_keeps_its_motor_below_the_speed_its_part_may_stand_out(
+    h: float, s_root: float, accel: float, allowed: float
+) -> None:
+    """While its part stands, the motor would have moved at |A| |t − t_root|; at the
+    window's edges that stays within ``allowed`` (what plan_insertions' edge_speed
+    gives from the tip's speed), also where the window grew to its step's end,
+    unless that takes a window shorter than the controller's shortest segment."""
+    t0, t1 = np.array([0.3]), np.array([0.3 + h])
+    t_root = t0 + s_root * h
+    A = np.array([accel])
+    wide = reversals.widest(np.array([allowed]), A)
+    ta, tb = reversals.windows(t0, t1, t_root, A, 5e-5, 1e-3, wide)
+    edge = accel * max(t_root[0] - ta[0], tb[0] - t_root[0])
+    assert edge <= max(allowed, accel * reversals.MIN_WINDOW_S) * (1 + 1e-9)
+
+
+def test_a_motor_that_stood_and_sets_off_the_old_way_first_reverses_in_the_step() -> None:
+    """A motor stands for two steps and the third step's chord goes its old way
+    (up) though it ends moving down: the step's cubic sets off up and turns inside
+    it. Its crossing is a window about the cubic's root, not one at the end of the
+    standing step (a head motor through the extreme of a tilt: crossing down before
+    it set off up left its part behind, 1.0022 x F, test_controller_truth's found
+    programs). A chord going the new way keeps the crossing at the standing step's
+    end."""
+    dt = np.full(3, 0.01)
+    t_end = np.cumsum(dt)
+    V = np.zeros((3, 5))
+    V[2, 0] = -0.0037
+    for chord, where in ((132e-6, "root"), (-132e-6, "stood")):
+        P = np.zeros((3, 5))
+        P[2, 0] = chord
+        ins = reversals.plan_insertions(
+            t_end, dt, P, V, np.zeros(3, dtype=bool), None, [0],
+            np.array([1] * 5), np.full(5, np.nan), 5e-5, 1e-3,
+        )  # fmt: skip
+        assert ins.w_new.tolist() == [-1]
+        if where == "stood":
+            assert ins.w_k.tolist() == [1] and ins.w_tb[0] == pytest.approx(t_end[1])
+        else:
+            zero, down = np.array([0.0]), np.array([-1])
+            sr, _ = reversals.velocity_roots(zero, zero, np.array([chord]), V[2:, 0], dt[2:], down)
+            root = t_end[1] + sr[0] * dt[2]
+            assert 0 < sr[0] < 1
+            assert ins.w_k.tolist() == [2] and ins.w_ta[0] < root < ins.w_tb[0]
+
+
+@settings(max_examples=200, deadline=None)
+@given(
     p0=st.floats(-5, 5),
     dp=st.floats(-0.05, 0.05),
     v0=st.floats(0.5, 100),
