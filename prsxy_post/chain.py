@@ -823,18 +823,23 @@ class Pipeline:
         return pc, side, contacts[np.lexsort((cols, begs, ends))]
 
     def _edge_speed(self, plan: Plan | None, s: Samples, pc: PointChunk) -> reversals.EdgeSpeed:
-        """How fast a motor may move while its part stands in a crossing window
-        (:data:`.reversals.EdgeSpeed`).
+        """How fast a motor may move while its part stands in a crossing window,
+        before and after its reversal (:data:`.reversals.EdgeSpeed`).
 
         The part lacks the motor's motion u, and the tip goes at v t − J u instead
         of v t (v the path's planned speed at the root, linear between the step's
         ends, t its tangent at the step's end, J = ∂x/∂P the motor's lever on the
         tip through the forward kinematics: the inverse of the IK's Jacobian
         there). Held within the block's speed limit and CROSSING_SPEED_SHARE of it,
-        |v t − J u| ≤ v + r with r = vmax (1 + share) − v, the worst sign of u
-        gives |J|² u² + 2 v |t·J| u − (2 v r + r²) ≤ 0:
+        |v t − J u| ≤ v + r with r = vmax (1 + share) − v, c = 2 v r + r²: on the
+        side of the root where the missing motion pushes the tip on (t·J u < 0:
+        before the root where (t·J) A > 0, u = A (t − t_root))
 
-            u ≤ (2 v r + r²) / (v |t·J| + sqrt(v² (t·J)² + |J|² (2 v r + r²)))
+            u ≤ c / (v |t·J| + sqrt(v² (t·J)² + |J|² c))
+
+        and on the other, where it holds the tip back,
+
+            u ≤ (v |t·J| + sqrt(v² (t·J)² + |J|² c)) / |J|²
 
         A motor moving the tip across the path (a table motor at an arc's extreme)
         costs its speed only in the second order."""
@@ -842,9 +847,11 @@ class Pipeline:
         # the path's speed at the point before the chunk (the first step's start)
         v_before = float(self.last.speed[0]) if self.last is not None else 0.0
 
-        def edge_speed(k: np.ndarray, frac: np.ndarray, col: int) -> np.ndarray:
+        def edge_speed(
+            k: np.ndarray, frac: np.ndarray, col: int, accel: np.ndarray
+        ) -> tuple[np.ndarray, np.ndarray]:
             if not len(k):
-                return np.zeros(0)
+                return np.zeros(0), np.zeros(0)
             q, tool = pc.q_target[k], pc.tool_length[k]
             P = kinematics.inverse(self.geo, q, tool).P
             jac = np.empty((len(k), 5, 5))  # ∂P_i / ∂q_j
@@ -852,7 +859,7 @@ class Pipeline:
                 dq = np.zeros_like(q)
                 dq[:, j] = 1.0
                 jac[:, :, j] = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
-            # pinv: a singular pose gives a long lever (the narrowest window), not
+            # pinv: a singular pose gives a long lever (the shortest window), not
             # an error
             lever = np.full((len(k), 3), np.nan)  # J = ∂x_tip / ∂P_col
             ok = np.all(np.isfinite(jac), axis=(1, 2))
@@ -865,16 +872,24 @@ class Pipeline:
             xyz = pc.qdot[k, :3]
             norm = np.linalg.norm(xyz, axis=1)
             with np.errstate(divide="ignore", invalid="ignore"):
-                # no tangent in xyz (a tilt alone): the worst direction
-                tj = np.where(
-                    norm > 0,
-                    np.abs(np.einsum("ij,ij->i", xyz, lever)) / norm,
-                    np.sqrt(j2),
-                )
+                # no tangent in xyz (a tilt alone): the worst direction, both sides
+                tj = np.where(norm > 0, np.einsum("ij,ij->i", xyz, lever) / norm, np.nan)
+                worst = np.isnan(tj)
+                tj = np.where(worst, np.sqrt(j2), np.abs(tj))
                 c = 2.0 * v * r + r * r
-                out = np.where(c > 0, c / (v * tj + np.sqrt(v * v * tj * tj + j2 * c)), 0.0)
+                root = v * tj + np.sqrt(v * v * tj * tj + j2 * c)
+                on = np.where(c > 0, c / root, 0.0)
+                back = np.where(worst, on, root / j2)
+                # the side where the tip is pushed on: before the root when the
+                # signed t·J and A agree
+                ahead = np.einsum("ij,ij->i", xyz, lever) * accel > 0
+            before = np.where(ahead, on, back)
+            after = np.where(ahead, back, on)
             # an unreachable pose (no lever) leaves the tolerance to decide
-            return np.where(np.isfinite(out), out, np.inf)
+            return (
+                np.where(np.isfinite(before), before, np.inf),
+                np.where(np.isfinite(after), after, np.inf),
+            )
 
         return edge_speed
 

@@ -36,9 +36,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-#: ``edge_speed(k, s, col)``: the fastest [mm/s] motor ``col`` may move while its
-#: part stands, in step ``k`` at the fraction ``s`` of it (:func:`plan_insertions`)
-EdgeSpeed = Callable[[np.ndarray, np.ndarray, int], np.ndarray]
+#: ``edge_speed(k, s, col, accel)``: the fastest [mm/s] motor ``col`` may move
+#: while its part stands before and after (two arrays) its reversal in step ``k``
+#: at the fraction ``s`` of it, at acceleration ``accel`` there
+#: (:func:`plan_insertions`)
+EdgeSpeed = Callable[[np.ndarray, np.ndarray, int, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 #: A planned motor velocity below this [mm/s] gives no direction: a motor creeping
 #: (a table following the head's parasitic motion by nanometres) does not make the
@@ -269,35 +271,56 @@ def windows(
     accel: np.ndarray,
     tol: float,
     longest: float,
-    widest: np.ndarray | None = None,
+    reach: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The crossing windows about reversals at ``t_root`` inside steps [t0, t1].
 
-    Width sqrt(8 tol / |A|) (the part stands at the extreme meanwhile and misses
-    the path by |A| (δ/2)² / 2), at most ``widest`` (the speed's bound,
-    :func:`plan_insertions`), between MIN_WINDOW_S and ``longest``. A window
-    that would reach past an end of its step is cut there, not shifted: shifted,
-    the part would stand for a whole width on one side of the extreme and meet the
-    motor 4 x as far behind the path, to be caught up by the next segment (a
-    corner's point is often the root itself). No sliver of a step is left beside a
-    window (a step much shorter than the window makes the rounding of the written
-    positions a large velocity error): the window grows by at most half its width
-    on that side.
+    The part stands at the extreme meanwhile and misses the path by |A| d² / 2
+    after standing d on a side of the root: up to sqrt(2 tol / |A|) on each side
+    (a width of sqrt(8 tol / |A|)), and no longer than ``reach`` (before, after)
+    [s] allows for the speed (:func:`plan_insertions`); the width between
+    MIN_WINDOW_S and ``longest``, a window too short for the first grown on the
+    side with more reach to spare. A window that would reach past an end of its
+    step is cut there, not shifted: shifted, the part would stand for a whole
+    width on one side of the extreme and meet the motor 4 x as far behind the
+    path, to be caught up by the next segment (a corner's point is often the root
+    itself). No sliver of a step is left beside a window (a step much shorter than
+    the window makes the rounding of the written positions a large velocity
+    error): the window grows by at most half its width on that side, where its
+    reach allows, or where the sliver would be shorter than MIN_WINDOW_S.
     """
+    n = len(t_root)
     with np.errstate(divide="ignore"):
-        width = np.where(accel == 0, longest, np.sqrt(8.0 * tol / np.abs(accel)))
-    if widest is not None:
-        width = np.minimum(width, widest)
-    width = np.clip(width, MIN_WINDOW_S, longest)
+        half = np.where(accel == 0, 0.5 * longest, np.sqrt(2.0 * tol / np.abs(accel)))
+    rb, ra = (np.full(n, np.inf), np.full(n, np.inf)) if reach is None else reach
+    db, da = np.minimum(half, rb), np.minimum(half, ra)
+    # at most the longest: each side to half of it, or to what the other leaves
+    db = np.minimum(db, longest - np.minimum(da, 0.5 * longest))
+    da = np.minimum(da, longest - db)
+    # at least a servo cycle: the missing time to the side with more reach left
+    # (evenly where both have the same)
+    extra = np.maximum(MIN_WINDOW_S - (db + da), 0.0)
+    spare_b, spare_a = rb - db, ra - da
+    with np.errstate(invalid="ignore"):
+        even = (spare_b == spare_a) | (np.isinf(spare_b) & np.isinf(spare_a))
+    to_b = np.where(
+        even,
+        0.5 * extra,
+        np.where(spare_b > spare_a, np.minimum(extra, spare_b), extra - np.minimum(extra, spare_a)),
+    )
+    db, da = db + to_b, da + (extra - to_b)
+    width = db + da
     whole = width >= t1 - t0
-    a = np.maximum(t_root - 0.5 * width, t0)
-    b = np.minimum(t_root + 0.5 * width, t1)
+    a = np.maximum(t_root - db, t0)
+    b = np.minimum(t_root + da, t1)
     # never shorter than a servo cycle: grown into the step where it was cut
     short = b - a < MIN_WINDOW_S
     b = np.where(short & (a <= t0), np.minimum(a + MIN_WINDOW_S, t1), b)
     a = np.where(short & (a > t0), np.maximum(b - MIN_WINDOW_S, t0), a)
-    a = np.where(a - t0 < 0.5 * width, t0, a)
-    b = np.where(t1 - b < 0.5 * width, t1, b)
+    grow_a = (a - t0 < 0.5 * width) & ((t_root - t0 <= rb) | (a - t0 < MIN_WINDOW_S))
+    grow_b = (t1 - b < 0.5 * width) & ((t1 - t_root <= ra) | (t1 - b < MIN_WINDOW_S))
+    a = np.where(grow_a, t0, a)
+    b = np.where(grow_b, t1, b)
     return np.where(whole, t0, a), np.where(whole, t1, b)
 
 
@@ -356,8 +379,8 @@ def _dips(
     t0 = t1 - h
     tm = t0 + 0.5 * (s1 + s2) * h
     A1, A2 = (2 * a * s1 + b) / h, (2 * a * s2 + b) / h
-    w1 = None if edge_speed is None else widest(edge_speed(k, s1, col), A1)
-    w2 = None if edge_speed is None else widest(edge_speed(k, s2, col), A2)
+    w1 = None if edge_speed is None else reach(edge_speed(k, s1, col, A1), A1)
+    w2 = None if edge_speed is None else reach(edge_speed(k, s2, col, A2), A2)
     ta1, tb1 = windows(t0, tm, t0 + s1 * h, A1, tol, longest, w1)
     ta2, tb2 = windows(tm, t1, t0 + s2 * h, A2, tol, longest, w2)
     return (
@@ -368,12 +391,18 @@ def _dips(
     )
 
 
-def widest(allowed: np.ndarray, accel: np.ndarray) -> np.ndarray:
-    """The widest window [s] about a reversal whose motor, at acceleration
-    ``accel``, stays below ``allowed`` [mm/s] at its edges: |A| δ ≤ allowed (not
-    δ / 2: :func:`windows` may grow a window by half its width to a step's end)."""
+def reach(
+    allowed: tuple[np.ndarray, np.ndarray], accel: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """How long [s] a part may stand on each side of its motor's reversal, the
+    motor at acceleration ``accel`` moving at |A| d a time d from the root: below
+    ``allowed`` (before, after) [mm/s] (:data:`EdgeSpeed`)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(np.abs(accel) > 0, allowed / np.abs(accel), np.inf)
+        a = np.abs(accel)
+        return (
+            np.where(a > 0, allowed[0] / a, np.inf),
+            np.where(a > 0, allowed[1] / a, np.inf),
+        )
 
 
 def corners(
@@ -514,9 +543,9 @@ def plan_insertions(
         n − 1: the next chunk's first step, ``near_next``)
     near_first : the chunk before ended at a blended corner (its ``near_next``):
         this chunk's first step gets a point that long [s] after its start
-    edge_speed : how fast a motor may move while its part stands, at a reversal in
-        motion (``edge_speed(k, s, col)``, :data:`EdgeSpeed`): its window is no
-        wider than :func:`widest` of that. None: the tolerance alone decides
+    edge_speed : how fast a motor may move while its part stands, before and after
+        a reversal in motion (:data:`EdgeSpeed`): its window stands no longer than
+        :func:`reach` of that on each side. None: the tolerance alone decides
     """
     ins = Insertions()
     n = len(dt)
@@ -589,7 +618,7 @@ def plan_insertions(
         sr, acc = velocity_roots(p[rm - 1], V_all[rm - 1, col], p[rm], V_all[rm, col], h, new[mid])
         t1 = t_end[km]
         t0 = t1 - h
-        wide = None if edge_speed is None else widest(edge_speed(km, sr, col), acc)
+        wide = None if edge_speed is None else reach(edge_speed(km, sr, col, acc), acc)
         ta, tb = windows(t0, t1, t0 + sr * h, acc, tol, longest, wide)
         w_k.append(km)
         w_ta.append(ta)

@@ -483,8 +483,9 @@ TILT_SPEEDS_UP_ALONG_A_LINE = (
 #: on some lines, at F400. On the last line but one U reverses mid-line, and its 1
 #: ms crossing window (from the path tolerance alone) began and ended with U at
 #: 0.012 mm/s: its part stood while the others went on, 1.0010 x F (and 1.00095 x
-#: as corrected G-code). A window is now also no wider than keeps the tip within
-#: reversals.CROSSING_SPEED_SHARE of F: 1.00026 x.
+#: as corrected G-code). A window now also stands no longer on each side of its
+#: root than keeps the tip within reversals.CROSSING_SPEED_SHARE of F: 1.00043 x
+#: (the other side, where the tip is held back, takes the rest of the window).
 COMPASS_WITH_A_TILT = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X0.456676 Y0.293710 Z0.000000 A0 B0\n"
     "G1 X0.445053 Y0.289302 Z0.000000 A0.0000 B0.2500 F400.0\n"
@@ -540,6 +541,20 @@ TBALL_WITH_A_TILT = (
     "G1 X5.417950 Y5.048650 Z0.000000 A0.0000 B0.4375 F1016.0\n"
     "M2\n"
 )
+#: found by truth_search.py (cam, PVT, machine 22), 2026-11-24, failing on the code
+#: before this stop too: a window of Universal G-Code Sender's enclosure.nc (line
+#: 4376 on, tests/data/gcode/corpus, GPL-3.0; moved to the origin), a half circle
+#: of 0.5 mm radius at F800 with B tilting by 0.25°. Table motor X reverses where
+#: the tip still moves along x, at 183 mm/s²: even a window of one servo cycle
+#: (0.25 ms) about the root left X's part standing while X would have moved at
+#: 0.023 mm/s, 1.0015 x F. A window now stands shorter on the side of the root
+#: where the part's standing pushes the tip on, longer on the other
+#: (reversals.windows' reach): 1.00024 x.
+ENCLOSURE_ARC_WITH_A_TILT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-0.250000 Y0.250000 Z-9.100000 A0 B0\n"
+    "G3 X0.250000 Y-0.250000 Z-9.100000 A0.0000 B-0.2500 I0.500000 J0.000000 F800.0\n"
+    "G0 X0.250000 Y-0.250000 Z0.000000\nM2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -572,6 +587,7 @@ FOUND = [
     (14, TILT_SPEEDS_UP_ALONG_A_LINE),
     (12, COMPASS_WITH_A_TILT),
     (21, TBALL_WITH_A_TILT),
+    (22, ENCLOSURE_ARC_WITH_A_TILT),
 ]
 FOUND_IDS = [
     "creep",
@@ -605,6 +621,7 @@ FOUND_IDS = [
     "tilt-speeds-up-along-a-line-F60",
     "compass-with-a-tilt-F400",
     "tball-with-a-tilt-F1016",
+    "enclosure-arc-with-a-tilt-F800",
 ]
 
 
