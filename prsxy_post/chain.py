@@ -847,24 +847,42 @@ class Pipeline:
         # the path's speed at the point before the chunk (the first step's start)
         v_before = float(self.last.speed[0]) if self.last is not None else 0.0
 
+        # the forward Jacobian ∂q/∂P at the rows asked for so far (every motor's and
+        # window's questions share them: the IK's differences are the cost)
+        fwd = np.full((len(pc), 5, 5), np.nan)
+        done = np.zeros(len(pc), dtype=bool)
+
+        def forward_jacobian(k: np.ndarray) -> np.ndarray:
+            new = np.unique(k[~done[k]])
+            if new.size:
+                q, tool = pc.q_target[new], pc.tool_length[new]
+                m = len(new)
+                # the pose and its five steps in one IK: (6 m, 5)
+                q6 = np.tile(q, (6, 1))
+                for j in range(5):
+                    q6[(j + 1) * m : (j + 2) * m, j] += DIR_STEP_MM
+                P6 = kinematics.inverse(self.geo, q6, np.tile(tool, 6)).P
+                jac = np.stack(
+                    [(P6[(j + 1) * m : (j + 2) * m] - P6[:m]) / DIR_STEP_MM for j in range(5)],
+                    axis=2,
+                )  # ∂P_i / ∂q_j
+                ok = np.all(np.isfinite(jac), axis=(1, 2))
+                if np.any(ok):
+                    try:
+                        fwd[new[ok]] = np.linalg.inv(jac[ok])
+                    except np.linalg.LinAlgError:
+                        # a singular pose: pinv gives a long lever (the shortest
+                        # window), not an error
+                        fwd[new[ok]] = np.linalg.pinv(jac[ok])
+                done[new] = True
+            return fwd[k]
+
         def edge_speed(
             k: np.ndarray, frac: np.ndarray, col: int, accel: np.ndarray
         ) -> tuple[np.ndarray, np.ndarray]:
             if not len(k):
                 return np.zeros(0), np.zeros(0)
-            q, tool = pc.q_target[k], pc.tool_length[k]
-            P = kinematics.inverse(self.geo, q, tool).P
-            jac = np.empty((len(k), 5, 5))  # ∂P_i / ∂q_j
-            for j in range(5):
-                dq = np.zeros_like(q)
-                dq[:, j] = 1.0
-                jac[:, :, j] = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
-            # pinv: a singular pose gives a long lever (the shortest window), not
-            # an error
-            lever = np.full((len(k), 3), np.nan)  # J = ∂x_tip / ∂P_col
-            ok = np.all(np.isfinite(jac), axis=(1, 2))
-            if np.any(ok):
-                lever[ok] = np.linalg.pinv(jac[ok])[:, :3, col]
+            lever = forward_jacobian(k)[:, :3, col]  # J = ∂x_tip / ∂P_col
             j2 = np.einsum("ij,ij->i", lever, lever)
             v0 = np.where(k >= 1, pc.speed[np.maximum(k - 1, 0)], v_before)
             v = v0 + frac * (pc.speed[k] - v0)
