@@ -781,6 +781,7 @@ class Pipeline:
             blends,
             self.near_next,
             self._edge_speed(plan, s, pc),
+            self.limits.segment != "cubic",
         )
         self.near_next = ins.near_next
         if ins.blended.size:
@@ -827,8 +828,8 @@ class Pipeline:
         before and after its reversal (:data:`.reversals.EdgeSpeed`).
 
         The part lacks the motor's motion u, and the tip goes at v t − J u instead
-        of v t (v the path's planned speed at the root, linear between the step's
-        ends, t its tangent at the step's end, J = ∂x/∂P the motor's lever on the
+        of v t (v the path's planned speed at the root and t its direction there,
+        both linear between the step's ends, J = ∂x/∂P the motor's lever on the
         tip through the forward kinematics: the inverse of the IK's Jacobian
         there). Held within the block's speed limit and CROSSING_SPEED_SHARE of it,
         |v t − J u| ≤ v + r with r = vmax (1 + share) − v, c = 2 v r + r²: on the
@@ -844,8 +845,10 @@ class Pipeline:
         A motor moving the tip across the path (a table motor at an arc's extreme)
         costs its speed only in the second order."""
         vmax = plan.blocks.vmax[s.block] if plan is not None else pc.speed
-        # the path's speed at the point before the chunk (the first step's start)
+        # the path's speed and velocity at the point before the chunk (the first
+        # step's start)
         v_before = float(self.last.speed[0]) if self.last is not None else 0.0
+        qdot_before = self.last.qdot[0, :3] if self.last is not None else np.zeros(3)
 
         # the forward Jacobian ∂q/∂P at the rows asked for so far (every motor's and
         # window's questions share them: the IK's differences are the cost)
@@ -887,7 +890,10 @@ class Pipeline:
             v0 = np.where(k >= 1, pc.speed[np.maximum(k - 1, 0)], v_before)
             v = v0 + frac * (pc.speed[k] - v0)
             r = np.maximum(vmax[k] * (1.0 + reversals.CROSSING_SPEED_SHARE) - v, 0.0)
-            xyz = pc.qdot[k, :3]
+            # the path's direction at the root: its velocity there, linear between
+            # the step's ends (on a tight arc the step turns it by tenths of a rad)
+            q0 = np.where((k >= 1)[:, None], pc.qdot[np.maximum(k - 1, 0), :3], qdot_before)
+            xyz = q0 + frac[:, None] * (pc.qdot[k, :3] - q0)
             norm = np.linalg.norm(xyz, axis=1)
             with np.errstate(divide="ignore", invalid="ignore"):
                 # no tangent in xyz (a tilt alone): the worst direction, both sides

@@ -272,6 +272,7 @@ def windows(
     tol: float,
     longest: float,
     reach: tuple[np.ndarray, np.ndarray] | None = None,
+    chords: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The crossing windows about reversals at ``t_root`` inside steps [t0, t1].
 
@@ -288,27 +289,47 @@ def windows(
     the window makes the rounding of the written positions a large velocity
     error): the window grows by at most half its width on that side, where its
     reach allows, or where the sliver would be shorter than MIN_WINDOW_S.
+
+    With ``chords`` (straight lines between the points: corrected G-code) a window
+    stands no longer before its root than after it: the part stands where its
+    motor left it, A (db² − da²) / 2 ahead of the path at the window's end where
+    db > da, and the straight line after the window, carrying no velocity, goes
+    back to the path there while the part stands on (0.35 % over F,
+    test_controller_truth's found programs). A PVT cubic leaves the window with the
+    path's velocity and takes the difference up along its step.
     """
     n = len(t_root)
     with np.errstate(divide="ignore"):
         half = np.where(accel == 0, 0.5 * longest, np.sqrt(2.0 * tol / np.abs(accel)))
     rb, ra = (np.full(n, np.inf), np.full(n, np.inf)) if reach is None else reach
     db, da = np.minimum(half, rb), np.minimum(half, ra)
+    if chords:
+        db = np.minimum(db, da)
     # at most the longest: each side to half of it, or to what the other leaves
     db = np.minimum(db, longest - np.minimum(da, 0.5 * longest))
     da = np.minimum(da, longest - db)
-    # at least a servo cycle: the missing time to the side with more reach left
-    # (evenly where both have the same)
+    # at least a servo cycle: evenly where both sides have reach to spare alike,
+    # else the missing time to the side with more reach to spare first, the rest
+    # to the other; with chords after the root first, then before it no longer
+    # than after, then evenly
     extra = np.maximum(MIN_WINDOW_S - (db + da), 0.0)
     spare_b, spare_a = rb - db, ra - da
     with np.errstate(invalid="ignore"):
         even = (spare_b == spare_a) | (np.isinf(spare_b) & np.isinf(spare_a))
-    to_b = np.where(
-        even,
-        0.5 * extra,
-        np.where(spare_b > spare_a, np.minimum(extra, spare_b), extra - np.minimum(extra, spare_a)),
-    )
-    db, da = db + to_b, da + (extra - to_b)
+    if chords:
+        add_a = np.where(even, 0.5 * extra, np.minimum(extra, spare_a))
+        rest = extra - add_a
+        add_b = np.where(even, 0.5 * extra, np.minimum(rest, da + add_a - db))
+        rest = np.where(even, 0.0, rest - add_b)
+        db, da = db + add_b + 0.5 * rest, da + add_a + 0.5 * rest
+    else:
+        more_b = spare_b > spare_a
+        add_b = np.where(
+            even,
+            0.5 * extra,
+            np.where(more_b, np.minimum(extra, spare_b), extra - np.minimum(extra, spare_a)),
+        )
+        db, da = db + add_b, da + (extra - add_b)
     width = db + da
     whole = width >= t1 - t0
     a = np.maximum(t_root - db, t0)
@@ -317,10 +338,22 @@ def windows(
     short = b - a < MIN_WINDOW_S
     b = np.where(short & (a <= t0), np.minimum(a + MIN_WINDOW_S, t1), b)
     a = np.where(short & (a > t0), np.maximum(b - MIN_WINDOW_S, t0), a)
-    grow_a = (a - t0 < 0.5 * width) & ((t_root - t0 <= rb) | (a - t0 < MIN_WINDOW_S))
-    grow_b = (t1 - b < 0.5 * width) & ((t1 - t_root <= ra) | (t1 - b < MIN_WINDOW_S))
-    a = np.where(grow_a, t0, a)
+    # no sliver shorter than half the window beside it: grown over it where the
+    # reach allows (and, with chords, before the root where the window stays no
+    # longer there than after), where the sliver is shorter than a servo cycle, or
+    # after the root where the window stood longer before it: the part is left
+    # ahead of the path, and a sliver's cubic, too short to take that up, turned
+    # its motor back while the part stood (0.5 % over F, test_controller_truth's
+    # found programs)
+    grow_b = (t1 - b < 0.5 * width) & (
+        (t1 - t_root <= ra) | (t1 - b < MIN_WINDOW_S) | (t_root - a > b - t_root)
+    )
     b = np.where(grow_b, t1, b)
+    before_ok = t_root - t0 <= rb
+    if chords:
+        before_ok &= t_root - t0 <= b - t_root
+    grow_a = (a - t0 < 0.5 * width) & (before_ok | (a - t0 < MIN_WINDOW_S))
+    a = np.where(grow_a, t0, a)
     return np.where(whole, t0, a), np.where(whole, t1, b)
 
 
@@ -353,6 +386,7 @@ def _dips(
     longest: float,
     edge_speed: EdgeSpeed | None = None,
     col: int = 0,
+    chords: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The two crossings of every step ``k`` whose cubic turns back and on again
     while the motor moves the same way (``sg``) at both of its ends.
@@ -381,8 +415,56 @@ def _dips(
     A1, A2 = (2 * a * s1 + b) / h, (2 * a * s2 + b) / h
     w1 = None if edge_speed is None else reach(edge_speed(k, s1, col, A1), A1)
     w2 = None if edge_speed is None else reach(edge_speed(k, s2, col, A2), A2)
-    ta1, tb1 = windows(t0, tm, t0 + s1 * h, A1, tol, longest, w1)
-    ta2, tb2 = windows(tm, t1, t0 + s2 * h, A2, tol, longest, w2)
+    ta1, tb1 = windows(t0, tm, t0 + s1 * h, A1, tol, longest, w1, chords)
+    ta2, tb2 = windows(tm, t1, t0 + s2 * h, A2, tol, longest, w2, chords)
+    return (
+        np.concatenate([k, k]),
+        np.concatenate([-sg, sg]),
+        np.concatenate([ta1, ta2]),
+        np.concatenate([tb1, tb2]),
+    )
+
+
+def _sets_off_back(
+    k: np.ndarray,
+    sg: np.ndarray,
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    t_end: np.ndarray,
+    dt: np.ndarray,
+    tol: float,
+    longest: float,
+    edge_speed: EdgeSpeed | None = None,
+    col: int = 0,
+    chords: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The two crossings of every step ``k`` that a motor leaves from rest, or
+    standing, the way against ``sg``, the way it ends the step moving and its part
+    is on: it crosses to −sg as it sets off (a window about the step's start) and
+    back at the root where its cubic turns to ``sg`` (a window there), each in its
+    own part of the step, as a dip's (:func:`_dips`). Left alone where it goes back
+    no further than ``tol``: its part stands meanwhile.
+
+    Returns (step, new side, window start, window end) for 2 m windows, the first
+    crossing of every step before the second.
+    """
+    h = dt[k]
+    s2, A2 = velocity_roots(P0, V0, P1, V1, h, sg)
+    deep = np.abs(_hermite(P0, V0, P1, V1, h, s2[:, None])[:, 0] - P0) > tol
+    deep &= s2 > 0
+    k, sg, h, s2, A2 = k[deep], sg[deep], h[deep], s2[deep], A2[deep]
+    _, b, _ = _velocity_quadratic(P0[deep], V0[deep], P1[deep], V1[deep], h)
+    A1 = b / h
+    t1 = t_end[k]
+    t0 = t1 - h
+    tm = t0 + 0.5 * s2 * h
+    zero = np.zeros(len(k))
+    w1 = None if edge_speed is None else reach(edge_speed(k, zero, col, A1), A1)
+    w2 = None if edge_speed is None else reach(edge_speed(k, s2, col, A2), A2)
+    ta1, tb1 = windows(t0, tm, t0, A1, tol, longest, w1, chords)
+    ta2, tb2 = windows(tm, t1, t0 + s2 * h, A2, tol, longest, w2, chords)
     return (
         np.concatenate([k, k]),
         np.concatenate([-sg, sg]),
@@ -522,6 +604,7 @@ def plan_insertions(
     blends: tuple[np.ndarray, np.ndarray] | None = None,
     near_first: float = 0.0,
     edge_speed: EdgeSpeed | None = None,
+    chords: bool = False,
 ) -> Insertions:
     """Find every reversal of the motors ``cols`` in a chunk of points and its window.
 
@@ -546,6 +629,8 @@ def plan_insertions(
     edge_speed : how fast a motor may move while its part stands, before and after
         a reversal in motion (:data:`EdgeSpeed`): its window stands no longer than
         :func:`reach` of that on each side. None: the tolerance alone decides
+    chords : the controller runs straight lines between the points (corrected
+        G-code), not cubics (:func:`windows`)
     """
     ins = Insertions()
     n = len(dt)
@@ -573,12 +658,18 @@ def plan_insertions(
         r = r[(r - off >= 0) & (r - off < n)]
         k = r - off
         new = sg[r]
-        at_rest = (r == 0) | rest_all[np.maximum(r - 1, 0)]
+        p = P_all[:, col]
+        # a step whose chord goes the old way sets off that way first and turns
+        # inside it: a reversal in motion, at the cubic's root, also where the step
+        # leaves from rest or from a motor standing (a head motor through the extreme
+        # of a tilt: 0.22 % over F, and 0.5 µm off the path from rest,
+        # test_controller_truth's found programs)
+        old_way = new * (p[r] - p[np.maximum(r - 1, 0)]) < 0.0
+        at_rest = (r == 0) | (rest_all[np.maximum(r - 1, 0)] & ~old_way)
         crept_f = (crept[r] != 0) & ~at_rest
         # drifted back within a step that began moving the old way (it ends at rest,
         # or creeping): the step's cubic turns inside it, and the window goes there
         crept_f &= sg[np.maximum(r - 1, 0)] != -new
-        p = P_all[:, col]
         stood = (
             ~at_rest
             & ~crept_f
@@ -587,11 +678,7 @@ def plan_insertions(
             & (sg[np.maximum(r - 1, 0)] == 0)
             & (sg[np.maximum(r - 2, 0)] == 0)
             & (np.abs(p[np.maximum(r - 1, 0)] - p[np.maximum(r - 2, 0)]) < 1e-9)
-            # and leaves the new way: a step whose chord goes the old way sets off
-            # that way first and turns inside the step (a reversal in motion: a head
-            # motor through the extreme of a tilt, 1.0022 x F, test_controller_
-            # truth's found programs)
-            & (new * (p[r] - p[np.maximum(r - 1, 0)]) >= 0.0)
+            & ~old_way
         )
         mid = ~(at_rest | crept_f | stood)
         for kk, nn in zip(k[at_rest].tolist(), new[at_rest].tolist(), strict=True):
@@ -619,7 +706,7 @@ def plan_insertions(
         t1 = t_end[km]
         t0 = t1 - h
         wide = None if edge_speed is None else reach(edge_speed(km, sr, col, acc), acc)
-        ta, tb = windows(t0, t1, t0 + sr * h, acc, tol, longest, wide)
+        ta, tb = windows(t0, t1, t0 + sr * h, acc, tol, longest, wide, chords)
         w_k.append(km)
         w_ta.append(ta)
         w_tb.append(tb)
@@ -641,12 +728,38 @@ def plan_insertions(
             longest,
             edge_speed,
             col,
+            chords,
         )
         w_k.append(kd)
         w_ta.append(ta_d)
         w_tb.append(tb_d)
-        w_col.append(np.full(len(kc) + len(ks) + len(km) + len(kd), col))
-        w_new.append(np.concatenate([new[crept_f], new[stood], new[mid], new_d]))
+        # setting off back: a motor at rest or standing leaves with its chord against
+        # the way it ends the step and its part is on: it goes the other way first
+        # and turns inside the step (from rest through the extreme of a tilt: 0.5
+        # µm off the path, test_controller_truth's found programs)
+        j = np.flatnonzero((sg[1:] != 0) & (sg[:-1] == 0)) + 1
+        j = j[(j - off >= 0) & (j - off < n) & (came[j] == sg[j])]
+        j = j[sg[j] * (p[j] - p[j - 1]) < 0.0]
+        kb, new_b, ta_b, tb_b = _sets_off_back(
+            j - off,
+            sg[j],
+            p[j - 1],
+            V_all[j - 1, col],
+            p[j],
+            V_all[j, col],
+            t_end,
+            dt,
+            tol,
+            longest,
+            edge_speed,
+            col,
+            chords,
+        )
+        w_k.append(kb)
+        w_ta.append(ta_b)
+        w_tb.append(tb_b)
+        w_col.append(np.full(len(kc) + len(ks) + len(km) + len(kd) + len(kb), col))
+        w_new.append(np.concatenate([new[crept_f], new[stood], new[mid], new_d, new_b]))
     if w_col:
         wk = np.concatenate(w_k)
         ta, tb = np.concatenate(w_ta), np.concatenate(w_tb)

@@ -555,6 +555,86 @@ ENCLOSURE_ARC_WITH_A_TILT = (
     "G3 X0.250000 Y-0.250000 Z-9.100000 A0.0000 B-0.2500 I0.500000 J0.000000 F800.0\n"
     "G0 X0.250000 Y-0.250000 Z0.000000\nM2\n"
 )
+#: found by truth_search.py (cam, PVT, machine 12), 2026-11-24, failing on the code
+#: before this stop too: a window of CAMotics' compass.ngc (line 4 on, tests/data/
+#: gcode/corpus, GPL-2.0-or-later; moved to the origin), a plunge and short lines
+#: at F400 with B swinging by up to 0.5° from line to line. The last line starts
+#: and ends at rest; U sets off 0.47 µm up, against the way it ends the line and
+#: its part is on, and turns down inside the line's first step: the points said
+#: "down" only, so U's part stood through the step, 0.500 µm off the path and
+#: 0.66 arcsec off the tool axis. U now crosses up as it sets off and down at its
+#: cubic's root (reversals._sets_off_back): 0.055 µm, 0.08 arcsec.
+COMPASS_SETS_OFF_BACK = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-2.982145 Y-4.009648 Z-5.000000 A0 B0\n"
+    "G0 X-2.982145 Y-4.009648 Z0.000000\n"
+    "G0 X2.611142 Y4.009648 Z0.000000\n"
+    "G1 X2.611142 Y4.009648 Z-9.850000 A0.0000 B0.0000 F400.0\n"
+    "G1 X2.611986 Y3.991070 Z-9.850000 A0.0000 B0.0000 F400.0\n"
+    "G1 X2.623925 Y3.859688 Z-9.850000 A0.0000 B-0.1562 F400.0\n"
+    "G1 X2.625426 Y3.847328 Z-9.850000 A0.0000 B-0.2812 F400.0\n"
+    "G1 X2.647067 Y3.705130 Z-9.850000 A0.0000 B0.0312 F400.0\n"
+    "G1 X2.649304 Y3.692925 Z-9.850000 A0.0000 B0.0625 F400.0\n"
+    "G1 X2.679499 Y3.552262 Z-9.850000 A0.0000 B0.2812 F400.0\n"
+    "G1 X2.682476 Y3.540183 Z-9.850000 A0.0000 B0.0625 F400.0\n"
+    "G1 X2.721096 Y3.401650 Z-9.850000 A0.0000 B0.0938 F400.0\n"
+    "G1 X2.724800 Y3.389764 Z-9.850000 A0.0000 B0.1875 F400.0\n"
+    "G1 X2.771724 Y3.253781 Z-9.850000 A0.0000 B0.2188 F400.0\n"
+    "G1 X2.776132 Y3.242158 Z-9.850000 A0.0000 B0.2188 F400.0\n"
+    "G1 X2.831179 Y3.109262 Z-9.850000 A0.0000 B0.1562 F400.0\n"
+    "G1 X2.836286 Y3.097915 Z-9.850000 A0.0000 B-0.3438 F400.0\n"
+    "G1 X2.899236 Y2.968629 Z-9.850000 A0.0000 B-0.3438 F400.0\n"
+    "G1 X2.905040 Y2.957572 Z-9.850000 A0.0000 B0.0938 F400.0\n"
+    "G1 X2.975678 Y2.832327 Z-9.850000 A0.0000 B0.1250 F400.0\n"
+    "G1 X2.982145 Y2.821628 Z-9.850000 A0.0000 B-0.2188 F400.0\n"
+    "M2\n"
+)
+#: found by truth_search.py (cam, PVT, machine 14), 2026-11-24, failing on the code
+#: before this stop too: a window of led_floor's Fusion 360 program 1078 (line 15 on,
+#: tests/data/gcode/corpus, Apache-2.0; moved to the origin): plunges, then a large
+#: arc into one of 0.24 mm radius at F1000 with B tilting by 0.03°. Table motor X
+#: reverses on the small arc, which turns the path by 0.7 rad a step: judged along
+#: the path's direction at the step's end, the window stood longer on the side
+#: where X's standing part pushed the tip on, 1.0037 x F. The direction is now
+#: taken at the root (Pipeline._edge_speed): 1.00030 x.
+LED_FLOOR_SMALL_ARC_WITH_A_TILT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X0.501000 Y-17.588000 Z-10.000000 A0 B0\n"
+    "G0 X-0.846000 Y15.593000 Z-10.000000\n"
+    "G0 X-0.846000 Y15.593000 Z0.000000\n"
+    "G1 X-0.846000 Y15.593000 Z-5.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X-0.846000 Y15.593000 Z-6.930000 A0.0000 B0.0000 F333.3\n"
+    "G1 X-0.846000 Y15.593000 Z-11.983000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X-0.839000 Y15.601000 Z-11.983000 A0.0000 B0.0000 F1000.0\n"
+    "G2 X0.846000 Y17.236000 Z-11.983000 A0.0000 B0.0000 I17.207000 J-16.045000 F1000.0\n"
+    "G3 X0.846000 Y17.588000 Z-11.983000 A0.0000 B-0.0312 I-0.156000 J0.176000 F1000.0\n"
+    "M2\n"
+)
+#: found by truth_search.py (cam, corrected G-code, machine 31), 2026-11-24: a
+#: window of led_floor's program 1078 (line 1796 on, Apache-2.0; moved to the
+#: origin), two short lines and a helical half circle of 0.25 mm radius tilting B
+#: at F250. Table motor X reverses on the arc with the root near its window's end:
+#: its part stood where X left it, 10.6 nm ahead of the path at the window's end,
+#: and the 0.26 ms straight line after the window took X back to the path while the
+#: part stood on, 1.0035 x F. With straight lines a window now stands no longer
+#: before its root than after it (reversals.windows' chords): 1.00018 x. (This
+#: stop's windows, shorter on the side of the root where the part's standing pushes
+#: the tip on, had made such windows.)
+LED_FLOOR_HELIX_WITH_A_TILT = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X0.226000 Y-0.036500 Z0.000000 A0 B0\n"
+    "G1 X0.244000 Y-0.002500 Z0.000000 A0.0000 B0.0000 F250.0\n"
+    "G1 X0.250000 Y0.036500 Z0.000000 A0.0000 B0.0000 F250.0\n"
+    "G3 X-0.250000 Y0.036500 Z-0.500000 A0.0000 B0.2500 I-0.250000 J0.000000 F250.0\n"
+    "M2\n"
+)
+#: found by truth_search.py (cam, corrected G-code, machine 22), 2026-11-24: a
+#: window of Universal G-Code Sender's enclosure.nc (line 1770 on, GPL-3.0; moved
+#: to the origin), an arc tilting A by 0.25° into a line at F500: the same as
+#: LED_FLOOR_HELIX_WITH_A_TILT, 1.0014 x F; now 1.000001 x.
+ENCLOSURE_ARC_INTO_A_LINE = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-1.237800 Y-1.216250 Z0.000000 A0 B0\n"
+    "G3 X-0.410400 Y-1.215650 Z0.000000 A-0.2500 B0.0000 I0.413500 J0.281100 F500.0\n"
+    "G1 X1.237800 Y1.216250 Z0.000000 A-0.2500 B0.0000 F500.0\n"
+    "M2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -588,6 +668,10 @@ FOUND = [
     (12, COMPASS_WITH_A_TILT),
     (21, TBALL_WITH_A_TILT),
     (22, ENCLOSURE_ARC_WITH_A_TILT),
+    (12, COMPASS_SETS_OFF_BACK),
+    (14, LED_FLOOR_SMALL_ARC_WITH_A_TILT),
+    (31, LED_FLOOR_HELIX_WITH_A_TILT),
+    (22, ENCLOSURE_ARC_INTO_A_LINE),
 ]
 FOUND_IDS = [
     "creep",
@@ -622,10 +706,39 @@ FOUND_IDS = [
     "compass-with-a-tilt-F400",
     "tball-with-a-tilt-F1016",
     "enclosure-arc-with-a-tilt-F800",
+    "compass-sets-off-back-F400",
+    "led-floor-small-arc-with-a-tilt-F1000",
+    "led-floor-helix-with-a-tilt-F250",
+    "enclosure-arc-into-a-line-F500",
 ]
 
 
-@pytest.mark.parametrize(("seed", "text"), FOUND, ids=FOUND_IDS)
+#: ENCLOSURE_ARC_INTO_A_LINE as PVT: 1.0025 x F on the code before this stop, 1.0024
+#: x now. Table motor Y reverses on the arc about 0.9 ms into its 1 ms window (the
+#: step's cubic put the root mid-window; on the path it lies near the window's
+#: end): its part, left where Y left it at the window's start, is 45 nm ahead of
+#: the path at the window's end, and the next step's cubic, with the path's
+#: velocity there (0.006 mm/s), turns Y back while the part stands. Windows no
+#: longer before the root than after it (as for corrected G-code) made it 1.00099 x
+#: but took led-floor-small-arc-with-a-tilt to 1.0016 x; refining the root on the
+#: path (a Newton step and a secant through the planned velocity) left it at
+#: 1.0052 x and took led-floor-helix-with-a-tilt to 1.0011 x as G-code. Open: a
+#: window must end where the part can be met moving the new way.
+PVT_OPEN = {"enclosure-arc-into-a-line-F500"}
+FOUND_PVT = [
+    pytest.param(
+        seed,
+        text,
+        id=name,
+        marks=[pytest.mark.xfail(strict=True, reason="open: see PVT_OPEN")]
+        if name in PVT_OPEN
+        else [],
+    )
+    for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True)
+]
+
+
+@pytest.mark.parametrize(("seed", "text"), FOUND_PVT)
 def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, text: str) -> None:
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text)
