@@ -12,14 +12,18 @@ of it while the path goes on. So the jump gets a window of its own:
   points at t_r ± δ/2. Inside the window the part stands at the extremum while
   the motor crosses; it misses the true path by at most |A| (δ/2)² / 2 for the
   motor's acceleration A at the reversal, so δ = sqrt(8 tol / |A|), at most the
-  profile's ``reversal_ms``;
+  profile's ``reversal_ms``; on each side of the root no longer than keeps the
+  tip's speed within CROSSING_SPEED_SHARE of F (the motor's lever on the tip,
+  ``edge_speed``), so shorter on the side where the standing part pushes the tip
+  on;
 - a reversal at rest (the path stood still at the previous point, the motor
   leaves the other way): one more point at the same pose, δ later, at which the
   motor has crossed; the path waits for it;
 - a dip (the motor moves the same way at both ends of a step, but the step's
   cubic turns back and on again inside it: a tight curve's extreme between two
   points): two windows, one at each turning point, when the dip is deeper than
-  the tolerance.
+  the tolerance; and the same where a motor sets off from rest or standing the
+  other way first (:func:`_sets_off_back`).
 
 After a crossing the part is brought back onto its wanted position along the path
 (:func:`catch_up`). At a corner taken at speed where the motor stands on one side
@@ -296,7 +300,8 @@ def windows(
     db > da, and the straight line after the window, carrying no velocity, goes
     back to the path there while the part stands on (0.35 % over F,
     test_controller_truth's found programs). A PVT cubic leaves the window with the
-    path's velocity and takes the difference up along its step.
+    path's velocity and takes the difference up along its step, unless that step is
+    a sliver: then the window grows over it.
     """
     n = len(t_root)
     with np.errstate(divide="ignore"):
