@@ -23,7 +23,7 @@ of it while the path goes on. So the jump gets a window of its own:
   cubic turns back and on again inside it: a tight curve's extreme between two
   points): two windows, one at each turning point, when the dip is deeper than
   the tolerance; and the same where a motor sets off from rest or standing the
-  other way first (:func:`_sets_off_back`).
+  other way first (:func:`_dips`).
 
 After a crossing the part is brought back onto its wanted position along the path
 (:func:`catch_up`). At a corner taken at speed where the motor stands on one side
@@ -392,6 +392,7 @@ def _dips(
     edge_speed: EdgeSpeed | None = None,
     col: int = 0,
     chords: bool = False,
+    sets_off: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The two crossings of every step ``k`` whose cubic turns back and on again
     while the motor moves the same way (``sg``) at both of its ends.
@@ -404,14 +405,25 @@ def _dips(
 
     Returns (step, new side, window start, window end) for 2 m windows, the first
     crossing of every dip before the second.
+
+    With ``sets_off``, the steps that a motor leaves from rest, or standing, the
+    way against ``sg``, the way it ends the step moving and its part is on: it
+    crosses to −sg as it sets off (a window about the step's start) and back at
+    the root where its cubic turns to ``sg`` (a window there), each in its own part
+    of the step; left alone where it goes back no further than ``tol``.
     """
     h = dt[k]
-    s1, s2 = turning_points(P0, V0, P1, V1, h)
-    turns = np.isfinite(s1)
-    k, sg, h, s1, s2 = k[turns], sg[turns], h[turns], s1[turns], s2[turns]
-    P0, V0, P1, V1 = P0[turns], V0[turns], P1[turns], V1[turns]
-    p = _hermite(P0, V0, P1, V1, h, np.column_stack([s1, s2]))
-    deep = np.abs(p[:, 1] - p[:, 0]) > tol
+    if sets_off:
+        s2, _ = velocity_roots(P0, V0, P1, V1, h, sg)
+        s1 = np.zeros(len(k))
+        deep = (np.abs(_hermite(P0, V0, P1, V1, h, s2[:, None])[:, 0] - P0) > tol) & (s2 > 0)
+    else:
+        s1, s2 = turning_points(P0, V0, P1, V1, h)
+        turns = np.isfinite(s1)
+        k, sg, h, s1, s2 = k[turns], sg[turns], h[turns], s1[turns], s2[turns]
+        P0, V0, P1, V1 = P0[turns], V0[turns], P1[turns], V1[turns]
+        p = _hermite(P0, V0, P1, V1, h, np.column_stack([s1, s2]))
+        deep = np.abs(p[:, 1] - p[:, 0]) > tol
     k, sg, h, s1, s2 = k[deep], sg[deep], h[deep], s1[deep], s2[deep]
     a, b, _ = _velocity_quadratic(P0[deep], V0[deep], P1[deep], V1[deep], h)
     t1 = t_end[k]
@@ -421,54 +433,6 @@ def _dips(
     w1 = None if edge_speed is None else reach(edge_speed(k, s1, col, A1), A1)
     w2 = None if edge_speed is None else reach(edge_speed(k, s2, col, A2), A2)
     ta1, tb1 = windows(t0, tm, t0 + s1 * h, A1, tol, longest, w1, chords)
-    ta2, tb2 = windows(tm, t1, t0 + s2 * h, A2, tol, longest, w2, chords)
-    return (
-        np.concatenate([k, k]),
-        np.concatenate([-sg, sg]),
-        np.concatenate([ta1, ta2]),
-        np.concatenate([tb1, tb2]),
-    )
-
-
-def _sets_off_back(
-    k: np.ndarray,
-    sg: np.ndarray,
-    P0: np.ndarray,
-    V0: np.ndarray,
-    P1: np.ndarray,
-    V1: np.ndarray,
-    t_end: np.ndarray,
-    dt: np.ndarray,
-    tol: float,
-    longest: float,
-    edge_speed: EdgeSpeed | None = None,
-    col: int = 0,
-    chords: bool = False,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The two crossings of every step ``k`` that a motor leaves from rest, or
-    standing, the way against ``sg``, the way it ends the step moving and its part
-    is on: it crosses to −sg as it sets off (a window about the step's start) and
-    back at the root where its cubic turns to ``sg`` (a window there), each in its
-    own part of the step, as a dip's (:func:`_dips`). Left alone where it goes back
-    no further than ``tol``: its part stands meanwhile.
-
-    Returns (step, new side, window start, window end) for 2 m windows, the first
-    crossing of every step before the second.
-    """
-    h = dt[k]
-    s2, A2 = velocity_roots(P0, V0, P1, V1, h, sg)
-    deep = np.abs(_hermite(P0, V0, P1, V1, h, s2[:, None])[:, 0] - P0) > tol
-    deep &= s2 > 0
-    k, sg, h, s2, A2 = k[deep], sg[deep], h[deep], s2[deep], A2[deep]
-    _, b, _ = _velocity_quadratic(P0[deep], V0[deep], P1[deep], V1[deep], h)
-    A1 = b / h
-    t1 = t_end[k]
-    t0 = t1 - h
-    tm = t0 + 0.5 * s2 * h
-    zero = np.zeros(len(k))
-    w1 = None if edge_speed is None else reach(edge_speed(k, zero, col, A1), A1)
-    w2 = None if edge_speed is None else reach(edge_speed(k, s2, col, A2), A2)
-    ta1, tb1 = windows(t0, tm, t0, A1, tol, longest, w1, chords)
     ta2, tb2 = windows(tm, t1, t0 + s2 * h, A2, tol, longest, w2, chords)
     return (
         np.concatenate([k, k]),
@@ -718,53 +682,40 @@ def plan_insertions(
         # a dip: the motor moves the same way at both ends of a step, but the step's
         # cubic turns twice inside it (the extreme of a tight curve between two
         # points, or a corner whose point carries the mean of its sides' velocities)
-        j = np.flatnonzero((sg[1:] == sg[:-1]) & (sg[1:] != 0)) + 1
-        j = j[(j - off >= 0) & (j - off < n)]
-        kd, new_d, ta_d, tb_d = _dips(
-            j - off,
-            sg[j],
-            p[j - 1],
-            V_all[j - 1, col],
-            p[j],
-            V_all[j, col],
-            t_end,
-            dt,
-            tol,
-            longest,
-            edge_speed,
-            col,
-            chords,
-        )
-        w_k.append(kd)
-        w_ta.append(ta_d)
-        w_tb.append(tb_d)
+        j_dip = np.flatnonzero((sg[1:] == sg[:-1]) & (sg[1:] != 0)) + 1
+        j_dip = j_dip[(j_dip - off >= 0) & (j_dip - off < n)]
         # setting off back: a motor at rest or standing leaves with its chord against
         # the way it ends the step and its part is on: it goes the other way first
         # and turns inside the step (from rest through the extreme of a tilt: 0.5
         # µm off the path, test_controller_truth's found programs)
-        j = np.flatnonzero((sg[1:] != 0) & (sg[:-1] == 0)) + 1
-        j = j[(j - off >= 0) & (j - off < n) & (came[j] == sg[j])]
-        j = j[sg[j] * (p[j] - p[j - 1]) < 0.0]
-        kb, new_b, ta_b, tb_b = _sets_off_back(
-            j - off,
-            sg[j],
-            p[j - 1],
-            V_all[j - 1, col],
-            p[j],
-            V_all[j, col],
-            t_end,
-            dt,
-            tol,
-            longest,
-            edge_speed,
-            col,
-            chords,
-        )
-        w_k.append(kb)
-        w_ta.append(ta_b)
-        w_tb.append(tb_b)
-        w_col.append(np.full(len(kc) + len(ks) + len(km) + len(kd) + len(kb), col))
-        w_new.append(np.concatenate([new[crept_f], new[stood], new[mid], new_d, new_b]))
+        j_off = np.flatnonzero((sg[1:] != 0) & (sg[:-1] == 0)) + 1
+        j_off = j_off[(j_off - off >= 0) & (j_off - off < n) & (came[j_off] == sg[j_off])]
+        j_off = j_off[sg[j_off] * (p[j_off] - p[j_off - 1]) < 0.0]
+        news = [new[crept_f], new[stood], new[mid]]
+        for j, sets_off in ((j_dip, False), (j_off, True)):
+            kd, new_d, ta_d, tb_d = _dips(
+                j - off,
+                sg[j],
+                p[j - 1],
+                V_all[j - 1, col],
+                p[j],
+                V_all[j, col],
+                t_end,
+                dt,
+                tol,
+                longest,
+                edge_speed,
+                col,
+                chords,
+                sets_off,
+            )
+            w_k.append(kd)
+            w_ta.append(ta_d)
+            w_tb.append(tb_d)
+            news.append(new_d)
+        new_all = np.concatenate(news)
+        w_col.append(np.full(len(new_all), col))
+        w_new.append(new_all)
     if w_col:
         wk = np.concatenate(w_k)
         ta, tb = np.concatenate(w_ta), np.concatenate(w_tb)
