@@ -289,6 +289,20 @@ def ik_derivative(
     return (kinematics.inverse(geo, q + step * dq, tool).P - P) / step
 
 
+def ik_jacobian(
+    geo: kinematics.Geometry, q: np.ndarray, tool: np.ndarray, step: float
+) -> np.ndarray:
+    """(N, 5, 5) ∂P_i/∂q_j at poses ``q`` (N, 5) [mm, mm, mm, deg, deg]: the IK's
+    one-sided differences over ``step`` along each coordinate, as
+    :func:`ik_derivative`, the pose and its five steps in one IK call."""
+    m = len(q)
+    q6 = np.tile(q, (6, 1))
+    for j in range(5):
+        q6[(j + 1) * m : (j + 2) * m, j] += step
+    P6 = kinematics.inverse(geo, q6, np.tile(tool, 6)).P
+    return np.stack([(P6[(j + 1) * m : (j + 2) * m] - P6[:m]) / step for j in range(5)], axis=2)
+
+
 @dataclass
 class Planned:
     """A chunk through the planner (:meth:`Planning.plan`), ready for its points.
@@ -863,17 +877,7 @@ class Pipeline:
         def forward_jacobian(k: np.ndarray) -> np.ndarray:
             new = np.unique(k[~done[k]])
             if new.size:
-                q, tool = pc.q_target[new], pc.tool_length[new]
-                m = len(new)
-                # the pose and its five steps in one IK: (6 m, 5)
-                q6 = np.tile(q, (6, 1))
-                for j in range(5):
-                    q6[(j + 1) * m : (j + 2) * m, j] += DIR_STEP_MM
-                P6 = kinematics.inverse(self.geo, q6, np.tile(tool, 6)).P
-                jac = np.stack(
-                    [(P6[(j + 1) * m : (j + 2) * m] - P6[:m]) / DIR_STEP_MM for j in range(5)],
-                    axis=2,
-                )  # ∂P_i / ∂q_j
+                jac = ik_jacobian(self.geo, pc.q_target[new], pc.tool_length[new], DIR_STEP_MM)
                 ok = np.all(np.isfinite(jac), axis=(1, 2))
                 if np.any(ok):
                     try:
@@ -1068,13 +1072,8 @@ class Pipeline:
         digit = self.written.digit
         if self.written.space == "motor" or not len(q):
             return np.full(len(q), digit)
-        P = kinematics.inverse(self.geo, q, tool).P
-        gain = np.zeros(len(q))
-        for j in range(5):
-            dq = np.zeros_like(q)
-            dq[:, j] = 1.0
-            gain += np.abs(ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)[:, col])
-        return digit * gain
+        jac = ik_jacobian(self.geo, q, tool, DIR_STEP_MM)
+        return digit * np.abs(jac[:, col, :]).sum(axis=1)
 
     def _catch_up(
         self,
