@@ -987,7 +987,8 @@ class Pipeline:
         carried on from the last contact, where it meets the corrected command.
 
         A part meets its motor off its wanted position (where it stood, behind the
-        path by up to the reversal allowance) and is brought back along the path
+        path by up to the reversal allowance, or ahead of it where the window stood
+        longer before its root than after it) and is brought back along the path
         (:func:`.reversals.catch_up`), before the motor's next crossing begins; what
         is left at the chunk's end goes on in the next.
         """
@@ -1094,8 +1095,17 @@ class Pipeline:
         off0 = np.asarray(off0, dtype=float)
         start = np.asarray(start, dtype=int)
         way = side[np.maximum(start, 0), col]
+        # the motor's wanted moves into each point (the first from the last point
+        # made): a part left ahead of its way is taken up no faster than they go
+        P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
+        dP = np.diff(pc.P_ideal[:, col], prepend=P_before)
         idx, off, slope, left = reversals.catch_up(
-            off0, way, start, np.asarray(stop, dtype=int), s_path
+            off0,
+            way,
+            start,
+            np.asarray(stop, dtype=int),
+            s_path,
+            motion=(dP, pc.V_ideal[:, col], pc.speed),
         )
         if len(left) and left[-1] != 0.0:
             self.catch[col] = float(left[-1])

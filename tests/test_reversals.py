@@ -439,6 +439,90 @@ def test_a_part_behind_its_motor_is_brought_back_at_a_share_of_the_path_speed() 
     assert len(ahead[0]) == 0
 
 
+def test_a_part_ahead_of_its_motor_is_taken_up_no_faster_than_its_motor_moves() -> None:
+    """A window that stood longer before its root than after it leaves the part
+    ahead of its motor's way: 0.05 µm above a motor now moving up (offset +0.05 µm,
+    side +1). Taken up at the share of the path (0.01 µm a 0.05 mm step), but over
+    step 4, where the motor moves up only 0.004 µm, by half that: the command
+    (wanted + offset) never goes back down, so the motor never leaves its part."""
+    share = 2e-4
+    s_path = 0.05 * np.arange(1, 21)
+    dP = np.full(20, 1e-3)
+    dP[4] = 0.004e-6
+    V = np.full(20, 0.1)
+    speed = np.full(20, 5.0)
+    idx, off, slope, left = reversals.catch_up(
+        np.array([0.05e-3]),
+        np.array([1]),
+        np.array([2]),
+        np.array([20]),
+        s_path,
+        share,
+        motion=(dP, V, speed),
+    )
+    assert idx.tolist() == [3, 4, 5, 6, 7]
+    np.testing.assert_allclose(
+        off, [0.04e-3, 0.039998e-3, 0.029998e-3, 0.019998e-3, 0.009998e-3], atol=1e-15
+    )
+    # mm/s: 1 µm/s, slower up; the last bit over the step after it
+    np.testing.assert_allclose(slope * 5.0, [-1e-3] * 4 + [-0.9998e-3])
+    assert left.tolist() == [0.0]
+    command = np.cumsum(dP)
+    command[idx] += off
+    command[2] += 0.05e-3  # where the window ended: the part's own position
+    assert np.all(np.diff(command[2:]) > 0)
+    # where the motor goes up slower than the share, so does the offset's rate
+    slow = np.full(20, 0.002)
+    _, _, slope, _ = reversals.catch_up(
+        np.array([0.05e-3]),
+        np.array([1]),
+        np.array([2]),
+        np.array([20]),
+        s_path,
+        share,
+        motion=(dP, slow, speed),
+    )
+    np.testing.assert_allclose(slope[:-1] * 5.0, -0.001)  # half the motor's 2 µm/s
+
+
+@given(
+    off=st.floats(1e-6, 1e-3),
+    moves=st.lists(st.floats(0.0, 2e-3), min_size=3, max_size=30),
+    ds=st.floats(1e-3, 0.5),
+    way=st.sampled_from([-1, 1]),
+)
+def test_a_part_ahead_never_sees_its_command_turn_back(
+    off: float, moves: list[float], ds: float, way: int
+) -> None:
+    """Whatever the motor's moves its way (some none at all): the command, wanted
+    plus offset, never goes back; the offset only shrinks, by no more than the
+    share of the path a step, and what is left at the chunk's end is carried."""
+    share = 5e-5
+    n = len(moves)
+    dP = way * np.array(moves)
+    s_path = ds * np.arange(1, n + 1)
+    idx, o, _slope, left = reversals.catch_up(
+        np.array([way * off]),
+        np.array([way]),
+        np.array([0]),
+        np.array([n]),
+        s_path,
+        share,
+        motion=(dP, dP / 0.01, np.full(n, ds / 0.01)),
+    )
+    full = np.zeros(n)
+    full[idx] = o
+    full[0] = way * off
+    mag = way * full[1:]
+    assert np.all(mag >= 0)
+    taken = np.diff(np.concatenate([[off], mag]))
+    assert np.all(taken <= 1e-18)
+    assert np.all(-taken <= share * ds * (1 + 1e-9) + 1e-18)
+    assert np.all(-taken <= 0.5 * way * dP[1:] * (1 + 1e-9) + 1e-18)
+    assert np.all(way * np.diff(np.cumsum(dP) + full) >= -1e-18)
+    assert left[0] == pytest.approx(full[-1], abs=1e-18)
+
+
 def test_a_catch_up_is_gone_where_the_next_crossing_begins() -> None:
     """The motor's next crossing begins at point 5, 3 steps (0.15 mm of path) after
     this one ends: the offset must be gone there (the next crossing's extreme is
