@@ -801,6 +801,7 @@ class Pipeline:
             # truth's found programs); the tolerance alone sizes them
             self._edge_speed(plan, s, pc) if self.limits.segment == "cubic" else None,
             self.limits.segment != "cubic",
+            self._path_velocity(plan, s, pc),
         )
         self.near_next = ins.near_next
         if ins.blended.size:
@@ -841,6 +842,31 @@ class Pipeline:
         cols = np.concatenate([ins.w_col, np.array([c for _, c, _ in ins.stands], dtype=int)])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
         return pc, side, contacts[np.lexsort((cols, begs, ends))]
+
+    def _path_velocity(
+        self, plan: Plan | None, s: Samples, pc: PointChunk
+    ) -> reversals.Velocity | None:
+        """The wanted velocity of a motor inside the chunk's steps, from the plan
+        (:data:`.reversals.Velocity`): the error map, the IK and its velocity at the
+        pose the plan has there. NaN in a step that begins in another block (its
+        start is not in the row's block). None without a plan."""
+        if plan is None:
+            return None
+
+        def velocity(k: np.ndarray, frac: np.ndarray, col: int) -> np.ndarray:
+            out = np.full(len(k), np.nan)
+            tau = s.tau[k] - (1.0 - frac) * pc.dt[k]
+            inside = s.tau[k] - pc.dt[k] >= 0.0
+            if np.any(inside):
+                kk = k[inside]
+                q, qdot = at_times(plan, s.block[kk], tau[inside])
+                q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
+                tool = s.tool_length[kk]
+                P = kinematics.inverse(self.geo, q_t, tool).P
+                out[inside] = self._ik_velocity(q_t, qdot, tool, P)[:, col]
+            return out
+
+        return velocity
 
     def _edge_speed(self, plan: Plan | None, s: Samples, pc: PointChunk) -> reversals.EdgeSpeed:
         """How fast a motor may move while its part stands in a crossing window,

@@ -46,6 +46,17 @@ import numpy as np
 #: (:func:`plan_insertions`)
 EdgeSpeed = Callable[[np.ndarray, np.ndarray, int, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
+#: The path's own velocity of a motor [mm/s] at fractions ``frac`` (m,) of steps
+#: ``k`` (m,) of the chunk, for motor ``col``: what the points sample, not the
+#: step's cubic between them; NaN where it is not known (:func:`path_roots`).
+Velocity = Callable[[np.ndarray, np.ndarray, int], np.ndarray]
+
+#: False-position steps that move a reversal's root from the step's cubic onto the
+#: path, and the half width [fraction of the step] of the central difference that
+#: gives the path's acceleration there (:func:`path_roots`).
+ROOT_STEPS = 4
+ROOT_SLOPE_STEP = 1e-3
+
 #: A planned motor velocity below this [mm/s] gives no direction: a motor creeping
 #: (a table following the head's parasitic motion by nanometres) does not make the
 #: part cross its play at every wobble; its drift is watched instead (DRIFT_SHARE).
@@ -266,6 +277,94 @@ def velocity_roots(
         linear = np.where(V0 != V1, V0 / (V0 - V1), 0.5)
     s = np.clip(np.where(np.isnan(best), linear, best), 0.0, 1.0)
     return s, (2.0 * a * s + b) / h
+
+
+def path_roots(
+    s: np.ndarray,
+    accel: np.ndarray,
+    V0: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    new: np.ndarray,
+    k: np.ndarray,
+    col: int,
+    velocity: Velocity,
+    steps: int = ROOT_STEPS,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The roots ``s`` of steps' cubics (:func:`velocity_roots`) moved onto the
+    path's own velocity, and its acceleration there.
+
+    The cubic through a step's ends puts the root where the Hermite's velocity
+    turns, which for a motor turning slowly is not where the path's does: a
+    table motor on a tilting arc (40 mm/s² by the cubic, 1.7 mm/s² on the path,
+    test_controller_truth's led-floor-tiny-arc-as-lines) had it 1 ms late in a
+    9 ms step; on fast turns the two agree within a microsecond. Where the
+    path's velocity goes from the old way (V0 · new < 0) to the new (V1 · new >
+    0) over the step, false position from ``s`` keeps the root bracketed by the
+    fractions where it was seen on either side,
+
+        s' = s_a − v_a (s_b − s_a) / (v_b − v_a),
+
+    with the Illinois rule (an end kept twice running has its v halved),
+    and the acceleration is a central difference of the path's velocity about
+    the new root. Elsewhere (a motor setting off from a stand, a velocity not known
+    there) the cubic's root and acceleration are kept.
+
+    Parameters
+    ----------
+    s, accel : (m,) the cubic's roots [fraction of the step] and accelerations
+        there [mm/s²]
+    V0, V1 : (m,) the path's velocity at the steps' start and end [mm/s]
+    h : (m,) the steps' durations [s]
+    new : (m,) the way each motor turns to (+1, −1)
+    k : (m,) the steps (rows of the chunk)
+    col : the motor
+    velocity : the path's velocity inside steps (:data:`Velocity`)
+    steps : false-position steps
+
+    Returns
+    -------
+    s, accel : (m,)
+    """
+    ok = (new * V0 < 0) & (new * V1 > 0)
+    if not np.any(ok):
+        return s, accel
+    s_a, v_a = np.zeros(len(s)), V0.astype(float)
+    s_b, v_b = np.ones(len(s)), V1.astype(float)
+    x = s.copy()
+    last = np.zeros(len(s), dtype=int)  # the end moved last: −1 a, +1 b
+    for _ in range(steps):
+        v = velocity(k[ok], x[ok], col)
+        known = np.zeros(len(s), dtype=bool)
+        known[ok] = np.isfinite(v)
+        vm = np.zeros(len(s))
+        vm[ok] = np.where(np.isfinite(v), v, 0.0)
+        ok &= known
+        turned = ok & (new * vm > 0)
+        old = ok & ~turned
+        # Illinois: an end kept twice running has its velocity halved, so that
+        # false position closes in from both sides
+        v_a = np.where(turned & (last == 1), 0.5 * v_a, v_a)
+        v_b = np.where(old & (last == -1), 0.5 * v_b, v_b)
+        last = np.where(turned, 1, np.where(old, -1, last))
+        s_b, v_b = np.where(turned, x, s_b), np.where(turned, vm, v_b)
+        s_a, v_a = np.where(old, x, s_a), np.where(old, vm, v_a)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x_new = s_a - v_a * (s_b - s_a) / (v_b - v_a)
+        x = np.where(ok & np.isfinite(x_new), np.clip(x_new, s_a, s_b), x)
+        if not np.any(ok):
+            return s, accel
+    # the acceleration at the root: a central difference over ±ROOT_SLOPE_STEP of
+    # the step (false position closes in from one side, and the bracket's other
+    # end may stay at the step's end, too far for a slope at the root)
+    d = ROOT_SLOPE_STEP
+    lo, hi = np.clip(x[ok] - d, 0.0, 1.0), np.clip(x[ok] + d, 0.0, 1.0)
+    both = velocity(np.concatenate([k[ok], k[ok]]), np.concatenate([lo, hi]), col)
+    slope = np.full(len(s), np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope[ok] = (both[len(lo) :] - both[: len(lo)]) / ((hi - lo) * h[ok])
+    moved = ok & np.isfinite(slope)
+    return np.where(moved, x, s), np.where(moved, slope, accel)
 
 
 def windows(
@@ -572,6 +671,7 @@ def plan_insertions(
     near_first: float = 0.0,
     edge_speed: EdgeSpeed | None = None,
     chords: bool = False,
+    velocity: Velocity | None = None,
 ) -> Insertions:
     """Find every reversal of the motors ``cols`` in a chunk of points and its window.
 
@@ -598,6 +698,9 @@ def plan_insertions(
         :func:`reach` of that on each side. None: the tolerance alone decides
     chords : the controller runs straight lines between the points (corrected
         G-code), not cubics (:func:`windows`)
+    velocity : the path's own velocity inside steps (:data:`Velocity`): a reversal
+        in motion is put at its root (:func:`path_roots`). None: at the root of the
+        step's cubic
     """
     ins = Insertions()
     n = len(dt)
@@ -670,6 +773,10 @@ def plan_insertions(
         km, rm = k[mid], r[mid]
         h = dt[km]
         sr, acc = velocity_roots(p[rm - 1], V_all[rm - 1, col], p[rm], V_all[rm, col], h, new[mid])
+        if velocity is not None and len(km):
+            sr, acc = path_roots(
+                sr, acc, V_all[rm - 1, col], V_all[rm, col], h, new[mid], km, col, velocity
+            )
         t1 = t_end[km]
         t0 = t1 - h
         wide = None if edge_speed is None else reach(edge_speed(km, sr, col, acc), acc)
@@ -927,7 +1034,8 @@ def catch_up(
     # the points up to where the offset is gone, or the next crossing begins; none
     # where there is no path to that crossing (the offset goes in its step, as it must)
     gone = np.searchsorted(s_path, s0 + np.abs(off0) / rate, "left")
-    # a part ahead: where it is gone depends on the motor's moves too (below)
+    # a part ahead: where it is gone depends on the motor's moves too (below); what
+    # they leave of it where the next crossing begins goes in the step to it
     end = np.where(ahead_way, np.minimum(stop, n), np.minimum(stop, gone))
     length = np.where(room > 0, np.maximum(end - first, 0), 0)
     idx = _ranges(first, length)

@@ -439,6 +439,72 @@ def test_a_part_behind_its_motor_is_brought_back_at_a_share_of_the_path_speed() 
     assert len(ahead[0]) == 0
 
 
+@given(
+    t_star=st.floats(0.1, 0.9),
+    accel=st.floats(50.0, 5000.0),
+    bend=st.floats(-0.9, 4.0),
+    new=st.sampled_from([-1, 1]),
+)
+def test_a_reversal_is_put_where_the_paths_own_velocity_turns(
+    t_star: float, accel: float, bend: float, new: int
+) -> None:
+    """A path whose motor velocity is new (A u + c u³), u = t − t*, over a 10 ms
+    step h, the cubic term up to 4 x the linear one a step away (c = bend A / h²;
+    no less than −0.9 x, so that the velocity turns only at t*):
+    the step's cubic, from the ends' positions and velocities alone, puts the
+    root elsewhere (it sees no c), and false position from there puts it within
+    1 µs of t* (a 250th of the shortest window), with the acceleration A there (a
+    central difference about it)."""
+    h = 0.01
+    c = bend * accel / h**2
+
+    def v(t: np.ndarray) -> np.ndarray:
+        u = t - t_star * h
+        return new * (accel * u + c * u**3)
+
+    def p(t: float) -> float:
+        u = t - t_star * h
+        return new * (accel * u**2 / 2 + c * u**4 / 4)
+
+    V0, V1 = v(np.array([0.0])), v(np.array([h]))
+    s, a = reversals.velocity_roots(
+        np.array([p(0.0)]), V0, np.array([p(h)]), V1, np.array([h]), np.array([new])
+    )
+
+    def velocity(k: np.ndarray, frac: np.ndarray, col: int) -> np.ndarray:
+        assert col == 3 and set(k.tolist()) == {7}
+        return v(frac * h)
+
+    s2, a2 = reversals.path_roots(
+        s, a, V0, V1, np.array([h]), np.array([new]), np.array([7]), 3, velocity
+    )
+    assert abs(s2[0] - t_star) * h < 1e-6
+    assert new * a2[0] == pytest.approx(accel, rel=1e-2)  # dv/dt at u = 0
+
+
+def test_a_reversal_keeps_its_cubics_root_where_the_path_is_not_known() -> None:
+    """A motor setting off from a stand (V0 = 0: no old way to bracket) and a step
+    whose path velocity is not known (NaN) keep the root of the step's cubic."""
+    s, a = np.array([0.4, 0.6]), np.array([100.0, 100.0])
+
+    def velocity(k: np.ndarray, frac: np.ndarray, col: int) -> np.ndarray:
+        return np.full(len(k), np.nan)
+
+    out = reversals.path_roots(
+        s,
+        a,
+        np.array([0.0, -1.0]),
+        np.array([1.0, 1.0]),
+        np.array([0.01, 0.01]),
+        np.array([1, 1]),
+        np.array([0, 1]),
+        0,
+        velocity,
+    )
+    np.testing.assert_array_equal(out[0], s)
+    np.testing.assert_array_equal(out[1], a)
+
+
 def test_a_part_ahead_of_its_motor_is_taken_up_no_faster_than_its_motor_moves() -> None:
     """A window that stood longer before its root than after it leaves the part
     ahead of its motor's way: 0.05 µm above a motor now moving up (offset +0.05 µm,
