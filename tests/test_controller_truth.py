@@ -681,6 +681,34 @@ LED_FLOOR_TINY_ARC_AS_LINES = (
     "G1 X9.378500 Y-8.611000 Z0.000000 A-1.0625 B0.0000 F1000.0\n"
     "M2\n"
 )
+#: A cam search (machine 31, G-code) on led_floor/cad/nc/1078_wall_27bit_slower_
+#: feeds_wider_light_holder_hole.nc line 145, moved into the workspace, the last
+#: arc tilted by 0.0625°: table motor Y reverses on the
+#: 0.22 mm arc at F1000 (1172 mm/s²) 0.07 ms before the end of a 0.77 ms step, so
+#: its window, cut at the step's end and not shifted, stands 0.29 ms before the
+#: root and 0.07 ms after it: over the window's straight line Y's part lacks a
+#: mean 0.13 mm/s the old way, and the tip runs 1.0029 x F (as on the code before
+#: this stop). Open for corrected G-code (GCODE_OPEN); as PVT, 1.00010 x.
+LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
+    "G0 X5.970500 Y-5.272000 Z0.000000 A0 B0\n"
+    "G1 X5.784500 Y-5.346000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X5.599500 Y-5.420000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G2 X-7.782500 Y3.927000 Z0.000000 A0.0000 B0.0000 I-3.410000 J9.370000 F1000.0\n"
+    "G1 X-7.781500 Y5.401000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X-7.777500 Y5.413000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X-7.766500 Y5.420000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X-7.754500 Y5.420000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X-6.274500 Y4.866000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X-6.265500 Y4.859000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X-6.261500 Y4.847000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X-6.262500 Y3.927000 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G3 X5.090500 Y-4.023000 Z0.000000 A0.0000 B0.0000 I8.460000 J0.000000 F1000.0\n"
+    "G3 X6.290500 Y-3.562000 Z0.000000 A0.0000 B0.0000 I-12.535000 J34.442000 F1000.0\n"
+    "G2 X7.490500 Y-3.101000 Z0.000000 A0.0000 B0.0000 I13.751000 J-34.025000 F1000.0\n"
+    "G2 X7.782500 Y-3.306000 Z0.000000 A-0.0625 B0.0000 I0.074000 J-0.205000 F1000.0\n"
+    "M2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -719,6 +747,7 @@ FOUND = [
     (31, LED_FLOOR_HELIX_WITH_A_TILT),
     (22, ENCLOSURE_ARC_INTO_A_LINE),
     (31, LED_FLOOR_TINY_ARC_AS_LINES),
+    (31, LED_FLOOR_ARC_REVERSES_AT_A_STEP_END),
 ]
 FOUND_IDS = [
     "creep",
@@ -758,6 +787,7 @@ FOUND_IDS = [
     "led-floor-helix-with-a-tilt-F250",
     "enclosure-arc-into-a-line-F500",
     "led-floor-tiny-arc-as-lines-F1000",
+    "led-floor-arc-reverses-at-a-step-end-F1000",
 ]
 
 
@@ -782,7 +812,26 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
     assert_within(judge_pmac(truth, motions, res, texts), None)
 
 
-@pytest.mark.parametrize(("seed", "text"), FOUND, ids=FOUND_IDS)
+#: Found programs still out of bounds as corrected G-code (strict xfails): a window
+#: cut at its step's end stands on one side of the root only, and a straight line
+#: averages the velocity its part lacks over it. What it needs: a window that may
+#: reach over the step's end (the planned point there moved to the window's end, or
+#: dropped inside it), so that it stays symmetric about the root.
+GCODE_OPEN = {"led-floor-arc-reverses-at-a-step-end-F1000"}
+FOUND_GCODE = [
+    pytest.param(
+        seed,
+        text,
+        id=name,
+        marks=[pytest.mark.xfail(strict=True, reason="open: see GCODE_OPEN")]
+        if name in GCODE_OPEN
+        else [],
+    )
+    for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True)
+]
+
+
+@pytest.mark.parametrize(("seed", "text"), FOUND_GCODE)
 def test_programs_the_search_found_run_as_linuxcnc_runs_them(seed: int, text: str) -> None:
     """The same programs as corrected G-code: a G43 with no move before the program
     end read a standing segment with the new tool, 35 mm off (the judge's, as for
