@@ -846,24 +846,32 @@ class Pipeline:
     def _path_velocity(
         self, plan: Plan | None, s: Samples, pc: PointChunk
     ) -> reversals.Velocity | None:
-        """The wanted velocity of a motor inside the chunk's steps, from the plan
-        (:data:`.reversals.Velocity`): the error map, the IK and its velocity at the
-        pose the plan has there. NaN in a step that begins in another block (its
-        start is not in the row's block). None without a plan."""
+        """The wanted velocity of motors inside the chunk's steps, from the plan
+        (:data:`.reversals.Velocity`): the IK and its velocity at the pose the plan
+        has there, as the points' (:meth:`_solve`). The error map's correction is
+        taken linear between the step's ends (it changes by µm over mm: its
+        curvature over a step is far below the rounding of the written numbers),
+        not evaluated again. NaN in a step that begins in another block (its start
+        is not in the row's block). None without a plan."""
         if plan is None:
             return None
+        # the map's correction at each point and at the point before the chunk
+        fix = pc.q - pc.q_target
+        fix_before = self.last.q[0] - self.last.q_target[0] if self.last is not None else fix[0]
 
-        def velocity(k: np.ndarray, frac: np.ndarray, col: int) -> np.ndarray:
+        def velocity(k: np.ndarray, frac: np.ndarray, cols: np.ndarray) -> np.ndarray:
             out = np.full(len(k), np.nan)
             tau = s.tau[k] - (1.0 - frac) * pc.dt[k]
             inside = s.tau[k] - pc.dt[k] >= 0.0
             if np.any(inside):
-                kk = k[inside]
+                kk, ff = k[inside], frac[inside][:, None]
                 q, qdot = at_times(plan, s.block[kk], tau[inside])
-                q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
+                e0 = np.where((kk >= 1)[:, None], fix[np.maximum(kk - 1, 0)], fix_before)
+                q_t = q - (e0 + ff * (fix[kk] - e0))
                 tool = s.tool_length[kk]
                 P = kinematics.inverse(self.geo, q_t, tool).P
-                out[inside] = self._ik_velocity(q_t, qdot, tool, P)[:, col]
+                V = self._ik_velocity(q_t, qdot, tool, P)
+                out[inside] = V[np.arange(len(kk)), cols[inside]]
             return out
 
         return velocity

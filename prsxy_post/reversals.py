@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
@@ -46,16 +47,21 @@ import numpy as np
 #: (:func:`plan_insertions`)
 EdgeSpeed = Callable[[np.ndarray, np.ndarray, int, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
-#: The path's own velocity of a motor [mm/s] at fractions ``frac`` (m,) of steps
-#: ``k`` (m,) of the chunk, for motor ``col``: what the points sample, not the
-#: step's cubic between them; NaN where it is not known (:func:`path_roots`).
-Velocity = Callable[[np.ndarray, np.ndarray, int], np.ndarray]
+#: ``velocity(k, frac, cols)``: the path's own velocity [mm/s] of motors ``cols``
+#: (m,) at fractions ``frac`` (m,) of steps ``k`` (m,) of the chunk: what the
+#: points sample, not the step's cubic between them; NaN where it is not known
+#: (:func:`path_roots`).
+Velocity = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 #: False-position steps that move a reversal's root from the step's cubic onto the
 #: path, and the half width [fraction of the step] of the central difference that
 #: gives the path's acceleration there (:func:`path_roots`).
 ROOT_STEPS = 4
 ROOT_SLOPE_STEP = 1e-3
+#: A root is taken as found where the path's velocity there is what its
+#: acceleration makes in this long [s]: a 250th of the shortest window
+#: (MIN_WINDOW_S). On fast turns the cubic's root is: one look at the path.
+ROOT_TIME_S = 1e-6
 
 #: A planned motor velocity below this [mm/s] gives no direction: a motor creeping
 #: (a table following the head's parasitic motion by nanometres) does not make the
@@ -287,7 +293,7 @@ def path_roots(
     h: np.ndarray,
     new: np.ndarray,
     k: np.ndarray,
-    col: int,
+    cols: np.ndarray,
     velocity: Velocity,
     steps: int = ROOT_STEPS,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -306,8 +312,10 @@ def path_roots(
         s' = s_a − v_a (s_b − s_a) / (v_b − v_a),
 
     with the Illinois rule (an end kept twice running has its v halved),
-    and the acceleration is a central difference of the path's velocity about
-    the new root. Elsewhere (a motor setting off from a stand, a velocity not known
+    until the path's velocity there is what the acceleration makes in
+    ROOT_TIME_S; the acceleration is then a central difference of the path's
+    velocity about the new root (a root found at once keeps the cubic's).
+    Elsewhere (a motor setting off from a stand, a velocity not known
     there) the cubic's root and acceleration are kept.
 
     Parameters
@@ -318,7 +326,7 @@ def path_roots(
     h : (m,) the steps' durations [s]
     new : (m,) the way each motor turns to (+1, −1)
     k : (m,) the steps (rows of the chunk)
-    col : the motor
+    cols : (m,) the motors
     velocity : the path's velocity inside steps (:data:`Velocity`)
     steps : false-position steps
 
@@ -333,15 +341,31 @@ def path_roots(
     s_b, v_b = np.ones(len(s)), V1.astype(float)
     x = s.copy()
     last = np.zeros(len(s), dtype=int)  # the end moved last: −1 a, +1 b
+    # the roots still sought, and those moved off the cubic's
+    going = ok.copy()
+    moved = np.zeros(len(s), dtype=bool)
     for _ in range(steps):
-        v = velocity(k[ok], x[ok], col)
+        v = velocity(k[going], x[going], cols[going])
         known = np.zeros(len(s), dtype=bool)
-        known[ok] = np.isfinite(v)
+        known[going] = np.isfinite(v)
         vm = np.zeros(len(s))
-        vm[ok] = np.where(np.isfinite(v), v, 0.0)
-        ok &= known
-        turned = ok & (new * vm > 0)
-        old = ok & ~turned
+        vm[going] = np.where(np.isfinite(v), v, 0.0)
+        ok &= known | ~going
+        # found: the path's velocity there is what the acceleration makes in
+        # ROOT_TIME_S (on fast turns the cubic's root already is), the acceleration
+        # the cubic's or the secant to the bracket's other end, whichever is less
+        turned = new * vm > 0
+        s_o, v_o = np.where(turned, s_a, s_b), np.where(turned, v_a, v_b)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            secant = np.abs(vm - v_o) / (np.abs(x - s_o) * h)
+        slow = np.fmin(np.abs(accel), secant)
+        found = going & known & (np.abs(vm) <= slow * ROOT_TIME_S)
+        going &= known & ~found
+        if not np.any(going):
+            break
+        moved |= going
+        turned = going & (new * vm > 0)
+        old = going & ~turned
         # Illinois: an end kept twice running has its velocity halved, so that
         # false position closes in from both sides
         v_a = np.where(turned & (last == 1), 0.5 * v_a, v_a)
@@ -351,19 +375,20 @@ def path_roots(
         s_a, v_a = np.where(old, x, s_a), np.where(old, vm, v_a)
         with np.errstate(divide="ignore", invalid="ignore"):
             x_new = s_a - v_a * (s_b - s_a) / (v_b - v_a)
-        x = np.where(ok & np.isfinite(x_new), np.clip(x_new, s_a, s_b), x)
-        if not np.any(ok):
-            return s, accel
-    # the acceleration at the root: a central difference over ±ROOT_SLOPE_STEP of
-    # the step (false position closes in from one side, and the bracket's other
+        x = np.where(going & np.isfinite(x_new), np.clip(x_new, s_a, s_b), x)
+    moved &= ok
+    if not np.any(moved):
+        return s, accel
+    # the acceleration at a moved root: a central difference over ±ROOT_SLOPE_STEP
+    # of the step (false position closes in from one side, and the bracket's other
     # end may stay at the step's end, too far for a slope at the root)
     d = ROOT_SLOPE_STEP
-    lo, hi = np.clip(x[ok] - d, 0.0, 1.0), np.clip(x[ok] + d, 0.0, 1.0)
-    both = velocity(np.concatenate([k[ok], k[ok]]), np.concatenate([lo, hi]), col)
+    lo, hi = np.clip(x[moved] - d, 0.0, 1.0), np.clip(x[moved] + d, 0.0, 1.0)
+    both = velocity(np.tile(k[moved], 2), np.concatenate([lo, hi]), np.tile(cols[moved], 2))
     slope = np.full(len(s), np.nan)
     with np.errstate(divide="ignore", invalid="ignore"):
-        slope[ok] = (both[len(lo) :] - both[: len(lo)]) / ((hi - lo) * h[ok])
-    moved = ok & np.isfinite(slope)
+        slope[moved] = (both[len(lo) :] - both[: len(lo)]) / ((hi - lo) * h[moved])
+    moved &= np.isfinite(slope)
     return np.where(moved, x, s), np.where(moved, slope, accel)
 
 
@@ -655,6 +680,26 @@ def _snap(k: np.ndarray, t: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.nd
     return out
 
 
+class _Turns(NamedTuple):
+    """One motor's reversals in a chunk (:func:`plan_insertions`): its directions
+    ``sg`` per row and the one each row comes from, the reversals' steps ``k`` and
+    new ways, its wanted positions ``p``, each reversal's kind, and the roots
+    ``sr`` [fraction of the step] and accelerations ``acc`` of those in motion."""
+
+    col: int
+    sg: np.ndarray
+    came: np.ndarray
+    k: np.ndarray
+    new: np.ndarray
+    p: np.ndarray
+    at_rest: np.ndarray
+    crept_f: np.ndarray
+    stood: np.ndarray
+    mid: np.ndarray
+    sr: np.ndarray
+    acc: np.ndarray
+
+
 def plan_insertions(
     t_end: np.ndarray,
     dt: np.ndarray,
@@ -717,6 +762,10 @@ def plan_insertions(
     w_ta: list[np.ndarray] = []
     w_tb: list[np.ndarray] = []
     w_new: list[np.ndarray] = []
+    # first every motor's reversals and their kinds, then the roots of those in
+    # motion moved onto the path in one search for all the motors (each look at
+    # the path is an IK call), then the windows
+    seen: list[_Turns] = []
     for col in cols:
         sg = np.where(rest_all, 0, signs(V_all[:, col]))
         # creeps back become reversals; the reach is carried to the next chunk
@@ -751,6 +800,31 @@ def plan_insertions(
             & ~old_way
         )
         mid = ~(at_rest | crept_f | stood)
+        km, rm = k[mid], r[mid]
+        sr, acc = velocity_roots(
+            p[rm - 1], V_all[rm - 1, col], p[rm], V_all[rm, col], dt[km], new[mid]
+        )
+        seen.append(_Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc))
+    if velocity is not None and seen:
+        km_all = np.concatenate([x.k[x.mid] for x in seen])
+        col_all = np.concatenate([np.full(len(x.sr), x.col) for x in seen])
+        sr_all, acc_all = path_roots(
+            np.concatenate([x.sr for x in seen]),
+            np.concatenate([x.acc for x in seen]),
+            V_all[km_all + off - 1, col_all],
+            V_all[km_all + off, col_all],
+            dt[km_all],
+            np.concatenate([x.new[x.mid] for x in seen]),
+            km_all,
+            col_all,
+            velocity,
+        )
+        cut = np.cumsum([len(x.sr) for x in seen])[:-1]
+        seen = [
+            x._replace(sr=a, acc=b)
+            for x, a, b in zip(seen, np.split(sr_all, cut), np.split(acc_all, cut), strict=True)
+        ]
+    for col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc in seen:
         for kk, nn in zip(k[at_rest].tolist(), new[at_rest].tolist(), strict=True):
             ins.stand[kk] = longest
             ins.stands.append((kk, col, nn))
@@ -770,13 +844,8 @@ def plan_insertions(
         w_ta.append(np.where(t1 - t0 <= 1.5 * longest, t0, t1 - longest))
         w_tb.append(t1)
         # a reversal in motion: the window about the root of the step's cubic
-        km, rm = k[mid], r[mid]
+        km = k[mid]
         h = dt[km]
-        sr, acc = velocity_roots(p[rm - 1], V_all[rm - 1, col], p[rm], V_all[rm, col], h, new[mid])
-        if velocity is not None and len(km):
-            sr, acc = path_roots(
-                sr, acc, V_all[rm - 1, col], V_all[rm, col], h, new[mid], km, col, velocity
-            )
         t1 = t_end[km]
         t0 = t1 - h
         wide = None if edge_speed is None else reach(edge_speed(km, sr, col, acc), acc)
