@@ -709,6 +709,35 @@ LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
     "G2 X7.782500 Y-3.306000 Z0.000000 A-0.0625 B0.0000 I0.074000 J-0.205000 F1000.0\n"
     "M2\n"
 )
+#: A cam search (machine 21, G-code) on led_floor/cad/nc/1078_wall_27bit_slower_
+#: feeds_wider_light_holder_hole.nc line 842, moved into the workspace, the last
+#: arc (0.18 mm radius at F1000) tilted by 0.137°. As corrected G-code 1.0058 x F
+#: at line 13, as PVT 1.0013 x at line 6 (1.0088 x on the code before this stop):
+#: there every part follows its motor, outside any window, after table motor Y's
+#: crossing. Not yet looked into.
+LED_FLOOR_TILTED_FILLET = (
+    "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
+    "G0 X3.411000 Y-0.506500 Z0.000000 A0 B0\n"
+    "G3 X1.726000 Y1.141500 Z0.000000 A0.0000 B0.0000 I-17.429000 J-16.133000 F1000.0\n"
+    "G2 X1.726000 Y1.493500 Z0.000000 A0.0000 B0.0000 I0.156000 J0.176000 F1000.0\n"
+    "G3 X3.411000 Y3.128500 Z0.000000 A0.0000 B0.0000 I-15.522000 J17.680000 F1000.0\n"
+    "G1 X3.416000 Y3.141500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X3.447000 Y5.434500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X3.440000 Y5.448500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X3.425000 Y5.454500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X3.411000 Y5.446500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G2 X-0.662000 Y1.505500 Z0.000000 A0.0000 B0.0000 I-17.228000 J13.727000 F1000.0\n"
+    "G3 X-0.662000 Y1.129500 Z0.000000 A0.0000 B0.0000 I0.141000 J-0.188000 F1000.0\n"
+    "G2 X3.411000 Y-2.839500 Z0.000000 A0.0000 B0.0000 I-13.335000 J-17.759000 F1000.0\n"
+    "G1 X3.415000 Y-2.851500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X3.448000 Y-5.434500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X3.441000 Y-5.449500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X3.425000 Y-5.454500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G1 X3.411000 Y-5.445500 Z0.000000 A0.0000 B0.0000 F1000.0\n"
+    "G3 X-3.448000 Y1.166500 Z0.000000 A0.0000 B0.0000 I-17.387000 J-11.172000 F1000.0\n"
+    "G2 X-3.448000 Y1.468500 Z0.000000 A0.1367 B0.0000 I0.089000 J0.151000 F1000.0\n"
+    "M2\n"
+)
 FOUND = [
     (21, CREEP_AFTER_A_STOP),
     (21, CREEP_THEN_A_HELIX),
@@ -748,6 +777,7 @@ FOUND = [
     (22, ENCLOSURE_ARC_INTO_A_LINE),
     (31, LED_FLOOR_TINY_ARC_AS_LINES),
     (31, LED_FLOOR_ARC_REVERSES_AT_A_STEP_END),
+    (21, LED_FLOOR_TILTED_FILLET),
 ]
 FOUND_IDS = [
     "creep",
@@ -788,10 +818,26 @@ FOUND_IDS = [
     "enclosure-arc-into-a-line-F500",
     "led-floor-tiny-arc-as-lines-F1000",
     "led-floor-arc-reverses-at-a-step-end-F1000",
+    "led-floor-tilted-fillet-F1000",
 ]
 
 
-@pytest.mark.parametrize(("seed", "text"), FOUND, ids=FOUND_IDS)
+#: Found programs still out of bounds as PVT (strict xfails).
+PVT_OPEN = {"led-floor-tilted-fillet-F1000"}
+FOUND_PVT = [
+    pytest.param(
+        seed,
+        text,
+        id=name,
+        marks=[pytest.mark.xfail(strict=True, reason="open: see PVT_OPEN")]
+        if name in PVT_OPEN
+        else [],
+    )
+    for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True)
+]
+
+
+@pytest.mark.parametrize(("seed", "text"), FOUND_PVT)
 def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, text: str) -> None:
     """led-floor-tiny-arc-as-lines-F1000 ran 1.0057 x F at the reversal of table
     motor Y on its last arc (0.22 mm radius at F1000, 1165 mm/s²). The window stood
@@ -812,12 +858,13 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
     assert_within(judge_pmac(truth, motions, res, texts), None)
 
 
-#: Found programs still out of bounds as corrected G-code (strict xfails): a window
-#: cut at its step's end stands on one side of the root only, and a straight line
-#: averages the velocity its part lacks over it. What it needs: a window that may
-#: reach over the step's end (the planned point there moved to the window's end, or
-#: dropped inside it), so that it stays symmetric about the root.
-GCODE_OPEN = {"led-floor-arc-reverses-at-a-step-end-F1000"}
+#: Found programs still out of bounds as corrected G-code (strict xfails; each
+#: program's comment says what is known). LED_FLOOR_ARC_REVERSES_AT_A_STEP_END: a
+#: window cut at its step's end stands on one side of the root only, and a
+#: straight line averages the velocity its part lacks over it. It needs a window
+#: that may reach over the step's end (the planned point there moved to the
+#: window's end, or dropped inside it), so that it stays symmetric about the root.
+GCODE_OPEN = {"led-floor-arc-reverses-at-a-step-end-F1000", "led-floor-tilted-fillet-F1000"}
 FOUND_GCODE = [
     pytest.param(
         seed,
