@@ -712,9 +712,13 @@ LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
 #: A cam search (machine 21, G-code) on led_floor/cad/nc/1078_wall_27bit_slower_
 #: feeds_wider_light_holder_hole.nc line 842, moved into the workspace, the last
 #: arc (0.18 mm radius at F1000) tilted by 0.137°. As corrected G-code 1.0058 x F
-#: at line 13, as PVT 1.0013 x at line 6 (1.0088 x on the code before this stop):
-#: there every part follows its motor, outside any window, after table motor Y's
-#: crossing. Not yet looked into.
+#: at line 13, as PVT 1.0013 x at line 6 (1.0088 x on the code before this stop).
+#: As PVT every part follows its motor there, outside any window: the tilt turns
+#: table motor Y back and forth, its crossings 2 ms apart, and the first leaves the
+#: part 45 nm behind, which reversals.catch_up must take up before the second
+#: begins (that crossing's extreme is reckoned from the wanted position): 0.017
+#: mm/s, 20 x the share. It needs the next crossing reckoned from where the part
+#: is. As G-code not yet looked into.
 LED_FLOOR_TILTED_FILLET = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
     "G0 X3.411000 Y-0.506500 Z0.000000 A0 B0\n"
