@@ -714,8 +714,8 @@ LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
 #: arc (0.18 mm radius at F1000) tilted by 0.137°. As corrected G-code 1.0058 x F
 #: at line 13, as PVT 1.0013 x at line 6 (1.0088 x on the code before this stop).
 #: As PVT every part follows its motor there, outside any window: the tilt turns
-#: table motor Y back and forth, its crossings 2 ms apart, and the first leaves the
-#: part 45 nm behind, which reversals.catch_up must take up before the second
+#: table motor Y back and forth, its crossings three points apart, the first leaving the
+#: part 45 nm behind, for reversals.catch_up to take up before the second
 #: begins (that crossing's extreme is reckoned from the wanted position): 0.017
 #: mm/s, 20 x the share. It needs the next crossing reckoned from where the part
 #: is. As G-code not yet looked into.
