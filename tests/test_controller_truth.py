@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import itertools
 import re
+from typing import Any
 
 import numpy as np
 import pytest
@@ -826,19 +827,25 @@ FOUND_IDS = [
 ]
 
 
+def _found(still_open: set[str], why: str) -> list[Any]:
+    """FOUND as test parameters, those in ``still_open`` strict xfails."""
+    assert still_open <= set(FOUND_IDS)
+    return [
+        pytest.param(
+            seed,
+            text,
+            id=name,
+            marks=[pytest.mark.xfail(strict=True, reason=f"open: see {why}")]
+            if name in still_open
+            else [],
+        )
+        for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True)
+    ]
+
+
 #: Found programs still out of bounds as PVT (strict xfails).
 PVT_OPEN = {"led-floor-tilted-fillet-F1000"}
-FOUND_PVT = [
-    pytest.param(
-        seed,
-        text,
-        id=name,
-        marks=[pytest.mark.xfail(strict=True, reason="open: see PVT_OPEN")]
-        if name in PVT_OPEN
-        else [],
-    )
-    for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True)
-]
+FOUND_PVT = _found(PVT_OPEN, "PVT_OPEN")
 
 
 @pytest.mark.parametrize(("seed", "text"), FOUND_PVT)
@@ -855,8 +862,7 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
     enclosure-arc-into-a-line-F500 ran 1.0024 x F the same way, once a window that
     stood longer before its root than after it had grown over the rest of its step
     (reversals.windows' rule for that sliver, which the take-up above makes moot
-    and which is gone): Y's part stood 0.33 ms past the root. 1.00079 x now; the
-    root found on the step's cubic is still about 45 µs later than the path's."""
+    and which is gone): Y's part stood 0.33 ms past the root. 1.00079 x now."""
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text)
     assert_within(judge_pmac(truth, motions, res, texts), None)
@@ -869,17 +875,7 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 #: that may reach over the step's end (the planned point there moved to the
 #: window's end, or dropped inside it), so that it stays symmetric about the root.
 GCODE_OPEN = {"led-floor-arc-reverses-at-a-step-end-F1000", "led-floor-tilted-fillet-F1000"}
-FOUND_GCODE = [
-    pytest.param(
-        seed,
-        text,
-        id=name,
-        marks=[pytest.mark.xfail(strict=True, reason="open: see GCODE_OPEN")]
-        if name in GCODE_OPEN
-        else [],
-    )
-    for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True)
-]
+FOUND_GCODE = _found(GCODE_OPEN, "GCODE_OPEN")
 
 
 @pytest.mark.parametrize(("seed", "text"), FOUND_GCODE)

@@ -518,17 +518,20 @@ def test_a_part_ahead_of_its_motor_is_taken_up_no_faster_than_its_motor_moves() 
     s_path = 0.05 * np.arange(1, 21)
     dP = np.full(20, 1e-3)
     dP[4] = 0.004e-6
-    V = np.full(20, 0.1)
     speed = np.full(20, 5.0)
-    idx, off, slope, left = reversals.catch_up(
-        np.array([0.05e-3]),
-        np.array([1]),
-        np.array([2]),
-        np.array([20]),
-        s_path,
-        share,
-        motion=(dP, V, speed),
-    )
+
+    def ahead(V: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        return reversals.catch_up(
+            np.array([0.05e-3]),
+            np.array([1]),
+            np.array([2]),
+            np.array([20]),
+            s_path,
+            share,
+            motion=(dP, V, speed),
+        )
+
+    idx, off, slope, left = ahead(np.full(20, 0.1))
     assert idx.tolist() == [3, 4, 5, 6, 7]
     np.testing.assert_allclose(
         off, [0.04e-3, 0.039998e-3, 0.029998e-3, 0.019998e-3, 0.009998e-3], atol=1e-15
@@ -541,16 +544,7 @@ def test_a_part_ahead_of_its_motor_is_taken_up_no_faster_than_its_motor_moves() 
     command[2] += 0.05e-3  # where the window ended: the part's own position
     assert np.all(np.diff(command[2:]) > 0)
     # where the motor goes up slower than the share, so does the offset's rate
-    slow = np.full(20, 0.002)
-    _, _, slope, _ = reversals.catch_up(
-        np.array([0.05e-3]),
-        np.array([1]),
-        np.array([2]),
-        np.array([20]),
-        s_path,
-        share,
-        motion=(dP, slow, speed),
-    )
+    _, _, slope, _ = ahead(np.full(20, 0.002))
     np.testing.assert_allclose(slope[:-1] * 5.0, -0.001)  # half the motor's 2 µm/s
 
 
