@@ -60,7 +60,8 @@ ROOT_STEPS = 4
 ROOT_SLOPE_STEP = 1e-3
 #: A root is taken as found where the path's velocity there is what its
 #: acceleration makes in this long [s]: a 250th of the shortest window
-#: (MIN_WINDOW_S). On fast turns the cubic's root is: one look at the path.
+#: (MIN_WINDOW_S). On fast turns the cubic's root already is, and one look at the
+#: path keeps it.
 ROOT_TIME_S = 1e-6
 
 #: A planned motor velocity below this [mm/s] gives no direction: a motor creeping
