@@ -719,7 +719,10 @@ LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
 #: part 45 nm behind, for reversals.catch_up to take up before the second
 #: begins (that crossing's extreme is reckoned from the wanted position): 0.017
 #: mm/s, 20 x the share. It needs the next crossing reckoned from where the part
-#: is. As G-code not yet looked into.
+#: is. As G-code, Y's window is a whole 0.65 ms step (a chord on the tight arc)
+#: whose root is at its very end (planned velocity −0.216 → +0.0027 mm/s): the
+#: part stands through it, lacking a mean 0.1 mm/s, as in
+#: LED_FLOOR_ARC_REVERSES_AT_A_STEP_END.
 LED_FLOOR_TILTED_FILLET = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
     "G0 X3.411000 Y-0.506500 Z0.000000 A0 B0\n"
@@ -869,9 +872,9 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 
 
 #: Found programs still out of bounds as corrected G-code (strict xfails; each
-#: program's comment says what is known). LED_FLOOR_ARC_REVERSES_AT_A_STEP_END: a
-#: window cut at its step's end stands on one side of the root only, and a
-#: straight line averages the velocity its part lacks over it. It needs a window
+#: program's comment says what is known). Both: a window cut at its step's end
+#: stands on one side of the root only, and a straight line averages the velocity
+#: its part lacks over it. It needs a window
 #: that may reach over the step's end (the planned point there moved to the
 #: window's end, or dropped inside it), so that it stays symmetric about the root.
 GCODE_OPEN = {"led-floor-arc-reverses-at-a-step-end-F1000", "led-floor-tilted-fillet-F1000"}
