@@ -290,16 +290,24 @@ def ik_derivative(
 
 
 def ik_jacobian(
-    geo: kinematics.Geometry, q: np.ndarray, tool: np.ndarray, step: float
+    geo: kinematics.Geometry,
+    q: np.ndarray,
+    tool: np.ndarray,
+    step: float,
+    P: np.ndarray | None = None,
 ) -> np.ndarray:
     """(N, 5, 5) ∂P_i/∂q_j at poses ``q`` (N, 5) [mm, mm, mm, deg, deg]: the IK's
     one-sided differences over ``step`` along each coordinate, as
-    :func:`ik_derivative`, the pose and its five steps in one IK call."""
+    :func:`ik_derivative`, the pose (unless its IK ``P`` is given) and its five
+    steps in one IK call."""
     m = len(q)
-    q6 = np.tile(q, (6, 1))
+    base = 0 if P is None else 1
+    q6 = np.tile(q, (6 - base, 1))
     for j in range(5):
-        q6[(j + 1) * m : (j + 2) * m, j] += step
-    P6 = kinematics.inverse(geo, q6, np.tile(tool, 6)).P
+        q6[(j + 1 - base) * m : (j + 2 - base) * m, j] += step
+    P6 = kinematics.inverse(geo, q6, np.tile(tool, 6 - base)).P
+    if P is not None:
+        P6 = np.concatenate([P, P6])
     return np.stack([(P6[(j + 1) * m : (j + 2) * m] - P6[:m]) / step for j in range(5)], axis=2)
 
 
@@ -911,7 +919,10 @@ class Pipeline:
         def forward_jacobian(k: np.ndarray) -> np.ndarray:
             new = np.unique(k[~done[k]])
             if new.size:
-                jac = ik_jacobian(self.geo, pc.q_target[new], pc.tool_length[new], DIR_STEP_MM)
+                # P_ideal is the IK of q_target here (blends move it only later)
+                jac = ik_jacobian(
+                    self.geo, pc.q_target[new], pc.tool_length[new], DIR_STEP_MM, pc.P_ideal[new]
+                )
                 ok = np.all(np.isfinite(jac), axis=(1, 2))
                 if np.any(ok):
                     try:

@@ -355,8 +355,8 @@ def path_roots(
         # found: the path's velocity there is what the acceleration makes in
         # ROOT_TIME_S (on fast turns the cubic's root already is), the acceleration
         # the cubic's or the secant to the bracket's other end, whichever is less
-        turned = new * vm > 0
-        s_o, v_o = np.where(turned, s_a, s_b), np.where(turned, v_a, v_b)
+        new_way = new * vm > 0
+        s_o, v_o = np.where(new_way, s_a, s_b), np.where(new_way, v_a, v_b)
         with np.errstate(divide="ignore", invalid="ignore"):
             secant = np.abs(vm - v_o) / (np.abs(x - s_o) * h)
         slow = np.fmin(np.abs(accel), secant)
@@ -365,8 +365,8 @@ def path_roots(
         if not np.any(going):
             break
         moved |= going
-        turned = going & (new * vm > 0)
-        old = going & ~turned
+        turned = going & new_way
+        old = going & ~new_way
         # Illinois: an end kept twice running has its velocity halved, so that
         # false position closes in from both sides
         v_a = np.where(turned & (last == 1), 0.5 * v_a, v_a)
@@ -425,8 +425,8 @@ def windows(
     db > da, and the straight line after the window, carrying no velocity, goes
     back to the path there while the part stands on (0.35 % over F,
     test_controller_truth's found programs). A PVT cubic leaves the window with the
-    path's velocity and takes the difference up along its step, unless that step is
-    a sliver: then the window grows over it.
+    path's velocity, and the commands after it take the difference up along the
+    path (:func:`catch_up`).
     """
     n = len(t_root)
     with np.errstate(divide="ignore"):
