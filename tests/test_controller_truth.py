@@ -596,7 +596,8 @@ COMPASS_SETS_OFF_BACK = (
 #: reverses on the small arc, which turns the path by 0.7 rad a step: judged along
 #: the path's direction at the step's end, the window stood longer on the side
 #: where X's standing part pushed the tip on, 1.0037 x F. The direction is now
-#: taken at the root (Pipeline._edge_speed): 1.00030 x.
+#: taken at the root (Pipeline._edge_speed): 1.00030 x (1.00033 x once
+#: reversals.path_roots put roots on the path).
 LED_FLOOR_SMALL_ARC_WITH_A_TILT = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X0.501000 Y-17.588000 Z-10.000000 A0 B0\n"
     "G0 X-0.846000 Y15.593000 Z-10.000000\n"
@@ -618,7 +619,7 @@ LED_FLOOR_SMALL_ARC_WITH_A_TILT = (
 #: part stood on, 1.0035 x F. This stop's windows, shorter on the side of the root
 #: where the part's standing pushes the tip on, had made such windows; for straight
 #: lines they are symmetric again, sized by the tolerance (Pipeline._reversals):
-#: 1.00017 x.
+#: 1.00017 x (1.00013 x since).
 LED_FLOOR_HELIX_WITH_A_TILT = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X0.226000 Y-0.036500 Z0.000000 A0 B0\n"
     "G1 X0.244000 Y-0.002500 Z0.000000 A0.0000 B0.0000 F250.0\n"
@@ -629,7 +630,7 @@ LED_FLOOR_HELIX_WITH_A_TILT = (
 #: found by truth_search.py (cam, corrected G-code, machine 22), 2026-11-24: a
 #: window of Universal G-Code Sender's enclosure.nc (line 1770 on, GPL-3.0; moved
 #: to the origin), an arc tilting A by 0.25° into a line at F500: the same as
-#: LED_FLOOR_HELIX_WITH_A_TILT, 1.0014 x F; now 1.000001 x.
+#: LED_FLOOR_HELIX_WITH_A_TILT, 1.0014 x F; then 1.000001 x, 1.00005 x since.
 ENCLOSURE_ARC_INTO_A_LINE = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-1.237800 Y-1.216250 Z0.000000 A0 B0\n"
     "G3 X-0.410400 Y-1.215650 Z0.000000 A-0.2500 B0.0000 I0.413500 J0.281100 F500.0\n"
@@ -683,10 +684,10 @@ LED_FLOOR_TINY_ARC_AS_LINES = (
     "M2\n"
 )
 #: A cam search (machine 31, G-code) on led_floor/cad/nc/1078_wall_27bit_slower_
-#: feeds_wider_light_holder_hole.nc line 145, moved into the workspace, the last
-#: arc tilted by 0.0625°: table motor Y reverses on the
-#: 0.22 mm arc at F1000 (1172 mm/s²) 0.07 ms before the end of a 0.77 ms step, so
-#: its window, cut at the step's end and not shifted, stands 0.29 ms before the
+#: feeds_wider_light_holder_hole.nc line 145 (tests/data/gcode/corpus, Apache-2.0),
+#: moved into the workspace, the last arc tilted by 0.0625°: table motor Y reverses
+#: on the 0.22 mm arc at F1000 (1172 mm/s²) 0.07 ms before the end of a 0.77 ms
+#: step, so its window, cut at the step's end and not shifted, stands 0.29 ms before the
 #: root and 0.07 ms after it: over the window's straight line Y's part lacks a
 #: mean 0.13 mm/s the old way, and the tip runs 1.0029 x F (as on the code before
 #: this stop). Open for corrected G-code (GCODE_OPEN); as PVT, 1.00010 x.
@@ -711,8 +712,9 @@ LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
     "M2\n"
 )
 #: A cam search (machine 21, G-code) on led_floor/cad/nc/1078_wall_27bit_slower_
-#: feeds_wider_light_holder_hole.nc line 842, moved into the workspace, the last
-#: arc (0.18 mm radius at F1000) tilted by 0.137°. As corrected G-code 1.0058 x F
+#: feeds_wider_light_holder_hole.nc line 842 (tests/data/gcode/corpus, Apache-2.0),
+#: moved into the workspace, the last arc (0.18 mm radius at F1000) tilted by
+#: 0.137°. As corrected G-code 1.0058 x F
 #: at line 13, as PVT 1.0013 x at line 6 (1.0088 x on the code before this stop).
 #: As PVT every part follows its motor there, outside any window: the tilt turns
 #: table motor Y back and forth, its crossings three points apart, the first leaving the
@@ -874,9 +876,9 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 #: Found programs still out of bounds as corrected G-code (strict xfails; each
 #: program's comment says what is known). Both: a window cut at its step's end
 #: stands on one side of the root only, and a straight line averages the velocity
-#: its part lacks over it. It needs a window
-#: that may reach over the step's end (the planned point there moved to the
-#: window's end, or dropped inside it), so that it stays symmetric about the root.
+#: its part lacks over it. It needs a window that may reach over the step's end
+#: (the planned point there moved to the window's end, or dropped inside it), so
+#: that it stays symmetric about the root.
 GCODE_OPEN = {"led-floor-arc-reverses-at-a-step-end-F1000", "led-floor-tilted-fillet-F1000"}
 FOUND_GCODE = _found(GCODE_OPEN, "GCODE_OPEN")
 
