@@ -550,7 +550,7 @@ TBALL_WITH_A_TILT = (
 #: (0.25 ms) about the root left X's part standing while X would have moved at
 #: 0.023 mm/s, 1.0015 x F. A window now stands shorter on the side of the root
 #: where the part's standing pushes the tip on, longer on the other
-#: (reversals.windows' reach): 1.00024 x.
+#: (reversals.windows' reach): 1.00024 x (1.00023 x since).
 ENCLOSURE_ARC_WITH_A_TILT = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-0.250000 Y0.250000 Z-9.100000 A0 B0\n"
     "G3 X0.250000 Y-0.250000 Z-9.100000 A0.0000 B-0.2500 I0.500000 J0.000000 F800.0\n"
@@ -862,12 +862,14 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
     after it were left wanted, so the 0.2 ms rest of the step had to take the
     offset up: its cubic turned Y back and the part stood while the path ran on.
     A part ahead is now taken up at CATCH_UP_SHARE of the path, never by more than
-    half its motor's move (reversals.catch_up's motion): 1.00035 x.
+    half its motor's move (reversals.catch_up's motion): 1.00035 x (1.00034 x with
+    roots on the path, reversals.path_roots).
 
     enclosure-arc-into-a-line-F500 ran 1.0024 x F the same way, once a window that
     stood longer before its root than after it had grown over the rest of its step
     (reversals.windows' rule for that sliver, which the take-up above makes moot
-    and which is gone): Y's part stood 0.33 ms past the root. 1.00079 x now."""
+    and which is gone): Y's part stood 0.33 ms past the root. 1.00079 x then,
+    1.00067 x with roots on the path."""
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text)
     assert_within(judge_pmac(truth, motions, res, texts), None)
