@@ -1034,8 +1034,11 @@ class Pipeline:
         A part meets its motor off its wanted position (where it stood, behind the
         path by up to the reversal allowance, or ahead of it where the window stood
         longer before its root than after it) and is brought back along the path
-        (:func:`.reversals.catch_up`), before the motor's next crossing begins; what
-        is left at the chunk's end goes on in the next.
+        (:func:`.reversals.catch_up`) at a share of the path speed; what is left where
+        the motor's next crossing begins goes into that crossing, which is then
+        reckoned again from where the part is (the part followed through the
+        commands as written, :func:`.reversals.follow_stretches`), and what is left
+        at the chunk's end goes on in the next.
         """
         prev_P = self.last_cmd[0] if self.last_cmd is not None else None
         prev_V = self.last_cmd[1] if self.last_cmd is not None else None
@@ -1056,10 +1059,15 @@ class Pipeline:
                 y0 = self.play_y[col]
                 P0, V0 = float(prev_P[col]), float(prev_V[col])  # type: ignore[index]
             mine = contacts[contacts[:, 2] == col]
+            # the motor's wanted moves into each point (the first from the last point
+            # made): a part left ahead of its way is taken up no faster than they go
+            P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
+            dP = np.diff(pc.P_ideal[:, col], prepend=P_before)
             carried = self.catch.pop(col, 0.0)
             if carried:
+                # what it leaves where the first crossing begins, the follow below sees
                 stop = int(mine[0, 1]) if len(mine) else n
-                self._catch_up(pc, side, col, [carried], [-1], [stop], P_cmd, V_cmd, s_path)
+                self._catch_up(pc, side, col, [carried], [-1], [stop], P_cmd, V_cmd, s_path, dP)
             if len(mine):
                 e, b = mine[:, 0], mine[:, 1]
                 # followed up to the last contact only (the part's path is causal);
@@ -1080,10 +1088,69 @@ class Pipeline:
                 # a written digit short of the contact: rounded past it, the motor
                 # would push its part within the window's last servo cycles
                 short = self._crossing_short(pc.q_target[e], pc.tool_length[e], col)
-                cmd = np.where(u, table.lo_inv(y_s) - short, table.hi_inv(y_s) + short)
-                P_cmd[e, col] = cmd
-                off0 = y_s - pc.P_ideal[e, col]
-                self._catch_up(pc, side, col, off0, e, np.append(b[1:], n), P_cmd, V_cmd, s_path)
+                stops = np.append(b[1:], n)
+                made_e = P_cmd[e, col].copy()
+                P_cmd[e, col] = np.where(u, table.lo_inv(y_s) - short, table.hi_inv(y_s) + short)
+                P_made, V_made = P_cmd[:, col].copy(), V_cmd[:, col].copy()
+                left = self._catch_up(
+                    pc, side, col, y_s - pc.P_ideal[e, col], e, stops, P_cmd, V_cmd, s_path, dP
+                )
+                # a part still off where the next crossing begins takes that offset
+                # into it: the crossing is reckoned again from where the part is, the
+                # part followed from the crossing before through the commands as now
+                # written, and taken up again; until no crossing leaves the next
+                # another offset (a chain of them takes a round each)
+                carry = np.concatenate([[0.0], left[:-1]])
+                todo = np.flatnonzero(carry)
+                while todo.size:
+                    ep, ej, bj = e[todo - 1], e[todo], b[todo]
+                    span = ej - ep
+                    pts = reversals.ranges(ep + 1, span)
+                    P_w = P_cmd[pts, col]
+                    P_w[np.cumsum(span) - 1] = made_e[todo]  # the crossings' ends as made
+                    y_w, lo_w, hi_w = reversals.follow_stretches(
+                        table,
+                        y_s[todo - 1],
+                        P_cmd[ep, col],
+                        V_cmd[ep, col],
+                        P_w,
+                        V_cmd[pts, col],
+                        pc.dt[pts],
+                        span,
+                        cubic,
+                    )
+                    base = np.cumsum(span) - span
+                    into = np.maximum(bj - ep, 0)  # the window's first step in its stretch
+                    beg = np.where(into > 0, y_w[base + into - 1], y_s[todo - 1])
+                    cuts = np.column_stack([base + into, base + span]).ravel()
+                    lo_j = np.minimum.reduceat(np.append(lo_w, np.inf), cuts)[::2]
+                    hi_j = np.maximum.reduceat(np.append(hi_w, -np.inf), cuts)[::2]
+                    uj = u[todo]
+                    y_s[todo] = np.where(uj, np.minimum(lo_j, beg), np.maximum(hi_j, beg))
+                    P_cmd[ej, col] = np.where(
+                        uj,
+                        table.lo_inv(y_s[todo]) - short[todo],
+                        table.hi_inv(y_s[todo]) + short[todo],
+                    )
+                    # their own take-up again, from the commands as made
+                    redo = reversals.ranges(ej + 1, np.minimum(stops[todo] + 1, n) - ej - 1)
+                    P_cmd[redo, col], V_cmd[redo, col] = P_made[redo], V_made[redo]
+                    new_left = self._catch_up(
+                        pc,
+                        side,
+                        col,
+                        y_s[todo] - pc.P_ideal[ej, col],
+                        ej,
+                        stops[todo],
+                        P_cmd,
+                        V_cmd,
+                        s_path,
+                        dP,
+                    )
+                    moved = todo[new_left != left[todo]]
+                    left[todo] = new_left
+                    todo = moved[moved + 1 < len(e)] + 1
+                    carry[todo] = left[todo - 1]
                 # at the last contact the part meets the motor where it stands; from
                 # there on, the corrected commands carry it
                 last = int(e.max())
@@ -1132,36 +1199,30 @@ class Pipeline:
         P_cmd: np.ndarray,
         V_cmd: np.ndarray,
         s_path: np.ndarray,
-    ) -> None:
+        dP: np.ndarray,
+    ) -> np.ndarray:
         """Command motor ``col`` to bring its part back onto its wanted position
         after crossings that end at ``start`` with the part off by ``off0``
-        (:func:`.reversals.catch_up`); what the last leaves at the chunk's end is
-        kept for the next chunk."""
+        (:func:`.reversals.catch_up`), ``dP`` (n,) the motor's wanted move into each
+        point [mm]. Returns the offset each leaves where the next crossing begins;
+        what the last leaves at the chunk's end is kept for the next chunk."""
         off0 = np.asarray(off0, dtype=float)
         start = np.asarray(start, dtype=int)
+        stop = np.asarray(stop, dtype=int)
         way = side[np.maximum(start, 0), col]
-        # the motor's wanted moves into each point (the first from the last point
-        # made): a part left ahead of its way is taken up no faster than they go
-        P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
-        dP = np.diff(pc.P_ideal[:, col], prepend=P_before)
         idx, off, slope, left = reversals.catch_up(
-            off0,
-            way,
-            start,
-            np.asarray(stop, dtype=int),
-            s_path,
-            motion=(dP, pc.V_ideal[:, col], pc.speed),
+            off0, way, start, stop, s_path, motion=(dP, pc.V_ideal[:, col], pc.speed)
         )
-        if len(left) and left[-1] != 0.0:
+        if len(left) and stop[-1] >= len(pc) and left[-1] != 0.0:
             self.catch[col] = float(left[-1])
-        if not len(idx):
-            return
-        table = self.tables[MOTORS[col]]
-        sd = side[idx, col]
-        P_cmd[idx, col] = axiscomp.compensate_sided(table, pc.P_ideal[idx, col] + off, sd)
-        V_cmd[idx, col] = (pc.V_ideal[idx, col] + slope * pc.speed[idx]) / table.slope(
-            P_cmd[idx, col], sd
-        )
+        if len(idx):
+            table = self.tables[MOTORS[col]]
+            sd = side[idx, col]
+            P_cmd[idx, col] = axiscomp.compensate_sided(table, pc.P_ideal[idx, col] + off, sd)
+            V_cmd[idx, col] = (pc.V_ideal[idx, col] + slope * pc.speed[idx]) / table.slope(
+                P_cmd[idx, col], sd
+            )
+        return np.where(stop < len(pc), left, 0.0)
 
     def _new_points(
         self,

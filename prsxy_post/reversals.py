@@ -26,7 +26,9 @@ of it while the path goes on. So the jump gets a window of its own:
   other way first (:func:`_dips`).
 
 After a crossing the part is brought back onto its wanted position along the path
-(:func:`catch_up`). At a corner taken at speed where the motor stands on one side
+(:func:`catch_up`), and what is left of its offset when the motor's next crossing
+begins goes into that crossing (:func:`follow_stretches` follows the part there).
+At a corner taken at speed where the motor stands on one side
 (:func:`corners`), a PVT program blends the corner as a parabola over a millisecond
 or so each side, every motor's velocity linear across it (:func:`blend_shift`). A
 program of straight lines needs nothing there: a motor standing at both ends of a
@@ -107,7 +109,7 @@ CORNER_TURN_MM = 1e-6
 CROSSING_SPEED_SHARE = 5e-4
 
 
-def _ranges(first: np.ndarray, length: np.ndarray) -> np.ndarray:
+def ranges(first: np.ndarray, length: np.ndarray) -> np.ndarray:
     """The indices first[i], first[i] + 1, … (length[i] of them) of every range, one
     after another: one array for all the ranges, without a loop."""
     return np.repeat(first - np.cumsum(length) + length, length) + np.arange(int(length.sum()))
@@ -1025,12 +1027,12 @@ def sides(
         # a blend's point before a corner) are on the new side: where the path turns a corner
         # the cubic's root is before the corner, the plan's velocity turns at it
         after = np.maximum(last_row[mine] - e - 1, 0)
-        sg[_ranges(e + 1, after)] = np.repeat(new, after)
+        sg[ranges(e + 1, after)] = np.repeat(new, after)
         # two crossings in one step (a dip): the second's old side starts after the
         # first's end
         f = np.maximum(f, np.concatenate([[0], e[:-1] + 1]))
         length = np.maximum(e - f, 0)
-        idx = _ranges(f, length)
+        idx = ranges(f, length)
         sg[idx] = np.repeat(-new, length)
         sg[e] = new
         here = s_col == col
@@ -1052,13 +1054,15 @@ def catch_up(
     is brought back along the path: the offset shrinks by a share of the path
     length run,
 
-        off_j = sign(off0) · max(0, |off0| − share_i · (s_j − s_start)),
+        off_j = sign(off0) · max(0, |off0| − share · (s_j − s_start)),
 
-    so its rate is that share of the path speed. The share is ``share``, or more
-    where the offset must be gone sooner: at the point where the motor's next
-    crossing begins, whose extreme is reckoned from the wanted position (no more
-    than the one step the whole offset took before). A part standing with the path
-    keeps its offset.
+    so its rate is that share of the path speed, up to the point ``stop`` where
+    the motor's next crossing begins. What is left there is not hurried away: it
+    goes into that crossing (the command at its start still carries it, and the
+    crossing is reckoned from where the part then is: chain.Pipeline._settle). Taken
+    up in the few points a tight curve leaves between two crossings, it ran a part
+    20 x the share, 1.0013 x F (test_controller_truth's found programs). A part
+    standing with the path keeps its offset.
 
     Only a part behind its motor's way (``off0 · way < 0``) is brought back; one
     ahead of it (a blend carried it past the wanted extreme, or a window stood
@@ -1078,8 +1082,9 @@ def catch_up(
     off0 : (m,) the part's offset at each crossing's end [mm]
     way : (m,) the side each motor is on after its crossing (+1 up, −1 down)
     start : (m,) the point where each crossing ends (−1: the point before the chunk)
-    stop : (m,) the point by which the offset must be gone (the next crossing's
-        start), or the chunk's length (it goes on in the next chunk)
+    stop : (m,) the point where the motor's next crossing begins (its command
+        there is still on this side), or the chunk's length (it goes on in the
+        next chunk)
     s_path : (n,) path length run by each point since the point before the chunk
     share : the offset's rate, a share of the path speed
     motion : (dP, V, speed), each (n,): the motor's wanted move into each point
@@ -1088,11 +1093,12 @@ def catch_up(
 
     Returns
     -------
-    idx : (k,) the points start < j < stop with an offset left, by crossing
+    idx : (k,) the points start < j ≤ stop (j < n) with an offset left, by crossing
     off : (k,) their offsets [mm]
     slope : (k,) d off / d s there: times the path speed, the offset's rate
-    left : (m,) the offset left at the chunk's last point, where ``stop`` is the
-        chunk's length (else 0)
+    left : (m,) the offset left at ``stop``, carried into the next crossing, or
+        where ``stop`` is the chunk's length at its last point, carried into the
+        next chunk [mm]
     """
     n = len(s_path)
     ahead_way = (off0 * way > 0) & (motion is not None)
@@ -1102,20 +1108,17 @@ def catch_up(
         return none.astype(int), none, none, off0
     first = start + 1
     s0 = np.where(start >= 0, s_path[np.maximum(start, 0)], 0.0)
-    inside = stop < n
-    room = np.where(inside, s_path[np.minimum(stop, n - 1)] - s0, np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rate = np.maximum(share, np.where(room > 0, np.abs(off0) / room, 0.0))
-    # the points up to where the offset is gone, or the next crossing begins; none
-    # where there is no path to that crossing (the offset goes in its step, as it must)
-    gone = np.searchsorted(s_path, s0 + np.abs(off0) / rate, "left")
-    # a part ahead: where it is gone depends on the motor's moves too (below); what
-    # they leave of it where the next crossing begins goes in the step to it
-    end = np.where(ahead_way, np.minimum(stop, n), np.minimum(stop, gone))
-    length = np.where(room > 0, np.maximum(end - first, 0), 0)
-    idx = _ranges(first, length)
+    # the last point whose command carries the offset: the next crossing's start,
+    # or the chunk's last point
+    last = np.where(stop < n, stop, n - 1)
+    # the points up to where the offset is gone; a part ahead: where it is gone
+    # depends on the motor's moves too (below)
+    gone = np.searchsorted(s_path, s0 + np.abs(off0) / share, "left")
+    end = np.where(ahead_way, last + 1, np.minimum(last + 1, gone))
+    length = np.maximum(end - first, 0)
+    idx = ranges(first, length)
     run = s_path[idx] - np.repeat(s0, length)
-    mag = np.maximum(np.repeat(np.abs(off0), length) - np.repeat(rate, length) * run, 0.0)
+    mag = np.maximum(np.repeat(np.abs(off0), length) - share * run, 0.0)
     steep_motor = np.full(len(idx), np.inf)
     if motion is not None and np.any(ahead_way):
         dP, V, speed = motion
@@ -1125,7 +1128,7 @@ def catch_up(
         # motor's move its way, whichever is less
         ds = s_path[idx] - np.where(idx >= 1, s_path[np.maximum(idx - 1, 0)], 0.0)
         w = way[which]
-        take = np.where(mine, np.minimum(rate[which] * ds, np.maximum(0.5 * w * dP[idx], 0.0)), 0.0)
+        take = np.where(mine, np.minimum(share * ds, np.maximum(0.5 * w * dP[idx], 0.0)), 0.0)
         # the cumulative take within each range: less what the ranges before took
         cum = np.concatenate([[0.0], np.cumsum(take)])
         before = np.repeat(cum[np.cumsum(length) - length], length)
@@ -1137,19 +1140,15 @@ def catch_up(
                 np.inf,
             )
     off = np.copysign(mag, np.repeat(off0, length))
-    # left at the chunk's last point (where no crossing comes first)
-    s_last = np.where(start < n - 1, s_path[n - 1], s0)
-    left_mag = np.maximum(np.abs(off0) - rate * (s_last - s0), 0.0)
+    # left at the last point: a part behind by the closed form (all of it where
+    # there is no point to take it), a part ahead what its range's last point keeps
+    s_last = np.where(last > start, s_path[np.maximum(last, 0)], s0)
+    left_mag = np.maximum(np.abs(off0) - share * (s_last - s0), 0.0)
     if np.any(ahead_way):
-        # a part ahead: what its range left at the chunk's last point
-        last_of = np.cumsum(length) - 1
-        has = (length > 0) & (end == n)
-        left_mag = np.where(
-            ahead_way,
-            np.where(has, mag[np.maximum(last_of, 0)] if len(mag) else 0.0, np.abs(off0)),
-            left_mag,
-        )
-    left = np.where(inside, 0.0, np.copysign(left_mag, off0))
+        last_of = np.maximum(np.cumsum(length) - 1, 0)
+        kept = mag[last_of] if len(mag) else np.zeros(len(off0))
+        left_mag = np.where(ahead_way, np.where(length > 0, kept, np.abs(off0)), left_mag)
+    left = np.copysign(left_mag, off0)
     keep = mag > 0
     # its slope at each point: over the step after it (a last bit of offset gone
     # early in that step gives the point a velocity to match, not the whole rate),
@@ -1157,7 +1156,7 @@ def catch_up(
     nxt = np.minimum(idx + 1, n - 1)
     ahead = np.where(idx + 1 < n, s_path[nxt] - s_path[idx], np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
-        steep = np.minimum(np.repeat(rate, length), np.where(ahead > 0, mag / ahead, np.inf))
+        steep = np.minimum(share, np.where(ahead > 0, mag / ahead, np.inf))
     steep = np.minimum(steep, steep_motor)
     slope = -np.sign(off) * steep
     return idx[keep], off[keep], slope[keep], left
@@ -1190,11 +1189,47 @@ def follow(
     y_min, y_max : (n,) the least and greatest position of the part within each
         step (its end included)
     """
+    one = np.ones(1)
+    return follow_stretches(
+        table, y0 * one, P0 * one, V0 * one, P, V, dt, np.array([len(P)]), cubic
+    )
+
+
+def follow_stretches(
+    table: object,
+    y0: np.ndarray,
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    dt: np.ndarray,
+    steps: np.ndarray,
+    cubic: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`follow` over several stretches of commands at once, each from where
+    its part stands at its start (the play model's scan starts again at each).
+
+    Parameters
+    ----------
+    y0, P0, V0 : (w,) where each stretch's part stands at its start, and the
+        command's position and velocity there [mm, mm, mm/s]
+    P, V, dt : (k,) the commands and durations of the stretches' steps, stretch
+        after stretch [mm, mm/s, s]
+    steps : (w,) how many steps each stretch has
+
+    Returns
+    -------
+    y_end, y_min, y_max : (k,) as :func:`follow`'s, step by step
+    """
     from .axiscomp import _clamp_scan
 
     n = len(P)
-    Pa = np.concatenate([[P0], P[:-1]])
-    Va = np.concatenate([[V0], V[:-1]])
+    first = (np.cumsum(steps) - steps)[steps > 0]
+    opening = np.zeros(n, dtype=np.int64)
+    opening[first] = 1
+    Pa = np.concatenate([[0.0], P[:-1]])
+    Va = np.concatenate([[0.0], V[:-1]])
+    Pa[first], Va[first] = P0[steps > 0], V0[steps > 0]
     h = dt
     # a step of no time (a standing point's twin) has no cubic: h = ∞ makes it flat
     a, b, c = _velocity_quadratic(Pa, Va, P, V, np.where(h > 0, h, np.inf))
@@ -1207,12 +1242,13 @@ def follow(
     ok2 = (disc >= 0) & (r2 > 0) & (r2 < 1) & (h > 0) & (np.abs(r2 - r1) > 0) & cubic
     # samples of each step in time order: its turning points, then its end. Most
     # steps have none, so the cubic is evaluated only where it turns (the end of a
-    # step is its point, P).
-    count = 1 + ok1.astype(np.int64) + ok2.astype(np.int64)
+    # step is its point, P). Each stretch opens with one more: where its part
+    # stands (lo = hi = y0: the scan is clamped to it, whatever came before).
+    count = 1 + opening + ok1 + ok2
     last_of = np.cumsum(count) - 1
     flat = np.empty(int(last_of[-1]) + 1 if n else 0)
     flat[last_of] = P
-    turns = np.flatnonzero(count > 1)
+    turns = np.flatnonzero(ok1 | ok2)
     if turns.size:
         a1, a2 = ok1[turns], ok2[turns]
         q1, q2 = r1[turns], r2[turns]
@@ -1221,12 +1257,18 @@ def follow(
         cmd = _hermite(
             Pa[turns], Va[turns], P[turns], V[turns], h[turns], np.column_stack([early, late])
         )
-        start = (last_of - count + 1)[turns]
-        flat[start] = cmd[:, 0]
-        two = count[turns] == 3
-        flat[start[two] + 1] = cmd[two, 1]
+        at = (last_of - count + 1 + opening)[turns]
+        flat[at] = cmd[:, 0]
+        two = a1 & a2
+        flat[at[two] + 1] = cmd[two, 1]
     lo = table.lo(flat)  # type: ignore[attr-defined]
     hi = table.hi(flat)  # type: ignore[attr-defined]
-    y = _clamp_scan(np.concatenate([[y0], lo]), np.concatenate([[y0], hi]))[1:]
+    opens = (last_of - count + 1)[first]
+    lo[opens] = hi[opens] = y0[steps > 0]
+    y = _clamp_scan(lo, hi)
+    # each step's samples, a stretch's opening one counted as its first step's
+    # next (so that it is no extreme of that step)
     bounds = last_of - count + 1
-    return y[last_of], np.minimum.reduceat(y, bounds), np.maximum.reduceat(y, bounds)
+    inside = y.copy()
+    inside[opens] = y[opens + 1]
+    return y[last_of], np.minimum.reduceat(inside, bounds), np.maximum.reduceat(inside, bounds)

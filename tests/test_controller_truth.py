@@ -714,17 +714,19 @@ LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
 #: A cam search (machine 21, G-code) on led_floor/cad/nc/1078_wall_27bit_slower_
 #: feeds_wider_light_holder_hole.nc line 842 (tests/data/gcode/corpus, Apache-2.0),
 #: moved into the workspace, the last arc (0.18 mm radius at F1000) tilted by
-#: 0.137°. As corrected G-code 1.0058 x F
-#: at line 13, as PVT 1.0013 x at line 6 (1.0088 x on the code before this stop).
+#: 0.137°. As corrected G-code 1.0058 x F at line 13; as PVT 1.0013 x at line 6
+#: (1.0088 x two stops ago).
 #: As PVT every part follows its motor there, outside any window: the tilt turns
 #: table motor Y back and forth, its crossings three points apart, the first leaving the
-#: part 45 nm behind, for reversals.catch_up to take up before the second
-#: begins (that crossing's extreme is reckoned from the wanted position): 0.017
-#: mm/s, 20 x the share. It needs the next crossing reckoned from where the part
-#: is. As G-code, Y's window is a whole 0.65 ms step (a chord on the tight arc)
+#: part 45 nm behind, which reversals.catch_up took up before the second began
+#: (that crossing's extreme was reckoned from the wanted position): 0.017 mm/s, 20 x
+#: the share. Now the offset shrinks at the share only, what is left goes into the
+#: next crossing, and that crossing is reckoned from where the part is
+#: (chain.Pipeline._settle): 1.00044 x. As G-code, Y's window is a whole 0.65 ms
+#: step (a chord on the tight arc)
 #: whose root is at its very end (planned velocity −0.216 → +0.0027 mm/s): the
 #: part stands through it, lacking a mean 0.1 mm/s, as in
-#: LED_FLOOR_ARC_REVERSES_AT_A_STEP_END.
+#: LED_FLOOR_ARC_REVERSES_AT_A_STEP_END (still open).
 LED_FLOOR_TILTED_FILLET = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
     "G0 X3.411000 Y-0.506500 Z0.000000 A0 B0\n"
@@ -849,7 +851,7 @@ def _found(still_open: set[str], why: str) -> list[Any]:
 
 
 #: Found programs still out of bounds as PVT (strict xfails).
-PVT_OPEN = {"led-floor-tilted-fillet-F1000"}
+PVT_OPEN: set[str] = set()
 FOUND_PVT = _found(PVT_OPEN, "PVT_OPEN")
 
 
@@ -869,7 +871,12 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
     stood longer before its root than after it had grown over the rest of its step
     (reversals.windows' rule for that sliver, which the take-up above makes moot
     and which is gone): Y's part stood 0.33 ms past the root. 1.00079 x then,
-    1.00067 x with roots on the path."""
+    1.00067 x with roots on the path.
+
+    led-floor-tilted-fillet-F1000 ran 1.0013 x F where a part left 45 nm behind was
+    hurried back in the three points before its motor's next crossing: what is
+    left there now goes into that crossing, reckoned from where the part is
+    (1.00044 x)."""
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text)
     assert_within(judge_pmac(truth, motions, res, texts), None)
