@@ -689,8 +689,10 @@ LED_FLOOR_TINY_ARC_AS_LINES = (
 #: on the 0.22 mm arc at F1000 (1172 mm/s²) 0.07 ms before the end of a 0.77 ms
 #: step, so its window, cut at the step's end and not shifted, stands 0.29 ms before the
 #: root and 0.07 ms after it: over the window's straight line Y's part lacks a
-#: mean 0.13 mm/s the old way, and the tip runs 1.0029 x F (as on the code before
-#: this stop). Open for corrected G-code (GCODE_OPEN); as PVT, 1.00010 x.
+#: mean 0.13 mm/s the old way, and the tip ran 1.0029 x F. A window of straight
+#: lines now reaches over its step's end, as long after the root as before it
+#: (reversals.windows' t_after), the step's end inside it put on its line
+#: (chain.Pipeline._straight_through): 1.00005 x; as PVT, 1.00010 x.
 LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
     "G0 X5.970500 Y-5.272000 Z0.000000 A0 B0\n"
@@ -722,11 +724,10 @@ LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
 #: (that crossing's extreme was reckoned from the wanted position): 0.017 mm/s, 20 x
 #: the share. Now the offset shrinks at the share only, what is left goes into the
 #: next crossing, and that crossing is reckoned from where the part is
-#: (chain.Pipeline._settle): 1.00044 x. As G-code, Y's window is a whole 0.65 ms
-#: step (a chord on the tight arc)
-#: whose root is at its very end (planned velocity −0.216 → +0.0027 mm/s): the
-#: part stands through it, lacking a mean 0.1 mm/s, as in
-#: LED_FLOOR_ARC_REVERSES_AT_A_STEP_END (still open).
+#: (chain.Pipeline._settle): 1.00044 x. As G-code, Y's windows were cut at their
+#: steps' ends, one 0.02 ms after its root and 0.63 before, as in
+#: LED_FLOOR_ARC_REVERSES_AT_A_STEP_END; reaching over them (before the step's
+#: start too: reversals.windows' t_before), 1.00045 x.
 LED_FLOOR_TILTED_FILLET = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
     "G0 X3.411000 Y-0.506500 Z0.000000 A0 B0\n"
@@ -883,12 +884,8 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 
 
 #: Found programs still out of bounds as corrected G-code (strict xfails; each
-#: program's comment says what is known). Both: a window cut at its step's end
-#: stands on one side of the root only, and a straight line averages the velocity
-#: its part lacks over it. It needs a window that may reach over the step's end
-#: (the planned point there moved to the window's end, or dropped inside it), so
-#: that it stays symmetric about the root.
-GCODE_OPEN = {"led-floor-arc-reverses-at-a-step-end-F1000", "led-floor-tilted-fillet-F1000"}
+#: program's comment says what is known).
+GCODE_OPEN: set[str] = set()
 FOUND_GCODE = _found(GCODE_OPEN, "GCODE_OPEN")
 
 
@@ -906,7 +903,15 @@ def test_programs_the_search_found_run_as_linuxcnc_runs_them(seed: int, text: st
     1 nm past its part,
     pushed at 4.85 mm/s in the window's last servo cycle; a crossing now ends a
     digit of every written coordinate short (chain.Pipeline._crossing_short):
-    1.00033 x. (creep-then-helix-F60, 1.0062 x F, was the same rounding.)"""
+    1.00033 x. (creep-then-helix-F60, 1.0062 x F, was the same rounding.)
+
+    led-floor-arc-reverses-at-a-step-end-F1000 and led-floor-tilted-fillet-F1000
+    ran 1.0029 and 1.0058 x F: a window cut at its step's end (or start) stood on
+    one side of its root only, and the straight line over it averaged the velocity
+    its part lacked; windows now reach over into the step beside, symmetric about
+    the root, the step's end inside on the window's straight line: 1.00005 and
+    1.00045 x. Reaching over a corner, one stood on one side of it while the path
+    turned: steep-helix 0.27 µm off its G41.1 corner until corners were kept out."""
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text, "gcode")
     tr, blend = judge_gcode(truth, motions, res, texts)

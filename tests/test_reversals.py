@@ -150,6 +150,49 @@ def test_a_motor_setting_off_from_rest_the_other_way_first_crosses_twice() -> No
         assert ins.w_ta[1] < root < ins.w_tb[1] <= t_end[1]
 
 
+@settings(max_examples=300, deadline=None)
+@given(
+    h=st.floats(0.0005, 0.02),
+    s_root=st.floats(0, 1),
+    accel=st.floats(1.0, 1e5),
+    tol=st.floats(1e-6, 1e-4),
+    room_b=st.floats(0.0, 0.02),
+    room_a=st.floats(0.0, 0.02),
+)
+def test_a_window_of_straight_lines_reaches_over_its_steps_ends_symmetric(
+    h: float, s_root: float, accel: float, tol: float, room_b: float, room_a: float
+) -> None:
+    """With straight lines between the points, a window whose root lies nearer its
+    step's end (or start) than half its width reaches into the step beside as far
+    as it may (room_b, room_a) and stands as long after its root as before it:
+    a straight line over it averages the velocity its standing part lacks, which
+    a window on one side of the root does not (test_controller_truth's found
+    programs). No longer than its step, nor than the tolerance allows on a side;
+    where it may not reach over, it is the window cut at its step's ends."""
+    longest = 1e-3
+    t0, t1 = np.array([0.3]), np.array([0.3 + h])
+    t_root = t0 + s_root * h
+    A = np.array([accel])
+    ta, tb = reversals.windows(
+        t0, t1, t_root, A, tol, longest, chords=True, t_before=t0 - room_b, t_after=t1 + room_a
+    )
+    cut = reversals.windows(t0, t1, t_root, A, tol, longest, chords=True)
+    assert t0[0] - room_b <= ta[0] <= t_root[0] <= tb[0] <= t1[0] + room_a
+    if ta[0] < t0[0] - 1e-12 or tb[0] > t1[0] + 1e-12:
+        before, after = t_root[0] - ta[0], tb[0] - t_root[0]
+        assert before == pytest.approx(after, rel=1e-9)
+        assert 2 * before >= reversals.MIN_WINDOW_S * (1 - 1e-9)
+        assert 2 * before <= h * (1 + 1e-9)
+        assert accel * before**2 / 2 <= tol * (1 + 1e-9) or 2 * before <= reversals.MIN_WINDOW_S * (
+            1 + 1e-9
+        )
+    else:
+        np.testing.assert_allclose([ta[0], tb[0]], [cut[0][0], cut[1][0]], rtol=0, atol=1e-12)
+    # given no room, never over
+    none = reversals.windows(t0, t1, t_root, A, tol, longest, chords=True, t_before=t0, t_after=t1)
+    np.testing.assert_array_equal([none[0][0], none[1][0]], [cut[0][0], cut[1][0]])
+
+
 @settings(max_examples=200, deadline=None)
 @given(
     p0=st.floats(-5, 5),
@@ -772,6 +815,7 @@ def test_a_point_after_a_window_in_its_step_is_on_the_new_side() -> None:
     ins = reversals.Insertions()
     ins.w_k, ins.w_col, ins.w_new = np.array([1]), np.array([0]), np.array([-1])
     ins.w_t0, ins.w_ta, ins.w_tb = np.array([0.01]), np.array([0.012]), np.array([0.013])
+    ins.w_kb, ins.w_t0b = ins.w_k, ins.w_t0
     # the end of step 0; in step 1 the window's ends, a blend's point before the corner, and
     # the corner (the step's end, carrying the mean of its sides' velocities)
     rows = reversals.Rows(
