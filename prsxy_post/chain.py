@@ -802,12 +802,10 @@ class Pipeline:
             self.reversal_s,
             blends,
             self.near_next,
-            # straight lines (corrected G-code) carry the pose from edge to edge of
-            # a window: a part standing through one symmetric about the root lacks
-            # next to no displacement over it, and one shortened on a side lacked
-            # A (db² − da²) / 2 (0.11 % over F on a 0.2 mm arc, test_controller_
-            # truth's found programs); the tolerance alone sizes them
-            self._edge_speed(plan, s, pc) if self.limits.segment == "cubic" else None,
+            # straight lines (corrected G-code) too: a window is one line, symmetric
+            # about its root, and within the reach on both sides the tip's speed
+            # strays less across it (reversals.chord_windows)
+            self._edge_speed(plan, s, pc),
             self.limits.segment != "cubic",
             self._path_velocity(plan, s, pc),
             # a window reaching over a corner stood on one side of it while the

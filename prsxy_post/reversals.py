@@ -198,7 +198,7 @@ class Insertions:
     w_t0 : (w,) the start of each window's step [s]
     w_kb, w_t0b : (w,) the step where each window ends and its start: w_k, or with
         straight lines between the points, the next step, where the window
-        reaches past its step's end (:func:`windows`' ``t_after``; one that reaches
+        reaches past its step's end (:func:`chord_windows`; one that reaches
         before its step's start has w_k the step before)
     mid_k, mid_t : (m,) the points put inside steps: the row whose step they are in,
         and their time since the chunk's previous point; sorted by step, then time
@@ -415,8 +415,6 @@ def windows(
     longest: float,
     reach: tuple[np.ndarray, np.ndarray] | None = None,
     chords: bool = False,
-    t_before: np.ndarray | None = None,
-    t_after: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The crossing windows about reversals at ``t_root`` inside steps [t0, t1].
 
@@ -442,17 +440,6 @@ def windows(
     test_controller_truth's found programs). A PVT cubic leaves the window with the
     path's velocity, and the commands after it take the difference up along the
     path (:func:`catch_up`).
-
-    ``t_before``, ``t_after`` (with ``chords``): how far before its step's start
-    and past its step's end each window may reach, into the steps beside it [s]
-    (t0, t1: not at all). Cut at its step's end, a window about a root near it
-    stood longer before the root than after it (0.29 ms against 0.07 at F1000:
-    0.29 % over F, test_controller_truth's found programs), and the other way at
-    its start (0.63 ms after against 0.02: 0.57 %). A window that needs to reach
-    over and may is as long before its root as after it, as far as the steps
-    beside allow and no longer than its step, whatever sliver that leaves beside
-    it; the step's end inside it is put on its straight line
-    (chain.Pipeline._straight_through).
     """
     n = len(t_root)
     with np.errstate(divide="ignore"):
@@ -487,22 +474,6 @@ def windows(
         )
         db, da = db + add_b, da + (extra - add_b)
     width = db + da
-    # reaching over an end of its step by more than a snap, where it may: as long
-    # on each side of the root as both allow, if that is a servo cycle
-    lim_b = t0 if t_before is None or not chords else np.minimum(t_before, t0)
-    lim_a = t1 if t_after is None or not chords else np.maximum(t_after, t1)
-    # and no longer than its step, whose chord the sampler sized to the curve: the
-    # window's line is no farther from it (chain.Pipeline._straight_through)
-    side_s = np.minimum(
-        np.minimum(np.minimum(db, da), 0.5 * (t1 - t0)),
-        np.minimum(t_root - lim_b, lim_a - t_root),
-    )
-    spill = ((t_root - db < t0 - SNAP_S) & (lim_b < t0 - SNAP_S)) | (
-        (t_root + da > t1 + SNAP_S) & (lim_a > t1 + SNAP_S)
-    )
-    spill &= (2.0 * side_s >= MIN_WINDOW_S) & (
-        (t_root - side_s < t0 - SNAP_S) | (t_root + side_s > t1 + SNAP_S)
-    )
     whole = width >= t1 - t0
     a = np.maximum(t_root - db, t0)
     b = np.minimum(t_root + da, t1)
@@ -524,8 +495,64 @@ def windows(
         before_ok &= t_root - t0 <= b - t_root
     grow_a = (a - t0 < 0.5 * width) & (before_ok | (a - t0 < MIN_WINDOW_S))
     a = np.where(grow_a, t0, a)
-    a, b = np.where(whole, t0, a), np.where(whole, t1, b)
-    return np.where(spill, t_root - side_s, a), np.where(spill, t_root + side_s, b)
+    return np.where(whole, t0, a), np.where(whole, t1, b)
+
+
+def chord_windows(
+    t0: np.ndarray,
+    t1: np.ndarray,
+    t_root: np.ndarray,
+    accel: np.ndarray,
+    tol: float,
+    longest: float,
+    reach: tuple[np.ndarray, np.ndarray] | None,
+    t_before: np.ndarray,
+    t_after: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The crossing windows about reversals at ``t_root`` inside steps [t0, t1]
+    for straight lines between the points (corrected G-code).
+
+    The controller runs a window as one straight line at one speed while the part
+    stands in it and lacks its wanted velocity A (t − t_root): the line's mean
+    lacks A (da² − db²) / 2 over its length, none where the window stands as long
+    after its root as before it, and across it the tip's speed strays by up to
+    |A| d through the head's lever (1.0044 x F in a 1 ms window,
+    test_controller_truth's found programs). So a window is symmetric about its
+    root, d on each side: within the tolerance (|A| d² / 2), the ``reach`` on
+    either side (:func:`reach`) and half the longest, but at least half a servo
+    cycle. Where that passes its step's end (or start) it reaches over into the
+    step beside as far as ``t_after`` (``t_before``) allows, no longer than its
+    step; where it may not, it is cut there. A sliver of its step left beside it,
+    shorter than a servo cycle (its written digits' rounding a large velocity
+    error), is taken in, on both sides alike where there is room, else on its
+    side alone.
+
+    Returns the windows' starts and ends [s], as :func:`windows`.
+    """
+    with np.errstate(divide="ignore"):
+        half = np.where(accel == 0, 0.5 * longest, np.sqrt(2.0 * tol / np.abs(accel)))
+    rb, ra = (np.inf, np.inf) if reach is None else reach
+    d = np.minimum(np.minimum(half, 0.5 * longest), np.minimum(rb, ra))
+    d = np.maximum(d, 0.5 * MIN_WINDOW_S)
+    lim_b, lim_a = np.minimum(t_before, t0), np.maximum(t_after, t1)
+    # over into a step beside: no longer than its own step (whose chord the
+    # sampler sized to the curve: chain.Pipeline._straight_through)
+    over = (t_root - d < t0 - SNAP_S) | (t_root + d > t1 + SNAP_S)
+    d = np.where(over, np.minimum(d, 0.5 * (t1 - t0)), d)
+    a = np.maximum(t_root - d, lim_b)
+    b = np.minimum(t_root + d, lim_a)
+    # slivers of its step beside it taken in: both sides alike where there is room
+    for _ in range(2):
+        sl_b = (a > t0) & (a - t0 < MIN_WINDOW_S)
+        sl_a = (b < t1) & (t1 - b < MIN_WINDOW_S)
+        # as far on the other side as the sliver's end is on this one
+        grow = np.maximum(np.where(sl_b, t_root - t0, 0.0), np.where(sl_a, t1 - t_root, 0.0))
+        even = (sl_b | sl_a) & (t_root - grow >= lim_b) & (t_root + grow <= lim_a)
+        a = np.where(even, np.minimum(a, t_root - grow), a)
+        b = np.where(even, np.maximum(b, t_root + grow), b)
+    a = np.where((a > t0) & (a - t0 < MIN_WINDOW_S), t0, a)
+    b = np.where((b < t1) & (t1 - b < MIN_WINDOW_S), t1, b)
+    return a, b
 
 
 def turning_points(
@@ -787,7 +814,8 @@ def plan_insertions(
         a reversal in motion (:data:`EdgeSpeed`): its window stands no longer than
         :func:`reach` of that on each side. None: the tolerance alone decides
     chords : the controller runs straight lines between the points (corrected
-        G-code), not cubics (:func:`windows`)
+        G-code), not cubics: windows in motion are :func:`chord_windows`, a dip's
+        :func:`windows` with ``chords``
     velocity : the path's own velocity inside steps (:data:`Velocity`): a reversal
         in motion is put at its root (:func:`path_roots`). None: at the root of the
         step's cubic
@@ -927,7 +955,6 @@ def plan_insertions(
         t1 = t_end[km]
         t0 = t1 - h
         wide = None if edge_speed is None else reach(edge_speed(km, sr, col, acc), acc)
-        t_before = t_after = None
         if chords:
             # straight lines: a window may reach into the step beside (of this
             # chunk) where the path moves through both without a corner between
@@ -953,7 +980,9 @@ def plan_insertions(
             )
             t_before = t0 - np.where(free_prev, np.clip(dt[prv] - MIN_WINDOW_S, 0.0, None), 0.0)
             t_after = t1 + np.where(free_next, np.clip(dt[nxt] - MIN_WINDOW_S, 0.0, None), 0.0)
-        ta, tb = windows(t0, t1, t0 + sr * h, acc, tol, longest, wide, chords, t_before, t_after)
+            ta, tb = chord_windows(t0, t1, t0 + sr * h, acc, tol, longest, wide, t_before, t_after)
+        else:
+            ta, tb = windows(t0, t1, t0 + sr * h, acc, tol, longest, wide)
         w_k.append(km)
         w_ta.append(ta)
         w_tb.append(tb)

@@ -754,18 +754,18 @@ LED_FLOOR_TILTED_FILLET = (
 #: A cam search (machine 31, G-code) on CAMotics' examples/vcarve/vcarve.ngc line
 #: 7 (tests/data/gcode/corpus, GPL-2.0-or-later), moved into the workspace, tilted
 #: by 0.5° about B and back: the last line takes the tilt off over a 0.05 mm move at
-#: F152.4 while head motor P1's wanted velocity turns slowly (about 60 mm/s², ±0.03
-#: mm/s over its window). Its window, sized by the tolerance alone, is the longest
+#: F152.4 while head motor P1's wanted velocity turns slowly (27 mm/s², read off
+#: the planned velocities either side). Its window, sized by the tolerance alone, was the longest
 #: (1 ms), and LinuxCNC runs it as one straight line at one speed, but the part
 #: standing in it lacks A (t − t_root) all the while: through the head's lever the
-#: tip runs from 0.997 to 1.0044 x F across the line (as before this stop). As PVT
-#: the window is held within the edge speed's reach (Pipeline._edge_speed):
-#: 1.00042 x. Given the same reach, corrected G-code ran 1.0012 x here, and three
-#: found programs on tight arcs went out of bounds (1.0011 to 1.0021 x): shorter
-#: windows cross the play faster, and LinuxCNC's blend of a window's corners has
-#: the motor meet its part before the line's end at that speed. Open for corrected
-#: G-code (GCODE_OPEN): the window must be short enough for the velocity its part
-#: lacks and long enough for the speed at which its motor meets the part.
+#: tip ran from 0.997 to 1.0044 x F across the line. Windows of straight lines are
+#: now symmetric about the root and held within the edge speed's reach on both
+#: sides (reversals.chord_windows): 1.0012 x, the window the shortest (0.25 ms, a
+#: servo cycle) and the tip still from 0.9992 to 1.0012 x F across it. As PVT
+#: 1.00042 x (a window may stand longer on the side where the tip is held back).
+#: Open for corrected G-code (GCODE_OPEN): a window of one servo cycle strays too
+#: far; it would take a shorter line, or the head's lever taken into the
+#: crossing's other motors.
 VCARVE_UNTILTS_AS_A_HEAD_MOTOR_TURNS = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
     "G0 X-0.374650 Y-1.221397 Z-2.540000 A0 B0\n"

@@ -156,41 +156,61 @@ def test_a_motor_setting_off_from_rest_the_other_way_first_crosses_twice() -> No
     s_root=st.floats(0, 1),
     accel=st.floats(1.0, 1e5),
     tol=st.floats(1e-6, 1e-4),
+    reach_b=st.floats(1e-5, 1e-2),
+    reach_a=st.floats(1e-5, 1e-2),
     room_b=st.floats(0.0, 0.02),
     room_a=st.floats(0.0, 0.02),
 )
-def test_a_window_of_straight_lines_reaches_over_its_steps_ends_symmetric(
-    h: float, s_root: float, accel: float, tol: float, room_b: float, room_a: float
+def test_a_window_of_straight_lines_is_symmetric_about_its_root(
+    h: float,
+    s_root: float,
+    accel: float,
+    tol: float,
+    reach_b: float,
+    reach_a: float,
+    room_b: float,
+    room_a: float,
 ) -> None:
-    """With straight lines between the points, a window whose root lies nearer its
-    step's end (or start) than half its width reaches into the step beside as far
-    as it may (room_b, room_a) and stands as long after its root as before it:
-    a straight line over it averages the velocity its standing part lacks, which
-    a window on one side of the root does not (test_controller_truth's found
-    programs). No longer than its step, nor than the tolerance allows on a side;
-    where it may not reach over, it is the window cut at its step's ends."""
+    """A straight line over a window averages the velocity its standing part lacks,
+    A (t − t_root): none where it stands as long after the root as before it
+    (test_controller_truth's found programs). So a window of straight lines is
+    symmetric about its root, within the tolerance and the reach on both sides (at
+    least half a servo cycle each), reaching into the steps beside as far as
+    room_b and room_a allow (no longer than its step there); asymmetric only
+    where an end is cut at a step's end it may not pass, or a sliver of its step
+    is taken in on one side. It leaves no sliver shorter than a servo cycle of its
+    step beside it."""
     longest = 1e-3
     t0, t1 = np.array([0.3]), np.array([0.3 + h])
     t_root = t0 + s_root * h
-    A = np.array([accel])
-    ta, tb = reversals.windows(
-        t0, t1, t_root, A, tol, longest, chords=True, t_before=t0 - room_b, t_after=t1 + room_a
+    ta, tb = reversals.chord_windows(
+        t0,
+        t1,
+        t_root,
+        np.array([accel]),
+        tol,
+        longest,
+        (np.array([reach_b]), np.array([reach_a])),
+        t0 - room_b,
+        t1 + room_a,
     )
-    cut = reversals.windows(t0, t1, t_root, A, tol, longest, chords=True)
-    assert t0[0] - room_b <= ta[0] <= t_root[0] <= tb[0] <= t1[0] + room_a
-    if ta[0] < t0[0] - 1e-12 or tb[0] > t1[0] + 1e-12:
-        before, after = t_root[0] - ta[0], tb[0] - t_root[0]
-        assert before == pytest.approx(after, rel=1e-9)
-        assert 2 * before >= reversals.MIN_WINDOW_S * (1 - 1e-9)
-        assert 2 * before <= h * (1 + 1e-9)
-        assert accel * before**2 / 2 <= tol * (1 + 1e-9) or 2 * before <= reversals.MIN_WINDOW_S * (
-            1 + 1e-9
-        )
-    else:
-        np.testing.assert_allclose([ta[0], tb[0]], [cut[0][0], cut[1][0]], rtol=0, atol=1e-12)
-    # given no room, never over
-    none = reversals.windows(t0, t1, t_root, A, tol, longest, chords=True, t_before=t0, t_after=t1)
-    np.testing.assert_array_equal([none[0][0], none[1][0]], [cut[0][0], cut[1][0]])
+    a, b, r = ta[0], tb[0], t_root[0]
+    eps = 1e-12
+    assert t0[0] - room_b - eps <= a <= r <= b <= t1[0] + room_a + eps
+    assert a <= t0[0] + eps or a - t0[0] >= reversals.MIN_WINDOW_S - eps
+    assert b >= t1[0] - eps or t1[0] - b >= reversals.MIN_WINDOW_S - eps
+    ends = (t0[0], t1[0], t0[0] - room_b, t1[0] + room_a)
+    at_end = min(abs(x - e) for x in (a, b) for e in ends) <= eps
+    if not at_end:
+        assert r - a == pytest.approx(b - r, abs=eps)
+        d = b - r
+        natural = min(np.sqrt(2 * tol / accel), reach_b, reach_a, 0.5 * longest)
+        assert d <= max(natural, 0.5 * reversals.MIN_WINDOW_S) * (1 + 1e-9)
+    if a < t0[0] - eps or b > t1[0] + eps:
+        assert b - a <= h + 2 * reversals.MIN_WINDOW_S + eps
+    # given no room, never over its step's ends
+    ta, tb = reversals.chord_windows(t0, t1, t_root, np.array([accel]), tol, longest, None, t0, t1)
+    assert t0[0] <= ta[0] <= tb[0] <= t1[0]
 
 
 @settings(max_examples=200, deadline=None)
