@@ -1181,7 +1181,8 @@ class Pipeline:
 
     def _straight_through(self, pc: PointChunk, contacts: np.ndarray, P_cmd: np.ndarray) -> None:
         """Straight lines between the points (corrected G-code): a planned point
-        alone inside a crossing window (one that reaches past its step's end) put
+        alone inside a crossing window (one that reaches over its step's end or
+        start, :func:`.reversals.chord_windows`) put
         on the straight line from the window's first point to its last, every
         motor, by time, so that the window is one straight line run at one speed.
         Two lines, each averaged what the standing part lacked over it, and the

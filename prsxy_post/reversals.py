@@ -522,10 +522,11 @@ def chord_windows(
     either side (:func:`reach`) and half the longest, but at least half a servo
     cycle. Where that passes its step's end (or start) it reaches over into the
     step beside as far as ``t_after`` (``t_before``) allows, no longer than its
-    step; where it may not, it is cut there. A sliver of its step left beside it,
+    step (or a servo cycle); where it may not, it is cut there (and is longer
+    on the other side, to a servo cycle). A sliver of its step left beside it,
     shorter than a servo cycle (its written digits' rounding a large velocity
-    error), is taken in, on both sides alike where there is room, else on its
-    side alone.
+    error), is taken in, on both sides alike where there is room (over a short
+    step, up to twice its length), else on its side alone.
 
     Returns the windows' starts and ends [s], as :func:`windows`.
     """
@@ -536,11 +537,16 @@ def chord_windows(
     d = np.maximum(d, 0.5 * MIN_WINDOW_S)
     lim_b, lim_a = np.minimum(t_before, t0), np.maximum(t_after, t1)
     # over into a step beside: no longer than its own step (whose chord the
-    # sampler sized to the curve: chain.Pipeline._straight_through)
+    # sampler sized to the curve: chain.Pipeline._straight_through), or a servo
+    # cycle
     over = (t_root - d < t0 - SNAP_S) | (t_root + d > t1 + SNAP_S)
-    d = np.where(over, np.minimum(d, 0.5 * (t1 - t0)), d)
+    d = np.where(over, np.maximum(np.minimum(d, 0.5 * (t1 - t0)), 0.5 * MIN_WINDOW_S), d)
     a = np.maximum(t_root - d, lim_b)
     b = np.minimum(t_root + d, lim_a)
+    # cut on a side, still a servo cycle: longer on the other
+    short = b - a < MIN_WINDOW_S
+    b = np.where(short & (a <= lim_b), np.minimum(a + MIN_WINDOW_S, lim_a), b)
+    a = np.where(short & (a > lim_b), np.maximum(b - MIN_WINDOW_S, lim_b), a)
     # slivers of its step beside it taken in: both sides alike where there is room
     for _ in range(2):
         sl_b = (a > t0) & (a - t0 < MIN_WINDOW_S)

@@ -152,7 +152,7 @@ def test_a_motor_setting_off_from_rest_the_other_way_first_crosses_twice() -> No
 
 @settings(max_examples=300, deadline=None)
 @given(
-    h=st.floats(0.0005, 0.02),
+    h=st.floats(0.0001, 0.02),
     s_root=st.floats(0, 1),
     accel=st.floats(1.0, 1e5),
     tol=st.floats(1e-6, 1e-4),
@@ -176,7 +176,8 @@ def test_a_window_of_straight_lines_is_symmetric_about_its_root(
     (test_controller_truth's found programs). So a window of straight lines is
     symmetric about its root, within the tolerance and the reach on both sides (at
     least half a servo cycle each), reaching into the steps beside as far as
-    room_b and room_a allow (no longer than its step there); asymmetric only
+    room_b and room_a allow (no longer than its step there, or a servo cycle);
+    asymmetric only
     where an end is cut at a step's end it may not pass, or a sliver of its step
     is taken in on one side. It leaves no sliver shorter than a servo cycle of its
     step beside it."""
@@ -207,7 +208,12 @@ def test_a_window_of_straight_lines_is_symmetric_about_its_root(
         natural = min(np.sqrt(2 * tol / accel), reach_b, reach_a, 0.5 * longest)
         assert d <= max(natural, 0.5 * reversals.MIN_WINDOW_S) * (1 + 1e-9)
     if a < t0[0] - eps or b > t1[0] + eps:
-        assert b - a <= h + 2 * reversals.MIN_WINDOW_S + eps
+        # no longer than its step, or a servo cycle; twice that at most where a
+        # sliver of its step was taken in (the whole step then in the window)
+        whole = a <= t0[0] + eps and b >= t1[0] - eps
+        assert b - a <= (2 if whole else 1) * max(h, reversals.MIN_WINDOW_S) + eps
+    # at least a servo cycle, where its step and those beside leave room for one
+    assert b - a >= min(reversals.MIN_WINDOW_S, h + room_b + room_a) - eps
     # given no room, never over its step's ends
     ta, tb = reversals.chord_windows(t0, t1, t_root, np.array([accel]), tol, longest, None, t0, t1)
     assert t0[0] <= ta[0] <= tb[0] <= t1[0]
