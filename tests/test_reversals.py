@@ -656,19 +656,26 @@ def test_a_part_ahead_never_sees_its_command_turn_back(
 
 
 def test_what_a_catch_up_leaves_where_the_next_crossing_begins_goes_into_it() -> None:
-    """The motor's next crossing begins at point 5, 3 steps (0.15 mm of path) after
+    """The motor's next crossing begins at point 4, 2 steps (0.1 mm of path) after
     this one ends: the offset shrinks at the share up to there and what is left
     goes into that crossing (its window's first command still carries it), not
     hurried away in the steps before it (in a tight curve's few points that ran a
-    part 20 x the share: 1.0013 x F, test_controller_truth's found programs)."""
+    part 20 x the share: 1.0013 x F, test_controller_truth's found programs). At
+    point 5 (0.15 mm) it would be gone at twice the share (CATCH_UP_HURRY), and is."""
     share = 2e-4
     s_path = 0.05 * np.arange(1, 21)
     idx, off, _slope, left = reversals.catch_up(
+        np.array([-0.06e-3]), np.array([1]), np.array([2]), np.array([4]), s_path, share
+    )
+    assert idx.tolist() == [3, 4]
+    np.testing.assert_allclose(off, [-0.05e-3, -0.04e-3], atol=1e-15)
+    np.testing.assert_allclose(left, [-0.04e-3], atol=1e-15)
+    idx, off, _slope, left = reversals.catch_up(
         np.array([-0.06e-3]), np.array([1]), np.array([2]), np.array([5]), s_path, share
     )
-    assert idx.tolist() == [3, 4, 5]
-    np.testing.assert_allclose(off, [-0.05e-3, -0.04e-3, -0.03e-3], atol=1e-15)
-    np.testing.assert_allclose(left, [-0.03e-3], atol=1e-15)
+    assert idx.tolist() == [3, 4]
+    np.testing.assert_allclose(off, [-0.04e-3, -0.02e-3], atol=1e-15)
+    np.testing.assert_allclose(left, [0.0], atol=1e-18)
     # no path run before it (the path stands): all of it goes into the crossing
     stand = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
     idx, off, _slope, left = reversals.catch_up(
