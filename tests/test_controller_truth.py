@@ -691,8 +691,8 @@ LED_FLOOR_TINY_ARC_AS_LINES = (
 #: root and 0.07 ms after it: over the window's straight line Y's part lacks a
 #: mean 0.13 mm/s the old way, and the tip ran 1.0029 x F. A window of straight
 #: lines now reaches over its step's end, as long after the root as before it
-#: (reversals.windows' t_after), the step's end inside it put on its line
-#: (chain.Pipeline._straight_through): 1.00005 x; as PVT, 1.00010 x.
+#: (reversals.chord_windows), the step's end inside it put on its line
+#: (chain.Pipeline._straight_through): 1.00066 x; as PVT, 1.00009 x.
 LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
     "G0 X5.970500 Y-5.272000 Z0.000000 A0 B0\n"
@@ -725,9 +725,9 @@ LED_FLOOR_ARC_REVERSES_AT_A_STEP_END = (
 #: the share. Now the offset shrinks at the share only, what is left goes into the
 #: next crossing, and that crossing is reckoned from where the part is
 #: (chain.Pipeline._settle): 1.00044 x. As G-code, Y's windows were cut at their
-#: steps' ends, one 0.02 ms after its root and 0.63 before, as in
+#: steps' ends, one standing 0.02 ms before its root and 0.63 after, as in
 #: LED_FLOOR_ARC_REVERSES_AT_A_STEP_END; reaching over them (before the step's
-#: start too: reversals.windows' t_before), 1.00045 x.
+#: start too: reversals.chord_windows), 1.00012 x.
 LED_FLOOR_TILTED_FILLET = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
     "G0 X3.411000 Y-0.506500 Z0.000000 A0 B0\n"
@@ -946,9 +946,10 @@ def test_programs_the_search_found_run_as_linuxcnc_runs_them(seed: int, text: st
     ran 1.0029 and 1.0058 x F: a window cut at its step's end (or start) stood on
     one side of its root only, and the straight line over it averaged the velocity
     its part lacked; windows now reach over into the step beside, symmetric about
-    the root, the step's end inside on the window's straight line: 1.00005 and
-    1.00045 x. Reaching over a corner, one stood on one side of it while the path
-    turned: steep-helix 0.27 µm off its G41.1 corner until corners were kept out."""
+    the root, the step's end inside on the window's straight line: 1.00066 and
+    1.00012 x (reversals.chord_windows). Reaching over a corner, one stood on one
+    side of it while the path turned: steep-helix 0.27 µm off its G41.1 corner
+    until corners were kept out."""
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text, "gcode")
     tr, blend = judge_gcode(truth, motions, res, texts)
