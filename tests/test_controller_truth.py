@@ -755,14 +755,15 @@ LED_FLOOR_TILTED_FILLET = (
 #: 7 (tests/data/gcode/corpus, GPL-2.0-or-later), moved into the workspace, tilted
 #: by 0.5° about B and back: the last line takes the tilt off over a 0.05 mm move at
 #: F152.4 while head motor P1's wanted velocity turns slowly (27 mm/s², read off
-#: the planned velocities either side). Its window, sized by the tolerance alone, was the longest
-#: (1 ms), and LinuxCNC runs it as one straight line at one speed, but the part
-#: standing in it lacks A (t − t_root) all the while: through the head's lever the
-#: tip ran from 0.997 to 1.0044 x F across the line. Windows of straight lines are
-#: now symmetric about the root and held within the edge speed's reach on both
-#: sides (reversals.chord_windows): 1.0012 x, the window the shortest (0.25 ms, a
-#: servo cycle) and the tip still from 0.9992 to 1.0012 x F across it. As PVT
-#: 1.00042 x (a window may stand longer on the side where the tip is held back).
+#: the planned velocities either side). Its window, sized by the tolerance alone,
+#: was the longest (1 ms), and LinuxCNC runs it as one straight line at one
+#: speed, but the part standing in it lacks A (t − t_root) all the while: through
+#: the head's lever the tip ran from 0.997 to 1.0044 x F across the line.
+#: Windows of straight lines are now symmetric about the root and held within the
+#: edge speed's reach on both sides (reversals.chord_windows): 1.0012 x, the
+#: window the shortest (0.25 ms, a servo cycle) and the tip still from 0.9992 to
+#: 1.0012 x F across it. As PVT 1.00042 x (a window may stand longer on the side
+#: where the tip is held back).
 #: Open for corrected G-code (GCODE_OPEN): a window of one servo cycle strays too
 #: far; it would take a shorter line, or the head's lever taken into the
 #: crossing's other motors.

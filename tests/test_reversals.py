@@ -177,10 +177,9 @@ def test_a_window_of_straight_lines_is_symmetric_about_its_root(
     symmetric about its root, within the tolerance and the reach on both sides (at
     least half a servo cycle each), reaching into the steps beside as far as
     room_b and room_a allow (no longer than its step there, or a servo cycle);
-    asymmetric only
-    where an end is cut at a step's end it may not pass, or a sliver of its step
-    is taken in on one side. It leaves no sliver shorter than a servo cycle of its
-    step beside it."""
+    asymmetric only where an end is cut at a step's end it may not pass, or a
+    sliver of its step is taken in on one side. It leaves no sliver shorter than a
+    servo cycle of its step beside it."""
     longest = 1e-3
     t0, t1 = np.array([0.3]), np.array([0.3 + h])
     t_root = t0 + s_root * h
