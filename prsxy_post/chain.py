@@ -810,8 +810,9 @@ class Pipeline:
             self._path_velocity(plan, s, pc),
             # a window reaching over a corner stood on one side of it while the
             # path turned (0.27 µm off a G41.1 corner, test_controller_truth's
-            # found programs)
-            None if plan is None else self._bends(plan, s)[0],
+            # found programs); only windows of straight lines reach over (PVT's
+            # corners found their bends in _corners)
+            None if plan is None or self.limits.segment == "cubic" else self._bends(plan, s)[0],
         )
         self.near_next = ins.near_next
         if ins.blended.size:

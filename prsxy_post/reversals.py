@@ -556,6 +556,7 @@ def chord_windows(
     b = np.where(short & (a <= lim_b), np.minimum(a + MIN_WINDOW_S, lim_a), b)
     a = np.where(short & (a > lim_b), np.maximum(b - MIN_WINDOW_S, lim_b), a)
     # slivers of its step beside it taken in: both sides alike where there is room
+    # (twice: grown over one sliver, the window may leave one on its other side)
     for _ in range(2):
         sl_b = (a > t0) & (a - t0 < MIN_WINDOW_S)
         sl_a = (b < t1) & (t1 - b < MIN_WINDOW_S)
