@@ -1,0 +1,68 @@
+"""Corrected G-code as LinuxCNC's own motion controller runs it: the table.
+
+Each program is converted to corrected G-code for its machine and run twice: as
+straight lines each in its written G93 time (tests/controllers.py, what
+tests/test_controller_truth.py judges), and on LinuxCNC 2.9 itself, headless
+(tests/linuxcnc_motion.py: its trajectory planner, blends and 1 ms servo cycle).
+Both are executed by the true machine and judged against the G-code's geometry
+(tests/test_linuxcnc_motion.py's run_on_linuxcnc). LinuxCNC runs in real time:
+the found programs take about eight minutes.
+
+    python bench/linuxcnc_truth.py                      # the found programs, with play
+    python bench/linuxcnc_truth.py --no-play            # the same machines without play
+    python bench/linuxcnc_truth.py --programs samples   # the samples, random machine 11
+    python bench/linuxcnc_truth.py --longest 10         # skip programs longer than 10 s
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from tests import controllers as ctl  # noqa: E402
+from tests import linuxcnc_motion as lm  # noqa: E402
+from tests.test_controller_truth import FOUND, FOUND_IDS, judge_gcode  # noqa: E402
+from tests.test_linuxcnc_motion import run_on_linuxcnc  # noqa: E402
+from tests.test_tracking import convert, truth_machine  # noqa: E402
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--programs", choices=["found", "samples"], default="found")
+    ap.add_argument("--no-play", action="store_true", help="the machines without play")
+    ap.add_argument("--longest", type=float, default=60.0, help="skip longer programs [s]")
+    args = ap.parse_args()
+    if not lm.available():
+        sys.exit("LinuxCNC is not installed (apt-get install linuxcnc-uspace)")
+    if args.programs == "found":
+        jobs = [(name, seed, text) for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True)]
+    else:
+        jobs = [(p.name, 11, p.read_text()) for p in sorted((ROOT / "samples").glob("*.ngc"))]
+    print(
+        "| program | machine | as written: speed / F, path µm "
+        "| on LinuxCNC: speed / F, path µm, tool axis arcsec | time written / LinuxCNC s |"
+    )
+    print("|---|---|---|---|---|")
+    for name, seed, text in jobs:
+        truth = truth_machine("random", seed, play=not args.no_play)
+        motions, res, texts = convert(truth, text, "gcode")
+        written = ctl.run_gcode(texts[0])
+        if written.t[-1] > args.longest:
+            print(f"| {name} | random {seed} | skipped: {written.t[-1]:.0f} s | | |", flush=True)
+            continue
+        model, _ = judge_gcode(truth, motions, res, texts)
+        tr, run, _ = run_on_linuxcnc(truth, motions, res, texts[0])
+        print(
+            f"| {name} | random {seed} | {model.speed_ratio:.4f}, {model.path_mm * 1e3:.3f} "
+            f"| {tr.speed_ratio:.4f}, {tr.path_mm * 1e3:.3f}, {tr.ab_deg * 3600:.2f} "
+            f"| {written.t[-1]:.2f} / {run.t[-1]:.2f} |",
+            flush=True,
+        )
+
+
+if __name__ == "__main__":
+    main()

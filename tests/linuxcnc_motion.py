@@ -1,0 +1,319 @@
+"""LinuxCNC's own motion controller, run headless on a written program.
+
+`tests/controllers.py` runs corrected G-code as straight lines, each in exactly its
+G93 time. A LinuxCNC machine does not: its trajectory planner (``tp.c``) re-times
+the lines with its own velocity and acceleration limits, blends them within
+``G64 P`` and samples the result once a servo cycle. This module runs the real
+thing, the LinuxCNC 2.9 of Debian's ``linuxcnc-uspace`` (the package that gives
+the tests ``rs274``), and records what it commands, cycle by cycle:
+
+- The machine is ``trivkins`` over ``X Y Z A B`` (``[KINS] KINEMATICS = trivkins
+  coordinates=XYZAB``), so the joint commands are the controller's Cartesian pose;
+  the tests turn them into motor commands with the controller's own inverse
+  kinematics, as a PRS-XY kinematics module would each servo cycle.
+- POSIX non-realtime (``rtapi_app`` without a realtime kernel): the servo thread
+  runs late or early on the wall clock, but the planner and the sampler run once per
+  invocation with the nominal period, so sample k is at k x ``SERVO_PERIOD``.
+  ``SERVO_PERIOD = 1000000`` ns is the value in every LinuxCNC sample
+  configuration (``sim/axis/axis_mm.ini``).
+- Limits: ``[AXIS_X/Y/Z]`` and ``[TRAJ]`` from the profile's tip limits
+  (``max_feed_mm_min``, ``max_accel_mm_s2``), ``[AXIS_A/B]`` from its tilt limits
+  (``rapid_deg_min``, ``max_accel_deg_s2``): the same limits the post-processor
+  plans with.
+- Each joint is homed where the program starts: with ``HOME_SEARCH_VEL = 0`` LinuxCNC
+  takes the joint's position to be ``HOME_OFFSET`` (LinuxCNC's homing documentation,
+  "HOME_SEARCH_VEL"), and with ``HOME`` equal to it the joint stays there.
+- HAL: ``joint.N.pos-cmd`` (the commanded joint position) and ``motion.program-line``
+  (the line of the motion being executed) go into a ``sampler`` running last in the
+  servo thread. ``halsampler`` prints floats with ``%f`` (six decimals, 1 nm: far
+  too coarse for a velocity over 1 ms), so the positions pass a ``scale`` of 1e6
+  on their way in.
+- The display is a script that resets the estop, switches the machine on, homes,
+  runs the program in AUTO mode and waits until the interpreter is idle and the
+  motion queue empty (``linuxcnc`` Python module: ``stat``, ``command``,
+  ``error_channel``).
+- ``rtapi_app`` refuses to run as root without a fallback user; as root the run
+  names ``nobody`` (``RTAPI_UID``) and puts the RTAPI socket in the run's own
+  folder (``RTAPI_FIFO_PATH``).
+
+One LinuxCNC runs at a time (a lock file): instances would share HAL and NML memory.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import pwd
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from prsxy_post.profile import MachineLimits
+
+LINUXCNC = shutil.which("linuxcnc")
+HALSAMPLER = shutil.which("halsampler")
+#: the interpreter the display script runs under: Debian's, which has ``linuxcnc``
+SYSTEM_PYTHON = "/usr/bin/python3"
+SERVO_PERIOD_S = 1e-3
+#: halsampler's ``%f`` keeps six decimals; the positions are scaled by this first
+SCALE = 1e6
+AXES = "XYZAB"
+
+
+def available() -> bool:
+    """Whether LinuxCNC's motion controller can run here."""
+    if LINUXCNC is None or HALSAMPLER is None or not Path(SYSTEM_PYTHON).exists():
+        return False
+    probe = subprocess.run(
+        [SYSTEM_PYTHON, "-c", "import linuxcnc"], capture_output=True, text=True, check=False
+    )
+    return probe.returncode == 0
+
+
+@dataclass
+class MotionRun:
+    """What LinuxCNC commanded, one row per servo cycle from the start pose on.
+
+    q : (m, 5) commanded pose [mm, mm, mm, deg, deg]
+    t : (m,) time [s]
+    line : (m,) line of the program file (1-based) whose motion was executing
+    errors : the operator messages LinuxCNC raised
+    """
+
+    q: np.ndarray
+    t: np.ndarray
+    line: np.ndarray
+    errors: list[str]
+
+
+_DISPLAY = r"""#!/usr/bin/python3
+import os, subprocess, sys, time
+import linuxcnc
+
+program = os.environ["PRSXY_PROGRAM"]
+samples = os.environ["PRSXY_SAMPLES"]
+errors = os.environ["PRSXY_ERRORS"]
+timeout = float(os.environ["PRSXY_TIMEOUT"])
+s = linuxcnc.stat()
+c = linuxcnc.command()
+e = linuxcnc.error_channel()
+
+
+def wait(cond, seconds):
+    t0 = time.time()
+    while time.time() - t0 < seconds:
+        s.poll()
+        if cond():
+            return True
+        time.sleep(0.002)
+    return False
+
+
+def finish(code):
+    with open(errors, "w") as f:
+        while True:
+            m = e.poll()
+            if not m:
+                break
+            f.write(str(m[1]).replace("\n", " ") + "\n")
+        if code:
+            f.write(code + "\n")
+    sys.exit(0)
+
+
+c.state(linuxcnc.STATE_ESTOP_RESET)
+c.state(linuxcnc.STATE_ON)
+if not wait(lambda: s.task_state == linuxcnc.STATE_ON, 20):
+    finish("the machine did not switch on")
+c.home(-1)
+if not wait(lambda: all(s.homed[:5]), 20):
+    finish("the joints did not home")
+c.mode(linuxcnc.MODE_AUTO)
+c.wait_complete()
+sampler = subprocess.Popen(["halsampler", "-t"], stdout=open(samples, "w"))
+c.program_open(program)
+c.auto(linuxcnc.AUTO_RUN, 0)
+started = wait(lambda: s.interp_state != linuxcnc.INTERP_IDLE, 10)
+done = started and wait(
+    lambda: s.interp_state == linuxcnc.INTERP_IDLE and s.queue == 0 and s.inpos, timeout)
+time.sleep(0.05)
+sampler.terminate()
+sampler.wait()
+finish("" if done else "the program did not finish in time")
+"""
+
+
+def _ini(limits: MachineLimits, start: np.ndarray) -> str:
+    v_tip = limits.max_feed_mm_min / 60.0
+    v_tilt = limits.rapid_deg_min / 60.0
+    out = [
+        "[EMC]\nVERSION = 1.1\nMACHINE = prsxy-post LinuxCNC oracle\n",
+        "[DISPLAY]\nDISPLAY = ./display.py\n",
+        "[TASK]\nTASK = milltask\nCYCLE_TIME = 0.001\n",
+        "[RS274NGC]\nPARAMETER_FILE = sim.var\n",
+        "[EMCMOT]\nEMCMOT = motmod\nCOMM_TIMEOUT = 1.0\n"
+        f"SERVO_PERIOD = {round(SERVO_PERIOD_S * 1e9)}\n",
+        "[EMCIO]\nEMCIO = io\nCYCLE_TIME = 0.100\nTOOL_TABLE = sim.tbl\n",
+        "[HAL]\nHALFILE = sim.hal\n",
+        "[TRAJ]\nCOORDINATES = X Y Z A B\nLINEAR_UNITS = mm\nANGULAR_UNITS = degree\n"
+        f"MAX_LINEAR_VELOCITY = {v_tip!r}\nMAX_LINEAR_ACCELERATION = {limits.max_accel_mm_s2!r}\n",
+        "[KINS]\nKINEMATICS = trivkins coordinates=XYZAB\nJOINTS = 5\n",
+    ]
+    for j, ax in enumerate(AXES):
+        v, a = (v_tip, limits.max_accel_mm_s2) if j < 3 else (v_tilt, limits.max_accel_deg_s2)
+        home = float(start[j])
+        out.append(
+            f"[AXIS_{ax}]\nMAX_VELOCITY = {v!r}\nMAX_ACCELERATION = {a!r}\n"
+            "MIN_LIMIT = -100000\nMAX_LIMIT = 100000\n"
+            f"[JOINT_{j}]\nTYPE = {'LINEAR' if j < 3 else 'ANGULAR'}\n"
+            f"MAX_VELOCITY = {v!r}\nMAX_ACCELERATION = {a!r}\n"
+            "MIN_LIMIT = -100000\nMAX_LIMIT = 100000\nFERROR = 1e9\nMIN_FERROR = 1e9\n"
+            f"HOME = {home!r}\nHOME_OFFSET = {home!r}\nHOME_SEARCH_VEL = 0\n"
+            "HOME_LATCH_VEL = 0\nHOME_SEQUENCE = 0\n"
+        )
+    return "".join(out)
+
+
+def _hal() -> str:
+    lines = [
+        "loadrt [KINS]KINEMATICS",
+        "loadrt [EMCMOT]EMCMOT servo_period_nsec=[EMCMOT]SERVO_PERIOD num_joints=[KINS]JOINTS",
+        "loadrt scale count=5",
+        "loadrt sampler depth=200000 cfg=fffffs",
+        "addf motion-command-handler servo-thread",
+        "addf motion-controller servo-thread",
+    ]
+    for j in range(5):
+        lines += [
+            f"addf scale.{j} servo-thread",
+            f"setp scale.{j}.gain {SCALE:g}",
+            f"net motor{j} joint.{j}.motor-pos-cmd => joint.{j}.motor-pos-fb",
+            f"net cmd{j} joint.{j}.pos-cmd => scale.{j}.in",
+            f"net scaled{j} scale.{j}.out => sampler.0.pin.{j}",
+        ]
+    lines += [
+        "addf sampler.0 servo-thread",
+        "net line motion.program-line => sampler.0.pin.5",
+        "net estop iocontrol.0.user-enable-out => iocontrol.0.emc-enable-in",
+        "net prepare iocontrol.0.tool-prepare => iocontrol.0.tool-prepared",
+        "net change iocontrol.0.tool-change => iocontrol.0.tool-changed",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+#: tools 1-99 with no length: corrected G-code carries the tool lengths in its points
+_TOOLS = "".join(f"T{n} P{n} Z0 D0\n" for n in range(1, 100))
+
+
+def run(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: float) -> MotionRun:
+    """Run ``text`` on LinuxCNC, homed at the pose ``start``; what it commanded.
+
+    ``timeout_s`` bounds the program's own run (it runs in real time)."""
+    if not available():
+        raise RuntimeError("LinuxCNC's motion controller is not installed")
+    start = np.asarray(start, dtype=float)
+    lock = Path(tempfile.gettempdir()) / "prsxy-linuxcnc.lock"
+    with open(lock, "w") as held, tempfile.TemporaryDirectory(prefix="prsxy-lcnc-") as tmp:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        d = Path(tmp)
+        os.chmod(d, 0o777)
+        files = {
+            "sim.ini": _ini(limits, start),
+            "sim.hal": _hal(),
+            "sim.tbl": _TOOLS,
+            "sim.var": "",
+            "display.py": _DISPLAY,
+            "program.ngc": text,
+        }
+        for name, body in files.items():
+            (d / name).write_text(body)
+            os.chmod(d / name, 0o755 if name == "display.py" else 0o666)
+        env = dict(
+            os.environ,
+            PRSXY_PROGRAM=str(d / "program.ngc"),
+            PRSXY_SAMPLES=str(d / "samples.txt"),
+            PRSXY_ERRORS=str(d / "errors.txt"),
+            PRSXY_TIMEOUT=repr(float(timeout_s)),
+            # LinuxCNC writes its logs (linuxcnc_print.txt, linuxcnc_debug.txt) there
+            HOME=str(d),
+        )
+        if os.geteuid() == 0:
+            env["RTAPI_UID"] = str(pwd.getpwnam("nobody").pw_uid)
+            env["RTAPI_FIFO_PATH"] = str(d / "rtapi_fifo")
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            subprocess.run(
+                [LINUXCNC, "sim.ini"],
+                cwd=d,
+                env=env,
+                capture_output=True,
+                text=True,
+                timeout=timeout_s + 120.0,
+                check=False,
+            )
+        errors_file = d / "errors.txt"
+        if not errors_file.exists() or not (d / "samples.txt").exists():
+            log = d / "linuxcnc_debug.txt"
+            tail = log.read_text(errors="replace").splitlines()[-15:] if log.exists() else []
+            raise RuntimeError("LinuxCNC did not run the program:\n" + "\n".join(tail))
+        errors = [e for e in errors_file.read_text().splitlines() if e]
+        raw = np.loadtxt(d / "samples.txt", ndmin=2)
+    q = raw[:, 1:6] / SCALE
+    line = raw[:, 6].astype(int)
+    # the sampler runs from the start of HAL: the cycles before homing (at zero) and
+    # the homing itself are not the program's; then from the last cycle at rest
+    # before the first motion to the first at rest after the last
+    homed = np.flatnonzero(
+        np.all(np.abs(q - start) <= 1e-9 * np.maximum(1.0, np.abs(start)), axis=1)
+    )
+    if len(homed) == 0:
+        raise RuntimeError(f"LinuxCNC never stood at the start pose {start}: {errors}")
+    q, line = q[homed[0] :], line[homed[0] :]
+    moved = np.flatnonzero(np.any(q[1:] != q[:-1], axis=1))
+    a, b = (0, 1) if len(moved) == 0 else (int(moved[0]), int(moved[-1]) + 2)
+    q, line = q[a:b], line[a:b]
+    return MotionRun(q, np.arange(len(q)) * SERVO_PERIOD_S, line, errors)
+
+
+def motion_lines(text: str) -> dict[int, int]:
+    """File line (1-based) -> index of the written point that line ends at, for
+    every G0/G1/G4 line (the points `tests.controllers.run_gcode` reads)."""
+    out: dict[int, int] = {}
+    k = -1
+    for no, raw in enumerate(text.splitlines(), 1):
+        if raw.strip().startswith(("G0 ", "G1 ", "G4 ")):
+            k += 1
+            out[no] = k
+    return out
+
+
+def segments(run_: MotionRun, text: str, points: np.ndarray) -> np.ndarray:
+    """(m,) for each cycle, the written point whose segment it is in.
+
+    ``motion.program-line`` names the segment being executed; in a blend two are,
+    so the nearer of the named one and its neighbours (in pose space, a degree
+    weighing as a µm) is taken."""
+    of = motion_lines(text)
+    seg = np.array([of.get(int(n), -1) for n in run_.line])
+    # before the first motion line and after the last: the first and last segment
+    first_known = np.flatnonzero(seg >= 0)
+    seg[: first_known[0] if len(first_known) else len(seg)] = 1
+    seg = np.maximum(np.maximum.accumulate(seg), 1)
+    best = np.full(len(seg), np.inf)
+    out = seg.copy()
+    w = np.array([1.0, 1.0, 1.0, 1e-3, 1e-3])
+    for off in range(-3, 4):
+        k = np.clip(seg + off, 1, len(points) - 1)
+        a, b = points[k - 1], points[k]
+        ab = b - a
+        n2 = np.einsum("ij,ij->i", ab, ab)
+        u = np.clip(np.einsum("ij,ij->i", run_.q - a, ab) / np.where(n2 > 0, n2, 1.0), 0.0, 1.0)
+        d = np.linalg.norm((run_.q - (a + u[:, None] * ab)) * w, axis=1)
+        nearer = d < best - 1e-15
+        best[nearer] = d[nearer]
+        out[nearer] = k[nearer]
+    return out
