@@ -310,7 +310,9 @@ def run_gcode(text: str, substeps: int = 8) -> GcodeRun:
             t.append(t[-1] + float(w["P"]))
             line.append(cur)
             dwells.append((len(q) - 1, float(w["P"])))
-        elif re.fullmatch(r"(?:[GMTS]-?[\d.]+\s*)+", s) and not s.startswith(("G2", "G9", "G64")):
+        elif re.fullmatch(r"(?:[GMTS]-?[\d.]+\s*)+", s) and not s.startswith(
+            ("G2", "G9", "G64", "G61")
+        ):
             functions.append((len(q) - 1, s))
     qa = np.array(q)
     ta = np.array(t)

@@ -135,6 +135,19 @@ def test_linuxcnc_blends_lines_that_turn_a_over_f() -> None:
     assert _peak_speed(turning) > 1.15 * 300.0
 
 
+def test_a_play_window_at_a_corner_runs_where_it_is_written() -> None:
+    """xy-corner-F60 on machine 12: motor X crosses its play at the corner, where the
+    program stops. Under G64 P LinuxCNC blended into the crossing and out of it, the
+    motor starting across its play while the line before was still being finished:
+    0.77 µm off the path. The lines that end where the motion stands now run in G61
+    (exact path): 0.085 µm, and never over F (both measured)."""
+    truth = truth_machine("random", 12)
+    motions, res, texts = convert(truth, XY_CORNER_AT_F60, "gcode")
+    assert "\nG61\n" in texts[0]
+    tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
+    assert_within(tr, None, TOL_MM)
+
+
 #: Programs whose corrected G-code LinuxCNC runs out of bounds (strict xfails; each
 #: with what was measured, `bench/linuxcnc_truth.py` gives the whole table)
 OPEN = [
@@ -145,18 +158,7 @@ OPEN = [
         marks=pytest.mark.xfail(
             strict=True,
             reason="open: LinuxCNC blends the compensated lines parabolically (A and B "
-            "turn on every line): 1.19 x F on the F300 plunge, 0.88 µm off the path "
-            "where the last arc meets the G0 up (line 8)",
-        ),
-    ),
-    pytest.param(
-        12,
-        XY_CORNER_AT_F60,
-        id="xy-corner-F60",
-        marks=pytest.mark.xfail(
-            strict=True,
-            reason="open: LinuxCNC blends into and out of the window where motor X "
-            "crosses its play at the corner (the program stops there): 0.77 µm off",
+            "turn on every line): 1.19 x F on the F300 plunge",
         ),
     ),
     pytest.param(
