@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from .conftest import ROOT
-from .test_controller_truth import XY_CORNER_AT_F60
+from .test_controller_truth import TBALL_WITH_A_TILT, XY_CORNER_AT_F60
 from .test_tracking import convert, truth_machine
 
 PROGRAMS = [
@@ -42,18 +42,53 @@ def _moves_and_modes(text: str) -> tuple[list[str], list[bool]]:
     return moves, exact
 
 
+def _tilt_cut_deg(q: np.ndarray, dt: np.ndarray, k: int) -> float:
+    """How far a parabolic blend of the lines into and out of point k may cut the
+    tilt corner there: |ω_out − ω_in| min(t_in, t_out) / 8 [deg], from the written
+    points and G93 times read back."""
+    w_in = (q[k, 3:] - q[k - 1, 3:]) / dt[k]
+    w_out = (q[k + 1, 3:] - q[k, 3:]) / dt[k + 1]
+    return float(np.linalg.norm(w_out - w_in)) * min(dt[k], dt[k + 1]) / 8.0
+
+
 @pytest.mark.parametrize(("name", "text"), PROGRAMS, ids=[n for n, _ in PROGRAMS])
 def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str, text: str):
     """Each written move is one of the chain's points (no tolerance set): a G1 that
-    ends where the plan stands (speed 0) is read under G61, every other under G64 P."""
+    ends where the plan stands (speed 0) is read under G61, every other under G64 P
+    but at a block's end where the tilt turns by more than a parabolic blend may
+    cut (half the angular tolerance, 0.25 arcsec)."""
     truth = truth_machine("random", 12)
     _, res, texts = convert(truth, text, "gcode")
     moves, exact = _moves_and_modes(texts[0])
     pts = res.points
     written = [k for k in range(len(pts)) if pts.fn[k] is None]
     assert len(written) == len(moves)
-    stands = np.array([pts.speed[k] == 0.0 for k in written])
-    g1 = np.array([m.startswith("G1 ") for m in moves])
-    assert np.array_equal(np.array(exact)[g1], stands[g1])
+    q = np.array([[float(v) for v in re.findall(r"[XYZAB](-?[\d.]+)", m)] for m in moves])
+    dt = np.array([60.0 / float(m.split("F")[1]) if " F" in m else 0.0 for m in moves])
+    cut = 0.25 / 3600
+    want = []
+    for i, k in enumerate(written):
+        if not moves[i].startswith("G1 "):
+            want.append(exact[i])  # G0 and G4 lines: no junction of their own here
+        elif pts.speed[k] == 0.0:
+            want.append(True)
+        else:
+            turns = pts.block_end[k] and i + 1 < len(moves) and moves[i + 1].startswith("G1 ")
+            want.append(bool(turns and _tilt_cut_deg(q, dt, i) > cut))
+    assert exact == want
     # and the program stands somewhere beside its end (a corner, a rapid's end)
-    assert np.sum(stands[g1]) >= 2
+    assert sum(pts.speed[k] == 0.0 for k in written) >= 2
+
+
+def test_a_sharp_tilt_corner_in_motion_runs_in_exact_path_mode() -> None:
+    """tball-with-a-tilt-F1016's last line turns B by 0.5° over 0.47 mm at F1016,
+    from lines that hold it: the line into that corner is read under G61, and the
+    lines inside the blocks are not."""
+    truth = truth_machine("random", 21)
+    _, res, texts = convert(truth, TBALL_WITH_A_TILT, "gcode")
+    _, exact = _moves_and_modes(texts[0])
+    pts = res.points
+    written = [k for k in range(len(pts)) if pts.fn[k] is None]
+    moving_exact = [i for i, k in enumerate(written) if exact[i] and pts.speed[k] > 0]
+    assert moving_exact, "no tilt corner taken in G61"
+    assert all(pts.block_end[written[i]] for i in moving_exact)
