@@ -12,13 +12,17 @@ the found programs take about eight minutes.
     python bench/linuxcnc_truth.py --no-play            # the same machines without play
     python bench/linuxcnc_truth.py --programs samples   # the samples, random machine 11
     python bench/linuxcnc_truth.py --longest 10         # skip programs longer than 10 s
+    python bench/linuxcnc_truth.py --blends             # the parabolic blends, measured
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
@@ -26,8 +30,28 @@ sys.path.insert(0, str(ROOT))
 from tests import controllers as ctl  # noqa: E402
 from tests import linuxcnc_motion as lm  # noqa: E402
 from tests.test_controller_truth import FOUND, FOUND_IDS, judge_gcode  # noqa: E402
-from tests.test_linuxcnc_motion import run_on_linuxcnc  # noqa: E402
+from tests.test_linuxcnc_motion import _peak_speed, _plunge, run_on_linuxcnc  # noqa: E402
 from tests.test_tracking import convert, truth_machine  # noqa: E402
+
+
+def blends() -> None:
+    """A straight plunge Z2 → Z0 as forty G93 lines (the test's _plunge, at F300
+    and F60), A still or turning 2e-7° a line, at the profile's acceleration limit
+    and at ten times it: LinuxCNC's largest X Y Z speed over a servo cycle."""
+    print("| feed | A per line | acceleration limit mm/s² | peak speed / F | LinuxCNC s |")
+    print("|---|---|---|---:|---:|")
+    nominal = truth_machine("nominal", None).limits
+    start = np.array([0.0, 0.0, 2.0, 0.0, 0.0])
+    for feed in (300.0, 60.0):
+        for turn in (0.0, 2e-7):
+            for accel in (nominal.max_accel_mm_s2, 10 * nominal.max_accel_mm_s2):
+                limits = dataclasses.replace(nominal, max_accel_mm_s2=accel)
+                run = lm.run(_plunge(turn, feed), limits, start, timeout_s=60.0)
+                peak = _peak_speed(run)
+                print(
+                    f"| F{feed:g} | {turn:g}° | {accel:g} | {peak / feed:.4f} | {run.t[-1]:.3f} |",
+                    flush=True,
+                )
 
 
 def main() -> None:
@@ -35,9 +59,13 @@ def main() -> None:
     ap.add_argument("--programs", choices=["found", "samples"], default="found")
     ap.add_argument("--no-play", action="store_true", help="the machines without play")
     ap.add_argument("--longest", type=float, default=60.0, help="skip longer programs [s]")
+    ap.add_argument("--blends", action="store_true", help="the parabolic blends alone")
     args = ap.parse_args()
     if not lm.available():
         sys.exit("LinuxCNC is not installed (apt-get install linuxcnc-uspace)")
+    if args.blends:
+        blends()
+        return
     if args.programs == "found":
         jobs = [(name, seed, text) for name, (seed, text) in zip(FOUND_IDS, FOUND, strict=True)]
     else:

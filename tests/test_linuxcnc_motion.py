@@ -103,11 +103,13 @@ def test_an_xyz_program_for_a_machine_without_errors_runs_within_bounds() -> Non
     assert run.t[-1] > 2.0
 
 
-def _plunge(turn_a_deg: float) -> str:
-    """G1 Z2 → Z0 at F300 as forty G93 lines of 10 ms, A turning by ``turn_a_deg``
-    on each (as a compensated tilt does)."""
+def _plunge(turn_a_deg: float, feed: float = 300.0) -> str:
+    """G1 Z2 → Z0 at ``feed`` [mm/min] as forty G93 lines, A turning by
+    ``turn_a_deg`` on each (as a compensated tilt does); 10 ms lines at F300."""
+    inverse_time = feed / 0.05  # 1 / minutes of a 0.05 mm line
     rows = [
-        f"G1 X0 Y0 Z{2.0 - k * 0.05:.7f} A{k * turn_a_deg:.7f} B0 F6000.000" for k in range(1, 41)
+        f"G1 X0 Y0 Z{2.0 - k * 0.05:.7f} A{k * turn_a_deg:.7f} B0 F{inverse_time:.3f}"
+        for k in range(1, 41)
     ]
     return "G21 G90 G17 G40 G49 G94\nG64 P0.00025\nG0 X0 Y0 Z2 A0 B0\nG93\n" + "\n".join(
         [*rows, "G94", "M2", ""]
@@ -125,9 +127,9 @@ def test_linuxcnc_blends_lines_that_turn_a_over_f() -> None:
     """The controller rule behind the open programs below, measured: a straight
     plunge at F300 as 10 ms lines runs at F; with A turning 2e-7 degrees a line, LinuxCNC
     blends every junction parabolically and the next line speeds up before the one
-    before has slowed down: 1.19 x F at every junction (1.42 x at F60). A larger
-    acceleration limit shortens the blends below a servo cycle (1.00 x at 20 000
-    mm/s²)."""
+    before has slowed down: 1.20 x F at every junction (1.42 x at F60). At ten
+    times the acceleration limit the blends are shorter than a servo cycle and
+    run at F (`python bench/linuxcnc_truth.py --blends`)."""
     limits = truth_machine("nominal", None).limits
     start = np.array([0.0, 0.0, 2.0, 0.0, 0.0])
     plain = lm.run(_plunge(0.0), limits, start, timeout_s=10.0)

@@ -42,21 +42,26 @@ def _moves_and_modes(text: str) -> tuple[list[str], list[bool]]:
     return moves, exact
 
 
-def _tilt_cut_deg(q: np.ndarray, dt: np.ndarray, k: int) -> float:
-    """How far a parabolic blend of the lines into and out of point k may cut the
-    tilt corner there: |ω_out − ω_in| min(t_in, t_out) / 8 [deg], from the written
-    points and G93 times read back."""
-    w_in = (q[k, 3:] - q[k - 1, 3:]) / dt[k]
-    w_out = (q[k + 1, 3:] - q[k, 3:]) / dt[k + 1]
-    return float(np.linalg.norm(w_out - w_in)) * min(dt[k], dt[k + 1]) / 8.0
+def _corner_cut(q: np.ndarray, dt: np.ndarray, k: int, accel: float) -> tuple[float, float]:
+    """How far LinuxCNC's parabolic blend of the lines into and out of point k may
+    cut the corner there, in X Y Z [mm] and in A B [deg]: the pose rate turning
+    from r_in to r_out over t = min(t_in, t_out, 2 v / a) cuts |r_out − r_in| t / 8
+    (the writer's module docstring), from the written points and G93 times read
+    back."""
+    r_in = (q[k] - q[k - 1]) / dt[k]
+    r_out = (q[k + 1] - q[k]) / dt[k + 1]
+    v = max(np.linalg.norm(r_in[:3]), np.linalg.norm(r_out[:3]))
+    t = min(dt[k], dt[k + 1], 2.0 * v / accel) if v > 0 else min(dt[k], dt[k + 1])
+    turn = r_out - r_in
+    return float(np.linalg.norm(turn[:3])) * t / 8.0, float(np.linalg.norm(turn[3:])) * t / 8.0
 
 
 @pytest.mark.parametrize(("name", "text"), PROGRAMS, ids=[n for n, _ in PROGRAMS])
 def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str, text: str):
     """Each written move is one of the chain's points (no tolerance set): a G1 that
     ends where the plan stands (speed 0) is read under G61, every other under G64 P
-    but at a block's end where the tilt turns by more than a parabolic blend may
-    cut (half the angular tolerance, 0.25 arcsec)."""
+    but at a block's end where a parabolic blend would cut the corner by more than
+    half the tolerance (0.25 µm, 0.25 arcsec)."""
     truth = truth_machine("random", 12)
     _, res, texts = convert(truth, text, "gcode")
     moves, exact = _moves_and_modes(texts[0])
@@ -65,7 +70,7 @@ def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str
     assert len(written) == len(moves)
     q = np.array([[float(v) for v in re.findall(r"[XYZAB](-?[\d.]+)", m)] for m in moves])
     dt = np.array([60.0 / float(m.split("F")[1]) if " F" in m else 0.0 for m in moves])
-    cut = 0.25 / 3600
+    accel = truth.limits.max_accel_mm_s2
     want = []
     for i, k in enumerate(written):
         if not moves[i].startswith("G1 "):
@@ -74,7 +79,11 @@ def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str
             want.append(True)
         else:
             turns = pts.block_end[k] and i + 1 < len(moves) and moves[i + 1].startswith("G1 ")
-            want.append(bool(turns and _tilt_cut_deg(q, dt, i) > cut))
+            if turns:
+                mm, deg = _corner_cut(q, dt, i, accel)
+                want.append(mm > 0.25e-3 or deg > 0.25 / 3600)
+            else:
+                want.append(False)
     assert exact == want
     # and the program stands somewhere beside its end (a corner, a rapid's end)
     assert sum(pts.speed[k] == 0.0 for k in written) >= 2
