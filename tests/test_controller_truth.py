@@ -17,6 +17,10 @@ against the G-code's own geometry:
 - within the acceleration limit, on the commanded motion: the contract's play
   model takes a part up with a jolt wherever a motor meets it moving, which no
   command can smooth away entirely.
+
+The G-code here runs as written, each line in its G93 time. LinuxCNC's own
+planner re-times and blends the lines: test_linuxcnc_motion.py runs them on
+LinuxCNC itself.
 """
 
 from __future__ import annotations
