@@ -44,15 +44,16 @@ def _moves_and_modes(text: str) -> tuple[list[str], list[bool]]:
 
 def _corner_cut(q: np.ndarray, dt: np.ndarray, k: int, accel: float) -> tuple[float, float]:
     """How far LinuxCNC's parabolic blend of the lines into and out of point k may
-    cut the corner there, in X Y Z [mm] and in A B [deg]: the pose rate turning
-    from r_in to r_out over t = min(t_in, t_out, 2 v / a) cuts |r_out − r_in| t / 8
-    (the writer's module docstring), from the written points and G93 times read
-    back."""
+    cut the corner there, in X Y Z [mm] and in A B [deg]: the direction per mm of
+    X Y Z turning from d_in to d_out at the speed v over t = min(t_in, t_out,
+    2 v / a) cuts |d_out − d_in| v t / 8 (the writer's module docstring), from the
+    written points and G93 times read back."""
     r_in = (q[k] - q[k - 1]) / dt[k]
     r_out = (q[k + 1] - q[k]) / dt[k + 1]
-    v = max(np.linalg.norm(r_in[:3]), np.linalg.norm(r_out[:3]))
+    v_in, v_out = np.linalg.norm(r_in[:3]), np.linalg.norm(r_out[:3])
+    v = max(v_in, v_out)
     t = min(dt[k], dt[k + 1], 2.0 * v / accel) if v > 0 else min(dt[k], dt[k + 1])
-    turn = r_out - r_in
+    turn = (r_out / v_out - r_in / v_in) * v if v_in > 0 and v_out > 0 else r_out - r_in
     return float(np.linalg.norm(turn[:3])) * t / 8.0, float(np.linalg.norm(turn[3:])) * t / 8.0
 
 

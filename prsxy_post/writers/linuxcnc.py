@@ -30,11 +30,12 @@ errors moves A and B a little on every line. In a parabolic blend both lines run
 at once for t = min(t_in, t_out, v / a_t) (``tpComputeBlendVelocity``: the
 shorter line's time, or the time to reach the speed v at the tangential
 acceleration a_t, half the line's limit in a parabolic blend, so at most
-2 v / a with a the profile's limit), the pose rate turning from r_in to r_out
-over it: the corner is cut by |r_out − r_in| t / 8, in X Y Z and in A and B
-alike. G64 P is meant to bound the first and does not bound the second: on
-LinuxCNC itself drill.ngc's corner from a Z rapid into a diagonal one at
-2.1 mm/s was cut by 0.83 µm under G64 P0.00025 (the estimate: 0.8 µm), and
+2 v / a with a the profile's limit), the pose's direction per mm of X Y Z
+travel turning from d_in to d_out over it at the speed v: the corner is cut by
+|d_out − d_in| v t / 8, in X Y Z and in A and B alike (a line that turns A or B
+alone: its rates, |r_out − r_in| t / 8). G64 P is meant to bound the first and
+does not bound the second: on LinuxCNC itself drill.ngc's corner from a Z rapid
+into a diagonal one at 2.1 mm/s was cut by 0.83 µm under G64 P0.00025, and
 tball-with-a-tilt-F1016's tilt corner by 24 arcsec (7.3 µm at the tip); with
 G61 there 0.47 µm and 0.46 arcsec. Inside a block the rate turns by a step's
 worth of curvature, and the blend cuts the polyline back towards the curve.
@@ -102,8 +103,8 @@ class GcodeWriter:
         self.ended_by: str | None = None
         #: G61 (exact path) is active, for a line ending where the motion stands
         self.exact = False
-        #: a block's last point in motion, held until the next point shows whether
-        #: the tilt turns there: (point, its segment's time)
+        #: a block's last point in motion, held until the next point shows how
+        #: far LinuxCNC would cut the corner there: (point, its segment's time)
         self.corner: tuple[np.ndarray, float] | None = None
 
     def begin(self) -> list[Piece]:
@@ -117,8 +118,8 @@ class GcodeWriter:
             "Run with no tool length offset (G49) and no work offset: tool lengths and",
             "offsets are in the points. Timing is G93 inverse time per segment.",
             f"Corners blend within G64 P{self.blend:g} (LinuxCNC's G64 without P would",
-            "cut them by any amount); a line that ends where the motion stands runs",
-            "in G61 (exact path).",
+            "cut them by any amount); a line that ends where the motion stands, or at",
+            "a corner LinuxCNC would blend too far, runs in G61 (exact path).",
         ]
         lines = ["%"] + [
             "(" + x.replace("(", "[").replace(")", "]") + ")"
@@ -194,9 +195,16 @@ class GcodeWriter:
         if q_next is not None and self.last_q is not None and dt_next > 0.0:
             r_in = (qc - self.last_q) / t
             r_out = (q_next - qc) / dt_next
-            v = max(float(np.linalg.norm(r_in[:3])), float(np.linalg.norm(r_out[:3])))
+            v_in, v_out = float(np.linalg.norm(r_in[:3])), float(np.linalg.norm(r_out[:3]))
+            v = max(v_in, v_out)
             t_blend = min(t, dt_next, 2.0 * v / self.accel) if v > 0.0 else min(t, dt_next)
-            cut = np.abs(r_out - r_in) * t_blend / 8.0
+            if v_in > 0.0 and v_out > 0.0:
+                # the turn of the path's direction (per mm of X Y Z travel): a change
+                # of speed along the same line cuts nothing
+                turn = (r_out / v_out - r_in / v_in) * v
+            else:
+                turn = r_out - r_in
+            cut = turn * t_blend / 8.0
             exact = bool(
                 np.linalg.norm(cut[:3]) > self.blend or np.linalg.norm(cut[3:]) > self.tilt_cut
             )

@@ -10,8 +10,8 @@
 (Run with no tool length offset [G49] and no work offset: tool lengths and)
 (offsets are in the points. Timing is G93 inverse time per segment.)
 (Corners blend within G64 P0.00025 [LinuxCNC's G64 without P would)
-(cut them by any amount]; a line that ends where the motion stands runs)
-(in G61 [exact path].)
+(cut them by any amount]; a line that ends where the motion stands, or at)
+(a corner LinuxCNC would blend too far, runs in G61 [exact path].)
 G21 G90 G17 G40 G49 G94
 G64 P0.00025
 G0 X0.0000000 Y0.0000000 Z20.0000000 A0.0000000 B0.0000000
@@ -34,10 +34,8 @@ G1 X0.0000000 Y0.0000000 Z6.9256944 A0.0000000 B0.0000000 F6127.660
 G1 X0.0000000 Y0.0000000 Z6.1566406 A0.0000000 B0.0000000 F6127.660
 G1 X0.0000000 Y0.0000000 Z5.5793403 A0.0000000 B0.0000000 F6127.660
 G1 X0.0000000 Y0.0000000 Z5.1937934 A0.0000000 B0.0000000 F6127.660
-G61
 G1 X0.0000000 Y0.0000000 Z5.0000000 A0.0000000 B0.0000000 F6127.660
 (line 6)
-G64 P0.00025
 G1 X0.0000000 Y0.0000000 Z4.9007213 A0.0000000 B0.0000000 F6043.589
 G1 X0.0000000 Y0.0000000 Z4.8014425 A0.0000000 B0.0000000 F6043.589
 G1 X0.0000000 Y0.0000000 Z4.7021638 A0.0000000 B0.0000000 F6043.589
