@@ -14,15 +14,16 @@ the tests ``rs274``), and records what it commands, cycle by cycle:
 - POSIX non-realtime (``rtapi_app`` without a realtime kernel): the servo thread
   runs late or early on the wall clock, but the planner and the sampler run once per
   invocation with the nominal period, so sample k is at k x ``SERVO_PERIOD``.
-  ``SERVO_PERIOD = 1000000`` ns is the value in every LinuxCNC sample
-  configuration (``sim/axis/axis_mm.ini``).
+  ``SERVO_PERIOD = 1000000`` ns, as LinuxCNC's sample configurations set it
+  (``sim/axis/axis_mm.ini``).
 - Limits: ``[AXIS_X/Y/Z]`` and ``[TRAJ]`` from the profile's tip limits
   (``max_feed_mm_min``, ``max_accel_mm_s2``), ``[AXIS_A/B]`` from its tilt limits
   (``rapid_deg_min``, ``max_accel_deg_s2``): the same limits the post-processor
   plans with.
 - Each joint is homed where the program starts: with ``HOME_SEARCH_VEL = 0`` LinuxCNC
-  takes the joint's position to be ``HOME_OFFSET`` (LinuxCNC's homing documentation,
-  "HOME_SEARCH_VEL"), and with ``HOME`` equal to it the joint stays there.
+  homes a joint where it stands, its position set to ``HOME_OFFSET`` (LinuxCNC's
+  homing configuration), and with ``HOME`` equal to it the joint stays there; the
+  run checks that the commanded pose stood at the start before the program moved.
 - HAL: ``joint.N.pos-cmd`` (the commanded joint position) and ``motion.program-line``
   (the line of the motion being executed) go into a ``sampler`` running last in the
   servo thread. ``halsampler`` prints floats with ``%f`` (six decimals, 1 nm: far
