@@ -24,6 +24,9 @@ version Debian's ``linuxcnc-uspace`` 2.9.0~pre1 ships):
 
 Corrected G-code for a machine with errors turns A and B by a few 1e-7 degrees
 on every line (the compensated tilt), so LinuxCNC blends all of it parabolically.
+The writer runs in G61 (exact path) the lines that end where the motion stands
+and those into a corner such a blend would cut too far (writers/linuxcnc.py);
+the blends' speed over F stays open (OPEN below).
 """
 
 from __future__ import annotations
