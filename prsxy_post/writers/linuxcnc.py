@@ -33,15 +33,14 @@ acceleration a_t, half the line's limit in a parabolic blend, so at most
 2 v / a with a the profile's limit), the pose's direction per mm of X Y Z
 travel turning from d_in to d_out over it at the speed v: the corner is cut by
 |d_out − d_in| v t / 8, in X Y Z and in A and B alike (a line that turns A or B
-alone: its rates, |r_out − r_in| t / 8). With the written speeds this bounds the
-cut from above: LinuxCNC often takes the corner slower (drill.ngc's below was
-reckoned at 10.7 µm and measured at 0.83 µm), so some of these stops are more
-than LinuxCNC needs. G64 P is meant to bound the first and
-does not bound the second: on LinuxCNC itself drill.ngc's corner from a Z rapid
-into a diagonal one at 2.1 mm/s was cut by 0.83 µm under G64 P0.00025, and
-tball-with-a-tilt-F1016's tilt corner by 24 arcsec (7.3 µm at the tip); with
-G61 there 0.47 µm and 0.46 arcsec. Inside a block the rate turns by a step's
-worth of curvature, and the blend cuts the polyline back towards the curve.
+alone: its rates, |r_out − r_in| t / 8). On LinuxCNC itself G64 P0.00025 did
+not hold such blends: drill.ngc's corner from a Z rapid into a diagonal one at
+2.1 mm/s was cut by 0.83 µm, and tball-with-a-tilt-F1016's tilt corner by
+24 arcsec (7.3 µm at the tip); with G61 there 0.47 µm and 0.46 arcsec. With the
+written speeds the reckoning bounds the cut from above (drill.ngc's corner:
+10.7 µm; LinuxCNC took it slower than written), so some of these stops are more
+than LinuxCNC needs. Inside a block the rate turns by a step's worth of
+curvature, and the blend cuts the polyline back towards the curve.
 """
 
 from __future__ import annotations
