@@ -14,6 +14,8 @@ import re
 import numpy as np
 import pytest
 
+from prsxy_post.writers.linuxcnc import corner_cut
+
 from .conftest import ROOT
 from .test_controller_truth import TBALL_WITH_A_TILT, XY_CORNER_AT_F60
 from .test_tracking import convert, truth_machine
@@ -42,21 +44,6 @@ def _moves_and_modes(text: str) -> tuple[list[str], list[bool]]:
     return moves, exact
 
 
-def _corner_cut(q: np.ndarray, dt: np.ndarray, k: int, accel: float) -> tuple[float, float]:
-    """How far LinuxCNC's parabolic blend of the lines into and out of point k may
-    cut the corner there, in X Y Z [mm] and in A B [deg]: the direction per mm of
-    X Y Z turning from d_in to d_out at the speed v over t = min(t_in, t_out,
-    2 v / a) cuts |d_out − d_in| v t / 8 (the writer's module docstring), from the
-    written points and G93 times read back."""
-    r_in = (q[k] - q[k - 1]) / dt[k]
-    r_out = (q[k + 1] - q[k]) / dt[k + 1]
-    v_in, v_out = np.linalg.norm(r_in[:3]), np.linalg.norm(r_out[:3])
-    v = max(v_in, v_out)
-    t = min(dt[k], dt[k + 1], 2.0 * v / accel) if v > 0 else min(dt[k], dt[k + 1])
-    turn = (r_out / v_out - r_in / v_in) * v if v_in > 0 and v_out > 0 else r_out - r_in
-    return float(np.linalg.norm(turn[:3])) * t / 8.0, float(np.linalg.norm(turn[3:])) * t / 8.0
-
-
 @pytest.mark.parametrize(("name", "text"), PROGRAMS, ids=[n for n, _ in PROGRAMS])
 def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str, text: str):
     """Each written move is one of the chain's points (no tolerance set): a G1 that
@@ -81,7 +68,7 @@ def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str
         else:
             turns = pts.block_end[k] and i + 1 < len(moves) and moves[i + 1].startswith("G1 ")
             if turns:
-                mm, deg = _corner_cut(q, dt, i, accel)
+                mm, deg = corner_cut(q[i - 1], q[i], q[i + 1], dt[i], dt[i + 1], accel)
                 want.append(mm > 0.25e-3 or deg > 0.25 / 3600)
             else:
                 want.append(False)
@@ -102,3 +89,22 @@ def test_a_sharp_tilt_corner_in_motion_runs_in_exact_path_mode() -> None:
     moving_exact = [i for i, k in enumerate(written) if exact[i] and pts.speed[k] > 0]
     assert moving_exact, "no tilt corner taken in G61"
     assert all(pts.block_end[written[i]] for i in moving_exact)
+
+
+def test_the_corner_cut_in_closed_form() -> None:
+    """A right-angle corner in X Y at 10 mm/s over 10 ms lines, acceleration
+    2000 mm/s²: the blend lasts min(10 ms, 2 v / a = 10 ms), the direction turns by
+    √2, the cut is √2 · 10 mm/s · 10 ms / 8. The same line slowing from 10 to 5
+    mm/s cuts nothing; a tilt turning from 0 to 100 °/s on a straight line cuts
+    100 °/s · 10 ms / 8 in A B alone."""
+
+    def pose(x: float, y: float = 0.0, b: float = 0.0) -> np.ndarray:
+        return np.array([x, y, 0.0, 0.0, b])
+
+    mm, deg = corner_cut(pose(-0.1), pose(0.0), pose(0.0, 0.1), 0.01, 0.01, 2000.0)
+    assert mm == pytest.approx(np.sqrt(2) * 10.0 * 0.01 / 8) and deg == 0.0
+    mm, deg = corner_cut(pose(-0.1), pose(0.0), pose(0.05), 0.01, 0.01, 2000.0)
+    assert mm == pytest.approx(0.0, abs=1e-15) and deg == 0.0
+    mm, deg = corner_cut(pose(-0.1), pose(0.0), pose(0.1, b=1.0), 0.01, 0.01, 2000.0)
+    assert mm == pytest.approx(0.0, abs=1e-15)
+    assert deg == pytest.approx(100.0 * 0.01 / 8)

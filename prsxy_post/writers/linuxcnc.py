@@ -75,6 +75,34 @@ SETTINGS = {
 }
 
 
+def corner_cut(
+    q_in: np.ndarray, q_at: np.ndarray, q_out: np.ndarray, t_in: float, t_out: float, accel: float
+) -> tuple[float, float]:
+    """How far LinuxCNC's parabolic blend of the lines q_in → q_at → q_out may cut
+    the corner at q_at: (X Y Z [mm], A B [deg]).
+
+    Poses (5,) [mm, mm, mm, deg, deg], line times t_in, t_out [s], the path
+    acceleration ``accel`` [mm/s²]. The blend lasts t = min(t_in, t_out, 2 v / a)
+    at the larger X Y Z speed v, and the pose's direction per mm of X Y Z turns
+    from d_in to d_out over it: |d_out − d_in| v t / 8 (lines that turn A or B
+    alone: |r_out − r_in| t / 8). An upper bound with the written speeds (module
+    docstring).
+    """
+    r_in = (q_at - q_in) / t_in
+    r_out = (q_out - q_at) / t_out
+    v_in, v_out = float(np.linalg.norm(r_in[:3])), float(np.linalg.norm(r_out[:3]))
+    v = max(v_in, v_out)
+    t_blend = min(t_in, t_out, 2.0 * v / accel) if v > 0.0 else min(t_in, t_out)
+    if v_in > 0.0 and v_out > 0.0:
+        # the turn of the path's direction (per mm of X Y Z travel): a change of
+        # speed along the same line cuts nothing
+        turn = (r_out / v_out - r_in / v_in) * v
+    else:
+        turn = r_out - r_in
+    cut = turn * t_blend / 8.0
+    return float(np.linalg.norm(cut[:3])), float(np.linalg.norm(cut[3:]))
+
+
 class GcodeWriter:
     """Corrected Cartesian G-code (module docstring).
 
@@ -179,10 +207,7 @@ class GcodeWriter:
             if chunk.speed[k] > 0.0 and chunk.block_end[k]:
                 self.corner = (qk, t)  # written once the next point is known
                 continue
-            self._mode(lines, exact=bool(chunk.speed[k] == 0.0))
-            lines.append("G1 " + self.fmt % tuple(qk) + f" F{60.0 / t:.3f}")
-            self.last_q = qk
-            self.n += 1
+            self._g1(lines, qk, t, exact=bool(chunk.speed[k] == 0.0))
         return [(0, "\n".join(lines) + "\n")] if lines else []
 
     def _resolve_corner(self, lines: list[str], q_next: np.ndarray | None, dt_next: float) -> None:
@@ -195,25 +220,9 @@ class GcodeWriter:
         self.corner = None
         exact = False
         if q_next is not None and self.last_q is not None and dt_next > 0.0:
-            r_in = (qc - self.last_q) / t
-            r_out = (q_next - qc) / dt_next
-            v_in, v_out = float(np.linalg.norm(r_in[:3])), float(np.linalg.norm(r_out[:3]))
-            v = max(v_in, v_out)
-            t_blend = min(t, dt_next, 2.0 * v / self.accel) if v > 0.0 else min(t, dt_next)
-            if v_in > 0.0 and v_out > 0.0:
-                # the turn of the path's direction (per mm of X Y Z travel): a change
-                # of speed along the same line cuts nothing
-                turn = (r_out / v_out - r_in / v_in) * v
-            else:
-                turn = r_out - r_in
-            cut = turn * t_blend / 8.0
-            exact = bool(
-                np.linalg.norm(cut[:3]) > self.blend or np.linalg.norm(cut[3:]) > self.tilt_cut
-            )
-        self._mode(lines, exact=exact)
-        lines.append("G1 " + self.fmt % tuple(qc) + f" F{60.0 / t:.3f}")
-        self.last_q = qc
-        self.n += 1
+            mm, deg = corner_cut(self.last_q, qc, q_next, t, dt_next, self.accel)
+            exact = mm > self.blend or deg > self.tilt_cut
+        self._g1(lines, qc, t, exact=exact)
 
     def _write_held(self, lines: list[str]) -> None:
         """Write the last held-back point (it becomes the new chord start)."""
@@ -221,18 +230,19 @@ class GcodeWriter:
             return
         qh = self.run[-1][0]
         t = sum(d for _, d in self.run)
-        self._mode(lines, exact=False)  # only points in motion are held back
-        lines.append("G1 " + self.fmt % tuple(qh) + f" F{60.0 / t:.3f}")
-        self.last_q = qh
         self.run = []
-        self.n += 1
+        self._g1(lines, qh, t, exact=False)  # only points in motion are held back
 
-    def _mode(self, lines: list[str], *, exact: bool) -> None:
-        """Switch to G61 for a line that ends where the motion stands, back to
-        G64 P for one that ends in motion (module docstring)."""
+    def _g1(self, lines: list[str], q: np.ndarray, t: float, *, exact: bool) -> None:
+        """Write the line to ``q`` taking ``t`` seconds, in G61 where ``exact`` (a
+        line ending where the motion stands, or at a corner LinuxCNC's blend would
+        cut too far), else in G64 P (module docstring)."""
         if exact != self.exact:
             lines.append("G61" if exact else f"G64 P{self.blend:g}")
             self.exact = exact
+        lines.append("G1 " + self.fmt % tuple(q) + f" F{60.0 / t:.3f}")
+        self.last_q = q
+        self.n += 1
 
     def _within(self, qk: np.ndarray) -> bool:
         """Would the chord from the last written point to qk pass the held-back points?"""
