@@ -292,8 +292,9 @@ def motion_lines(text: str) -> dict[int, int]:
     return out
 
 
-def segments(run_: MotionRun, text: str, points: np.ndarray) -> np.ndarray:
-    """(m,) for each cycle, the written point whose segment it is in.
+def segments(run_: MotionRun, text: str, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For each cycle, the written point whose segment it is in, (m,), and the
+    commanded pose's distance from that segment [mm, a degree weighing as a µm].
 
     ``motion.program-line`` names the segment being executed; in a blend two are,
     so the nearer of the named one and its neighbours (in pose space, a degree
@@ -317,4 +318,4 @@ def segments(run_: MotionRun, text: str, points: np.ndarray) -> np.ndarray:
         nearer = d < best - 1e-15
         best[nearer] = d[nearer]
         out[nearer] = k[nearer]
-    return out
+    return out, best

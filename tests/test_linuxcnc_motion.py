@@ -32,6 +32,7 @@ the blends' speed over F stays open (OPEN below).
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import numpy as np
 import pytest
@@ -68,7 +69,7 @@ def run_on_linuxcnc(truth, motions, res, text: str) -> tuple[ctl.Trace, lm.Motio
     written = ctl.run_gcode(text)
     run = lm.run(text, truth.limits, written.q[0], timeout_s=3.0 * written.t[-1] + 30.0)
     assert not run.errors, run.errors
-    seg = lm.segments(run, text, written.q)
+    seg, off = lm.segments(run, text, written.q)
     s = np.linspace(0.0, 1.0, SUBSTEPS + 1)[1:]
     q = np.vstack(
         [
@@ -84,12 +85,7 @@ def run_on_linuxcnc(truth, motions, res, text: str) -> tuple[ctl.Trace, lm.Motio
     P = kinematics.inverse(chain.controller_geometry(truth), q).P
     executed = ctl.machine_executes(truth, t, P, tool)
     trace = ctl.judge(motions, executed, t, seg_d, written.line, tool, truth.limits.rapid_mm_min)
-    a, b = written.q[seg - 1], written.q[seg]
-    ab = b - a
-    n2 = np.einsum("ij,ij->i", ab, ab)
-    u = np.clip(np.einsum("ij,ij->i", run.q - a, ab) / np.where(n2 > 0, n2, 1.0), 0.0, 1.0)
-    off = (run.q - (a + u[:, None] * ab)) * np.array([1.0, 1.0, 1.0, 1e-3, 1e-3])
-    return trace, run, float(np.linalg.norm(off, axis=1).max())
+    return trace, run, float(off.max())
 
 
 def test_an_xyz_program_for_a_machine_without_errors_runs_within_bounds() -> None:
@@ -167,29 +163,30 @@ def test_a_sharp_tilt_corner_keeps_to_the_path() -> None:
     assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
 
 
+def _open(seed: int, text: str, name: str, why: str) -> Any:
+    """A program LinuxCNC runs out of bounds: a strict xfail saying what was measured."""
+    return pytest.param(
+        seed, text, id=name, marks=pytest.mark.xfail(strict=True, reason=f"open: {why}")
+    )
+
+
 #: Programs whose corrected G-code LinuxCNC runs out of bounds (strict xfails; each
 #: with what was measured, `bench/linuxcnc_truth.py` gives the whole table)
 OPEN = [
-    pytest.param(
+    _open(
         21,
         ARC_INTO_A_STOP,
-        id="stop",
-        marks=pytest.mark.xfail(
-            strict=True,
-            reason="open: LinuxCNC blends the compensated lines parabolically (A and B "
-            "turn on every line): 1.19 x F on the F300 plunge",
-        ),
+        "stop",
+        "LinuxCNC blends the compensated lines parabolically (A and B turn on every "
+        "line): 1.19 x F on the F300 plunge",
     ),
-    pytest.param(
+    _open(
         12,
         COMPASS_WITH_A_TILT,
-        id="compass-with-a-tilt-F400",
-        marks=pytest.mark.xfail(
-            strict=True,
-            reason="open: 1.02 x F, LinuxCNC's parabolic blends of the lines that turn "
-            "B (the path is within bounds since tilt corners run in G61: 2.1 µm, "
-            "2.3 arcsec before, 0.28 µm after)",
-        ),
+        "compass-with-a-tilt-F400",
+        "1.02 x F, LinuxCNC's parabolic blends of the lines that turn B (the path is "
+        "within bounds since tilt corners run in G61: 2.1 µm, 2.3 arcsec before, "
+        "0.28 µm after)",
     ),
 ]
 
