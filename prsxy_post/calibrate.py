@@ -189,7 +189,7 @@ def observations(
 
 def _out(geo: kinematics.Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
     """Tip [mm] and A, B [deg] for platform poses xv = (c, A, B, γ) [mm, rad]."""
-    R = kinematics.rot_y(xv[:, 4]) @ kinematics.rot_x(xv[:, 3]) @ kinematics.rot_z(xv[:, 5])
+    R = kinematics.platform_rotation(xv[:, 3], xv[:, 4], xv[:, 5])
     T = xv[:, :3] + np.einsum("nij,j->ni", R, geo.tool)
     w = T - geo.origin + kinematics.table_displacement(geo, P[:, 3], P[:, 4])
     return np.column_stack([w, np.degrees(xv[:, 3]), np.degrees(xv[:, 4])])
@@ -231,15 +231,12 @@ def fk_with_jacobian(
         return y, None, xv, None
     n, m = len(P), len(theta)
     hx = np.array([1e-6, 1e-6, 1e-6, 1e-8, 1e-8, 1e-8])
-    Fx = np.empty((n, 6, 6))
+    Fx = kinematics._fk_system(geo, P, xv)[1]
     Gx = np.empty((n, 5, 6))
     for j in range(6):
         xp, xm = xv.copy(), xv.copy()
         xp[:, j] += hx[j]
         xm[:, j] -= hx[j]
-        Fx[:, :, j] = (
-            kinematics._fk_residual(geo, P, xp) - kinematics._fk_residual(geo, P, xm)
-        ) / (2 * hx[j])
         Gx[:, :, j] = (_out(geo, P, xp) - _out(geo, P, xm)) / (2 * hx[j])
     h_all = steps if steps is not None else default_steps(PARAMS, theta)
     Ft = np.empty((n, 6, m))

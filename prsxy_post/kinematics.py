@@ -65,6 +65,28 @@ def rot_z(a: np.ndarray) -> np.ndarray:
     )
 
 
+def platform_rotation(a: np.ndarray, b: np.ndarray, gamma: np.ndarray) -> np.ndarray:
+    """R = R_y(B) R_x(A) R_z(γ) (contract), (N, 3, 3); angles in rad.
+
+    The product written out, one array operation per entry instead of three
+    stacked matrices and two products (the FK's Newton builds it every step).
+    """
+    ca, sa = np.cos(a), np.sin(a)
+    cb, sb = np.cos(b), np.sin(b)
+    cg, sg = np.cos(gamma), np.sin(gamma)
+    R = np.empty((*np.shape(a), 3, 3))
+    R[..., 0, 0] = cb * cg + sb * sa * sg
+    R[..., 0, 1] = sb * sa * cg - cb * sg
+    R[..., 0, 2] = sb * ca
+    R[..., 1, 0] = ca * sg
+    R[..., 1, 1] = ca * cg
+    R[..., 1, 2] = -sa
+    R[..., 2, 0] = cb * sa * sg - sb * cg
+    R[..., 2, 1] = sb * sg + cb * sa * cg
+    R[..., 2, 2] = cb * ca
+    return R
+
+
 def tool_axis(a_deg: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
     """Tool axis R·(0,0,1) = (cos A sin B, −sin A, cos A cos B), shape (N, 3)."""
     a, b = np.radians(a_deg), np.radians(b_deg)
@@ -449,17 +471,74 @@ def table_motors(geo: Geometry, dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndar
     return p5, p6
 
 
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a × b over the last axis, written out (np.cross is slow on small shapes)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a · b over the last axis, written out (a reduction over 3 is slow)."""
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
+def _fk_parts(
+    geo: Geometry, P: np.ndarray, xv: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """R (N, 3, 3), R b_k (N, 3, 3), w_k (N, 3, 3), |w_k| (N, 3) and the six FK
+    equations (N, 6) at xv = (c, A, B, γ) [mm, rad]."""
+    c = xv[:, :3]
+    R = platform_rotation(xv[:, 3], xv[:, 4], xv[:, 5])
+    rb = np.matmul(R, geo.b.T).transpose(0, 2, 1)  # R b_k, (N, leg, 3)
+    v = c[:, None, :] + rb - geo.g[None]
+    plane = _dot3(v, geo.u)
+    w = v - geo.hinge_offset(P[:, :3])
+    norm_w = np.sqrt(_dot3(w, w))
+    # Length residual scaled to mm: |w| − L behaves like a distance.
+    f = np.concatenate([plane, norm_w - geo.L[None]], axis=1)
+    return R, rb, w, norm_w, f
+
+
 def _fk_residual(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
     """Six FK equations for unknowns xv = (c, A, B, γ) [mm, rad], shape (N, 6)."""
-    c = xv[:, :3]
-    R = rot_y(xv[:, 4]) @ rot_x(xv[:, 3]) @ rot_z(xv[:, 5])
-    s = c[:, None, :] + np.einsum("nij,kj->nki", R, geo.b)
-    v = s - geo.g[None]
-    plane = np.einsum("nki,ki->nk", v, geo.u)
-    w = v - geo.hinge_offset(P[:, :3])
-    # Length residual scaled to mm: |w| − L behaves like a distance.
-    length = np.sqrt(np.einsum("nki,nki->nk", w, w)) - geo.L[None]
-    return np.concatenate([plane, length], axis=1)
+    return _fk_parts(geo, P, xv)[4]
+
+
+def _fk_system(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The six FK equations at xv = (c, A, B, γ) [mm, rad] and their Jacobian.
+
+    With s_k = c + R b_k and R = R_y(B) R_x(A) R_z(γ) (contract), the equations are
+    the ball's height over its hinge plane, (s_k − g_k)·u_k, and the strut length,
+    |w_k| − L_k with w_k = s_k − a_k. Their derivatives are closed forms: ∂s_k/∂c = I
+    and, for an angle turning about the unit axis e (machine frame),
+    ∂(R b_k)/∂θ = e × (R b_k), with e = R_y(B) x̂ for A, ŷ for B and R ẑ for γ
+    (each factor of R turns about its own axis, carried by the factors to its left).
+
+    Returns
+    -------
+    f : (N, 6) [mm]; J : (N, 6, 6) ∂f/∂xv [mm/mm, mm/rad]
+    """
+    R, rb, w, norm_w, f = _fk_parts(geo, P, xv)
+    n = len(xv)
+    axes = np.empty((n, 3, 3))  # rotation axes of A, B, γ (rows)
+    axes[:, 0, 0] = np.cos(xv[:, 4])
+    axes[:, 0, 1] = 0.0
+    axes[:, 0, 2] = -np.sin(xv[:, 4])
+    axes[:, 1] = (0.0, 1.0, 0.0)
+    axes[:, 2] = R[:, :, 2]
+    unit_w = w / norm_w[..., None]
+    # n·(e × R b_k) = e·(R b_k × n): the angle columns are the triple products
+    # with the two normals, u_k for the plane and w_k / |w_k| for the length
+    axes_t = axes.transpose(0, 2, 1)
+    J = np.empty((n, 6, 6))
+    J[:, :3, :3] = geo.u[None]
+    J[:, 3:, :3] = unit_w
+    J[:, :3, 3:] = np.matmul(_cross3(rb, np.broadcast_to(geo.u, rb.shape)), axes_t)
+    J[:, 3:, 3:] = np.matmul(_cross3(rb, unit_w), axes_t)
+    return f, J
 
 
 def _fk_guess(geo: Geometry, P: np.ndarray) -> np.ndarray:
@@ -505,21 +584,12 @@ def forward_platform(
     n = len(P)
     active = np.ones(n, dtype=bool)
     converged = np.zeros(n, dtype=bool)
-    h = np.array([1e-6, 1e-6, 1e-6, 1e-8, 1e-8, 1e-8])
     for _ in range(max_iter):
         idx = np.nonzero(active)[0]
         if idx.size == 0:
             break
         x = xv[idx]
-        Pi = P[idx]
-        f = _fk_residual(geo, Pi, x)
-        J = np.empty((idx.size, 6, 6))
-        for j in range(6):
-            xp = x.copy()
-            xm = x.copy()
-            xp[:, j] += h[j]
-            xm[:, j] -= h[j]
-            J[:, :, j] = (_fk_residual(geo, Pi, xp) - _fk_residual(geo, Pi, xm)) / (2 * h[j])
+        f, J = _fk_system(geo, P[idx], x)
         with np.errstate(all="ignore"):
             try:
                 step = np.linalg.solve(J, -f[..., None])[..., 0]
@@ -553,7 +623,7 @@ def forward(
     """
     P = np.atleast_2d(np.asarray(P, dtype=float))
     xv, ok = forward_platform(geo, P, guess)
-    R = rot_y(xv[:, 4]) @ rot_x(xv[:, 3]) @ rot_z(xv[:, 5])
+    R = platform_rotation(xv[:, 3], xv[:, 4], xv[:, 5])
     t = _tool_vectors(geo, len(P), tool_length_offset)
     T = xv[:, :3] + np.einsum("nij,nj->ni", R, t)
     D = table_displacement(geo, P[:, 3], P[:, 4])

@@ -201,3 +201,36 @@ def test_effects_move_the_tip(nominal: profile_mod.Profile) -> None:
     q_plain, _ = K.forward(_geo(nominal), P)
     # 10 µm of bow at 100 mm moves the tip by a few µm
     assert 1e-3 < np.abs(q_plain - q)[0, :3].max() < 2e-2
+
+
+@settings(max_examples=50, deadline=None)
+@given(pose, st.integers(0, 2**32 - 1))
+def test_fk_jacobian_is_the_equations_derivative(qv: tuple[float, ...], seed: int) -> None:
+    """The closed-form Jacobian Newton's FK steps with equals central differences of
+    the six FK equations (on a machine with bowed guides, where the hinge moves
+    with the motor and not with the platform)."""
+    nominal = profile_mod.loads((VECTORS / "nominal.toml").read_text(), "nominal")
+    truth = simulate.random_machine(nominal, np.random.default_rng(seed), effects=True)
+    geo = K.Geometry.from_params(truth.kinematics, truth.origin, truth.table, truth.effects)
+    r = K.inverse(geo, np.array([qv]))
+    # away from the solution too: the Jacobian must hold where Newton starts
+    xv = np.column_stack([r.pose.c, np.radians(qv[3]), np.radians(qv[4]), r.pose.gamma])
+    xv = xv + np.array([[0.3, -0.2, 0.5, 0.01, -0.02, 0.003]])
+    _, J = K._fk_system(geo, r.P, xv)
+    h = np.array([1e-5, 1e-5, 1e-5, 1e-7, 1e-7, 1e-7])
+    J_fd = np.empty((1, 6, 6))
+    for j in range(6):
+        xp, xm = xv.copy(), xv.copy()
+        xp[:, j] += h[j]
+        xm[:, j] -= h[j]
+        J_fd[:, :, j] = (K._fk_residual(geo, r.P, xp) - K._fk_residual(geo, r.P, xm)) / (2 * h[j])
+    np.testing.assert_allclose(J, J_fd, rtol=0, atol=1e-6 * np.abs(J_fd).max())
+
+
+def test_platform_rotation_is_the_contract_product() -> None:
+    """R_y(B) R_x(A) R_z(γ) written out equals the product of the three matrices."""
+    rng = np.random.default_rng(5)
+    a, b, g = rng.uniform(-np.pi, np.pi, (3, 50))
+    np.testing.assert_allclose(
+        K.platform_rotation(a, b, g), K.rot_y(b) @ K.rot_x(a) @ K.rot_z(g), atol=1e-15
+    )
