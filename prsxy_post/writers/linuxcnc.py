@@ -45,7 +45,8 @@ curvature, and the blend cuts the polyline back towards the curve.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -53,7 +54,7 @@ import numpy as np
 from ..interpolate.geometry import CORNER_SHARE
 from .base import Dialect, Piece, Provenance, Setting, header, words_text
 from .cartesian import written_points
-from .numbers import round_clean
+from .numbers import format_fixed_rows, round_clean
 
 if TYPE_CHECKING:
     from ..chain import PointChunk
@@ -76,7 +77,12 @@ SETTINGS = {
 
 
 def corner_cut(
-    q_in: np.ndarray, q_at: np.ndarray, q_out: np.ndarray, t_in: float, t_out: float, accel: float
+    q_in: Sequence[float],
+    q_at: Sequence[float],
+    q_out: Sequence[float],
+    t_in: float,
+    t_out: float,
+    accel: float,
 ) -> tuple[float, float]:
     """How far LinuxCNC's parabolic blend of the lines q_in → q_at → q_out may cut
     the corner at q_at: (X Y Z [mm], A B [deg]).
@@ -86,21 +92,20 @@ def corner_cut(
     at the larger X Y Z speed v, and the pose's direction per mm of X Y Z turns
     from d_in to d_out over it: |d_out − d_in| v t / 8 (lines that turn A or B
     alone: |r_out − r_in| t / 8). An upper bound with the written speeds (module
-    docstring).
+    docstring). Plain floats: the writer calls it at every block end in motion.
     """
-    r_in = (q_at - q_in) / t_in
-    r_out = (q_out - q_at) / t_out
-    v_in, v_out = float(np.linalg.norm(r_in[:3])), float(np.linalg.norm(r_out[:3]))
+    r_in = [(b - a) / t_in for a, b in zip(q_in, q_at, strict=True)]
+    r_out = [(b - a) / t_out for a, b in zip(q_at, q_out, strict=True)]
+    v_in, v_out = math.hypot(*r_in[:3]), math.hypot(*r_out[:3])
     v = max(v_in, v_out)
     t_blend = min(t_in, t_out, 2.0 * v / accel) if v > 0.0 else min(t_in, t_out)
     if v_in > 0.0 and v_out > 0.0:
         # the turn of the path's direction (per mm of X Y Z travel): a change of
         # speed along the same line cuts nothing
-        turn = (r_out / v_out - r_in / v_in) * v
+        turn = [(o / v_out - i / v_in) * v for i, o in zip(r_in, r_out, strict=True)]
     else:
-        turn = r_out - r_in
-    cut = turn * t_blend / 8.0
-    return float(np.linalg.norm(cut[:3])), float(np.linalg.norm(cut[3:]))
+        turn = [o - i for i, o in zip(r_in, r_out, strict=True)]
+    return math.hypot(*turn[:3]) * t_blend / 8.0, math.hypot(*turn[3:]) * t_blend / 8.0
 
 
 class GcodeWriter:
@@ -127,15 +132,16 @@ class GcodeWriter:
         self.n = 0
         self.t_total = 0.0
         self.last_line: int | None = None
-        self.last_q: np.ndarray | None = None
-        self.run: list[tuple[np.ndarray, float]] = []  # held back: (point, its dt)
-        self.fmt = " ".join(f"{a}%.{self.dec}f" for a in "XYZAB")
+        self.last_q: list[float] | None = None
+        #: points held back: (point, its dt, its words)
+        self.run: list[tuple[list[float], float, str]] = []
         self.ended_by: str | None = None
         #: G61 (exact path) is active, for a line ending where the motion stands
         self.exact = False
         #: a block's last point in motion, held until the next point shows how
-        #: far LinuxCNC would cut the corner there: (point, its segment's time)
-        self.corner: tuple[np.ndarray, float] | None = None
+        #: far LinuxCNC would cut the corner there: (point, its segment's time,
+        #: its words)
+        self.corner: tuple[list[float], float, str] | None = None
 
     def begin(self) -> list[Piece]:
         ck = (
@@ -162,21 +168,35 @@ class GcodeWriter:
     def feed(self, chunk: PointChunk) -> list[Piece]:
         if len(chunk) == 0:
             return []
-        q = round_clean(written_points(self.cgeo, chunk), self.dec)
+        q_arr = round_clean(written_points(self.cgeo, chunk), self.dec)
+        # every point's "X.. Y.. Z.. A.. B.." at once (the same text as % per value),
+        # and the per-point values as Python lists: a loop over numpy scalars took
+        # most of the writer's time
+        rows = format_fixed_rows(
+            [((" " if i else "") + a, q_arr[:, i], self.dec) for i, a in enumerate("XYZAB")]
+        )
+        texts = [row[:-1] for row in rows]  # without the newline
+        q = q_arr.tolist()
+        dt = chunk.dt.tolist()
+        line_no = chunk.line.tolist()
+        speed = chunk.speed.tolist()
+        block_end = chunk.block_end.tolist()
+        dwell = chunk.dwell.tolist()
         lines: list[str] = []
-        for k in range(len(chunk)):
+        for k in range(len(q)):
             qk = q[k]
             if self.n == 0:
-                lines.append("G0 " + self.fmt % tuple(qk))
+                lines.append("G0 " + texts[k])
                 lines.append("G93")
                 self.last_q = qk
                 self.n = 1
                 continue
-            dtk = float(chunk.dt[k])
-            self._resolve_corner(lines, qk, dtk)
-            if chunk.line[k] != self.last_line:
-                lines.append(f"(line {int(chunk.line[k])})")
-                self.last_line = int(chunk.line[k])
+            dtk = dt[k]
+            if self.corner is not None:
+                self._resolve_corner(lines, qk, dtk)
+            if line_no[k] != self.last_line:
+                lines.append(f"(line {line_no[k]})")
+                self.last_line = line_no[k]
             self.t_total += dtk
             words = chunk.fn[k]
             if words is not None:
@@ -186,74 +206,71 @@ class GcodeWriter:
                     self.ended_by = words_text(words)
                 lines.append(words_text(words))
                 continue
-            standing = (
-                self.last_q is not None and np.array_equal(qk, self.last_q) and chunk.dwell[k]
-            )
-            if standing:
+            if dwell[k] and qk == self.last_q:  # the pose stands: a dwell
                 self._write_held(lines)
                 lines.append(f"G4 P{dtk:.4f}")
                 continue
-            if self.tol > 0 and not chunk.block_end[k] and chunk.speed[k] > 0:
+            if self.tol > 0 and not block_end[k] and speed[k] > 0:
                 # a point that may be dropped: keep it back while the chord from the
                 # last written point to it passes all the held-back ones
                 if not self._within(qk):
                     self._write_held(lines)
-                self.run.append((qk, dtk))
+                self.run.append((qk, dtk, texts[k]))
                 continue
             if self.run and not self._within(qk):
                 self._write_held(lines)
-            t = dtk + sum(d for _, d in self.run)
+            t = dtk + sum(d for _, d, _ in self.run)
             self.run = []
-            if chunk.speed[k] > 0.0 and chunk.block_end[k]:
-                self.corner = (qk, t)  # written once the next point is known
+            if speed[k] > 0.0 and block_end[k]:
+                self.corner = (qk, t, texts[k])  # written once the next point is known
                 continue
-            self._g1(lines, qk, t, exact=bool(chunk.speed[k] == 0.0))
+            self._g1(lines, qk, texts[k], t, exact=speed[k] == 0.0)
         return [(0, "\n".join(lines) + "\n")] if lines else []
 
-    def _resolve_corner(self, lines: list[str], q_next: np.ndarray | None, dt_next: float) -> None:
+    def _resolve_corner(self, lines: list[str], q_next: list[float] | None, dt_next: float) -> None:
         """Write the held block end, in G61 where LinuxCNC's parabolic blend would
         cut the corner there by more than ``blend`` in X Y Z or ``tilt_cut`` in A
         and B (module docstring)."""
         if self.corner is None:
             return
-        qc, t = self.corner
+        qc, t, text = self.corner
         self.corner = None
         exact = False
         if q_next is not None and self.last_q is not None and dt_next > 0.0:
             mm, deg = corner_cut(self.last_q, qc, q_next, t, dt_next, self.accel)
             exact = mm > self.blend or deg > self.tilt_cut
-        self._g1(lines, qc, t, exact=exact)
+        self._g1(lines, qc, text, t, exact=exact)
 
     def _write_held(self, lines: list[str]) -> None:
         """Write the last held-back point (it becomes the new chord start)."""
         if not self.run:
             return
-        qh = self.run[-1][0]
-        t = sum(d for _, d in self.run)
+        qh, _, text = self.run[-1]
+        t = sum(d for _, d, _ in self.run)
         self.run = []
-        self._g1(lines, qh, t, exact=False)  # only points in motion are held back
+        self._g1(lines, qh, text, t, exact=False)  # only points in motion are held back
 
-    def _g1(self, lines: list[str], q: np.ndarray, t: float, *, exact: bool) -> None:
-        """Write the line to ``q`` taking ``t`` seconds, in G61 where ``exact`` (a
-        line ending where the motion stands, or at a corner LinuxCNC's blend would
-        cut too far), else in G64 P (module docstring)."""
+    def _g1(self, lines: list[str], q: list[float], text: str, t: float, *, exact: bool) -> None:
+        """Write the line to ``q`` (its words ``text``) taking ``t`` seconds, in G61
+        where ``exact`` (a line ending where the motion stands, or at a corner
+        LinuxCNC's blend would cut too far), else in G64 P (module docstring)."""
         if exact != self.exact:
             lines.append("G61" if exact else f"G64 P{self.blend:g}")
             self.exact = exact
-        lines.append("G1 " + self.fmt % tuple(q) + f" F{60.0 / t:.3f}")
+        lines.append(f"G1 {text} F{60.0 / t:.3f}")
         self.last_q = q
         self.n += 1
 
-    def _within(self, qk: np.ndarray) -> bool:
+    def _within(self, qk: list[float]) -> bool:
         """Would the chord from the last written point to qk pass the held-back points?"""
         if not self.run or self.last_q is None:
             return True
-        a = self.last_q
-        d = qk - a
+        a = np.asarray(self.last_q)
+        d = np.asarray(qk) - a
         dd = float(d @ d)
         if dd == 0:
             return False
-        pts = np.array([p for p, _ in self.run])
+        pts = np.array([p for p, _, _ in self.run])
         t = np.clip((pts - a) @ d / dd, 0, 1)
         return float(np.linalg.norm(pts - (a + t[:, None] * d), axis=1).max()) <= self.tol
 
