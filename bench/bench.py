@@ -5,20 +5,20 @@ Usage::
     python bench/bench.py                 # 200 k and 2 M lines
     python bench/bench.py --lines 200000  # one size
     python bench/bench.py --json out.json
+    python bench/bench.py --format gcode  # corrected G-code for LinuxCNC instead
 
 For each size it generates a five-axis finishing program (short G1 moves at F2000,
-five-axis passes, small R arcs), converts it with every compensation stage on and
-PMAC output (a calibrated profile with real-axis tables and an error map), in a child
-process so peak resident memory is that conversion's alone, and reports per stage:
-seconds, lines/s, interpolation points/s, and the CPU time of the conversion's
-processes together (``chain CPU``). Two times: ``chain`` is the conversion
-inside the process (what ``convert_file`` takes: read, interpret, plan, compensate,
-write), ``command`` is the whole ``prsxy-post convert`` command as a user runs it
-(Python's start and imports included). In the same run and on the same file it
+five-axis passes, small R arcs), converts it with every compensation stage on and PMAC
+output (or ``--format gcode``; a calibrated profile with real-axis tables and an error
+map), in a child process so peak resident memory is that conversion's alone, and
+reports per stage: seconds, lines/s, interpolation points/s, and the CPU time of the
+conversion's processes together (``chain CPU``). Two times: ``chain`` is the
+conversion inside the process (what ``convert_file`` takes: read, interpret, plan,
+compensate, write), ``command`` is the whole ``prsxy-post convert`` command as a user
+runs it (Python's start and imports included). In the same run and on the same file it
 times LinuxCNC's ``rs274 -g`` (a whole command too) and pygcode's ``Machine`` when
-they are installed. Large programs are interpreted in a second process and
-written by a third (see README); peak memory is reported for each: main +
-interpreter + writer.
+they are installed. Large programs are interpreted in a second process and written by
+a third (see README); peak memory is reported for each: main + interpreter + writer.
 
 It is a script, not a test: the figures depend on the machine. README shows the
 latest figures with the machine they were taken on.
@@ -102,13 +102,13 @@ def bench_profile(path: Path) -> Path:
     return path
 
 
-def child_convert(program: str, prof: str, out: str) -> None:
+def child_convert(program: str, prof: str, out: str, fmt: str) -> None:
     """Run in a child process: convert and print the stats as JSON."""
     sys.path.insert(0, str(ROOT))
     from prsxy_post.convert import ConvertJob, convert_file, peak_rss_mb
 
     t0, c0 = time.perf_counter(), os.times()
-    st = convert_file(ConvertJob(program, prof, "pmac", out, options="bench", parallel=True))
+    st = convert_file(ConvertJob(program, prof, fmt, out, options="bench", parallel=True))
     total, c1 = time.perf_counter() - t0, os.times()
     # CPU of this process and of the interpreter and writer processes it waited for
     cpu = sum(c1[k] - c0[k] for k in range(4))
@@ -152,7 +152,7 @@ def time_rs274(program: Path) -> float | None:
     return seconds
 
 
-def time_command(program: Path, prof: Path, out: Path) -> float:
+def time_command(program: Path, prof: Path, out: Path, fmt: str) -> float:
     """Wall time of the ``prsxy-post convert`` command, start to exit."""
     t0 = time.perf_counter()
     subprocess.run(
@@ -164,6 +164,8 @@ def time_command(program: Path, prof: Path, out: Path) -> float:
             str(program),
             "--profile",
             str(prof),
+            "--format",
+            fmt,
             "-o",
             str(out),
             "-q",
@@ -189,23 +191,24 @@ def time_pygcode(program: Path, limit_lines: int) -> float | None:
     return time.perf_counter() - t0
 
 
-def run(sizes: list[int], pygcode_limit: int) -> list[dict]:
+def run(sizes: list[int], pygcode_limit: int, fmt: str) -> list[dict]:
     results = []
     with tempfile.TemporaryDirectory() as d:
         prof = bench_profile(Path(d) / "bench.toml")
         for n in sizes:
             prog = Path(d) / f"finish-{n}.ngc"
             prog.write_text(generate(n))
-            out = Path(d) / f"finish-{n}.pmc"
+            out = Path(d) / f"finish-{n}.{'pmc' if fmt == 'pmac' else 'out.ngc'}"
             proc = subprocess.run(
-                [sys.executable, __file__, "--child", str(prog), str(prof), str(out)],
+                [sys.executable, __file__, "--child", str(prog), str(prof), str(out), fmt],
                 capture_output=True,
                 text=True,
                 check=True,
             )
             r = json.loads(proc.stdout.strip().splitlines()[-1])
             r["size_lines"] = n
-            r["command_s"] = time_command(prog, prof, out)
+            r["format"] = fmt
+            r["command_s"] = time_command(prog, prof, out, fmt)
             r["rs274_s"] = time_rs274(prog)
             r["pygcode_s"] = time_pygcode(prog, pygcode_limit)
             r["output_mb"] = out.stat().st_size / 1e6
@@ -220,6 +223,7 @@ def report(results: list[dict]) -> str:
     lines = [
         f"Machine: {platform.platform()}, {os.cpu_count()} cores, {cpu}, "
         f"Python {platform.python_version()}",
+        f"Output format: {results[0].get('format', 'pmac')}",
         "",
     ]
     lines += [
@@ -266,12 +270,18 @@ def main() -> None:
         default=250_000,
         help="skip pygcode above this many lines (it needs minutes)",
     )
-    ap.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
+    ap.add_argument(
+        "--format",
+        choices=["pmac", "gcode"],
+        default="pmac",
+        help="output format converted to (default pmac)",
+    )
+    ap.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         child_convert(*args.child)
         return
-    results = run(args.lines or [200_000, 2_000_000], args.pygcode_limit)
+    results = run(args.lines or [200_000, 2_000_000], args.pygcode_limit, args.format)
     print(report(results))
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))

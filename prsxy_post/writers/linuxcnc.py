@@ -219,8 +219,10 @@ class GcodeWriter:
                 continue
             if self.run and not self._within(qk):
                 self._write_held(lines)
-            t = dtk + sum(d for _, d, _ in self.run)
-            self.run = []
+            t = dtk
+            if self.run:
+                t += sum(d for _, d, _ in self.run)
+                self.run = []
             if speed[k] > 0.0 and block_end[k]:
                 self.corner = (qk, t, texts[k])  # written once the next point is known
                 continue
