@@ -196,6 +196,8 @@ class Trace:
     speed_ratio: float
     accel_mm_s2: float
     worst_line: int
+    #: the largest speed over the programmed feed [mm/s] (≤ 0 within F)
+    speed_excess_mm_s: float = 0.0
 
 
 def judge(
@@ -249,6 +251,8 @@ def judge(
     v = np.linalg.norm(np.diff(q[:, :3], axis=0), axis=1) / np.where(dt > 0, dt, 1.0)
     ratio = v / np.where(feed[1:] > 0, feed[1:] / 60.0, np.inf)
     speed_ratio = float(ratio[same].max()) if np.any(same) else 0.0
+    excess = v - np.where(feed[1:] > 0, feed[1:] / 60.0, np.inf)
+    speed_excess = float(excess[same].max()) if np.any(same) else 0.0
     acc = 0.0
     if len(q) > 2:
         vel = np.diff(q[:, :3], axis=0) / np.where(dt > 0, dt, 1.0)[:, None]
@@ -257,7 +261,7 @@ def judge(
         ok = same[1:] & same[:-1]
         if np.any(ok):
             acc = float(np.linalg.norm(dv, axis=1)[ok].max())
-    return Trace(path, abe, speed_ratio, acc, worst)
+    return Trace(path, abe, speed_ratio, acc, worst, speed_excess)
 
 
 @dataclass
