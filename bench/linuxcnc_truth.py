@@ -13,6 +13,7 @@ the found programs take about eight minutes.
     python bench/linuxcnc_truth.py --programs samples   # the samples, random machine 11
     python bench/linuxcnc_truth.py --longest 10         # skip programs longer than 10 s
     python bench/linuxcnc_truth.py --blends             # the parabolic blends, measured
+    python bench/linuxcnc_truth.py --g61-everywhere     # what if every line ran in G61
 """
 
 from __future__ import annotations
@@ -60,6 +61,12 @@ def main() -> None:
     ap.add_argument("--no-play", action="store_true", help="the machines without play")
     ap.add_argument("--longest", type=float, default=60.0, help="skip longer programs [s]")
     ap.add_argument("--blends", action="store_true", help="the parabolic blends alone")
+    ap.add_argument(
+        "--g61-everywhere",
+        action="store_true",
+        help="run every line in G61 (exact path, a stop at every point): a what-if, "
+        "not an output mode",
+    )
     args = ap.parse_args()
     if not lm.available():
         sys.exit("LinuxCNC is not installed (apt-get install linuxcnc-uspace)")
@@ -84,7 +91,13 @@ def main() -> None:
             print(f"| {name} | random {seed} | skipped: {written.t[-1]:.0f} s | | | |", flush=True)
             continue
         model, _ = judge_gcode(truth, motions, res, texts)
-        tr, run, _ = run_on_linuxcnc(truth, motions, res, texts[0])
+        text_run = texts[0]
+        if args.g61_everywhere:
+            blend = written.blend
+            assert blend is not None
+            text_run = text_run.replace(f"G64 P{blend:g}", "G61")
+            assert not any(x.startswith("G64") for x in text_run.splitlines())
+        tr, run, _ = run_on_linuxcnc(truth, motions, res, text_run)
         print(
             f"| {name} | random {seed} | {model.speed_ratio:.4f}, {model.path_mm * 1e3:.3f} "
             f"| {tr.speed_ratio:.4f}, {tr.path_mm * 1e3:.3f}, {tr.ab_deg * 3600:.2f} "
