@@ -13,7 +13,7 @@ the found programs take about eight minutes.
     python bench/linuxcnc_truth.py --programs samples   # the samples, random machine 11
     python bench/linuxcnc_truth.py --longest 10         # skip programs longer than 10 s
     python bench/linuxcnc_truth.py --blends             # the parabolic blends, measured
-    python bench/linuxcnc_truth.py --g61-everywhere     # what if every line ran in G61
+    python bench/linuxcnc_truth.py --g61-everywhere     # with g61_every_line = 1
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from tests import controllers as ctl  # noqa: E402
 from tests import linuxcnc_motion as lm  # noqa: E402
 from tests.test_controller_truth import FOUND, FOUND_IDS, judge_gcode  # noqa: E402
 from tests.test_linuxcnc_motion import _peak_speed, _plunge, run_on_linuxcnc  # noqa: E402
-from tests.test_tracking import convert, truth_machine  # noqa: E402
+from tests.test_tracking import convert, truth_machine, with_gcode_setting  # noqa: E402
 
 
 def blends() -> None:
@@ -64,8 +64,8 @@ def main() -> None:
     ap.add_argument(
         "--g61-everywhere",
         action="store_true",
-        help="run every line in G61 (exact path, a stop at every point): a what-if, "
-        "not an output mode",
+        help="write with [output.gcode] g61_every_line = 1: every line in G61 (exact "
+        "path, a stop at every point)",
     )
     args = ap.parse_args()
     if not lm.available():
@@ -85,19 +85,15 @@ def main() -> None:
     print("|---|---|---|---|---|---:|")
     for name, seed, text in jobs:
         truth = truth_machine("random", seed, play=not args.no_play)
+        if args.g61_everywhere:
+            truth = with_gcode_setting(truth, "g61_every_line", 1)
         motions, res, texts = convert(truth, text, "gcode")
         written = ctl.run_gcode(texts[0])
         if written.t[-1] > args.longest:
             print(f"| {name} | random {seed} | skipped: {written.t[-1]:.0f} s | | | |", flush=True)
             continue
         model, _ = judge_gcode(truth, motions, res, texts)
-        text_run = texts[0]
-        if args.g61_everywhere:
-            blend = written.blend
-            assert blend is not None
-            text_run = text_run.replace(f"G64 P{blend:g}", "G61")
-            assert not any(x.startswith("G64") for x in text_run.splitlines())
-        tr, run, _ = run_on_linuxcnc(truth, motions, res, text_run)
+        tr, run, _ = run_on_linuxcnc(truth, motions, res, texts[0])
         print(
             f"| {name} | random {seed} | {model.speed_ratio:.4f}, {model.path_mm * 1e3:.3f} "
             f"| {tr.speed_ratio:.4f}, {tr.path_mm * 1e3:.3f}, {tr.ab_deg * 3600:.2f} "

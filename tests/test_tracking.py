@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pytest
@@ -352,6 +353,13 @@ def truth_machine(kind: str, seed: int | None, *, play: bool = True) -> profile_
     return simulate.random_machine(
         nominal, np.random.default_rng(seed), axis_errors=play, name=f"random {seed}"
     )
+
+
+def with_gcode_setting(profile: profile_mod.Profile, key: str, value: Any) -> profile_mod.Profile:
+    """The profile with ``[output.gcode] key = value``, validated as a profile file is."""
+    output = dict(profile.raw.get("output", {}))
+    output["gcode"] = {**output.get("gcode", {}), key: value}
+    return profile_mod.profile_from_dict(dict(profile.raw, output=output))
 
 
 PROV = writers.Provenance("x.ngc", "0" * 64, "p", "p.toml", "0" * 64, "")

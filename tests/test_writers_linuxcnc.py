@@ -18,7 +18,7 @@ from prsxy_post.writers.linuxcnc import corner_cut
 
 from .conftest import ROOT
 from .test_controller_truth import TBALL_WITH_A_TILT, XY_CORNER_AT_F60
-from .test_tracking import convert, truth_machine
+from .test_tracking import convert, truth_machine, with_gcode_setting
 
 PROGRAMS = [
     ("xy-corner-F60", XY_CORNER_AT_F60),
@@ -108,3 +108,17 @@ def test_the_corner_cut_in_closed_form() -> None:
     mm, deg = corner_cut(pose(-0.1), pose(0.0), pose(0.1, b=1.0), 0.01, 0.01, 2000.0)
     assert mm == pytest.approx(0.0, abs=1e-15)
     assert deg == pytest.approx(100.0 * 0.01 / 8)
+
+
+@pytest.mark.parametrize(("name", "text"), PROGRAMS, ids=[n for n, _ in PROGRAMS])
+def test_g61_every_line_writes_the_same_moves_all_in_exact_path(name: str, text: str) -> None:
+    """``[output.gcode] g61_every_line = 1``: the same moves as by default, every one
+    read under G61, and no G64 in the program (so LinuxCNC blends nothing)."""
+    truth = truth_machine("random", 12)
+    _, _, default = convert(truth, text, "gcode")
+    _, _, exact = convert(with_gcode_setting(truth, "g61_every_line", 1), text, "gcode")
+    moves_default, _ = _moves_and_modes(default[0])
+    moves, modes = _moves_and_modes(exact[0])
+    assert moves == moves_default
+    assert all(modes)
+    assert not any(line.startswith("G64") for line in exact[0].splitlines())

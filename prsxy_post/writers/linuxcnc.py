@@ -41,6 +41,13 @@ written speeds the reckoning bounds the cut from above (drill.ngc's corner:
 10.7 µm; LinuxCNC took it slower than written), so some of these stops are more
 than LinuxCNC needs. Inside a block the rate turns by a step's worth of
 curvature, and the blend cuts the polyline back towards the curve.
+
+Parabolic blends also run over F: LinuxCNC sets the next line's target speed from
+the speed the line before has lost, scaled by their blend speeds (``tpUpdateBlend``),
+and the two need not add up to F (1.20 x F on a plunge of 10 ms lines at F300 whose
+A turns 2e-7 degrees a line). With ``g61_every_line = 1`` every line runs in G61,
+which LinuxCNC never blends: F holds, and the program takes longer
+(``bench/linuxcnc_truth.py --g61-everywhere``).
 """
 
 from __future__ import annotations
@@ -72,6 +79,13 @@ SETTINGS = {
         "> 0: drop points while the chord through the kept ones stays within this "
         "(it adds to the path error)",
         "gcode_tolerance_mm",
+    ),
+    "g61_every_line": Setting(
+        0,
+        0,
+        1,
+        "1: every line runs in G61 (exact path, a stop at every point): LinuxCNC 2.9 then "
+        "never blends, and never runs over F, at the cost of time",
     ),
 }
 
@@ -123,6 +137,8 @@ class GcodeWriter:
         self.prov = prov
         self.tol = float(settings["tolerance_mm"])
         self.dec = int(settings["decimals"])
+        #: every line in G61: LinuxCNC 2.9's parabolic blends run over F (module docstring)
+        self.all_exact = bool(settings["g61_every_line"])
         self.cgeo = controller_geometry(profile)
         self.blend = CORNER_SHARE * profile.interpolation.path_tolerance_mm
         #: how far LinuxCNC may cut a tilt corner [deg] (module docstring)
@@ -157,12 +173,18 @@ class GcodeWriter:
             "cut them by any amount); a line that ends where the motion stands, or at",
             "a corner LinuxCNC would blend too far, runs in G61 (exact path).",
         ]
+        if self.all_exact:
+            extra[-3:] = [
+                "Every line runs in G61 (exact path, g61_every_line): a stop at every",
+                "point, no blend.",
+            ]
         lines = ["%"] + [
             "(" + x.replace("(", "[").replace(")", "]") + ")"
             for x in header(self.prov, self.profile, extra)
         ]
         lines.append("G21 G90 G17 G40 G49 G94")
-        lines.append(f"G64 P{self.blend:g}")
+        lines.append("G61" if self.all_exact else f"G64 P{self.blend:g}")
+        self.exact = self.all_exact
         return [(0, "\n".join(lines) + "\n")]
 
     def feed(self, chunk: PointChunk) -> list[Piece]:
@@ -256,6 +278,7 @@ class GcodeWriter:
         """Write the line to ``q`` (its words ``text``) taking ``t`` seconds, in G61
         where ``exact`` (a line ending where the motion stands, or at a corner
         LinuxCNC's blend would cut too far), else in G64 P (module docstring)."""
+        exact = exact or self.all_exact
         if exact != self.exact:
             lines.append("G61" if exact else f"G64 P{self.blend:g}")
             self.exact = exact
