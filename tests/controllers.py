@@ -313,7 +313,8 @@ def run_gcode(text: str, substeps: int = 8) -> GcodeRun:
             q.append(q[-1])
             t.append(t[-1] + float(w["P"]))
             line.append(cur)
-            dwells.append((len(q) - 1, float(w["P"])))
+            if float(w["P"]) > 0.0:  # G4 P0 waits for the motion to end, no time
+                dwells.append((len(q) - 1, float(w["P"])))
         elif re.fullmatch(r"(?:[GMTS]-?[\d.]+\s*)+", s) and not s.startswith(
             ("G2", "G9", "G64", "G61")
         ):

@@ -43,6 +43,7 @@ from . import controllers as ctl
 from . import linuxcnc_motion as lm
 from .test_controller_truth import (
     ARC_INTO_A_STOP,
+    COMPASS_SETS_OFF_BACK,
     COMPASS_WITH_A_TILT,
     TBALL_WITH_A_TILT,
     XY_CORNER_AT_F60,
@@ -165,6 +166,25 @@ def test_a_sharp_tilt_corner_keeps_to_the_path() -> None:
     the parabolic blends of the lines before: OPEN below)."""
     truth = truth_machine("random", 21)
     motions, res, texts = convert(truth, TBALL_WITH_A_TILT, "gcode")
+    tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
+    assert tr.path_mm <= TOL_MM, f"{tr.path_mm * 1e3:.3f} µm off the path at line {tr.worst_line}"
+    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
+
+
+def test_a_stop_lands_on_a_servo_sample() -> None:
+    """compass-sets-off-back-F400 on machine 12: table motor X reverses where the
+    program stops. LinuxCNC ends a G61 line within a servo cycle and starts the next
+    in the same cycle (tp.c, tpHandleSplitCycle), so no sample fell on the corner:
+    the drive cut it, the motor turned short of its extreme, and its part, left
+    elsewhere in the play, stood at the next crossing while Y and B moved on: 0.605 µm
+    and 0.60 arcsec off. Each G61 line is now followed by G4 P0, which LinuxCNC's
+    task runs only once the motion has ended (emctaskmain.cc,
+    emcTaskCheckPreconditions), so the next line starts from a sample at the corner:
+    0.064 µm and 0.08 arcsec (measured). Its speed stays open (the parabolic blends,
+    1.41 x F)."""
+    truth = truth_machine("random", 12)
+    motions, res, texts = convert(truth, COMPASS_SETS_OFF_BACK, "gcode")
+    assert "\nG61\n" in texts[0] and "\nG4 P0\n" in texts[0]
     tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
     assert tr.path_mm <= TOL_MM, f"{tr.path_mm * 1e3:.3f} µm off the path at line {tr.worst_line}"
     assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"

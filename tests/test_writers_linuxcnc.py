@@ -27,18 +27,27 @@ PROGRAMS = [
 
 
 def _moves_and_modes(text: str) -> tuple[list[str], list[bool]]:
-    """Every G0/G1/G4 line of the written program, and whether G61 was in force
-    when it was read."""
+    """Every G0/G1/G4 line of the written program but the ``G4 P0`` settles, and
+    whether G61 was in force when it was read. A G1 read under G61 must be followed
+    by ``G4 P0``, and no other line: LinuxCNC's task waits for the motion to end
+    before a dwell (``emctaskmain.cc``, ``emcTaskCheckPreconditions``:
+    ``EMC_TRAJ_DELAY_TYPE`` returns ``EMC_TASK_EXEC_WAITING_FOR_MOTION_AND_IO``), so the
+    next line starts from a servo sample at the corner, which ``tpHandleSplitCycle``
+    would otherwise skip (writers/linuxcnc.py's docstring)."""
     moves: list[str] = []
     exact: list[bool] = []
     mode = False
-    for raw in text.splitlines():
-        s = raw.strip()
+    rows = [raw.strip() for raw in text.splitlines()]
+    for k, s in enumerate(rows):
         if s == "G61":
             mode = True
         elif re.fullmatch(r"G64 P[\d.]+", s):
             mode = False
+        elif s == "G4 P0":
+            assert rows[k - 1].startswith("G1 ") and mode, f"G4 P0 after {rows[k - 1]!r}"
         elif s.startswith(("G0 ", "G1 ", "G4 ")):
+            if s.startswith("G1 ") and mode:
+                assert rows[k + 1] == "G4 P0", f"no G4 P0 after the G61 line {s!r}"
             moves.append(s)
             exact.append(mode)
     return moves, exact

@@ -42,6 +42,16 @@ written speeds the reckoning bounds the cut from above (drill.ngc's corner:
 than LinuxCNC needs. Inside a block the rate turns by a step's worth of
 curvature, and the blend cuts the polyline back towards the curve.
 
+A stop in G61 is not where the commands stand still: LinuxCNC ends a line within a
+servo cycle and, in the same cycle, starts the next from rest (``tp.c``,
+``tpHandleSplitCycle``), so no servo sample falls on the corner and the drive,
+following its samples, cuts it. A motor that reverses there turns short of its
+extreme, and with play its part is left elsewhere in the play, which carries on to
+the next crossing: compass-sets-off-back-F400 ran 0.605 µm off its path. So every
+line in G61 is followed by ``G4 P0``: a dwell waits for the motion to end
+(``emctaskmain.cc``, ``emcTaskCheckPreconditions``: ``EMC_TRAJ_DELAY_TYPE`` waits
+for motion and I/O), and the next line starts on a sample at the corner (0.064 µm).
+
 Parabolic blends also run over F: LinuxCNC sets the next line's target speed from
 the speed the line before has lost, scaled by their blend speeds (``tpUpdateBlend``),
 and the two need not add up to F (1.20 x F on a plunge of 10 ms lines at F300 whose
@@ -171,12 +181,13 @@ class GcodeWriter:
             "offsets are in the points. Timing is G93 inverse time per segment.",
             f"Corners blend within G64 P{self.blend:g} (LinuxCNC's G64 without P would",
             "cut them by any amount); a line that ends where the motion stands, or at",
-            "a corner LinuxCNC would blend too far, runs in G61 (exact path).",
+            "a corner LinuxCNC would blend too far, runs in G61 (exact path) and is",
+            "followed by G4 P0, so that the next line starts where it ends.",
         ]
         if self.all_exact:
-            extra[-3:] = [
-                "Every line runs in G61 (exact path, g61_every_line): a stop at every",
-                "point, no blend.",
+            extra[-4:] = [
+                "Every line runs in G61 (exact path, g61_every_line), followed by G4 P0:",
+                "a stop at every point, no blend.",
             ]
         lines = ["%"] + [
             "(" + x.replace("(", "[").replace(")", "]") + ")"
@@ -283,6 +294,10 @@ class GcodeWriter:
             lines.append("G61" if exact else f"G64 P{self.blend:g}")
             self.exact = exact
         lines.append(f"G1 {text} F{60.0 / t:.3f}")
+        if exact:
+            # LinuxCNC ends a line mid servo cycle and starts the next in the same
+            # cycle; a dwell waits for the motion to end (module docstring)
+            lines.append("G4 P0")
         self.last_q = q
         self.n += 1
 
