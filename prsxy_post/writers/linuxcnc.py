@@ -51,6 +51,10 @@ the next crossing: compass-sets-off-back-F400 ran 0.605 µm off its path. So eve
 line in G61 is followed by ``G4 P0``: a dwell waits for the motion to end
 (``emctaskmain.cc``, ``emcTaskCheckPreconditions``: ``EMC_TRAJ_DELAY_TYPE`` waits
 for motion and I/O), and the next line starts on a sample at the corner (0.064 µm).
+That next line runs in G61 as well: LinuxCNC refills its queue after the dwell while
+the line already runs, and a blend added to a running line left steep-helix's
+path 0.49 µm to one side for the lines after it (0.71 µm off; 0.12 µm with the
+line in G61).
 
 Parabolic blends also run over F: LinuxCNC sets the next line's target speed from
 the speed the line before has lost, scaled by their blend speeds (``tpUpdateBlend``),
@@ -164,6 +168,8 @@ class GcodeWriter:
         self.ended_by: str | None = None
         #: G61 (exact path) is active, for a line ending where the motion stands
         self.exact = False
+        #: the last line written was followed by G4 P0: the next runs in G61 too
+        self.after_settle = False
         #: a block's last point in motion, held until the next point shows how
         #: far LinuxCNC would cut the corner there: (point, its segment's time,
         #: its words)
@@ -182,7 +188,7 @@ class GcodeWriter:
             f"Corners blend within G64 P{self.blend:g} (LinuxCNC's G64 without P would",
             "cut them by any amount); a line that ends where the motion stands, or at",
             "a corner LinuxCNC would blend too far, runs in G61 (exact path) and is",
-            "followed by G4 P0, so that the next line starts where it ends.",
+            "followed by G4 P0, so that the next line (in G61 too) starts where it ends.",
         ]
         if self.all_exact:
             extra[-4:] = [
@@ -290,10 +296,14 @@ class GcodeWriter:
         where ``exact`` (a line ending where the motion stands, or at a corner
         LinuxCNC's blend would cut too far), else in G64 P (module docstring)."""
         exact = exact or self.all_exact
-        if exact != self.exact:
-            lines.append("G61" if exact else f"G64 P{self.blend:g}")
-            self.exact = exact
+        # the first line after a dwell runs in G61 too: LinuxCNC refills its queue
+        # while it runs (module docstring)
+        mode = exact or self.after_settle
+        if mode != self.exact:
+            lines.append("G61" if mode else f"G64 P{self.blend:g}")
+            self.exact = mode
         lines.append(f"G1 {text} F{60.0 / t:.3f}")
+        self.after_settle = exact
         if exact:
             # LinuxCNC ends a line mid servo cycle and starts the next in the same
             # cycle; a dwell waits for the motion to end (module docstring)
