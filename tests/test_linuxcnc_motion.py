@@ -250,7 +250,7 @@ def test_corrected_gcode_on_linuxcnc(seed: int, text: str) -> None:
 def test_g61_every_line_holds_f_on_linuxcnc(seed: int, text: str) -> None:
     """The open programs above with ``[output.gcode] g61_every_line = 1``: LinuxCNC
     blends nothing, so F holds and the path and tool axis stay within the tolerance.
-    The price is time: "stop" takes 8.9 s on LinuxCNC instead of 2.3 s with the
+    The price is time: "stop" takes 10.9 s on LinuxCNC instead of 2.3 s with the
     blends (1.64 s as written; `python bench/linuxcnc_truth.py --g61-everywhere`)."""
     truth = with_gcode_setting(truth_machine("random", seed), "g61_every_line", 1)
     motions, res, texts = convert(truth, text, "gcode")
