@@ -163,7 +163,8 @@ def test_a_sharp_tilt_corner_keeps_to_the_path() -> None:
     """tball-with-a-tilt-F1016's last line turns B by 0.5° over 0.47 mm at F1016
     from lines that hold it. LinuxCNC blended that corner parabolically, A and B
     free of G64 P: 7.3 µm and 24 arcsec off. The line into the corner now runs in
-    G61: 0.47 µm and 0.46 arcsec (measured). Its speed is still open (1.027 x F,
+    G61: 0.47 µm and 0.46 arcsec, and with a G4 P0 after it 0.04 µm and 0.01 arcsec
+    (measured). Its speed is still open (1.027 x F,
     the parabolic blends of the lines before: OPEN below)."""
     truth = truth_machine("random", 21)
     motions, res, texts = convert(truth, TBALL_WITH_A_TILT, "gcode")

@@ -36,11 +36,12 @@ travel turning from d_in to d_out over it at the speed v: the corner is cut by
 alone: its rates, |r_out − r_in| t / 8). On LinuxCNC itself G64 P0.00025 did
 not hold such blends: drill.ngc's corner from a Z rapid into a diagonal one at
 2.1 mm/s was cut by 0.83 µm, and tball-with-a-tilt-F1016's tilt corner by
-24 arcsec (7.3 µm at the tip); with G61 there 0.47 µm and 0.46 arcsec. With the
-written speeds the reckoning bounds the cut from above (drill.ngc's corner:
-10.7 µm; LinuxCNC took it slower than written), so some of these stops are more
-than LinuxCNC needs. Inside a block the rate turns by a step's worth of
-curvature, and the blend cuts the polyline back towards the curve.
+24 arcsec (7.3 µm at the tip); with G61 there 0.47 µm and 0.46 arcsec (0.04 µm
+and 0.01 arcsec with the G4 P0 below). With the written speeds the reckoning
+bounds the cut from above (drill.ngc's corner: 10.7 µm; LinuxCNC took it slower
+than written), so some of these stops are more than LinuxCNC needs. Inside a block
+the rate turns by a step's worth of curvature, and the blend cuts the polyline back
+towards the curve.
 
 A stop in G61 is not where the commands stand still: LinuxCNC ends a line within a
 servo cycle and, in the same cycle, starts the next from rest (``tp.c``,
