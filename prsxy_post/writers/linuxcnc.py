@@ -52,10 +52,10 @@ the next crossing: compass-sets-off-back-F400 ran 0.605 µm off its path. So eve
 line in G61 is followed by ``G4 P0``: a dwell waits for the motion to end
 (``emctaskmain.cc``, ``emcTaskCheckPreconditions``: ``EMC_TRAJ_DELAY_TYPE`` waits
 for motion and I/O), and the next line starts on a sample at the corner (0.064 µm).
-That next line runs in G61 as well: LinuxCNC refills its queue after the dwell while
-the line already runs, and a blend added to a running line left steep-helix's
-path 0.49 µm to one side for the lines after it (0.71 µm off; 0.12 µm with the
-line in G61).
+That next line runs in G61 as well, and so does the program's first: LinuxCNC
+refills its queue after the dwell (or at the start) while the line already runs,
+and a blend added to a running line left steep-helix's path 0.49 µm to one side
+for the lines after it (0.71 µm off; 0.12 µm with the line in G61).
 
 Parabolic blends also run over F: LinuxCNC sets the next line's target speed from
 the speed the line before has lost, scaled by their blend speeds (``tpUpdateBlend``),
@@ -169,8 +169,9 @@ class GcodeWriter:
         self.ended_by: str | None = None
         #: G61 (exact path) is active, for a line ending where the motion stands
         self.exact = False
-        #: the last line written was followed by G4 P0: the next runs in G61 too
-        self.after_settle = False
+        #: the last line written was followed by G4 P0, or none was written yet
+        #: (LinuxCNC's queue starts empty): the next runs in G61 too
+        self.after_settle = True
         #: a block's last point in motion, held until the next point shows how
         #: far LinuxCNC would cut the corner there: (point, its segment's time,
         #: its words)
