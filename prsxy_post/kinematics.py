@@ -68,13 +68,18 @@ def rot_z(a: np.ndarray) -> np.ndarray:
 def platform_rotation(a: np.ndarray, b: np.ndarray, gamma: np.ndarray) -> np.ndarray:
     """R = R_y(B) R_x(A) R_z(γ) (contract), (N, 3, 3); angles in rad.
 
-    The product written out, one array operation per entry instead of three
-    stacked matrices and two products (the FK's Newton builds it every step).
+    The product written out (:func:`_rotation_cs`), one array operation per entry
+    instead of three stacked matrices and two products (the FK's Newton builds it
+    every step).
     """
-    ca, sa = np.cos(a), np.sin(a)
-    cb, sb = np.cos(b), np.sin(b)
-    cg, sg = np.cos(gamma), np.sin(gamma)
-    R = np.empty((*np.shape(a), 3, 3))
+    return _rotation_cs(np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(gamma), np.sin(gamma))
+
+
+def _rotation_cs(
+    ca: np.ndarray, sa: np.ndarray, cb: np.ndarray, sb: np.ndarray, cg: np.ndarray, sg: np.ndarray
+) -> np.ndarray:
+    """R_y(B) R_x(A) R_z(γ) from the angles' cosines and sines, (N, 3, 3)."""
+    R = np.empty((*np.shape(ca), 3, 3))
     R[..., 0, 0] = cb * cg + sb * sa * sg
     R[..., 0, 1] = sb * sa * cg - cb * sg
     R[..., 0, 2] = sb * ca
@@ -280,12 +285,7 @@ class _Solved:
         return cb * x + sb * z2, y2, -sb * x + cb * z2
 
     def pose(self) -> PlatformPose:
-        R = _rot_yx_cs(self.ca, self.sa, self.cb, self.sb)
-        Rab0, Rab1 = R[:, :, 0].copy(), R[:, :, 1].copy()
-        cg, sg = self.cg[:, None], self.sg[:, None]
-        # R = Rab Rz(γ): Rz mixes the first two columns only
-        R[:, :, 0] = Rab0 * cg + Rab1 * sg
-        R[:, :, 1] = Rab1 * cg - Rab0 * sg
+        R = _rotation_cs(self.ca, self.sa, self.cb, self.sb, self.cg, self.sg)
         return PlatformPose(self.c, self.gamma, R)
 
 
@@ -338,15 +338,6 @@ def _solve(geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float 
         [r_legs[:, 0] * m[0] + r_legs[:, 1] * m[1] + r_legs[:, 2] * m[2] + r_z * m[3] for m in Mp]
     )  # c = M⁺ r
     return _Solved(ca, sa, cb, sb, cg, sg, gamma, c, t)
-
-
-def _rot_yx_cs(ca: np.ndarray, sa: np.ndarray, cb: np.ndarray, sb: np.ndarray) -> np.ndarray:
-    """Ry(b) Rx(a) from cosines and sines, shape (N, 3, 3)."""
-    R = np.empty((len(ca), 3, 3))
-    R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = cb, sb * sa, sb * ca
-    R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = 0.0, ca, -sa
-    R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = -sb, cb * sa, cb * ca
-    return R
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
