@@ -183,20 +183,25 @@ class GcodeWriter:
             if self.profile.controller_kinematics
             else "the nominal design"
         )
+        modes = (
+            [
+                "Every line runs in G61 (exact path, g61_every_line), followed by G4 P0:",
+                "a stop at every point, no blend.",
+            ]
+            if self.all_exact
+            else [
+                f"Corners blend within G64 P{self.blend:g} (LinuxCNC's G64 without P would",
+                "cut them by any amount); a line that ends where the motion stands, or at",
+                "a corner LinuxCNC would blend too far, runs in G61 (exact path) and is",
+                "followed by G4 P0, so that the next line (in G61 too) starts where it ends.",
+            ]
+        )
         extra = [
             f"For a controller whose inverse kinematics is {ck}, with an ideal table.",
             "Run with no tool length offset (G49) and no work offset: tool lengths and",
             "offsets are in the points. Timing is G93 inverse time per segment.",
-            f"Corners blend within G64 P{self.blend:g} (LinuxCNC's G64 without P would",
-            "cut them by any amount); a line that ends where the motion stands, or at",
-            "a corner LinuxCNC would blend too far, runs in G61 (exact path) and is",
-            "followed by G4 P0, so that the next line (in G61 too) starts where it ends.",
+            *modes,
         ]
-        if self.all_exact:
-            extra[-4:] = [
-                "Every line runs in G61 (exact path, g61_every_line), followed by G4 P0:",
-                "a stop at every point, no blend.",
-            ]
         lines = ["%"] + [
             "(" + x.replace("(", "[").replace(")", "]") + ")"
             for x in header(self.prov, self.profile, extra)
