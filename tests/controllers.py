@@ -14,6 +14,16 @@ Turbo PMAC (Software Reference, Program Command Specification):
   part, where the machine already is).
 - Letters G, M, T, D, S outside a move line are machine functions (no motion).
 - ``;`` starts a comment.
+- The trajectory generator computes each motor's commanded position once every
+  servo cycle ("a Turbo PMAC program exists to pass data to the trajectory
+  generator routines that compute the series of commanded positions for the motors
+  every servo cycle", User Manual, How Turbo PMAC Executes a Motion Program); I10
+  gives it the time it advances each servo interrupt (Software Reference, I10), and
+  the default servo cycle is 442 µs (Software Reference, Isx94's note). A motor is
+  commanded only at those instants: :func:`run_pmac` with ``servo_ms`` samples the
+  cubics there, the clock starting with each move from rest (after a DWELL, or the
+  program's start), and a motor brought to rest holds its end position for the
+  next servo cycle, so that position is commanded too.
 
 LinuxCNC (G-code): a G1 moves along a straight line in the controller's Cartesian
 space, which its kinematics turn into joint commands; corners blend within the
@@ -75,8 +85,27 @@ def hermite(
     return h00 * P0 + h10 * h * V0 + h01 * P1 + h11 * h * V1
 
 
-def run_pmac(texts: list[str], substeps: int = 16) -> PmacRun:
-    """Execute PMAC program text(s), run one after the other, as the controller does."""
+#: Turbo PMAC's default servo cycle [ms] (module docstring)
+SERVO_MS = 0.442
+
+
+def _servo_fractions(t0: float, h: float, origin: float, servo_s: float) -> np.ndarray:
+    """The fractions of a segment [t0, t0 + h] at which the servo clock that ticks
+    at ``origin + k * servo_s`` falls, the segment's start excluded, its end included."""
+    eps = 1e-9 * servo_s  # a tick on the segment's end counts (sums of floats)
+    k0 = int(np.floor((t0 - origin + eps) / servo_s)) + 1
+    k1 = int(np.floor((t0 + h - origin + eps) / servo_s))
+    ticks = origin + servo_s * np.arange(k0, k1 + 1)
+    return np.clip((ticks - t0) / h, 0.0, 1.0)
+
+
+def run_pmac(texts: list[str], substeps: int = 16, servo_ms: float | None = None) -> PmacRun:
+    """Execute PMAC program text(s), run one after the other, as the controller does.
+
+    The motion between the points is sampled ``substeps`` times a segment, evenly,
+    or, with ``servo_ms``, at the servo clock as the controller commands it (module
+    docstring).
+    """
     P: list[np.ndarray] = []
     V: list[np.ndarray] = []
     t: list[float] = []
@@ -91,6 +120,16 @@ def run_pmac(texts: list[str], substeps: int = 16) -> PmacRun:
     parts = 0
     at_rest = True
     s = np.linspace(0.0, 1.0, substeps + 1)[1:]
+    servo_s = None if servo_ms is None else servo_ms / 1000.0
+    origin = 0.0  # where the servo clock started ticking for the moves
+
+    def hold() -> None:
+        """A motor brought to rest is commanded its end position at the next tick."""
+        if servo_s is not None and dense_t and dense_t[-1][-1:].tolist() != [t[-1]]:
+            dense_t.append(np.array([t[-1]]))
+            dense_P.append(P[-1][None, :].copy())
+            dense_seg.append(np.array([len(P) - 1]))
+
     for text in texts:
         for raw in text.splitlines():
             code = raw.split(";", 1)[0].strip()
@@ -119,6 +158,7 @@ def run_pmac(texts: list[str], substeps: int = 16) -> PmacRun:
             if code.startswith("DWELL"):
                 assert not np.any(V[-1]) or at_rest, "a DWELL after a point with velocity"
                 ms = float(code[5:])
+                hold()
                 if ms > 0:
                     dwells.append((len(P), ms))
                     h = ms / 1000.0
@@ -140,9 +180,14 @@ def run_pmac(texts: list[str], substeps: int = 16) -> PmacRun:
                 v1 = np.array([d[a][1] for a in AXES])
                 v0 = np.zeros(5) if at_rest else V[-1]
                 h = seg_ms / 1000.0
-                dense_t.append(t[-1] + s * h)
-                dense_P.append(hermite(P[-1], v0, p1, v1, h, s))
-                dense_seg.append(np.full(len(s), len(P)))
+                f = s
+                if servo_s is not None:
+                    if at_rest:  # the clock of a move from rest starts with it
+                        origin = t[-1]
+                    f = _servo_fractions(t[-1], h, origin, servo_s)
+                dense_t.append(t[-1] + f * h)
+                dense_P.append(hermite(P[-1], v0, p1, v1, h, f))
+                dense_seg.append(np.full(len(f), len(P)))
                 P.append(p1)
                 V.append(v1)
                 t.append(t[-1] + h)
@@ -154,6 +199,7 @@ def run_pmac(texts: list[str], substeps: int = 16) -> PmacRun:
                 functions.append((len(P) - 1, code))
                 continue
             # setup lines: CLOSE, &n, #n->..., ABS, OPEN ROT, DEFINE ..., B0, DELETE ...
+    hold()  # the program's end
     # the run begins at the start point: the play model starts there (approached
     # from below, the contract says), not at the first sample of the first segment
     return PmacRun(
