@@ -9,10 +9,15 @@ kinematics) and held against the G-code's geometry (tests/controllers.py, the
 same code the tests use).
 
     python bench/controller_truth.py            # the table, Markdown
+    python bench/controller_truth.py --servo-ms 0.442 0.884 --found
+        # PMAC at the servo clock (Turbo PMAC commands each cubic at its ticks
+        # only; 0.442 ms is its default cycle): the samples and the programs the
+        # search found (tests/test_controller_truth.py FOUND), a column per cycle
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -47,12 +52,14 @@ def at_points(motions, q: np.ndarray, line: np.ndarray) -> float:
     return worst
 
 
-def measure(path: Path, fmt: str, kind: str, seed: int | None) -> dict[str, float]:
+def measure(
+    text: str, fmt: str, kind: str, seed: int | None, servo_ms: float | None = None
+) -> dict[str, float]:
     truth = truth_machine(kind, seed)
-    motions, res, texts = convert(truth, path.read_text(), fmt)
+    motions, res, texts = convert(truth, text, fmt)
     rapid = truth.limits.rapid_mm_min
     if fmt == "pmac":
-        run = ctl.run_pmac(texts)
+        run = ctl.run_pmac(texts, servo_ms=servo_ms)
         tool = _tool_of_segments(res, run.line, run.seg)
         q = ctl.machine_executes(truth, run.t_dense, run.P_dense, tool)
         tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, rapid)
@@ -79,7 +86,43 @@ def measure(path: Path, fmt: str, kind: str, seed: int | None) -> dict[str, floa
     }
 
 
+def servo_table(periods: list[float], found: bool) -> None:
+    """PMAC at the servo clock: worst path µm / tool axis arcsec / speed over F, per
+    cycle, over the four machines for a sample, on its machine for a found program."""
+    cases: list[tuple[str, list[tuple[str, int | None]], str]] = [
+        (p.name, MACHINES, p.read_text()) for p in sorted((ROOT / "samples").glob("*.ngc"))
+    ]
+    if found:
+        from tests.test_controller_truth import FOUND, FOUND_IDS
+
+        cases += [(n, [("random", sd)], t) for n, (sd, t) in zip(FOUND_IDS, FOUND, strict=True)]
+    heads = ["even 16 a segment"] + [f"servo {ms:g} ms" for ms in periods]
+    print("| program | " + " | ".join(heads) + " |")
+    print("|---|" + "---:|" * len(heads))
+    worst = [[0.0, 0.0, 0.0] for _ in heads]
+    for name, machines, text in cases:
+        cells = []
+        for k, ms in enumerate([None, *periods]):
+            rows = [measure(text, "pmac", kind, sd, ms) for kind, sd in machines]
+            w = [max(r[key] for r in rows) for key in ("path_um", "ab_arcsec", "speed")]
+            worst[k] = [max(a, b) for a, b in zip(worst[k], w, strict=True)]
+            cells.append(f"{w[0]:.3f} µm / {w[1]:.2f}″ / {w[2]:.4f}")
+        print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+    print(
+        "| largest | "
+        + " | ".join(f"{w[0]:.3f} µm / {w[1]:.2f}″ / {w[2]:.4f}" for w in worst)
+        + " |"
+    )
+
+
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--servo-ms", type=float, nargs="+", help="PMAC at these servo cycles")
+    ap.add_argument("--found", action="store_true", help="with --servo-ms: the found programs too")
+    args = ap.parse_args()
+    if args.servo_ms:
+        servo_table(args.servo_ms, args.found)
+        return
     print(
         "| program | format | largest path error between points µm (nominal / random 11, "
         "12, 13) | at the points µm | tool axis arcsec | speed / F |"
@@ -87,7 +130,7 @@ def main() -> None:
     print("|---|---|---|---:|---:|---:|")
     for path in sorted((ROOT / "samples").glob("*.ngc")):
         for fmt in ("pmac", "gcode"):
-            rows = [measure(path, fmt, k, s) for k, s in MACHINES]
+            rows = [measure(path.read_text(), fmt, k, s) for k, s in MACHINES]
             between = " / ".join(f"{r['path_um']:.3f}" for r in rows)
             extra = f" + G64 P {rows[0]['blend_um']:.2f}" if fmt == "gcode" else ""
             print(
