@@ -124,7 +124,8 @@ def run_pmac(texts: list[str], substeps: int = 16, servo_ms: float | None = None
     origin = 0.0  # where the servo clock started ticking for the moves
 
     def hold() -> None:
-        """A motor brought to rest is commanded its end position at the next tick."""
+        """A motor brought to rest holds its end position from the next tick on: that
+        position is commanded (sampled here at the move's end)."""
         if servo_s is not None and dense_t and dense_t[-1][-1:].tolist() != [t[-1]]:
             dense_t.append(np.array([t[-1]]))
             dense_P.append(P[-1][None, :].copy())
