@@ -98,6 +98,24 @@ def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str
     assert sum(pts.speed[k] == 0.0 for k in written) >= 2
 
 
+def test_the_program_s_first_g1_runs_in_exact_path_mode() -> None:
+    """LinuxCNC's queue starts empty, as after a ``G4 P0``: the program's first G1 is
+    read under G61 even where it ends in motion, and the line after it is not. On a
+    machine without play the first G1 is the first step of the program's rapid (with
+    play it is the crossing that sets each part at the start, which stands anyway)."""
+    truth = truth_machine("random", 12, play=False)
+    text = "G21 G90 G17 G94\nG0 X-20 Y-10 Z0\nG1 X20 F1200\nG1 Y10\nG0 Z5\nM2\n"
+    _, res, texts = convert(truth, text, "gcode")
+    moves, exact, settled = _moves_and_modes(texts[0])
+    pts = res.points
+    written = [k for k in range(len(pts)) if pts.fn[k] is None]
+    first = next(i for i, m in enumerate(moves) if m.startswith("G1 "))
+    assert pts.speed[written[first]] > 0.0, "the first G1 stands: this cannot tell the rule"
+    assert not settled[first]
+    assert exact[first], "the first G1 is not read under G61"
+    assert moves[first + 1].startswith("G1 ") and not exact[first + 1]
+
+
 def test_a_sharp_tilt_corner_in_motion_runs_in_exact_path_mode() -> None:
     """tball-with-a-tilt-F1016's last line turns B by 0.5° over 0.47 mm at F1016,
     from lines that hold it: the line into that corner is read under G61, and the
