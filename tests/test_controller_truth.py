@@ -1187,6 +1187,8 @@ def test_split_parts_end_at_rest_and_run_as_one_program(seed: int | None) -> Non
     # the path as one program does
     tr = judge_pmac(truth, motions, res, texts)
     assert_within(tr, None if seed else truth.limits.max_accel_mm_s2)
+    # and at the servo clock, which starts again with each part's first move
+    assert_within(judge_pmac(truth, motions, res, texts, servo_ms=ctl.SERVO_MS), None)
     ends = [re.search(r"; end of part \d+: at rest after line (\d+), (.*)", t) for t in texts[:-1]]
     assert all(ends), "every part but the last says where and why it ends"
 
