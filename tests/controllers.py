@@ -3,7 +3,10 @@
 Turbo PMAC (Software Reference, Program Command Specification):
 
 - ``PVT{data}`` puts the program in PVT mode with a segment time of {data} ms;
-  it is modal until the next PVT (or TM) command.
+  it is modal until the next PVT (or TM) command. With I42 = 0 the time is kept
+  as 12 integer and 12 fractional bits of a ms (User Manual, "PVT-Mode Moves"), so
+  only whole 1/4096 ms run as written: :func:`run_pmac` refuses a time between two
+  (whether the controller would round or truncate it the manual does not say).
 - In PVT mode a move line gives each axis ``{pos}:{vel}``; "taking the starting
   position and velocity (from the previous segment), the ending position and
   velocity, and the segment time, Turbo PMAC computes the unique cubic position
@@ -155,6 +158,7 @@ def run_pmac(texts: list[str], substeps: int = 16, servo_ms: float | None = None
                 continue
             if code.startswith("PVT"):
                 seg_ms = float(code[3:])
+                assert (seg_ms * 4096).is_integer(), f"{code}: off the 1/4096 ms grid"
                 continue
             if code.startswith("DWELL"):
                 assert not np.any(V[-1]) or at_rest, "a DWELL after a point with velocity"

@@ -12,8 +12,8 @@ against the G-code's own geometry:
 - never faster than F (or the rapid rate) beyond the rounding of the written
   numbers (0.1 %: seven decimals of a mm, the PMAC default, move a motor by up to
   0.1 nm between two points, 1.5 x that over a cubic's middle: 0.06 % at F60 over
-  the shortest segment, a quarter of a millisecond; velocities to 1e-4 mm/s and
-  PVT times to 1e-4 ms add less);
+  the shortest segment, a quarter of a millisecond; velocities to 1e-4 mm/s add
+  less, and PVT times are written in the controller's own 1/4096 ms, rounded up);
 - within the acceleration limit, on the commanded motion: the contract's play
   model takes a part up with a jolt wherever a motor meets it moving, which no
   command can smooth away entirely.

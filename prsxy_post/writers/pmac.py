@@ -32,6 +32,13 @@ if TYPE_CHECKING:
 #: "PVT{data}": with I42 = 0 the segment time is 0 to 4095.9998 ms (Software
 #: Reference, PVT{data}); a longer stay is a DWELL.
 PVT_MAX_MS = 4095.9998
+#: With I42 = 0 Turbo PMAC keeps a PVT time as a 24-bit value, 12 bits of integer
+#: and 12 of fraction of a ms (User Manual, "PVT-Mode Moves"): it runs whole
+#: 1/4096 ms. The manual does not say whether it rounds or truncates a time between
+#: two (truncated, led-floor-tiny-arc-as-lines' 0.2 ms segments ran 1.0017 x F), so
+#: times are written as whole quanta, each rounded up (never faster than planned):
+#: the controller runs exactly the written time.
+PVT_QUANTA_PER_MS = 4096
 #: DWELL{data}: 0 to 8,388,607 ms (Software Reference, DWELL{data}); longer dwells
 #: are written as several.
 DWELL_MAX_MS = 8_388_607.0
@@ -80,6 +87,17 @@ SETTINGS = {
 }
 
 
+def pvt_ms_text(quanta: int) -> str:
+    """A PVT time of ``quanta`` / 4096 ms, exactly, as decimal text with at least four
+    decimals: 40960 → ``10.0000``, 1000 → ``0.244140625``.
+
+    A whole number of 2^-12 has at most twelve decimals, and its double is exact.
+    """
+    text = f"{quanta / PVT_QUANTA_PER_MS:.12f}".rstrip("0")
+    whole, frac = text.split(".")
+    return f"{whole}.{frac:0<4}"
+
+
 class PmacWriter:
     """A Turbo PMAC PVT motion program, streamed (module docstring)."""
 
@@ -95,7 +113,8 @@ class PmacWriter:
         self.part = 0
         self.n = 0  # points written in all
         self.t_total = 0.0
-        self.tm_cur: str | None = None
+        #: the PVT time in force [1/4096 ms]
+        self.tm_cur: int | None = None
         self.last_line: int | None = None
         self.last_P: np.ndarray | None = None
         self.open = False
@@ -107,7 +126,9 @@ class PmacWriter:
         motors = " ".join(str(m) for m in MOTORS)
         return [
             "Controller settings (Turbo PMAC Software Reference, I-variables):",
-            "  I42=0: PVT times in ms with fractions, 0-4095.9998 ms (I42; PVT{data})",
+            "  I42=0: PVT times in ms with fractions, 0-4095.9998 ms (I42; PVT{data});",
+            "    written in whole 1/4096 ms, the steps it keeps them in, so it runs them",
+            "    exactly",
             f"  I{50 + self.cs}90=1000 (Isx90 of &{self.cs}): velocities in mm/s (time units",
             "    of 1000 ms);",
             "    positions in mm (the axis definitions below: counts per mm)",
@@ -207,7 +228,9 @@ class PmacWriter:
         prev = np.vstack([self.last_P[None, :] if self.last_P is not None else P[:1], P[:-1]])
         # the path and the motors stand (a dwell, a function): no PVT segment
         still = np.all(P == prev, axis=1) & chunk.dwell
-        ms = format_fixed_rows([("", chunk.dt * 1000.0, 4)])  # "%.4f\n" each
+        # the segment times in PMAC's quanta, rounded up; 1e-6 of one for the
+        # rounding of dt itself (10 ms is 40960 quanta, not 40961)
+        quanta = np.ceil(chunk.dt * (1000.0 * PVT_QUANTA_PER_MS) - 1e-6).astype(np.int64)
         pieces: list[Piece] = []
         out: list[str] = []
         k = 0
@@ -225,7 +248,7 @@ class PmacWriter:
             splits = np.flatnonzero(chunk.split[k:] > 0) if not self.rot else np.zeros(0, int)
             if splits.size:
                 stop = k + int(splits[0]) + 1
-            out.append(self._segment(chunk, rows, ms, still, k, stop))
+            out.append(self._segment(chunk, rows, quanta, still, k, stop))
             self.n += stop - k
             k = stop
             if splits.size:
@@ -255,7 +278,7 @@ class PmacWriter:
         self,
         pts: PointChunk,
         rows: list[str],
-        ms: list[str],
+        quanta: np.ndarray,
         still: np.ndarray,
         k0: int,
         k1: int,
@@ -267,24 +290,26 @@ class PmacWriter:
             return ""
         m = k1 - k0
         line = pts.line[k0:k1]
-        # one running sum in order (accumulate is sequential, unlike sum): the same
-        # bits however the program was chunked
-        self.t_total = float(np.add.accumulate(np.concatenate([[self.t_total], pts.dt[k0:k1]]))[-1])
+        stand = still[k0:k1]
+        # the time as written: the PVT quanta, the dwells' own; one running sum in
+        # order (accumulate is sequential, unlike sum): the same bits however the
+        # program was chunked
+        dt = np.where(stand, pts.dt[k0:k1], quanta[k0:k1] / (1000.0 * PVT_QUANTA_PER_MS))
+        self.t_total = float(np.add.accumulate(np.concatenate([[self.t_total], dt]))[-1])
         text = np.empty((m, 3), dtype=object)
         text[:] = ""
         prev_line = np.concatenate([[-1 if self.last_line is None else self.last_line], line[:-1]])
         changed = np.flatnonzero(line != prev_line)
         text[changed, 0] = [f"; line {ln}\n" for ln in line[changed].tolist()]
         self.last_line = int(line[-1])
-        stand = still[k0:k1]
         fn = pts.fn[k0:k1]
         moving = np.flatnonzero(~stand)
         if moving.size:
-            mv = [ms[k0 + i] for i in moving.tolist()]
-            before = [self.tm_cur, *mv[:-1]]
-            new = [i for i, a, b in zip(moving.tolist(), mv, before, strict=True) if a != b]
-            text[new, 1] = ["PVT" + ms[k0 + i] for i in new]
-            self.tm_cur = mv[-1]
+            mv = quanta[k0 + moving]
+            before = np.concatenate([[-1 if self.tm_cur is None else self.tm_cur], mv[:-1]])
+            new = np.flatnonzero(mv != before)
+            text[moving[new], 1] = [f"PVT{pvt_ms_text(q)}\n" for q in mv[new].tolist()]
+            self.tm_cur = int(mv[-1])
         text[:, 2] = rows[k0:k1]
         for i in np.flatnonzero(stand).tolist():
             words = fn[i]
