@@ -1118,9 +1118,9 @@ def test_found_programs_at_the_servo_clock_stay_on_the_path(seed: int, text: str
 
 
 #: Found programs faster than F at the servo clock (strict xfails), measured at
-#: 0.442 ms: enclosure-arc-with-a-tilt 1.0016 x, enclosure-arc-into-a-line 1.0030 x,
-#: led-floor-arc-reverses-at-a-step-end 1.0026 x, led-floor-tilted-fillet 1.0037 x
-#: (0.06 mm/s over F1000), vcarve 1.0022 x. A part left short at a turn is met
+#: 0.442 ms: enclosure-arc-with-a-tilt 1.0015 x, enclosure-arc-into-a-line 1.0028 x,
+#: led-floor-arc-reverses-at-a-step-end 1.0038 x (0.06 mm/s over F1000),
+#: led-floor-tilted-fillet 1.0033 x, vcarve 1.0023 x. A part left short at a turn is met
 #: sooner by its motor on the other side of its play, while the crossing, planned
 #: on the continuous cubics, still runs fast; the planner does not know the servo
 #: clock's phase (the windows would have to begin at a tick).
