@@ -1290,6 +1290,8 @@ def test_header_states_the_controller_settings() -> None:
     # Turbo PMAC numbers coordinate system s's I-variables Isxx as I(50+s)xx: &1 I51xx
     for needed in ("I42=0", "I5190=1000", "I5150=0", "I51=0", "Mxx69", "DELETE COMP", "Ixx86=0"):
         assert needed in head, needed
+    # the servo cycle the tests run the cubics at (tests.controllers.SERVO_MS)
+    assert f"I10: a servo cycle of {ctl.SERVO_MS * 1000:.0f} us or shorter" in head
     assert "path tolerance 0.0005 mm" in head
     assert "Ixx51" not in head  # no such setting: tables are switched by the global I51
 
