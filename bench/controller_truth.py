@@ -13,6 +13,9 @@ same code the tests use).
         # PMAC at the servo clock (Turbo PMAC commands each cubic at its ticks
         # only; 0.442 ms is its default cycle): the samples and the programs the
         # search found (tests/test_controller_truth.py FOUND), a column per cycle
+    python bench/controller_truth.py --servo-ms 0.442 --found --phases 4
+        # each cell the worst over the clock's ticks moved by 0, 1/4, 1/2, 3/4 of a
+        # cycle: how much a figure owes to where the ticks fall
 """
 
 from __future__ import annotations
@@ -53,16 +56,31 @@ def at_points(motions, q: np.ndarray, line: np.ndarray) -> float:
 
 
 def measure(
-    text: str, fmt: str, kind: str, seed: int | None, servo_ms: float | None = None
+    text: str,
+    fmt: str,
+    kind: str,
+    seed: int | None,
+    servo_ms: float | None = None,
+    phases: int = 1,
 ) -> dict[str, float]:
     truth = truth_machine(kind, seed)
     motions, res, texts = convert(truth, text, fmt)
     rapid = truth.limits.rapid_mm_min
     if fmt == "pmac":
-        run = ctl.run_pmac(texts, servo_ms=servo_ms)
-        tool = _tool_of_segments(res, run.line, run.seg)
-        q = ctl.machine_executes(truth, run.t_dense, run.P_dense, tool)
-        tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, rapid)
+        trs = []
+        for k in range(phases if servo_ms else 1):
+            run = ctl.run_pmac(texts, servo_ms=servo_ms, servo_phase=k / phases)
+            tool = _tool_of_segments(res, run.line, run.seg)
+            q = ctl.machine_executes(truth, run.t_dense, run.P_dense, tool)
+            trs.append(ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, rapid))
+        # the worst of each figure over the phases
+        tr = ctl.Trace(
+            max(x.path_mm for x in trs),
+            max(x.ab_deg for x in trs),
+            max(x.speed_ratio for x in trs),
+            max(x.accel_mm_s2 for x in trs),
+            max(trs, key=lambda x: x.path_mm).worst_line,
+        )
         pts = ctl.machine_executes(truth, run.t, run.P, _tool_of_lines(res, run.line))
         point = at_points(motions, pts, run.line)
         blend = 0.0
@@ -86,9 +104,10 @@ def measure(
     }
 
 
-def servo_table(periods: list[float], found: bool) -> None:
+def servo_table(periods: list[float], found: bool, phases: int) -> None:
     """PMAC at the servo clock: worst path µm / tool axis arcsec / speed over F, per
-    cycle, over the four machines for a sample, on its machine for a found program."""
+    cycle, over the four machines for a sample, on its machine for a found program,
+    over ``phases`` positions of the ticks."""
     cases: list[tuple[str, list[tuple[str, int | None]], str]] = [
         (p.name, MACHINES, p.read_text()) for p in sorted((ROOT / "samples").glob("*.ngc"))
     ]
@@ -103,7 +122,7 @@ def servo_table(periods: list[float], found: bool) -> None:
     for name, machines, text in cases:
         cells = []
         for k, ms in enumerate([None, *periods]):
-            rows = [measure(text, "pmac", kind, sd, ms) for kind, sd in machines]
+            rows = [measure(text, "pmac", kind, sd, ms, phases) for kind, sd in machines]
             w = [max(r[key] for r in rows) for key in ("path_um", "ab_arcsec", "speed")]
             worst[k] = [max(a, b) for a, b in zip(worst[k], w, strict=True)]
             cells.append(f"{w[0]:.3f} µm / {w[1]:.2f}″ / {w[2]:.4f}")
@@ -119,9 +138,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--servo-ms", type=float, nargs="+", help="PMAC at these servo cycles")
     ap.add_argument("--found", action="store_true", help="with --servo-ms: the found programs too")
+    ap.add_argument(
+        "--phases",
+        type=int,
+        default=1,
+        help="with --servo-ms: the worst over this many tick phases",
+    )
     args = ap.parse_args()
     if args.servo_ms:
-        servo_table(args.servo_ms, args.found)
+        servo_table(args.servo_ms, args.found, args.phases)
         return
     print(
         "| program | format | largest path error between points µm (nominal / random 11, "

@@ -102,12 +102,15 @@ def _servo_fractions(t0: float, h: float, origin: float, servo_s: float) -> np.n
     return np.clip((ticks - t0) / h, 0.0, 1.0)
 
 
-def run_pmac(texts: list[str], substeps: int = 16, servo_ms: float | None = None) -> PmacRun:
+def run_pmac(
+    texts: list[str], substeps: int = 16, servo_ms: float | None = None, servo_phase: float = 0.0
+) -> PmacRun:
     """Execute PMAC program text(s), run one after the other, as the controller does.
 
     The motion between the points is sampled ``substeps`` times a segment, evenly,
     or, with ``servo_ms``, at the servo clock as the controller commands it (module
-    docstring).
+    docstring). ``servo_phase`` (a share of a cycle) moves the ticks later than the
+    controller's, for measuring how much a result owes to where they fall.
     """
     P: list[np.ndarray] = []
     V: list[np.ndarray] = []
@@ -188,7 +191,7 @@ def run_pmac(texts: list[str], substeps: int = 16, servo_ms: float | None = None
                 f = s
                 if servo_s is not None:
                     if at_rest:  # the clock of a move from rest starts with it
-                        origin = t[-1]
+                        origin = t[-1] + servo_phase * servo_s
                     f = _servo_fractions(t[-1], h, origin, servo_s)
                 dense_t.append(t[-1] + f * h)
                 dense_P.append(hermite(P[-1], v0, p1, v1, h, f))
