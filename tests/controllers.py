@@ -132,7 +132,12 @@ def run_pmac(
     def hold() -> None:
         """A motor brought to rest holds its end position from the next tick on: that
         position is commanded (sampled here at the move's end)."""
-        if servo_s is not None and dense_t and dense_t[-1][-1:].tolist() != [t[-1]]:
+        if servo_s is None or not dense_t:
+            return
+        last = next((float(a[-1]) for a in reversed(dense_t) if len(a)), None)
+        # not where a tick fell on the end already (within the sums' rounding: a
+        # sample a femtosecond away would make a speed of nothing over nothing)
+        if last is None or t[-1] - last > 1e-9:
             dense_t.append(np.array([t[-1]]))
             dense_P.append(P[-1][None, :].copy())
             dense_seg.append(np.array([len(P) - 1]))
