@@ -1111,6 +1111,16 @@ def test_pvt_at_the_servo_clock_stays_on_the_path(kind: str, seed: int | None, p
     assert_within(_servo_trace(kind, seed, path.read_text()), None)
 
 
+@CORNER_SEARCH
+@given(programs())
+def test_any_corner_any_speed_at_the_servo_clock_stays_on_the_path(text: str) -> None:
+    """The corner search's programs on machine 21 (backlash in every motor), at the
+    servo clock: path and tool axis."""
+    truth = truth_machine("random", 21)
+    motions, res, texts = convert(truth, text)
+    assert_on_the_path(judge_pmac(truth, motions, res, texts, servo_ms=ctl.SERVO_MS))
+
+
 @pytest.mark.parametrize(("seed", "text"), _found(set(), ""))
 def test_found_programs_at_the_servo_clock_stay_on_the_path(seed: int, text: str) -> None:
     """Path and tool axis at the servo clock, the search's programs (FOUND)."""
