@@ -32,7 +32,7 @@ from tests import controllers as ctl  # noqa: E402
 from tests import linuxcnc_motion as lm  # noqa: E402
 from tests.test_controller_truth import FOUND, FOUND_IDS, judge_gcode  # noqa: E402
 from tests.test_linuxcnc_motion import _peak_speed, _plunge, run_on_linuxcnc  # noqa: E402
-from tests.test_tracking import convert, truth_machine, with_gcode_setting  # noqa: E402
+from tests.test_tracking import convert, truth_machine, with_output_setting  # noqa: E402
 
 
 def blends() -> None:
@@ -86,7 +86,7 @@ def main() -> None:
     for name, seed, text in jobs:
         truth = truth_machine("random", seed, play=not args.no_play)
         if args.g61_everywhere:
-            truth = with_gcode_setting(truth, "g61_every_line", 1)
+            truth = with_output_setting(truth, "gcode", "g61_every_line", 1)
         motions, res, texts = convert(truth, text, "gcode")
         written = ctl.run_gcode(texts[0])
         if written.t[-1] > args.longest:

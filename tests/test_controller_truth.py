@@ -50,6 +50,7 @@ from .test_tracking import (
     _tool_of_segments,
     convert,
     truth_machine,
+    with_output_setting,
 )
 
 SAMPLES = sorted((ROOT / "samples").glob("*.ngc"))
@@ -1210,11 +1211,7 @@ def test_the_velocity_at_each_point_is_the_plan_s_on_both_sides() -> None:
 
 
 def _split_profile(truth, max_points: int):
-    from prsxy_post.profile import profile_from_dict
-
-    doc = dict(truth.raw)
-    doc["output"] = {"pmac": {"max_points_per_program": max_points}}
-    return profile_from_dict(doc, "<split>")
+    return with_output_setting(truth, "pmac", "max_points_per_program", max_points)
 
 
 @pytest.mark.parametrize("seed", [None, 11])
@@ -1268,12 +1265,7 @@ def test_rotary_buffer_is_sized_in_words_and_set_up_in_order() -> None:
     word"; no data-gathering buffer may exist (DELETE GATHER first); B0 points the
     coordinate system at the buffer and "cannot be given while the rotary buffers are
     open" (Software Reference, OPEN ROTARY)."""
-    from prsxy_post.profile import profile_from_dict
-
-    base = truth_machine("nominal", None)
-    doc = dict(base.raw)
-    doc["output"] = {"pmac": {"rotary_buffer_points": 200}}
-    truth = profile_from_dict(doc, "<rot>")
+    truth = with_output_setting(truth_machine("nominal", None), "pmac", "rotary_buffer_points", 200)
     motions, res, texts = convert(truth, (ROOT / "samples" / "pocket.ngc").read_text())
     assert len(texts) == 1
     code = [ln.split(";")[0].strip() for ln in texts[0].splitlines()]

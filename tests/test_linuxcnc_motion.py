@@ -56,7 +56,7 @@ from .test_tracking import (
     _tool_of_segments,
     convert,
     truth_machine,
-    with_gcode_setting,
+    with_output_setting,
 )
 
 #: samples per servo cycle, the drive following its command linearly between them
@@ -253,7 +253,7 @@ def test_g61_every_line_holds_f_on_linuxcnc(seed: int, text: str) -> None:
     blends nothing, so F holds and the path and tool axis stay within the tolerance.
     The price is time: "stop" takes 10.9 s on LinuxCNC instead of 2.3 s with the
     blends (1.64 s as written; `python bench/linuxcnc_truth.py --g61-everywhere`)."""
-    truth = with_gcode_setting(truth_machine("random", seed), "g61_every_line", 1)
+    truth = with_output_setting(truth_machine("random", seed), "gcode", "g61_every_line", 1)
     motions, res, texts = convert(truth, text, "gcode")
     tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
     assert_within(tr, None, TOL_MM)

@@ -355,10 +355,12 @@ def truth_machine(kind: str, seed: int | None, *, play: bool = True) -> profile_
     )
 
 
-def with_gcode_setting(profile: profile_mod.Profile, key: str, value: Any) -> profile_mod.Profile:
-    """The profile with ``[output.gcode] key = value``, validated as a profile file is."""
+def with_output_setting(
+    profile: profile_mod.Profile, dialect: str, key: str, value: Any
+) -> profile_mod.Profile:
+    """The profile with ``[output.<dialect>] key = value``, validated as a profile file is."""
     output = dict(profile.raw.get("output", {}))
-    output["gcode"] = {**output.get("gcode", {}), key: value}
+    output[dialect] = {**output.get(dialect, {}), key: value}
     return profile_mod.profile_from_dict(dict(profile.raw, output=output))
 
 

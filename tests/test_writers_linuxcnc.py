@@ -18,7 +18,7 @@ from prsxy_post.writers.linuxcnc import corner_cut
 
 from .conftest import ROOT
 from .test_controller_truth import TBALL_WITH_A_TILT, XY_CORNER_AT_F60
-from .test_tracking import convert, truth_machine, with_gcode_setting
+from .test_tracking import convert, truth_machine, with_output_setting
 
 PROGRAMS = [
     ("xy-corner-F60", XY_CORNER_AT_F60),
@@ -160,7 +160,7 @@ def test_g61_every_line_writes_the_same_moves_all_in_exact_path(name: str, text:
     read under G61, and no G64 in the program (so LinuxCNC blends nothing)."""
     truth = truth_machine("random", 12)
     _, _, default = convert(truth, text, "gcode")
-    _, _, exact = convert(with_gcode_setting(truth, "g61_every_line", 1), text, "gcode")
+    _, _, exact = convert(with_output_setting(truth, "gcode", "g61_every_line", 1), text, "gcode")
     moves_default, _, _ = _moves_and_modes(default[0])
     moves, modes, _ = _moves_and_modes(exact[0])
     assert moves == moves_default
