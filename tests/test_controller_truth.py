@@ -98,13 +98,18 @@ def judge_gcode(truth, motions, res, texts) -> tuple[ctl.Trace, float]:
     return ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, rapid), run.blend
 
 
+def assert_on_the_path(tr: ctl.Trace, path_mm: float = TOL_MM) -> None:
+    """Path and tool axis."""
+    assert tr.path_mm <= path_mm, f"{tr.path_mm * 1000:.3f} µm off the path at line {tr.worst_line}"
+    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
+
+
 def assert_within(tr: ctl.Trace, accel: float | None, path_mm: float = TOL_MM) -> None:
     """Path, tool axis and speed; the acceleration where ``accel`` is given (a
     machine without play: with play, the contract's model takes a part up with a
     jolt wherever a motor meets it moving, and a motor crossing its play moves
     alone, unloaded, faster than the path)."""
-    assert tr.path_mm <= path_mm, f"{tr.path_mm * 1000:.3f} µm off the path at line {tr.worst_line}"
-    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
+    assert_on_the_path(tr, path_mm)
     assert tr.speed_ratio <= 1 + SPEED_ROUNDING, f"{tr.speed_ratio:.5f} x F"
     if accel is not None:
         assert tr.accel_mm_s2 <= accel * (1 + ACCEL_ROUNDING), f"{tr.accel_mm_s2:.0f} mm/s²"
@@ -1107,11 +1112,6 @@ def _converted(kind: str, seed: int | None, text: str) -> tuple[Any, ...]:
 def _servo_trace(kind: str, seed: int | None, text: str, phase: float = 0.0) -> ctl.Trace:
     truth, motions, res, texts = _converted(kind, seed, text)
     return judge_pmac(truth, motions, res, texts, servo_ms=ctl.SERVO_MS, servo_phase=phase)
-
-
-def assert_on_the_path(tr: ctl.Trace) -> None:
-    assert tr.path_mm <= TOL_MM, f"{tr.path_mm * 1000:.3f} µm off the path at line {tr.worst_line}"
-    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
 
 
 @pytest.mark.parametrize(("kind", "seed"), MACHINES)

@@ -48,10 +48,10 @@ from .test_controller_truth import (
     STEEP_HELIX_AFTER_A_CIRCLE,
     TBALL_WITH_A_TILT,
     XY_CORNER_AT_F60,
+    assert_on_the_path,
     assert_within,
 )
 from .test_tracking import (
-    TOL_DEG,
     TOL_MM,
     _tool_of_segments,
     convert,
@@ -169,8 +169,7 @@ def test_a_sharp_tilt_corner_keeps_to_the_path() -> None:
     truth = truth_machine("random", 21)
     motions, res, texts = convert(truth, TBALL_WITH_A_TILT, "gcode")
     tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
-    assert tr.path_mm <= TOL_MM, f"{tr.path_mm * 1e3:.3f} µm off the path at line {tr.worst_line}"
-    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
+    assert_on_the_path(tr)
 
 
 def test_a_stop_lands_on_a_servo_sample() -> None:
@@ -188,8 +187,7 @@ def test_a_stop_lands_on_a_servo_sample() -> None:
     motions, res, texts = convert(truth, COMPASS_SETS_OFF_BACK, "gcode")
     assert "\nG61\n" in texts[0] and "\nG4 P0\n" in texts[0]
     tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
-    assert tr.path_mm <= TOL_MM, f"{tr.path_mm * 1e3:.3f} µm off the path at line {tr.worst_line}"
-    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
+    assert_on_the_path(tr)
 
 
 def test_the_line_after_a_dwell_runs_in_exact_path_mode() -> None:
@@ -207,8 +205,7 @@ def test_the_line_after_a_dwell_runs_in_exact_path_mode() -> None:
         nxt = next(j for j in range(k + 1, len(rows)) if rows[j].startswith(("G1 ", "M2")))
         assert not any(r.startswith("G64") for r in rows[k + 1 : nxt])
     tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
-    assert tr.path_mm <= TOL_MM, f"{tr.path_mm * 1e3:.3f} µm off the path at line {tr.worst_line}"
-    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
+    assert_on_the_path(tr)
 
 
 def _open(seed: int, text: str, name: str, why: str) -> Any:
