@@ -105,7 +105,8 @@ def bench_profile(path: Path) -> Path:
 def child_convert(program: str, prof: str, out: str, fmt: str) -> None:
     """Run in a child process: convert and print the stats as JSON."""
     sys.path.insert(0, str(ROOT))
-    from prsxy_post.convert import ConvertJob, convert_file, peak_rss_mb
+    from prsxy_post.convert import ConvertJob, convert_file
+    from prsxy_post.runtime import peak_rss_mb
 
     t0, c0 = time.perf_counter(), os.times()
     st = convert_file(ConvertJob(program, prof, fmt, out, options="bench", parallel=True))

@@ -29,7 +29,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from prsxy_post import chain, kinematics  # noqa: E402
+from prsxy_post import kinematics  # noqa: E402
 from tests import controllers as ctl  # noqa: E402
 from tests.test_tracking import (  # noqa: E402
     _tool_of_lines,
@@ -87,7 +87,7 @@ def measure(
     else:
         grun = ctl.run_gcode(texts[0])
         tool = _tool_of_segments(res, grun.line, grun.seg)
-        cgeo = chain.controller_geometry(truth)
+        cgeo = kinematics.controller_geometry(truth)
         P = kinematics.inverse(cgeo, grun.q_dense).P
         q = ctl.machine_executes(truth, grun.t_dense, P, tool)
         tr = ctl.judge(motions, q, grun.t_dense, grun.seg, grun.line, tool, rapid)

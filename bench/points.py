@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import bench  # noqa: E402
-from prsxy_post import chain, gcode, profile  # noqa: E402
+from prsxy_post import chain, gcode, profile, program  # noqa: E402
 from prsxy_post.interpolate.sampling import longest_step, steps  # noqa: E402
 
 CHUNK = 4096
@@ -46,7 +46,7 @@ def count(text: str, prof: profile.Profile) -> dict[str, float]:
     """Lines, blocks, planned points (floor, phase boundaries), chain points and the
     planned motion's duration [s] of a program."""
     pipe = chain.Pipeline(prof, chain.Stages())
-    cfg = chain.interpreter_config(prof, None)
+    cfg = program.interpreter_config(prof, None)
     motions = list(gcode.iter_motions_batched(gcode.batches_of(gcode.split_lines(text)), cfg, "p"))
     out = dict.fromkeys(("blocks", "planned", "floor", "chain", "seconds"), 0.0)
     out["lines"] = float(len(text.splitlines()))

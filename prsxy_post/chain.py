@@ -20,14 +20,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import axiscomp, kinematics, reversals
-from . import check as checks
 from . import effects as registry
+from . import rules as checks
 from .errors import LimitError, PrsxyError
 from .interpolate import (
     Blocks,
@@ -43,12 +43,13 @@ from .interpolate import (
 from .interpolate.geometry import CURVE_SHARE, REVERSAL_SHARE
 from .interpolate.lookahead import KAPPA, REVERSAL_SLOPE, STAND_SLOPE
 from .interpolate.sampling import sample, steps
+from .points import PointChunk, Written
 from .profile import MOTORS, Profile, nominal_kinematics
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-    from .gcode import InterpreterConfig, Motion
+    from .gcode import Motion
 
 
 @dataclass(frozen=True)
@@ -70,35 +71,6 @@ class Stages:
         return (
             "stages on: " + (", ".join(on) or "none") + ("; off: " + ", ".join(off) if off else "")
         )
-
-
-def interpreter_config(
-    profile: Profile,
-    start: Sequence[float] | None = None,
-    on_message: Callable[[str, int, str, str], None] | None = None,
-) -> InterpreterConfig:
-    """The G-code interpreter's settings from a profile (offsets, tools, G28/G30,
-    start, [gcode] subroutine path relative to the profile's folder, loop limit,
-    user M codes); ``on_message`` receives the program's (MSG/DEBUG/PRINT)."""
-    import os
-
-    from .gcode import InterpreterConfig, ToolEntry
-
-    st = tuple(float(x) for x in (profile.start if start is None else start))
-    g = profile.gcode
-    src = profile.source
-    here = os.path.dirname(os.path.abspath(src)) if os.path.isfile(src) else "."
-    return InterpreterConfig(
-        work_offsets=dict(profile.work_offsets),
-        g28_position=tuple(profile.g28),
-        g30_position=tuple(profile.g30),
-        tool_table={n: ToolEntry(length=ln, diameter=d) for n, (ln, d) in profile.tools.items()},
-        start=st,
-        subroutine_path=tuple(os.path.join(here, d) for d in g.get("subroutine_path", [])),
-        max_loop_passes=int(g.get("max_loop_passes", 10_000_000)),
-        user_m_codes=frozenset(g.get("user_m_codes", [])),
-        on_message=on_message,
-    )
 
 
 def limits_of(profile: Profile, segment: str = "cubic") -> PlanLimits:
@@ -127,12 +99,6 @@ def ik_geometry(profile: Profile, stages: Stages) -> kinematics.Geometry:
     return kinematics.Geometry.from_params(nominal_kinematics(), profile.origin)
 
 
-def controller_geometry(profile: Profile) -> kinematics.Geometry:
-    """[controller_kinematics] (default: the nominal design) with an ideal table."""
-    kp = profile.controller_kinematics or nominal_kinematics()
-    return kinematics.Geometry.from_params(kp, profile.origin)
-
-
 #: A fitted virtual-axis error: q (N, 5) → e(q) (N, 5) [mm, deg].
 ErrorFunction = Callable[[np.ndarray], np.ndarray]
 
@@ -140,80 +106,6 @@ ErrorFunction = Callable[[np.ndarray], np.ndarray]
 def check_motions(motions: Sequence[Motion], profile: Profile) -> list[PrsxyError]:
     """Problems visible in the program itself: feed above the machine's maximum."""
     return [p.error(profile) for p in checks.feed_problems(profile, motions)]
-
-
-@dataclass
-class PointChunk:
-    """A run of consecutive points with everything the chain computed.
-
-    q : (n, 5) [mm, mm, mm, deg, deg] the programmed path (workpiece frame)
-    qdot : (n, 5) [mm/s, deg/s] its planned velocity
-    dt : (n,) [s] time of the segment that ends at each point
-    t : (n,) [s] time at each point from the program start
-    line : (n,) source line
-    first : (n,) bool, first point of its block
-    tool_length : (n,) active G43 offset [mm]
-    speed : (n,) planned path speed [mm/s or deg/s]
-    dwell : (n,) bool, the path stands for dt here (a dwell, a machine function,
-        or a motor crossing its play at rest)
-    fn : (n,) object, the machine-function words at function points, else None
-    block_end : (n,) bool, the last point of its block
-    split : (n,) int8, a split program's part ends at rest at this point (1: a stop
-        the program makes, 2: one put there for the split), else 0
-    q_target : (n, 5) the pose handed to the IK, after the virtual-axis map
-    P_ideal, V_ideal : (n, 5) [mm, mm/s] where the motors must be and how fast
-    P_cmd, V_cmd : (n, 5) the commands after the real-axis tables and servo lead
-    """
-
-    q: np.ndarray
-    qdot: np.ndarray
-    dt: np.ndarray
-    t: np.ndarray
-    line: np.ndarray
-    first: np.ndarray
-    tool_length: np.ndarray
-    speed: np.ndarray
-    dwell: np.ndarray
-    fn: np.ndarray
-    block_end: np.ndarray
-    split: np.ndarray
-    q_target: np.ndarray
-    P_ideal: np.ndarray
-    V_ideal: np.ndarray
-    P_cmd: np.ndarray
-    V_cmd: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.dt)
-
-    def take(self, sl: slice | np.ndarray) -> PointChunk:
-        return PointChunk(**{f.name: getattr(self, f.name)[sl] for f in fields(self)})
-
-    @staticmethod
-    def concat(chunks: Sequence[PointChunk]) -> PointChunk:
-        return PointChunk(
-            **{
-                f.name: np.concatenate([getattr(c, f.name) for c in chunks])
-                for f in fields(PointChunk)
-            }
-        )
-
-    @staticmethod
-    def empty() -> PointChunk:
-        def z(name: str) -> np.ndarray:
-            if name in ("q", "qdot", "q_target", "P_ideal", "V_ideal", "P_cmd", "V_cmd"):
-                return np.zeros((0, 5))
-            if name == "split":
-                return np.zeros(0, dtype=np.int8)
-            if name in ("first", "dwell", "block_end"):
-                return np.zeros(0, dtype=bool)
-            if name == "line":
-                return np.zeros(0, dtype=int)
-            if name == "fn":
-                return np.empty(0, dtype=object)
-            return np.zeros(0)
-
-        return PointChunk(**{f.name: z(f.name) for f in fields(PointChunk)})
 
 
 @dataclass
@@ -259,20 +151,6 @@ def prepare(motions: Sequence[Motion], profile: Profile, limits: PlanLimits) -> 
 VEL_STEP_S = 1e-6
 #: The same along the path [mm], for the motors' directions at the blocks' ends.
 DIR_STEP_MM = 1e-4
-
-
-@dataclass(frozen=True)
-class Written:
-    """How the output writes its numbers, for what must survive their rounding.
-
-    space : "motor": each motor's position is written (a PVT program); "pose": the
-        tip's pose x y z A B [mm, mm, mm, deg, deg], which the controller's own
-        inverse kinematics turns into motor positions (corrected G-code)
-    digit : the last written digit's value (10^-decimals)
-    """
-
-    space: str = "motor"
-    digit: float = 1e-7
 
 
 def ik_derivative(

@@ -19,7 +19,6 @@ Example
 from __future__ import annotations
 
 import contextlib
-import gc
 import itertools
 import os
 import queue
@@ -27,9 +26,8 @@ import sys
 import threading
 import time
 import traceback
-from collections.abc import Callable, Generator, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from . import sinks
@@ -43,6 +41,8 @@ from .files import (
     refuse_to_overwrite,
     sha256_of,
 )
+from .program import iter_program_batches
+from .runtime import few_gc_passes, peak_rss_mb
 
 
 @dataclass(frozen=True)
@@ -77,32 +77,6 @@ class ConvertJob:
     on_message: Callable[[str, int, str, str], None] | None = None
 
 
-def iter_program_batches(
-    path: str, progress: Callable[[int], None] | None = None
-) -> Generator[list[str], None, None]:
-    """The program's lines without their ends (CR, LF or CRLF), read as a stream,
-    a list per block read.
-
-    Bytes that are not UTF-8 become lone surrogates: harmless in comments, and
-    rejected by the parser anywhere else.
-    """
-    from . import gcode
-
-    with open(path, encoding="utf-8", errors="surrogateescape", newline="") as fh:
-        if fh.read(1) != "\ufeff":
-            fh.seek(0)
-
-        def pieces() -> Iterator[str]:
-            chars = 0
-            while piece := fh.read(1 << 17):
-                chars += len(piece)
-                yield piece
-                if progress is not None:
-                    progress(chars)
-
-        yield from gcode.iter_line_batches(pieces())
-
-
 @dataclass
 class ConvertStats:
     """What a conversion did, for the benchmark: paths, counts and seconds per stage."""
@@ -118,27 +92,14 @@ class ConvertStats:
     writer_peak_rss_mb: float | None = None
 
 
-def peak_rss_mb() -> float | None:
-    """This process's own peak resident memory [MB] (Linux), None where unknown.
-    Not ru_maxrss: Linux carries the parent's high-water mark into a forked or
-    exec'd child."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    return None
-
-
 def _planned_here(
     job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any = None
 ) -> Iterator[Any]:
     """The program's motions, chunk by chunk, through :func:`chain.prepare` and the
     planner (:class:`chain.Planning`), the last one final."""
-    from . import chain, gcode
+    from . import chain, gcode, program
 
-    cfg = chain.interpreter_config(prof, job.start, on_message=job.on_message)
+    cfg = program.interpreter_config(prof, job.start, on_message=job.on_message)
 
     def counted(batches: Iterator[list[str]]) -> Iterator[list[str]]:
         for batch in batches:
@@ -285,22 +246,6 @@ PARALLEL_FROM_BYTES = 256 * 1024
 
 def _convert_one(job: ConvertJob) -> list[str]:
     return convert_file(job).written
-
-
-@contextlib.contextmanager
-def few_gc_passes() -> Iterator[None]:
-    """Rarer passes of the cycle collector: a conversion makes millions of
-    short-lived tuples and no cycles to speak of, and the passes over them cost a
-    fifth of the interpreter's time (measured). Objects that exist before are
-    frozen out of the passes; all is as it was afterwards."""
-    old = gc.get_threshold()
-    gc.freeze()
-    gc.set_threshold(50_000, 20, 20)
-    try:
-        yield
-    finally:
-        gc.set_threshold(*old)
-        gc.unfreeze()
 
 
 def convert_file(

@@ -37,7 +37,6 @@ from .profile import (
     LEG_OPTIONAL,
     LEG_REQUIRED,
     MOTORS,
-    Cyclic,
     Effects,
     KinematicParams,
     Leg,
@@ -137,11 +136,6 @@ class Family:
         geometry member: its value in ``profile`` plus the change)."""
         c, k = self.doc_slot(doc, change.name)
         c[k] = float(self.value(Parts.of(profile), change.name) + change.delta)
-
-    # [effects] section
-    def parse(self, checker: Any, section: Mapping[str, Any]) -> dict[str, Any]:
-        """Read and check this family's ``[effects]`` keys: Effects field -> value."""
-        return {}
 
 
 @dataclass
@@ -314,10 +308,6 @@ class GuideBow(Family):
     def doc_slot(self, doc: dict[str, Any], name: str) -> tuple[Any, Any]:
         return _effects_vector(doc, "guide_bow", 3), self.index(name)
 
-    def parse(self, checker: Any, section: Mapping[str, Any]) -> dict[str, Any]:
-        v = _bounded_vector(checker, section, "guide_bow", 3, 1.0)
-        return {"guide_bow": (v[0], v[1], v[2])}
-
     def sentence(self, name: str, size: float, period: float | None = None) -> str:
         return (
             f"Guide {self.index(name) + 1} is bowed by {size * 1000:+.2f} µm at 100 mm of travel."
@@ -339,10 +329,6 @@ class TableStraightness(Family):
 
     def doc_slot(self, doc: dict[str, Any], name: str) -> tuple[Any, Any]:
         return _effects_vector(doc, "table_straightness", 2), self.index(name)
-
-    def parse(self, checker: Any, section: Mapping[str, Any]) -> dict[str, Any]:
-        v = _bounded_vector(checker, section, "table_straightness", 2, 1.0)
-        return {"table_straightness": (v[0], v[1])}
 
     def sentence(self, name: str, size: float, period: float | None = None) -> str:
         axis = "XY"[self.index(name)]
@@ -530,28 +516,6 @@ class CyclicError(MotorFamily):
             }
         )
 
-    def parse(self, checker: Any, section: Mapping[str, Any]) -> dict[str, Any]:
-        c = checker
-        raw = section.get("cyclic", [])
-        if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
-            raise c.fail("effects.cyclic", "is not an array of tables", "[[effects.cyclic]] tables")
-        out = []
-        for i, e in enumerate(raw):
-            p = f"effects.cyclic[{i + 1}]"
-            c.unknown(e, {"motor", "amplitude", "period", "phase"}, p)
-            m = c.integer(e, "motor", p)
-            if m not in MOTORS:
-                raise c.fail(f"{p}.motor", f"is {m}", "one of 1, 2, 3, 5, 6")
-            out.append(
-                Cyclic(
-                    m,
-                    c.number(e, "amplitude", p, lo=-1.0, hi=1.0),
-                    c.number(e, "period", p, positive=True),
-                    c.number(e, "phase", p, 0.0),
-                )
-            )
-        return {"cyclic": tuple(out)}
-
     def random_change(self, name: str, rng: np.random.Generator, scale: float = 1.0) -> Change:
         amp = _magnitude(rng, self.prior * scale)
         return Change(
@@ -591,10 +555,6 @@ class ServoLag(MotorFamily):
         v = [float(x) for x in eff.get("servo_lag_ms", [0.0] * len(MOTORS))]
         v[self.index(change.name)] += change.delta
         eff["servo_lag_ms"] = v
-
-    def parse(self, checker: Any, section: Mapping[str, Any]) -> dict[str, Any]:
-        v = _bounded_vector(checker, section, "servo_lag_ms", len(MOTORS), 100.0)
-        return {"servo_lag_ms": (v[0], v[1], v[2], v[3], v[4])}
 
     def sentence(self, name: str, size: float, period: float | None = None) -> str:
         return (
@@ -655,15 +615,6 @@ def _magnitude(rng: np.random.Generator, typical: float) -> float:
 
 def _signed(rng: np.random.Generator) -> float:
     return float(rng.choice([-1.0, 1.0]))
-
-
-def _bounded_vector(
-    checker: Any, section: Mapping[str, Any], key: str, n: int, limit: float
-) -> np.ndarray:
-    v = checker.vector(section, key, "effects", n, [0.0] * n)
-    if np.any(np.abs(v) > limit):
-        raise checker.fail(f"effects.{key}", f"is {v.tolist()}", f"values within ±{limit:g}")
-    return v
 
 
 # ---------------------------------------------------------------- the registry
@@ -878,18 +829,6 @@ def apply(
         for n, d in total.items():
             family(n).write(out, profile, Change(n, d))
     return out
-
-
-def parse_section(checker: Any, doc: Mapping[str, Any]) -> Effects:
-    """The ``[effects]`` section, each key read and checked by the family owning it."""
-    section = checker.table(doc, "effects", "", False) or {}
-    owned = {k: f for f in FAMILIES for k in f.effects_keys}
-    checker.unknown(section, set(owned), "effects")
-    fields: dict[str, Any] = {}
-    for f in FAMILIES:
-        if f.effects_keys:
-            fields.update(f.parse(checker, section))
-    return Effects(**fields)
 
 
 def iter_families(stage: str | None = None) -> Iterator[Family]:

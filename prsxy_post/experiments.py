@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import chain, gcode, measure, simulate
+from . import chain, gcode, measure, program, simulate
 from .profile import MOTORS, Profile
 
 
@@ -35,7 +35,7 @@ def ballbar_run(
     text = simulate.ballbar_gcode(
         radius, plane=plane, ccw=ccw, tilt_deg=tilt, feed=feed, pivot=(pivot[0], pivot[1], pivot[2])
     )
-    motions = gcode.interpret(text, chain.interpreter_config(commanded), "<ballbar>")
+    motions = gcode.interpret(text, program.interpreter_config(commanded), "<ballbar>")
     first_cut = next(i for i, m in enumerate(motions) if m.kind not in ("rapid", "function"))
     circle = [m for m in motions[first_cut:] if m.kind != "function"]
     start = np.array(circle[0].start, dtype=float)

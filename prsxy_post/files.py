@@ -16,6 +16,7 @@ import tempfile
 from pathlib import Path
 
 from .errors import PrsxyError, UsageError, write_failed
+from .kinematics import check_reach
 from .profile import Profile, loads
 
 
@@ -127,8 +128,11 @@ def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | b
 
 
 def load_profile(path: str) -> Profile:
-    """Read and validate a profile file."""
-    return loads(read_text(path, "profile"), path)
+    """Read and validate a profile file: its keys and values, and that its struts
+    reach the start pose (:func:`prsxy_post.kinematics.check_reach`)."""
+    prof = loads(read_text(path, "profile"), path)
+    check_reach(prof)
+    return prof
 
 
 def inspect_source(path: str) -> str:

@@ -27,12 +27,14 @@ Then c = M⁺ r(γ) exactly. No iteration, no warm start, and vectorised.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
-from .profile import Effects, KinematicParams, TableParams
+from .errors import ProfileError
+from .profile import Effects, KinematicParams, Profile, TableParams, nominal_kinematics
 
 #: Travel at which ``effects.guide_bow`` is given [mm].
 BOW_REF_MM = 100.0
@@ -627,3 +629,55 @@ def forward(
 def platform_guess(pose: PlatformPose, q: np.ndarray) -> np.ndarray:
     """An FK start (c, A, B, γ) from an IK solution, for warm-started FK."""
     return np.column_stack([pose.c, np.radians(q[:, 3]), np.radians(q[:, 4]), pose.gamma])
+
+
+def check_reach(prof: Profile) -> None:
+    """A profile whose struts cannot reach its start pose is an error naming the leg.
+
+    Part of reading a profile file (:func:`prsxy_post.files.load_profile`): the
+    profile package checks the document's keys and values, this its geometry.
+
+    Raises
+    ------
+    ProfileError
+        ``kinematics.legs[i].strut_length`` (or ``controller_kinematics...``) and
+        how far the strut falls short across its guide.
+    """
+    for section, kp in (
+        ("kinematics", prof.kinematics),
+        ("controller_kinematics", prof.controller_kinematics),
+    ):
+        if kp is None:
+            continue
+        geo = (
+            Geometry.from_params(kp, prof.origin, prof.table, prof.effects)
+            if section == "kinematics"
+            else Geometry.from_params(kp, prof.origin)
+        )
+        q = prof.start[None, :]
+        try:
+            sol = solve_platform(geo, q)
+        except Exception as exc:  # degenerate geometry: no solution at all
+            raise ProfileError(
+                f"the platform cannot be placed at the start pose ({exc})",
+                source=prof.source,
+                key=section,
+                expected="a 3-PRS geometry close to the nominal design",
+            ) from None
+        disc = strut_discriminant(geo, sol)
+        for i in range(3):
+            if not disc[0, i] >= 0:
+                short = math.sqrt(-disc[0, i]) if disc[0, i] < 0 else math.nan
+                raise ProfileError(
+                    f"strut {i + 1} cannot reach the platform at the start pose "
+                    f"(it falls short by {short:.3f} mm across the guide)",
+                    source=prof.source,
+                    key=f"{section}.legs[{i + 1}].strut_length",
+                    expected="a strut longer than the hinge-to-ball distance across the guide",
+                )
+
+
+def controller_geometry(profile: Profile) -> Geometry:
+    """[controller_kinematics] (default: the nominal design) with an ideal table."""
+    kp = profile.controller_kinematics or nominal_kinematics()
+    return Geometry.from_params(kp, profile.origin)

@@ -14,14 +14,17 @@ Example
 
 from __future__ import annotations
 
-from collections.abc import Callable, Generator, Iterable, Sequence
+import os
+from collections.abc import Callable, Generator, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from . import gcode
 from .files import inspect_source
+from .gcode import FileLines, InterpreterConfig, ToolEntry
 
 if TYPE_CHECKING:
-    from .gcode import FileLines, Motion
+    from .gcode import Motion
     from .profile import Profile
 
 
@@ -29,24 +32,67 @@ def file_batches(path: str | Path) -> Generator[list[str], None, None]:
     """The lines of a program file (without their ends), a list per block read:
     bounded memory on programs of millions of lines. A binary file (a NUL byte)
     is refused with its line before any is read."""
-    from .convert import iter_program_batches
-
     inspect_source(str(path))
     yield from iter_program_batches(str(path))
+
+
+def iter_program_batches(
+    path: str, progress: Callable[[int], None] | None = None
+) -> Generator[list[str], None, None]:
+    """The program's lines without their ends (CR, LF or CRLF), read as a stream,
+    a list per block read.
+
+    Bytes that are not UTF-8 become lone surrogates: harmless in comments, and
+    rejected by the parser anywhere else.
+    """
+    with open(path, encoding="utf-8", errors="surrogateescape", newline="") as fh:
+        if fh.read(1) != "\ufeff":
+            fh.seek(0)
+
+        def pieces() -> Iterator[str]:
+            chars = 0
+            while piece := fh.read(1 << 17):
+                chars += len(piece)
+                yield piece
+                if progress is not None:
+                    progress(chars)
+
+        yield from gcode.iter_line_batches(pieces())
+
+
+def interpreter_config(
+    profile: Profile,
+    start: Sequence[float] | None = None,
+    on_message: Callable[[str, int, str, str], None] | None = None,
+) -> InterpreterConfig:
+    """The G-code interpreter's settings from a profile (offsets, tools, G28/G30,
+    start, [gcode] subroutine path relative to the profile's folder, loop limit,
+    user M codes); ``on_message`` receives the program's (MSG/DEBUG/PRINT)."""
+    st = tuple(float(x) for x in (profile.start if start is None else start))
+    g = profile.gcode
+    src = profile.source
+    here = os.path.dirname(os.path.abspath(src)) if os.path.isfile(src) else "."
+    return InterpreterConfig(
+        work_offsets=dict(profile.work_offsets),
+        g28_position=tuple(profile.g28),
+        g30_position=tuple(profile.g30),
+        tool_table={n: ToolEntry(length=ln, diameter=d) for n, (ln, d) in profile.tools.items()},
+        start=st,
+        subroutine_path=tuple(os.path.join(here, d) for d in g.get("subroutine_path", [])),
+        max_loop_passes=int(g.get("max_loop_passes", 10_000_000)),
+        user_m_codes=frozenset(g.get("user_m_codes", [])),
+        on_message=on_message,
+    )
 
 
 def lines_of(path: str | Path) -> FileLines | None:
     """The program's lines read again from its file when a loop or a call jumps
     back (``None`` for standard input, ``-``, which is held in memory instead)."""
-    from . import gcode
-
     return None if str(path) == "-" else gcode.FileLines(str(path))
 
 
 def text_batches(text: str) -> Generator[list[str], None, None]:
     """The lines of program text, in the lists :func:`motions` takes."""
-    from . import gcode
-
     yield from gcode.batches_of(gcode.split_lines(text))
 
 
@@ -80,10 +126,8 @@ def motions(
         At the line (and column) the interpreter cannot take, after every
         motion before it.
     """
-    from . import chain, gcode
-
     if profile is not None:
-        cfg = chain.interpreter_config(profile, start, on_message=on_message)
+        cfg = interpreter_config(profile, start, on_message=on_message)
     elif start is not None:
         cfg = gcode.InterpreterConfig(start=tuple(float(x) for x in start), on_message=on_message)
     else:

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import PrsxyError, write_failed
+from .runtime import peak_rss_mb
 
 Piece = tuple[int, str]
 
@@ -149,8 +150,6 @@ def _serve(conn: Any, here: WriterHere) -> None:
                     elif kind == "feed":
                         here.feed(msg[1])
                     elif kind == "finish":
-                        from .convert import peak_rss_mb
-
                         written = here.finish()
                         written.peak_rss_mb = peak_rss_mb()
                         conn.send(("done", written))

@@ -90,7 +90,7 @@ def trace_error(truth: profile_mod.Profile, prof: profile_mod.Profile, program: 
     the G-code path of its line (its block's line, arc or helix; a point of a line
     that does not move, from the point the chain meant there)."""
     text = (ROOT / "samples" / program).read_text()
-    cfg = chain.interpreter_config(prof)
+    cfg = program.interpreter_config(prof)
     motions = list(gcode.iter_motions(gcode.split_lines(text), cfg, program))
     d = writers.dialect("pmac")
     settings = writers.settings_of(prof, "pmac")

@@ -35,7 +35,7 @@ import pytest
 from hypothesis import HealthCheck, given, reject, settings
 from hypothesis import strategies as st
 
-from prsxy_post import chain, kinematics
+from prsxy_post import chain, kinematics, points
 from prsxy_post.errors import PrsxyError
 
 from . import controllers as ctl
@@ -92,7 +92,7 @@ def judge_gcode(truth, motions, res, texts) -> tuple[ctl.Trace, float]:
     run = ctl.run_gcode(texts[0])
     assert run.blend is not None and run.blend < TOL_MM, "no G64 P before the first motion"
     tool = _tool_of_segments(res, run.line, run.seg)
-    P = kinematics.inverse(chain.controller_geometry(truth), run.q_dense).P
+    P = kinematics.inverse(kinematics.controller_geometry(truth), run.q_dense).P
     q = ctl.machine_executes(truth, run.t_dense, P, tool)
     rapid = truth.limits.rapid_mm_min
     return ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, rapid), run.blend
@@ -987,11 +987,11 @@ def test_a_crossing_ends_short_of_its_part_however_the_written_pose_rounds() -> 
     later)."""
     truth = truth_machine("random", 21)
     digit = 1e-6
-    pipe = chain.Pipeline(truth, segment="chord", written=chain.Written("pose", digit))
+    pipe = chain.Pipeline(truth, segment="chord", written=points.Written("pose", digit))
     rng = np.random.default_rng(5)
     q = random_poses(rng, 100)
     tool = rng.uniform(0.0, 80.0, len(q))
-    cgeo = chain.controller_geometry(truth)
+    cgeo = kinematics.controller_geometry(truth)
     P0 = kinematics.inverse(cgeo, q, tool).P
     corners = 0.5 * digit * np.array(list(itertools.product((-1.0, 1.0), repeat=5)))
     moved = np.max([np.abs(kinematics.inverse(cgeo, q + c, tool).P - P0) for c in corners], axis=0)
@@ -1399,7 +1399,7 @@ def test_splines_and_nurbs_are_followed_on_the_curve(kind: str, seed: int | None
         return
     run = ctl.run_gcode(texts[0])
     tool = _tool_of_lines(res, run.line[run.seg])
-    P = kinematics.inverse(chain.controller_geometry(truth), run.q_dense).P
+    P = kinematics.inverse(kinematics.controller_geometry(truth), run.q_dense).P
     q = ctl.machine_executes(truth, run.t_dense, P, tool)
     tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, truth.limits.rapid_mm_min)
     assert run.blend is not None

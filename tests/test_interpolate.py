@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from prsxy_post import chain, gcode, interpolate
+from prsxy_post import chain, gcode, interpolate, program
 from prsxy_post import profile as profile_mod
 from prsxy_post.interpolate.geometry import CORNER_SHARE
 
@@ -99,7 +99,7 @@ def test_velocity_is_the_tangent_times_the_speed() -> None:
 def test_planner_streams_like_one_shot(chunk: int) -> None:
     prof = profile_mod.loads((ROOT / "profiles" / "prsxy-shop.toml").read_text(), "shop")
     ms = gcode.interpret(
-        (ROOT / "samples" / "pocket.ngc").read_text(), chain.interpreter_config(prof)
+        (ROOT / "samples" / "pocket.ngc").read_text(), program.interpreter_config(prof)
     )
     one = chain.run_chain(ms, prof).points
     streamed = chain.run_chain(ms, prof, chunk=chunk).points
@@ -113,7 +113,9 @@ def _junction_speeds(text: str, prof: profile_mod.Profile, segment: str) -> dict
     """Planned speed at the end of each moving line's block, through the chain's
     planning (which tells the look-ahead the motors' directions)."""
     planning = chain.Planning(prof, segment=segment)
-    motions = list(gcode.iter_motions(gcode.split_lines(text), chain.interpreter_config(prof), "x"))
+    motions = list(
+        gcode.iter_motions(gcode.split_lines(text), program.interpreter_config(prof), "x")
+    )
     planned = planning.plan(chain.prepare(motions, prof, planning.limits), final=True)
     assert planned.plan is not None
     b, law = planned.plan.blocks, planned.plan.law

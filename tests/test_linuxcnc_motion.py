@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from prsxy_post import chain, kinematics
+from prsxy_post import kinematics
 
 from . import controllers as ctl
 from . import linuxcnc_motion as lm
@@ -91,7 +91,7 @@ def run_on_linuxcnc(truth, motions, res, text: str) -> tuple[ctl.Trace, lm.Motio
     t = np.concatenate([[0.0], (run.t[:-1, None] + np.diff(run.t)[:, None] * s[None, :]).ravel()])
     seg_d = np.concatenate([[seg[0]], np.repeat(seg[1:], SUBSTEPS)])
     tool = _tool_of_segments(res, written.line, seg_d)
-    P = kinematics.inverse(chain.controller_geometry(truth), q).P
+    P = kinematics.inverse(kinematics.controller_geometry(truth), q).P
     executed = ctl.machine_executes(truth, t, P, tool)
     trace = ctl.judge(motions, executed, t, seg_d, written.line, tool, truth.limits.rapid_mm_min)
     return trace, run, float(off.max())

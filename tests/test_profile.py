@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from prsxy_post import files, kinematics
 from prsxy_post import profile as profile_mod
 from prsxy_post.errors import ProfileError
 
@@ -97,9 +99,19 @@ def test_perturbed_vectors_profile_reads(perturbed: profile_mod.Profile) -> None
 
 
 def _err(text: str) -> str:
+    """The error reading a profile file gives: its keys and values
+    (``profile.loads``), then its struts' reach (``kinematics.check_reach``)."""
     with pytest.raises(ProfileError) as exc:
-        profile_mod.loads(text, "bad.toml")
+        kinematics.check_reach(profile_mod.loads(text, "bad.toml"))
     return str(exc.value)
+
+
+def test_a_profile_file_whose_struts_cannot_reach_is_refused(tmp_path: Path) -> None:
+    """Reading the file (what every command does) checks the reach too."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text(NOMINAL_TEXT.replace("strut_length = 400.0", "strut_length = 100.0", 1))
+    with pytest.raises(ProfileError, match=r"legs\[1\]\.strut_length: strut 1 cannot reach"):
+        files.load_profile(str(bad))
 
 
 @pytest.mark.parametrize(

@@ -7,6 +7,7 @@ import tomllib
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from prsxy_post import kinematics
 from prsxy_post import profile as profile_mod
 from prsxy_post.errors import ProfileError
 
@@ -67,6 +68,7 @@ def test_mutated_documents_give_a_profile_or_a_keyed_error(edits: list) -> None:
             continue
     try:
         p = profile_mod.profile_from_dict(doc, "fuzz.toml")
+        kinematics.check_reach(p)
     except ProfileError as err:
         msg = str(err)
         assert msg.startswith("fuzz.toml: ")

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from prsxy_post import chain, gcode, kinematics, simulate, writers
+from prsxy_post import chain, gcode, kinematics, program, simulate, writers
 from prsxy_post import profile as profile_mod
 
 from .conftest import ROOT
@@ -371,7 +371,7 @@ def convert(
     profile: profile_mod.Profile, text: str, fmt: str = "pmac", chunk: int = 0
 ) -> tuple[list[gcode.Motion], chain.ChainResult, list[str]]:
     """Interpret, run the chain for the dialect and write: (motions, result, part texts)."""
-    cfg = chain.interpreter_config(profile)
+    cfg = program.interpreter_config(profile)
     motions = list(gcode.iter_motions(gcode.split_lines(text), cfg, "x.ngc"))
     d = writers.dialect(fmt)
     settings = writers.settings_of(profile, fmt)
@@ -415,7 +415,7 @@ def test_gcode_output_through_controller_traces_the_path_at_its_points(
     the true machine executes the resulting motor commands."""
     truth = truth_machine(kind, seed)
     motions, res, texts = convert(truth, path.read_text(), "gcode")
-    cgeo = chain.controller_geometry(truth)
+    cgeo = kinematics.controller_geometry(truth)
     q_read, dt, lines = read_gcode_points(texts[0])
     tool = _tool_of_lines(res, lines)
     P_ctrl = kinematics.inverse(cgeo, q_read).P  # the controller's own IK

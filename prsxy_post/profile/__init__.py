@@ -24,230 +24,37 @@ import math
 import re
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
-from typing import Any, NamedTuple
+from dataclasses import fields
+from typing import Any
 
 import numpy as np
 
 from ..errors import ProfileError
-
-#: The motors, by number, in the column order of every motor-space array
-#: (``P: (N, 5) ndarray [mm]`` holds P1, P2, P3, P5, P6). There is no motor 4.
-MOTORS = (1, 2, 3, 5, 6)
-DEFAULT_AXIS_NAMES = {1: "U", 2: "V", 3: "W", 5: "X", 6: "Y"}
-
-LEG_REQUIRED = (
-    "guide_radius",
-    "guide_angle",
-    "guide_height",
-    "strut_length",
-    "platform_radius",
-    "platform_angle",
+from .effects_section import parse_effects
+from .output import OUTPUT_SETTINGS
+from .types import (
+    DEFAULT_AXIS_NAMES,
+    DEFAULT_MOTOR_LIMITS,
+    DEFAULT_TABLE_LIMITS,
+    DEFAULTS,
+    KIN_OPTIONAL,
+    KIN_REQUIRED,
+    LEG_OPTIONAL,
+    LEG_REQUIRED,
+    MOTORS,
+    TABLE_KEYS,
+    AxisComp,
+    Cyclic,
+    Effects,
+    Interpolation,
+    KinematicParams,
+    Leg,
+    MachineLimits,
+    MotorConfig,
+    Profile,
+    TableParams,
+    Tool,
 )
-LEG_OPTIONAL = ("guide_tilt_x", "guide_tilt_y", "hinge_twist", "platform_z")
-KIN_REQUIRED = ("tool_length",)
-KIN_OPTIONAL = ("tool_offset_x", "tool_offset_y")
-TABLE_KEYS = ("scale_x", "scale_y", "squareness")
-
-
-@dataclass(frozen=True)
-class MachineLimits:
-    """The ``[limits]`` section: what the machine can do and what a job may cost.
-
-    max_tilt_deg : largest tool-axis tilt from vertical [deg]
-    max_feed_mm_min : largest programmed feed F [mm/min]
-    rapid_mm_min : G0 speed along the XYZ path [mm/min]
-    rapid_deg_min : G0 speed of A/B-only moves, and the cap on A/B rates [deg/min]
-    max_accel_mm_s2 : path acceleration the look-ahead plans with [mm/s²]
-    max_accel_deg_s2 : A/B acceleration [deg/s²]
-    max_points : a program that would interpolate to more points is refused
-    max_time_s : ... or one that would run longer [s]
-    """
-
-    max_tilt_deg: float = 30.0
-    max_feed_mm_min: float = 30000.0
-    rapid_mm_min: float = 10000.0
-    rapid_deg_min: float = 3600.0
-    max_accel_mm_s2: float = 2000.0
-    max_accel_deg_s2: float = 3600.0
-    max_points: int = 50_000_000
-    max_time_s: float = 360_000.0
-
-
-@dataclass(frozen=True)
-class Interpolation:
-    """``[interpolation]``: how programs become points.
-
-    period_ms : the coarse interpolation period [ms]
-    path_tolerance_mm : how far the motion the controller runs between points may
-        leave the programmed path where the program sets no ``G64 P`` [mm]
-    path_tolerance_arcsec : the same for the tool axis [arcsec]
-    reversal_ms : the longest window in which a motor with play crosses it [ms]
-    """
-
-    period_ms: float = 10.0
-    path_tolerance_mm: float = 0.0005
-    path_tolerance_arcsec: float = 0.5
-    reversal_ms: float = 1.0
-
-
-class Tool(NamedTuple):
-    """One ``[[tools]]`` entry: G43 H<number> adds ``length`` [mm] to the tool length."""
-
-    length: float
-    diameter: float = 0.0
-
-
-#: Defaults of the project's own sections. Each key is documented in profiles/README.md.
-DEFAULTS: dict[str, dict[str, Any]] = {
-    "limits": {f.name: f.default for f in fields(MachineLimits)},
-    "interpolation": {f.name: f.default for f in fields(Interpolation)},
-    "start": {"pose": [0.0, 0.0, 0.0, 0.0, 0.0]},
-    "gcode": {
-        "g28": [0.0, 0.0, 0.0, 0.0, 0.0],
-        "g30": [0.0, 0.0, 0.0, 0.0, 0.0],
-        "subroutine_path": [],  # directories (relative: to the profile's folder)
-        "max_loop_passes": 10_000_000,
-        "user_m_codes": [],  # M100..M199 the controller has
-    },
-}
-
-DEFAULT_MOTOR_LIMITS = {1: (-200.0, 200.0), 2: (-200.0, 200.0), 3: (-200.0, 200.0)}
-DEFAULT_TABLE_LIMITS = (-300.0, 300.0)
-
-
-@dataclass(frozen=True)
-class Leg:
-    """One PRS leg, in the units of the file (mm, degrees)."""
-
-    guide_radius: float
-    guide_angle: float
-    guide_height: float
-    strut_length: float
-    platform_radius: float
-    platform_angle: float
-    guide_tilt_x: float = 0.0
-    guide_tilt_y: float = 0.0
-    hinge_twist: float = 0.0
-    platform_z: float = 0.0
-
-
-@dataclass(frozen=True)
-class KinematicParams:
-    """The ``[kinematics]`` (or ``[controller_kinematics]``) section."""
-
-    tool_length: float
-    legs: tuple[Leg, Leg, Leg]
-    tool_offset_x: float = 0.0
-    tool_offset_y: float = 0.0
-
-
-@dataclass(frozen=True)
-class TableParams:
-    """The ``[table]`` section: scale errors (dimensionless), squareness (rad)."""
-
-    scale_x: float = 0.0
-    scale_y: float = 0.0
-    squareness: float = 0.0
-
-
-@dataclass(frozen=True)
-class Effects:
-    """Physical effects beyond the contract's terms (the ``[effects]`` section).
-
-    guide_bow : per leg, radial bow of the guide [mm] at 100 mm of travel
-        (hinge centre a_i = g_i + P_i d_i + b_i (P_i / 100)² r_i)
-    table_straightness : (k_x, k_y) [mm/m²]: the X motion bends towards +Y by
-        k_x (P5 / 1000)², the Y motion towards +X by k_y (P6 / 1000)²
-    servo_lag_ms : per motor 1, 2, 3, 5, 6: how far the motor follows behind its
-        command [ms]; the part is where the command was that long ago, so on a
-        moving axis the error is −lag · velocity and flips with direction
-    cyclic : periodic positioning errors per motor, added to both directions of
-        its real-axis error: amplitude · sin(2π p / period + phase)
-    """
-
-    guide_bow: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    table_straightness: tuple[float, float] = (0.0, 0.0)
-    servo_lag_ms: tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0)
-    cyclic: tuple[Cyclic, ...] = ()
-
-
-@dataclass(frozen=True)
-class Cyclic:
-    """A periodic error of one motor [mm, mm, deg]."""
-
-    motor: int
-    amplitude: float
-    period: float
-    phase: float = 0.0
-
-
-@dataclass(frozen=True)
-class AxisComp:
-    """One ``[[axis_comp]]`` table (contract: real-axis error per motor)."""
-
-    motor: int
-    positions: np.ndarray
-    forward: np.ndarray
-    reverse: np.ndarray
-
-
-@dataclass(frozen=True)
-class MotorConfig:
-    """Output name, resolution and travel of one motor."""
-
-    motor: int
-    axis: str
-    counts_per_mm: float
-    min: float
-    max: float
-
-
-@dataclass(frozen=True)
-class Profile:
-    """A validated machine profile.
-
-    ``raw`` is the parsed document as the user wrote it (no defaults filled in),
-    with the keys this version only carries along (the error map, provenance
-    notes); treat it as read-only. The tool changes a profile file with
-    :func:`prsxy_post.profile.update.update_text` on ``text``.
-    """
-
-    name: str
-    origin: np.ndarray  # (3,) mm, machine frame
-    kinematics: KinematicParams
-    table: TableParams
-    axis_comp: tuple[AxisComp, ...]
-    controller_kinematics: KinematicParams | None
-    effects: Effects
-    motors: tuple[MotorConfig, ...]
-    limits: MachineLimits
-    period_ms: float
-    start: np.ndarray  # (5,) workpiece frame
-    work_offsets: Mapping[int, tuple[float, float, float, float, float]]
-    g28: tuple[float, float, float, float, float]
-    g30: tuple[float, float, float, float, float]
-    tools: Mapping[int, Tool]  # by tool number
-    #: ``[output.<dialect>]`` sections, validated, with their defaults
-    output: Mapping[str, Mapping[str, Any]]
-    raw: dict[str, Any] = field(repr=False)
-    #: ``[interpolation]`` with its defaults
-    interpolation: Interpolation = field(default_factory=Interpolation)
-    #: what the user should know about the file: deprecated keys and where they went
-    notes: tuple[str, ...] = ()
-    source: str = "<profile>"
-    #: the [gcode] section as read (with its defaults)
-    gcode: Mapping[str, Any] = field(default_factory=dict)
-    #: the TOML text it was read from ("" when made from a document), for
-    #: :func:`prsxy_post.profile.update.update_text`
-    text: str = field(default="", repr=False)
-
-    def motor(self, m: int) -> MotorConfig:
-        for mc in self.motors:
-            if mc.motor == m:
-                return mc
-        raise KeyError(m)
-
 
 # ---------------------------------------------------------------- validation
 
@@ -507,22 +314,20 @@ def _motors(c: _Checker, entries: Any) -> tuple[MotorConfig, ...]:
 def _output(c: _Checker, doc: Mapping[str, Any]) -> tuple[dict[str, dict[str, Any]], list[str]]:
     """``[output.<dialect>]`` for every registered dialect, with the keys it declares;
     the old flat ``[output]`` keys are still read, with a note saying where they go."""
-    from ..writers import DIALECTS  # here: the dialects' modules import this one
-
     sec = c.table(doc, "output", "", False) or {}
     legacy: dict[str, list[str]] = {}
-    for name, d in DIALECTS.items():
-        for key, st in d.settings.items():
+    for name, d in OUTPUT_SETTINGS.items():
+        for key, st in d.items():
             if st.legacy:
                 legacy.setdefault(st.legacy, []).append(f"output.{name}.{key}")
-    c.unknown(sec, set(DIALECTS) | set(legacy), "output")
+    c.unknown(sec, set(OUTPUT_SETTINGS) | set(legacy), "output")
     out: dict[str, dict[str, Any]] = {}
-    for name, d in DIALECTS.items():
+    for name, d in OUTPUT_SETTINGS.items():
         path = f"output.{name}"
         sub = c.table(sec, name, "output", False) or {}
-        c.unknown(sub, set(d.settings), path)
+        c.unknown(sub, set(d), path)
         vals: dict[str, Any] = {}
-        for key, st in d.settings.items():
+        for key, st in d.items():
             src, where, k = sub, path, key
             if key not in sub and st.legacy and st.legacy in sec:
                 src, where, k = sec, "output", st.legacy
@@ -625,9 +430,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     c.unknown(tsec, set(TABLE_KEYS), "table")
     table = TableParams(*(c.number(tsec, k, "table", 0.0, lo=-0.01, hi=0.01) for k in TABLE_KEYS))
     axis_comp = _axis_comp(c, doc["axis_comp"]) if "axis_comp" in doc else ()
-    from .. import effects as effects_registry  # local: the registry imports this module
-
-    effects = effects_registry.parse_section(c, doc)
+    effects = parse_effects(c, doc)
     motors = _motors(c, doc.get("motors"))
 
     sections = {name_: _section_with_defaults(c, doc, name_) for name_ in DEFAULTS}
@@ -697,46 +500,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         notes=tuple(notes),
         gcode=g,
     )
-    _check_reach(prof)
     return prof
-
-
-def _check_reach(prof: Profile) -> None:
-    """A geometry whose struts cannot reach the start pose is an error naming the leg."""
-    from .. import kinematics  # local: kinematics imports this module's types
-
-    for section, kp in (
-        ("kinematics", prof.kinematics),
-        ("controller_kinematics", prof.controller_kinematics),
-    ):
-        if kp is None:
-            continue
-        geo = (
-            kinematics.Geometry.from_params(kp, prof.origin, prof.table, prof.effects)
-            if section == "kinematics"
-            else kinematics.Geometry.from_params(kp, prof.origin)
-        )
-        q = prof.start[None, :]
-        try:
-            sol = kinematics.solve_platform(geo, q)
-        except Exception as exc:  # degenerate geometry: no solution at all
-            raise ProfileError(
-                f"the platform cannot be placed at the start pose ({exc})",
-                source=prof.source,
-                key=section,
-                expected="a 3-PRS geometry close to the nominal design",
-            ) from None
-        disc = kinematics.strut_discriminant(geo, sol)
-        for i in range(3):
-            if not disc[0, i] >= 0:
-                short = math.sqrt(-disc[0, i]) if disc[0, i] < 0 else math.nan
-                raise ProfileError(
-                    f"strut {i + 1} cannot reach the platform at the start pose "
-                    f"(it falls short by {short:.3f} mm across the guide)",
-                    source=prof.source,
-                    key=f"{section}.legs[{i + 1}].strut_length",
-                    expected="a strut longer than the hinge-to-ball distance across the guide",
-                )
 
 
 def loads(text: str, source: str = "<profile>") -> Profile:
@@ -785,3 +549,34 @@ def nominal_kinematics() -> KinematicParams:
     h = math.sqrt(400.0**2 - 150.0**2)
     l1, l2, l3 = (Leg(250.0, a, h, 400.0, 100.0, a) for a in (90.0, 210.0, 330.0))
     return KinematicParams(150.0, (l1, l2, l3))
+
+
+__all__ = [
+    "DEFAULTS",
+    "DEFAULT_AXIS_NAMES",
+    "DEFAULT_MOTOR_LIMITS",
+    "DEFAULT_TABLE_LIMITS",
+    "KIN_OPTIONAL",
+    "KIN_REQUIRED",
+    "LEG_OPTIONAL",
+    "LEG_REQUIRED",
+    "MAX_MAGNITUDE",
+    "MOTORS",
+    "TABLE_KEYS",
+    "AxisComp",
+    "Cyclic",
+    "Effects",
+    "Interpolation",
+    "KinematicParams",
+    "Leg",
+    "MachineLimits",
+    "MotorConfig",
+    "Profile",
+    "TableParams",
+    "Tool",
+    "dumps",
+    "kinematics_to_dict",
+    "loads",
+    "nominal_kinematics",
+    "profile_from_dict",
+]

@@ -1,6 +1,6 @@
 """What every output dialect shares: its settings, its registry entry, the header.
 
-A dialect turns the chain's points (:class:`~prsxy_post.chain.PointChunk`) into
+A dialect turns the chain's points (:class:`~prsxy_post.points.PointChunk`) into
 the text a controller runs. It is one module with a :class:`Dialect` entry; the
 registry (:mod:`prsxy_post.writers`) lists them. Each has its profile section
 ``[output.<name>]`` whose keys it declares as :class:`Setting` s (the profile
@@ -19,30 +19,14 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 from .. import __version__
+from ..points import Written
+from ..profile.output import Setting
 
 if TYPE_CHECKING:
-    from ..chain import PointChunk, Written
+    from ..points import PointChunk
     from ..profile import Profile
 
 Piece = tuple[int, str]  # (output part, text)
-
-
-@dataclass(frozen=True)
-class Setting:
-    """One key of a dialect's profile section.
-
-    default : value when absent (its type is the key's type: int or float)
-    lo, hi : allowed range (inclusive)
-    doc : one line for profiles/README.md
-    legacy : the key's name in the old flat ``[output]`` section, read with a
-        deprecation note
-    """
-
-    default: float | int
-    lo: float
-    hi: float
-    doc: str
-    legacy: str | None = None
 
 
 @dataclass(frozen=True)
@@ -93,9 +77,7 @@ class Dialect:
     space: str = "motor"
 
     def written(self, settings: Mapping[str, Any]) -> Written:
-        """How the chain's numbers are rounded on the way out (:class:`chain.Written`)."""
-        from ..chain import Written
-
+        """How the chain's numbers are rounded on the way out (:class:`points.Written`)."""
         return Written(self.space, 10.0 ** -int(settings["decimals"]))
 
 

@@ -17,7 +17,7 @@ from .. import kinematics
 from ..errors import ReachError
 
 if TYPE_CHECKING:
-    from ..chain import PointChunk
+    from ..points import PointChunk
 
 
 def written_points(cgeo: kinematics.Geometry, chunk: PointChunk) -> np.ndarray:

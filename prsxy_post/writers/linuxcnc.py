@@ -73,36 +73,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .. import kinematics
 from ..interpolate.geometry import CORNER_SHARE
-from .base import Dialect, Piece, Provenance, Setting, header, words_text
+from ..profile.output import OUTPUT_SETTINGS
+from .base import Dialect, Piece, Provenance, header, words_text
 from .cartesian import written_points
 from .numbers import format_fixed_rows, round_clean
 
 if TYPE_CHECKING:
-    from ..chain import PointChunk
+    from ..points import PointChunk
     from ..profile import Profile
 
-SETTINGS = {
-    # 7: a 0.1 nm step, as the PMAC writer's. At 6 (1 nm) the rounding of x and y
-    # alone ran a 1 ms crossing window at F60 1.0018 x F (test_controller_truth's
-    # found programs). LinuxCNC reads the words as doubles.
-    "decimals": Setting(7, 4, 9, "decimals of positions", "decimals"),
-    "tolerance_mm": Setting(
-        0.0,
-        0.0,
-        10.0,
-        "> 0: drop points while the chord through the kept ones stays within this "
-        "(it adds to the path error)",
-        "gcode_tolerance_mm",
-    ),
-    "g61_every_line": Setting(
-        0,
-        0,
-        1,
-        "1: every line runs in G61 (exact path, a stop at every point): LinuxCNC 2.9 then "
-        "never blends, and never runs over F, at the cost of time",
-    ),
-}
+SETTINGS = OUTPUT_SETTINGS["gcode"]
 
 
 def corner_cut(
@@ -146,15 +128,13 @@ class GcodeWriter:
     """
 
     def __init__(self, profile: Profile, settings: Mapping[str, Any], prov: Provenance) -> None:
-        from ..chain import controller_geometry
-
         self.profile = profile
         self.prov = prov
         self.tol = float(settings["tolerance_mm"])
         self.dec = int(settings["decimals"])
         #: every line in G61: LinuxCNC 2.9's parabolic blends run over F (module docstring)
         self.all_exact = bool(settings["g61_every_line"])
-        self.cgeo = controller_geometry(profile)
+        self.cgeo = kinematics.controller_geometry(profile)
         self.blend = CORNER_SHARE * profile.interpolation.path_tolerance_mm
         #: how far LinuxCNC may cut a tilt corner [deg] (module docstring)
         self.tilt_cut = CORNER_SHARE * profile.interpolation.path_tolerance_arcsec / 3600.0

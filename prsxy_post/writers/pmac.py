@@ -22,11 +22,12 @@ import numpy as np
 
 from ..errors import LimitError
 from ..profile import MOTORS
-from .base import Dialect, Piece, Provenance, Setting, header, words_text
+from ..profile.output import OUTPUT_SETTINGS
+from .base import Dialect, Piece, Provenance, header, words_text
 from .numbers import format_fixed_rows, round_clean
 
 if TYPE_CHECKING:
-    from ..chain import PointChunk
+    from ..points import PointChunk
     from ..profile import Profile
 
 #: "PVT{data}": with I42 = 0 the segment time is 0 to 4095.9998 ms (Software
@@ -51,40 +52,7 @@ WORDS_PER_LINE = 2 * len(MOTORS) + 2
 #: Program"): a split program must not number its parts into them.
 RESERVED_PROGRAMS = range(1000, 1004)
 
-SETTINGS = {
-    "coordinate_system": Setting(1, 1, 16, "coordinate system `&n`", "coordinate_system"),
-    "program": Setting(1, 1, 32767, "`OPEN PROG n` (split parts count up from here)", "program"),
-    # 7: a 0.1 nm step. At 6 (1 nm) the rounding alone moved a motor 0.15 % faster
-    # than planned over a 1 ms segment at F60 (a crossing window). Turbo PMAC keeps
-    # program constants as 48-bit floats with a 36-bit mantissa (User Manual,
-    # "Computational Features": "P & Q-Variables, Program Constants"), which holds
-    # 7 decimals exactly below 2^35 × 1e-7 ≈ 3436 mm.
-    "decimals": Setting(7, 4, 9, "decimals of motor positions", "decimals"),
-    "max_points_per_program": Setting(
-        0,
-        0,
-        10**9,
-        "> 0: split long jobs into programs of at most this many points, each "
-        "ending at rest at a block end",
-        "max_points_per_program",
-    ),
-    "backlash_takeup_mm": Setting(
-        0.0005,
-        1e-9,
-        1.0,
-        "`tables export --format pmac`: Ixx85, how fast the controller takes up a "
-        "backlash [mm per background cycle] (Software Reference, Ixx85: 1/16 count "
-        "per background cycle; 0 would disable the backlash)",
-    ),
-    "rotary_buffer_points": Setting(
-        0,
-        0,
-        10**7,
-        "> 0: write for a rotary buffer holding this many lines ahead "
-        "(`DEFINE ROT` in words: 12 per line)",
-        "rotary_buffer_points",
-    ),
-}
+SETTINGS = OUTPUT_SETTINGS["pmac"]
 
 
 def pvt_ms_text(quanta: int) -> str:

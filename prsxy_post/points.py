@@ -1,0 +1,102 @@
+"""The stream's point types: what the chain hands the writers.
+
+:class:`PointChunk` is a run of consecutive points with everything the chain
+computed for them; :class:`Written` says how a dialect rounds its numbers, which
+the chain must know to end a crossing of a motor's play beyond their rounding.
+Both sit below the chain and the writers, so neither imports the other.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+
+@dataclass
+class PointChunk:
+    """A run of consecutive points with everything the chain computed.
+
+    q : (n, 5) [mm, mm, mm, deg, deg] the programmed path (workpiece frame)
+    qdot : (n, 5) [mm/s, deg/s] its planned velocity
+    dt : (n,) [s] time of the segment that ends at each point
+    t : (n,) [s] time at each point from the program start
+    line : (n,) source line
+    first : (n,) bool, first point of its block
+    tool_length : (n,) active G43 offset [mm]
+    speed : (n,) planned path speed [mm/s or deg/s]
+    dwell : (n,) bool, the path stands for dt here (a dwell, a machine function,
+        or a motor crossing its play at rest)
+    fn : (n,) object, the machine-function words at function points, else None
+    block_end : (n,) bool, the last point of its block
+    split : (n,) int8, a split program's part ends at rest at this point (1: a stop
+        the program makes, 2: one put there for the split), else 0
+    q_target : (n, 5) the pose handed to the IK, after the virtual-axis map
+    P_ideal, V_ideal : (n, 5) [mm, mm/s] where the motors must be and how fast
+    P_cmd, V_cmd : (n, 5) the commands after the real-axis tables and servo lead
+    """
+
+    q: np.ndarray
+    qdot: np.ndarray
+    dt: np.ndarray
+    t: np.ndarray
+    line: np.ndarray
+    first: np.ndarray
+    tool_length: np.ndarray
+    speed: np.ndarray
+    dwell: np.ndarray
+    fn: np.ndarray
+    block_end: np.ndarray
+    split: np.ndarray
+    q_target: np.ndarray
+    P_ideal: np.ndarray
+    V_ideal: np.ndarray
+    P_cmd: np.ndarray
+    V_cmd: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.dt)
+
+    def take(self, sl: slice | np.ndarray) -> PointChunk:
+        return PointChunk(**{f.name: getattr(self, f.name)[sl] for f in fields(self)})
+
+    @staticmethod
+    def concat(chunks: Sequence[PointChunk]) -> PointChunk:
+        return PointChunk(
+            **{
+                f.name: np.concatenate([getattr(c, f.name) for c in chunks])
+                for f in fields(PointChunk)
+            }
+        )
+
+    @staticmethod
+    def empty() -> PointChunk:
+        def z(name: str) -> np.ndarray:
+            if name in ("q", "qdot", "q_target", "P_ideal", "V_ideal", "P_cmd", "V_cmd"):
+                return np.zeros((0, 5))
+            if name == "split":
+                return np.zeros(0, dtype=np.int8)
+            if name in ("first", "dwell", "block_end"):
+                return np.zeros(0, dtype=bool)
+            if name == "line":
+                return np.zeros(0, dtype=int)
+            if name == "fn":
+                return np.empty(0, dtype=object)
+            return np.zeros(0)
+
+        return PointChunk(**{f.name: z(f.name) for f in fields(PointChunk)})
+
+
+@dataclass(frozen=True)
+class Written:
+    """How the output writes its numbers, for what must survive their rounding.
+
+    space : "motor": each motor's position is written (a PVT program); "pose": the
+        tip's pose x y z A B [mm, mm, mm, deg, deg], which the controller's own
+        inverse kinematics turns into motor positions (corrected G-code)
+    digit : the last written digit's value (10^-decimals)
+    """
+
+    space: str = "motor"
+    digit: float = 1e-7
