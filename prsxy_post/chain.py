@@ -42,6 +42,7 @@ from .interpolate import (
 )
 from .interpolate.geometry import CURVE_SHARE, REVERSAL_SHARE
 from .interpolate.lookahead import KAPPA, REVERSAL_SLOPE, STAND_SLOPE
+from .interpolate.pieces import Pieces
 from .interpolate.sampling import sample, steps
 from .points import PointChunk, Written
 from .profile import MOTORS, Profile, nominal_kinematics
@@ -496,6 +497,8 @@ class Pipeline:
         self.held: PointChunk | None = None  # points waiting for the servo lead
         self.prev_out: PointChunk | None = None  # the last point released
         self.problems: list[PrsxyError] = []
+        # the planner's runs, cut again where the output does not depend on them
+        self.pieces = Pieces()
         self.t = 0.0
         self.n_points = 0
         #: seconds spent per stage (for the benchmark and profiling)
@@ -523,16 +526,17 @@ class Pipeline:
         """:meth:`feed` for a chunk already through :meth:`Planning.plan` (here or
         in another process): its points, compensated, as they become final."""
         self.timings["interpolate"] += planned.seconds
-        self._problem(planned.problems)
         out: list[PointChunk] = []
+        if planned.problems:  # the points of earlier lines, and their problems, first
+            out += self._made(self.pieces.take(final=True))
+            self._problem(planned.problems)
         if planned.start_line is not None:
             first = self._start_point(planned.start_line)
             if first is not None:
                 out.append(first)
         if planned.plan is not None and planned.samples is not None:
-            pc = self._points(planned.plan, planned.samples)
-            if pc is not None:
-                out.append(pc)
+            self.pieces.add(planned.plan, planned.samples)
+        out += self._made(self.pieces.take(final=planned.final or bool(planned.late)))
         self._problem(planned.late)
         if planned.final:
             if planned.moves_nothing:
@@ -547,6 +551,15 @@ class Pipeline:
 
     def finish(self) -> list[PointChunk]:
         return self.feed([], final=True)
+
+    def _made(self, pieces: list[tuple[Plan, Samples]]) -> list[PointChunk]:
+        """The points of whole pieces (:mod:`.interpolate.pieces`), as they become final."""
+        out = []
+        for plan, samples in pieces:
+            pc = self._points(plan, samples)
+            if pc is not None:
+                out.append(pc)
+        return out
 
     # -- points
     def _start_point(self, line0: int) -> PointChunk | None:

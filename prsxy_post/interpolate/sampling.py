@@ -11,6 +11,7 @@ duration.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -59,6 +60,14 @@ class Samples:
 
     def take(self, sel: slice | np.ndarray) -> Samples:
         return Samples(**{f.name: getattr(self, f.name)[sel] for f in fields(self)})
+
+    @staticmethod
+    def concat(parts: Sequence[Samples], offsets: Sequence[int]) -> Samples:
+        """Consecutive runs of points as one; ``offsets``: where each run's plan
+        begins in the joined plan (its points' ``block`` are moved by that)."""
+        out = {f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(Samples)}
+        out["block"] = np.concatenate([p.block + o for p, o in zip(parts, offsets, strict=True)])
+        return Samples(**out)
 
 
 def longest_step(b: Blocks, law: TimeLaw, limits: PlanLimits) -> np.ndarray:
