@@ -276,12 +276,20 @@ def main() -> None:
         default="pmac",
         help="output format converted to (default pmac)",
     )
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     ap.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         child_convert(*args.child)
         return
     results = run(args.lines or [200_000, 2_000_000], args.pygcode_limit, args.format)
+    if args.markdown:
+        import mdsection
+
+        title = "Conversion speed" if args.format == "pmac" else "Corrected G-code speed"
+        print(mdsection.header(title))
     print(report(results))
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))

@@ -29,6 +29,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+import mdsection  # noqa: E402
+
 from prsxy_post import chain, kinematics  # noqa: E402
 from tests import controllers as ctl  # noqa: E402
 from tests.test_tracking import (  # noqa: E402
@@ -144,7 +146,13 @@ def main() -> None:
         default=1,
         help="with --servo-ms: the worst over this many tick phases",
     )
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     args = ap.parse_args()
+    if args.markdown:
+        title = "At the servo clock" if args.servo_ms else "What the controller executes"
+        print(mdsection.header(title))
     if args.servo_ms:
         servo_table(args.servo_ms, args.found, args.phases)
         return
