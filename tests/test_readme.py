@@ -167,3 +167,46 @@ def test_walk_runs_as_printed(tmp_path: Path) -> None:
     tables = (tmp_path / "pmac" / "axis-tables.pmc").read_text()
     assert "I51=1" in tables and "`I51=1`" in walk
     assert re.search(r"add [+-]\d+ to I\d26", tables) and "`Ixx26`" in load
+
+
+MEASUREMENTS = ROOT / "docs" / "measurements.md"
+#: the two lines under a section's heading: the command, and when it was measured
+PROVENANCE = re.compile(
+    r"^- Regenerate: `python \S+\.py[^`]*`.*\n(?:  .*\n)*- Measured: \d{4}-\d\d-\d\d", re.M
+)
+
+
+def _sections(text: str) -> dict[str, str]:
+    parts = re.split(r"^## (.+)\n", text, flags=re.M)
+    return dict(zip(parts[1::2], parts[2::2], strict=True))
+
+
+def test_every_measured_table_names_its_command_and_date() -> None:
+    """A section of docs/measurements.md that holds a table says which script run
+    regenerates it and when it was measured."""
+    sections = _sections(MEASUREMENTS.read_text())
+    tables = {t: s for t, s in sections.items() if re.search(r"^\|", s, re.M)}
+    assert len(tables) >= 10, sorted(sections)
+    bad = [t for t, s in tables.items() if not PROVENANCE.search(s)]
+    assert not bad, f"sections without '- Regenerate: `python ...`' and '- Measured: date': {bad}"
+
+
+def test_bench_markdown_prints_sections_of_the_page() -> None:
+    """What `--markdown` prints heads a section the page has, in the page's format."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    try:
+        import mdsection
+    finally:
+        sys.path.remove(str(ROOT / "bench"))
+    head = mdsection.header("X", [str(ROOT / "bench" / "points.py"), "--lines", "9", "--markdown"])
+    assert head.startswith("## X\n\n- Regenerate: `python bench/points.py --lines 9`\n")
+    assert PROVENANCE.search(head), head
+    sections = _sections(MEASUREMENTS.read_text())
+    titles = set()
+    for script in sorted((ROOT / "bench").glob("*.py")):
+        for line in script.read_text().splitlines():
+            if "header(" in line or re.match(r"\s*title = ", line):
+                titles.update(re.findall(r'"([A-Z][^"]+)"', line))
+    assert len(titles) >= 9, titles
+    missing = sorted(t for t in titles if t not in sections)
+    assert not missing, f"bench scripts print sections docs/measurements.md lacks: {missing}"
