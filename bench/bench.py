@@ -18,10 +18,11 @@ compensate, write), ``command`` is the whole ``prsxy-post convert`` command as a
 runs it (Python's start and imports included). In the same run and on the same file it
 times LinuxCNC's ``rs274 -g`` (a whole command too) and pygcode's ``Machine`` when
 they are installed. Large programs are interpreted in a second process and written by
-a third (see README); peak memory is reported for each: main + interpreter + writer.
+a third (docs/architecture.md); peak memory is reported for each: main + interpreter + writer.
 
-It is a script, not a test: the figures depend on the machine. README shows the
-latest figures with the machine they were taken on.
+It is a script, not a test: the figures depend on the machine. docs/measurements.md
+shows the latest figures with the machine they were taken on (``--markdown`` prints
+its section).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Calibration and diagnosis judged by execution, the figures in the README.
+"""Calibration and diagnosis judged by execution, the figures of docs/measurements.md.
 
     python bench/calibration_accuracy.py [--seeds 7 8 9]
 

@@ -1,4 +1,4 @@
-"""What the controller executes: the README's table, measured.
+"""What the controller executes: the table of docs/measurements.md, measured.
 
 Every sample is converted for the nominal machine and for machines with random
 errors in every contract term and backlash in every motor (seeds 11-13), in both

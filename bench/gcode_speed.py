@@ -24,8 +24,8 @@ start-up is a few milliseconds). With ``--convert``, also the whole ``prsxy-post
 convert`` command on each program (bench.py's profile and stages: every
 compensation stage, PMAC output; Python's start included), against the same
 ``rs274 -g``. Each figure is the best of ``--repeat`` runs, all alternated. It is
-a script, not a test: the figures depend on the machine; README shows the latest
-with the machine they were taken on.
+a script, not a test: the figures depend on the machine; docs/measurements.md shows
+the latest (``--markdown`` prints its section).
 """
 
 from __future__ import annotations
