@@ -18,10 +18,11 @@ compensate, write), ``command`` is the whole ``prsxy-post convert`` command as a
 runs it (Python's start and imports included). In the same run and on the same file it
 times LinuxCNC's ``rs274 -g`` (a whole command too) and pygcode's ``Machine`` when
 they are installed. Large programs are interpreted in a second process and written by
-a third (see README); peak memory is reported for each: main + interpreter + writer.
+a third (docs/architecture.md); peak memory is reported for each: main + interpreter + writer.
 
-It is a script, not a test: the figures depend on the machine. README shows the
-latest figures with the machine they were taken on.
+It is a script, not a test: the figures depend on the machine. docs/measurements.md
+shows the latest figures with the machine they were taken on (``--markdown`` prints
+its section).
 """
 
 from __future__ import annotations
@@ -277,12 +278,20 @@ def main() -> None:
         default="pmac",
         help="output format converted to (default pmac)",
     )
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     ap.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         child_convert(*args.child)
         return
     results = run(args.lines or [200_000, 2_000_000], args.pygcode_limit, args.format)
+    if args.markdown:
+        import mdsection
+
+        title = "Conversion speed" if args.format == "pmac" else "Corrected G-code speed"
+        print(mdsection.header(title))
     print(report(results))
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))

@@ -1,4 +1,4 @@
-"""Calibration and diagnosis judged by execution, the figures in the README.
+"""Calibration and diagnosis judged by execution, the figures of docs/measurements.md.
 
     python bench/calibration_accuracy.py [--seeds 7 8 9]
 
@@ -27,6 +27,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+import mdsection  # noqa: E402
+
 from prsxy_post import profile  # noqa: E402
 from tests import loop  # noqa: E402
 
@@ -34,7 +36,12 @@ from tests import loop  # noqa: E402
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--seeds", type=int, nargs="+", default=[7, 8, 9])
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     args = ap.parse_args()
+    if args.markdown:
+        print(mdsection.header("Calibration closes the loop"))
     nominal = profile.loads((ROOT / "profiles" / "prsxy-nominal.toml").read_text(), "nominal")
     print(
         "| seed | program | nominal µm | map only µm | calibrate µm | + diagnose -o µm "

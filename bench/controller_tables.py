@@ -18,6 +18,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+import mdsection
+
 from tests import test_controller_tables_linuxcnc as lc
 from tests import test_controller_tables_pmac as pm
 
@@ -25,9 +27,19 @@ from tests import test_controller_tables_pmac as pm
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     args = ap.parse_args()
     seeds = tuple(args.seeds)
     rows = {**lc.measured_residuals(seeds), **pm.measured_residuals(seeds)}
+    if args.markdown:
+        print(mdsection.header("Real-axis tables as the controllers apply them"))
+        print(f"| table | largest abs(end − target) over seeds {', '.join(map(str, seeds))} µm |")
+        print("|---|---:|")
+        for name, worst in rows.items():
+            print(f"| {name} | {worst * 1e3:.4f} |")
+        return
     print(f"largest |end - target| over seeds {', '.join(map(str, seeds))}:")
     for name, worst in rows.items():
         print(f"  {name:28s} {worst * 1e3:.4f} um")

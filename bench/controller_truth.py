@@ -1,4 +1,4 @@
-"""What the controller executes: the README's table, measured.
+"""What the controller executes: the table of docs/measurements.md, measured.
 
 Every sample is converted for the nominal machine and for machines with random
 errors in every contract term and backlash in every motor (seeds 11-13), in both
@@ -28,6 +28,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+
+import mdsection  # noqa: E402
 
 from prsxy_post import kinematics  # noqa: E402
 from tests import controllers as ctl  # noqa: E402
@@ -144,7 +146,13 @@ def main() -> None:
         default=1,
         help="with --servo-ms: the worst over this many tick phases",
     )
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     args = ap.parse_args()
+    if args.markdown:
+        title = "At the servo clock" if args.servo_ms else "What the controller executes"
+        print(mdsection.header(title))
     if args.servo_ms:
         servo_table(args.servo_ms, args.found, args.phases)
         return

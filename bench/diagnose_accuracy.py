@@ -35,6 +35,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+import mdsection  # noqa: E402
+
 from prsxy_post import diagnose, effects, experiments, measure, profile, simulate  # noqa: E402
 from prsxy_post.diagnose import model, selection  # noqa: E402
 
@@ -232,10 +234,14 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, nargs="+", default=list(range(10)))
     ap.add_argument("--json", help="write the cases here")
     ap.add_argument("--summarise", nargs="+", metavar="JSON", help="only summarise saved runs")
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     args = ap.parse_args()
+    head = mdsection.header("Diagnosis on random machines") + "\n" if args.markdown else ""
     if args.summarise:
         out = [r for f in args.summarise for r in json.loads(Path(f).read_text())]
-        print(summarise(out))
+        print(head + summarise(out))
         return
     nominal = profile.loads(NOMINAL.read_text(), "prsxy-nominal.toml")
     groups = confounded(nominal)
@@ -251,7 +257,7 @@ def main() -> None:
             )
             if args.json:
                 Path(args.json).write_text(json.dumps(out, indent=1, default=float))
-    print(summarise(out))
+    print(head + summarise(out))
 
 
 if __name__ == "__main__":

@@ -24,8 +24,8 @@ start-up is a few milliseconds). With ``--convert``, also the whole ``prsxy-post
 convert`` command on each program (bench.py's profile and stages: every
 compensation stage, PMAC output; Python's start included), against the same
 ``rs274 -g``. Each figure is the best of ``--repeat`` runs, all alternated. It is
-a script, not a test: the figures depend on the machine; README shows the latest
-with the machine they were taken on.
+a script, not a test: the figures depend on the machine; docs/measurements.md shows
+the latest (``--markdown`` prints its section).
 """
 
 from __future__ import annotations
@@ -41,7 +41,17 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+import mdsection  # noqa: E402
+
 from bench import bench_profile, generate, time_command, time_rs274  # noqa: E402
+
+#: the programs as docs/measurements.md names them
+NAMES = {
+    "cam": "cam: bench.py's five-axis finishing program (the fast path)",
+    "cam+comp": "cam+comp: the same under `G41.1 D0.01` (general path, compensation queue)",
+    "macro": "macro: a `while` loop calling a subroutine per move, named and numbered "
+    "parameters, `SIN`/`COS`",
+}
 
 
 def cam_with_comp(n_lines: int) -> str:
@@ -89,13 +99,20 @@ def main() -> None:
     ap.add_argument("--lines", type=int, default=200_000, help="moves per program")
     ap.add_argument("--repeat", type=int, default=5, help="best of this many runs")
     ap.add_argument("--convert", action="store_true", help="time the convert command too")
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     args = ap.parse_args()
     programs = {
         "cam": generate(args.lines),
         "cam+comp": cam_with_comp(args.lines),
         "macro": macro(args.lines),
     }
-    print(f"{platform.processor() or platform.machine()}, Python {platform.python_version()}")
+    if args.markdown:
+        print(mdsection.header("The interpreter and convert beside rs274"))
+        print(mdsection.machine() + "\n")
+    else:
+        print(f"{platform.processor() or platform.machine()}, Python {platform.python_version()}")
     head = "| program | lines | motions | ours s | rs274 -g s | ours / rs274 |"
     rule = "|---|---:|---:|---:|---:|---:|"
     if args.convert:
@@ -122,7 +139,12 @@ def main() -> None:
             theirs = None if runs[0] is None else min(r for r in runs if r is not None)
             ratio = f"{ours[0] / theirs:.2f}" if theirs else "–"
             rs = f"{theirs:.2f}" if theirs else "–"
-            row = f"| {name} | {text.count(chr(10))} | {ours[1]} | {ours[0]:.2f} | {rs} | {ratio} |"
+            n_lines, n_motions = text.count(chr(10)), ours[1]
+            if args.markdown:  # the names and thousands as the page writes them
+                shown, counts = NAMES[name], f"{n_lines:,} | {n_motions:,}"
+            else:
+                shown, counts = name, f"{n_lines} | {n_motions}"
+            row = f"| {shown} | {counts} | {ours[0]:.2f} | {rs} | {ratio} |"
             if commands:
                 cmd = min(commands)
                 row += f" {cmd:.2f} | {f'{cmd / theirs:.2f}' if theirs else '–'} |"

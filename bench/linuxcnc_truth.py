@@ -14,6 +14,8 @@ the found programs take about eight minutes.
     python bench/linuxcnc_truth.py --longest 10         # skip programs longer than 10 s
     python bench/linuxcnc_truth.py --blends             # the parabolic blends, measured
     python bench/linuxcnc_truth.py --g61-everywhere     # with g61_every_line = 1
+    python bench/linuxcnc_truth.py --markdown           # docs/measurements.md's section,
+                                                        # the counts within each bound after
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+
+import mdsection  # noqa: E402
 
 from tests import controllers as ctl  # noqa: E402
 from tests import linuxcnc_motion as lm  # noqa: E402
@@ -55,6 +59,25 @@ def blends() -> None:
                 )
 
 
+#: the bounds the section of docs/measurements.md counts programs within: the path
+#: and tool-axis tolerance, and the speed the G-code commands (with its rounding)
+BOUNDS = {"path ≤ 0.5 µm": 0.5, "tool axis ≤ 0.5 arcsec": 0.5, "speed ≤ 1.001 F": 1.001}
+
+
+def counts_table(label: str, judged: list[tuple[float, float, float]]) -> str:
+    """How many of the judged programs (path µm, tool axis arcsec, speed / F) hold each
+    bound, and all three, as the section's table."""
+    within = [[v <= b for v, b in zip(j, BOUNDS.values(), strict=True)] for j in judged]
+    cells = [sum(w[k] for w in within) for k in range(len(BOUNDS))] + [sum(all(w) for w in within)]
+    return "\n".join(
+        [
+            "| on LinuxCNC 2.9 | " + " | ".join(BOUNDS) + " | all three |",
+            "|---|" + "---:|" * (len(BOUNDS) + 1),
+            f"| {label} | " + " | ".join(str(c) for c in cells) + " |",
+        ]
+    )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--programs", choices=["found", "samples"], default="found")
@@ -67,9 +90,14 @@ def main() -> None:
         help="write with [output.gcode] g61_every_line = 1: every line in G61 (exact "
         "path, a stop at every point)",
     )
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     args = ap.parse_args()
     if not lm.available():
         sys.exit("LinuxCNC is not installed (apt-get install linuxcnc-uspace)")
+    if args.markdown:
+        print(mdsection.header("Corrected G-code on LinuxCNC 2.9"))
     if args.blends:
         blends()
         return
@@ -83,6 +111,7 @@ def main() -> None:
         "| LinuxCNC's largest speed over F mm/s |"
     )
     print("|---|---|---|---|---|---:|")
+    judged: list[tuple[float, float, float]] = []
     for name, seed, text in jobs:
         truth = truth_machine("random", seed, play=not args.no_play)
         if args.g61_everywhere:
@@ -98,12 +127,18 @@ def main() -> None:
             model, _ = judge_gcode(truth, motions, res, texts)
             as_written = f"{model.speed_ratio:.4f}, {model.path_mm * 1e3:.3f}"
         tr, run, _ = run_on_linuxcnc(truth, motions, res, texts[0])
+        judged.append((tr.path_mm * 1e3, tr.ab_deg * 3600, tr.speed_ratio))
         print(
             f"| {name} | random {seed} | {as_written} "
             f"| {tr.speed_ratio:.4f}, {tr.path_mm * 1e3:.3f}, {tr.ab_deg * 3600:.2f} "
             f"| {written.t[-1]:.2f} / {run.t[-1]:.2f} | {tr.speed_excess_mm_s:.3f} |",
             flush=True,
         )
+    if args.markdown:
+        setting = ", `g61_every_line = 1`" if args.g61_everywhere else ""
+        play = "without play" if args.no_play else "with play"
+        label = f"the {len(judged)} {args.programs} programs ({play}{setting})"
+        print("\n" + counts_table(label, judged))
 
 
 if __name__ == "__main__":

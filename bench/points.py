@@ -35,6 +35,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+import mdsection  # noqa: E402
+
 import bench  # noqa: E402
 from prsxy_post import chain, gcode, profile, program  # noqa: E402
 from prsxy_post.interpolate.sampling import longest_step, steps  # noqa: E402
@@ -72,7 +74,12 @@ def count(text: str, prof: profile.Profile) -> dict[str, float]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--lines", type=int, default=20000)
+    ap.add_argument(
+        "--markdown", action="store_true", help="print the section of docs/measurements.md"
+    )
     args = ap.parse_args()
+    if args.markdown:
+        print(mdsection.header("Where the points come from"))
     with tempfile.TemporaryDirectory() as tmp:
         prof = profile.loads(bench.bench_profile(Path(tmp) / "bench.toml").read_text(), "bench")
     c = count(bench.generate(args.lines), prof)
