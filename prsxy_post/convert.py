@@ -302,6 +302,7 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                 profile_source=job.profile_path,
                 profile_sha256=sha256_of(job.profile_path),
                 options=job.options,
+                axis_comp=stages.axis_comp,
             )
             dialect = writers.dialect(job.fmt)
             settings = writers.settings_of(prof, job.fmt)

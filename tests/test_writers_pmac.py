@@ -57,3 +57,27 @@ def test_pvt_times_are_whole_quanta_never_shorter_than_planned(path) -> None:
     assert np.all(longer < QUANTUM_S)
     assert np.min(planned[moving]) < 1e-3, "no segment under a ms: the windows were not met"
     np.testing.assert_allclose(dt[dwell], planned[dwell], atol=5e-8)  # 4 decimals of a ms
+
+
+@pytest.mark.parametrize("with_tables", [True, False])
+def test_the_header_says_which_tables_compensate_the_real_axes(tmp_path, with_tables: bool) -> None:
+    """With the real-axis tables stage the program carries the motors' errors, and
+    the controller's own tables must be off (I51=0) or they would count twice;
+    converted without it (``--no-axis-comp``), they must be on (I51=1) with the
+    file ``tables export --format pmac`` writes (Software Reference, I51, DEFINE
+    COMP, DEFINE BLCOMP)."""
+    from click.testing import CliRunner
+
+    from prsxy_post.cli import main
+
+    out = tmp_path / "p.pmc"
+    args = ["convert", str(ROOT / "samples" / "drill.ngc"), "--profile"]
+    args += [str(ROOT / "profiles" / "prsxy-shop.toml"), "-o", str(out)]
+    result = CliRunner().invoke(main, args + ([] if with_tables else ["--no-axis-comp"]))
+    assert result.exit_code == 0, result.output
+    head = out.read_text().split("\nCLOSE\n")[0]
+    if with_tables:
+        assert "I51=0" in head and "Ixx86=0" in head and "I51=1" not in head
+    else:
+        assert "I51=1" in head and "axis-tables.pmc" in head and "do NOT carry" in head
+        assert "I51=0" not in head and "Ixx86=0" not in head

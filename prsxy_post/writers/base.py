@@ -39,6 +39,9 @@ class Provenance:
     profile_source: str
     profile_sha256: str
     options: str
+    #: the real-axis tables stage ran: the motors' real-axis errors are in the
+    #: program (else the controller's own tables must compensate them)
+    axis_comp: bool = True
 
 
 class Writer(Protocol):

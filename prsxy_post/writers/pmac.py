@@ -100,12 +100,33 @@ class PmacWriter:
             "  I10: a servo cycle of 442 us or shorter (the default; I10 in 1/8,388,608",
             "    ms): the trajectory is commanded once a cycle, and a motor turning",
             "    between two commands is commanded short of its turn; the path",
-            "    tolerance was measured at 442 us (README, At the servo clock)",
+            "    tolerance was measured at 442 us (docs/measurements.md, At the servo clock)",
             f"  I{50 + self.cs}90=1000 (Isx90 of &{self.cs}): velocities in mm/s (time units",
             "    of 1000 ms);",
             "    positions in mm (the axis definitions below: counts per mm)",
             f"  I{50 + self.cs}50=0 (Isx50 of &{self.cs}): no kinematic subroutines; the",
             "    motors are commanded directly",
+            *(self._tables_lines(motors)),
+            "Machine functions (S, T, M, G, D words) run at rest: DWELL0 first (it waits",
+            "for the motion to finish), then the words: M n calls PROG 1001 at N(n*1000),",
+            "T n PROG 1002, D n PROG 1003, G n PROG 1000: the controller must hold",
+            "those programs and labels (this program's are listed at its end); S puts",
+            "the speed in Q127 (Software Reference, M{data}, T{data}, D{data},",
+            "S{data}; User Manual, Implementing a Machine-Tool Style Program).",
+        ]
+
+    def _tables_lines(self, motors: str) -> list[str]:
+        """What the controller's own real-axis tables must do with this program."""
+        if not self.prov.axis_comp:
+            return [
+                f"  motors {motors} do NOT carry their real-axis errors in this program",
+                "  (converted without the real-axis tables stage): the controller's own",
+                "  tables must compensate them: download the file of `prsxy-post tables",
+                "    export --format pmac` (axis-tables.pmc: DEFINE COMP, DEFINE BLCOMP",
+                "    and each motor's Ixx85, Ixx86) and set I51=1 (I51, global:",
+                "    leadscrew compensation tables on)",
+            ]
+        return [
             f"  motors {motors} carry their real-axis errors in this program; the",
             "  controller's own tables would compensate them twice:",
             "    I51=0 (I51, global: leadscrew compensation tables off), then each",
@@ -114,12 +135,6 @@ class PmacWriter:
             "    in it and is still added every servo cycle; DELETE COMP is not said",
             "    to clear it) (User Manual, Active Calculation of Corrections)",
             "    Ixx86=0 on each (Ixx86: backlash size; Ixx85 then does nothing)",
-            "Machine functions (S, T, M, G, D words) run at rest: DWELL0 first (it waits",
-            "for the motion to finish), then the words: M n calls PROG 1001 at N(n*1000),",
-            "T n PROG 1002, D n PROG 1003, G n PROG 1000: the controller must hold",
-            "those programs and labels (this program's are listed at its end); S puts",
-            "the speed in Q127 (Software Reference, M{data}, T{data}, D{data},",
-            "S{data}; User Manual, Implementing a Machine-Tool Style Program).",
         ]
 
     def _open_part(self, P0: np.ndarray) -> list[str]:
