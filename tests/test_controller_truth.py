@@ -1155,7 +1155,7 @@ def test_pvt_stays_on_the_path_wherever_the_servo_ticks_fall(
     """The controller starts its clock with each move from rest (phase 0, above), but
     where its ticks fall on a turn moves with any change of timing (a PVT time
     rounded, a segment planned otherwise): path and tool axis must not owe their
-    accuracy to it. At 0.884 ms they would (README, "At the servo clock")."""
+    accuracy to it. At 0.884 ms they would (docs/measurements.md, "At the servo clock")."""
     assert_on_the_path(_servo_trace(kind, seed, path.read_text(), phase))
 
 
