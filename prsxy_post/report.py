@@ -421,6 +421,15 @@ def ballbar_report(analysis: Analysis, where: str | Path | None = None) -> dict[
     )
     page.para("What to do next: " + " ".join(ballbar_next(analysis)), cls="next")
     written_to(page, where)
+    page.heading("Polar plots")
+    page.image(
+        "ballbar.png",
+        plots.ballbar_plot(analysis.results, analysis.runs, analysis.predicted),
+        "Polar plots, one per circle, seen from the side RS274/NGC names the direction "
+        "from: ccw (G3, blue) and cw (G2, red) overlaid on one scale (µm/div in each "
+        "title); dashed: the fitted terms"
+        + ("; dotted: the model's simulation." if analysis.predicted else "."),
+    )
     page.heading("Runs")
     page.table(
         ["file", "circle", "direction", "feed", "G µm", "noise µm", "above the noise"],
@@ -446,13 +455,5 @@ def ballbar_report(analysis: Analysis, where: str | Path | None = None) -> dict[
         "errors. Directions as RS274/NGC names G2 (cw) and G3 (ccw): seen from the "
         "positive end of the axis normal to the plane (+Z for XY, +Y for XZ, +X for YZ).",
         cls="small",
-    )
-    page.image(
-        "ballbar.png",
-        plots.ballbar_plot(analysis.results, analysis.runs, analysis.predicted),
-        "Polar plots, one per circle, seen from the side RS274/NGC names the direction "
-        "from: ccw (G3, blue) and cw (G2, red) overlaid on one scale (µm/div in each "
-        "title); dashed: the fitted terms"
-        + ("; dotted: the model's simulation." if analysis.predicted else "."),
     )
     return page.files()

@@ -216,7 +216,7 @@ def test_ballbar_page_is_a_table_and_asks_for_the_other_direction(nominal: Profi
     files = report.ballbar_report(bb.analyse([run]), "somewhere")
     md = files["report.md"]
     assert isinstance(md, str)
-    assert re.findall(r"^## (.*)$", md, re.M)[:2] == ["Conclusion", "Runs"]
+    assert re.findall(r"^## (.*)$", md, re.M)[:3] == ["Conclusion", "Polar plots", "Runs"]
     assert "What to do next: Re-measure: 1 circle(s) ran one way only" in md
     row = next(ln for ln in md.splitlines() if ln.startswith(f"| {Path(run.source).name}"))
     assert "| YZ r20 | cw (G19 G2, from +X) | F1000 |" in row, row
