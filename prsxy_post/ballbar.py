@@ -3,6 +3,14 @@
 A run is read as the radial deviation Δr(θ) = dev_um along the angle θ of the
 commanded tip about the pivot in the run's plane (X-Y: θ = atan2(y, x); X-Z:
 atan2(z, x); Y-Z: atan2(z, y); cones are X-Y circles with a tilted spindle).
+
+**Names** (``docs/data-formats.md``): the direction is RS274/NGC's, ``ccw`` the
+way G3 turns and ``cw`` the way G2 turns in that plane, seen from the positive
+end of the plane's normal (+Z, +Y, +X for G17, G18, G19). In X-Z that is the
+opposite of θ's sense (X × Z = −Y): a G18 G3 run has θ falling. A run whose tool
+axis is tilted from Z is a cone test, named with its tilt; the feed is the
+commanded one, the speed the commanded samples hold for most of the run.
+
 The small-error model fitted by linear least squares, for a circle of radius r:
 
     Δr(θ) = c0                                     mean radius error
@@ -20,8 +28,9 @@ hence **squareness** σ = 2 s2 / r (reported ×1000 in mm/m, sign as the profile
 ``table.squareness``: positive when the Y motion leans towards +X) and **scale
 mismatch** (s_x − s_y)·r = 2 c2 (reported in mm at the test radius, as a ballbar
 report gives it). A servo lag τ_1 on the first axis adds (τ_1 r ω / 2) sin 2θ with
-the sign of the direction; the pair (ccw, cw) separates it from squareness:
-**servo mismatch** Δτ = (s2_ccw − s2_cw) / (r ω) with ω = v / r, in ms.
+the sign of θ's sense; the pair (ccw, cw) separates it from squareness:
+**servo mismatch** Δτ = o (s2_ccw − s2_cw) / (r ω) with ω = v / r, in ms, o the
+plane's :data:`ORIENTATION` (−1 in X-Z, where the ccw run has θ falling).
 
 **Circular deviation** G (ISO 230-4): the radial range of the path about its
 least-squares centre, max Δr − min Δr after removing c1, s1. **Circular

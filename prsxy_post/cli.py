@@ -1030,8 +1030,9 @@ def ballbar(
     """ISO 230-4 circular deviation and ballbar diagnostics of ballbar RUNS.
 
     Each figure is printed only when it stands above the noise, with its
-    significance; --json has them all. Polar plots overlay a circle's ccw and cw
-    runs on one µm/div scale.
+    significance; --json has them all. Directions are RS274/NGC's: ccw is G3, cw
+    is G2, seen from +Z (XY), +Y (XZ) or +X (YZ). Polar plots overlay a circle's
+    ccw and cw runs on one µm/div scale, seen from that side.
 
     Example: prsxy-post ballbar ballbar-*.csv --report bb-report
     """

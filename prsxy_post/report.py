@@ -166,11 +166,11 @@ def _laser_clause(data: Data, need: Mapping[int, float]) -> str:
     for motor, step in need.items():
         spacing = _laser_spacing(data, motor)
         now = f"now {spacing:g} mm" if spacing is not None else "no laser run now"
-        parts.append(f"motor {motor} at most {step:g} mm apart ({now})")
+        parts.append(f"for motor {motor} at most {step:g} mm apart ({now})")
     return (
         "measure with the laser at targets "
         + ", ".join(parts)
-        + ", so that its cyclic errors show in the laser runs (two targets a pitch)"
+        + " (two targets a pitch of the cyclic errors, so that the laser runs show them)"
     )
 
 
@@ -227,9 +227,9 @@ def _diagnose_summary(page: Page, result: Diagnosis, data: Data, where: Any) -> 
     page.heading("Conclusion")
     page.para(lead, cls="lead")
     page.para("What to do next: " + diagnose_next(result, data), cls="next")
+    written_to(page, where)
     for u in result.unexplained:
         page.para(u["sentence"], warn=True)
-    written_to(page, where)
     if effects:
         page.heading("Largest findings")
         page.items([e.sentence() for e in effects[:TOP_FINDINGS]])
