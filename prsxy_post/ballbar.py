@@ -443,7 +443,8 @@ def centred(th: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def result_to_json(x: BallbarResult | BallbarPair) -> dict[str, Any]:
-    return asdict(x)
+    """The fields, and the circle's name (``XZ r50``, ``cone 15° r100``)."""
+    return {**asdict(x), "circle": x.circle}
 
 
 def circles(

@@ -170,6 +170,7 @@ def test_every_plane_and_direction_is_named_as_rs274_turns_it(
         assert res.gcode == {"ccw": "G3", "cw": "G2"}[direction]
         assert res.viewed_from == {"XY": "+Z", "XZ": "+Y", "YZ": "+X"}[plane]
         assert (js[k]["direction"], js[k]["gcode"]) == (direction, res.gcode)
+        assert js[k]["circle"] == res.circle
         line = analysis.lines()[k]
         assert f" {direction} (" in line and "F1000:" in line, line
         if cone:

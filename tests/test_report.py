@@ -221,3 +221,37 @@ def test_ballbar_page_is_a_table_and_asks_for_the_other_direction(nominal: Profi
     row = next(ln for ln in md.splitlines() if ln.startswith(f"| {Path(run.source).name}"))
     assert "| YZ r20 | cw (G19 G2, from +X) | F1000 |" in row, row
     assert str(Path("somewhere").resolve() / "report.html") in md
+
+
+# ---------------------------------------------------------------- plots
+
+
+def test_the_bar_chart_draws_each_files_noise(nominal: Profile) -> None:
+    """A black dash at each bar's noise, in the unit its bar is in (µm here)."""
+    pytest.importorskip("matplotlib", reason="plots need the optional matplotlib")
+    from prsxy_post import plots
+
+    result = _diagnosis([])
+    fig = plots.residuals_figure(result)
+    (ax,) = fig.axes
+    (noise,) = [c for c in ax.collections if c.get_label() == "noise"]
+    (seg,) = noise.get_segments()
+    assert seg[:, 0] == pytest.approx([0.5, 0.5])  # 0.0005 mm of ballbar noise, in µm
+    assert "noise" in [t.get_text() for t in ax.get_legend().get_texts()]
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+
+
+def test_a_residual_of_the_noise_size_spans_divisions() -> None:
+    """The residual panel's scale makes a 0.5 µm structure in 0.5 µm noise span two
+    divisions or more, where the measured panel's 10 µm/div would show a twentieth."""
+    from prsxy_post import plots
+
+    th = np.linspace(-np.pi, np.pi, 2000, endpoint=False)
+    rng = np.random.default_rng(0)
+    r = 0.5 * np.sin(7 * th) + rng.normal(0, 0.5, th.size)
+    div = plots.residual_scale(plots.smooth(th, r), 0.5)
+    assert 2 * 0.5 / div >= 2, div
+    # and the samples' scatter stays inside the plot (±4.8 divisions)
+    assert np.mean(np.abs(r) < 4.8 * div) > 0.99
