@@ -84,6 +84,38 @@ def test_servo_mismatch_flips_with_direction_and_the_pair_separates_it() -> None
     assert abs(p.servo_mismatch_ms) == pytest.approx(2.0, rel=0.1)
 
 
+def test_servo_mismatch_keeps_its_meaning_in_the_xz_plane() -> None:
+    """The same table errors and lag laid in X-Z (the second axis Z): the runs are
+    named the other way round (θ = atan2(z, x) rising is G2 there, seen from +Y), and
+    the pair finds the same lag of the first axis with the same sign."""
+    runs = [
+        run(100.0, ccw, np.random.default_rng(4), sq=1e-4, lag_ms=2.0, feed=2000.0)
+        for ccw in (True, False)
+    ]
+    xz = [
+        measure.BallbarRun(
+            f"xz-{k}.csv",
+            "xz r100",
+            r.pivot,
+            r.length,
+            r.t,
+            r.commanded[:, [0, 2, 1, 3, 4]],
+            r.dev_um,
+            r.rows,
+            {},
+        )
+        for k, r in zip(("a", "b"), runs, strict=True)
+    ]
+    res_xy, (pair_xy,) = bb.analyse_runs(runs)
+    res_xz, (pair_xz,) = bb.analyse_runs(xz)
+    assert [r.direction for r in res_xy] == ["ccw", "cw"]
+    assert [r.direction for r in res_xz] == ["cw", "ccw"]
+    assert [r.plane for r in res_xz] == ["XZ", "XZ"]
+    assert pair_xz.servo_mismatch_ms == pytest.approx(pair_xy.servo_mismatch_ms, rel=1e-9)
+    assert pair_xz.servo_mismatch_ms == pytest.approx(2.0, rel=0.1)
+    assert pair_xz.squareness_mm_per_m == pytest.approx(pair_xy.squareness_mm_per_m, rel=1e-9)
+
+
 def test_spec_example_reads_the_perturbed_table() -> None:
     """The spec's example run was measured on perturbed.toml (squareness 0.13 mm/m)."""
     r = measure.read_ballbar((DATA / "spec" / "ballbar-xy-r50-ccw.csv").read_text(), "x")
