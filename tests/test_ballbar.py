@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 from prsxy_post import ballbar as bb
-from prsxy_post import experiments, measure, plots
+from prsxy_post import experiments, measure, plots, simulate
 from prsxy_post.profile import Profile
 
+from . import oracle
 from .conftest import DATA
 
 
@@ -260,6 +261,24 @@ def test_direction_read_from_the_samples_not_the_name(
         {},
     )
     assert bb.analyse_run(lying).direction == rs274_direction(run)[1] == "ccw"
+
+
+@pytest.mark.linuxcnc
+@pytest.mark.parametrize("plane", ["XY", "XZ", "YZ"])
+def test_simulates_programs_turn_in_linuxcnc_as_their_files_are_named(plane: str) -> None:
+    """The program simulate runs for a file named ccw is, in LinuxCNC's interpreter,
+    an arc of positive rotation in that plane: RS274/NGC's ARC_FEED (NIST RS274NGC
+    3, canonical machining functions) "If rotation is positive, the arc is traversed
+    counterclockwise as viewed from the positive end of the coordinate axis
+    perpendicular to the currently selected plane"; cw, negative."""
+    if oracle.RS274 is None:
+        pytest.skip("rs274 not installed: apt-get install linuxcnc-uspace to run the oracle")
+    for ccw in (True, False):
+        ref = oracle.run(simulate.ballbar_gcode(20.0, plane=plane, ccw=ccw))
+        assert ref.error is None, ref.error
+        (arc,) = [m for m in ref.motions if m.kind == "arc"]
+        assert arc.plane == {"XY": 17, "XZ": 18, "YZ": 19}[plane]
+        assert arc.rotation == (1 if ccw else -1)
 
 
 @pytest.mark.parametrize("feed", [750.0, 2400.0])
