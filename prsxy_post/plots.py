@@ -230,38 +230,61 @@ def residual_scale(smoothed_um: np.ndarray, noise_um: float) -> float:
     return nice_division(max(span, 4 * noise_um, 1e-3))
 
 
-def diagnose_ballbar_residual(result: Diagnosis, data: Data) -> bytes | None:
-    """Per run, what the model after leaves (measured − model after) on a scale of
-    its own: the samples (grey), their 5° average (blue), and the estimated noise
-    (dashed rings at ± 1 σ), so a residual of the noise's size is visible."""
-    if not data.runs:
-        return None
+def residual_panels(
+    panels: Sequence[tuple[str, str, np.ndarray, np.ndarray, float]], ring_label: str
+) -> Any:
+    """Polar residual panels (title, plane, θ [rad], residual [µm], σ [µm]), each on
+    a scale of its own (:func:`residual_scale`): the samples (grey), their 5° average
+    (blue) and dashed rings at ± σ, so a residual of the noise's size is visible."""
     plt = pyplot()
-    _, segs = data.measured()
-    noise_um = float(result.noise.get("ballbar", 0.0)) * 1000.0
-    runs = [s for s in segs if s.kind == "ballbar"]
-    fig, rows, cols = _grid(plt, len(runs), 4, 3.9, 4.3)
-    for k, (seg, run) in enumerate(zip(runs, data.runs, strict=True)):
+    fig, rows, cols = _grid(plt, len(panels), 4, 3.9, 4.3)
+    for k, (title, plane, th, resid, sigma) in enumerate(panels):
         ax = fig.add_subplot(rows, cols, k + 1, projection="polar")
-        plane, th, _ = angles(run)
-        r = centred(th, result.residual_after[seg.start : seg.stop] * 1000)
-        ok = np.isfinite(r)
-        th, r = th[ok], r[ok]
+        ok = np.isfinite(resid)
+        th, r = th[ok], centred(th[ok], resid[ok])
         sm = smooth(th, r)
-        ring = np.full_like(th, noise_um)
+        ring = np.full_like(th, sigma)
         traces: list[Trace] = [
             (th, r, {"color": "0.6", "lw": 0.5, "alpha": 0.7, "label": "residual"}),
-            (th, ring, {"color": "0.2", "lw": 0.8, "ls": "--", "label": "± noise"}),
+            (th, ring, {"color": "0.2", "lw": 0.8, "ls": "--", "label": ring_label}),
             (th, -ring, {"color": "0.2", "lw": 0.8, "ls": "--"}),
             (th, sm, {"color": "tab:blue", "lw": 1.4, "label": "5° average"}),
         ]
-        div = residual_scale(sm, noise_um)
+        div = residual_scale(sm, sigma)
         polar_panel(ax, traces, div, plane)
-        ax.set_title(f"{seg.name}\n{div:g} µm/div", fontsize=8)
+        ax.set_title(f"{title}\n{div:g} µm/div", fontsize=8)
         if k == 0:
             ax.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.25, -0.3))
     fig.tight_layout()
-    return png(fig, dpi=90)
+    return fig
+
+
+def diagnose_ballbar_residual(result: Diagnosis, data: Data) -> bytes | None:
+    """Per run, what the model after leaves (measured − model after), with the
+    estimated noise: :func:`residual_panels`."""
+    if not data.runs:
+        return None
+    _, segs = data.measured()
+    noise_um = float(result.noise.get("ballbar", 0.0)) * 1000.0
+    runs = [s for s in segs if s.kind == "ballbar"]
+    panels = []
+    for seg, run in zip(runs, data.runs, strict=True):
+        plane, th, _ = angles(run)
+        resid = result.residual_after[seg.start : seg.stop] * 1000
+        panels.append((seg.name, plane, th, resid, noise_um))
+    return png(residual_panels(panels, "± noise"), dpi=90)
+
+
+def ballbar_residual(results: Sequence[BallbarResult], runs: Sequence[BallbarRun]) -> bytes:
+    """Per run, what the fitted terms leave (measured − fitted model), with the
+    scatter the fit leaves: :func:`residual_panels`. Cyclic errors and reversal
+    spikes the terms do not take show here."""
+    panels = []
+    for res, run in zip(results, runs, strict=True):
+        _, th, _ = angles(run)
+        resid = run.dev_um - model_deviation(th, res)
+        panels.append((f"{res.circle} {res.direction}", res.plane, th, resid, res.noise_um))
+    return png(residual_panels(panels, "± the fit's scatter"), dpi=90)
 
 
 def diagnose_poses(result: Diagnosis, data: Data) -> bytes | None:

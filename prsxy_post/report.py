@@ -435,6 +435,13 @@ def ballbar_report(analysis: Analysis, where: str | Path | None = None) -> dict[
         ["file", "circle", "direction", "feed", "G µm", "noise µm", "above the noise"],
         [_run_row(r) for r in analysis.results],
     )
+    page.image(
+        "ballbar-residual.png",
+        plots.ballbar_residual(analysis.results, analysis.runs),
+        "What the fitted terms leave of each run, on a scale of its own (µm/div): the "
+        "samples (grey), their 5° average (blue), ± the fit's scatter (dashed); cyclic "
+        "errors and reversal spikes show here.",
+    )
     if analysis.pairs:
         page.heading("Pairs (ccw and cw of one circle)")
         page.table(
