@@ -942,15 +942,15 @@ def diagnose(
     if report_dir:
         from . import report
 
-        files.update(
-            {Path(report_dir) / k: v for k, v in report.diagnose_report(result, d).items()}
-        )
+        pages = report.diagnose_report(result, d, report_dir)
+        files.update({Path(report_dir) / k: v for k, v in pages.items()})
     if files:
         write_atomic(files)
     if as_json:
         click.echo(json.dumps(result.to_json(), default=_json_default, indent=1))
         for u in result.unexplained:
             click.echo(f"warning: {u['sentence']}", err=True)
+        _wrote_report(report_dir, err=True)
         return
     click.echo(f"noise: {', '.join(f'{k} {v:.3f}' for k, v in result.to_json()['noise'].items())}")
     for r in result.regions[:5]:
@@ -983,6 +983,13 @@ def diagnose(
         click.echo(f"warning: {u['sentence']}", err=True)
     if output:
         click.echo(f"wrote {output}")
+    _wrote_report(report_dir)
+
+
+def _wrote_report(report_dir: str | None, err: bool = False) -> None:
+    """Where a report was written (stderr beside --json, which owns stdout)."""
+    if report_dir:
+        click.echo(f"wrote the report: {(Path(report_dir) / 'report.html').resolve()}", err=err)
 
 
 @main.command()
@@ -1023,13 +1030,14 @@ def ballbar(
     """ISO 230-4 circular deviation and ballbar diagnostics of ballbar RUNS.
 
     Each figure is printed only when it stands above the noise, with its
-    significance; --json has them all. Polar plots overlay a circle's ccw and cw
-    runs on one µm/div scale.
+    significance; --json has them all. Directions are RS274/NGC's: ccw is G3, cw
+    is G2, seen from +Z (XY), +Y (XZ) or +X (YZ). Polar plots overlay a circle's
+    ccw and cw runs on one µm/div scale, seen from that side.
 
     Example: prsxy-post ballbar ballbar-*.csv --report bb-report
     """
     from . import ballbar as bb
-    from . import measure
+    from . import measure, plots
 
     data = [measure.read_ballbar(read_text(p, "ballbar file"), p) for p in runs]
     model = commanded = None
@@ -1040,18 +1048,21 @@ def ballbar(
     analysis = bb.analyse(data, model, commanded)
     files: dict[Path, str | bytes] = {}
     if plot_path:
-        files[Path(plot_path)] = bb.plot_runs(analysis.results, data, analysis.predicted)
+        files[Path(plot_path)] = plots.ballbar_plot(analysis.results, data, analysis.predicted)
     if report_dir:
         from . import report
 
-        files.update({Path(report_dir) / k: v for k, v in report.ballbar_report(analysis).items()})
+        pages = report.ballbar_report(analysis, report_dir)
+        files.update({Path(report_dir) / k: v for k, v in pages.items()})
     if files:
         write_atomic(files)
     if as_json:
         click.echo(json.dumps(analysis.to_json(), indent=1, default=_json_default))
+        _wrote_report(report_dir, err=True)
         return
     for line in analysis.lines():
         click.echo(line)
+    _wrote_report(report_dir)
 
 
 @main.group()
