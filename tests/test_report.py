@@ -1,10 +1,9 @@
 """The report pages: they lead with the conclusion (findings largest first, what to
-do next, where the page is), and the modules that draw and write them sit above
-the analysis, with no import circle (imports inside functions included)."""
+do next, where the page is). That the modules drawing and writing them sit above
+the analysis, in no import circle, is tests/test_layers.py's."""
 
 from __future__ import annotations
 
-import ast
 import re
 from pathlib import Path
 
@@ -15,98 +14,6 @@ from prsxy_post import ballbar as bb
 from prsxy_post import experiments, measure, report
 from prsxy_post.diagnose import Data, Diagnosis, Effect
 from prsxy_post.profile import Profile
-
-from .conftest import ROOT
-
-# ---------------------------------------------------------------- import circles
-
-
-def _is_type_checking(node: ast.AST) -> bool:
-    test = getattr(node, "test", None)
-    return isinstance(node, ast.If) and (
-        (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING")
-        or (isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
-    )
-
-
-def _imports(tree: ast.AST) -> list[ast.Import | ast.ImportFrom]:
-    """Every import statement, inside functions too, except under TYPE_CHECKING."""
-    out: list[ast.Import | ast.ImportFrom] = []
-    todo = [tree]
-    while todo:
-        node = todo.pop()
-        if _is_type_checking(node):
-            todo += getattr(node, "orelse", [])
-            continue
-        if isinstance(node, ast.Import | ast.ImportFrom):
-            out.append(node)
-        todo += list(ast.iter_child_nodes(node))
-    return out
-
-
-def import_graph() -> dict[str, set[str]]:
-    """{module: the package modules it imports}, read from the source with ast."""
-    pkg = ROOT / "prsxy_post"
-    paths = {}
-    for path in pkg.rglob("*.py"):
-        parts = path.relative_to(ROOT).with_suffix("").parts
-        name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-        paths[name] = path
-    graph: dict[str, set[str]] = {}
-    for name, path in paths.items():
-        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-        deps: set[str] = set()
-        for node in _imports(ast.parse(path.read_text())):
-            if isinstance(node, ast.Import):
-                targets = [a.name for a in node.names]
-            else:
-                base = package
-                for _ in range(node.level - 1):
-                    base = base.rpartition(".")[0]
-                if node.level == 0:
-                    base = node.module or ""
-                elif node.module:
-                    base = f"{base}.{node.module}"
-                targets = [base] + [f"{base}.{a.name}" for a in node.names]
-            for t in targets:
-                while t and t not in paths:
-                    t = t.rpartition(".")[0]
-                if t and t != name:
-                    deps.add(t)
-        graph[name] = deps
-    return graph
-
-
-def _reaches(graph: dict[str, set[str]], start: str, goal: str) -> list[str] | None:
-    """A chain of imports from start to goal, or None."""
-    seen, todo = {start}, [[start]]
-    while todo:
-        chain = todo.pop()
-        for nxt in graph.get(chain[-1], ()):
-            if nxt == goal:
-                return [*chain, nxt]
-            if nxt not in seen:
-                seen.add(nxt)
-                todo.append([*chain, nxt])
-    return None
-
-
-def test_the_graph_sees_imports_inside_functions() -> None:
-    """The reader is not blind: ballbar.analyse imports diagnose inside a function."""
-    graph = import_graph()
-    assert "prsxy_post.diagnose" in graph["prsxy_post.ballbar"]
-    assert "prsxy_post.plots" in graph["prsxy_post.cli"]
-
-
-@pytest.mark.parametrize("module", ["ballbar", "plots", "report"])
-def test_ballbar_plots_and_report_are_in_no_import_circle(module: str) -> None:
-    """Issue 30: the analysis under the plots under the pages, nothing back."""
-    graph = import_graph()
-    name = f"prsxy_post.{module}"
-    for dep in graph[name]:
-        chain = _reaches(graph, dep, name)
-        assert chain is None, f"{name} -> {' -> '.join(chain or [])}"
-
 
 # ---------------------------------------------------------------- the diagnose page
 
