@@ -98,8 +98,7 @@ def lin(terms: list[tuple[float, str]], const: float = 0.0) -> str:
         mag = "" if abs(c) == 1.0 else f"{k(abs(c))}*"
         out += ("-" if c < 0 else ("+" if out else "")) + mag + v
     if const != 0.0 or not out:
-        c = k(abs(const))
-        out += ("-" if const < 0 else ("+" if out else "")) + c
+        out += ("-" if const < 0 else ("+" if out else "")) + k(abs(const))
     return out
 
 
@@ -416,14 +415,16 @@ def forward_program(geo: Geometry, emap: ErrorMap | None, cpm: list[float]) -> _
     p.let("det", det(J))
     p(f"IF ({p.det}!=0)")
     for col, var in enumerate(("xa", "xb", "xz")):
-        m = [[r[i] if j == col else J[i][j] for j in range(3)] for i in range(3)]
-        p.let(f"num{col}", det(m))
+        cramer = [[r[i] if j == col else J[i][j] for j in range(3)] for i in range(3)]
+        p.let(f"num{col}", det(cramer))
         p.let(var, f"{p.v(var)}+{p.v(f'num{col}')}/{p.det}")
     p("ENDIF")
     p.let("nn", f"{p.nn}+1")
     p("ENDWHILE")
     # the pose at the solution, and how far it misses the motors
-    _head(p, geo, p.xa, p.xb, p.xz, clamp=True)
+    # (out of reach here is an error: a clamped root can fake a solution)
+    p.let("bad", "0")
+    _head(p, geo, p.xa, p.xb, p.xz, clamp=False)
     p.let("res", "0")
     for i in range(3):
         p.let("ri", f"ABS({pm[i]}-{p.v(f'ph{i + 1}')})")
@@ -456,7 +457,7 @@ def forward_program(geo: Geometry, emap: ErrorMap | None, cpm: list[float]) -> _
         out = [p.v(f"u{i}") for i in range(5)]
     else:
         out = geo_q
-    p(f"IF ({p.res}>{k(FK_TOL_MM)})", f"{ERROR_FLAG}=1", "ELSE")
+    p(f"IF ({p.res}>{k(FK_TOL_MM)} OR {p.bad}>0)", f"{ERROR_FLAG}=1", "ELSE")
     for q, var in zip(AXIS_Q, out, strict=True):
         p(f"{q}={var}")
     p("ENDIF")
