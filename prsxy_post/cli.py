@@ -1054,6 +1054,24 @@ def ballbar(
         click.echo(line)
 
 
+@main.command("kinematics")
+@profile_option
+@click.option("-o", "--output", required=True, help="Turbo PMAC download file to write (.pmc).")
+@guarded
+def kinematics_export(profile_path: str, output: str) -> None:
+    """Write the profile's calibrated kinematics as Turbo PMAC OPEN FORWARD / OPEN
+    INVERSE programs for coordinate system 1 (the embedded route)."""
+    from .writers import pmac_kinematics
+
+    kf = pmac_kinematics.export(load_profile(profile_path), profile_path)
+    write_atomic({Path(output): kf.text})
+    click.echo(
+        f"wrote {output}: download after `tables export --format pmac`; "
+        f"work variables Q20-Q{kf.last_q}",
+        err=True,
+    )
+
+
 @main.group()
 def tables() -> None:
     """Real-axis tables in the files controllers load: LinuxCNC comp files, Turbo PMAC."""

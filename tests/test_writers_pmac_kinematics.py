@@ -249,3 +249,45 @@ def test_the_download_file_sets_up_coordinate_system_1() -> None:
     body = buffer(text, "INVERSE") + buffer(text, "FORWARD")
     used = {int(n) for ln in body for n in re.findall(r"Q(\d+)", ln)}
     assert used <= {0, 1, 2, 7, 8, 9, 100} | set(range(20, 1024))
+
+
+def test_dls_pmacanalyse_reads_the_download_file() -> None:
+    """Diamond Light Source's Turbo PMAC parser (dls-pmacanalyse) reads the whole
+    file as on-line commands: its I-variables are the file's, and the forward and
+    inverse buffers it stores for C.S. 1 hold the statements the emulator ran (it
+    ends each buffer with the RETURN a CLOSE adds)."""
+    from dls_pmacanalyse.pmacparser import PmacParser
+    from dls_pmacanalyse.pmacstate import PmacState
+
+    prof = calibrated(22)
+    text = pk.export(prof).text
+    state = PmacState("prsxy-post")
+    PmacParser(text.splitlines(), state).onLine()
+    assert float(state.getIVariable(5150).valStr()) == 1.0
+    assert float(state.getIVariable(5113).valStr()) == prof.period_ms
+    assert float(state.getIVariable(15).valStr()) == 0.0
+    for prog, name in (
+        (state.getForwardKinematicProgram(1), "FORWARD"),
+        (state.getInverseKinematicProgram(1), "INVERSE"),
+    ):
+        read = "".join(str(t) for t in prog.v if str(t) != "\n")
+        ours = re.sub(r"\s", "", "\n".join(buffer(text, name))).upper()
+        assert read == ours + "RETURN", name
+
+
+def test_the_kinematics_command_writes_the_file(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from prsxy_post.cli import main
+
+    prof_path = ROOT / "profiles" / "prsxy-shop.toml"
+    out = tmp_path / "kin.pmc"
+    res = CliRunner().invoke(main, ["kinematics", "--profile", str(prof_path), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert out.read_text() == pk.export(NOMINAL, str(prof_path)).text
+    res = CliRunner().invoke(
+        main, ["kinematics", "--profile", str(tmp_path / "none.toml"), "-o", str(out)]
+    )
+    assert res.exit_code != 0
+    assert "none.toml: cannot read profile" in res.output
+    assert "Traceback" not in res.output

@@ -137,6 +137,8 @@ class KinematicsFile:
     text: str
     inverse_vars: int
     forward_vars: int
+    #: the highest work variable either program uses (Q20 up to it)
+    last_q: int
 
 
 # ---------------------------------------------------------------- the map
@@ -495,7 +497,9 @@ def export(profile: Profile, source: str = "") -> KinematicsFile:
         "CLOSE",
         "I5150=1",
     ]
-    return KinematicsFile("\n".join(lines) + "\n", len(inv.vars), len(fwd.vars))
+    return KinematicsFile(
+        "\n".join(lines) + "\n", len(inv.vars), len(fwd.vars), max(inv.next, fwd.next) - 1
+    )
 
 
 def _header(
@@ -515,7 +519,7 @@ def _header(
     if emap is not None:
         comps = ", ".join(c for c in COMPONENTS if c in emap.coef)
         kept.append(f"the virtual-axis map of Eq. 4-6 ({comps}; Q' = Q - e(Q'), two evaluations)")
-    hi = 19 + max(len(inv.vars), len(fwd.vars))
+    hi = max(inv.next, fwd.next) - 1
     text = [
         f"prsxy-post {__version__}: embedded kinematics for Turbo PMAC coordinate system 1",
         f"profile: {profile.name} ({source or profile.source})",
