@@ -1,0 +1,146 @@
+"""The embedded route's Cartesian program, executed as Turbo PMAC runs it through
+its kinematics (tests/pmac_segmented.py: segments of Isx13, the inverse at each
+end, the motors splined between at the servo clock), by the true machine, and
+judged against the G-code's geometry as the controller-truth tests judge PVT.
+
+The machines have no play: the embedded route leaves the real axes to the
+controller's own tables (``tables export --format pmac``, tested on their own in
+test_controller_tables_pmac); the kinematics and the segmentation are what is
+judged here.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import re
+
+import numpy as np
+import pytest
+
+from prsxy_post import chain, gcode, simulate, writers
+from prsxy_post.errors import LimitError
+from prsxy_post.writers import pmac_cartesian as pc
+
+from . import controllers as ctl
+from .conftest import ROOT
+from .pmac_segmented import run_segmented
+from .test_controller_truth import SPEED_ROUNDING, assert_on_the_path
+from .test_tracking import path_distance, truth_machine
+
+SAMPLES = sorted((ROOT / "samples").glob("*.ngc"))
+PROV = writers.Provenance("x.ngc", "0" * 64, "p", "p.toml", "0" * 64, "")
+
+
+def machine(kind: str, seed: int | None):
+    if kind == "effects":  # bowed guides and curved table axes as well
+        base = truth_machine("nominal", None, play=False)
+        return simulate.random_machine(
+            base, np.random.default_rng(seed), effects=True, name=f"effects {seed}"
+        )
+    return truth_machine(kind, seed, play=False)
+
+
+MACHINES = [("nominal", None), ("random", 11), ("effects", 12)]
+
+
+@functools.cache
+def written(kind: str, seed: int | None, name: str) -> tuple[list[gcode.Motion], str]:
+    truth = machine(kind, seed)
+    text = (ROOT / "samples" / name).read_text()
+    motions = list(gcode.iter_motions(gcode.split_lines(text), chain.interpreter_config(truth)))
+    return motions, pc.write_program(motions, truth, PROV, motions[0].start)
+
+
+def execute(kind: str, seed: int | None, name: str, seg_ms: float | None = None, run_on=None):
+    """Run the program on the kinematics of the machine it was written for (or of
+    ``run_on``), executed by the true machine; the trace and the run."""
+    truth = machine(kind, seed)
+    motions, prog = written(kind, seed, name)
+    run = run_segmented(prog, run_on or truth, seg_ms)
+    q = ctl.machine_executes(truth, run.t_dense, run.P_dense, run.tool_dense)
+    tr = ctl.judge(
+        motions, q, run.t_dense, run.seg, run.line, run.tool_dense, truth.limits.rapid_mm_min
+    )
+    return tr, run, motions
+
+
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
+def test_the_segment_ends_are_on_the_gcode_path(path) -> None:
+    """The axis positions the controller computes at each segment end (read back
+    from the written moves) lie on the G-code's lines and arcs."""
+    _, run, motions = execute("nominal", None, path.name)
+    for ln in np.unique(run.line):
+        ms = [m for m in motions if m.line == ln and m.kind not in ("dwell", "function")]
+        if not ms:
+            continue
+        sel = run.line == ln
+        d = np.min([path_distance(m, run.q[sel])[0] for m in ms], axis=0)
+        assert d.max() < 1e-9, (ln, d.max())
+
+
+@pytest.mark.parametrize(("kind", "seed"), MACHINES)
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
+def test_with_5_ms_segments_the_machine_stays_on_the_path(kind, seed, path) -> None:
+    """With I5113 = 5 the true machine follows the G-code within the path
+    tolerance and the tool axis within its own, at no more than F."""
+    tr, _, _ = execute(kind, seed, path.name, seg_ms=5.0)
+    assert_on_the_path(tr)
+    assert tr.speed_ratio <= 1 + SPEED_ROUNDING
+
+
+def test_with_10_ms_segments_arcs_are_cut_by_the_spline() -> None:
+    """At the coarse period (I5113 = 10) the spline between segment ends cuts an
+    arc as a uniform cubic B-spline cuts a circle: by R (1 − cos θ) / 3 at the
+    segment ends, θ = v h / R the angle of one segment. On the pocket (table
+    motors turning on circles) the worst is the R5 arc at F1200: 1.333 µm, over
+    the path tolerance: the figure the table in docs/measurements.md shows."""
+    tr, _, motions = execute("nominal", None, "pocket.ngc")
+    h = 0.010
+    cuts = []
+    for m in motions:
+        if m.kind != "arc":
+            continue
+        r = math.dist(m.start[:2], m.center[:2])  # type: ignore[index]
+        theta = m.feed / 60.0 * h / r
+        cuts.append(r * (1 - math.cos(theta)) / 3)
+    assert tr.path_mm == pytest.approx(max(cuts), rel=0.01)
+    assert tr.path_mm > 0.5e-3
+
+
+def test_the_wrong_kinematics_leave_the_path() -> None:
+    """The program run on the nominal design's kinematics while the machine is
+    random 11: the controller's model is what puts the tool on the path (the
+    judge sees the difference)."""
+    tr, _, _ = execute("random", 11, "five-axis.ngc", 5.0, run_on=machine("nominal", None))
+    assert tr.path_mm > 20 * 0.5e-3
+
+
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
+def test_dls_pmacanalyse_reads_the_cartesian_program(path) -> None:
+    """Diamond Light Source's Turbo PMAC parser reads the written program into
+    motion program 1; the move lines it stores are the ones the emulator ran."""
+    from dls_pmacanalyse.pmacparser import PmacParser
+    from dls_pmacanalyse.pmacstate import PmacState
+
+    _, prog = written("nominal", None, path.name)
+    state = PmacState("prsxy-post")
+    PmacParser(prog.splitlines(), state).onLine()
+    tokens = [str(t) for t in state.getMotionProgram(1).v]
+    stored = "".join(" " if t == "\n" else t for t in tokens)
+    moves = re.findall(r"X(-?[\d.]+)Y(-?[\d.]+)Z(-?[\d.]+)A(-?[\d.]+)B(-?[\d.]+)", stored)
+    ours = re.findall(r"^X(-?[\d.]+) Y(-?[\d.]+) Z(-?[\d.]+) A(-?[\d.]+) B(-?[\d.]+)", prog, re.M)
+    assert len(moves) == len(ours) > 0
+    np.testing.assert_array_equal(np.array(moves, float), np.array(ours, float))
+    for word in ("LINEAR", "DWELL", "TA", "F"):
+        assert word in stored
+    if path.name == "pocket.ngc":
+        assert "CIRCLE1" in stored and "CIRCLE2" in stored
+
+
+def test_a_g5_curve_is_refused_with_its_line() -> None:
+    truth = machine("nominal", None)
+    text = "G21 G90 G17\nG0 X0 Y0 Z1\nG5 I0 J10 P10 Q-10 X20 Y0 F600\nM2\n"
+    motions = list(gcode.iter_motions(gcode.split_lines(text), chain.interpreter_config(truth)))
+    with pytest.raises(LimitError, match="line 3: a G5 curve"):
+        pc.write_program(motions, truth, PROV, motions[0].start)
