@@ -1057,17 +1057,35 @@ def ballbar(
 @main.command("kinematics")
 @profile_option
 @click.option("-o", "--output", required=True, help="Turbo PMAC download file to write (.pmc).")
+@click.option(
+    "--program",
+    type=click.Path(dir_okay=False),
+    help="Also write this G-code program as a Cartesian Turbo PMAC motion program "
+    "(LINEAR/CIRCLE moves) that runs through these kinematics.",
+)
+@click.option("--program-output", help="Where to write it (default: PROGRAM.cart.pmc).")
 @guarded
-def kinematics_export(profile_path: str, output: str) -> None:
+def kinematics_export(
+    profile_path: str, output: str, program: str | None, program_output: str | None
+) -> None:
     """Write the profile's calibrated kinematics as Turbo PMAC OPEN FORWARD / OPEN
     INVERSE programs for coordinate system 1 (the embedded route)."""
-    from .writers import pmac_kinematics
+    from .files import inspect_source
+    from .writers import Provenance, pmac_cartesian, pmac_kinematics
 
-    kf = pmac_kinematics.export(load_profile(profile_path), profile_path)
-    write_atomic({Path(output): kf.text})
+    prof = load_profile(profile_path)
+    kf = pmac_kinematics.export(prof, profile_path)
+    files = {Path(output): kf.text}
+    if program:
+        sha = inspect_source(program)
+        prov = Provenance(program, sha, prof.name, profile_path, sha256_of(profile_path), "")
+        out = program_output or str(Path(program).with_suffix(".cart.pmc"))
+        text = read_text(program, "program")
+        files[Path(out)] = pmac_cartesian.program_text(text, program, prof, prov)
+    write_atomic(files)
     click.echo(
-        f"wrote {output}: download after `tables export --format pmac`; "
-        f"work variables Q20-Q{kf.last_q}",
+        f"wrote {', '.join(str(f) for f in files)}: download after `tables export --format "
+        f"pmac`; work variables Q20-Q{kf.last_q}",
         err=True,
     )
 

@@ -144,3 +144,39 @@ def test_a_g5_curve_is_refused_with_its_line() -> None:
     motions = list(gcode.iter_motions(gcode.split_lines(text), chain.interpreter_config(truth)))
     with pytest.raises(LimitError, match="line 3: a G5 curve"):
         pc.write_program(motions, truth, PROV, motions[0].start)
+
+
+def test_the_kinematics_command_writes_the_program_too(tmp_path) -> None:
+    """``prsxy-post kinematics --program``: the Cartesian program beside the
+    kinematics, the one the emulator runs on the path; a program the machine cannot
+    run is refused with its file and line, and nothing is written."""
+    from click.testing import CliRunner
+
+    from prsxy_post.cli import main
+
+    prof = str(ROOT / "profiles" / "prsxy-shop.toml")
+    src = tmp_path / "pocket.ngc"
+    src.write_text((ROOT / "samples" / "pocket.ngc").read_text())
+    res = CliRunner().invoke(
+        main,
+        ["kinematics", "--profile", prof, "-o", str(tmp_path / "k.pmc"), "--program", str(src)],
+    )
+    assert res.exit_code == 0, res.output
+    prog = (tmp_path / "pocket.cart.pmc").read_text()
+    truth = machine("nominal", None)
+    motions = list(
+        gcode.iter_motions(gcode.split_lines(src.read_text()), chain.interpreter_config(truth))
+    )
+    run = run_segmented(prog, truth, 5.0)
+    q = ctl.machine_executes(truth, run.t_dense, run.P_dense, run.tool_dense)
+    tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, run.tool_dense, 10000.0)
+    assert_on_the_path(tr)
+    bad = tmp_path / "bad.ngc"
+    bad.write_text("G21 G90\nG0 X0 Y0 Z5\nG1 X10 F99999999\nM2\n")
+    out = tmp_path / "k2.pmc"
+    res = CliRunner().invoke(
+        main, ["kinematics", "--profile", prof, "-o", str(out), "--program", str(bad)]
+    )
+    assert res.exit_code == 1
+    assert f"{bad}:3: feed" in res.output
+    assert not out.exists() and not (tmp_path / "bad.cart.pmc").exists()

@@ -254,3 +254,19 @@ def write_program(
     for m in motions:
         w.motion(m)
     return w.finish()
+
+
+def program_text(text: str, source: str, profile: Profile, prov: Provenance) -> str:
+    """Interpret G-code ``text`` (file name ``source`` for errors) under the profile's
+    interpreter settings and write it as the Cartesian program; the first problem
+    the program itself shows (a feed above the machine's) is raised."""
+    from ..chain import check_motions, interpreter_config
+    from ..gcode import iter_motions, split_lines
+
+    motions = list(iter_motions(split_lines(text), interpreter_config(profile), source))
+    problems = check_motions(motions, profile)
+    if problems:
+        raise problems[0].located(source)
+    if not motions:
+        raise LimitError(f"{source}: the program makes no motion", expected="a G-code program")
+    return write_program(motions, profile, prov, motions[0].start)
