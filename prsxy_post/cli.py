@@ -151,6 +151,10 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
         "prsxy-post ballbar xy-r50-ccw.csv xy-r50-cw.csv",
         "prsxy-post ballbar run*.csv --plot ballbar.png --profile shop.toml",
     ),
+    "kinematics": (
+        "prsxy-post kinematics --profile shop.toml -o kinematics.pmc",
+        "prsxy-post kinematics --profile shop.toml -o kinematics.pmc --program part.ngc",
+    ),
     "tables": (
         "prsxy-post tables export --profile shop.toml --format linuxcnc1 --out-dir comp/",
         "prsxy-post tables export --profile shop.toml --format pmac --out-dir pmac/",
