@@ -155,6 +155,18 @@ def test_the_inverse_takes_the_tool_length_offset_from_q100(machine) -> None:
         assert flag == 0.0 and np.max(np.abs(got - wi)) < COUNT_TOL
 
 
+def test_the_forward_takes_the_tool_length_offset_from_q100(machine) -> None:
+    """PMATCH after a tool change: with Q100 = 35 the forward gives back the pose
+    of the longer tool's tip."""
+    prof, emu = machine
+    q = poses(np.random.default_rng(7), 3)
+    for qi, ci in zip(q, project_motors(prof, q, 35.0), strict=True):
+        got, flag = emu.forward(ci, 35.0)
+        assert flag == 0.0
+        assert np.max(np.abs(got[:3] - qi[:3])) * 1000 < UM_TOL
+        assert np.max(np.abs(got[3:] - qi[3:])) * 3600 < ARCSEC_TOL
+
+
 def test_the_forward_gives_back_the_pose(machine) -> None:
     """OPEN FORWARD, run as PMAC runs it at R or PMATCH on the motors' counts,
     puts in Q7-Q9, Q1, Q2 the pose whose compensated motors those are: within
