@@ -24,14 +24,19 @@ The rules (SRM = Software Reference, TUM = User Manual), each as modelled here:
   is the project's chain (the map, then the calibrated IK): test_writers_pmac_
   kinematics holds the exported OPEN INVERSE to it within 0.01 count.
 - Between segment ends the motors are fine-interpolated at the servo clock by a
-  cubic spline. Modelled as the uniform cubic B-spline of the segment ends (the
-  spline SPLINE1 runs, which "moves the points" by a sixth of their second
-  difference, the pmac writer's docstring): it does not pass through the segment
-  ends, so it is the larger of the two readings of "cubic spline" for the path.
-- A move that ends at rest (DWELL0 after it) ends on its end point, and the
-  spline is at rest there: the B-spline gets there once its last three points
-  are the end, so the end is held for two more segment ends (time the move's
-  stop takes on top of TA).
+  cubic spline, modelled as the spline of Turbo PMAC's SPLINE mode: "LINEAR and
+  SPLINE modes are 2nd and 3rd-order B-splines, respectively, which pass to the
+  inside of programmed points" (TUM "Use of PVT in Contouring"); its velocity at
+  a point is (X(n+1) − X(n−1)) / 2T and its position misses the point by
+  (Dist(n+1) − Dist(n)) / 6 (PMAC User Manual, SPLINE1, "Quantifying the Position
+  Adjustment"): the uniform cubic B-spline of the segment ends. The manuals we
+  have do not write out the segmentation's own fine interpolation; this
+  reading (the spline of SPLINE mode) is an assumption the figures depend on.
+- A move that ends at rest (DWELL0 after it) ends on its end point: SPLINE "adds
+  a zero-distance segment ... at the beginning and end of a series of splined
+  moves" (PMAC User Manual, SPLINE1, "Added Pieces"), so between two moves the
+  end point is held for two more segment ends (the one added after the first
+  move, the one before the next), where the B-spline comes to rest on it.
 - ``DWELL{ms}`` stands; ``Q100=`` then ``CMD"PMATCH"`` changes the tool length
   offset and recomputes the axis positions from the motors (SRM PMATCH).
 """

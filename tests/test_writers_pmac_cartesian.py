@@ -180,3 +180,39 @@ def test_the_kinematics_command_writes_the_program_too(tmp_path) -> None:
     assert res.exit_code == 1
     assert f"{bad}:3: feed" in res.output
     assert not out.exists() and not (tmp_path / "bad.cart.pmc").exists()
+
+
+PLANES = """G21 G90 G17
+G0 X0 Y0 Z10
+G1 Z0 F600
+G18 G2 X20 Z0 I10 K0 F900
+G3 X0 Z0 I-10 K0
+G19 G2 Y20 Z0 J10 K0
+G3 Y0 Z0 J-10 K0 X5
+G17 G3 X5 Y0 I-5 J0 Z-1 P3
+G0 Z10
+M2
+"""
+
+
+@pytest.mark.parametrize("seed", [None, 11])
+def test_arcs_in_every_plane_and_helices_of_several_turns(seed) -> None:
+    """G18 and G19 arcs (NORMAL J-1, I-1), a helix with a line in X, three turns of
+    a helix: the segment ends lie on the arcs and, with 5 ms segments, the machine
+    follows them."""
+    truth = machine("random" if seed else "nominal", seed)
+    motions = list(gcode.iter_motions(gcode.split_lines(PLANES), chain.interpreter_config(truth)))
+    assert {m.plane for m in motions if m.kind == "arc"} == {17, 18, 19}
+    prog = pc.write_program(motions, truth, PROV, motions[0].start)
+    assert "NORMAL J-1" in prog and "NORMAL I-1" in prog and "NORMAL K-1" in prog
+    run = run_segmented(prog, truth, 5.0)
+    for ln in np.unique(run.line):
+        ms = [m for m in motions if m.line == ln and m.kind not in ("dwell", "function")]
+        if ms:
+            sel = run.line == ln
+            d = np.min([path_distance(m, run.q[sel])[0] for m in ms], axis=0)
+            # the end of each turn is written to 7 decimals (Z -1/3: 3.3e-8 mm off)
+            assert d.max() < 1e-7, (ln, d.max())
+    q = ctl.machine_executes(truth, run.t_dense, run.P_dense, run.tool_dense)
+    tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, run.tool_dense, 10000.0)
+    assert_on_the_path(tr)
