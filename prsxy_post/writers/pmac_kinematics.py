@@ -543,6 +543,8 @@ def _header(
         f"  {TOOL_OFFSET_Q}: the G43 tool length offset [mm] added to the profile's tool;",
         '    after changing it, PMATCH (in a program: DWELL0 CMD"PMATCH" DWELL0)',
         f"  work variables Q20-Q{hi} of C.S. 1; P1-P32, Q0-Q10 as the manual reserves them",
+        "  I11=0 (the default): the forward's iterations take as long as they need",
+        "    (User Manual, Iterative Solutions)",
         f"Forward: {FK_STEPS} Newton steps on the head's three motors for A, B, z, then",
         f"  the residual must be under {FK_TOL_MM:g} mm; {MAP_UNDO_STEPS} fixed-point steps undo",
         "  the map.",
