@@ -160,6 +160,131 @@ def _path(mode: str, normal: int, a: np.ndarray, b: np.ndarray, ijk: np.ndarray)
     return pose, math.hypot(radius * abs(phi), float(b[normal] - a[normal]))
 
 
+class _Controller:
+    """The coordinate system's state while a program runs: the segment ends so far
+    (time, axis pose, tools, line) and the modes in force."""
+
+    def __init__(self, kin: _Kin, h: float) -> None:
+        self.kin, self.h = kin, h
+        self.t: list[float] = []
+        self.q: list[np.ndarray] = []
+        self.tool: list[float] = []  # the tool the tip is judged with
+        self.ik_tool: list[float] = []  # the tool the controller's inverse used (Q100)
+        self.line: list[int] = []
+        self.functions: list[tuple[int, str]] = []
+        self.mode, self.normal = "LINEAR", 2
+        self.F: float | None = None
+        self.TM: float | None = None
+        self.TA: float | None = None
+        self.timed_by = "F"
+        self.tlo = 0.0
+        self.cur: np.ndarray | None = None
+        self.cur_line = 0
+        self.await_rest = False
+        #: hold points not yet followed by a move: the spline leaves them towards
+        #: the next move's points (its support is four points), so they are judged
+        #: with the next move's line and tool (the motors stand while a tool changes)
+        self.held: list[int] = []
+
+    def _append(self, t: float, q: np.ndarray, tool: float, ik_tool: float, line: int) -> None:
+        self.t.append(t)
+        self.q.append(q)
+        self.tool.append(tool)
+        self.ik_tool.append(ik_tool)
+        self.line.append(line)
+
+    def hold(self) -> None:
+        """The move ends at rest at its end point (module docstring): two more
+        segment ends there."""
+        for _ in range(2):
+            self._append(self.t[-1] + self.h, self.q[-1].copy(), self.tool[-1],
+                         self.ik_tool[-1], self.line[-1])  # fmt: skip
+            self.held.append(len(self.t) - 1)
+
+    def dwell(self, ms: float) -> None:
+        if self.await_rest:
+            self.hold()
+        self.await_rest = False
+        if ms > 0 and self.cur is not None:
+            for _ in range(math.ceil(ms / (self.h * 1000) - 1e-9)):
+                self._append(self.t[-1] + self.h, self.cur.copy(), self.tlo, self.tlo,
+                             self.cur_line)  # fmt: skip
+
+    def pmatch(self) -> None:
+        """The axis positions of the motors as they stand, with the new tool."""
+        assert self.cur is not None
+        P_now = self.kin.inverse(self.cur[None], np.array([self.ik_tool[-1]]))[0]
+        self.cur = self.kin.forward(P_now, self.tlo)
+
+    def timing(self, words: dict[str, str]) -> None:
+        if "F" in words:
+            self.F, self.timed_by = float(words["F"]), "F"
+        if "TM" in words:
+            self.TM, self.timed_by = float(words["TM"]), "TM"
+        if "TA" in words:
+            self.TA = float(words["TA"])
+
+    def move(self, words: dict[str, str], code: str) -> None:
+        """A move from rest to rest (module docstring), its segment ends."""
+        assert not self.await_rest, "a move not followed by DWELL0 would blend"
+        end = np.array([float(words[a]) for a in "XYZAB"])
+        self.await_rest = True
+        if self.cur is None:  # the program's first move: where the machine is
+            self.cur = end
+            self._append(0.0, end, self.tlo, self.tlo, self.cur_line)
+            return
+        ijk = np.array([float(words.get(a, 0.0)) for a in "IJK"])
+        pose, length = _path(self.mode, self.normal, self.cur, end, ijk)
+        assert self.TA is not None
+        ta = self.TA / 1000.0
+        if self.timed_by == "F":
+            assert self.F is not None and length > 0.0, code
+            T = length / self.F
+        else:
+            assert self.TM is not None
+            T = self.TM / 1000.0
+        T = max(T, ta)
+        ks = np.arange(1, math.ceil((T + ta) / self.h - 1e-9) + 1)
+        u = fraction(ks * self.h, T, ta)
+        u[-1] = 1.0
+        for i in self.held:
+            self.line[i] = self.cur_line
+            self.tool[i] = self.tlo
+        self.held.clear()
+        t0 = self.t[-1]
+        for tk, qk in zip((t0 + ks * self.h).tolist(), pose(u), strict=True):
+            self._append(tk, qk, self.tlo, self.tlo, self.cur_line)
+        self.cur = end
+
+    def command(self, raw: str) -> None:
+        """One line of the program."""
+        code = raw.split(";", 1)[0].strip()
+        if raw.strip().startswith("; line "):
+            self.cur_line = int(raw.strip()[7:].split(":")[0])
+        if not code:
+            return
+        if code in ("LINEAR", "CIRCLE1", "CIRCLE2"):
+            self.mode = code
+        elif m := re.fullmatch(r"NORMAL ([IJK])-1", code):
+            self.normal = NORMAL_AXIS[m.group(1)]
+        elif m := re.fullmatch(r"DWELL(\d+(?:\.\d+)?)", code):
+            self.dwell(float(m.group(1)))
+        elif m := re.fullmatch(r"Q100=(-?\d+(?:\.\d+)?)", code):
+            self.tlo = float(m.group(1))
+        elif code == 'CMD"PMATCH"':
+            self.pmatch()
+        elif _TIMING.fullmatch(code):
+            self.timing(dict(re.findall(r"\b(F|TM|TA)(\d+(?:\.\d+)?)", code)))
+        elif set("XYZAB") <= set(words := dict(_WORD.findall(code))):
+            self.move(words, code)
+        elif re.fullmatch(r"(?:[GMTDS]-?[\d.]+\s*)+", code):
+            self.functions.append((len(self.t) - 1, code))
+        # else setup: CLOSE, &1, OPEN PROG, ABS, TS0
+
+
+_TIMING = re.compile(r"(?:(?:F|TM|TA)\d+(?:\.\d+)?\s*)+")
+
+
 def run_segmented(
     text: str,
     profile: Profile,
@@ -170,144 +295,25 @@ def run_segmented(
     ``profile`` with segmentation time ``seg_ms`` (default: the profile's period,
     what ``prsxy-post kinematics`` sets Isx13 to)."""
     kin = _Kin(profile)
-    h = (seg_ms if seg_ms is not None else profile.period_ms) / 1000.0
-    t: list[float] = []
-    q: list[np.ndarray] = []
-    tool: list[float] = []  # the tool the tip is judged with
-    ik_tool: list[float] = []  # the tool the controller's inverse used (Q100)
-    line: list[int] = []
-    functions: list[tuple[int, str]] = []
-    mode, normal = "LINEAR", 2
-    F = TM = TA = None
-    timed_by = "F"
-    tlo = 0.0
-    cur: np.ndarray | None = None
-    cur_line = 0
-    await_rest = False
-    lines = text.splitlines()
-    #: hold points not yet followed by a move: the spline leaves them towards the
-    #: next move's points (its support is four points), so they are judged with
-    #: the next move's line and tool (the motors stand while the tool changes)
-    held: list[int] = []
-
-    def hold() -> None:
-        """The move ends at rest at its end point: the spline reaches it once the
-        end is its last three points (two more segment ends held there)."""
-        for _ in range(2):
-            t.append(t[-1] + h)
-            q.append(q[-1].copy())
-            tool.append(tool[-1])
-            ik_tool.append(ik_tool[-1])
-            line.append(line[-1])
-            held.append(len(t) - 1)
-
-    for raw in lines:
-        code = raw.split(";", 1)[0].strip()
-        if raw.strip().startswith("; line "):
-            cur_line = int(raw.strip()[7:].split(":")[0])
-        if not code:
-            continue
-        if code in ("LINEAR", "CIRCLE1", "CIRCLE2"):
-            mode = code
-            continue
-        if m := re.fullmatch(r"NORMAL ([IJK])-1", code):
-            normal = NORMAL_AXIS[m.group(1)]
-            continue
-        if m := re.fullmatch(r"DWELL(\d+(?:\.\d+)?)", code):
-            if await_rest:
-                hold()
-            await_rest = False
-            ms = float(m.group(1))
-            if ms > 0 and cur is not None:
-                for _ in range(math.ceil(ms / (h * 1000) - 1e-9)):
-                    t.append(t[-1] + h)
-                    q.append(cur.copy())
-                    tool.append(tlo)
-                    ik_tool.append(tlo)
-                    line.append(cur_line)
-            continue
-        if m := re.fullmatch(r"Q100=(-?\d+(?:\.\d+)?)", code):
-            tlo = float(m.group(1))
-            continue
-        if code == 'CMD"PMATCH"':
-            assert cur is not None
-            # the axis positions of the motors as they stand, with the new tool
-            P_now = kin.inverse(cur[None], np.array([ik_tool[-1]]))[0]
-            cur = kin.forward(P_now, tlo)
-            continue
-        timing = dict(re.findall(r"\b(F|TM|TA)(\d+(?:\.\d+)?)", code))
-        if timing and not _WORD.search(re.sub(r"\b(F|TM|TA)\d+(?:\.\d+)?", "", code)):
-            if "F" in timing:
-                F, timed_by = float(timing["F"]), "F"
-            if "TM" in timing:
-                TM, timed_by = float(timing["TM"]), "TM"
-            if "TA" in timing:
-                TA = float(timing["TA"])
-            continue
-        words = dict(_WORD.findall(code))
-        if set("XYZAB") <= set(words):
-            assert not await_rest, "a move not followed by DWELL0 would blend"
-            end = np.array([float(words[a]) for a in "XYZAB"])
-            await_rest = True
-            if cur is None:  # the program's first move: where the machine is
-                cur = end
-                t.append(0.0)
-                q.append(end)
-                tool.append(tlo)
-                ik_tool.append(tlo)
-                line.append(cur_line)
-                continue
-            ijk = np.array([float(words.get(a, 0.0)) for a in "IJK"])
-            pose, length = _path(mode, normal, cur, end, ijk)
-            assert TA is not None
-            ta = TA / 1000.0
-            if timed_by == "F":
-                assert F is not None and length > 0.0, code
-                T = length / F
-            else:
-                assert TM is not None
-                T = TM / 1000.0
-            T = max(T, ta)
-            total = T + ta
-            ks = np.arange(1, math.ceil(total / h - 1e-9) + 1)
-            u = fraction(ks * h, T, ta)
-            u[-1] = 1.0
-            pts = pose(u)
-            for i in held:
-                line[i] = cur_line
-                tool[i] = tlo
-            held.clear()
-            t0 = t[-1]
-            t.extend((t0 + ks * h).tolist())
-            q.extend(list(pts))
-            tool.extend([tlo] * len(ks))
-            ik_tool.extend([tlo] * len(ks))
-            line.extend([cur_line] * len(ks))
-            cur = end
-            continue
-        if re.fullmatch(r"(?:[GMTDS]-?[\d.]+\s*)+", code):
-            functions.append((len(t) - 1, code))
-            continue
-        # setup: CLOSE, &1, OPEN PROG, ABS, TS0
-    ta_ = np.array(t)
-    qa = np.array(q)
-    toola = np.array(tool)
-    P = kin.inverse(qa, np.array(ik_tool))
+    c = _Controller(kin, (seg_ms if seg_ms is not None else profile.period_ms) / 1000.0)
+    for raw in text.splitlines():
+        c.command(raw)
+    t, tool = np.array(c.t), np.array(c.tool)
+    P = kin.inverse(np.array(c.q), np.array(c.ik_tool))
     # the servo clock's ticks from the start, each in the interval it falls in
-    ticks = np.arange(1, int(ta_[-1] / (servo_ms / 1000.0)) + 1) * (servo_ms / 1000.0)
-    k = np.clip(np.searchsorted(ta_, ticks, side="left") - 1, 0, len(ta_) - 2)
-    s = (ticks - ta_[k]) / (ta_[k + 1] - ta_[k])
-    P_dense = np.vstack([P[:1], bspline(P, s, k)])
+    ticks = np.arange(1, int(t[-1] / (servo_ms / 1000.0)) + 1) * (servo_ms / 1000.0)
+    k = np.clip(np.searchsorted(t, ticks, side="left") - 1, 0, len(t) - 2)
+    s = (ticks - t[k]) / (t[k + 1] - t[k])
     seg = np.concatenate([[0], k + 1])
     return SegmentedRun(
-        ta_,
-        qa,
-        toola,
-        np.array(line),
+        t,
+        np.array(c.q),
+        tool,
+        np.array(c.line),
         P,
         np.concatenate([[0.0], ticks]),
-        P_dense,
+        np.vstack([P[:1], bspline(P, s, k)]),
         seg,
-        toola[seg],
-        functions,
+        tool[seg],
+        c.functions,
     )
