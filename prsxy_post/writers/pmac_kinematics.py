@@ -233,6 +233,25 @@ def _head(p: _Prog, geo: Geometry, a: str, b: str, z: str, clamp: bool) -> None:
                 [(float(nul[i]), p.v(f"{legs}_{i}")) for i in range(3)] + [(float(nul[3]), p.v(zz))]
             ),
         )
+    _spin(p, clamp)
+    for i in range(3):
+        p.let(
+            f"rl{i}",
+            f"{p.v(f'kc0_{i}')}+{p.v(f'kcc_{i}')}*{p.cg}+{p.v(f'kcs_{i}')}*{p.sg}",
+        )
+    p.let("rlz", f"{p.kz0}+{p.kzc}*{p.cg}+{p.kzs}*{p.sg}")
+    for j in range(3):
+        p.let(
+            f"c{j}",
+            lin([(float(Mp[j, i]), p.v(f"rl{i}")) for i in range(3)] + [(float(Mp[j, 3]), p.rlz)]),
+        )
+    _struts(p, geo, clamp)
+
+
+def _spin(p: _Prog, clamp: bool) -> None:
+    """γ [deg] (``gam``, its cosine and sine ``cg``, ``sg``): of the two roots of
+    K0 + Kc cos γ + Ks sin γ = 0, γ = φ ± acos(−K0 / ρ), the one nearest zero
+    (kinematics._solve); ATAN2 takes its cosine argument from Q0."""
     p.let("rho", f"SQRT({p.Kc}*{p.Kc}+{p.Ks}*{p.Ks})")
     p(f"Q0={p.Kc}")
     p.let("phi", f"ATAN2({p.Ks})")
@@ -254,17 +273,11 @@ def _head(p: _Prog, geo: Geometry, a: str, b: str, z: str, clamp: bool) -> None:
     p(f"IF (ABS({p.g2})<ABS({p.g1}))", f"{p.gam}={p.g2}", "ENDIF")
     p.let("cg", f"COS({p.gam})")
     p.let("sg", f"SIN({p.gam})")
-    for i in range(3):
-        p.let(
-            f"rl{i}",
-            f"{p.v(f'kc0_{i}')}+{p.v(f'kcc_{i}')}*{p.cg}+{p.v(f'kcs_{i}')}*{p.sg}",
-        )
-    p.let("rlz", f"{p.kz0}+{p.kzc}*{p.cg}+{p.kzs}*{p.sg}")
-    for j in range(3):
-        p.let(
-            f"c{j}",
-            lin([(float(Mp[j, i]), p.v(f"rl{i}")) for i in range(3)] + [(float(Mp[j, 3]), p.rlz)]),
-        )
+
+
+def _struts(p: _Prog, geo: Geometry, clamp: bool) -> None:
+    """p_i = d_i·v_i + sqrt((d_i·v_i)² − |v_i|² + L_i²), v_i = c + R b_i − g_i (the
+    hinge above the ball joint), then the bowed guides' Newton steps."""
     for i in range(3):
         bx, by, bz = geo.b[i]
         _rotate(p, f"b{i}", float(bx), float(by), k(float(bz)))
@@ -374,16 +387,18 @@ def inverse_program(geo: Geometry, emap: ErrorMap | None, cpm: list[float]) -> _
     return p
 
 
-def forward_program(geo: Geometry, emap: ErrorMap | None, cpm: list[float]) -> _Prog:
-    """OPEN FORWARD: P1–P3, P5, P6 [counts] → Q1, Q2, Q7–Q9 [deg, mm]."""
-    p = _Prog(20)
-    for i, m in enumerate(MOTORS):
-        p.let(f"pm{i}", f"P{m}/{k(cpm[i])}")
-    pm = [p.v(f"pm{i}") for i in range(5)]
-    # start: level platform, z from the mean slider travel
-    p.let("xa", "0")
-    p.let("xb", "0")
-    p.let("xz", f"({pm[0]}+{pm[1]}+{pm[2]})/3")
+def _det3(m: list[list[str]]) -> str:
+    return (
+        f"{m[0][0]}*({m[1][1]}*{m[2][2]}-{m[1][2]}*{m[2][1]})"
+        f"-{m[0][1]}*({m[1][0]}*{m[2][2]}-{m[1][2]}*{m[2][0]})"
+        f"+{m[0][2]}*({m[1][0]}*{m[2][1]}-{m[1][1]}*{m[2][0]})"
+    )
+
+
+def _newton(p: _Prog, geo: Geometry, pm: list[str]) -> None:
+    """FK_STEPS Newton steps on (A, B, z) [deg, deg, mm] (``xa``, ``xb``, ``xz``)
+    for the head motors ``pm[0..2]`` [mm]: the inverse's head at x and at x + h
+    along each unknown (J = (f_j − f_0) / h), the step by Cramer's rule."""
     p.let("nn", "0")
     p(f"WHILE ({p.nn}<{FK_STEPS})")
     p.let("jj", "0")
@@ -399,30 +414,34 @@ def forward_program(geo: Geometry, emap: ErrorMap | None, cpm: list[float]) -> _
         p("ENDIF")
     p.let("jj", f"{p.jj}+1")
     p("ENDWHILE")
-    # J[i][j] = (f_j − f_0)/h, r = p_measured − f_0; Cramer's rule
     for i in range(3):
         for j in range(1, 4):
             p.let(f"J{i}{j}", f"({p.v(f'f{j}_{i}')}-{p.v(f'f0_{i}')})/{k(FK_H)}")
         p.let(f"rr{i}", f"{pm[i]}-{p.v(f'f0_{i}')}")
     J = [[p.v(f"J{i}{j}") for j in range(1, 4)] for i in range(3)]
     r = [p.v(f"rr{i}") for i in range(3)]
-
-    def det(m: list[list[str]]) -> str:
-        return (
-            f"{m[0][0]}*({m[1][1]}*{m[2][2]}-{m[1][2]}*{m[2][1]})"
-            f"-{m[0][1]}*({m[1][0]}*{m[2][2]}-{m[1][2]}*{m[2][0]})"
-            f"+{m[0][2]}*({m[1][0]}*{m[2][1]}-{m[1][1]}*{m[2][0]})"
-        )
-
-    p.let("det", det(J))
+    p.let("det", _det3(J))
     p(f"IF ({p.det}!=0)")
     for col, var in enumerate(("xa", "xb", "xz")):
         cramer = [[r[i] if j == col else J[i][j] for j in range(3)] for i in range(3)]
-        p.let(f"num{col}", det(cramer))
+        p.let(f"num{col}", _det3(cramer))
         p.let(var, f"{p.v(var)}+{p.v(f'num{col}')}/{p.det}")
     p("ENDIF")
     p.let("nn", f"{p.nn}+1")
     p("ENDWHILE")
+
+
+def forward_program(geo: Geometry, emap: ErrorMap | None, cpm: list[float]) -> _Prog:
+    """OPEN FORWARD: P1–P3, P5, P6 [counts] → Q1, Q2, Q7–Q9 [deg, mm]."""
+    p = _Prog(20)
+    for i, m in enumerate(MOTORS):
+        p.let(f"pm{i}", f"P{m}/{k(cpm[i])}")
+    pm = [p.v(f"pm{i}") for i in range(5)]
+    # start: level platform, z from the mean slider travel
+    p.let("xa", "0")
+    p.let("xb", "0")
+    p.let("xz", f"({pm[0]}+{pm[1]}+{pm[2]})/3")
+    _newton(p, geo, pm)
     # the pose at the solution, and how far it misses the motors
     # (out of reach here is an error: a clamped root can fake a solution)
     p.let("bad", "0")
