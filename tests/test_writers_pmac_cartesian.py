@@ -216,3 +216,40 @@ def test_arcs_in_every_plane_and_helices_of_several_turns(seed) -> None:
     q = ctl.machine_executes(truth, run.t_dense, run.P_dense, run.tool_dense)
     tr = ctl.judge(motions, q, run.t_dense, run.seg, run.line, run.tool_dense, 10000.0)
     assert_on_the_path(tr)
+
+
+@pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
+def test_the_moves_run_at_the_programmed_feed(path) -> None:
+    """Each move takes its length over its feed (rapids at the profile's rapid
+    speed) plus its stop: at least that, and no more than one TA (a whole ms
+    above v/a) and three segments more (the last, partial one and the two at rest)."""
+    truth = machine("nominal", None)
+    _, run, motions = execute("nominal", None, path.name, seg_ms=5.0)
+    lim = truth.limits
+    lo = hi = 0.0
+    for m in motions:
+        if m.kind == "function" or (m.kind in ("feed", "rapid") and m.start == m.end):
+            continue
+        if m.kind == "dwell":
+            lo += m.duration
+            hi += m.duration + 0.005
+            continue
+        s, e = np.array(m.start), np.array(m.end)
+        if m.kind == "arc":
+            n_ax = pc.NORMAL_AXIS[m.plane]
+            _, sweep = pc.arc_sweep(m)
+            r = math.dist(np.delete(s[:3], n_ax), np.delete(np.array(m.center), n_ax))
+            length = math.hypot(r * sweep, e[n_ax] - s[n_ax])
+        else:
+            length = float(np.linalg.norm(e[:3] - s[:3]))
+        rotary = length == 0.0
+        if rotary:
+            length = float(np.linalg.norm(e[3:] - s[3:]))
+        rate = (lim.rapid_deg_min if rotary else lim.rapid_mm_min) if m.kind == "rapid" else m.feed
+        a = lim.max_accel_deg_s2 if rotary else lim.max_accel_mm_s2
+        t_move = length / (rate / 60.0)
+        ta = math.ceil(1000.0 * rate / 60.0 / a - 1e-9) / 1000.0
+        lo += max(t_move, ta)
+        turns = max(1, abs(m.rotation)) if m.kind == "arc" else 1
+        hi += turns * (max(t_move / turns, ta) + ta + 3 * 0.005)
+    assert lo <= run.t[-1] <= hi, (lo, run.t[-1], hi)
