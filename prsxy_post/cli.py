@@ -151,6 +151,10 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
         "prsxy-post ballbar xy-r50-ccw.csv xy-r50-cw.csv",
         "prsxy-post ballbar run*.csv --plot ballbar.png --profile shop.toml",
     ),
+    "kinematics": (
+        "prsxy-post kinematics --profile shop.toml -o kinematics.pmc",
+        "prsxy-post kinematics --profile shop.toml -o kinematics.pmc --program part.ngc",
+    ),
     "tables": (
         "prsxy-post tables export --profile shop.toml --format linuxcnc1 --out-dir comp/",
         "prsxy-post tables export --profile shop.toml --format pmac --out-dir pmac/",
@@ -1063,6 +1067,43 @@ def ballbar(
     for line in analysis.lines():
         click.echo(line)
     _wrote_report(report_dir)
+
+
+@main.command("kinematics")
+@profile_option
+@click.option("-o", "--output", required=True, help="Turbo PMAC download file to write (.pmc).")
+@click.option(
+    "--program",
+    type=click.Path(dir_okay=False),
+    help="Also write this G-code program as a Cartesian Turbo PMAC motion program "
+    "(LINEAR/CIRCLE moves) that runs through these kinematics.",
+)
+@click.option("--program-output", help="Where to write it (default: PROGRAM.cart.pmc).")
+@guarded
+def kinematics_export(
+    profile_path: str, output: str, program: str | None, program_output: str | None
+) -> None:
+    """Write the profile's calibrated kinematics as Turbo PMAC OPEN FORWARD / OPEN
+    INVERSE programs for coordinate system 1 (the embedded route)."""
+    from . import embedded
+    from .files import inspect_source
+    from .writers import Provenance, pmac_kinematics
+
+    prof = load_profile(profile_path)
+    kf = pmac_kinematics.export(prof, profile_path)
+    files = {Path(output): kf.text}
+    if program:
+        sha = inspect_source(program)
+        prov = Provenance(program, sha, prof.name, profile_path, sha256_of(profile_path), "")
+        out = program_output or str(Path(program).with_suffix(".cart.pmc"))
+        text = read_text(program, "program")
+        files[Path(out)] = embedded.program_text(text, program, prof, prov)
+    write_atomic(files)
+    click.echo(
+        f"wrote {', '.join(str(f) for f in files)}: download after `tables export --format "
+        f"pmac`; work variables Q20-Q{kf.last_q}",
+        err=True,
+    )
 
 
 @main.group()
