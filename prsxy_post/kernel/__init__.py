@@ -21,8 +21,10 @@ command line: its inputs are arrays and small frozen records of arrays.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -44,7 +46,15 @@ def _load() -> tuple[Any, Any, str, str]:
     try:
         from . import _ik, _text  # type: ignore[attr-defined]
     except ImportError as e:
-        why = f"the compiled extension is not built ({e})"
+        absent = [
+            n for n in ("_ik", "_text") if importlib.util.find_spec(f"{__name__}.{n}") is None
+        ]
+        why = (
+            f"the compiled extension is not built (no {', '.join(absent)} "
+            f"in {Path(__file__).parent})"
+            if absent
+            else f"the compiled extension does not import ({e})"
+        )
         return (*pure, f"pure numpy ({why})", why)
     return _ik.inverse_rows, _text.format_fixed_rows, f"compiled (Cython {_ik.CYTHON})", ""
 
