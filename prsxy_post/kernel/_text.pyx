@@ -8,7 +8,18 @@ whole chunk when a value is too large), written row by row into one buffer."""
 import numpy as np
 
 from libc.math cimport fabs, floor, rint, signbit
-from libc.stdint cimport int64_t
+from libc.stdint cimport int64_t, uint32_t
+from cpython.list cimport PyList_New, PyList_SET_ITEM
+from cpython.ref cimport Py_INCREF
+from cpython.unicode cimport PyUnicode_DecodeASCII
+
+#: the characters str.splitlines breaks at
+_BREAKS = "\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"
+
+cdef char _PAIRS[201]
+for _i in range(100):
+    _PAIRS[2 * _i] = 48 + _i // 10
+    _PAIRS[2 * _i + 1] = 48 + _i % 10
 
 from . import text as _pure
 
@@ -22,6 +33,7 @@ def format_fixed_rows(columns, str end="\n"):
     if n == 0:
         return []
     cdef Py_ssize_t c, i, j, pos = 0, row_max = 0
+    cdef char tmp[24]
     cdef double x, t, lim, scale
     cdef int64_t k, ip, fp, p10
     cdef int d, nd
@@ -64,16 +76,24 @@ def format_fixed_rows(columns, str end="\n"):
             ks[c, i] = int(f"{abs(float(vals[c, i])):.{d}f}".replace(".", ""))
         row_max += len(pre) + 1 + 20 + 1 + d
     cdef bytes allpre = b"".join(pres)
-    cdef const unsigned char[:] pb = allpre if allpre else b"\0"
     cdef bytes endb = end.encode("ascii").replace(b"\0", b"")
-    cdef const unsigned char[:] eb = endb if endb else b"\0"
     cdef Py_ssize_t ne = len(endb)
     row_max += ne
-    buf = bytearray(n * row_max)
-    cdef unsigned char[:] out = buf
-    cdef unsigned char tmp[24]
+    buf = bytearray(n * row_max + 1)
+    cdef char* out = buf
+    cdef const char* pb = allpre
+    cdef const char* eb = endb
+    # one str a row straight from the buffer when each row is exactly one line (the
+    # end is a newline, no prefix holds a line break); else Python's splitlines
+    # over the whole text, as the reference does
+    cdef bint one_line = end == "\n" and not any(ch in _BREAKS for ch in allpre.decode("ascii"))
+    starts_a = np.empty(n + 1, np.intp)
+    cdef Py_ssize_t[::1] starts = starts_a
+    cdef uint32_t ipart, fpart
+    cdef int q
     with nogil:
         for i in range(n):
+            starts[i] = pos
             for c in range(ncol):
                 for j in range(at[c], at[c + 1]):
                     out[pos] = pb[j]
@@ -84,14 +104,15 @@ def format_fixed_rows(columns, str end="\n"):
                 k = ks[c, i]
                 d = <int> dec[c]
                 p10 = p10s[c]
-                ip = k // p10
-                fp = k - ip * p10
+                # both parts are below 10^9 (the bound on the values): 32 bits
+                ipart = <uint32_t> (k // p10)
+                fpart = <uint32_t> (k - (k // p10) * p10)
                 nd = 0
                 while True:
-                    tmp[nd] = <unsigned char> (48 + ip % 10)
+                    tmp[nd] = <char> (48 + ipart % 10)
                     nd += 1
-                    ip = ip // 10
-                    if ip == 0:
+                    ipart = ipart // 10
+                    if ipart == 0:
                         break
                 while nd > 0:
                     nd -= 1
@@ -100,11 +121,24 @@ def format_fixed_rows(columns, str end="\n"):
                 if d:
                     out[pos] = 46  # '.'
                     pos += 1
-                    for j in range(d - 1, -1, -1):
-                        out[pos + j] = <unsigned char> (48 + fp % 10)
-                        fp = fp // 10
+                    q = d - 1
+                    while q >= 1:
+                        out[pos + q - 1] = _PAIRS[2 * (fpart % 100)]
+                        out[pos + q] = _PAIRS[2 * (fpart % 100) + 1]
+                        fpart = fpart // 100
+                        q -= 2
+                    if q == 0:
+                        out[pos] = <char> (48 + fpart % 10)
                     pos += d
             for j in range(ne):
                 out[pos] = eb[j]
                 pos += 1
-    return bytes(buf[:pos]).decode("ascii").splitlines(keepends=True)
+        starts[n] = pos
+    if not one_line:
+        return PyUnicode_DecodeASCII(out, pos, NULL).splitlines(keepends=True)
+    rows = PyList_New(n)
+    for i in range(n):
+        row = PyUnicode_DecodeASCII(out + starts[i], starts[i + 1] - starts[i], NULL)
+        Py_INCREF(row)
+        PyList_SET_ITEM(rows, i, row)
+    return rows
