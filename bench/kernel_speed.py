@@ -51,6 +51,8 @@ def libm_differences(n: int = 10**6) -> dict[str, float]:
         "cos": (np.cos(t), np.fromiter(map(math.cos, tl), float, n)),
         "arccos": (np.arccos(a), np.fromiter(map(math.acos, al), float, n)),
         "arctan2": (np.arctan2(a, b), np.fromiter(map(math.atan2, al, bl), float, n)),
+        # not a C library function: the C kernel's x * (pi / 180)
+        "radians": (np.radians(t * 100), t * 100 * (math.pi / 180.0)),
     }
     return {k: float(np.mean(x != y)) for k, (x, y) in pairs.items()}
 
