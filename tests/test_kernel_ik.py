@@ -144,3 +144,14 @@ def test_geometry_solves_its_linear_algebra_once(monkeypatch: pytest.MonkeyPatch
     geo2 = kinematics.Geometry.from_params(prof.kinematics, prof.origin + 1.0)
     kinematics.inverse(geo2, q)
     assert n_svd == 2
+
+
+def test_read_only_poses_are_taken_as_the_reference_takes_them() -> None:
+    """Poses in a read-only array (a broadcast row, a memory-mapped file) solve as
+    the reference solves them, instead of failing in the compiled kernel only."""
+    _ik = compiled("_ik")
+    m = _arrays(PROFILES[0])
+    q = np.broadcast_to(np.array([1.0, 2.0, -3.0, 4.0, 5.0]), (4, 5))
+    tz = np.broadcast_to(np.array(m.tool[2]), (4,))
+    assert not q.flags.writeable
+    assert same_bits(_ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz))

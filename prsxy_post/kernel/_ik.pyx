@@ -38,7 +38,7 @@ cdef inline double _wrap(double a) nogil:
     return mod - M_PI
 
 
-def inverse_rows(m, double[:, :] q, double[:] tz):
+def inverse_rows(m, const double[:, :] q, const double[:] tz):
     """Motor positions P (N, 5) [mm]; the compiled twin of ``ik.inverse_rows``.
     A geometry with bowed guides goes to the reference (its Newton sums are
     numpy's einsum, whose order is numpy's own)."""
