@@ -58,7 +58,15 @@ def extensions() -> list[Extension]:
         for name in ("_ik", "_text")
     ]
     try:
-        return list(cythonize(mods, compiler_directives={"language_level": 3}, quiet=True))
+        # the generated C goes under build/, not beside the package (nor into wheels)
+        return list(
+            cythonize(
+                mods,
+                compiler_directives={"language_level": 3},
+                quiet=True,
+                build_dir="build/cython",
+            )
+        )
     except Exception as e:
         sys.stderr.write(f"prsxy-post: the kernel did not cythonize ({e}); pure kernel\n")
         return []
