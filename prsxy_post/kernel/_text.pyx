@@ -11,7 +11,14 @@ from libc.math cimport fabs, floor, rint, signbit
 from libc.stdint cimport int64_t, uint32_t
 from cpython.list cimport PyList_New, PyList_SET_ITEM
 from cpython.ref cimport Py_INCREF
+from cpython.bytes cimport PyBytes_AS_STRING, PyBytes_FromStringAndSize
 from cpython.unicode cimport PyUnicode_DecodeASCII
+from libc.string cimport memcpy
+
+cdef extern from "Python.h":
+    # a new str of n ASCII characters (max char 127) and its bytes, to fill
+    object PyUnicode_New(Py_ssize_t n, Py_UCS4 maxchar)
+    void* PyUnicode_DATA(object o)
 
 #: the characters str.splitlines breaks at
 _BREAKS = "\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"
@@ -79,8 +86,9 @@ def format_fixed_rows(columns, str end="\n"):
     cdef bytes endb = end.encode("ascii").replace(b"\0", b"")
     cdef Py_ssize_t ne = len(endb)
     row_max += ne
-    buf = bytearray(n * row_max + 1)
-    cdef char* out = buf
+    # not zeroed: every byte up to pos is written below
+    buf = PyBytes_FromStringAndSize(NULL, n * row_max + 1)
+    cdef char* out = PyBytes_AS_STRING(buf)
     cdef const char* pb = allpre
     cdef const char* eb = endb
     # one str a row straight from the buffer when each row is exactly one line (the
@@ -138,7 +146,9 @@ def format_fixed_rows(columns, str end="\n"):
         return PyUnicode_DecodeASCII(out, pos, NULL).splitlines(keepends=True)
     rows = PyList_New(n)
     for i in range(n):
-        row = PyUnicode_DecodeASCII(out + starts[i], starts[i + 1] - starts[i], NULL)
+        # the bytes are ASCII (digits, '-', '.', and prefixes encoded as ASCII)
+        row = PyUnicode_New(starts[i + 1] - starts[i], 127)
+        memcpy(PyUnicode_DATA(row), out + starts[i], starts[i + 1] - starts[i])
         Py_INCREF(row)
         PyList_SET_ITEM(rows, i, row)
     return rows
