@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 import click
 import numpy as np
 
-from . import __version__
+from . import __version__, kernel
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
 from .files import clash, read_text, sha256_of, write_atomic
 from .files import load_profile as _load_profile
@@ -193,7 +193,9 @@ class _Group(_Examples, click.Group):
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="prsxy-post")
+@click.version_option(
+    __version__, prog_name="prsxy-post", message=f"%(prog)s %(version)s\nkernel: {kernel.NAME}"
+)
 @click.option("--debug", is_flag=True, help="Show a traceback with errors.")
 @click.pass_context
 def main(ctx: click.Context, debug: bool) -> None:
@@ -202,6 +204,12 @@ def main(ctx: click.Context, debug: bool) -> None:
     Exit codes: 0 success, 1 bad input, 2 bad usage, 3 internal error.
     """
     ctx.obj = Ctx(debug=debug)
+    if kernel.MISSING:
+        click.echo(
+            f"prsxy-post: warning: {kernel.WHY_PURE}; running the pure numpy kernel "
+            "(the same output, several times slower)",
+            err=True,
+        )
 
 
 profile_option = click.option(
