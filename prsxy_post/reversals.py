@@ -359,59 +359,139 @@ def path_roots(
     ok = (new * V0 < 0) & (new * V1 > 0)
     if not np.any(ok):
         return s, accel
+    where = _Looks(k, cols, h, velocity)
+    x, moved = _false_position(s, accel, V0, V1, new, ok, where, steps)
+    if not np.any(moved):
+        return s, accel
+    slope = _path_slopes(x, moved, where)
+    moved &= np.isfinite(slope)
+    return np.where(moved, x, s), np.where(moved, slope, accel)
+
+
+class _Looks(NamedTuple):
+    """Where :func:`path_roots` looks at the path: the steps ``k`` (m,) (rows of
+    the chunk), the motors ``cols`` (m,), the steps' durations ``h`` (m,) [s], and
+    the path's velocity inside steps (:data:`Velocity`)."""
+
+    k: np.ndarray
+    cols: np.ndarray
+    h: np.ndarray
+    velocity: Velocity
+
+
+class _Bracket(NamedTuple):
+    """False position's bracket about each of m roots: the fractions of the step
+    ``s_a`` where the path's velocity ``v_a`` [mm/s] is still the old way and
+    ``s_b`` where ``v_b`` is the new way, and ``last`` the end moved last (−1 a,
+    +1 b, 0 neither)."""
+
+    s_a: np.ndarray
+    v_a: np.ndarray
+    s_b: np.ndarray
+    v_b: np.ndarray
+    last: np.ndarray
+
+
+def _false_position(
+    s: np.ndarray,
+    accel: np.ndarray,
+    V0: np.ndarray,
+    V1: np.ndarray,
+    new: np.ndarray,
+    ok: np.ndarray,
+    where: _Looks,
+    steps: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Up to ``steps`` steps of false position with the Illinois rule from the
+    cubic's roots ``s`` (m,) of the steps ``ok`` (m,) bool, bracketed by the
+    step's ends (velocities V0, V1 [mm/s]), until the path's velocity at each is
+    what the acceleration makes in ROOT_TIME_S (:func:`path_roots`).
+
+    Returns
+    -------
+    x : (m,) the roots [fraction of the step]
+    moved : (m,) bool, moved off the cubic's root (where the path was known)
+    """
+    # the bracket starts at the step's ends; the end moved last: −1 a, +1 b
     s_a, v_a = np.zeros(len(s)), V0.astype(float)
     s_b, v_b = np.ones(len(s)), V1.astype(float)
+    br = _Bracket(s_a, v_a, s_b, v_b, np.zeros(len(s), dtype=int))
     x = s.copy()
-    last = np.zeros(len(s), dtype=int)  # the end moved last: −1 a, +1 b
     # the roots still sought, and those moved off the cubic's
     going = ok.copy()
     moved = np.zeros(len(s), dtype=bool)
     for _ in range(steps):
-        v = velocity(k[going], x[going], cols[going])
+        v = where.velocity(where.k[going], x[going], where.cols[going])
         known = np.zeros(len(s), dtype=bool)
         known[going] = np.isfinite(v)
         vm = np.zeros(len(s))
         vm[going] = np.where(np.isfinite(v), v, 0.0)
         ok &= known | ~going
-        # found: the path's velocity there is what the acceleration makes in
-        # ROOT_TIME_S (on fast turns the cubic's root already is), the acceleration
-        # the cubic's or the secant to the bracket's other end, whichever is less
         new_way = new * vm > 0
-        s_o, v_o = np.where(new_way, s_a, s_b), np.where(new_way, v_a, v_b)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            secant = np.abs(vm - v_o) / (np.abs(x - s_o) * h)
-        slow = np.fmin(np.abs(accel), secant)
-        found = going & known & (np.abs(vm) * ROOT_SLOPE_MARGIN <= slow * ROOT_TIME_S)
+        found = going & known & _root_found(x, vm, new_way, br, accel, where.h)
         going &= known & ~found
         if not np.any(going):
             break
         moved |= going
-        turned = going & new_way
-        old = going & ~new_way
-        # Illinois: an end kept twice running has its velocity halved, so that
-        # false position closes in from both sides
-        v_a = np.where(turned & (last == 1), 0.5 * v_a, v_a)
-        v_b = np.where(old & (last == -1), 0.5 * v_b, v_b)
-        last = np.where(turned, 1, np.where(old, -1, last))
-        s_b, v_b = np.where(turned, x, s_b), np.where(turned, vm, v_b)
-        s_a, v_a = np.where(old, x, s_a), np.where(old, vm, v_a)
+        br = _illinois(br, x, vm, going & new_way, going & ~new_way)
         with np.errstate(divide="ignore", invalid="ignore"):
-            x_new = s_a - v_a * (s_b - s_a) / (v_b - v_a)
-        x = np.where(going & np.isfinite(x_new), np.clip(x_new, s_a, s_b), x)
+            x_new = br.s_a - br.v_a * (br.s_b - br.s_a) / (br.v_b - br.v_a)
+        x = np.where(going & np.isfinite(x_new), np.clip(x_new, br.s_a, br.s_b), x)
     moved &= ok
-    if not np.any(moved):
-        return s, accel
+    return x, moved
+
+
+def _root_found(
+    x: np.ndarray,
+    vm: np.ndarray,
+    new_way: np.ndarray,
+    br: _Bracket,
+    accel: np.ndarray,
+    h: np.ndarray,
+) -> np.ndarray:
+    """(m,) bool, the path's velocity ``vm`` [mm/s] at the fractions ``x`` is what
+    the acceleration makes in ROOT_TIME_S: the root is found."""
+    # found: the path's velocity there is what the acceleration makes in
+    # ROOT_TIME_S (on fast turns the cubic's root already is), the acceleration
+    # the cubic's or the secant to the bracket's other end, whichever is less
+    s_o, v_o = np.where(new_way, br.s_a, br.s_b), np.where(new_way, br.v_a, br.v_b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        secant = np.abs(vm - v_o) / (np.abs(x - s_o) * h)
+    slow = np.fmin(np.abs(accel), secant)
+    return np.abs(vm) * ROOT_SLOPE_MARGIN <= slow * ROOT_TIME_S
+
+
+def _illinois(
+    br: _Bracket, x: np.ndarray, vm: np.ndarray, turned: np.ndarray, old: np.ndarray
+) -> _Bracket:
+    """The bracket with its new-way end moved to ``x`` where the path's velocity
+    ``vm`` there has ``turned``, its old-way end where it is still ``old``."""
+    s_a, v_a, s_b, v_b, last = br
+    # Illinois: an end kept twice running has its velocity halved, so that
+    # false position closes in from both sides
+    v_a = np.where(turned & (last == 1), 0.5 * v_a, v_a)
+    v_b = np.where(old & (last == -1), 0.5 * v_b, v_b)
+    last = np.where(turned, 1, np.where(old, -1, last))
+    s_b, v_b = np.where(turned, x, s_b), np.where(turned, vm, v_b)
+    s_a, v_a = np.where(old, x, s_a), np.where(old, vm, v_a)
+    return _Bracket(s_a, v_a, s_b, v_b, last)
+
+
+def _path_slopes(x: np.ndarray, moved: np.ndarray, where: _Looks) -> np.ndarray:
+    """The path's acceleration [mm/s²] at the roots ``x`` (m,) that ``moved``
+    (NaN elsewhere, and where the path is not known)."""
     # the acceleration at a moved root: a central difference over ±ROOT_SLOPE_STEP
     # of the step (false position closes in from one side, and the bracket's other
     # end may stay at the step's end, too far for a slope at the root)
     d = ROOT_SLOPE_STEP
     lo, hi = np.clip(x[moved] - d, 0.0, 1.0), np.clip(x[moved] + d, 0.0, 1.0)
-    both = velocity(np.tile(k[moved], 2), np.concatenate([lo, hi]), np.tile(cols[moved], 2))
-    slope = np.full(len(s), np.nan)
+    both = where.velocity(
+        np.tile(where.k[moved], 2), np.concatenate([lo, hi]), np.tile(where.cols[moved], 2)
+    )
+    slope = np.full(len(x), np.nan)
     with np.errstate(divide="ignore", invalid="ignore"):
-        slope[moved] = (both[len(lo) :] - both[: len(lo)]) / ((hi - lo) * h[moved])
-    moved &= np.isfinite(slope)
-    return np.where(moved, x, s), np.where(moved, slope, accel)
+        slope[moved] = (both[len(lo) :] - both[: len(lo)]) / ((hi - lo) * where.h[moved])
+    return slope
 
 
 def windows(
