@@ -23,7 +23,7 @@ from . import __version__
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
 from .files import clash, read_text, sha256_of, write_atomic
 from .files import load_profile as _load_profile
-from .profile import Profile
+from .profile import MOTORS, Profile
 from .writers import DIALECTS
 
 if TYPE_CHECKING:
@@ -150,6 +150,7 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
     "ballbar": (
         "prsxy-post ballbar xy-r50-ccw.csv xy-r50-cw.csv",
         "prsxy-post ballbar run*.csv --plot ballbar.png --profile shop.toml",
+        "prsxy-post ballbar ballbar-*.csv --report bb-report/",
     ),
     "tables": (
         "prsxy-post tables export --profile shop.toml --format linuxcnc1 --out-dir comp/",
@@ -162,7 +163,7 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
     ),
     "tables import": (
         "prsxy-post tables import comp/motor5.comp --profile a.toml --format linuxcnc1 -o b.toml",
-        "prsxy-post tables import pmac/motor5.pmc --profile shop.toml --format pmac -o new.toml",
+        "prsxy-post tables import pmac/axis-tables.pmc --profile shop.toml --format pmac -o b.toml",
     ),
 }
 
@@ -840,9 +841,6 @@ def calibrate(
     backlash, cyclic error, servo lag; named, sized and compensated), then the
     virtual-axis error map from what remains. Each stage prints what it changed
     and the residuals before and after.
-
-    Example: prsxy-post calibrate poses.csv axis.csv ballbar-*.csv --profile
-    nominal.toml -o calibrated.toml
     """
     from . import calibrate as cal
 
@@ -1025,8 +1023,6 @@ def ballbar(
     Each figure is printed only when it stands above the noise, with its
     significance; --json has them all. Polar plots overlay a circle's ccw and cw
     runs on one µm/div scale.
-
-    Example: prsxy-post ballbar ballbar-*.csv --report bb-report
     """
     from . import ballbar as bb
     from . import measure
@@ -1060,6 +1056,33 @@ def tables() -> None:
 
 
 TABLE_FORMATS = click.Choice(["linuxcnc0", "linuxcnc1", "pmac"])
+
+
+class _Motor(click.ParamType):
+    """A motor number of the contract (docs/machine-model.md): 1, 2, 3 (the guides'
+    sliders P1, P2, P3) and 5, 6 (the table's P5, P6); there is no motor 4."""
+
+    name = "motor"
+
+    def get_metavar(self, param: click.Parameter, ctx: click.Context | None = None) -> str:
+        return "[" + "|".join(str(m) for m in MOTORS) + "]"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> int:
+        if isinstance(value, int) and value in MOTORS:
+            return value
+        try:
+            motor = int(str(value).strip())
+        except ValueError:
+            motor = None
+        if motor in MOTORS:
+            return motor
+        names = ", ".join(f"{m} (P{m})" for m in MOTORS)
+        self.fail(
+            f"{value!r} is not a motor of the PRS-XY machine (expected one of {names}; "
+            "there is no motor 4)",
+            param,
+            ctx,
+        )
 
 
 @tables.command("export")
@@ -1161,7 +1184,7 @@ def _linuxcnc_motor(
 @click.option("--format", "fmt", type=TABLE_FORMATS, required=True)
 @click.option(
     "--motor",
-    type=click.IntRange(1, 6),
+    type=_Motor(),
     default=None,
     help="Motor of a LinuxCNC file (default: from --ini or the file's prsxy-post notes).",
 )
