@@ -10,6 +10,7 @@ import functools
 import json
 import os
 import sys
+import time
 import traceback
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -28,6 +29,10 @@ from .writers import DIALECTS
 
 if TYPE_CHECKING:
     from .measure import AxisData, BallbarRun, PoseData
+
+
+#: the exit code after Ctrl-C (128 + SIGINT, as shells report it)
+EXIT_INTERRUPTED = 130
 
 
 def load_profile(path: str) -> Profile:
@@ -90,7 +95,7 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
             raise
         except KeyboardInterrupt:
             click.echo("interrupted; no output written", err=True)
-            sys.exit(130)
+            sys.exit(EXIT_INTERRUPTED)
         except BrokenPipeError:
             # the reader went away (prsxy-post inspect big.ngc | head): stop quietly,
             # and keep Python from complaining when it flushes stdout at exit
@@ -263,19 +268,50 @@ def inspect(program: str, profile_path: str | None, start: str | None, as_json: 
 # ------------------------------------------------------------------ convert
 
 
+def _stderr_is_terminal() -> bool:
+    """Whether standard error is a terminal (progress bars go only there)."""
+    return sys.stderr.isatty()
+
+
+def _clock(seconds: float) -> str:
+    s = max(0, round(seconds))
+    return (
+        f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
+    )
+
+
 class _Progress:
-    """A one-line progress display on a terminal's stderr."""
+    """A one-line progress display on a terminal's stderr: the program, how much
+    of it is read, and the time left at the rate so far (ETA). The line is
+    erased when the program is done, before the next one's."""
 
-    def __init__(self, name: str) -> None:
-        self.name = name
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self.clock = clock
+        self.job: Any = None
+        self.started = 0.0
 
-    def __call__(self, done: int, total: int) -> None:
-        pct = min(100.0, 100.0 * done / max(total, 1))
-        sys.stderr.write(f"\r{self.name}: {pct:5.1f}%")
-        sys.stderr.flush()
+    def __call__(self, job: Any, done: int, total: int) -> None:
+        now = self.clock()
+        if job is not self.job:
+            self.close()
+            self.job, self.started = job, now
+        frac = min(1.0, done / max(total, 1))
+        elapsed = now - self.started
+        eta = (
+            f"  ETA {_clock(elapsed * (1.0 - frac) / frac)}" if frac > 0 and elapsed >= 1.0 else ""
+        )
+        self._show(f"{job.program}: {100.0 * frac:5.1f}%{eta}")
 
     def close(self) -> None:
-        sys.stderr.write(f"\r{self.name}: done  \n")
+        if self.job is not None:
+            self._show("")
+            self.job = None
+
+    @staticmethod
+    def _show(text: str) -> None:
+        # written as is: click.echo would strip the erase-line code off a non-tty
+        sys.stderr.write(f"\r\x1b[K{text}")
+        sys.stderr.flush()
 
 
 @main.command()
@@ -410,30 +446,54 @@ def convert(
                 on_message=say,
             )
         )
-    if pooled:
-        results = conv.convert_many(jobs_list, workers=jobs)
-    else:
-        results = []
-        for job in jobs_list:
-            show = not quiet and sys.stderr.isatty() and job.program != "-"
-            bar = _Progress(job.program) if show else None
-            try:
-                results.append((conv.convert_file(job, bar).written, None))
-            except PrsxyError as err:
-                results.append((None, err))
-            finally:
-                if bar is not None:
-                    bar.close()
-    worst = 0
-    for job, (files, problem) in zip(jobs_list, results, strict=True):
-        if problem is not None:
-            click.echo(str(problem), err=True)
-            worst = max(worst, problem.exit_code)
-            continue
-        if not quiet and files != ["-"]:
-            click.echo(f"{job.program} -> {', '.join(files or [])}", err=True)
+    show = not quiet and not pooled and _stderr_is_terminal()
+    bar = _Progress() if show else None
+    try:
+        outcomes = conv.convert_many(jobs_list, workers=jobs if pooled else 1, progress=bar)
+    except conv.Interrupted as stop:
+        if bar is not None:
+            bar.close()
+        _say_outcomes(stop.outcomes, quiet=True)
+        click.echo(_interrupted(stop.outcomes), err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    if bar is not None:
+        bar.close()
+    worst = _say_outcomes(outcomes, quiet)
     if worst:
         sys.exit(worst)
+
+
+def _say_outcomes(outcomes: Sequence[Any], quiet: bool) -> int:
+    """Each program's error (always) and its outputs (unless quiet); the worst
+    exit code."""
+    worst = 0
+    for o in outcomes:
+        if o.error is not None:
+            click.echo(str(o.error), err=True)
+            worst = max(worst, o.error.exit_code)
+        elif o.state == "done" and not quiet and o.written != ["-"]:
+            click.echo(f"{o.job.program} -> {', '.join(o.written)}", err=True)
+    return worst
+
+
+def _interrupted(outcomes: Sequence[Any]) -> str:
+    """What a Ctrl-C left: every output written whole, and every one not written
+    (an existing file of that name is as it was)."""
+    lines = ["interrupted: every conversion stopped"]
+    why = {
+        "stopped": "stopped while being converted",
+        "waiting": "not started",
+        "failed": "failed, see above",
+        "running": "stopped while being converted",
+    }
+    for o in outcomes:
+        if o.state == "done":
+            lines += [f"  written whole: {w} (from {o.job.program})" for w in o.written]
+    for o in outcomes:
+        if o.state != "done":
+            out = "standard output" if o.job.output == "-" else o.job.output
+            lines.append(f"  not written: {out} ({o.job.program}: {why[o.state]})")
+    return "\n".join(lines)
 
 
 def _output_of(program: str, ext: str, output: str | None, out_dir: str | None) -> str:
