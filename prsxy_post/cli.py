@@ -10,6 +10,7 @@ import functools
 import json
 import os
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable, Sequence
@@ -446,10 +447,17 @@ def convert(
                 on_message=say,
             )
         )
-    show = not quiet and not pooled and _stderr_is_terminal()
-    bar = _Progress() if show else None
+    _run_conversions(jobs_list, jobs if pooled else 1, quiet)
+
+
+def _run_conversions(jobs: Sequence[Any], workers: int, quiet: bool) -> None:
+    """Convert, with a progress line on a terminal (one process at a time), and
+    say what was written; after Ctrl-C, what was written whole and what not."""
+    from . import convert as conv
+
+    bar = _Progress() if not quiet and workers == 1 and _stderr_is_terminal() else None
     try:
-        outcomes = conv.convert_many(jobs_list, workers=jobs if pooled else 1, progress=bar)
+        outcomes = conv.convert_many(jobs, workers=workers, progress=bar)
     except conv.Interrupted as stop:
         if bar is not None:
             bar.close()
@@ -652,6 +660,78 @@ ignore_provenance_option = click.option(
     help="Use measurement files even when their '# commanded_with:' names another "
     "profile than --commanded-with (or --profile).",
 )
+
+
+class _Stages:
+    """The stages of a long command on stderr, as the library reports them
+    (``progress(stage, fraction done)``): on a terminal one line, a bar with the
+    stage and the time so far, redrawn every second; otherwise a line per stage
+    with the time it began (for logs). Nothing with ``quiet``."""
+
+    WIDTH = 20
+
+    def __init__(
+        self,
+        command: str,
+        quiet: bool = False,
+        terminal: bool | None = None,
+        clock: Callable[[], float] = time.monotonic,
+        tick: float = 1.0,
+    ) -> None:
+        self.command, self.quiet, self.clock, self.tick = command, quiet, clock, tick
+        self.terminal = _stderr_is_terminal() if terminal is None else terminal
+        self.started = clock()
+        self.stage: str | None = None
+        self.fraction = 0.0
+        self.lock = threading.Lock()
+        self.stopped = threading.Event()
+        self.ticker: threading.Thread | None = None
+
+    def __enter__(self) -> _Stages:
+        return self
+
+    def __exit__(self, kind: object, *exc: object) -> None:
+        self.close(finished=kind is None)
+
+    def __call__(self, stage: str, fraction: float) -> None:
+        if self.quiet:
+            return
+        with self.lock:
+            self.stage, self.fraction = stage, min(max(fraction, 0.0), 1.0)
+            if not self.terminal:
+                elapsed = _clock(self.clock() - self.started)
+                click.echo(f"{self.command} [{elapsed}]: {stage}", err=True)
+                return
+            self._draw()
+        if self.ticker is None:
+            self.ticker = threading.Thread(target=self._tick, daemon=True)
+            self.ticker.start()
+
+    def _draw(self) -> None:
+        done = round(self.fraction * self.WIDTH)
+        bar = "#" * done + "-" * (self.WIDTH - done)
+        elapsed = _clock(self.clock() - self.started)
+        sys.stderr.write(f"\r\x1b[K{self.command} [{bar}] {elapsed} {self.stage}")
+        sys.stderr.flush()
+
+    def _tick(self) -> None:
+        while not self.stopped.wait(self.tick):
+            with self.lock:
+                self._draw()
+
+    def close(self, finished: bool = True) -> None:
+        """Stop redrawing and erase the bar (the results follow); in the plain
+        lines, say how long it took."""
+        self.stopped.set()
+        if self.stage is not None and not self.terminal and finished:
+            elapsed = _clock(self.clock() - self.started)
+            click.echo(f"{self.command} [{elapsed}]: done", err=True)
+            self.stage = None
+        if self.ticker is not None:
+            self.ticker.join()
+            self.ticker = None
+            sys.stderr.write("\r\x1b[K")
+            sys.stderr.flush()
 
 
 def _out_dir_files(out_dir: str, files: dict[str, str]) -> None:
@@ -880,6 +960,7 @@ def _check_output(out: str, inputs: Sequence[str], in_place: bool) -> None:
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
 @ignore_provenance_option
 @click.option("--json", "as_json", is_flag=True, help="Print the stage reports as JSON.")
+@click.option("--quiet", "-q", is_flag=True, help="Print no progress (the results still).")
 @guarded
 def calibrate(
     data: Sequence[str],
@@ -892,6 +973,7 @@ def calibrate(
     in_place: bool,
     ignore_provenance: bool,
     as_json: bool,
+    quiet: bool,
 ) -> None:
     """Calibrate PROFILE from measurement files DATA (axis, poses, ballbar).
 
@@ -909,18 +991,20 @@ def calibrate(
     commanded = load_profile(commanded_with) if commanded_with else start
     want = [s.strip() for s in stages.split(",") if s.strip()]
     poses, runs, axis = read_measurements(data, profile_path, commanded_with, ignore_provenance)
-    result = cal.calibrate(
-        start,
-        commanded,
-        poses,
-        runs,
-        axis,
-        stages=want,
-        max_rel_stderr=max_rel_stderr,
-        seed=seed,
-        commanded_with=fingerprint(commanded_with or profile_path),
-        sources=list(data),
-    )
+    with _Stages("calibrate", quiet) as progress:
+        result = cal.calibrate(
+            start,
+            commanded,
+            poses,
+            runs,
+            axis,
+            stages=want,
+            max_rel_stderr=max_rel_stderr,
+            seed=seed,
+            commanded_with=fingerprint(commanded_with or profile_path),
+            sources=list(data),
+            progress=progress,
+        )
     write_atomic(profile_files(result.doc, output, profile_path, in_place))
     if as_json:
         click.echo(
@@ -970,6 +1054,7 @@ def _json_default(x: Any) -> Any:
 )
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
 @ignore_provenance_option
+@click.option("--quiet", "-q", is_flag=True, help="Print no progress (the results still).")
 @guarded
 def diagnose(
     data: Sequence[str],
@@ -981,6 +1066,7 @@ def diagnose(
     alpha: float,
     in_place: bool,
     ignore_provenance: bool,
+    quiet: bool,
 ) -> None:
     """Find where PROFILE's simulation and the measurements DATA disagree and why."""
     from . import diagnose as dg
@@ -990,10 +1076,15 @@ def diagnose(
     current = load_profile(profile_path)
     commanded = load_profile(commanded_with) if commanded_with else current
     poses, runs, axis = read_measurements(data, profile_path, commanded_with, ignore_provenance)
-    d = dg.Data.build(commanded, poses, runs, axis)
-    result = dg.diagnose(
-        current, d, alpha=alpha, commanded_with=fingerprint(commanded_with or profile_path)
-    )
+    with _Stages("diagnose", quiet) as progress:
+        d = dg.Data.build(commanded, poses, runs, axis)
+        result = dg.diagnose(
+            current,
+            d,
+            alpha=alpha,
+            commanded_with=fingerprint(commanded_with or profile_path),
+            progress=progress,
+        )
     files: dict[Path, str | bytes] = {}
     if output:
         files.update(profile_files(result.updated, output, profile_path, in_place))

@@ -410,17 +410,7 @@ def _convert_file(
                     n_points += len(pc)
                     out.feed(pc)
         written_parts = out.finish()
-        temps = written_parts.temps
-        targets = [sinks.part_path(job.output, part, split) for part in sorted(temps)]
-        for target in targets:  # a part's name (x.part1.pmc) too, before any is published
-            refuse_to_overwrite(target, inputs)
-        written = []
-        with sinks.signals_held():  # every part renamed and said so, or none
-            for part, target in zip(sorted(temps), targets, strict=True):
-                publish(temps[part], target)
-                written.append(target)
-            if published is not None and job.output != "-":
-                published(written)
+        written = _publish_parts(job, written_parts.temps, split, published)
         if job.output == "-":
             memory = written_parts.memory
             sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))
@@ -449,6 +439,28 @@ def _convert_file(
             for tmp in written_parts.temps.values():
                 if os.path.exists(tmp):
                     os.unlink(tmp)
+
+
+def _publish_parts(
+    job: ConvertJob,
+    temps: dict[int, str],
+    split: bool,
+    published: Callable[[list[str]], None] | None,
+) -> list[str]:
+    """Rename the finished parts onto their targets, and say so (``published``)
+    before a stop held meanwhile arrives: all of it happens, or none."""
+    inputs = {"G-code program": job.program, "profile": job.profile_path}
+    targets = [sinks.part_path(job.output, part, split) for part in sorted(temps)]
+    for target in targets:  # a part's name (x.part1.pmc) too, before any is published
+        refuse_to_overwrite(target, inputs)
+    written = []
+    with sinks.signals_held():
+        for part, target in zip(sorted(temps), targets, strict=True):
+            publish(temps[part], target)
+            written.append(target)
+        if published is not None and job.output != "-":
+            published(written)
+    return written
 
 
 def _can_fork() -> bool:
