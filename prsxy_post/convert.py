@@ -528,8 +528,7 @@ def convert_many(
         for o in outcomes:
             if o.state == "running":
                 o.state = "stopped"
-                for tmp in sinks.leftover_temps(o.job.output):
-                    tmp.unlink(missing_ok=True)
+                sinks.remove_leftovers(o.job.output)
         raise Interrupted(outcomes) from None
     return outcomes
 
@@ -653,6 +652,8 @@ def _run_in_processes(outcomes: list[Outcome], workers: int) -> None:
                     proc.join()
                     conn.close()
                     del running[i]
+                    if outcomes[i].state != "done":  # a worker killed outright left them
+                        sinks.remove_leftovers(outcomes[i].job.output)
     except KeyboardInterrupt:
         _stop_all(outcomes, running)
         raise
@@ -675,8 +676,7 @@ def _stop_all(outcomes: list[Outcome], running: dict[int, tuple[Any, Any]]) -> N
             sinks.stop(proc, max(0.0, deadline - time.monotonic()))
             conn.close()
             if o.state != "done":
-                for tmp in sinks.leftover_temps(o.job.output):
-                    tmp.unlink(missing_ok=True)
+                sinks.remove_leftovers(o.job.output)
     finally:
         signal.signal(signal.SIGINT, old)
 

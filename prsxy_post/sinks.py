@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import signal
 import sys
 import tempfile
@@ -115,16 +116,18 @@ def stop(proc: Any, timeout: float = 10.0) -> None:
     proc.join()
 
 
-def leftover_temps(out: str) -> list[Path]:
-    """Temp files :class:`Parts` makes for the output ``out`` (or its parts) that
-    are still on disk: a process killed before it could remove them left them."""
+def remove_leftovers(out: str) -> None:
+    """Remove the temp files :class:`Parts` makes for the output ``out`` (or its
+    parts) that are still on disk: a process killed before it could remove its
+    own left them."""
     if out == "-":
-        return []
+        return
     target = Path(out)
-    base, ext = os.path.splitext(target.name)
-    found = set(target.parent.glob(f".{target.name}.*.tmp"))
-    found |= set(target.parent.glob(f".{base}.part*{ext}.*.tmp"))
-    return sorted(found)
+    base, ext = (re.escape(x) for x in os.path.splitext(target.name))
+    ours = re.compile(rf"\.{base}(\.part\d+)?{ext}\.[^.]+\.tmp")
+    for tmp in target.parent.glob(".*.tmp"):
+        if ours.fullmatch(tmp.name):
+            tmp.unlink(missing_ok=True)
 
 
 def part_path(out: str, part: int, split: bool) -> str:
@@ -362,6 +365,5 @@ class WriterProcess:
                     os.unlink(tmp)
         elif self.proc.exitcode is None or self.proc.exitcode < 0:
             # killed before it could remove its own (SIGKILL, the OOM killer)
-            for left in leftover_temps(self.output):
-                left.unlink(missing_ok=True)
+            remove_leftovers(self.output)
         self.conn.close()

@@ -221,6 +221,40 @@ def test_a_killed_process_is_exit_3_within_seconds(tmp_path: Path, which: str) -
     _no_temp_files(tmp_path)
 
 
+def test_a_killed_jobs_worker_is_exit_3_and_the_others_are_written(tmp_path: Path) -> None:
+    """--jobs 2: the worker converting one program is killed outright; that
+    program is an error (exit 3, saying so within seconds), the others are
+    written whole, and no temp file is left (the parent removes the killed
+    worker's)."""
+    src = tmp_path / "src"
+    src.mkdir()
+    progs = [_program(src / "a.ngc", 50), _program(src / "b.ngc", 300_000)]
+    progs.append(_program(src / "c.ngc", 60))
+    out = tmp_path / "out"
+    proc = _start("convert", *map(str, progs), "--profile", SHOP, "--out-dir", str(out), "-j", "2")
+    b = str(progs[1])
+
+    def victim() -> int | None:
+        if not (out.is_dir() and any(p.name.startswith(".b.pmc.") for p in out.iterdir())):
+            return None
+        return next((p for p in _descendants(proc.pid) if _has_open(p, lambda f: f == b)), None)
+
+    pid = _wait_for(victim, 60, proc)
+    assert isinstance(pid, int)
+    os.kill(pid, signal.SIGKILL)
+    code, err, _ = _ended_within(proc, 30.0)
+    assert code == 3, err
+    assert "Traceback" not in err
+    assert err.splitlines() == [
+        f"{progs[0]} -> {out / 'a.pmc'}",
+        f"{b}: the process converting it ended without a result (killed by SIGKILL); "
+        f"{out / 'b.pmc'} not written",
+        f"{progs[2]} -> {out / 'c.pmc'}",
+    ]
+    assert sorted(p.name for p in out.iterdir()) == ["a.pmc", "c.pmc"]
+    assert (out / "c.pmc").read_bytes() == _reference(progs[2], tmp_path / "c.pmc")
+
+
 class _Unreadable:
     """Pickles fine, fails to unpickle (as an object whose class cannot be
     rebuilt in the receiving process)."""
