@@ -274,6 +274,13 @@ def _stderr_is_terminal() -> bool:
     return sys.stderr.isatty()
 
 
+def _size_of(path: str) -> int:
+    try:
+        return os.path.getsize(path)
+    except OSError:
+        return 0
+
+
 def _clock(seconds: float) -> str:
     s = max(0, round(seconds))
     return (
@@ -307,6 +314,27 @@ class _Progress:
         if self.job is not None:
             self._show("")
             self.job = None
+
+    def batch(self, jobs: Sequence[Any]) -> Callable[[Any], None]:
+        """``finished(outcome)`` for programs converted in parallel: the line
+        shows how many are done and, by their sizes, the time left."""
+        size = {id(j): _size_of(j.program) for j in jobs}
+        total = sum(size.values())
+        state = {"done": 0, "failed": 0, "bytes": 0}
+        started = self.clock()
+
+        def finished(outcome: Any) -> None:
+            state["done" if outcome.state == "done" else "failed"] += 1
+            state["bytes"] += size[id(outcome.job)]
+            frac = state["bytes"] / total if total else 1.0
+            elapsed = self.clock() - started
+            eta = f"  ETA {_clock(elapsed * (1.0 - frac) / frac)}" if frac > 0 else ""
+            failed = f", {state['failed']} failed" if state["failed"] else ""
+            self._show(f"{len(jobs)} programs: {state['done']} done{failed}{eta}")
+
+        self.job = jobs  # so that close() erases the line
+        self._show(f"{len(jobs)} programs: 0 done")
+        return finished
 
     @staticmethod
     def _show(text: str) -> None:
@@ -451,13 +479,19 @@ def convert(
 
 
 def _run_conversions(jobs: Sequence[Any], workers: int, quiet: bool) -> None:
-    """Convert, with a progress line on a terminal (one process at a time), and
-    say what was written; after Ctrl-C, what was written whole and what not."""
+    """Convert, with a progress line on a terminal (the program being read, or
+    with --jobs the programs done), and say what was written; after Ctrl-C, what
+    was written whole and what not."""
     from . import convert as conv
 
-    bar = _Progress() if not quiet and workers == 1 and _stderr_is_terminal() else None
+    bar = _Progress() if not quiet and _stderr_is_terminal() else None
     try:
-        outcomes = conv.convert_many(jobs, workers=workers, progress=bar)
+        outcomes = conv.convert_many(
+            jobs,
+            workers=workers,
+            progress=bar if workers == 1 else None,
+            finished=bar.batch(jobs) if bar is not None and workers > 1 else None,
+        )
     except conv.Interrupted as stop:
         if bar is not None:
             bar.close()

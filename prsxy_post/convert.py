@@ -498,6 +498,7 @@ def convert_many(
     jobs: Sequence[ConvertJob],
     workers: int = 1,
     progress: Callable[[ConvertJob, int, int], None] | None = None,
+    finished: Callable[[Outcome], None] | None = None,
 ) -> list[Outcome]:
     """Convert several programs, in ``workers`` processes when more than one.
 
@@ -511,6 +512,7 @@ def convert_many(
     workers : processes converting at once (forked; one means here, in turn)
     progress : ``progress(job, characters read, file size)`` as each program is
         read, when converted here
+    finished : ``finished(outcome)`` as each program is done or has failed
 
     Returns
     -------
@@ -520,10 +522,12 @@ def convert_many(
     outcomes = [Outcome(job) for job in jobs]
     try:
         if workers > 1 and len(jobs) > 1 and _can_fork():
-            _run_in_processes(outcomes, workers)
+            _run_in_processes(outcomes, workers, finished)
         else:
             for o in outcomes:
                 _run_here(o, progress)
+                if finished is not None:
+                    finished(o)
     except KeyboardInterrupt:
         for o in outcomes:
             if o.state == "running":
@@ -626,7 +630,9 @@ def _message(conn: Any, timeout: float | None = None) -> tuple[Any, ...] | None:
     return msg if isinstance(msg, tuple) and msg else None
 
 
-def _run_in_processes(outcomes: list[Outcome], workers: int) -> None:
+def _run_in_processes(
+    outcomes: list[Outcome], workers: int, finished: Callable[[Outcome], None] | None
+) -> None:
     """Each job in a forked process of its own, ``workers`` at a time; on Ctrl-C,
     SIGTERM to every one running, whose answers (written whole, or stopped) are
     then collected."""
@@ -654,6 +660,8 @@ def _run_in_processes(outcomes: list[Outcome], workers: int) -> None:
                     del running[i]
                     if outcomes[i].state != "done":  # a worker killed outright left them
                         sinks.remove_leftovers(outcomes[i].job.output)
+                    if finished is not None:
+                        finished(outcomes[i])
     except KeyboardInterrupt:
         _stop_all(outcomes, running)
         raise

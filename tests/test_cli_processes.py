@@ -27,6 +27,7 @@ from .conftest import ROOT
 SHOP = str(ROOT / "profiles" / "prsxy-shop.toml")
 #: exit status after Ctrl-C: 128 + SIGINT, the CLI's convention (cli.EXIT_INTERRUPTED)
 INTERRUPTED = 130
+ERASE = "\r\x1b[K"
 
 
 def _program(path: Path, lines: int) -> Path:
@@ -353,3 +354,28 @@ def test_convert_shows_progress_only_on_a_terminal(
         percents.append(float(m[1]))
     assert len(percents) >= 2 and percents == sorted(percents) and percents[-1] == 100.0
     assert shown[-1] == f"{program} -> {tmp_path / 'big.pmc'}\n"
+
+
+def test_convert_jobs_on_a_terminal_counts_the_programs_done(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With --jobs the programs are read in other processes: the line counts
+    those done, with the time left by their sizes, and is erased before the
+    summary."""
+    from prsxy_post import cli
+
+    monkeypatch.setattr(cli, "_stderr_is_terminal", lambda: True)
+    progs = [str(_program(tmp_path / f"{n}.ngc", 2000)) for n in "abc"]
+    out = tmp_path / "out"
+    r = CliRunner().invoke(
+        main, ["convert", *progs, "--profile", SHOP, "--out-dir", str(out), "-j", "2"]
+    )
+    assert r.exit_code == 0, r.output
+    shown = r.stderr.split(ERASE)
+    assert shown[0] == "" and shown[1] == "3 programs: 0 done"
+    for k, line in enumerate(shown[2:5], start=1):
+        assert re.fullmatch(rf"3 programs: {k} done  ETA \d+:\d\d", line), line
+    assert shown[4].endswith("ETA 0:00")
+    assert shown[5].splitlines() == [
+        f"{p} -> {out / Path(p).with_suffix('.pmc').name}" for p in progs
+    ]
