@@ -498,9 +498,13 @@ def _run_conversions(jobs: Sequence[Any], workers: int, quiet: bool) -> None:
         _say_outcomes(stop.outcomes, quiet=True)
         click.echo(_interrupted(stop.outcomes), err=True)
         sys.exit(EXIT_INTERRUPTED)
-    if bar is not None:
-        bar.close()
-    worst = _say_outcomes(outcomes, quiet)
+    try:
+        if bar is not None:
+            bar.close()
+        worst = _say_outcomes(outcomes, quiet)
+    except KeyboardInterrupt:  # the outputs are written: say so, not "no output"
+        click.echo("\n" + _interrupted(outcomes), err=True)
+        sys.exit(EXIT_INTERRUPTED)
     if worst:
         sys.exit(worst)
 

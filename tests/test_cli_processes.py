@@ -379,3 +379,23 @@ def test_convert_jobs_on_a_terminal_counts_the_programs_done(
     assert shown[5].splitlines() == [
         f"{p} -> {out / Path(p).with_suffix('.pmc').name}" for p in progs
     ]
+
+
+def test_ctrl_c_after_the_outputs_are_written_does_not_deny_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Ctrl-C while the summary is printed: the output is on disk, and the
+    command says it was written whole (not "no output written")."""
+    from prsxy_post import cli
+
+    def interrupted(*args: object) -> int:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_say_outcomes", interrupted)
+    prog = _program(tmp_path / "a.ngc", 50)
+    out = tmp_path / "a.pmc"
+    r = CliRunner().invoke(main, ["convert", str(prog), "--profile", SHOP, "-o", str(out)])
+    assert r.exit_code == INTERRUPTED
+    assert f"  written whole: {out} (from {prog})" in r.stderr.splitlines()
+    assert "no output written" not in r.stderr
+    assert out.read_bytes() == _reference(prog, tmp_path / "ref.pmc")
