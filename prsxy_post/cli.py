@@ -14,7 +14,7 @@ import threading
 import time
 import traceback
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -23,8 +23,9 @@ import numpy as np
 
 from . import __version__
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
-from .files import clash, read_text, sha256_of, write_atomic
+from .files import clash, read_text, sha256_of
 from .files import load_profile as _load_profile
+from .files import write_atomic as _write_atomic
 from .profile import MOTORS, Profile
 from .writers import DIALECTS
 
@@ -66,6 +67,17 @@ def parse_pose(text: str, option: str) -> tuple[float, ...]:
 class Ctx:
     debug: bool = False
     quiet: bool = False
+    #: the files the command has written (whole), for what Ctrl-C says
+    written: list[str] = field(default_factory=list)
+
+
+def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:
+    """:func:`files.write_atomic`, remembering what the command wrote."""
+    _write_atomic(files)
+    ctx = click.get_current_context(silent=True)
+    obj = ctx.find_object(Ctx) if ctx is not None else None
+    if obj is not None:
+        obj.written += [str(p) for p in files]
 
 
 def fail(err: PrsxyError) -> NoReturn:
@@ -95,7 +107,10 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
         except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException):
             raise
         except KeyboardInterrupt:
-            click.echo("interrupted; no output written", err=True)
+            if ctx.written:  # Ctrl-C after the writing, while it printed
+                click.echo(f"interrupted; written whole: {', '.join(ctx.written)}", err=True)
+            else:
+                click.echo("interrupted; no output written", err=True)
             sys.exit(EXIT_INTERRUPTED)
         except BrokenPipeError:
             # the reader went away (prsxy-post inspect big.ngc | head): stop quietly,

@@ -399,3 +399,35 @@ def test_ctrl_c_after_the_outputs_are_written_does_not_deny_them(
     assert f"  written whole: {out} (from {prog})" in r.stderr.splitlines()
     assert "no output written" not in r.stderr
     assert out.read_bytes() == _reference(prog, tmp_path / "ref.pmc")
+
+
+def test_ctrl_c_after_calibrate_wrote_its_profile_says_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Any command: Ctrl-C once its output is written (while it prints) names
+    the file written whole instead of saying nothing was."""
+    from prsxy_post import cli
+
+    def interrupted(*args: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_print_stage", interrupted)
+    out = tmp_path / "cal.toml"
+    axis = ROOT / "tests" / "data" / "spec" / "axis.csv"
+    r = CliRunner().invoke(
+        main,
+        ["calibrate", str(axis), "--profile", SHOP, "-o", str(out), "--stages", "tables", "-q"]
+        + ["--ignore-provenance"],
+    )
+    assert r.exit_code == INTERRUPTED, r.output
+    assert r.stderr == f"interrupted; written whole: {out}\n"
+    assert out.is_file()
+    # before anything is written, it says that
+    monkeypatch.setattr(cli, "profile_files", interrupted)
+    r = CliRunner().invoke(
+        main,
+        ["calibrate", str(axis), "--profile", SHOP, "-o", str(tmp_path / "b.toml")]
+        + ["--stages", "tables", "-q", "--ignore-provenance"],
+    )
+    assert r.exit_code == INTERRUPTED
+    assert r.stderr == "interrupted; no output written\n"
