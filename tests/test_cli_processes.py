@@ -414,20 +414,14 @@ def test_ctrl_c_after_calibrate_wrote_its_profile_says_so(
     monkeypatch.setattr(cli, "_print_stage", interrupted)
     out = tmp_path / "cal.toml"
     axis = ROOT / "tests" / "data" / "spec" / "axis.csv"
-    r = CliRunner().invoke(
-        main,
-        ["calibrate", str(axis), "--profile", SHOP, "-o", str(out), "--stages", "tables", "-q"]
-        + ["--ignore-provenance"],
-    )
+    args = ["calibrate", str(axis), "--profile", SHOP, "--stages", "tables", "-q"]
+    args.append("--ignore-provenance")
+    r = CliRunner().invoke(main, [*args, "-o", str(out)])
     assert r.exit_code == INTERRUPTED, r.output
     assert r.stderr == f"interrupted; written whole: {out}\n"
     assert out.is_file()
     # before anything is written, it says that
     monkeypatch.setattr(cli, "profile_files", interrupted)
-    r = CliRunner().invoke(
-        main,
-        ["calibrate", str(axis), "--profile", SHOP, "-o", str(tmp_path / "b.toml")]
-        + ["--stages", "tables", "-q", "--ignore-provenance"],
-    )
+    r = CliRunner().invoke(main, [*args, "-o", str(tmp_path / "b.toml")])
     assert r.exit_code == INTERRUPTED
     assert r.stderr == "interrupted; no output written\n"
