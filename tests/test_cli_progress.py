@@ -163,3 +163,35 @@ def test_the_bar_keeps_the_time_going_between_stages() -> None:
         f"calibrate [{'#' * 10}{'-' * 10}] {t} physical effects beyond the kinematic parameters"
         for t in ("0:00", "1:01", "2:05")
     } <= shown
+
+
+def test_a_real_terminal_gets_the_bar(measured: Path) -> None:
+    """stderr on a pseudo-terminal (no faking): the command itself sees a
+    terminal and draws the bar in place, then erases it."""
+    import os
+    import pty
+    import subprocess
+
+    master, slave = pty.openpty()
+    cmd = [sys.executable, "-m", "prsxy_post.cli", "diagnose", str(measured / "axis.csv")]
+    proc = subprocess.Popen(
+        [*cmd, "--profile", NOMINAL], cwd=ROOT, stdout=subprocess.PIPE, stderr=slave
+    )
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            data = os.read(master, 4096)
+        except OSError:  # the terminal's other side closed: the command ended
+            break
+        if not data:
+            break
+        chunks.append(data)
+    os.close(master)
+    proc.communicate(timeout=120)
+    assert proc.returncode == 0
+    err = b"".join(chunks).decode()
+    assert f"{ERASE}diagnose [{'-' * 20}] 0:" in err
+    assert "looking for the effects the model misses" in err
+    assert "diagnose [0:" not in err  # no plain stage lines
+    assert err.split("warning: ")[0].endswith(ERASE)
