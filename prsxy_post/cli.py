@@ -297,10 +297,11 @@ def _size_of(path: str) -> int:
 
 
 def _clock(seconds: float) -> str:
+    """A duration as m:ss, or h:mm:ss from an hour on."""
     s = max(0, round(seconds))
-    return (
-        f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
-    )
+    if s >= 3600:
+        return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+    return f"{s // 60}:{s % 60:02d}"
 
 
 class _Progress:
@@ -320,9 +321,9 @@ class _Progress:
             self.job, self.started = job, now
         frac = min(1.0, done / max(total, 1))
         elapsed = now - self.started
-        eta = (
-            f"  ETA {_clock(elapsed * (1.0 - frac) / frac)}" if frac > 0 and elapsed >= 1.0 else ""
-        )
+        eta = ""
+        if frac > 0 and elapsed >= 1.0:  # the rate so far, once there is one
+            eta = f"  ETA {_clock(elapsed * (1.0 - frac) / frac)}"
         self._show(f"{job.program}: {100.0 * frac:5.1f}%{eta}")
 
     def close(self) -> None:

@@ -679,8 +679,9 @@ def _stop_all(outcomes: list[Outcome], running: dict[int, tuple[Any, Any]]) -> N
         deadline = time.monotonic() + 10.0
         for i, (proc, conn) in running.items():
             o = outcomes[i]
-            o.state = "stopped"
-            _settle(o, _message(conn, max(0.0, deadline - time.monotonic())), proc)
+            if o.state == "running":  # not yet heard (a Ctrl-C may fall just after)
+                o.state = "stopped"
+                _settle(o, _message(conn, max(0.0, deadline - time.monotonic())), proc)
             sinks.stop(proc, max(0.0, deadline - time.monotonic()))
             conn.close()
             if o.state != "done":
