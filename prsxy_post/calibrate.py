@@ -40,7 +40,7 @@ identified subspace) and reported as groups of parameters.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -869,11 +869,14 @@ def calibrate(
     seed: int = 0,
     commanded_with: Any = None,
     sources: Sequence[str] | None = None,
+    progress: Callable[[str, float], None] | None = None,
 ) -> Calibration:
     """Calibrate ``start`` from measurements taken while ``commanded`` commanded the
     machine: real-axis tables from laser runs, the contract's kinematic parameters,
     the library's physical effects (with the contract refitted jointly), then the
     virtual-axis error map on what remains.
+
+    ``progress(stage, fraction of the stages done)`` hears of each as it begins.
 
     Example
     -------
@@ -897,17 +900,21 @@ def calibrate(
     real_axis = list(start.axis_comp)
     reports: list[StageReport] = []
     found: list[Any] = []
+    said = _stage_teller(want, poses, runs, axis, progress)
     if "tables" in want and axis:
+        said("tables")
         real_axis, rep = stage_tables(start, axis)
         reports.append(rep)
         doc["axis_comp"] = _axis_doc(real_axis)
     if "kinematics" in want and (poses or runs):
+        said("kinematics")
         theta, _, _, rep = stage_kinematics(
             start, commanded, real_axis, poses, runs, max_rel_stderr=max_rel_stderr
         )
         reports.append(rep)
         doc = apply_theta(doc, theta)
     if "effects" in want and (poses or runs):
+        said("effects")
         now = profile_from_dict(doc, start.source)
         # the tables the laser runs just made hold the cyclic errors at their targets
         laser = {int(m) for a in axis for m in np.unique(a.motor)} if "tables" in want else set()
@@ -924,6 +931,7 @@ def calibrate(
         rep.warnings.extend(aliased_cyclic(found, axis, min_amplitude_mm=tol / 2))
         reports.append(rep)
     if "map" in want and poses:
+        said("map")
         now = profile_from_dict(doc, start.source)
         data = diagnose.Data.build(commanded, list(poses), [], [])
         emap = fit_error_map(now, data, seed, [p.source for p in poses])
@@ -951,3 +959,30 @@ def calibrate(
     }
     doc = provenance.record(doc, "calibrate", note, commanded_with=commanded_with)
     return Calibration(doc, reports, found)
+
+
+def _stage_teller(
+    want: Sequence[str],
+    poses: Sequence[PoseData],
+    runs: Sequence[BallbarRun],
+    axis: Sequence[AxisData],
+    progress: Callable[[str, float], None] | None,
+) -> Callable[[str], None]:
+    """``said(stage)`` tells ``progress`` that a stage of :func:`calibrate` begins."""
+    n_poses = sum(len(p.commanded) for p in poses)
+    motors = ", ".join(str(int(m)) for m in np.unique([m for a in axis for m in a.motor]))
+    text = {
+        "tables": f"real-axis tables from the laser runs of motors {motors}",
+        "kinematics": f"kinematic parameters from {n_poses} poses and {len(runs)} ballbar runs",
+        "effects": "physical effects beyond the kinematic parameters",
+        "map": f"virtual-axis error map from {n_poses} poses",
+    }
+    has = {"tables": bool(axis), "kinematics": bool(poses or runs)}
+    has.update(effects=has["kinematics"], map=bool(poses))
+    runs_now = [s for s in STAGES if s in want and has[s]]
+
+    def said(stage: str) -> None:
+        if progress is not None:
+            progress(text[stage], runs_now.index(stage) / len(runs_now))
+
+    return said

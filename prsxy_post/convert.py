@@ -22,6 +22,7 @@ import contextlib
 import itertools
 import os
 import queue
+import signal
 import sys
 import threading
 import time
@@ -32,7 +33,7 @@ from typing import Any
 
 from . import sinks
 from .chain import Stages
-from .errors import PrsxyError, write_failed
+from .errors import ProcessFailed, PrsxyError, write_failed
 from .files import (
     inspect_source,
     load_profile,
@@ -139,7 +140,8 @@ def _planned_here(
 
 def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
     """Runs in the interpreter process: sends ("chunk", planned, chars read),
-    then ("done", counts, peak MB), or ("error", PrsxyError) / ("crash", text)."""
+    then ("done", counts, peak MB, chars read), or ("error", PrsxyError) / ("crash", text).
+    Stopped (SIGTERM, :func:`sinks.stop`), it just ends: nobody reads any more."""
     chars = [0]
 
     def progress(n: int) -> None:
@@ -149,9 +151,11 @@ def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
     try:
         for planned in _planned_here(job, prof, counts, progress):
             conn.send(("chunk", planned, chars[0]))
-        conn.send(("done", counts, peak_rss_mb()))
+        conn.send(("done", counts, peak_rss_mb(), chars[0]))
     except PrsxyError as err:
         conn.send(("error", err, counts))
+    except SystemExit:
+        raise
     except BaseException:
         conn.send(("crash", traceback.format_exc(), counts))
     finally:
@@ -178,10 +182,7 @@ def _planned_chunks(
         return
     ctx = multiprocessing.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    proc = ctx.Process(target=_planning_child, args=(send, job, prof), daemon=True)
-    proc.start()
+    proc = sinks.forked(_planning_child, send, job, prof)
     send.close()
 
     # a thread takes chunks off the pipe as they come, so the interpreter runs up
@@ -196,6 +197,8 @@ def _planned_chunks(
                 msg = recv.recv()
             except (EOFError, OSError):
                 msg = ("eof",)
+            except BaseException as exc:  # what came cannot be read (it does not unpickle)
+                msg = ("unreadable", f"{type(exc).__name__}: {exc}")
             while not stop.is_set():
                 try:
                     ahead.put(msg, timeout=0.1)
@@ -205,14 +208,30 @@ def _planned_chunks(
             if msg[0] != "chunk":
                 return
 
+    # started with the stop signals held, which it keeps: they are the main
+    # thread's to handle (sinks.signals_held)
     pumping = threading.Thread(target=pump, daemon=True)
-    pumping.start()
+    with sinks.signals_held():
+        pumping.start()
+
+    def died(what: str) -> ProcessFailed:
+        return ProcessFailed(f"the interpreter process {what}; no output written")
+
+    def next_message() -> tuple[Any, ...]:
+        while True:
+            try:
+                return ahead.get(timeout=0.5)
+            except queue.Empty:
+                if not pumping.is_alive() and ahead.empty():
+                    raise died("could not be read any more") from None
 
     def receive() -> Iterator[Any]:
         while True:
-            msg = ahead.get()
+            msg = next_message()
             if msg[0] == "eof":
-                raise RuntimeError("the interpreter process ended without a result")
+                raise died(f"ended without a result ({sinks.how_it_ended(proc)})")
+            if msg[0] == "unreadable":
+                raise died(f"sent what cannot be read ({msg[1]})")
             if msg[0] == "chunk":
                 if bar is not None:
                     bar(msg[2])
@@ -221,6 +240,8 @@ def _planned_chunks(
             counts.update(msg[2] if msg[0] != "done" else msg[1])
             if msg[0] == "done":
                 counts["helper_peak_rss_mb"] = msg[2] or 0.0
+                if bar is not None:
+                    bar(msg[3])
                 return
             if msg[0] == "error":
                 raise msg[1]
@@ -230,9 +251,7 @@ def _planned_chunks(
         yield receive()
     finally:
         stop.set()
-        if proc.is_alive():
-            proc.terminate()
-        proc.join()
+        sinks.stop(proc)
         pumping.join(timeout=5.0)
         recv.close()
 
@@ -244,23 +263,25 @@ AHEAD = 8
 PARALLEL_FROM_BYTES = 256 * 1024
 
 
-def _convert_one(job: ConvertJob) -> list[str]:
-    return convert_file(job).written
-
-
 def convert_file(
-    job: ConvertJob, progress: Callable[[int, int], None] | None = None
+    job: ConvertJob,
+    progress: Callable[[int, int], None] | None = None,
+    published: Callable[[list[str]], None] | None = None,
 ) -> ConvertStats:
     """Convert one program, streaming, into its output file(s).
 
     Outputs go to temp files beside the targets and are renamed only when the
-    whole conversion succeeded; on any error the temp files are removed. With
-    ``output="-"`` the text is written to standard output at the end.
+    whole conversion succeeded; on any error, or a stop (KeyboardInterrupt,
+    SystemExit), the temp files are removed. With ``output="-"`` the text is
+    written to standard output at the end.
 
     Parameters
     ----------
     job : ConvertJob
     progress : called with (characters read, file size) as the program is read
+    published : called with the files written, right after they are renamed into
+        place and before a stop (SIGINT, SIGTERM) held meanwhile can arrive: what
+        it is told is exactly what is on disk
 
     Raises
     ------
@@ -268,10 +289,14 @@ def convert_file(
         Located at the program's line (and column) that cannot be converted.
     """
     with few_gc_passes():
-        return _convert_file(job, progress)
+        return _convert_file(job, progress, published)
 
 
-def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) -> ConvertStats:
+def _convert_file(
+    job: ConvertJob,
+    progress: Callable[[int, int], None] | None,
+    published: Callable[[list[str]], None] | None,
+) -> ConvertStats:
     inputs = {"G-code program": job.program, "profile": job.profile_path}
     refuse_to_overwrite(job.output, inputs)
     prof = load_profile(job.profile_path)
@@ -331,14 +356,7 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                     n_points += len(pc)
                     out.feed(pc)
         written_parts = out.finish()
-        temps = written_parts.temps
-        targets = [sinks.part_path(job.output, part, split) for part in sorted(temps)]
-        for target in targets:  # a part's name (x.part1.pmc) too, before any is published
-            refuse_to_overwrite(target, inputs)
-        written = []
-        for part, target in zip(sorted(temps), targets, strict=True):
-            publish(temps[part], target)
-            written.append(target)
+        written = _publish_parts(job, written_parts.temps, split, published)
         if job.output == "-":
             memory = written_parts.memory
             sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))
@@ -369,33 +387,253 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                     os.unlink(tmp)
 
 
+def _publish_parts(
+    job: ConvertJob,
+    temps: dict[int, str],
+    split: bool,
+    published: Callable[[list[str]], None] | None,
+) -> list[str]:
+    """Rename the finished parts onto their targets, and say so (``published``)
+    before a stop held meanwhile arrives: all of it happens, or none."""
+    inputs = {"G-code program": job.program, "profile": job.profile_path}
+    targets = [sinks.part_path(job.output, part, split) for part in sorted(temps)]
+    for target in targets:  # a part's name (x.part1.pmc) too, before any is published
+        refuse_to_overwrite(target, inputs)
+    written = []
+    with sinks.signals_held():
+        for part, target in zip(sorted(temps), targets, strict=True):
+            publish(temps[part], target)
+            written.append(target)
+        if published is not None and job.output != "-":
+            published(written)
+    return written
+
+
 def _can_fork() -> bool:
     import multiprocessing
 
     return "fork" in multiprocessing.get_all_start_methods()
 
 
-def _run_job(job: ConvertJob) -> tuple[list[str] | None, PrsxyError | None]:
-    try:
-        return _convert_one(job), None
-    except PrsxyError as err:
-        return None, err
+@dataclass
+class Outcome:
+    """What became of one job of :func:`convert_many`.
+
+    state : "waiting" (not started), "running", "done" (``written`` holds every
+        file it wrote, each whole), "failed" (``error`` says why; nothing of it
+        written) or "stopped" (interrupted; nothing of it written)
+    """
+
+    job: ConvertJob
+    state: str = "waiting"
+    written: list[str] = field(default_factory=list)
+    error: PrsxyError | None = None
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT) stopped :func:`convert_many`: every process it started has
+    ended and removed its temp files. ``outcomes`` says, per job, what was
+    written whole (state "done") and what was not."""
+
+    def __init__(self, outcomes: list[Outcome]) -> None:
+        super().__init__("interrupted")
+        self.outcomes = outcomes
 
 
 def convert_many(
-    jobs: Sequence[ConvertJob], workers: int = 1
-) -> list[tuple[list[str] | None, PrsxyError | None]]:
+    jobs: Sequence[ConvertJob],
+    workers: int = 1,
+    progress: Callable[[ConvertJob, int, int], None] | None = None,
+    finished: Callable[[Outcome], None] | None = None,
+) -> list[Outcome]:
     """Convert several programs, in ``workers`` processes when more than one.
 
-    Returns, per job in order, the files written or the error that stopped it
-    (one program's error does not stop the others).
-    """
-    if workers > 1 and len(jobs) > 1:
-        from concurrent.futures import ProcessPoolExecutor  # here: it takes 10 ms to import
+    One program's error does not stop the others. Ctrl-C does: the processes
+    stop at once, each removing its temp files, and :class:`Interrupted` is
+    raised with the outcomes so far.
 
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            return list(pool.map(_run_job, jobs))
-    return [_run_job(j) for j in jobs]
+    Parameters
+    ----------
+    jobs : the programs
+    workers : processes converting at once (forked; one means here, in turn)
+    progress : ``progress(job, characters read, file size)`` as each program is
+        read, when converted here
+    finished : ``finished(outcome)`` as each program is done or has failed
+
+    Returns
+    -------
+    list of Outcome
+        Per job, in order: its files (state "done") or its error ("failed").
+    """
+    outcomes = [Outcome(job) for job in jobs]
+    try:
+        if workers > 1 and len(jobs) > 1 and _can_fork():
+            _run_in_processes(outcomes, workers, finished)
+        else:
+            for o in outcomes:
+                _run_here(o, progress)
+                if finished is not None:
+                    finished(o)
+    except KeyboardInterrupt:
+        for o in outcomes:
+            if o.state == "running":
+                o.state = "stopped"
+                sinks.remove_leftovers(o.job.output)
+        raise Interrupted(outcomes) from None
+    return outcomes
+
+
+def _run_here(o: Outcome, progress: Callable[[ConvertJob, int, int], None] | None) -> None:
+    def published(files: list[str]) -> None:
+        o.state, o.written = "done", files
+
+    def bar(done: int, total: int) -> None:
+        if progress is not None:
+            progress(o.job, done, total)
+
+    o.state = "running"
+    try:
+        stats = convert_file(o.job, bar if progress is not None else None, published)
+    except PrsxyError as err:
+        o.state, o.error = "failed", err
+        return
+    o.state, o.written = "done", stats.written
+
+
+class _Stop(BaseException):
+    """A --jobs worker told to stop (SIGTERM): unwinds its conversion, whose
+    ``finally`` blocks remove the temp files."""
+
+
+def _raise_stop(signum: int, frame: Any) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # once: the cleanup is not cut short
+    raise _Stop
+
+
+def _job_process(conn: Any, job: ConvertJob) -> None:
+    """A --jobs worker (forked by :func:`sinks.forked`): converts one program and
+    sends ("done", files) the moment they are in place, or ("error", PrsxyError),
+    ("crash", text), ("stopped",)."""
+    signal.signal(signal.SIGTERM, _raise_stop)
+    sent = False
+
+    def published(files: list[str]) -> None:
+        nonlocal sent
+        conn.send(("done", files))  # with the stop signals held: whole, or not sent
+        sent = True
+
+    try:
+        try:
+            stats = convert_file(job, None, published)
+            if not sent:
+                conn.send(("done", stats.written))
+        except PrsxyError as err:
+            conn.send(("error", err))
+        except _Stop:
+            if not sent:
+                conn.send(("stopped",))
+        except BaseException:
+            conn.send(("crash", traceback.format_exc()))
+        finally:
+            conn.close()
+    except (_Stop, OSError):
+        pass  # stopped while it said how it ended: the parent hears nothing, or a part
+
+
+def _settle(o: Outcome, msg: tuple[Any, ...] | None, proc: Any) -> None:
+    """An outcome from what its worker said (None: it said nothing readable)."""
+    if msg is None and o.state == "stopped":
+        return
+    if msg is None:
+        o.state = "failed"
+        o.error = ProcessFailed(
+            f"the process converting it ended without a result ({sinks.how_it_ended(proc)}); "
+            f"{o.job.output} not written",
+            source=o.job.program,
+        )
+    elif msg[0] == "done":
+        o.state, o.written = "done", msg[1]
+    elif msg[0] == "error":
+        o.state, o.error = "failed", msg[1].located(source=o.job.program)
+    elif msg[0] == "stopped":
+        o.state = "stopped"
+    else:
+        o.state = "failed"
+        last = msg[1].strip().splitlines()[-1] if msg[1].strip() else "?"
+        o.error = ProcessFailed(
+            f"internal error in the process converting it: {last} (a bug: report it)",
+            source=o.job.program,
+        )
+
+
+def _message(conn: Any, timeout: float | None = None) -> tuple[Any, ...] | None:
+    try:
+        if timeout is not None and not conn.poll(timeout):
+            return None
+        msg = conn.recv()
+    except Exception:  # closed without a word, or what came cannot be read
+        return None
+    return msg if isinstance(msg, tuple) and msg else None
+
+
+def _run_in_processes(
+    outcomes: list[Outcome], workers: int, finished: Callable[[Outcome], None] | None
+) -> None:
+    """Each job in a forked process of its own, ``workers`` at a time; on Ctrl-C,
+    SIGTERM to every one running, whose answers (written whole, or stopped) are
+    then collected."""
+    import multiprocessing
+    from multiprocessing.connection import wait
+
+    ctx = multiprocessing.get_context("fork")
+    waiting = list(range(len(outcomes)))[::-1]
+    running: dict[int, tuple[Any, Any]] = {}
+    try:
+        while waiting or running:
+            while waiting and len(running) < workers:
+                i = waiting.pop()
+                with sinks.signals_held():  # a Ctrl-C finds it started and listed, or neither
+                    recv, send = ctx.Pipe(duplex=False)
+                    outcomes[i].state = "running"
+                    running[i] = (sinks.forked(_job_process, send, outcomes[i].job), recv)
+                    send.close()
+            ready = wait([conn for _, conn in running.values()])
+            for i, (proc, conn) in list(running.items()):
+                if conn in ready:
+                    _settle(outcomes[i], _message(conn), proc)
+                    proc.join()
+                    conn.close()
+                    del running[i]
+                    if outcomes[i].state != "done":  # a worker killed outright left them
+                        sinks.remove_leftovers(outcomes[i].job.output)
+                    if finished is not None:
+                        finished(outcomes[i])
+    except KeyboardInterrupt:
+        _stop_all(outcomes, running)
+        raise
+
+
+def _stop_all(outcomes: list[Outcome], running: dict[int, tuple[Any, Any]]) -> None:
+    """SIGTERM to every worker at once; each answers (done or stopped) and ends
+    within seconds, or is killed and its temp files removed here. A second
+    Ctrl-C meanwhile is ignored, so the cleanup is not cut short."""
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        for proc, _ in running.values():
+            if proc.is_alive():
+                proc.terminate()
+        deadline = time.monotonic() + 10.0
+        for i, (proc, conn) in running.items():
+            o = outcomes[i]
+            if o.state == "running":  # not yet heard (a Ctrl-C may fall just after)
+                o.state = "stopped"
+                _settle(o, _message(conn, max(0.0, deadline - time.monotonic())), proc)
+            sinks.stop(proc, max(0.0, deadline - time.monotonic()))
+            conn.close()
+            if o.state != "done":
+                sinks.remove_leftovers(o.job.output)
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def worth_a_second_process(program: str) -> bool:

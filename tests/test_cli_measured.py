@@ -162,7 +162,7 @@ def test_what_no_library_effect_explains_is_said_on_stderr_and_in_the_json(
 
 def test_a_clean_diagnosis_warns_of_nothing(runner: CliRunner, tmp_path: Path) -> None:
     files = _simulate(runner, tmp_path / "m", NOMINAL, NOMINAL)
-    r = invoke(runner, "diagnose", *files, "--profile", NOMINAL, "--json")
+    r = invoke(runner, "diagnose", *files, "--profile", NOMINAL, "--json", "--quiet")
     assert r.exit_code == 0 and r.stderr == "", r.stderr
     assert json.loads(r.stdout)["unexplained"] == []
 

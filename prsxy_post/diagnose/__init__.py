@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -794,14 +794,25 @@ def diagnose(
     rounds: int = 3,
     commanded_with: CommandedWith | None = None,
     rng_seed: int = 0,
+    progress: Callable[[str, float], None] | None = None,
 ) -> Diagnosis:
-    """The whole loop (module docstring); ``data`` was commanded by ``data.commanded``."""
+    """The whole loop (module docstring); ``data`` was commanded by ``data.commanded``.
+
+    ``progress(stage, fraction)`` is told each stage as it begins: what it does,
+    and the fraction of the stages that are done."""
     measured, segs = data.measured()
     if not segs:
         raise FitError("no measurements to diagnose", expected="pose, ballbar or axis files")
     has_map = errormap.from_profile(current) is not None
     refit_map = has_map and bool(data.poses)
     sel_map = has_map and not refit_map
+    stages = ["effects", *(["map"] if refit_map else []), "left"]
+
+    def said(stage: str, text: str) -> None:
+        if progress is not None:
+            progress(text, stages.index(stage) / len(stages))
+
+    said("effects", f"looking for the effects the model misses (up to {max(rounds, 1)} rounds)")
     before = measured - predict(current, data, [], with_map=has_map).pred
     effects, _, noise, w = find_effects(current, data, alpha=alpha, rounds=rounds, with_map=sel_map)
     updated_doc = apply_effects(current.raw, effects, current) if effects else dict(current.raw)
@@ -812,6 +823,7 @@ def diagnose(
             "reason": "no effect was added" if not effects else "no pose data to refit it",
         }
         if refit_map and effects:
+            said("map", "fitting the virtual-axis error map again on what the effects leave")
             prof_new = profile_from_dict(updated_doc, current.source)
             resid = measured - predict(prof_new, data, [], with_map=False).pred
             emap = _refit_map(data, resid, segs, rng_seed, [p.source for p in data.poses])
@@ -834,6 +846,7 @@ def diagnose(
     def library() -> Linearised:
         return predict(updated, data, all_keys, with_map=has_map)
 
+    said("left", "testing what is left against the noise")
     left = leftover.unexplained(data, after, segs, noise, w, library)
     note: dict[str, Any] = {
         "data": sorted({s.source for s in segs}),
