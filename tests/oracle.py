@@ -1,10 +1,12 @@
 """LinuxCNC's ``rs274 -g`` as a test oracle: run it, read its canonical calls back as motions.
 
-rs274 prints positions in program coordinates (the work offset and the G92
-offset are printed apart, by SET_G5X_OFFSET and SET_G92_OFFSET) and in the
-length units in effect (USE_LENGTH_UNITS); this turns them into the workpiece
-frame in mm, the frame of ``inspect --json``. Its standalone tool table and
-parameter file are in inches.
+rs274 prints positions in program coordinates (the work offset, the G92
+offset and the rotation about Z are printed apart, by SET_G5X_OFFSET,
+SET_G92_OFFSET and SET_XY_ROTATION) and in the length units in effect
+(USE_LENGTH_UNITS); this turns them into the workpiece frame in mm, the frame of
+``inspect --json``, as LinuxCNC's canon does (emccanon.cc, rotate_and_offset_pos:
+the G92 offset is added, the sum turned by the rotation, the work offset added).
+Its standalone tool table and parameter file are in inches.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ class OracleMotion:
     control_points: int = 0  # curves (NURBS_FEED): how many
     tool_length: float = 0.0  # Z of the tool length offset in effect (USE_TOOL_LENGTH_OFFSET) [mm]
     tool_scale: float = 1.0  # 25.4 when that offset was printed in inches
+    xy_rotation: float = 0.0  # SET_XY_ROTATION in effect [deg]
 
 
 @dataclass
@@ -142,7 +145,18 @@ def parse(out: str, err: str = "") -> OracleResult:
     scale = 1.0
     g5x = [0.0] * 6
     g92 = [0.0] * 6
-    offset = [0.0] * 6  # G5x + G92: printed positions are program coordinates
+    xy_rot = 0.0  # SET_XY_ROTATION [deg]
+
+    def place(p: list[float]) -> tuple[float, ...]:
+        """A printed point (x y z in the units in effect, then a b) in the
+        workpiece frame, mm."""
+        x, y, z = ((p[k] * scale + g92[k]) for k in range(3))
+        if xy_rot:
+            t = xy_rot * math.pi / 180.0
+            x, y = x * math.cos(t) - y * math.sin(t), x * math.sin(t) + y * math.cos(t)
+        xyz = (x + g5x[0], y + g5x[1], z + g5x[2])
+        return (*xyz, *(p[3 + k] + g92[3 + k] + g5x[3 + k] for k in range(len(p) - 3)))
+
     feed = 0.0
     plane = 17
     tool_length = 0.0
@@ -171,10 +185,10 @@ def parse(out: str, err: str = "") -> OracleResult:
         elif name == "SET_G5X_OFFSET":
             # printed in the length units in effect when it is set
             g5x = [v * scale for v in vals[1:4]] + list(vals[4:7])
-            offset = [a + b for a, b in zip(g5x, g92, strict=True)]
         elif name == "SET_G92_OFFSET":
             g92 = [v * scale for v in vals[0:3]] + list(vals[3:6])
-            offset = [a + b for a, b in zip(g5x, g92, strict=True)]
+        elif name == "SET_XY_ROTATION":
+            xy_rot = vals[0]
         elif name == "USE_TOOL_LENGTH_OFFSET":
             tool_length = vals[2] * scale  # printed in the length units in effect
             tool_scale = scale
@@ -183,14 +197,7 @@ def parse(out: str, err: str = "") -> OracleResult:
         elif name == "SET_FEED_RATE":
             feed = vals[0]
         elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
-            x, y, z, a, b = vals[:5]
-            end = (
-                x * scale + offset[0],
-                y * scale + offset[1],
-                z * scale + offset[2],
-                a + offset[3],
-                b + offset[4],
-            )
+            end = place(vals[:5])
             kind = "rapid" if name == "STRAIGHT_TRAVERSE" else "feed"
             # the feed is in length units per minute when X, Y or Z move, else deg/min
             moved = math.dist(end[:3], last[:3]) > 1e-9 or end[3:] == last[3:]
@@ -204,6 +211,7 @@ def parse(out: str, err: str = "") -> OracleResult:
                     scale=scale,
                     tool_length=tool_length,
                     tool_scale=tool_scale,
+                    xy_rotation=xy_rot,
                 )
             )
             last = end
@@ -215,8 +223,8 @@ def parse(out: str, err: str = "") -> OracleResult:
             cen = [0.0] * 3
             end[idx[0]], end[idx[1]], end[idx[2]] = e1, e2, ax
             cen[idx[0]], cen[idx[1]], cen[idx[2]] = c1, c2, ax
-            end5 = (*(end[k] * scale + offset[k] for k in range(3)), a + offset[3], b + offset[4])
-            center = tuple(cen[k] * scale + offset[k] for k in range(3))
+            end5 = place([*end, a, b])
+            center = place(cen)
             motions.append(
                 OracleMotion(
                     i,
@@ -229,6 +237,7 @@ def parse(out: str, err: str = "") -> OracleResult:
                     scale=scale,
                     tool_length=tool_length,
                     tool_scale=tool_scale,
+                    xy_rotation=xy_rot,
                 )
             )
             last = end5
@@ -244,6 +253,7 @@ def parse(out: str, err: str = "") -> OracleResult:
                     control_points=int(vals[0]),
                     tool_length=tool_length,
                     tool_scale=tool_scale,
+                    xy_rotation=xy_rot,
                 )
             )
         elif name == "DWELL":
@@ -257,6 +267,7 @@ def parse(out: str, err: str = "") -> OracleResult:
                     duration=vals[0],
                     tool_length=tool_length,
                     tool_scale=tool_scale,
+                    xy_rotation=xy_rot,
                 )
             )
     return OracleResult(motions, error, calls, prints)

@@ -113,8 +113,11 @@ def _tokens(words: tuple[tuple[str, float], ...]) -> list[str]:
 
 def _agree(om: oracle.OracleMotion, m: gcode.Motion) -> str | None:
     # rs274 prints four decimals of a position and, apart, of the offsets added to
-    # it: two roundings of half a unit of the last decimal each
-    tol = 1.2e-4 * om.scale + 1e-9
+    # it: two roundings of half a unit of the last decimal each. Turned by a
+    # rotation (G10 L2 R), the position's and the G92 offset's roundings in x and
+    # y (up to 1e-4 each) mix: up to sqrt(2) * 1e-4 in one axis, then the work
+    # offset's 0.5e-4
+    tol = (1.2e-4 if not om.xy_rotation else 1.95e-4) * om.scale + 1e-9
     if om.kind != m.kind:
         return f"kind {om.kind} vs {m.kind}"
     if abs(om.tool_length - m.tool_length) > 1.2e-4 * om.tool_scale + 1e-9:

@@ -21,7 +21,7 @@ from .functions import io, overrides, restore_blocks, snapshot, spindle_mode, to
 from .messages import expand, kind_of
 from .motion import EXACT_STOP, MM_PER_INCH, Motion
 from .moves import arc, home, linear
-from .offsets import axis_offsets, g10, save_home
+from .offsets import axis_offsets, change_frame, curve_to_work, g10, save_home, to_work
 from .params import Parameters
 from .read import Block, Word, evaluate, fail, parse
 from .splines import bezier, nurbs_end, nurbs_point
@@ -110,7 +110,7 @@ class Interpreter:
             return 0.0
         if name in ("_abs_x", "_abs_y", "_abs_z", "_abs_a", "_abs_b"):
             i = "xyzab".index(name[-1])
-            v = st.pos[i] + (st.tool_length if i == 2 else 0.0)
+            v = to_work(st, st.pos)[i] + (st.tool_length if i == 2 else 0.0)
             return v / sc if i < 3 else v
         if name == "_line":
             return float(self.line)
@@ -250,7 +250,23 @@ class Interpreter:
             else:
                 kw["start"] = self.detached
                 self.detached = None
+        if self.st.rotation:
+            self._rotate_out(kw)
         self.out.append(Motion(**kw))  # type: ignore[arg-type]
+
+    def _rotate_out(self, kw: dict[str, object]) -> None:
+        """A motion's points from the unrotated frame into the workpiece frame
+        (offsets.to_work): what LinuxCNC's canon does to every point it gets
+        (emccanon.cc rotate_and_offset_pos)."""
+        st = self.st
+        for key in ("start", "end"):
+            kw[key] = tuple(to_work(st, kw[key]))  # type: ignore[arg-type]
+        center = kw.get("center")
+        if center is not None:
+            kw["center"] = tuple(to_work(st, (*center, 0.0, 0.0))[:3])  # type: ignore[misc]
+        curve = kw.get("curve")
+        if curve is not None:
+            kw["curve"] = curve_to_work(st, curve)  # type: ignore[arg-type]
 
     def context(self, code: int, w: Word, line: int, pre: list[tuple[str, float]]) -> None:
         """M70 (save the modal state), M71 (forget it), M72 (restore it), M73
@@ -422,16 +438,12 @@ class Interpreter:
         if 12 in groups:
             self.no_comp("a change of coordinate system", line, groups[12][1])
             index = _coord_index(groups[12][0])
-            if self.params.values[5210 + 20 * index] != 0.0:
-                raise self.err(
-                    "rotated coordinate systems are not supported (its parameter R is not 0)",
-                    line,
-                    groups[12][1],
-                    "coordinate systems without rotation on this machine",
-                )
-            st.coord = index
-            st.origin = self.stored_origin(index)
-            self.params.values[5220] = float(index)
+            # the system in use again changes nothing, even when its parameters
+            # did (convert_coordinate_system, interp_convert.cc:1792-1798)
+            if index != st.coord:
+                change_frame(self, self.stored_origin(index), self.params.values[5210 + 20 * index])
+                st.coord = index
+                self.params.values[5220] = float(index)
         if 13 in groups:
             self.no_comp("a change of path control mode", line, groups[13][1])
             self._path_control(groups[13], seen, line)
@@ -606,6 +618,13 @@ class Interpreter:
                     line,
                     next(iter(axis_words.values()), None),
                     "a straight move to leave cutter compensation",
+                )
+            if st.rotation and st.plane != 17:
+                raise self.err(
+                    f"arcs in G{st.plane} in a rotated coordinate system are not supported",
+                    line,
+                    next(iter(axis_words.values()), None),
+                    "G17 arcs, or a system without rotation (G10 L2 R0)",
                 )
             if comp_active(self) and st.plane in (17, 18):
                 comp_arc(self, int(motion), axis_words, seen, line)

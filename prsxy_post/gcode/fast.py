@@ -53,6 +53,7 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
         st.ended
         or st.inverse_time
         or st.comp_side
+        or st.rotation  # points go out through Interpreter.emit_now's rotation
         or st.arc_not_allowed  # the full path clears it at the next straight move
         or it.detached is not None
         or it.queue
