@@ -52,6 +52,10 @@ class OracleResult:
     calls: list[tuple[str, str]] = field(default_factory=list)
     #: what (PRINT,...) wrote (rs274 prints it among the calls)
     prints: list[str] = field(default_factory=list)
+    #: rs274 lost the tool's position at a tool change (see :func:`_stale`): how
+    #: many motions it made before, and why; None when it did not
+    lost_after: int | None = None
+    lost_why: str = ""
 
 
 def run(
@@ -171,6 +175,10 @@ def parse(out: str, err: str = "") -> OracleResult:
     calls: list[tuple[str, str]] = []
     prints: list[str] = []
     lines = out.splitlines()
+    #: what placed the last point the stand-in canon was given (see _stale)
+    at_motion = (0.0, 0.0, (0.0,) * 6, False)
+    lost_after: int | None = None
+    lost_why = ""
     for i, ln in enumerate(lines):
         m = re.match(r"\s*\d+ N[\d.]+\s+(\w+)\((.*)\)\s*$", ln)
         if not m:
@@ -180,6 +188,16 @@ def parse(out: str, err: str = "") -> OracleResult:
         name, args = m.group(1), m.group(2)
         calls.append((name, args))
         vals = [float(v) for v in re.findall(r"-?\d+\.\d+|-?\d+", args)] if args else []
+        if name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "ARC_FEED"):
+            at_motion = (tool_length, xy_rot, tuple(g5x), False)
+        elif name == "NURBS_FEED":
+            at_motion = (tool_length, xy_rot, tuple(g5x), True)
+        elif (
+            name in ("CHANGE_TOOL", "CHANGE_TOOL_NUMBER", "RELOAD_TOOLDATA") and lost_after is None
+        ):
+            why = _stale(at_motion, (tool_length, xy_rot, tuple(g5x)))
+            if why:
+                lost_after, lost_why = len(motions), why
         if name == "USE_LENGTH_UNITS":
             scale = 25.4 if "INCHES" in args else 1.0
         elif name == "SET_G5X_OFFSET":
@@ -270,7 +288,50 @@ def parse(out: str, err: str = "") -> OracleResult:
                     xy_rotation=xy_rot,
                 )
             )
-    return OracleResult(motions, error, calls, prints)
+    return OracleResult(motions, error, calls, prints, lost_after, lost_why)
+
+
+#: the canonical calls of the blocks after which LinuxCNC reads the position back
+_REREAD = ("CHANGE_TOOL", "CHANGE_TOOL_NUMBER", "RELOAD_TOOLDATA")
+
+
+def _stale(
+    at_motion: tuple[float, float, tuple[float, ...], bool],
+    now: tuple[float, float, tuple[float, ...]],
+) -> str:
+    """Why standalone rs274 takes a wrong position after a tool change, or "".
+
+    After a block with M6 or M61, LinuxCNC reads the position back from the
+    canon before the next line (LinuxCNC 2.9.0~pre1, f1270d6ed7, the rs274
+    installed here: Interp::_read calls read_inputs, rs274ngc_pre.cc:1599, which
+    on toolchange_flag calls refresh_actual_position, :1447-1452; that sets
+    current_x.. from GET_EXTERNAL_POSITION_X.., interp_internal.cc:410-422; the
+    flag is set by M6 at interp_convert.cc:5613, M61 at :3397 and G10 L0 at
+    :3703). A running LinuxCNC's canon answers with the machine's position
+    taken back through the tool offset, the work offset, the rotation and the
+    G92 offset in effect (task/emccanon.cc:2658-2690, GET_EXTERNAL_POSITION →
+    unoffset_and_unrotate_pos): the interpreter's own point, nothing changes.
+    The stand-in canon of standalone rs274 answers with the last point it was
+    given (sai/saicanon.cc:829, GET_EXTERNAL_POSITION_Z returns
+    _sai._program_position_z), moved along by later G5x and G92 offsets
+    (:122-162) but not by a new tool length offset (USE_TOOL_LENGTH_OFFSET,
+    :539-544, keeps it apart) nor a rotation (SET_XY_ROTATION, :118-120, only
+    prints), and after NURBS_FEED it is read from past the end of the control
+    points (:325). So when, since the last move, the tool length offset or the
+    rotation changed, or the work offset changed while the system was rotated,
+    or the last move was a NURBS, rs274 goes on from a point where the tool is
+    not; a running LinuxCNC does not.
+    """
+    tool, rot, g5x, nurbs = at_motion
+    if nurbs:
+        return "the last move before the tool change was a NURBS"
+    if now[0] != tool:
+        return f"tool length offset {tool:g} at the last move, {now[0]:g} at the tool change"
+    if now[1] != rot:
+        return f"rotation {rot:g} deg at the last move, {now[1]:g} at the tool change"
+    if rot and now[2] != g5x:
+        return "the work offset of a rotated system changed since the last move"
+    return ""
 
 
 #: canonical calls of one machine function each: call → our words as text
