@@ -42,6 +42,9 @@ class OracleMotion:
     tool_length: float = 0.0  # Z of the tool length offset in effect (USE_TOOL_LENGTH_OFFSET) [mm]
     tool_scale: float = 1.0  # 25.4 when that offset was printed in inches
     xy_rotation: float = 0.0  # SET_XY_ROTATION in effect [deg]
+    #: 25.4 when an offset added to the point (G5x, or a G92 offset not 0) was
+    #: printed in inches: its last decimal is then 2.54e-3 mm
+    offset_scale: float = 1.0
 
 
 @dataclass
@@ -149,6 +152,7 @@ def parse(out: str, err: str = "") -> OracleResult:
     scale = 1.0
     g5x = [0.0] * 6
     g92 = [0.0] * 6
+    g5x_scale = g92_scale = 1.0  # the scale each was printed at
     xy_rot = 0.0  # SET_XY_ROTATION [deg]
 
     def place(p: list[float]) -> tuple[float, ...]:
@@ -203,8 +207,10 @@ def parse(out: str, err: str = "") -> OracleResult:
         elif name == "SET_G5X_OFFSET":
             # printed in the length units in effect when it is set
             g5x = [v * scale for v in vals[1:4]] + list(vals[4:7])
+            g5x_scale = scale
         elif name == "SET_G92_OFFSET":
             g92 = [v * scale for v in vals[0:3]] + list(vals[3:6])
+            g92_scale = scale
         elif name == "SET_XY_ROTATION":
             xy_rot = vals[0]
         elif name == "USE_TOOL_LENGTH_OFFSET":
@@ -230,6 +236,7 @@ def parse(out: str, err: str = "") -> OracleResult:
                     tool_length=tool_length,
                     tool_scale=tool_scale,
                     xy_rotation=xy_rot,
+                    offset_scale=max(g5x_scale, g92_scale if any(g92) else 1.0),
                 )
             )
             last = end
@@ -256,6 +263,7 @@ def parse(out: str, err: str = "") -> OracleResult:
                     tool_length=tool_length,
                     tool_scale=tool_scale,
                     xy_rotation=xy_rot,
+                    offset_scale=max(g5x_scale, g92_scale if any(g92) else 1.0),
                 )
             )
             last = end5
@@ -272,6 +280,7 @@ def parse(out: str, err: str = "") -> OracleResult:
                     tool_length=tool_length,
                     tool_scale=tool_scale,
                     xy_rotation=xy_rot,
+                    offset_scale=max(g5x_scale, g92_scale if any(g92) else 1.0),
                 )
             )
         elif name == "DWELL":
@@ -286,6 +295,7 @@ def parse(out: str, err: str = "") -> OracleResult:
                     tool_length=tool_length,
                     tool_scale=tool_scale,
                     xy_rotation=xy_rot,
+                    offset_scale=max(g5x_scale, g92_scale if any(g92) else 1.0),
                 )
             )
     return OracleResult(motions, error, calls, prints, lost_after, lost_why)

@@ -161,6 +161,9 @@ ROTATED = [
     "G0 X1 Y1\nM2\n",
     "G21\nG10 L2 P1 R60\nG52 X10 Y5\nG0 X0 Y0\nG1 X5 F100\nG92.2\nG0 X0\nG92.3\nG0 Y2\nM2\n",
     "G21\nG0 X4 Y4\nG92 X0 Y0\nG10 L2 P1 R-45\nG0 X1 Y0\nG10 L2 P0 R45 Y2\nG0 X0 Y0\nM2\n",
+    # G10 L2/L20 of the active system turn the program point without the G92
+    # offset (interp_convert.cc:4328-4366): found by the random rotated programs
+    "G21\nG0 X1 Y1\nG52 X1\nG10 L2 P0 R12.5\nG53 G0 Y0.5\nG0 X0\nG10 L20 P0 X1\nG0 Y2\nM2\n",
     # tool length offsets, G10 L10/L11 in a turned system
     "G21\nG10 L2 P1 R30\nT1 M6\nG43 G0 X5 Y5 Z10\nG10 L10 P1 Z2\nG43\nG0 X0 Z5\nG49 G0 Z0\nM2\n",
     "G21\nG10 L2 P1 R30 Z-2\nG10 L2 P9 R10 Z-3\nT2 M6\nG0 Z10\nG10 L11 P2 Z2\nG43 G0 X1 Z10\nM2\n",

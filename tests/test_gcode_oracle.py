@@ -116,8 +116,9 @@ def _agree(om: oracle.OracleMotion, m: gcode.Motion) -> str | None:
     # it: two roundings of half a unit of the last decimal each. Turned by a
     # rotation (G10 L2 R), the position's and the G92 offset's roundings in x and
     # y (up to 1e-4 each) mix: up to sqrt(2) * 1e-4 in one axis, then the work
-    # offset's 0.5e-4
-    tol = (1.2e-4 if not om.xy_rotation else 1.95e-4) * om.scale + 1e-9
+    # offset's 0.5e-4. An offset printed in inches (set in G20) and added to a
+    # point printed in mm carries its inch decimal
+    tol = (1.2e-4 if not om.xy_rotation else 1.95e-4) * max(om.scale, om.offset_scale) + 1e-9
     if om.kind != m.kind:
         return f"kind {om.kind} vs {m.kind}"
     if abs(om.tool_length - m.tool_length) > 1.2e-4 * om.tool_scale + 1e-9:
@@ -384,6 +385,8 @@ _CODES = [
     "T1 M6 G43", "G40", "G41.1 D1", "G42.1 D0.5", "G41 D1", "G42", "G80", "G98", "G99",
     "G28", "G30", "G28.1", "G53 G0 X1 Y2", "G4 P0.5", "M3 S1000", "M5", "M8", "M9",
     "G28 X1", "G30 Z2", "G10 L1 P2 Z3", "G10 L10 P1 Z2", "G10 L11 P1 Z1",
+    "G10 L2 P1 R30", "G10 L2 P0 R-45 X1", "G10 L2 P2 R15 Y2", "G10 L2 P0 R0",
+    "G10 L20 P0 X1 Y-1", "G10 L20 P2 X0", "G92 X1 Y1", "G52 X2",
 ]  # fmt: skip
 _LINE = st.one_of(
     st.builds(
@@ -436,6 +439,66 @@ def test_random_programs_agree_with_linuxcnc(body: list[str]) -> None:
     own draw then found the ``@example`` (a plain G94 sets the feed rate to 0)."""
     _require_rs274()
     v = verdict("G21 G90 G17 G94 G40 G49 G54 G80 F500\n" + "\n".join(body) + "\nM2\n")
+    assert v.status in ACCEPTED, f"{v.status}: {v.detail}"
+
+
+_ANGLE = st.sampled_from(["30", "-45", "90", "12.5", "-170", "0", "7.25"])
+
+
+_ROTATED_CODES = [
+    "G54", "G55", "G56", "G59.3", "G92.1", "G92.2", "G92.3", "G28", "G28 X1", "G30 Y2", "G28.1",
+    "G80", "T1 M6", "G43", "G43 H2", "G49", "G20", "G21", "G90.1", "G91.1", "G91", "G90",
+]  # fmt: skip
+
+
+@st.composite
+def _rotated(draw: st.DrawFn) -> str:
+    """Programs in rotated coordinate systems (G10 L2 R): moves, G17 arcs (R
+    large enough to reach, and centre words), G91, G92/G52, G10 L2/L20 of the
+    active system and others, system switches, G53, G28/G30, G28.1, cycles,
+    polar moves, tool lengths, both units."""
+    units = draw(st.sampled_from(["G21", "G20"]))
+    lines = [f"{units} G90 G17 G94 G40 G49 G54 G80 F500"]
+    lines.append(f"G10 L2 P1 R{draw(_ANGLE)} X{draw(_VALUE)} Y{draw(_VALUE)}")
+    lines.append(f"G10 L2 P2 R{draw(_ANGLE)} X{draw(_VALUE)} Z{draw(_VALUE)}")
+    lines.append(draw(st.sampled_from(["G54", "G55", "G56"])) + " G0 X0 Y0 Z5")
+    xy = _axis_words("XY", 2)
+    line = st.one_of(
+        st.builds(lambda g, a: f"{g} {a}", st.sampled_from(["G0", "G1"]), _axis_words("XYZ", 3)),
+        # R arcs incremental: an end on the start is then one in both (rs274 and
+        # we round an absolute point after a G10 L20 differently, by 1e-16)
+        st.builds(lambda g, a: f"G91 {g} {a} R40\nG90", st.sampled_from(["G2", "G3"]), xy),
+        st.builds(
+            lambda g, a, c: f"{g} {a} {c} P1",
+            st.sampled_from(["G2", "G3"]),
+            st.just("Z1"),
+            _axis_words("IJ", 2),
+        ),
+        st.builds(lambda a: f"G91 G1 {a}\nG90", xy),
+        st.builds(lambda a: f"G92 {a}", xy),
+        st.builds(lambda a: f"G52 {a}", xy),
+        st.builds(lambda r, a: f"G10 L2 P0 R{r} {a}", _ANGLE, xy),
+        st.builds(lambda n, r: f"G10 L2 P{n} R{r}", st.sampled_from("1239"), _ANGLE),
+        st.builds(lambda n, a: f"G10 L20 P{n} {a}", st.sampled_from("0123"), xy),
+        st.builds(lambda a: f"G53 G0 {a}", _axis_words("XYZ", 2)),
+        st.builds(lambda a: f"G81 {a} Z-1 R2", xy),
+        st.builds(lambda r, t: f"G1 @{r} ^{t}", st.sampled_from(["3", "10"]), _ANGLE),
+        st.sampled_from(_ROTATED_CODES),
+    )
+    lines += draw(st.lists(line, min_size=1, max_size=12))
+    return "\n".join([*lines, "G80", "M2"]) + "\n"
+
+
+@pytest.mark.linuxcnc
+@settings(
+    max_examples=150, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
+@given(_rotated())
+def test_random_rotated_programs_agree_with_linuxcnc(program: str) -> None:
+    """G10 L2 R and all that goes through a rotated system, as rs274 does it, or
+    both refuse."""
+    _require_rs274()
+    v = verdict(program)
     assert v.status in ACCEPTED, f"{v.status}: {v.detail}"
 
 
@@ -504,6 +567,13 @@ def _cycles(draw: st.DrawFn) -> str:
 @example(
     "G21 G90 G94 G40 G49 G54 G80 F500 G17 M3 S1000\nG98\nG0 Z5\nG81 X1 Z-2.5 R-1\n"
     "G81 X1\nG20\nY2\nG80\nM2\n"
+)
+# found by the random rotated programs, 2026-11-27: a G53 move is a move that
+# is no cycle, after which the next cycle starts from its own first level
+# (convert_motion, interp_convert.cc:3778-3779)
+@example(
+    "G20 G90 G94 G40 G49 G54 G80 F500 G17 M3 S1000\nG99\nG0 Z1\nG81 X1 Z-1 R2\n"
+    "G53 G0 Y2 Z2\nG81 X1 Z-1 R2\nG80\nM2\n"
 )
 def test_random_canned_cycles_agree_with_linuxcnc(program: str) -> None:
     """Every move of every cycle (rapid to the position, to R, the pecks, the feed

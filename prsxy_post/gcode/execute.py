@@ -476,6 +476,9 @@ class Interpreter:
             if mode0 == 53:
                 self.no_comp("G53", line, groups[0][1])
                 st.motion = motion
+                # a move that is no cycle forgets the cycles' first level
+                # (convert_motion, interp_convert.cc:3778-3779), G53's too
+                st.cycle_il = None
                 linear(self, int(motion), axis_words, seen, line, machine=True)
             elif motion == 80:
                 st.motion = None

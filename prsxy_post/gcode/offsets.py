@@ -157,7 +157,28 @@ def _setup_system(it: Interpreter, lv: int, seen: dict[str, Word], w: Word, line
             if v is not None:
                 pars[base + i] = v
     if index == st.coord:
-        change_frame(it, it.stored_origin(index), r)
+        _carry_setup(it, it.stored_origin(index), r)
+
+
+def _carry_setup(it: Interpreter, origin: list[float], rotation: float) -> None:
+    """The active system's offsets and rotation become these, the program point
+    carried as LinuxCNC's convert_setup carries it (interp_convert.cc:4328-4366):
+    turned out by the old rotation, moved by the change of offset, turned back
+    by the new one, the G92 offset left out of the turns. With G92 on and a
+    rotation, the interpreter's point then is not where the tool is (the tip
+    stays; the next move starts from it and goes where LinuxCNC sends it)."""
+    st = it.st
+    held = to_work(st, it.detached) if it.detached is not None else None
+    old, g = st.origin, st.g92
+    p = [st.pos[i] - old[i] - g[i] for i in range(5)]
+    p[0], p[1] = rotate(p[0], p[1], st.rotation)
+    p = [p[i] + old[i] - origin[i] for i in range(5)]
+    p[0], p[1] = rotate(p[0], p[1], -rotation)
+    st.origin = list(origin)
+    st.rotation = rotation
+    st.pos = [p[i] + g[i] + origin[i] for i in range(5)]
+    if held is not None:
+        it.detached = tuple(from_work(st, held))
 
 
 def _current_in_system(it: Interpreter, index: int) -> list[float]:
