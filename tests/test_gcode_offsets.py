@@ -7,6 +7,7 @@ the oracle's parameter file and tool table.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from prsxy_post import gcode
@@ -275,3 +276,27 @@ def test_arcs_off_xy_in_a_turned_system_are_refused_as_unsupported(program: str)
     """rs274 makes them; we refuse them as not supported, after the same moves."""
     v = verdict(program)
     assert v.status == "not supported" and v.rs274_ran, v
+
+
+def test_curves_turn_with_the_system() -> None:
+    """A G5 and a G5.2 curve in a turned system are the unturned ones turned
+    about the work offset (the canon turns NURBS control points as it turns
+    every point; rs274 prints only their number, so the closed form)."""
+    import math
+
+    body = "G0 X1 Y2\nG5 X10 Y5 I2 J3 P-2 Q1\nG5.2 X12 Y6 P1\nX14 Y2 P2\nX16 Y7 P1\nG5.3\nM2\n"
+    flat, _, err0 = ours("G21 G1 F100\nG10 L2 P1 X7 Y-3\n" + body)
+    turned, _, err1 = ours("G21 G1 F100\nG10 L2 P1 X7 Y-3 R-35\n" + body)
+    assert err0 is None and err1 is None
+    c, s = math.cos(math.radians(-35)), math.sin(math.radians(-35))
+    curves = [(a, b) for a, b in zip(flat, turned, strict=True) if a.kind == "curve"]
+    assert len(curves) == 2
+    for a, b in curves:
+        assert a.curve is not None and b.curve is not None
+        origin = np.array([7.0, -3.0])
+        rel = a.curve.control[:, :2] - origin
+        want = np.column_stack([rel[:, 0] * c - rel[:, 1] * s, rel[:, 0] * s + rel[:, 1] * c])
+        assert b.curve.control[:, :2] == pytest.approx(want + origin, abs=1e-12)
+        assert list(b.curve.weights) == list(a.curve.weights)
+        assert b.end[:2] == pytest.approx(tuple(b.curve.control[-1, :2]), abs=1e-12)
+        assert b.feed == a.feed
