@@ -251,9 +251,13 @@ def verdict(text: str) -> Verdict:
             why = _agree(ref.motions[k], m)
             if why is not None:
                 return Verdict("different", f"motion {k} (line {m.line}): {why}", k, ran)
-        if err is not None and ran and not any(w in str(err) for w in OUT_OF_SUBSET):
+        if err is not None and not ran:
+            return Verdict("both refuse", f"{err} | rs274: {ref.error}", 0, ran)
+        if err is not None and not any(w in str(err) for w in OUT_OF_SUBSET):
             return Verdict("we refuse", f"{err} (after rs274 lost the position)", n, ran)
-        return Verdict("rs274 loses the position", ref.lost_why, n, ran)
+        # rs274's own refusal after that point may come from the lost position
+        later = "" if ran else f"; then rs274: {ref.error}"
+        return Verdict("rs274 loses the position", ref.lost_why + later, n, ran)
     if err is None and not ran:
         return Verdict("only rs274 refuses", str(ref.error), len(ours), ran)
     if err is not None and not ran:

@@ -20,7 +20,9 @@ without rotation, and :func:`to_work` turns each motion's points into the
 workpiece frame when it goes out (``Interpreter.emit_now``). With ``r = 0`` the
 two frames are one. The spindle's gauge point is the tip plus the tool length in
 z. Changing an offset never moves the machine: the program coordinates of the
-same tip change (:func:`change_frame`).
+same tip change (:func:`change_frame`), except where LinuxCNC itself computes
+them otherwise (G10 L2/L20 of the active system with G92 on and a rotation,
+:func:`_carry_setup`).
 
 Not on this machine: tool offsets other than the length (X, Y, A, B in G10
 L1/L10/L11), and arcs in G18/G19 while the system is rotated (they would lie in
@@ -106,8 +108,9 @@ def curve_to_work(st: State, curve: Nurbs) -> Nurbs:
 
 def change_frame(it: Interpreter, origin: list[float], rotation: float) -> None:
     """The active system's offsets and rotation become these; the tool stays
-    where it is, its program coordinates change (convert_coordinate_system,
-    interp_convert.cc:1801-1820; convert_setup for the active system, :4328-4366)."""
+    where it is, its program coordinates change (convert_coordinate_system
+    through find_current_in_system, interp_convert.cc:1801-1820). G10 L2/L20 of
+    the active system carry the point otherwise (:func:`_carry_setup`)."""
     st = it.st
     tip = to_work(st, st.pos)
     held = to_work(st, it.detached) if it.detached is not None else None
