@@ -119,20 +119,21 @@ def test_offsets_last_for_the_run_only() -> None:
 #
 # G10 L2 P<n> R<deg> turns system n about Z (LinuxCNC 2.9.0~pre1, f1270d6ed7, the
 # rs274 installed here):
-# - convert_setup (interp_convert.cc:4197-4372): R goes to #[5210 + 20 n]
+# - convert_setup (interp_convert.cc:4180-4374): R goes to #[5210 + 20 n]
 #   (:4224-4229); "R not allowed in G10 L20" (:4225); "I J words not allowed with
-#   G10 L2" (:4190); L20 turns the difference of the current and the wanted
+#   G10 L2" (:4196); L20 turns the difference of the current and the wanted
 #   point by the system's R before it moves the origin (:4231-4263); when n is the
-#   active system the current point is carried into the new frame (:4328-4366).
-# - convert_coordinate_system (:1770-1844): selecting a system reads its R
+#   active system the current point is carried into the new frame, turned
+#   without the G92 offset (:4328-4366).
+# - convert_coordinate_system (:1752-1845): selecting a system reads its R
 #   (:1820); selecting the active one again does nothing (:1792-1798).
 # - find_current_in_system (interp_find.cc:467-526): the point in another system,
 #   turned back by its R; find_ends for G53 (:170-197) and find_relative for
 #   G28/G30 (:427-431) take machine coordinates through the rotation;
-#   convert_savehome (G28.1, interp_convert.cc:4445-4452) turns the point out.
-# - the canon (task/emccanon.cc rotate_and_offset_pos): a point is the program
-#   point plus the G92 offset, turned by R, plus the work offset; rs274 prints
-#   SET_XY_ROTATION and the program point, and tests/oracle.py places it so.
+#   convert_savehome (G28.1, interp_convert.cc:2446-2450) turns the point out.
+# - the canon (task/emccanon.cc:242-274, rotate_and_offset_pos): a point is the
+#   program point plus the G92 offset, turned by R, plus the work offset; rs274
+#   prints SET_XY_ROTATION and the program point, and tests/oracle.py places it so.
 
 ROTATED = [
     # every system, lines and G17 arcs (R and IJ, helical, two turns), P0 = active
@@ -211,7 +212,7 @@ def test_rotation_parameters_read_back() -> None:
 
 def test_abs_position_is_the_machine_point() -> None:
     """#<_abs_x> and #<_abs_y> are the point on the machine, turned
-    (interp_namedparams.cc:724-741). Ours in mm: rs274's standalone canon keeps
+    (interp_namedparams.cc:726-741). Ours in mm: rs274's standalone canon keeps
     machine units in inches (the known difference above), so the closed form."""
     _, msgs, err = ours(
         "G21\nG10 L2 P1 X10 Y20 R90\nG0 X3 Y4\n(PRINT,%.6f#<_abs_x> #<_abs_y>)\nM2\n"

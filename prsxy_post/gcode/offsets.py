@@ -124,7 +124,7 @@ def change_frame(it: Interpreter, origin: list[float], rotation: float) -> None:
 def _setup_system(it: Interpreter, lv: int, seen: dict[str, Word], w: Word, line: int) -> None:
     """G10 L2 P… sets a system's offsets and rotation; L20 so that the current
     position becomes the given one in that system (LinuxCNC's convert_setup,
-    interp_convert.cc:4197-4372 at 2.9.0~pre1)."""
+    interp_convert.cc:4180-4374 at 2.9.0~pre1)."""
     st = it.st
     for bad in ("I", "J"):
         if bad in seen:
