@@ -46,10 +46,11 @@ from typing import Any
 
 import numpy as np
 
-from . import axiscomp, errormap, kinematics, simulate
+from . import axiscomp, diagnose, errormap, kinematics, provenance, simulate
 from . import effects as registry
 from .errors import FitError
 from .measure import AxisData, BallbarRun, PoseData
+from .measurement_model import fk_with_jacobian
 from .profile import MOTORS, AxisComp, Effects, KinematicParams, Profile, TableParams
 
 LEG_KEYS = registry.LEG_KEYS
@@ -185,88 +186,6 @@ def observations(
 
 
 # ---------------------------------------------------------------- the model
-
-
-def _out(geo: kinematics.Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
-    """Tip [mm] and A, B [deg] for platform poses xv = (c, A, B, γ) [mm, rad]."""
-    R = kinematics.platform_rotation(xv[:, 3], xv[:, 4], xv[:, 5])
-    T = xv[:, :3] + np.einsum("nij,j->ni", R, geo.tool)
-    w = T - geo.origin + kinematics.table_displacement(geo, P[:, 3], P[:, 4])
-    return np.column_stack([w, np.degrees(xv[:, 3]), np.degrees(xv[:, 4])])
-
-
-def default_steps(names: Sequence[str], theta: np.ndarray) -> np.ndarray:
-    """Central-difference steps (the registry's, per member)."""
-    return registry.fd_steps(names, theta)
-
-
-def fk_with_jacobian(
-    make_geo: Any,
-    theta: np.ndarray,
-    P: np.ndarray,
-    guess: np.ndarray | None = None,
-    want_jac: bool = True,
-    steps: np.ndarray | None = None,
-    motors: bool = False,
-) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray | None]:
-    """Tip and axis y (N, 5) for motor positions P under geometry θ, with derivatives.
-
-    Implicit differentiation of the FK constraints F(x, θ, P) = 0 (x: platform pose):
-    ∂x/∂θ = −F_x⁻¹ F_θ, ∂y/∂θ = G_x ∂x/∂θ + G_θ, and likewise for P.
-
-    Returns
-    -------
-    y : (N, 5) [mm, deg]; J : (N, 5, m) ∂y/∂θ or None; xv : (N, 6) platform poses;
-    JP : (N, 5, 5) ∂y/∂P (motor sensitivities) when ``motors``, else None
-    """
-    geo = make_geo(theta)
-    xv, ok = kinematics.forward_platform(geo, P, guess)
-    if not np.all(ok):
-        raise FitError(
-            f"forward kinematics failed at {int(np.sum(~ok))} measured points",
-            expected="measurements of poses this geometry can reach",
-        )
-    y = _out(geo, P, xv)
-    if not want_jac:
-        return y, None, xv, None
-    n, m = len(P), len(theta)
-    hx = np.array([1e-6, 1e-6, 1e-6, 1e-8, 1e-8, 1e-8])
-    Fx = kinematics._fk_system(geo, P, xv)[1]
-    Gx = np.empty((n, 5, 6))
-    for j in range(6):
-        xp, xm = xv.copy(), xv.copy()
-        xp[:, j] += hx[j]
-        xm[:, j] -= hx[j]
-        Gx[:, :, j] = (_out(geo, P, xp) - _out(geo, P, xm)) / (2 * hx[j])
-    h_all = steps if steps is not None else default_steps(PARAMS, theta)
-    Ft = np.empty((n, 6, m))
-    Gt = np.empty((n, 5, m))
-    for j in range(m):
-        h = h_all[j]
-        tp, tm = theta.copy(), theta.copy()
-        tp[j] += h
-        tm[j] -= h
-        gp, gm = make_geo(tp), make_geo(tm)
-        Ft[:, :, j] = (kinematics._fk_residual(gp, P, xv) - kinematics._fk_residual(gm, P, xv)) / (
-            2 * h
-        )
-        Gt[:, :, j] = (_out(gp, P, xv) - _out(gm, P, xv)) / (2 * h)
-    lu = np.linalg.inv(Fx)
-    J = np.einsum("nij,njm->nim", Gx, -lu @ Ft) + Gt
-    JP = None
-    if motors:
-        FP = np.empty((n, 6, 5))
-        GP = np.empty((n, 5, 5))
-        for j in range(5):
-            Pp, Pm = P.copy(), P.copy()
-            Pp[:, j] += 1e-6
-            Pm[:, j] -= 1e-6
-            FP[:, :, j] = (
-                kinematics._fk_residual(geo, Pp, xv) - kinematics._fk_residual(geo, Pm, xv)
-            ) / 2e-6
-            GP[:, :, j] = (_out(geo, Pp, xv) - _out(geo, Pm, xv)) / 2e-6
-        JP = np.einsum("nij,njm->nim", Gx, -lu @ FP) + GP
-    return y, J, xv, JP
 
 
 @dataclass
@@ -602,8 +521,6 @@ def stage_error_map(
     provenance: dict[str, Any],
 ) -> tuple[Any, StageReport]:
     """Stage 3: the Eq. 5 error map from the pose residuals the calibrated model leaves."""
-    from . import errormap
-
     if not len(obs.P_pose):
         raise FitError(
             "the error map needs pose measurements", expected="a pose file (kind: poses)"
@@ -700,8 +617,6 @@ def stage_effects(
     runs less the effect would. Returns the profile document, the effects and
     the report.
     """
-    from . import diagnose
-
     data = diagnose.Data.build(commanded, list(poses), list(runs), [])
     candidates = [n for n in registry.members() if n not in set(registry.CONTRACT)]
     measured, segs = data.measured()
@@ -811,8 +726,6 @@ def aliased_cyclic(
 def fit_error_map(profile: Profile, data: Any, seed: int, sources: Sequence[str]) -> Any:
     """Stage 3 on diagnose's model: the Eq. 5 map fitted on the pose residual
     [mm, deg] that ``profile`` (every effect it holds, no map) leaves."""
-    from . import diagnose, errormap
-
     measured, segs = data.measured()
     resid = measured - diagnose.predict(profile, data, []).pred
     q, e = [], []
@@ -885,7 +798,6 @@ def calibrate(
     FitError
         When no stage had data to work on, or a fit cannot identify anything.
     """
-    from . import diagnose, provenance
     from .errors import UsageError
     from .profile import profile_from_dict
 

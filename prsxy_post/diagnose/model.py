@@ -15,7 +15,7 @@ targets are approached on their own from one side).
 A member's signature is the change of every prediction per unit of its size:
 
 - a geometry member θ_j: ∂y/∂θ_j, by the implicit-function theorem on the FK
-  constraints (:func:`prsxy_post.calibrate.fk_with_jacobian`);
+  constraints (:func:`prsxy_post.measurement_model.fk_with_jacobian`);
 - a motor member of motor m: ∂y/∂P_m × its motor term (the registry's
   :meth:`~prsxy_post.effects.MotorFamily.motor_term`), and the motor term itself
   on that motor's laser rows.
@@ -34,9 +34,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import axiscomp, calibrate, errormap, kinematics, simulate
+from .. import axiscomp, errormap, kinematics, simulate
 from .. import effects as registry
 from ..measure import AxisData, BallbarRun, PoseData
+from ..measurement_model import fk_with_jacobian
 from ..profile import MOTORS, Profile
 
 #: FK sensitivities are computed on about this many samples of each ballbar run.
@@ -234,7 +235,7 @@ def predict(
 
     for n_pose, P_cmd in enumerate(data.P_pose):
         Pm = simulate.actual_motors(model, P_cmd, approach=+1)
-        y, J, xv, JP = calibrate.fk_with_jacobian(
+        y, J, xv, JP = fk_with_jacobian(
             make_geo, theta, Pm, data.guess.get(("pose", n_pose)), want, steps,
             motors=bool(motor_keys),
         )  # fmt: skip
@@ -262,7 +263,7 @@ def predict(
     ):
         Pm = simulate.actual_motors(model, P_cmd, t=r.t)
         followed = registry.SERVO_LAG.follow(model, P_cmd, r.t)  # what the play model sees
-        y, _, xv, _ = calibrate.fk_with_jacobian(
+        y, _, xv, _ = fk_with_jacobian(
             make_geo, theta, Pm, data.guess.get(("run", n_run)), False, steps
         )
         data.guess[("run", n_run)] = xv
@@ -273,7 +274,7 @@ def predict(
         if not want:
             continue
         idx = _thin(len(Pm))
-        _, J, _, JP = calibrate.fk_with_jacobian(
+        _, J, _, JP = fk_with_jacobian(
             make_geo, theta, Pm[idx], xv[idx], True, steps, motors=bool(motor_keys)
         )
         unit = vec[idx] / dist[idx, None]
