@@ -593,6 +593,48 @@ def _kind_stats(
     return _stats({k: np.concatenate(v) for k, v in parts.items()})
 
 
+def table_nuisance(
+    now: Profile, axis: Sequence[AxisData], motors: Collection[int]
+) -> diagnose.Nuisance:
+    """What the laser-made tables leave open, for the physical stage: each table
+    value of ``motors`` is the mean of n readings, so it is known to σ / √n (σ the
+    motor's pooled spread of repeated readings, ISO 230-2's repeatability), and a
+    servo lag common to every motor, which position data cannot see."""
+    knots: dict[int, np.ndarray] = {}
+    sd: dict[str, float] = {}
+    tables = {c.motor: np.asarray(c.positions, dtype=float) for c in now.axis_comp}
+    for m in sorted(int(x) for x in motors):
+        at = tables.get(m)
+        rows = [
+            (a.target[a.motor == m], a.measured[a.motor == m], a.direction[a.motor == m])
+            for a in axis
+        ]
+        if at is None or not rows:
+            continue
+        t = np.concatenate([r[0] for r in rows])
+        v = np.concatenate([r[1] for r in rows])
+        d = np.concatenate([r[2] for r in rows])
+        ss, dof = 0.0, 0
+        count: dict[tuple[float, int], int] = {}
+        for x in np.unique(t):
+            for way in (1, -1):
+                grp = v[(t == x) & (d == way)]
+                count[(float(x), way)] = len(grp)
+                if len(grp) > 1:
+                    ss += float(np.sum((grp - grp.mean()) ** 2))
+                    dof += len(grp) - 1
+        if not dof:
+            continue
+        sigma = float(np.sqrt(ss / dof))
+        knots[m] = at
+        for side, sign in (("+", 1), ("-", -1)):
+            for j, x in enumerate(at):
+                n = count.get((float(x), sign), 0)
+                # a position the laser did not read is as uncertain as one reading
+                sd[f"table[{m}]{side}{j}"] = sigma / np.sqrt(max(n, 1))
+    return diagnose.Nuisance(knots, sd, common_lag=True)
+
+
 def stage_effects(
     now: Profile,
     commanded: Profile,
@@ -602,6 +644,7 @@ def stage_effects(
     alpha: float = 1e-3,
     max_rel_stderr: float = 0.25,
     tables_measured: Collection[int] = (),
+    axis: Sequence[AxisData] = (),
 ) -> tuple[dict[str, Any], list[Any], StageReport]:
     """The physical stage: the library's effects outside the contract (bowed guides,
     curved table axes, backlash, cyclic error, servo lag), named, sized and written
@@ -629,6 +672,7 @@ def stage_effects(
         alpha=alpha,
         max_rel_stderr=max_rel_stderr,
         tables_measured=tables_measured,
+        nuisance=table_nuisance(now, axis, tables_measured),
     )
     doc = registry.apply(now.raw, now, fit.changes(), fit.tables_measured)
     after = measured - diagnose.predict(fit.profile, data, []).pred
@@ -644,7 +688,8 @@ def stage_effects(
         }
         for e in found
     ]
-    notes = [e.sentence() for e in found] or ["no effect beyond the contract's terms found"]
+    notes = effect_sentences(found) or ["no effect beyond the contract's terms found"]
+    notes.append(tested_note(candidates, found, alpha, bool(tables_measured and axis)))
     notes.append(
         "contract parameters refitted with them: "
         + ", ".join(
@@ -666,6 +711,71 @@ def stage_effects(
         {"noise": noise},
     )
     return doc, found, rep
+
+
+#: How each family is named in the report of what was tested.
+_FAMILY_WORDS = {
+    "guide_bow": "bowed guides",
+    "table_straightness": "curved table axes",
+    "backlash": "backlash beyond the tables",
+    "cyclic": "cyclic errors",
+    "servo_lag": "servo lag of one motor against the others",
+}
+
+
+def effect_sentences(found: Sequence[Any]) -> list[str]:
+    """One sentence per effect, the servo lags in one: a lag common to every motor
+    moves the tip along its own path, which position data cannot see (to first
+    order), so only lags relative to the motors with none named are found and
+    written; several motors "lagging more than the others" would contradict each
+    other."""
+    lags = [e for e in found if isinstance(registry.family(e.name), registry.ServoLag)]
+    out = [e.sentence() for e in found if e not in lags]
+    if lags:
+        fam = registry.family(lags[0].name)
+        assert isinstance(fam, registry.ServoLag)
+        named = {fam.motor(e.name) for e in lags}
+        ref = ", ".join(str(m) for m in MOTORS if m not in named)
+        each = ", ".join(
+            f"motor {fam.motor(e.name)} {e.estimate:+.3f} ms (± {e.stderr:.2g})"
+            for e in sorted(lags, key=lambda e: fam.motor(e.name))
+        )
+        out.append(
+            f"Servo lag against motors {ref} (position data cannot see a lag common to "
+            f"every motor; none is written): {each}."
+        )
+    return out
+
+
+def tested_note(candidates: Sequence[str], found: Sequence[Any], alpha: float, laser: bool) -> str:
+    """What the physical stage tested and did not find, and the test."""
+    named = {e.name for e in found}
+    groups: dict[str, list[str]] = {}
+    for n in candidates:
+        groups.setdefault(registry.family(n).key, []).append(n)
+    parts = []
+    for key, names in groups.items():
+        fam = registry.family(names[0])
+        missing = [n for n in names if n not in named]
+        if not missing:
+            continue
+        if isinstance(fam, registry.MotorFamily):
+            which = "motors " + ", ".join(str(fam.motor(n)) for n in missing)
+        else:
+            which = ", ".join(str(fam.index(n) + 1) for n in missing)
+        if isinstance(fam, registry.CyclicError):
+            which += f" at pitches {min(fam.variants):g}-{max(fam.variants):g} mm"
+        parts.append(f"{_FAMILY_WORDS.get(key, key)} ({which})")
+    allowed = (
+        "the laser tables' values within their standard error and a servo lag common to every motor"
+        if laser
+        else "a servo lag common to every motor"
+    )
+    return (
+        f"tested {len(candidates)} library members, each by an F-test Bonferroni-corrected "
+        f"for all of them at α = {alpha:g} and the BIC, with the contract's terms, "
+        f"{allowed} free beside it; not found: " + ("; ".join(parts) or "none")
+    )
 
 
 def aliased_cyclic(
@@ -831,6 +941,7 @@ def calibrate(
             alpha=alpha,
             max_rel_stderr=max_rel_stderr,
             tables_measured=laser,
+            axis=axis,
         )
         tol = start.interpolation.path_tolerance_mm
         rep.warnings.extend(aliased_cyclic(found, axis, min_amplitude_mm=tol / 2))

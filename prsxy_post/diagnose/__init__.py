@@ -64,6 +64,40 @@ __all__ = [
     "regions",
 ]
 
+
+@dataclass(frozen=True)
+class Nuisance:
+    """What else may explain the data, never named nor written (calibration's
+    physical stage):
+
+    table_knots : motor -> the positions of its table, for motors whose table the
+        laser runs made: each value is known only to the laser's standard error
+    table_sd : table-error column key (:func:`.model.table_error_keys`) -> that
+        standard error [mm], the prior of the value's error (:meth:`.selection.Gram.build`'s
+        ``known``)
+    common_lag : a servo lag common to every motor is free: it moves the tip along
+        its own path, which position data cannot see (to first order), so only
+        lags relative to the others are candidates
+    """
+
+    table_knots: Mapping[int, np.ndarray] = field(default_factory=dict)
+    table_sd: Mapping[str, float] = field(default_factory=dict)
+    common_lag: bool = False
+
+    def keys(self, columns: Mapping[str, np.ndarray]) -> list[str]:
+        out = [k for k in self.table_sd if k in columns]
+        return out + ([COMMON_LAG] if self.common_lag and COMMON_LAG in columns else [])
+
+    def add_columns(self, columns: dict[str, np.ndarray]) -> None:
+        """The common lag's column (the sum of every motor's), when asked for."""
+        lags = [k for k in columns if k.startswith("servo_lag[")]
+        if self.common_lag and lags:
+            columns[COMMON_LAG] = np.sum([columns[k] for k in lags], axis=0)
+
+
+#: Column key of a servo lag common to every motor (:class:`Nuisance`).
+COMMON_LAG = "servo_lag:common"
+
 #: Signatures more alike than this (|partial correlation|) cannot be told apart.
 ALIAS_CORR = 0.98
 
@@ -404,16 +438,20 @@ def _select(
     alpha: float,
     max_rel_stderr: float = selection.UNDETERMINED,
     lower: dict[str, float] | None = None,
+    nuisance: Nuisance | None = None,
+    columns: Mapping[str, np.ndarray] | None = None,
 ) -> tuple[selection.Gram, selection.Test, list[int]]:
     priors = {k: registry.prior(split_key(k)[0]) for k in candidates}
+    extra = nuisance.keys(columns or {}) if nuisance is not None else []
     g = selection.Gram.build(
         normal,
         noise,
         candidates,
-        free,
+        [*free, *extra],
         priors=priors,
         max_rel_stderr=max_rel_stderr,
         lower=lower,
+        known=nuisance.table_sd if nuisance is not None else None,
     )
     # the noise scale of the whole library's fit: 1 when the whitening is right
     sse, used, _ = normal.full_fit(noise)
@@ -677,6 +715,7 @@ def find_effects(
     with_map: bool = False,
     max_rel_stderr: float = 0.25,
     tables_measured: Collection[int] = (),
+    nuisance: Nuisance | None = None,
 ) -> tuple[list[Effect], _Fit, dict[str, float], np.ndarray]:
     """Steps 2-4 of the module docstring: (effects, fit, noise, whitening weights).
 
@@ -691,7 +730,11 @@ def find_effects(
         on the machine as it is, its effects present (calibration's physical
         stage): a member is judged by what it adds beyond what such a table holds,
         and taken out of the table as it is added (:func:`refine`)
+    nuisance : what else may explain the data (:class:`Nuisance`): free in the
+        selection (the table errors within their prior), never named or written;
+        a member is named only if the data tell it apart from them
     """
+    nuis = nuisance or Nuisance()
     measured, segs = data.measured()
     if not segs:
         raise FitError("no measurements to diagnose", expected="pose, ballbar or axis files")
@@ -703,7 +746,15 @@ def find_effects(
         k: registry.lower_bound(split_key(k)[0], current) for k in keys if split_key(k)[1] is None
     }
     lower = {k: v for k, v in lower.items() if np.isfinite(v)}
-    lin0 = predict(current, data, free + keys, with_map=with_map, tables_measured=tables_measured)
+    lin0 = predict(
+        current,
+        data,
+        free + keys,
+        with_map=with_map,
+        tables_measured=tables_measured,
+        table_knots=nuis.table_knots,
+    )
+    nuis.add_columns(lin0.columns)
     resid0 = measured - lin0.pred
     rows = _kind_rows(segs, len(resid0))
     normal = selection.Normal.of(lin0.columns, resid0, rows)
@@ -721,7 +772,9 @@ def find_effects(
             # only roughly (the play after a reversal) no longer inflate it
             noise = estimate_noise(data, z, segs, normal)
             w = _whiten(segs, noise, len(resid0))
-        g, test, sel = _select(normal, noise, free, keys, alpha, max_rel_stderr, lower)
+        g, test, sel = _select(
+            normal, noise, free, keys, alpha, max_rel_stderr, lower, nuis, lin0.columns
+        )
         same = chosen is not None and {g.keys[i] for i in sel} == set(chosen)
         while True:
             picked = [g.keys[i] for i in sel]
@@ -761,18 +814,62 @@ def find_effects(
         # the working response at the new model: the data as its linearisation sees
         # them, relative to ``current`` (the sizes found are added back)
         lin = predict(
-            fit.profile, data, free + keys, with_map=with_map, tables_measured=tables_measured
+            fit.profile,
+            data,
+            free + keys,
+            with_map=with_map,
+            tables_measured=tables_measured,
+            table_knots=nuis.table_knots,
         )
+        nuis.add_columns(lin.columns)
         z = measured - lin.pred
         j = 0
         for k, d in zip(free + fit.keys, [1] * len(free) + fit.dims, strict=True):
             z = z + lin.columns[k] @ fit.x[j : j + d]
             j += d
         normal = selection.Normal.of(lin.columns, z, rows)
-    assert test is not None
+    assert test is not None and g is not None
     found = _effects_of(fit, g, sel, test)
+    if nuisance is not None:
+        _widen_by_nuisance(found, g, sel, test)
     _intervals(found, fit, current, data, measured, w, with_map)
     return found, fit, noise, w
+
+
+def _widen_by_nuisance(
+    found: list[Effect], g: selection.Gram, sel: Sequence[int], test: selection.Test
+) -> None:
+    """Standard errors, χ² and p-values that allow for the nuisance (:class:`Nuisance`).
+
+    The Gauss–Newton fit (:func:`refine`) holds the tables as the laser made them;
+    the selection's Gram matrix has their errors in it (Henderson's equations), so
+    its covariance of the chosen terms is the honest one where it is wider."""
+    if not sel:
+        return
+    beta, C, _ = g.fit(list(sel))
+    _, C_u = g.unscaled(list(sel), beta, C)
+    C_u = C_u * test.sigma2
+    pos = np.concatenate([[0], np.cumsum([g.dims[k] for k in sel])]).astype(int)
+    by_key = {e.key: e for e in found}
+    for t, k in enumerate(sel):
+        e = by_key.get(g.keys[k])
+        if e is None:
+            continue
+        a, b = int(pos[t]), int(pos[t + 1])
+        Ck = C_u[a:b, a:b]
+        if b - a == 1:
+            se = math.sqrt(max(float(Ck[0, 0]), 0.0))
+            v = np.array([e.estimate])
+        else:
+            phase = math.radians(e.phase_deg or 0.0)
+            u = np.array([math.cos(phase), math.sin(phase)])
+            se = math.sqrt(max(float(u @ Ck @ u), 0.0))
+            v = e.estimate * u
+        if se <= e.stderr:
+            continue
+        e.stderr = se
+        e.chi2 = float(v @ np.linalg.solve(Ck, v))
+        e.p_value = float(stats.chi2.sf(e.chi2, b - a))
 
 
 def _weakest(g: selection.Gram, sel: Sequence[int]) -> int:
