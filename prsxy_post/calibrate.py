@@ -593,48 +593,6 @@ def _kind_stats(
     return _stats({k: np.concatenate(v) for k, v in parts.items()})
 
 
-def table_nuisance(
-    now: Profile, axis: Sequence[AxisData], motors: Collection[int]
-) -> diagnose.Nuisance:
-    """What the laser-made tables leave open, for the physical stage: each table
-    value of ``motors`` is the mean of n readings, so it is known to σ / √n (σ the
-    motor's pooled spread of repeated readings, ISO 230-2's repeatability), and a
-    servo lag common to every motor, which position data cannot see."""
-    knots: dict[int, np.ndarray] = {}
-    sd: dict[str, float] = {}
-    tables = {c.motor: np.asarray(c.positions, dtype=float) for c in now.axis_comp}
-    for m in sorted(int(x) for x in motors):
-        at = tables.get(m)
-        rows = [
-            (a.target[a.motor == m], a.measured[a.motor == m], a.direction[a.motor == m])
-            for a in axis
-        ]
-        if at is None or not rows:
-            continue
-        t = np.concatenate([r[0] for r in rows])
-        v = np.concatenate([r[1] for r in rows])
-        d = np.concatenate([r[2] for r in rows])
-        ss, dof = 0.0, 0
-        count: dict[tuple[float, int], int] = {}
-        for x in np.unique(t):
-            for way in (1, -1):
-                grp = v[(t == x) & (d == way)]
-                count[(float(x), way)] = len(grp)
-                if len(grp) > 1:
-                    ss += float(np.sum((grp - grp.mean()) ** 2))
-                    dof += len(grp) - 1
-        if not dof:
-            continue
-        sigma = float(np.sqrt(ss / dof))
-        knots[m] = at
-        for side, sign in (("+", 1), ("-", -1)):
-            for j, x in enumerate(at):
-                n = count.get((float(x), sign), 0)
-                # a position the laser did not read is as uncertain as one reading
-                sd[f"table[{m}]{side}{j}"] = sigma / np.sqrt(max(n, 1))
-    return diagnose.Nuisance(knots, sd, common_lag=True)
-
-
 def stage_effects(
     now: Profile,
     commanded: Profile,
@@ -672,7 +630,7 @@ def stage_effects(
         alpha=alpha,
         max_rel_stderr=max_rel_stderr,
         tables_measured=tables_measured,
-        nuisance=table_nuisance(now, axis, tables_measured),
+        nuisance=diagnose.table_nuisance(now, axis, tables_measured, common_lag=True),
     )
     doc = registry.apply(now.raw, now, fit.changes(), fit.tables_measured)
     after = measured - diagnose.predict(fit.profile, data, []).pred

@@ -50,53 +50,24 @@ from ..measure import CommandedWith
 from ..profile import Profile, profile_from_dict
 from . import leftover, selection
 from .model import Data, Linearised, Segment, column_keys, predict, split_key
+from .nuisance import COMMON_LAG, Nuisance, table_nuisance
 
 __all__ = [
+    "COMMON_LAG",
     "Data",
     "Diagnosis",
     "Effect",
     "Linearised",
+    "Nuisance",
     "Segment",
     "apply_effects",
     "diagnose",
     "estimate_noise",
     "predict",
     "regions",
+    "table_nuisance",
 ]
 
-
-@dataclass(frozen=True)
-class Nuisance:
-    """What else may explain the data, never named nor written (calibration's
-    physical stage):
-
-    table_knots : motor -> the positions of its table, for motors whose table the
-        laser runs made: each value is known only to the laser's standard error
-    table_sd : table-error column key (:func:`.model.table_error_keys`) -> that
-        standard error [mm], the prior of the value's error (:meth:`.selection.Gram.build`'s
-        ``known``)
-    common_lag : a servo lag common to every motor is free: it moves the tip along
-        its own path, which position data cannot see (to first order), so only
-        lags relative to the others are candidates
-    """
-
-    table_knots: Mapping[int, np.ndarray] = field(default_factory=dict)
-    table_sd: Mapping[str, float] = field(default_factory=dict)
-    common_lag: bool = False
-
-    def keys(self, columns: Mapping[str, np.ndarray]) -> list[str]:
-        out = [k for k in self.table_sd if k in columns]
-        return out + ([COMMON_LAG] if self.common_lag and COMMON_LAG in columns else [])
-
-    def add_columns(self, columns: dict[str, np.ndarray]) -> None:
-        """The common lag's column (the sum of every motor's), when asked for."""
-        lags = [k for k in columns if k.startswith("servo_lag[")]
-        if self.common_lag and lags:
-            columns[COMMON_LAG] = np.sum([columns[k] for k in lags], axis=0)
-
-
-#: Column key of a servo lag common to every motor (:class:`Nuisance`).
-COMMON_LAG = "servo_lag:common"
 
 #: Signatures more alike than this (|partial correlation|) cannot be told apart.
 ALIAS_CORR = 0.98
@@ -931,7 +902,17 @@ def diagnose(
     def library() -> Linearised:
         return predict(updated, data, all_keys, with_map=has_map)
 
-    left = leftover.unexplained(data, after, segs, noise, w, library)
+    laser = {int(m) for a in data.axis for m in np.unique(a.motor)}
+    nuis = table_nuisance(updated, data.axis, laser) if laser else None
+
+    def table_errors() -> tuple[dict[str, np.ndarray], dict[str, float]]:
+        assert nuis is not None
+        lin = predict(updated, data, [], with_map=has_map, table_knots=nuis.table_knots)
+        return lin.columns, dict(nuis.table_sd)
+
+    left = leftover.unexplained(
+        data, after, segs, noise, w, library, table_errors if nuis is not None else None
+    )
     note: dict[str, Any] = {
         "data": sorted({s.source for s in segs}),
         "effects": [f"{e.name} {e.estimate:+.6g} {e.unit} ± {e.stderr:.2g}" for e in effects],
