@@ -1,13 +1,18 @@
 """Calibration from measurements: real-axis tables, kinematic parameters, error map.
 
-Three stages, as in the paper (section 4):
+The stages, as in the paper (section 4), real axes first:
 
 1. real-axis tables per motor from laser (axis) runs, with ISO 230-2 figures
    (the E_i(P_i) of Eq. 3);
 2. the kinematic and table parameters of the contract (the g'_i of Eq. 3) from
    pose and ballbar measurements, by nonlinear least squares with an
    identifiability analysis;
-3. the virtual-axis error map (Eq. 4–5) from what the calibrated model leaves.
+3. the library's physical effects beyond the contract (:func:`stage_effects`):
+   diagnose's selection over the whole library, the contract refitted with them;
+   a member is written only when the data tell it from zero, from the contract's
+   terms, from the laser tables' values within their standard errors and from a
+   servo lag common to every motor (which position data cannot see);
+4. the virtual-axis error map (Eq. 4–5) from what the calibrated model leaves.
 
 Stage 2 in detail
 -----------------

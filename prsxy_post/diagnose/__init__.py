@@ -20,8 +20,10 @@ The loop an engineer runs with a ballbar plot, made a procedure
    from the joint fit at the end; an estimate that moves by more than two
    standard errors (and 2 %) when another named effect is left out says so
    (:attr:`Effect.depends_on`).
-5. **Say what is left** (:mod:`.leftover`): every data kind still above its
-   noise, where, by how much, and how much of it any library member could take.
+5. **Say what is left** (:mod:`.leftover`): every data kind whose residual a
+   statistical test tells from its noise at 99.9 % confidence (the laser tables'
+   own errors allowed for when laser runs are given), where, by how much, and how
+   much of it any library member could take.
 6. **Close the loop.** A profile with a virtual-axis error map: the map is part
    of the model, but when pose data are given the physical effects are judged
    on what the map took (real axes first, as in the paper) and the map is then
@@ -29,7 +31,10 @@ The loop an engineer runs with a ballbar plot, made a procedure
 
 The library of effects is the registry in :mod:`prsxy_post.effects`; the
 calibration's physical stage (:func:`prsxy_post.calibrate.calibrate`) runs the
-same selection with the contract parameters free (``free=``).
+same selection with the contract parameters free (``free=``) and, beside them,
+what the data cannot tell a member from (``nuisance=``, :mod:`.nuisance`): the
+laser tables' values within their standard errors and a servo lag common to
+every motor.
 """
 
 from __future__ import annotations
