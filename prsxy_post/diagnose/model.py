@@ -198,8 +198,7 @@ def _held_side(
     (:meth:`prsxy_post.effects.Backlash.motor_term`: −1/2 forward, +1/2 reverse)."""
     if approach is not None or table is None or not table.max_play:
         return np.where(direction >= 0, 1.0, -1.0)
-    fam = registry.family("backlash[1]")
-    assert isinstance(fam, registry.MotorFamily)
+    fam = next(f for f in registry.FAMILIES if isinstance(f, registry.Backlash))
     ctx = registry.MotorContext(commands, table, None)
     d = fam.motor_term(commands, direction, np.zeros_like(commands), None, ctx)[:, 0]
     return np.where(d < 0, 1.0, np.where(d > 0, -1.0, np.where(direction >= 0, 1.0, -1.0)))

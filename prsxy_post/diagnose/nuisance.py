@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import effects as registry
 from ..measure import AxisData
 from ..profile import Profile
 
@@ -44,10 +45,13 @@ class Nuisance:
 
     def add_columns(self, columns: dict[str, np.ndarray]) -> None:
         """The common lag's column (the sum of every motor's), when asked for."""
-        lags = [k for k in columns if k.startswith("servo_lag[")]
+        lags = [k for k in columns if k in _LAG_MEMBERS]
         if self.common_lag and lags:
             columns[COMMON_LAG] = np.sum([columns[k] for k in lags], axis=0)
 
+
+#: The servo-lag members (one column each).
+_LAG_MEMBERS = frozenset(registry.SERVO_LAG.members())
 
 #: Column key of a servo lag common to every motor (:class:`Nuisance`).
 COMMON_LAG = "servo_lag:common"
