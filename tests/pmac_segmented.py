@@ -40,7 +40,7 @@ The rules (SRM = Software Reference, TUM = User Manual), each as modelled here:
   are computed and the inverse-kinematic program turns them into motor positions
   (SRM Isx13, Isx50; TUM "Conversion from Axis to Motor Position": "every segment
   of the move"). Here the inverse is the project's chain (the map, then the
-  calibrated IK): test_writers_pmac_ kinematics holds the exported OPEN INVERSE to
+  calibrated IK): test_writers_pmac_kinematics holds the exported OPEN INVERSE to
   it within 0.01 count.
 - Between segment ends the motors are fine-interpolated at the servo clock by a
   cubic spline, modelled as the spline of Turbo PMAC's SPLINE mode: "LINEAR and

@@ -45,18 +45,27 @@ MACHINES = [("nominal", None), ("random", 11), ("effects", 12)]
 
 
 @functools.cache
-def written(kind: str, seed: int | None, name: str) -> tuple[list[gcode.Motion], str]:
+def written(
+    kind: str, seed: int | None, name: str, blend: bool = True, seg_ms: float | None = None
+) -> tuple[list[gcode.Motion], str]:
     truth = machine(kind, seed)
     text = (ROOT / "samples" / name).read_text()
     motions = list(gcode.iter_motions(gcode.split_lines(text), program.interpreter_config(truth)))
-    return motions, pc.write_program(motions, truth, PROV, motions[0].start)
+    return motions, pc.write_program(motions, truth, PROV, motions[0].start, seg_ms, blend)
 
 
-def execute(kind: str, seed: int | None, name: str, seg_ms: float | None = None, run_on=None):
+def execute(
+    kind: str,
+    seed: int | None,
+    name: str,
+    seg_ms: float | None = None,
+    run_on=None,
+    blend: bool = True,
+):
     """Run the program on the kinematics of the machine it was written for (or of
     ``run_on``), executed by the true machine; the trace and the run."""
     truth = machine(kind, seed)
-    motions, prog = written(kind, seed, name)
+    motions, prog = written(kind, seed, name, blend)
     run = run_segmented(prog, run_on or truth, seg_ms)
     q = ctl.machine_executes(truth, run.t_dense, run.P_dense, run.tool_dense)
     tr = ctl.judge(
@@ -65,18 +74,23 @@ def execute(kind: str, seed: int | None, name: str, seg_ms: float | None = None,
     return tr, run, motions
 
 
+@pytest.mark.parametrize("blend", [False, True])
 @pytest.mark.parametrize("path", SAMPLES, ids=lambda p: p.name)
-def test_the_segment_ends_are_on_the_gcode_path(path) -> None:
+def test_the_segment_ends_are_on_the_gcode_path(path, blend) -> None:
     """The axis positions the controller computes at each segment end (read back
-    from the written moves) lie on the G-code's lines and arcs."""
-    _, run, motions = execute("nominal", None, path.name)
+    from the written moves) lie on the G-code's lines and arcs: exactly when every
+    move ends at rest; within the blends' bound (module docstring of
+    pmac_cartesian) of the path tolerance where moves blend."""
+    _, run, motions = execute("nominal", None, path.name, blend=blend)
+    worst = 0.0
     for ln in np.unique(run.line):
         ms = [m for m in motions if m.line == ln and m.kind not in ("dwell", "function")]
         if not ms:
             continue
         sel = run.line == ln
         d = np.min([path_distance(m, run.q[sel])[0] for m in ms], axis=0)
-        assert d.max() < 1e-9, (ln, d.max())
+        worst = max(worst, float(d.max()))
+    assert worst < (0.5e-3 if blend else 1e-9), worst
 
 
 @pytest.mark.parametrize(("kind", "seed"), MACHINES)
