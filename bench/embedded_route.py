@@ -85,7 +85,7 @@ def embedded(truth, text: str, seg_ms: float) -> tuple[float, float, float]:
     P = through_tables(truth, run.P_dense)
     q = ctl.machine_executes(truth, run.t_dense, P, run.tool_dense)
     tr = ctl.judge(
-        motions, q, run.t_dense, run.seg, run.line, run.tool_dense, truth.limits.rapid_mm_min
+        motions, q, run.t_dense, run.jseg, run.jline, run.tool_dense, truth.limits.rapid_mm_min
     )
     return tr.path_mm * 1e3, tr.ab_deg * 3600, float(run.t[-1])
 

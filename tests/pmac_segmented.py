@@ -72,7 +72,7 @@ import numpy as np
 from prsxy_post import chain, errormap, kinematics
 from prsxy_post.profile import Profile
 
-from .controllers import SERVO_MS
+from .controllers import MM_PER_DEG, SERVO_MS
 
 _WORD = re.compile(r"([XYZABIJK])(-?\d+(?:\.\d+)?)")
 NORMAL_AXIS = {"K": 2, "J": 1, "I": 0}
@@ -87,6 +87,12 @@ class SegmentedRun:
     P : (n, 5) motor positions at the segment ends [mm]
     t_dense, P_dense : the spline at the servo clock
     seg : (m,) the segment end each dense sample's interval ends at
+    jseg, jline : what :func:`controllers.judge` takes as seg and point_line: for
+        each dense sample the two moves it is judged against, jline[jseg − 1] and
+        jline[jseg]. At rest, the lines of its interval's segment ends; in a
+        sequence of blended moves, the move its progress along the path is in and
+        the neighbour it is nearer (a move shorter than a segment's advance is
+        crossed between two segment ends)
     tool_dense : (m,) tool length offset of each dense sample
     functions : (segment index, words) of every machine function
     """
@@ -101,6 +107,8 @@ class SegmentedRun:
     seg: np.ndarray
     tool_dense: np.ndarray
     functions: list[tuple[int, str]]
+    jseg: np.ndarray
+    jline: np.ndarray
 
 
 def _ramped(x: np.ndarray, A: float) -> np.ndarray:
@@ -196,6 +204,36 @@ class _Move:
     T: float
     ta: float
     line: int
+    length: float
+
+
+@dataclass
+class _Chain:
+    """A sequence of moves run from rest to rest: its time span [s], the moves'
+    starts between ramp middles [s], times, TAs, lengths and lines."""
+
+    t0: float
+    t1: float
+    starts: np.ndarray
+    T: list[float]
+    ta: list[float]
+    lengths: np.ndarray
+    lines: list[int]
+
+    def judged_lines(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For times t in the span: the line whose move the progress is in, and
+        the line of the neighbour it is nearer."""
+        progress = sum(
+            self.lengths[i] * share(t, float(self.starts[i]), self.T[i], self.ta[i], self.ta[i + 1])
+            for i in range(len(self.T))
+        )
+        bounds = np.concatenate([[0.0], np.cumsum(self.lengths)])
+        n = len(self.T)
+        o = np.clip(np.searchsorted(bounds[:-1], progress, side="right") - 1, 0, n - 1)
+        frac = (progress - bounds[o]) / np.where(self.lengths[o] > 0, self.lengths[o], 1.0)
+        nb = np.clip(np.where(frac < 0.5, o - 1, o + 1), 0, n - 1)
+        lines = np.array(self.lines)
+        return lines[o], lines[nb]
 
 
 class _Controller:
@@ -221,6 +259,8 @@ class _Controller:
         self.await_rest = False
         #: the moves since the last rest, blended into each other
         self.chain: list[_Move] = []
+        #: every sequence run so far
+        self.chains: list[_Chain] = []
         #: hold points not yet followed by a move: the spline leaves them towards
         #: the next move's points (its support is four points), so they are judged
         #: with the next move's line and tool (the motors stand while a tool changes)
@@ -264,8 +304,28 @@ class _Controller:
             u[tt >= total] = 1.0
             q = q + mv.pose(u) - mv.pose(np.zeros(1))
         q[-1] = self.chain[-1].b
-        # a segment end belongs to the move whose interval between ramp middles holds it
-        owner = np.clip(np.searchsorted(starts, tt, side="right") - 1, 0, len(T) - 1)
+        # a segment end belongs to the move its progress along the path is in (the
+        # moves' shares times their lengths, A/B at the judge's mm per degree): in a
+        # blend of moves at different speeds the pose runs ahead of or behind the
+        # times between ramp middles
+        lengths = np.array([mv.length for mv in self.chain])
+        progress = sum(
+            mv.length * share(tt, float(starts[i]), T[i], ta[i], ta[i + 1])
+            for i, mv in enumerate(self.chain)
+        )
+        bounds = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+        owner = np.clip(np.searchsorted(bounds, progress, side="right") - 1, 0, len(T) - 1)
+        self.chains.append(
+            _Chain(
+                self.t[-1],
+                self.t[-1] + float(tt[-1]),
+                starts + self.t[-1],
+                T,
+                ta,
+                lengths,
+                [mv.line for mv in self.chain],
+            )
+        )
         for i in self.held:
             self.line[i] = self.chain[0].line
             self.tool[i] = self.tlo
@@ -319,7 +379,8 @@ class _Controller:
         else:
             assert self.TM is not None
             T = self.TM / 1000.0
-        self.chain.append(_Move(start, end, pose, max(T, ta), ta, self.cur_line))
+        length5 = math.hypot(length, float(np.linalg.norm(end[3:] - start[3:])) * MM_PER_DEG)
+        self.chain.append(_Move(start, end, pose, max(T, ta), ta, self.cur_line, length5))
 
     def command(self, raw: str) -> None:
         """One line of the program."""
@@ -374,6 +435,15 @@ def run_segmented(
     k = np.clip(np.searchsorted(t, ticks, side="left") - 1, 0, len(t) - 2)
     s = (ticks - t[k]) / (t[k + 1] - t[k])
     seg = np.concatenate([[0], k + 1])
+    line = np.array(c.line)
+    t_dense = np.concatenate([[0.0], ticks])
+    ja, jb = line[np.maximum(seg - 1, 0)], line[seg]
+    for ch in c.chains:
+        sel = (t_dense > ch.t0) & (t_dense <= ch.t1)
+        if np.any(sel):
+            ja[sel], jb[sel] = ch.judged_lines(t_dense[sel])
+    jline = np.column_stack([ja, jb]).ravel()
+    jseg = 2 * np.arange(len(t_dense)) + 1
     return SegmentedRun(
         t,
         np.array(c.q),
@@ -385,4 +455,6 @@ def run_segmented(
         seg,
         tool[seg],
         c.functions,
+        jseg,
+        jline,
     )

@@ -17,6 +17,9 @@ between.
   alone is timed with TM (ms). Rapids are LINEAR moves at the profile's rapid
   speed: Turbo PMAC's RAPID mode moves each motor on its own, not along the
   straight line G0 follows.
+- Arcs: the spline between segment ends cuts an arc of radius R at speed v by
+  R (1 − cos(v h / R)) / 3, h = Isx13; an arc runs no faster than keeps that to
+  half the path tolerance (F lowered, never raised).
 - Acceleration: TA, a whole number of ms ("Turbo PMAC can use only integer values
   for TA and TS", User Manual, "Acceleration Parameters"), long enough that the
   move reaches its speed within the profile's acceleration limit; TS0 (no
@@ -192,13 +195,25 @@ class CartesianWriter:
         a = lim.max_accel_deg_s2 if rotary else lim.max_accel_mm_s2
         return max(1, math.ceil(1000.0 * speed / a - 1e-9))
 
-    def _timing(self, m: Motion, length_xyz: float, length_ab: float) -> tuple[str, int, float]:
-        """F (mm/s) and TA for X Y Z moves; TM and TA for A/B-only moves; with the TA
-        [ms] and the move's time T = max(D / F or TM, TA) [s]."""
+    def arc_speed(self, radius: float) -> float:
+        """The fastest an arc of ``radius`` [mm] may run [mm/s]: the spline between
+        segment ends cuts it by R (1 − cos(v h / R)) / 3 (tests/test_writers_pmac_
+        cartesian.py holds the closed form), kept to half the path tolerance."""
+        x = 1.0 - 1.5 * self.tolerance / radius
+        return math.inf if x <= -1.0 else radius / self.seg_s * math.acos(x)
+
+    def _timing(
+        self, m: Motion, length_xyz: float, length_ab: float, radius: float = 0.0
+    ) -> tuple[str, int, float]:
+        """F (mm/s) and TA for X Y Z moves (an arc no faster than :meth:`arc_speed`);
+        TM and TA for A/B-only moves; with the TA [ms] and the move's time T =
+        max(D / F or TM, TA) [s]."""
         lim = self.profile.limits
         rapid = m.kind == "rapid"
         if length_xyz > 0.0:
             v = (lim.rapid_mm_min if rapid else m.feed) / 60.0
+            if radius > 0.0:
+                v = min(v, self.arc_speed(radius))
             ta = self._accel_ms(v, False)
             return f"F{_f(v)} TA{ta}", ta, max(length_xyz / v, ta / 1000.0)
         rate = (lim.rapid_deg_min if rapid else m.feed) / 60.0
@@ -342,7 +357,9 @@ class CartesianWriter:
             ijk = c - start[:3]
             ijk[axis] = 0.0
             arc_len = math.hypot(radius * abs(piece), float(end[axis] - start[axis]))
-            timing, ta, T = self._timing(m, arc_len, float(np.linalg.norm(end[3:] - start[3:])))
+            timing, ta, T = self._timing(
+                m, arc_len, float(np.linalg.norm(end[3:] - start[3:])), radius
+            )
             vec = " ".join(
                 f"{a}{_f(v)}" for i, (a, v) in enumerate(zip("IJK", ijk, strict=True)) if i != axis
             )
