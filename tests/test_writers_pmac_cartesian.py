@@ -379,3 +379,34 @@ def test_generated_finishing_programs_blend_and_stay_on_the_path(kind, seed, seg
     # the worst sample (a tilting move's spline cut) is moved by < 1 nm by a blend
     assert paths[0] <= max(paths[1], 0.5e-3) + 1e-6, paths
     assert times[0] < 0.8 * times[1], times
+
+
+TANGENT = """G21 G90 G17
+G0 X0 Y0 Z-2
+G1 X20 F1200
+G3 X22 Y2 I0 J2
+G2 X27 Y7 I5 J0
+G0 Z5
+M2
+"""
+
+
+@pytest.mark.parametrize("seg_ms", [0.05, 2.0, 5.0, 10.0])
+def test_tangent_joins_blend_within_the_bound(seg_ms) -> None:
+    """A line into a tangent R2 arc into a tangent R5 arc the other way, at F1200
+    (TA 10 ms): both joins blend, and the executed path stays within the larger
+    of the two joins' :func:`pmac_cartesian.blend_deviation` (the arcs' v²/R
+    terms; their own spline cut included)."""
+    truth, motions, prog, blended = _blended(TANGENT, seg_ms, path_tolerance_mm=1.0)
+    assert blended == 2
+    run = run_segmented(prog, truth, seg_ms)
+    q = ctl.machine_executes(truth, run.t_dense, run.P_dense, run.tool_dense)
+    tr = ctl.judge(motions, q, run.t_dense, run.jseg, run.jline, run.tool_dense, 10000.0)
+    x, y = np.array([20.0, 0, 0, 0, 0]), np.array([0, 20.0, 0, 0, 0])
+    h = seg_ms / 1000.0
+    bound = max(
+        pc.blend_deviation(x, x, 0.0, 400.0 / 2.0, 0.010, h),
+        pc.blend_deviation(y, y, 400.0 / 2.0, 400.0 / 5.0, 0.010, h),
+    )
+    assert tr.path_mm <= bound, (tr.path_mm, bound)
+    assert tr.speed_ratio <= 1 + SPEED_ROUNDING
