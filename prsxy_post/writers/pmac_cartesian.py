@@ -41,24 +41,30 @@ between.
       e = max(v1, v2) sin θ E[X⁺] + (a1 + a2) TA² / 32 + max(a1, a2) h² / 6,
       E[X⁺] ≤ √(TA² / 12 + h² / 3) / 2,
 
-  X the averaging window's offset (a box of TA, then the spline's kernel; E[X⁺]
-  = E|X| / 2 ≤ σ / 2), a1, a2 the moves' own path accelerations v² / R at the
-  junction (0 on a line). For the box alone (h → 0) on lines the deviation is
-  exactly v TA sin θ / 8 at equal speeds (the window's mean of the corner's
-  inside part: TA / 8), which tests/test_writers_pmac_cartesian.py holds the
-  emulator to. Poses are compared in X Y Z with A and B scaled by the path
-  tolerance over the tool-axis tolerance, so one e bounds both.
+  X the averaging window's offset (with TS0 a box of TA, then the spline's
+  kernel; E[X⁺] = E|X| / 2 ≤ σ / 2), v1, v2 the speeds the moves run at (a move
+  shorter than TA at F runs D / TA), a1, a2 the moves' own path accelerations
+  v² / R at the junction (0 on a line). The second term bounds how far the arcs
+  leave their tangents within the window, the third is the spline's cut of a path
+  curving at a (as on an arc, see Arcs). For the box alone (h → 0) on lines the
+  deviation is exactly v TA sin θ / 8 at equal speeds (the window's mean of the
+  corner's inside part: TA / 8), which tests/test_writers_pmac_cartesian.py holds
+  the emulator to, with the bound over the executed corners and tangent joins.
+  Poses are compared in X Y Z with A and B scaled by the path tolerance over the
+  tool-axis tolerance, so one e bounds both.
   A junction is blended when e ≤ the profile's path tolerance, both moves are
   feeds at the same F (or rapids) with the same TA (so the ramps of two blends
-  never overlap: "TA(i+1) ≤ 2 (T(i) − TA(i) / 2)"), in the same NORMAL plane, and
+  never overlap: a blend's TA is cut to 2 (T(i) − TA(i) / 2) when longer, PMAC
+  training manual, 5.6 "Linear blended moves"), in the same NORMAL plane, and
   turn by less than 90° (a reversal would turn back before its end); a tangent
   join (line into a tangent arc, the turns of a helix, a polyline of small turns)
   blends at full speed when e holds. Anywhere else the move ends at rest: DWELL0
-  after it ("DWELL0" waits for the motion to end). The manuals do not say how a
-  blend across a NORMAL change, an F change (PMAC ramps the speed centred on the
-  junction, so the slower move would run over its F for TA / 2) or into an A/B
-  move timed by TM behaves beyond that; those stop. The speed is not lowered
-  into a corner: a corner that would cut too far stops.
+  after it ("DWELL0" waits for the motion to end). How a blend across a NORMAL
+  change, or into or out of an A/B move timed by TM, runs is not described in the
+  manuals we have: those stop (the conservative choice). A blend between
+  different F would run the slower move above its F for TA / 2 (the speed ramps
+  centred on the junction): that stops too. The speed is not lowered into a
+  corner: a corner that would be cut too far stops.
 - Machine functions as the PVT programs carry them: DWELL0, then the words
   (M n calls PROG 1001, T n PROG 1002, D n PROG 1003, G n PROG 1000, S in Q127).
 - A tool length offset (G43/G49) goes to Q100, which the kinematic programs add
