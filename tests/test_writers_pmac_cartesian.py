@@ -307,7 +307,16 @@ def _blended(text: str, seg_ms: float, **tol):
     return truth, motions, w.finish(), w.blended
 
 
-@pytest.mark.parametrize("theta", [0.5, 10.0, 45.0, 89.0])
+def test_a_corner_the_blend_cannot_turn_within_the_acceleration_stops() -> None:
+    """At 89° the velocity changes by 2 v sin(θ/2) = 28 mm/s, more than TA = 10 ms
+    at 2000 mm/s² allows: the move stops there however loose the tolerance."""
+    _, _, prog, blended = _blended(_corner(89.0), 0.05, path_tolerance_mm=1.0)
+    assert blended == 0
+    lines = prog.splitlines()
+    assert all(lines[i + 1] == "DWELL0" for i, x in enumerate(lines) if x.startswith("X"))
+
+
+@pytest.mark.parametrize("theta", [0.5, 10.0, 45.0])
 def test_the_blend_cuts_the_corner_by_v_ta_sin_theta_over_8(theta) -> None:
     """With segments far shorter than TA (the blend itself, no spline), the path
     of two lines at F1200 blended over TA = 10 ms leaves the corner by

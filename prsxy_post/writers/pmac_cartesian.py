@@ -53,9 +53,12 @@ between.
   Poses are compared in X Y Z with A and B scaled by the path tolerance over the
   tool-axis tolerance, so one e bounds both.
   A junction is blended when e ≤ the profile's path tolerance, both moves are
-  feeds at the same F (or rapids) with the same TA (so the ramps of two blends
-  never overlap: a blend's TA is cut to 2 (T(i) − TA(i) / 2) when longer, PMAC
-  training manual, 5.6 "Linear blended moves"), in the same NORMAL plane, and
+  feeds at the same F (or rapids), the second move's TA fits the first (a blend's
+  TA is cut to 2 (T(i) − TA(i) / 2) when longer, PMAC training manual, 5.6
+  "Linear blended moves"; the writer keeps it within, so no two ramps overlap)
+  and changes the velocity within the acceleration limits (an arc slowed for
+  the spline blends into a line at F when its TA covers the change), in the same
+  NORMAL plane, and
   turn by less than 90° (a reversal would turn back before its end); a tangent
   join (line into a tangent arc, the turns of a helix, a polyline of small turns)
   blends at full speed when e holds. Anywhere else the move ends at rest: DWELL0
@@ -158,12 +161,14 @@ def blend_deviation(
 @dataclass(frozen=True)
 class _End:
     """A move's side at a junction: velocity (scaled pose units), path
-    acceleration, and what must match for a blend (rate, TA, plane)."""
+    acceleration, what must match for a blend (rate and timing), the move's TA
+    [ms] and its time T [s]."""
 
     v: np.ndarray
     acc: float
     key: tuple[object, ...]
     ta_ms: int
+    T: float
 
 
 class CartesianWriter:
@@ -240,7 +245,19 @@ class CartesianWriter:
             return
         end, idx = self.last
         self.last = None
-        if end.key != start.key or end.ta_ms != start.ta_ms or float(end.v @ start.v) <= 0.0:
+        ta = start.ta_ms / 1000.0
+        lim = self.profile.limits
+        dv = start.v - end.v
+        if (
+            end.key != start.key
+            or float(end.v @ start.v) <= 0.0
+            # the blend's ramp must fit the move before: TA(i+1) ≤ 2 (T(i) − TA(i) / 2)
+            or end.T < (end.ta_ms / 1000.0 + ta) / 2.0 - 1e-12
+            # and change the velocity within the acceleration limits
+            or float(np.linalg.norm(dv[:3])) > lim.max_accel_mm_s2 * ta * (1 + 1e-9)
+            or float(np.linalg.norm(dv[3:])) / self.mm_per_deg
+            > lim.max_accel_deg_s2 * ta * (1 + 1e-9)
+        ):
             self.stopped += 1
             return
         e = blend_deviation(end.v, start.v, end.acc, start.acc, start.ta_ms / 1000.0, self.seg_s)
@@ -327,10 +344,10 @@ class CartesianWriter:
             v = self._scaled(e - s) / T
             rapid = m.kind == "rapid"
             key = ("rapid" if rapid else "feed", 0.0 if rapid else m.feed, dxyz > 0.0)
-            self._join(_End(v, 0.0, key, ta))
+            self._join(_End(v, 0.0, key, ta, T))
             self.lines.append(f"; line {m.line}")
             self._set_mode("LINEAR")
-            self._emit(timing, _pose(e), _End(v, 0.0, key, ta))
+            self._emit(timing, _pose(e), _End(v, 0.0, key, ta, T))
             return
         if m.kind == "arc":
             self._arc(m)
@@ -373,7 +390,7 @@ class CartesianWriter:
             acc = (radius * piece / T) ** 2 / radius if radius > 0.0 else 0.0
             v_in, v_out = (self._arc_velocity(start, end, c, n, piece, T, p) for p in (start, end))
             if first:
-                self._join(_End(v_in, acc, key, ta))
+                self._join(_End(v_in, acc, key, ta, T))
                 self.lines.append(f"; line {m.line}")
                 if m.plane != self.plane:
                     self.lines.append(PLANE_NORMAL[m.plane])
@@ -381,8 +398,8 @@ class CartesianWriter:
                 self._set_mode("CIRCLE2" if sweep > 0 else "CIRCLE1")
                 first = False
             else:  # the turns of one arc meet tangentially
-                self._join(_End(v_in, acc, key, ta))
-            self._emit(timing, f"{_pose(end)} {vec}", _End(v_out, acc, key, ta))
+                self._join(_End(v_in, acc, key, ta, T))
+            self._emit(timing, f"{_pose(end)} {vec}", _End(v_out, acc, key, ta, T))
             start = end
 
     def _arc_velocity(
