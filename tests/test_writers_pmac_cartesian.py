@@ -419,3 +419,32 @@ def test_tangent_joins_blend_within_the_bound(seg_ms) -> None:
     )
     assert tr.path_mm <= bound, (tr.path_mm, bound)
     assert tr.speed_ratio <= 1 + SPEED_ROUNDING
+
+
+@pytest.mark.parametrize("seg_ms", [0.05, 5.0])
+@pytest.mark.parametrize("length", [0.05, 0.12])
+def test_a_corner_into_a_move_shorter_than_ta_stays_within_the_bound(length, seg_ms) -> None:
+    """A line at F1200 into a 20° turn onto a move so short that it runs at
+    length / TA (PMAC: TA is the least time of a blended move), then a third move
+    back along the first direction: the speeds at the joins differ, and the
+    executed path stays within the bound with max(v1, v2) and within F."""
+    t = math.radians(20.0)
+    x1, y1 = 20.0 + length * math.cos(t), length * math.sin(t)
+    text = (
+        f"G21 G90 G17\nG0 X0 Y0 Z-2\nG1 X20 F1200\nG1 X{x1:.6f} Y{y1:.6f}\n"
+        f"G1 X{x1 + 10:.6f} Y{y1:.6f}\nG0 Z5\nM2\n"
+    )
+    truth, motions, prog, blended = _blended(text, seg_ms, path_tolerance_mm=1.0)
+    assert blended == 2
+    run = run_segmented(prog, truth, seg_ms)
+    q = ctl.machine_executes(truth, run.t_dense, run.P_dense, run.tool_dense)
+    tr = ctl.judge(motions, q, run.t_dense, run.jseg, run.jline, run.tool_dense, 10000.0)
+    x = np.array([20.0, 0, 0, 0, 0])
+    short = (length / 0.010) * np.array([math.cos(t), math.sin(t), 0, 0, 0])
+    h = seg_ms / 1000.0
+    bound = max(
+        pc.blend_deviation(x, short, 0.0, 0.0, 0.010, h),
+        pc.blend_deviation(short, x, 0.0, 0.0, 0.010, h),
+    )
+    assert tr.path_mm <= bound, (tr.path_mm, bound)
+    assert tr.speed_ratio <= 1 + SPEED_ROUNDING
