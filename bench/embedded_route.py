@@ -18,6 +18,7 @@ hysteresis).
     python bench/embedded_route.py                 # Markdown table
     python bench/embedded_route.py --seg-ms 10 5 2 # Isx13 values (default 10 5)
     python bench/embedded_route.py --play          # machines with backlash
+    python bench/embedded_route.py --blending 2000 # blended against stop-and-go
 """
 
 from __future__ import annotations
@@ -77,24 +78,72 @@ def pvt(truth, text: str) -> tuple[float, float, float]:
     return tr.path_mm * 1e3, tr.ab_deg * 3600, float(run.t[-1])
 
 
-def embedded(truth, text: str, seg_ms: float) -> tuple[float, float, float]:
-    """The same for the embedded route with Isx13 = seg_ms."""
+def embedded(truth, text: str, seg_ms: float, blend: bool = True) -> tuple[float, float, float]:
+    """The same for the embedded route with Isx13 = seg_ms, the program written for
+    it (blends judged for that Isx13, arcs slowed for its spline); ``blend=False``
+    ends every move at rest."""
     motions = list(gcode.iter_motions(gcode.split_lines(text), program.interpreter_config(truth)))
-    prog = pmac_cartesian.write_program(motions, truth, PROV, motions[0].start)
+    prog = pmac_cartesian.write_program(motions, truth, PROV, motions[0].start, seg_ms, blend)
     run = run_segmented(prog, truth, seg_ms)
     P = through_tables(truth, run.P_dense)
     q = ctl.machine_executes(truth, run.t_dense, P, run.tool_dense)
     tr = ctl.judge(
-        motions, q, run.t_dense, run.seg, run.line, run.tool_dense, truth.limits.rapid_mm_min
+        motions, q, run.t_dense, run.jseg, run.jline, run.tool_dense, truth.limits.rapid_mm_min
     )
     return tr.path_mm * 1e3, tr.ab_deg * 3600, float(run.t[-1])
+
+
+def junctions(truth, text: str, seg_ms: float) -> tuple[int, int]:
+    """How many junctions between moves blend and how many stop."""
+    motions = list(gcode.iter_motions(gcode.split_lines(text), program.interpreter_config(truth)))
+    w = pmac_cartesian.CartesianWriter(truth, PROV, seg_ms=seg_ms)
+    w.begin()
+    w.start(motions[0].start)
+    for m in motions:
+        w.motion(m)
+    return w.blended, w.blended + w.stopped
+
+
+def blending(seg_ms: list[float], lines: int) -> None:
+    """Blended against every move at rest: path error and time (second table)."""
+    from bench import generate
+
+    print()
+    print("| program | machine | Isx13 | every move at rest | blended | junctions blended |")
+    print("|---|---|---:|---:|---:|---:|")
+    progs = [(p.name, p.read_text()) for p in sorted((ROOT / "samples").glob("*.ngc"))]
+    progs.append((f"generated finishing, {lines} lines", generate(lines, 0)))
+    for name, text in progs:
+        for kind, seed in [("nominal", None), ("random", 11)]:
+            truth = machine(kind, seed)
+            label = kind if seed is None else f"{kind} {seed}"
+            for h in seg_ms:
+                cells = []
+                for blend in (False, True):
+                    p_um, a_s, t = embedded(truth, text, h, blend)
+                    cells.append(f"{p_um:.3f} µm / {a_s:.2f}″ / {t:.2f} s")
+                nb, nj = junctions(truth, text, h)
+                print(
+                    f"| {name} | {label} | {h:g} ms | {cells[0]} | {cells[1]} | {nb} of {nj} |",
+                    flush=True,
+                )
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seg-ms", type=float, nargs="+", default=[10.0, 5.0])
     ap.add_argument("--play", action="store_true", help="machines with backlash in every motor")
+    ap.add_argument(
+        "--blending",
+        type=int,
+        metavar="LINES",
+        help="instead: blended against every move at rest, on the samples and a "
+        "generated finishing program of LINES lines",
+    )
     args = ap.parse_args()
+    if args.blending:
+        blending(args.seg_ms, args.blending)
+        return
     heads = ["PVT, servo 0.442 ms"] + [f"embedded, Isx13 = {s:g} ms" for s in args.seg_ms]
     print("| program | machine | " + " | ".join(heads) + " |")
     print("|---|---|" + "---:|" * len(heads))

@@ -1,7 +1,8 @@
 """The paper's embedded route from the command line's side: a G-code program as
 the Cartesian Turbo PMAC program that runs through the calibrated kinematics the
 controller holds (:mod:`prsxy_post.writers.pmac_kinematics` writes those,
-:mod:`prsxy_post.writers.pmac_cartesian` the moves)."""
+:mod:`prsxy_post.writers.pmac_cartesian` the moves, blended where Turbo PMAC's
+blend stays within the path tolerance at the profile's Isx13)."""
 
 from __future__ import annotations
 

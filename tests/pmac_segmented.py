@@ -14,15 +14,34 @@ The rules (SRM = Software Reference, TUM = User Manual), each as modelled here:
   Axes").
 - ``TA`` (whole ms) the acceleration time, ``TS0`` no S-curve: a move from rest
   to rest accelerates over TA, runs at D / T, decelerates over TA, T = max(D / F
-  or TM, TA) the time between the ramps' middles (TUM "Linear Blended Moves",
-  "Acceleration Parameters"). Every move here is followed by DWELL0, so no two
-  moves blend; :func:`run_segmented` refuses a move that is not.
-- With Isx13 > 0 each move is cut into segments of Isx13 ms from its start; at
-  each segment's end the axis positions are computed and the inverse-kinematic
-  program turns them into motor positions (SRM Isx13, Isx50; TUM "Conversion
-  from Axis to Motor Position": "every segment of the move"). Here the inverse
-  is the project's chain (the map, then the calibrated IK): test_writers_pmac_
-  kinematics holds the exported OPEN INVERSE to it within 0.01 count.
+  or TM, TA) the time between the ramps' middles ("the acceleration time is the
+  minimum time for an individual blended move", TUM "Acceleration Parameters",
+  "Linear Blended Moves"; PMAC User Manual, "Short Moves").
+- Blending: moves with no DWELL between them blend: "If more than one move is
+  specified in succession with no pause in between, the first move will blend
+  into the second with the same type of controlled acceleration as is done to and
+  from a stop" (TUM "Linear Blended Moves"); CIRCLE moves are blended moves as
+  LINEAR ones are (SRM TS: "LINEAR and CIRCLE mode blended moves"). Modelled as
+  each move keeping its own velocity profile, its ramps centred on the times
+  between moves, and the path the sum of the moves' displacements (so the
+  velocity of the first ramps down over the TA while the second ramps up). The
+  TA of a blend is the TA in force at the second move; the final stop uses the
+  TA in force at the DWELL ("If the final deceleration to a stop should use a
+  different TA or TS ... declare the new TA ... after the final move command in
+  the sequence, but before the DWELL", PMAC User Manual, "Linear Blended Moves").
+  A blend's TA may not be longer than twice what the move before has left after
+  its own ramp, TA(i+1) ≤ 2 (T(i) − TA(i) / 2), else it is cut to that (PMAC
+  training manual, 5.6 "Linear blended moves"), so no two ramps overlap. A DWELL
+  stops the blending and the move before ends at rest (SRM DWELL; PUM "When No
+  Calculation Ahead"); a machine function, Q100= or PMATCH must follow a DWELL
+  here (the writer puts one there; :func:`run_segmented` refuses them otherwise).
+- With Isx13 > 0 each move, or each sequence of blended moves, is cut into
+  segments of Isx13 ms from its start; at each segment's end the axis positions
+  are computed and the inverse-kinematic program turns them into motor positions
+  (SRM Isx13, Isx50; TUM "Conversion from Axis to Motor Position": "every segment
+  of the move"). Here the inverse is the project's chain (the map, then the
+  calibrated IK): test_writers_pmac_kinematics holds the exported OPEN INVERSE to
+  it within 0.01 count.
 - Between segment ends the motors are fine-interpolated at the servo clock by a
   cubic spline, modelled as the spline of Turbo PMAC's SPLINE mode: "LINEAR and
   SPLINE modes are 2nd and 3rd-order B-splines, respectively, which pass to the
@@ -45,6 +64,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,7 +72,7 @@ import numpy as np
 from prsxy_post import chain, errormap, kinematics
 from prsxy_post.profile import Profile
 
-from .controllers import SERVO_MS
+from .controllers import MM_PER_DEG, SERVO_MS
 
 _WORD = re.compile(r"([XYZABIJK])(-?\d+(?:\.\d+)?)")
 NORMAL_AXIS = {"K": 2, "J": 1, "I": 0}
@@ -67,6 +87,12 @@ class SegmentedRun:
     P : (n, 5) motor positions at the segment ends [mm]
     t_dense, P_dense : the spline at the servo clock
     seg : (m,) the segment end each dense sample's interval ends at
+    jseg, jline : what :func:`controllers.judge` takes as seg and point_line: for
+        each dense sample the two moves it is judged against, jline[jseg − 1] and
+        jline[jseg]. At rest, the lines of its interval's segment ends; in a
+        sequence of blended moves, the move its progress along the path is in and
+        the neighbour it is nearer (a move shorter than a segment's advance is
+        crossed between two segment ends)
     tool_dense : (m,) tool length offset of each dense sample
     functions : (segment index, words) of every machine function
     """
@@ -81,18 +107,25 @@ class SegmentedRun:
     seg: np.ndarray
     tool_dense: np.ndarray
     functions: list[tuple[int, str]]
+    jseg: np.ndarray
+    jline: np.ndarray
 
 
-def fraction(t: np.ndarray, T: float, TA: float) -> np.ndarray:
-    """The share of the move done at times t [s] (module docstring): ramps of TA,
-    T between their middles (T ≥ TA), from rest to rest."""
-    V = 1.0 / T
-    total = T + TA
-    t = np.clip(t, 0.0, total)
-    up = 0.5 * V / TA * t**2
-    flat = V * (t - TA / 2)
-    down = 1.0 - 0.5 * V / TA * (total - t) ** 2
-    return np.where(t < TA, up, np.where(t <= T, flat, down))
+def _ramped(x: np.ndarray, A: float) -> np.ndarray:
+    """∫ of a unit velocity step smoothed over a ramp of A [s] starting at x = 0."""
+    if A <= 0.0:
+        return np.maximum(x, 0.0)
+    return np.where(x <= 0.0, 0.0, np.where(x < A, 0.5 * x**2 / A, x - 0.5 * A))
+
+
+def share(t: np.ndarray, start: float, T: float, ta_in: float, ta_out: float) -> np.ndarray:
+    """The share of a move done at times t [s]: its sharp interval is [start, start
+    + T], its speed ramps up over ta_in centred on ``start`` and down over ta_out
+    centred on ``start + T`` (module docstring: the same profile from rest or in a
+    blend); 0 before, 1 after."""
+    up = _ramped(t - (start - ta_in / 2), ta_in)
+    down = _ramped(t - (start + T - ta_out / 2), ta_out)
+    return np.clip((up - down) / T, 0.0, 1.0)
 
 
 def bspline(P: np.ndarray, s: np.ndarray, k: np.ndarray) -> np.ndarray:
@@ -160,6 +193,49 @@ def _path(mode: str, normal: int, a: np.ndarray, b: np.ndarray, ijk: np.ndarray)
     return pose, math.hypot(radius * abs(phi), float(b[normal] - a[normal]))
 
 
+@dataclass
+class _Move:
+    """One programmed move: from a to b along pose(u), T between its ramps'
+    middles, ta the TA in force at it (the blend into it)."""
+
+    a: np.ndarray
+    b: np.ndarray
+    pose: Callable[[np.ndarray], np.ndarray]
+    T: float
+    ta: float
+    line: int
+    length: float
+
+
+@dataclass
+class _Chain:
+    """A sequence of moves run from rest to rest: its time span [s], the moves'
+    starts between ramp middles [s], times, TAs, lengths and lines."""
+
+    t0: float
+    t1: float
+    starts: np.ndarray
+    T: list[float]
+    ta: list[float]
+    lengths: np.ndarray
+    lines: list[int]
+
+    def judged_lines(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For times t in the span: the line whose move the progress is in, and
+        the line of the neighbour it is nearer."""
+        progress = sum(
+            self.lengths[i] * share(t, float(self.starts[i]), self.T[i], self.ta[i], self.ta[i + 1])
+            for i in range(len(self.T))
+        )
+        bounds = np.concatenate([[0.0], np.cumsum(self.lengths)])
+        n = len(self.T)
+        o = np.clip(np.searchsorted(bounds[:-1], progress, side="right") - 1, 0, n - 1)
+        frac = (progress - bounds[o]) / np.where(self.lengths[o] > 0, self.lengths[o], 1.0)
+        nb = np.clip(np.where(frac < 0.5, o - 1, o + 1), 0, n - 1)
+        lines = np.array(self.lines)
+        return lines[o], lines[nb]
+
+
 class _Controller:
     """The coordinate system's state while a program runs: the segment ends so far
     (time, axis pose, tools, line) and the modes in force."""
@@ -181,6 +257,10 @@ class _Controller:
         self.cur: np.ndarray | None = None
         self.cur_line = 0
         self.await_rest = False
+        #: the moves since the last rest, blended into each other
+        self.chain: list[_Move] = []
+        #: every sequence run so far
+        self.chains: list[_Chain] = []
         #: hold points not yet followed by a move: the spline leaves them towards
         #: the next move's points (its support is four points), so they are judged
         #: with the next move's line and tool (the motors stand while a tool changes)
@@ -201,10 +281,64 @@ class _Controller:
                          self.ik_tool[-1], self.line[-1])  # fmt: skip
             self.held.append(len(self.t) - 1)
 
-    def dwell(self, ms: float) -> None:
+    def flush(self) -> None:
+        """Run the moves blended since the last rest and bring them to rest
+        (module docstring): the segment ends of their summed displacements."""
         if self.await_rest:
             self.hold()
-        self.await_rest = False
+            self.await_rest = False
+        if not self.chain:
+            return
+        assert self.TA is not None
+        T = [mv.T for mv in self.chain]
+        ta = [mv.ta for mv in self.chain] + [self.TA / 1000.0]
+        for i in range(1, len(ta)):  # TA(i+1) ≤ 2 (T(i) − TA(i) / 2)
+            ta[i] = min(ta[i], 2.0 * (T[i - 1] - ta[i - 1] / 2.0))
+        starts = ta[0] / 2 + np.concatenate([[0.0], np.cumsum(T)[:-1]])
+        total = ta[0] / 2 + sum(T) + ta[-1] / 2
+        ks = np.arange(1, math.ceil(total / self.h - 1e-9) + 1)
+        tt = ks * self.h
+        q = np.repeat(self.chain[0].a[None], len(tt), axis=0)
+        for i, mv in enumerate(self.chain):
+            u = share(tt, float(starts[i]), T[i], ta[i], ta[i + 1])
+            u[tt >= total] = 1.0
+            q = q + mv.pose(u) - mv.pose(np.zeros(1))
+        q[-1] = self.chain[-1].b
+        # a segment end belongs to the move its progress along the path is in (the
+        # moves' shares times their lengths, A/B at the judge's mm per degree): in a
+        # blend of moves at different speeds the pose runs ahead of or behind the
+        # times between ramp middles
+        lengths = np.array([mv.length for mv in self.chain])
+        progress = sum(
+            mv.length * share(tt, float(starts[i]), T[i], ta[i], ta[i + 1])
+            for i, mv in enumerate(self.chain)
+        )
+        bounds = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+        owner = np.clip(np.searchsorted(bounds, progress, side="right") - 1, 0, len(T) - 1)
+        self.chains.append(
+            _Chain(
+                self.t[-1],
+                self.t[-1] + float(tt[-1]),
+                starts + self.t[-1],
+                T,
+                ta,
+                lengths,
+                [mv.line for mv in self.chain],
+            )
+        )
+        for i in self.held:
+            self.line[i] = self.chain[0].line
+            self.tool[i] = self.tlo
+        self.held.clear()
+        t0 = self.t[-1]
+        for tk, qk, o in zip((t0 + tt).tolist(), q, owner.tolist(), strict=True):
+            self._append(tk, qk, self.tlo, self.tlo, self.chain[o].line)
+        self.cur = self.chain[-1].b
+        self.chain.clear()
+        self.hold()
+
+    def dwell(self, ms: float) -> None:
+        self.flush()
         if ms > 0 and self.cur is not None:
             for _ in range(math.ceil(ms / (self.h * 1000) - 1e-9)):
                 self._append(self.t[-1] + self.h, self.cur.copy(), self.tlo, self.tlo,
@@ -225,16 +359,18 @@ class _Controller:
             self.TA = float(words["TA"])
 
     def move(self, words: dict[str, str], code: str) -> None:
-        """A move from rest to rest (module docstring), its segment ends."""
-        assert not self.await_rest, "a move not followed by DWELL0 would blend"
+        """A move: it joins the moves to blend until the next DWELL (module
+        docstring)."""
         end = np.array([float(words[a]) for a in "XYZAB"])
-        self.await_rest = True
         if self.cur is None:  # the program's first move: where the machine is
             self.cur = end
             self._append(0.0, end, self.tlo, self.tlo, self.cur_line)
+            self.await_rest = True
             return
+        assert not self.await_rest, "the first move must end at rest (DWELL0)"
+        start = self.chain[-1].b if self.chain else self.cur
         ijk = np.array([float(words.get(a, 0.0)) for a in "IJK"])
-        pose, length = _path(self.mode, self.normal, self.cur, end, ijk)
+        pose, length = _path(self.mode, self.normal, start, end, ijk)
         assert self.TA is not None
         ta = self.TA / 1000.0
         if self.timed_by == "F":
@@ -243,18 +379,8 @@ class _Controller:
         else:
             assert self.TM is not None
             T = self.TM / 1000.0
-        T = max(T, ta)
-        ks = np.arange(1, math.ceil((T + ta) / self.h - 1e-9) + 1)
-        u = fraction(ks * self.h, T, ta)
-        u[-1] = 1.0
-        for i in self.held:
-            self.line[i] = self.cur_line
-            self.tool[i] = self.tlo
-        self.held.clear()
-        t0 = self.t[-1]
-        for tk, qk in zip((t0 + ks * self.h).tolist(), pose(u), strict=True):
-            self._append(tk, qk, self.tlo, self.tlo, self.cur_line)
-        self.cur = end
+        length5 = math.hypot(length, float(np.linalg.norm(end[3:] - start[3:])) * MM_PER_DEG)
+        self.chain.append(_Move(start, end, pose, max(T, ta), ta, self.cur_line, length5))
 
     def command(self, raw: str) -> None:
         """One line of the program."""
@@ -270,14 +396,17 @@ class _Controller:
         elif m := re.fullmatch(r"DWELL(\d+(?:\.\d+)?)", code):
             self.dwell(float(m.group(1)))
         elif m := re.fullmatch(r"Q100=(-?\d+(?:\.\d+)?)", code):
+            assert not self.chain, "Q100 changed while moves blend"
             self.tlo = float(m.group(1))
         elif code == 'CMD"PMATCH"':
+            assert not self.chain, "PMATCH while moves blend"
             self.pmatch()
         elif _TIMING.fullmatch(code):
             self.timing(dict(re.findall(r"\b(F|TM|TA)(\d+(?:\.\d+)?)", code)))
         elif set("XYZAB") <= set(words := dict(_WORD.findall(code))):
             self.move(words, code)
         elif re.fullmatch(r"(?:[GMTDS]-?[\d.]+\s*)+", code):
+            assert not self.chain, "a machine function while moves blend"
             self.functions.append((len(self.t) - 1, code))
         # else setup: CLOSE, &1, OPEN PROG, ABS, TS0
 
@@ -298,6 +427,7 @@ def run_segmented(
     c = _Controller(kin, (seg_ms if seg_ms is not None else profile.period_ms) / 1000.0)
     for raw in text.splitlines():
         c.command(raw)
+    c.flush()  # the program's end brings blended moves to rest
     t, tool = np.array(c.t), np.array(c.tool)
     P = kin.inverse(np.array(c.q), np.array(c.ik_tool))
     # the servo clock's ticks from the start, each in the interval it falls in
@@ -305,6 +435,15 @@ def run_segmented(
     k = np.clip(np.searchsorted(t, ticks, side="left") - 1, 0, len(t) - 2)
     s = (ticks - t[k]) / (t[k + 1] - t[k])
     seg = np.concatenate([[0], k + 1])
+    line = np.array(c.line)
+    t_dense = np.concatenate([[0.0], ticks])
+    ja, jb = line[np.maximum(seg - 1, 0)], line[seg]
+    for ch in c.chains:
+        sel = (t_dense > ch.t0) & (t_dense <= ch.t1)
+        if np.any(sel):
+            ja[sel], jb[sel] = ch.judged_lines(t_dense[sel])
+    jline = np.column_stack([ja, jb]).ravel()
+    jseg = 2 * np.arange(len(t_dense)) + 1
     return SegmentedRun(
         t,
         np.array(c.q),
@@ -316,4 +455,6 @@ def run_segmented(
         seg,
         tool[seg],
         c.functions,
+        jseg,
+        jline,
     )
