@@ -510,17 +510,17 @@ def _run_conversions(jobs: Sequence[Any], workers: int, quiet: bool) -> None:
     """Convert, with a progress line on a terminal (the program being read, or
     with --jobs the programs done), and say what was written; after Ctrl-C, what
     was written whole and what not."""
-    from . import convert as conv
+    from . import batch
 
     bar = _Progress() if not quiet and _stderr_is_terminal() else None
     try:
-        outcomes = conv.convert_many(
+        outcomes = batch.convert_many(
             jobs,
             workers=workers,
             progress=bar if workers == 1 else None,
             finished=bar.batch(jobs) if bar is not None and workers > 1 else None,
         )
-    except conv.Interrupted as stop:
+    except batch.Interrupted as stop:
         if bar is not None:
             bar.close()
         _say_outcomes(stop.outcomes, quiet=True)

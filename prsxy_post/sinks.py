@@ -366,3 +366,9 @@ class WriterProcess:
             # killed before it could remove its own (SIGKILL, the OOM killer)
             remove_leftovers(self.output)
         self.conn.close()
+
+
+def can_fork() -> bool:
+    import multiprocessing
+
+    return "fork" in multiprocessing.get_all_start_methods()
