@@ -96,11 +96,7 @@ def embedded(truth, text: str, seg_ms: float, blend: bool = True) -> tuple[float
 def junctions(truth, text: str, seg_ms: float) -> tuple[int, int]:
     """How many junctions between moves blend and how many stop."""
     motions = list(gcode.iter_motions(gcode.split_lines(text), program.interpreter_config(truth)))
-    w = pmac_cartesian.CartesianWriter(truth, PROV, seg_ms=seg_ms)
-    w.begin()
-    w.start(motions[0].start)
-    for m in motions:
-        w.motion(m)
+    w = pmac_cartesian.fed(motions, truth, PROV, motions[0].start, seg_ms)
     return w.blended, w.blended + w.stopped
 
 

@@ -56,7 +56,15 @@ from . import effects as registry
 from .errors import FitError
 from .measure import AxisData, BallbarRun, PoseData
 from .measurement_model import fk_with_jacobian
-from .profile import MOTORS, AxisComp, Effects, KinematicParams, Profile, TableParams
+from .profile import (
+    MOTORS,
+    AxisComp,
+    Effects,
+    KinematicParams,
+    Profile,
+    TableParams,
+    profile_from_dict,
+)
 
 LEG_KEYS = registry.LEG_KEYS
 
@@ -842,6 +850,29 @@ class Calibration:
         return {"stages": [r.to_dict() for r in self.reports]}
 
 
+def stage_map(
+    doc: dict[str, Any],
+    source: str,
+    commanded: Profile,
+    poses: Sequence[PoseData],
+    seed: int,
+) -> tuple[dict[str, Any], StageReport]:
+    """The virtual-axis error map (Eq. 4-5) fitted on what the profile ``doc`` leaves
+    of the poses, written into it; the report holds the residuals before and after."""
+    now = profile_from_dict(doc, source)
+    data = diagnose.Data.build(commanded, list(poses), [], [])
+    emap = fit_error_map(now, data, seed, [p.source for p in poses])
+    measured, segs = data.measured()
+    before = measured - diagnose.predict(now, data, []).pred
+    doc = dict(doc, error_map=emap.to_dict())
+    after = (
+        measured - diagnose.predict(profile_from_dict(doc, source), data, [], with_map=True).pred
+    )
+    rb, mb = _kind_stats(before, segs)
+    ra, ma = _kind_stats(after, segs)
+    return doc, _map_report(emap, rb, ra, mb, ma)
+
+
 def calibrate(
     start: Profile,
     commanded: Profile,
@@ -875,7 +906,6 @@ def calibrate(
         When no stage had data to work on, or a fit cannot identify anything.
     """
     from .errors import UsageError
-    from .profile import profile_from_dict
 
     want = list(dict.fromkeys(stages))
     unknown = [s for s in want if s not in STAGES]
@@ -918,19 +948,8 @@ def calibrate(
         reports.append(rep)
     if "map" in want and poses:
         said("map")
-        now = profile_from_dict(doc, start.source)
-        data = diagnose.Data.build(commanded, list(poses), [], [])
-        emap = fit_error_map(now, data, seed, [p.source for p in poses])
-        measured, segs = data.measured()
-        before = measured - diagnose.predict(now, data, []).pred
-        doc["error_map"] = emap.to_dict()
-        after = (
-            measured
-            - diagnose.predict(profile_from_dict(doc, start.source), data, [], with_map=True).pred
-        )
-        rb, mb = _kind_stats(before, segs)
-        ra, ma = _kind_stats(after, segs)
-        reports.append(_map_report(emap, rb, ra, mb, ma))
+        doc, rep = stage_map(doc, start.source, commanded, poses, seed)
+        reports.append(rep)
     if not reports:
         raise FitError(
             "no stage had data to work on",

@@ -299,11 +299,7 @@ def _blended(text: str, seg_ms: float, **tol):
     base = machine("nominal", None)
     truth = dataclasses.replace(base, interpolation=dataclasses.replace(base.interpolation, **tol))
     motions = list(gcode.iter_motions(gcode.split_lines(text), program.interpreter_config(truth)))
-    w = pc.CartesianWriter(truth, PROV, seg_ms=seg_ms)
-    w.begin()
-    w.start(motions[0].start)
-    for m in motions:
-        w.motion(m)
+    w = pc.fed(motions, truth, PROV, motions[0].start, seg_ms)
     return truth, motions, w.finish(), w.blended
 
 

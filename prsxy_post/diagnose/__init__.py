@@ -859,6 +859,36 @@ def _weakest(g: selection.Gram, sel: Sequence[int]) -> int:
     return int(np.argmin(ev))
 
 
+def _left_unexplained(
+    updated: Profile,
+    data: Data,
+    after: np.ndarray,
+    segs: list[Any],
+    noise: dict[str, float],
+    w: np.ndarray,
+    has_map: bool,
+) -> list[dict[str, Any]]:
+    """What the updated model leaves above the noise (:func:`leftover.unexplained`),
+    the whole library's signatures and, with laser runs, the tables' values within
+    their standard errors allowed for."""
+    all_keys = column_keys()
+
+    def library() -> Linearised:
+        return predict(updated, data, all_keys, with_map=has_map)
+
+    laser = {int(m) for a in data.axis for m in np.unique(a.motor)}
+    nuis = table_nuisance(updated, data.axis, laser) if laser else None
+
+    def table_errors() -> tuple[dict[str, np.ndarray], dict[str, float]]:
+        assert nuis is not None
+        lin = predict(updated, data, [], with_map=has_map, table_knots=nuis.table_knots)
+        return lin.columns, dict(nuis.table_sd)
+
+    return leftover.unexplained(
+        data, after, segs, noise, w, library, table_errors if nuis is not None else None
+    )
+
+
 def diagnose(
     current: Profile,
     data: Data,
@@ -914,23 +944,8 @@ def diagnose(
     updated = profile_from_dict(updated_doc, current.source)
     after = measured - predict(updated, data, [], with_map=has_map).pred
     rms_b, rms_a = _rms_um(before, segs), _rms_um(after, segs)
-    all_keys = column_keys()
-
-    def library() -> Linearised:
-        return predict(updated, data, all_keys, with_map=has_map)
-
     said("left", "testing what is left against the noise")
-    laser = {int(m) for a in data.axis for m in np.unique(a.motor)}
-    nuis = table_nuisance(updated, data.axis, laser) if laser else None
-
-    def table_errors() -> tuple[dict[str, np.ndarray], dict[str, float]]:
-        assert nuis is not None
-        lin = predict(updated, data, [], with_map=has_map, table_knots=nuis.table_knots)
-        return lin.columns, dict(nuis.table_sd)
-
-    left = leftover.unexplained(
-        data, after, segs, noise, w, library, table_errors if nuis is not None else None
-    )
+    left = _left_unexplained(updated, data, after, segs, noise, w, has_map)
     note: dict[str, Any] = {
         "data": sorted({s.source for s in segs}),
         "effects": [f"{e.name} {e.estimate:+.6g} {e.unit} ± {e.stderr:.2g}" for e in effects],

@@ -464,9 +464,22 @@ def write_program(
     its blends judged for segmentation time ``seg_ms`` (Isx13; default the
     profile's period, what ``prsxy-post kinematics`` sets); ``blend=False`` ends
     every move at rest."""
+    return fed(motions, profile, prov, start, seg_ms, blend).finish()
+
+
+def fed(
+    motions: Sequence[Motion],
+    profile: Profile,
+    prov: Provenance,
+    start: Sequence[float],
+    seg_ms: float | None = None,
+    blend: bool = True,
+) -> CartesianWriter:
+    """The writer with every motion fed, not yet finished: what
+    :func:`write_program` writes, and how many junctions blended and stopped."""
     w = CartesianWriter(profile, prov, seg_ms=seg_ms, blend=blend)
     w.begin()
     w.start(start)
     for m in motions:
         w.motion(m)
-    return w.finish()
+    return w
