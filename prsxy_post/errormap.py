@@ -33,7 +33,9 @@ from typing import Any
 import numpy as np
 from numpy.polynomial import legendre
 
+from . import kernel
 from .errors import FitError, ProfileError
+from .kernel.legendre import MapArrays
 from .profile import Profile
 
 COMPONENTS = ("x", "y", "z", "a", "b")
@@ -154,21 +156,23 @@ class ErrorMap:
 
     def __call__(self, q: np.ndarray) -> np.ndarray:
         """e(q), shape (N, 5) [mm, mm, mm, deg, deg]: Σ_u M_u(q) C_u over the
-        distinct Legendre products M_u the components use (each made once)."""
+        distinct Legendre products M_u the components use (each made once), in
+        the kernel (:func:`prsxy_post.kernel.legendre.map_rows`)."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
+        return kernel.map_rows(self.arrays, q)
+
+    @functools.cached_property
+    def arrays(self) -> MapArrays:
+        """The map flattened for the kernel: domain, distinct products and their
+        coefficients per component."""
         exps, C = self._plan
-        tables = legendre_tables(q, self.lo, self.hi, max(self.degree.values(), default=2))
-        out = np.zeros((len(q), 5))
-        # axpy per term rather than one BLAS product: a threaded BLAS would spin
-        # on the core the interpreter process runs on
-        for u, e5 in enumerate(exps):
-            col: np.ndarray | float = 1.0
-            for v, k in enumerate(e5):
-                if k:
-                    col = tables[v][:, k] * col
-            for i in np.flatnonzero(C[u]).tolist():
-                out[:, i] += C[u, i] * col
-        return out
+        return MapArrays(
+            lo=np.asarray(self.lo, dtype=float),
+            span=np.where(self.hi > self.lo, self.hi - self.lo, 1.0),
+            degree=max(max(self.degree.values(), default=2), 2),
+            exps=np.array(exps, dtype=np.int64).reshape(-1, 5),
+            coef=C,
+        )
 
     @functools.cached_property
     def _plan(self) -> tuple[list[tuple[int, ...]], np.ndarray]:

@@ -1,8 +1,9 @@
 """The kernel: per-point numerical work as functions over arrays.
 
-Each kernel has a numpy reference (``ik.py``, ``text.py``) and a compiled twin in
-Cython (``_ik.pyx``, ``_text.pyx``, built when the package is installed) that gives
-the same bits. This module picks one set for the whole program, once, at import:
+Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``) and a
+compiled twin in Cython (``_ik.pyx``, ``_text.pyx``, ``_legendre.pyx``, built when the
+package is installed) that gives the same bits. This module picks one set for the
+whole program, once, at import:
 
 - ``PRSXY_KERNEL=pure`` in the environment: the numpy reference (CI's pure leg);
 - otherwise the compiled kernels when the extension imports, else the reference.
@@ -29,26 +30,26 @@ from typing import Any
 
 import numpy as np
 
-from . import ik, text
+from . import ik, legendre, text
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
 
 InverseRows = Callable[[ik.IKArrays, np.ndarray, np.ndarray], np.ndarray]
 FixedRows = Callable[..., list[str]]
+#: the compiled modules, each the twin of the reference module of its name
+TWINS = ("_ik", "_text", "_legendre")
 
 
-def _load() -> tuple[Any, Any, str, str]:
-    """(inverse_rows, format_fixed_rows, name, why the reference runs or "")."""
-    pure = (ik.inverse_rows, text.format_fixed_rows)
+def _load() -> tuple[Any, Any, Any, str, str]:
+    """(inverse_rows, format_fixed_rows, map_rows, name, why the reference runs or "")."""
+    pure = (ik.inverse_rows, text.format_fixed_rows, legendre.map_rows)
     if os.environ.get(ENV, "").strip().lower() == "pure":
         return (*pure, "pure numpy (PRSXY_KERNEL=pure)", f"{ENV}=pure")
     try:
-        from . import _ik, _text  # type: ignore[attr-defined]
+        from . import _ik, _legendre, _text  # type: ignore[attr-defined]
     except ImportError as e:
-        absent = [
-            n for n in ("_ik", "_text") if importlib.util.find_spec(f"{__name__}.{n}") is None
-        ]
+        absent = [n for n in TWINS if importlib.util.find_spec(f"{__name__}.{n}") is None]
         why = (
             f"the compiled extension is not built (no {', '.join(absent)} "
             f"in {Path(__file__).parent})"
@@ -56,10 +57,16 @@ def _load() -> tuple[Any, Any, str, str]:
             else f"the compiled extension does not import ({e})"
         )
         return (*pure, f"pure numpy ({why})", why)
-    return _ik.inverse_rows, _text.format_fixed_rows, f"compiled (Cython {_ik.CYTHON})", ""
+    return (
+        _ik.inverse_rows,
+        _text.format_fixed_rows,
+        _legendre.map_rows,
+        f"compiled (Cython {_ik.CYTHON})",
+        "",
+    )
 
 
-_inverse_rows, _fixed_rows, NAME, WHY_PURE = _load()
+_inverse_rows, _fixed_rows, _map_rows, NAME, WHY_PURE = _load()
 #: True when the compiled kernels run.
 COMPILED: bool = not WHY_PURE
 #: True when the reference runs because the extension is missing (not asked for).
@@ -77,4 +84,11 @@ def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str =
     """Rows of fixed-point text: :func:`text.format_fixed_rows`, compiled when
     :data:`COMPILED`."""
     out: list[str] = _fixed_rows(columns, end)
+    return out
+
+
+def map_rows(m: legendre.MapArrays, q: np.ndarray) -> np.ndarray:
+    """The virtual-axis error e(q) (N, 5) [mm, mm, mm, deg, deg] for poses ``q``
+    (N, 5): :func:`legendre.map_rows`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _map_rows(m, q)
     return out
