@@ -13,7 +13,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-from prsxy_post import effects, writers
+import numpy as np
+
+from prsxy_post import effects, errormap, simulate, writers
+from prsxy_post import profile as profile_mod
 from prsxy_post.profile import effects_section
 from prsxy_post.profile.output import OUTPUT_SETTINGS
 
@@ -149,6 +152,61 @@ def test_loading_a_profile_imports_no_dialect_physics_or_kinematics() -> None:
     ).stdout.split()
     above = {"writers", "effects", "kinematics", "chain", "axiscomp", "reversals", "convert"}
     assert not [m for m in out if m.partition(".")[2].split(".")[0] in above], out
+
+
+#: what the convert command must not load (issue 31: each costs start-up, scipy alone
+#: about 0.2 s, for work a conversion never does)
+HEAVY = ("scipy", "matplotlib", "tomlkit")
+
+
+def _machine_with_everything(path: Path) -> Path:
+    """A profile with contract errors, real-axis tables with play, bowed guides,
+    servo lag and an error map: every stage of the chain runs."""
+    nominal = profile_mod.loads((PACKAGE.parent / "profiles" / "prsxy-nominal.toml").read_text())
+    rng = np.random.default_rng(5)
+    truth = simulate.random_machine(nominal, rng, axis_errors=True, effects=True, name="all")
+    q = rng.uniform([-150, -150, -60, -25, -25], [150, 150, 40, 25, 25], (200, 5))
+    emap = errormap.fit(q, 1e-3 * np.sin(q / 50.0), rng=rng, degrees=(2,), lambdas=[1e-4])
+    effects = dict(truth.raw.get("effects", {}), servo_lag_ms=[0.4, 0.1, 0.3, 0.8, 0.5])
+    path.write_text(profile_mod.dumps(dict(truth.raw, effects=effects, error_map=emap.to_dict())))
+    return path
+
+
+def test_converting_imports_no_scipy_matplotlib_or_tomlkit(tmp_path: Path) -> None:
+    """A conversion as the command runs it, both dialects, on a machine with every
+    stage on: the modules loaded at the end name none of :data:`HEAVY`."""
+    prof = _machine_with_everything(tmp_path / "all.toml")
+    code = (
+        "import atexit, sys\n"
+        "atexit.register(lambda: sys.stderr.write('MODULES ' + ' '.join(sys.modules) + '\\n'))\n"
+        "from prsxy_post.cli import main\n"
+        "main(sys.argv[1:], prog_name='prsxy-post')\n"
+    )
+    for fmt in ("pmac", "gcode"):
+        r = subprocess.run(
+            [
+                sys.executable,
+                "-c",
+                code,
+                "convert",
+                "samples/five-axis.ngc",
+                "--profile",
+                str(prof),
+                "--format",
+                fmt,
+                "-o",
+                str(tmp_path / f"out.{fmt}"),
+                "-q",
+            ],
+            cwd=PACKAGE.parent,
+            capture_output=True,
+            text=True,
+        )
+        assert r.returncode == 0, r.stderr
+        line = next(x for x in r.stderr.splitlines() if x.startswith("MODULES "))
+        loaded = line.split()[1:]
+        assert "prsxy_post.chain" in loaded  # the conversion ran in this process
+        assert not [m for m in loaded if m.split(".")[0] in HEAVY], fmt
 
 
 def test_every_dialect_declares_its_settings_in_the_profile_layer() -> None:
