@@ -38,9 +38,10 @@ InverseRows = Callable[[ik.IKArrays, np.ndarray, np.ndarray], np.ndarray]
 FixedRows = Callable[..., list[str]]
 
 
-def _load() -> tuple[Any, Any, str, str]:
-    """(inverse_rows, format_fixed_rows, name, why the reference runs or "")."""
-    pure = (ik.inverse_rows, text.format_fixed_rows)
+def _load() -> tuple[Any, Any, Any, str, str]:
+    """(inverse_rows, format_fixed_rows, pvt_segment_text, name, why the reference
+    runs or "")."""
+    pure = (ik.inverse_rows, text.format_fixed_rows, text.pvt_segment_text)
     if os.environ.get(ENV, "").strip().lower() == "pure":
         return (*pure, "pure numpy (PRSXY_KERNEL=pure)", f"{ENV}=pure")
     try:
@@ -56,10 +57,16 @@ def _load() -> tuple[Any, Any, str, str]:
             else f"the compiled extension does not import ({e})"
         )
         return (*pure, f"pure numpy ({why})", why)
-    return _ik.inverse_rows, _text.format_fixed_rows, f"compiled (Cython {_ik.CYTHON})", ""
+    return (
+        _ik.inverse_rows,
+        _text.format_fixed_rows,
+        _text.pvt_segment_text,
+        f"compiled (Cython {_ik.CYTHON})",
+        "",
+    )
 
 
-_inverse_rows, _fixed_rows, NAME, WHY_PURE = _load()
+_inverse_rows, _fixed_rows, _pvt_segment, NAME, WHY_PURE = _load()
 #: True when the compiled kernels run.
 COMPILED: bool = not WHY_PURE
 #: True when the reference runs because the extension is missing (not asked for).
@@ -77,4 +84,19 @@ def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str =
     """Rows of fixed-point text: :func:`text.format_fixed_rows`, compiled when
     :data:`COMPILED`."""
     out: list[str] = _fixed_rows(columns, end)
+    return out
+
+
+def pvt_segment_text(
+    columns: Sequence[tuple[str, np.ndarray, int]],
+    line: np.ndarray,
+    new_line: np.ndarray,
+    quanta: np.ndarray,
+    new_time: np.ndarray,
+    other_rows: np.ndarray,
+    other_text: Sequence[str],
+) -> str:
+    """A PVT program's points as one text: :func:`text.pvt_segment_text`, compiled
+    when :data:`COMPILED`."""
+    out: str = _pvt_segment(columns, line, new_line, quanta, new_time, other_rows, other_text)
     return out
