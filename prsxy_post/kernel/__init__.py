@@ -1,8 +1,9 @@
 """The kernel: per-point numerical work as functions over arrays.
 
-Each kernel has a numpy reference (``ik.py``, ``text.py``) and a compiled twin in
-Cython (``_ik.pyx``, ``_text.pyx``, built when the package is installed) that gives
-the same bits. This module picks one set for the whole program, once, at import:
+Each kernel has a numpy reference (``ik.py``, ``text.py``, ``fk.py``) and a compiled
+twin in Cython (``_ik.pyx``, ``_text.pyx``, ``_fk.pyx``, built when the package is
+installed) that gives the same bits. This module picks one set for the whole
+program, once, at import:
 
 - ``PRSXY_KERNEL=pure`` in the environment: the numpy reference (CI's pure leg);
 - otherwise the compiled kernels when the extension imports, else the reference.
@@ -29,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from . import ik, text
+from . import fk, ik, text
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
@@ -38,18 +39,20 @@ InverseRows = Callable[[ik.IKArrays, np.ndarray, np.ndarray], np.ndarray]
 FixedRows = Callable[..., list[str]]
 
 
-def _load() -> tuple[Any, Any, Any, str, str]:
-    """(inverse_rows, format_fixed_rows, pvt_segment_text, name, why the reference
-    runs or "")."""
-    pure = (ik.inverse_rows, text.format_fixed_rows, text.pvt_segment_text)
+#: the compiled modules, each the twin of a reference module
+_TWINS = ("_ik", "_text", "_fk")
+
+
+def _load() -> tuple[Any, Any, Any, Any, str, str]:
+    """(inverse_rows, format_fixed_rows, pvt_segment_text, the FK's arithmetic
+    (module), name, why the reference runs or "")."""
+    pure = (ik.inverse_rows, text.format_fixed_rows, text.pvt_segment_text, fk)
     if os.environ.get(ENV, "").strip().lower() == "pure":
         return (*pure, "pure numpy (PRSXY_KERNEL=pure)", f"{ENV}=pure")
     try:
-        from . import _ik, _text  # type: ignore[attr-defined]
+        from . import _fk, _ik, _text  # type: ignore[attr-defined]
     except ImportError as e:
-        absent = [
-            n for n in ("_ik", "_text") if importlib.util.find_spec(f"{__name__}.{n}") is None
-        ]
+        absent = [n for n in _TWINS if importlib.util.find_spec(f"{__name__}.{n}") is None]
         why = (
             f"the compiled extension is not built (no {', '.join(absent)} "
             f"in {Path(__file__).parent})"
@@ -61,12 +64,13 @@ def _load() -> tuple[Any, Any, Any, str, str]:
         _ik.inverse_rows,
         _text.format_fixed_rows,
         _text.pvt_segment_text,
+        _fk,
         f"compiled (Cython {_ik.CYTHON})",
         "",
     )
 
 
-_inverse_rows, _fixed_rows, _pvt_segment, NAME, WHY_PURE = _load()
+_inverse_rows, _fixed_rows, _pvt_segment, _fk_mod, NAME, WHY_PURE = _load()
 #: True when the compiled kernels run.
 COMPILED: bool = not WHY_PURE
 #: True when the reference runs because the extension is missing (not asked for).
@@ -99,4 +103,39 @@ def pvt_segment_text(
     """A PVT program's points as one text: :func:`text.pvt_segment_text`, compiled
     when :data:`COMPILED`."""
     out: str = _pvt_segment(columns, line, new_line, quanta, new_time, other_rows, other_text)
+    return out
+
+
+def rotation_cs(
+    ca: np.ndarray, sa: np.ndarray, cb: np.ndarray, sb: np.ndarray, cg: np.ndarray, sg: np.ndarray
+) -> np.ndarray:
+    """R_y(B) R_x(A) R_z(γ) (N, 3, 3) from the angles' cosines and sines:
+    :func:`fk.rotation_cs`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _fk_mod.rotation_cs(ca, sa, cb, sb, cg, sg)
+    return out
+
+
+def fk_equations(
+    m: fk.FKArrays, c: np.ndarray, rb: np.ndarray, off: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """w, |w| and the six FK equations: :func:`fk.fk_equations`, compiled when
+    :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _fk_mod.fk_equations(m, c, rb, off)
+    return out
+
+
+def fk_jacobian_parts(
+    m: fk.FKArrays,
+    R: np.ndarray,
+    rb: np.ndarray,
+    w: np.ndarray,
+    norm_w: np.ndarray,
+    cb: np.ndarray,
+    sb: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The FK Jacobian's columns of c and the factors of its angle columns:
+    :func:`fk.fk_jacobian_parts`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _fk_mod.fk_jacobian_parts(
+        m, R, rb, w, norm_w, cb, sb
+    )
     return out
