@@ -418,9 +418,7 @@ def _fk_system(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> tuple[np.ndarray
     R, rb, w, norm_w, f, cb, sb = _fk_parts(geo, P, xv)
     # n·(e × R b_k) = e·(R b_k × n): the angle columns are the triple products
     # with the two normals, u_k for the plane and w_k / |w_k| for the length
-    J, cross_u, cross_w, axes_t = kernel.fk_jacobian_parts(
-        geo.fk_arrays, R, rb, w, norm_w, cb, sb
-    )
+    J, cross_u, cross_w, axes_t = kernel.fk_jacobian_parts(geo.fk_arrays, R, rb, w, norm_w, cb, sb)
     J[:, :3, 3:] = np.matmul(cross_u, axes_t)
     J[:, 3:, 3:] = np.matmul(cross_w, axes_t)
     return f, J
@@ -480,10 +478,7 @@ def forward_platform(
                 step = np.linalg.solve(J, -f[..., None])[..., 0]
             except np.linalg.LinAlgError:
                 step = np.full_like(x, np.nan)
-        bad = ~np.all(np.isfinite(step), axis=1)
-        step[bad] = 0.0
-        xv[idx] = x + step
-        done = (np.max(np.abs(step), axis=1) < tol * 1e3) & ~bad
+        xv[idx], done, bad = kernel.newton_step(x, step, tol * 1e3)
         # Stop when the step is at rounding level; one more Newton step after the
         # step first gets small would not change the result.
         converged[idx[done]] = True

@@ -48,7 +48,7 @@ def _jacobian(out: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
     return J[:, :, :3], cu, cw, axes_t
 
 
-NAMES = ("rotation_cs", "fk_equations", "fk_jacobian_parts")
+NAMES = ("rotation_cs", "fk_equations", "fk_jacobian_parts", "newton_step")
 
 
 @pytest.fixture(scope="module")
@@ -130,6 +130,9 @@ def test_generated_fk_arithmetic_is_bit_identical(data: st.DataObject) -> None:
         assert _same(
             _jacobian(_fk.fk_jacobian_parts(*args)), _jacobian(fk.fk_jacobian_parts(*args))
         )
+        x, step = data.draw(_rows(n, 6)), data.draw(_rows(n, 6))
+        limit = data.draw(st.sampled_from([1e-9, 0.0, 1e3, np.inf]))
+        assert _same(_fk.newton_step(x, step, limit), fk.newton_step(x, step, limit))
 
 
 @pytest.mark.parametrize("path", PROFILES, ids=lambda p: p.stem)

@@ -139,3 +139,12 @@ def fk_jacobian_parts(
         m, R, rb, w, norm_w, cb, sb
     )
     return out
+
+
+def newton_step(
+    x: np.ndarray, step: np.ndarray, limit: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """x + step, done, bad (N,): one batched Newton update of the FK:
+    :func:`fk.newton_step`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _fk_mod.newton_step(x, step, limit)
+    return out

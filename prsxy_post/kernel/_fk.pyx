@@ -6,7 +6,7 @@
 
 import numpy as np
 
-from libc.math cimport sqrt
+from libc.math cimport fabs, isfinite, sqrt
 
 from . import fk as _pure
 
@@ -131,3 +131,33 @@ def fk_jacobian_parts(m, R_in, rb_in, w_in, nw_in, cb_in, sb_in):
                 cw[i, k, 1] = r2 * e0 - r0 * e2
                 cw[i, k, 2] = r0 * e1 - r1 * e0
     return J_a, cu_a, cw_a, axes_a.transpose(0, 2, 1)
+
+
+def newton_step(x_in, step_in, double limit):
+    """x + step, done, bad: one batched Newton update (``fk.newton_step``)."""
+    cdef Py_ssize_t n = x_in.shape[0], k = x_in.shape[1], i, j
+    cdef const double[:, :] x = x_in
+    cdef const double[:, :] step = step_in
+    out_a = np.empty((n, k))
+    done_a = np.empty(n, dtype=bool)
+    bad_a = np.empty(n, dtype=bool)
+    cdef double[:, ::1] out = out_a
+    cdef char[::1] done = done_a.view(np.int8)
+    cdef char[::1] bad = bad_a.view(np.int8)
+    cdef double s, big
+    cdef bint finite
+    with nogil:
+        for i in range(n):
+            finite = True
+            for j in range(k):
+                if not isfinite(step[i, j]):
+                    finite = False
+            big = 0.0
+            for j in range(k):
+                s = step[i, j] if finite else 0.0
+                out[i, j] = x[i, j] + s
+                if fabs(s) > big:
+                    big = fabs(s)
+            bad[i] = not finite
+            done[i] = finite and big < limit
+    return out_a, done_a, bad_a

@@ -122,3 +122,20 @@ def fk_jacobian_parts(
         cross3(rb, unit_w),
         axes.transpose(0, 2, 1),
     )
+
+
+def newton_step(
+    x: np.ndarray, step: np.ndarray, limit: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One batched Newton update: rows whose step is not finite stay (bad); the
+    others move by it and are done when every component of the step is below
+    ``limit``.
+
+    Returns
+    -------
+    x + step (N, 6);  done, bad : (N,) bool
+    """
+    bad = ~np.all(np.isfinite(step), axis=1)
+    step = np.where(bad[:, None], 0.0, step)
+    done = (np.max(np.abs(step), axis=1) < limit) & ~bad
+    return x + step, done, bad
