@@ -209,7 +209,7 @@ class Geometry:
     @cached_property
     def fk_arrays(self) -> kfk.FKArrays:
         """The geometry as the kernel's FK arithmetic takes it (made once)."""
-        return kfk.FKArrays(g=self.g, u=self.u, L=self.L)
+        return kfk.FKArrays(g=self.g, u=self.u, d=self.d, L=self.L)
 
     # Precomputed linear algebra of the closed-form IK, once per geometry (an SVD
     # and a pseudo-inverse cost 0.2 ms; the arrays are not changed after
@@ -392,7 +392,9 @@ def _fk_parts(
     cb, sb = np.cos(b), np.sin(b)
     R = kernel.rotation_cs(np.cos(a), np.sin(a), cb, sb, np.cos(g), np.sin(g))
     rb = np.matmul(R, geo.b.T).transpose(0, 2, 1)  # R b_k, (N, leg, 3)
-    w, norm_w, f = kernel.fk_equations(geo.fk_arrays, xv[:, :3], rb, geo.hinge_offset(P[:, :3]))
+    # the hinges' offsets P_k d_k in the kernel, unless the guides bow
+    off = None if geo.guide_bow is None else geo.hinge_offset(P[:, :3])
+    w, norm_w, f = kernel.fk_equations(geo.fk_arrays, xv[:, :3], rb, P[:, :3], off)
     return R, rb, w, norm_w, f, cb, sb
 
 

@@ -11,6 +11,7 @@ values, NaN and infinities), and whole forward solutions with either kernel.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -114,17 +115,20 @@ def _rows(n: int, k: int) -> st.SearchStrategy[np.ndarray]:
 def test_generated_fk_arithmetic_is_bit_identical(data: st.DataObject) -> None:
     _fk = compiled("_fk")
     n = data.draw(st.integers(0, 8))
-    m = fk.FKArrays(g=data.draw(_rows(3, 3)), u=data.draw(_rows(3, 3)), L=data.draw(_rows(1, 3))[0])
+    g, u, d = data.draw(_rows(3, 3)), data.draw(_rows(3, 3)), data.draw(_rows(3, 3))
+    m = fk.FKArrays(g=g, u=u, d=d, L=data.draw(_rows(1, 3))[0])
     angles = data.draw(_rows(6, n))
     # R b_k as the kinematics has it: a transposed view of a matmul's result
     rb = data.draw(_rows(n, 9)).reshape(n, 3, 3).transpose(0, 2, 1)
     c = data.draw(_rows(n, 6))[:, :3]  # a view of x, as forward_platform passes it
-    off = data.draw(_rows(n, 9)).reshape(n, 3, 3)
+    p3 = data.draw(_rows(n, 5))[:, :3]  # a view of P, as the kinematics passes it
+    # straight guides (P_k d_k in the kernel) or the offsets of bowed ones
+    off = data.draw(st.one_of(st.none(), _rows(n, 9).map(lambda a: a.reshape(n, 3, 3))))
     with np.errstate(all="ignore"):  # NaN and infinities: numpy warns, C does not
         R = fk.rotation_cs(*angles)
         assert _same((_fk.rotation_cs(*angles),), (R,))
-        want = fk.fk_equations(m, c, rb, off)
-        assert _same(_fk.fk_equations(m, c, rb, off), want)
+        want = fk.fk_equations(m, c, rb, p3, off)
+        assert _same(_fk.fk_equations(m, c, rb, p3, off), want)
         w, norm_w, _ = want
         args = (m, R, rb, w, norm_w, angles[2], angles[3])
         assert _same(
@@ -135,14 +139,18 @@ def test_generated_fk_arithmetic_is_bit_identical(data: st.DataObject) -> None:
         assert _same(_fk.newton_step(x, step, limit), fk.newton_step(x, step, limit))
 
 
+@pytest.mark.parametrize("bow", [False, True], ids=["straight", "bowed"])
 @pytest.mark.parametrize("path", PROFILES, ids=lambda p: p.stem)
 def test_forward_kinematics_is_bit_identical_with_either_kernel(
-    path: Path, monkeypatch: pytest.MonkeyPatch
+    path: Path, bow: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Whole forward solutions (Newton from the nominal guess and warm-started, then
-    the residual check) with the compiled arithmetic and with the reference."""
+    the residual check) with the compiled arithmetic and with the reference; with
+    straight guides and with bowed ones (``effects.guide_bow``)."""
     _fk = compiled("_fk")
     geo = _geometry(path)
+    if bow:
+        geo = dataclasses.replace(geo, guide_bow=np.array([0.004, -0.002, 0.003]))
     rng = np.random.default_rng(7)
     q = np.column_stack(
         [rng.uniform(-100, 100, (500, 2)), rng.uniform(-60, 0, 500), rng.uniform(-30, 30, (500, 2))]

@@ -116,11 +116,11 @@ def rotation_cs(
 
 
 def fk_equations(
-    m: fk.FKArrays, c: np.ndarray, rb: np.ndarray, off: np.ndarray
+    m: fk.FKArrays, c: np.ndarray, rb: np.ndarray, p3: np.ndarray, off: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """w, |w| and the six FK equations: :func:`fk.fk_equations`, compiled when
     :data:`COMPILED`."""
-    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _fk_mod.fk_equations(m, c, rb, off)
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _fk_mod.fk_equations(m, c, rb, p3, off)
     return out
 
 

@@ -48,12 +48,17 @@ def rotation_cs(ca, sa, cb, sb, cg, sg):
     return R_a
 
 
-def fk_equations(m, c_in, rb_in, off_in):
+def fk_equations(m, c_in, rb_in, p3_in, off_in=None):
     """w, |w|, f: the six FK equations (``fk.fk_equations``)."""
     cdef Py_ssize_t n = c_in.shape[0], i, k
     cdef const double[:, :] c = c_in
     cdef const double[:, :, :] rb = rb_in
-    cdef const double[:, :, :] off = np.broadcast_to(off_in, (n, 3, 3))
+    cdef const double[:, :] p3 = p3_in
+    cdef bint straight = off_in is None
+    cdef const double[:, :, :] off = np.broadcast_to(
+        np.zeros(1) if straight else off_in, (n, 3, 3)
+    )
+    cdef const double[:, :] d = np.ascontiguousarray(m.d, dtype=float)
     cdef const double[:, :] g = np.ascontiguousarray(m.g, dtype=float)
     cdef const double[:, :] u = np.ascontiguousarray(m.u, dtype=float)
     cdef const double[:] L = np.ascontiguousarray(m.L, dtype=float)
@@ -71,9 +76,14 @@ def fk_equations(m, c_in, rb_in, off_in):
                 v1 = c[i, 1] + rb[i, k, 1] - g[k, 1]
                 v2 = c[i, 2] + rb[i, k, 2] - g[k, 2]
                 f[i, k] = v0 * u[k, 0] + v1 * u[k, 1] + v2 * u[k, 2]
-                w0 = v0 - off[i, k, 0]
-                w1 = v1 - off[i, k, 1]
-                w2 = v2 - off[i, k, 2]
+                if straight:
+                    w0 = v0 - p3[i, k] * d[k, 0]
+                    w1 = v1 - p3[i, k] * d[k, 1]
+                    w2 = v2 - p3[i, k] * d[k, 2]
+                else:
+                    w0 = v0 - off[i, k, 0]
+                    w1 = v1 - off[i, k, 1]
+                    w2 = v2 - off[i, k, 2]
                 w[i, k, 0] = w0
                 w[i, k, 1] = w1
                 w[i, k, 2] = w2

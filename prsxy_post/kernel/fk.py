@@ -24,12 +24,14 @@ import numpy as np
 class FKArrays:
     """A geometry as the FK's arithmetic takes it, made once per geometry.
 
-    g, u : (3, 3) guide points [mm] and hinge axes, one leg a row
+    g, u, d : (3, 3) guide points [mm], hinge axes and guide directions, one leg
+        a row
     L : (3,) strut lengths [mm]
     """
 
     g: np.ndarray
     u: np.ndarray
+    d: np.ndarray
     L: np.ndarray
 
 
@@ -65,10 +67,11 @@ def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def fk_equations(
-    m: FKArrays, c: np.ndarray, rb: np.ndarray, off: np.ndarray
+    m: FKArrays, c: np.ndarray, rb: np.ndarray, p3: np.ndarray, off: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The six FK equations at the platform centre ``c`` (N, 3), with R b_k ``rb``
-    (N, leg, 3) and the hinges' offsets a_k − g_k ``off`` (N, leg, 3) [mm].
+    (N, leg, 3), for the head's motors ``p3`` (N, 3) [mm]: the hinges' offsets
+    a_k − g_k are P_k d_k (straight guides), or ``off`` (N, leg, 3) where given.
 
     Returns
     -------
@@ -76,7 +79,7 @@ def fk_equations(
     """
     v = c[:, None, :] + rb - m.g[None]
     plane = dot3(v, m.u)
-    w = v - off
+    w = v - (p3[:, :, None] * m.d[None] if off is None else off)
     norm_w = np.sqrt(dot3(w, w))
     # Length residual scaled to mm: |w| − L behaves like a distance.
     f = np.concatenate([plane, norm_w - m.L[None]], axis=1)
