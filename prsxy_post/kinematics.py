@@ -288,9 +288,9 @@ def _solve(
     geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float | None
 ) -> kik.PlatformCols:
     """The closed-form platform solution (module docstring), in components: the
-    kernel's reference (:func:`prsxy_post.kernel.ik.platform_cols`)."""
+    kernel's (:func:`prsxy_post.kernel.ik.platform_cols`, compiled when built)."""
     m = geo.ik_arrays
-    return kik.platform_cols(m, q, kik.tool_z(m, q.shape[0], tool_length_offset))
+    return kernel.platform_cols(m, q, kik.tool_z(m, q.shape[0], tool_length_offset))
 
 
 def _pose(p: kik.PlatformCols) -> PlatformPose:
@@ -322,7 +322,7 @@ class IKResult:
 
     @cached_property
     def pose(self) -> PlatformPose:
-        return _pose(kik.platform_cols(self._geo.ik_arrays, self._q, self._tool_z))
+        return _pose(kernel.platform_cols(self._geo.ik_arrays, self._q, self._tool_z))
 
 
 def inverse(

@@ -43,10 +43,10 @@ FixedRows = Callable[..., list[str]]
 _TWINS = ("_ik", "_text", "_fk")
 
 
-def _load() -> tuple[Any, Any, Any, Any, str, str]:
-    """(inverse_rows, format_fixed_rows, pvt_segment_text, the FK's arithmetic
-    (module), name, why the reference runs or "")."""
-    pure = (ik.inverse_rows, text.format_fixed_rows, text.pvt_segment_text, fk)
+def _load() -> tuple[Any, Any, Any, Any, Any, str, str]:
+    """(inverse_rows, platform_cols, format_fixed_rows, pvt_segment_text, the FK's
+    arithmetic (module), name, why the reference runs or "")."""
+    pure = (ik.inverse_rows, ik.platform_cols, text.format_fixed_rows, text.pvt_segment_text, fk)
     if os.environ.get(ENV, "").strip().lower() == "pure":
         return (*pure, "pure numpy (PRSXY_KERNEL=pure)", f"{ENV}=pure")
     try:
@@ -62,6 +62,7 @@ def _load() -> tuple[Any, Any, Any, Any, str, str]:
         return (*pure, f"pure numpy ({why})", why)
     return (
         _ik.inverse_rows,
+        _ik.platform_cols,
         _text.format_fixed_rows,
         _text.pvt_segment_text,
         _fk,
@@ -70,7 +71,7 @@ def _load() -> tuple[Any, Any, Any, Any, str, str]:
     )
 
 
-_inverse_rows, _fixed_rows, _pvt_segment, _fk_mod, NAME, WHY_PURE = _load()
+_inverse_rows, _platform_cols, _fixed_rows, _pvt_segment, _fk_mod, NAME, WHY_PURE = _load()
 #: True when the compiled kernels run.
 COMPILED: bool = not WHY_PURE
 #: True when the reference runs because the extension is missing (not asked for).
@@ -81,6 +82,13 @@ def inverse_rows(m: ik.IKArrays, q: np.ndarray, tz: np.ndarray) -> np.ndarray:
     """Motor positions (N, 5) [mm] for poses ``q`` (N, 5) and tool heights ``tz``
     (N,): :func:`ik.inverse_rows`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _inverse_rows(m, q, tz)
+    return out
+
+
+def platform_cols(m: ik.IKArrays, q: np.ndarray, tz: np.ndarray) -> ik.PlatformCols:
+    """Step 1 of the IK, the platform's spin and centre for poses ``q`` (N, 5):
+    :func:`ik.platform_cols`, compiled when :data:`COMPILED`."""
+    out: ik.PlatformCols = _platform_cols(m, q, tz)
     return out
 
 
