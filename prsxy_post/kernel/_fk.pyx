@@ -51,6 +51,13 @@ def rotation_cs(ca, sa, cb, sb, cg, sg):
 def fk_equations(m, c_in, rb_in, p3_in, off_in=None):
     """w, |w|, f: the six FK equations (``fk.fk_equations``)."""
     cdef Py_ssize_t n = c_in.shape[0], i, k
+    if (
+        c_in.shape != (n, 3)
+        or rb_in.shape != (n, 3, 3)
+        or p3_in.shape != (n, 3)
+        or (off_in is not None and off_in.shape != (n, 3, 3))
+    ):
+        raise ValueError("c and p3 must be (N, 3), rb and off (N, 3, 3)")
     cdef const double[:, :] c = c_in
     cdef const double[:, :, :] rb = rb_in
     cdef const double[:, :] p3 = p3_in
@@ -96,6 +103,13 @@ def fk_jacobian_parts(m, R_in, rb_in, w_in, nw_in, cb_in, sb_in):
     """J's columns of c, R b_k × u_k, R b_k × w_k/|w_k|, the axes as columns
     (``fk.fk_jacobian_parts``)."""
     cdef Py_ssize_t n = R_in.shape[0], i, k, j
+    if (
+        any(a.shape != (n, 3, 3) for a in (R_in, rb_in, w_in))
+        or nw_in.shape != (n, 3)
+        or cb_in.shape != (n,)
+        or sb_in.shape != (n,)
+    ):
+        raise ValueError("R, rb and w must be (N, 3, 3), |w| (N, 3), cos B and sin B (N,)")
     cdef const double[:, :, :] R = R_in
     cdef const double[:, :, :] rb = rb_in
     cdef const double[:, :, :] w = w_in
@@ -146,6 +160,8 @@ def fk_jacobian_parts(m, R_in, rb_in, w_in, nw_in, cb_in, sb_in):
 def newton_step(x_in, step_in, double limit):
     """x + step, done, bad: one batched Newton update (``fk.newton_step``)."""
     cdef Py_ssize_t n = x_in.shape[0], k = x_in.shape[1], i, j
+    if step_in.shape != x_in.shape:
+        raise ValueError("x and step must have the same shape (N, k)")
     cdef const double[:, :] x = x_in
     cdef const double[:, :] step = step_in
     out_a = np.empty((n, k))

@@ -220,6 +220,13 @@ def pvt_segment_text(columns, line, new_line, quanta, new_time, other_rows, othe
         return _pure.pvt_segment_text(
             columns, line, new_line, quanta, new_time, other_rows, other_text
         )
+    if (
+        any(len(a) != m for a in (new_line, quanta, new_time))
+        or any(len(col[1]) != m for col in columns)
+        or len(other_rows) != len(other_text)
+    ):
+        raise ValueError("every column and row array must have a value a row, "
+                         "and other_rows a text each")
     cdef const int64_t[::1] ln = np.ascontiguousarray(line, dtype=np.int64)
     cdef const int64_t[::1] qt = np.ascontiguousarray(quanta, dtype=np.int64)
     cdef const char[::1] nl = np.ascontiguousarray(new_line, dtype=bool).view(np.int8)
