@@ -35,6 +35,7 @@ import numpy as np
 
 from . import kernel
 from .errors import ProfileError
+from .kernel import fk as kfk
 from .kernel import ik as kik
 from .profile import Effects, KinematicParams, Profile, TableParams, nominal_kinematics
 
@@ -82,18 +83,9 @@ def platform_rotation(a: np.ndarray, b: np.ndarray, gamma: np.ndarray) -> np.nda
 def _rotation_cs(
     ca: np.ndarray, sa: np.ndarray, cb: np.ndarray, sb: np.ndarray, cg: np.ndarray, sg: np.ndarray
 ) -> np.ndarray:
-    """R_y(B) R_x(A) R_z(γ) from the angles' cosines and sines, (N, 3, 3)."""
-    R = np.empty((*np.shape(ca), 3, 3))
-    R[..., 0, 0] = cb * cg + sb * sa * sg
-    R[..., 0, 1] = sb * sa * cg - cb * sg
-    R[..., 0, 2] = sb * ca
-    R[..., 1, 0] = ca * sg
-    R[..., 1, 1] = ca * cg
-    R[..., 1, 2] = -sa
-    R[..., 2, 0] = cb * sa * sg - sb * cg
-    R[..., 2, 1] = sb * sg + cb * sa * cg
-    R[..., 2, 2] = cb * ca
-    return R
+    """R_y(B) R_x(A) R_z(γ) from the angles' cosines and sines, (N, 3, 3): the
+    kernel's (:func:`prsxy_post.kernel.fk.rotation_cs`, compiled when built)."""
+    return kernel.rotation_cs(ca, sa, cb, sb, cg, sg)
 
 
 def tool_axis(a_deg: np.ndarray, b_deg: np.ndarray) -> np.ndarray:
@@ -214,6 +206,11 @@ class Geometry:
             straight,
         )
 
+    @cached_property
+    def fk_arrays(self) -> kfk.FKArrays:
+        """The geometry as the kernel's FK arithmetic takes it (made once)."""
+        return kfk.FKArrays(g=self.g, u=self.u, d=self.d, L=self.L)
+
     # Precomputed linear algebra of the closed-form IK, once per geometry (an SVD
     # and a pseudo-inverse cost 0.2 ms; the arrays are not changed after
     # construction, as a frozen geometry's are not).
@@ -291,9 +288,9 @@ def _solve(
     geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float | None
 ) -> kik.PlatformCols:
     """The closed-form platform solution (module docstring), in components: the
-    kernel's reference (:func:`prsxy_post.kernel.ik.platform_cols`)."""
+    kernel's (:func:`prsxy_post.kernel.ik.platform_cols`, compiled when built)."""
     m = geo.ik_arrays
-    return kik.platform_cols(m, q, kik.tool_z(m, q.shape[0], tool_length_offset))
+    return kernel.platform_cols(m, q, kik.tool_z(m, q.shape[0], tool_length_offset))
 
 
 def _pose(p: kik.PlatformCols) -> PlatformPose:
@@ -325,7 +322,7 @@ class IKResult:
 
     @cached_property
     def pose(self) -> PlatformPose:
-        return _pose(kik.platform_cols(self._geo.ik_arrays, self._q, self._tool_z))
+        return _pose(kernel.platform_cols(self._geo.ik_arrays, self._q, self._tool_z))
 
 
 def inverse(
@@ -382,35 +379,23 @@ def table_motors(geo: Geometry, dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndar
     return kik.table_motors(geo.ik_arrays, dx, dy)
 
 
-def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a × b over the last axis, written out (np.cross is slow on small shapes)."""
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    return out
-
-
-def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a · b over the last axis, written out (a reduction over 3 is slow)."""
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
-
-
 def _fk_parts(
     geo: Geometry, P: np.ndarray, xv: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """R (N, 3, 3), R b_k (N, 3, 3), w_k (N, 3, 3), |w_k| (N, 3) and the six FK
-    equations (N, 6) at xv = (c, A, B, γ) [mm, rad]."""
-    c = xv[:, :3]
-    R = platform_rotation(xv[:, 3], xv[:, 4], xv[:, 5])
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """R (N, 3, 3), R b_k (N, 3, 3), w_k (N, 3, 3), |w_k| (N, 3), the six FK
+    equations (N, 6) at xv = (c, A, B, γ) [mm, rad], and cos B, sin B (N,).
+
+    The sines and cosines (numpy's) and R b_k (numpy's matmul) here; the arithmetic
+    between them in the kernel (:mod:`prsxy_post.kernel.fk`, compiled when built).
+    """
+    a, b, g = xv[:, 3], xv[:, 4], xv[:, 5]
+    cb, sb = np.cos(b), np.sin(b)
+    R = kernel.rotation_cs(np.cos(a), np.sin(a), cb, sb, np.cos(g), np.sin(g))
     rb = np.matmul(R, geo.b.T).transpose(0, 2, 1)  # R b_k, (N, leg, 3)
-    v = c[:, None, :] + rb - geo.g[None]
-    plane = _dot3(v, geo.u)
-    w = v - geo.hinge_offset(P[:, :3])
-    norm_w = np.sqrt(_dot3(w, w))
-    # Length residual scaled to mm: |w| − L behaves like a distance.
-    f = np.concatenate([plane, norm_w - geo.L[None]], axis=1)
-    return R, rb, w, norm_w, f
+    # the hinges' offsets P_k d_k in the kernel, unless the guides bow
+    off = None if geo.guide_bow is None else geo.hinge_offset(P[:, :3])
+    w, norm_w, f = kernel.fk_equations(geo.fk_arrays, xv[:, :3], rb, P[:, :3], off)
+    return R, rb, w, norm_w, f, cb, sb
 
 
 def _fk_residual(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
@@ -432,23 +417,12 @@ def _fk_system(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> tuple[np.ndarray
     -------
     f : (N, 6) [mm]; J : (N, 6, 6) ∂f/∂xv [mm/mm, mm/rad]
     """
-    R, rb, w, norm_w, f = _fk_parts(geo, P, xv)
-    n = len(xv)
-    axes = np.empty((n, 3, 3))  # rotation axes of A, B, γ (rows)
-    axes[:, 0, 0] = np.cos(xv[:, 4])
-    axes[:, 0, 1] = 0.0
-    axes[:, 0, 2] = -np.sin(xv[:, 4])
-    axes[:, 1] = (0.0, 1.0, 0.0)
-    axes[:, 2] = R[:, :, 2]
-    unit_w = w / norm_w[..., None]
+    R, rb, w, norm_w, f, cb, sb = _fk_parts(geo, P, xv)
     # n·(e × R b_k) = e·(R b_k × n): the angle columns are the triple products
     # with the two normals, u_k for the plane and w_k / |w_k| for the length
-    axes_t = axes.transpose(0, 2, 1)
-    J = np.empty((n, 6, 6))
-    J[:, :3, :3] = geo.u[None]
-    J[:, 3:, :3] = unit_w
-    J[:, :3, 3:] = np.matmul(_cross3(rb, np.broadcast_to(geo.u, rb.shape)), axes_t)
-    J[:, 3:, 3:] = np.matmul(_cross3(rb, unit_w), axes_t)
+    J, cross_u, cross_w, axes_t = kernel.fk_jacobian_parts(geo.fk_arrays, R, rb, w, norm_w, cb, sb)
+    J[:, :3, 3:] = np.matmul(cross_u, axes_t)
+    J[:, 3:, 3:] = np.matmul(cross_w, axes_t)
     return f, J
 
 
@@ -506,10 +480,7 @@ def forward_platform(
                 step = np.linalg.solve(J, -f[..., None])[..., 0]
             except np.linalg.LinAlgError:
                 step = np.full_like(x, np.nan)
-        bad = ~np.all(np.isfinite(step), axis=1)
-        step[bad] = 0.0
-        xv[idx] = x + step
-        done = (np.max(np.abs(step), axis=1) < tol * 1e3) & ~bad
+        xv[idx], done, bad = kernel.newton_step(x, step, tol * 1e3)
         # Stop when the step is at rounding level; one more Newton step after the
         # step first gets small would not change the result.
         converged[idx[done]] = True

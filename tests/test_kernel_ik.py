@@ -48,6 +48,25 @@ def test_sample_programs_ik_is_bit_identical(tmp_path: Path) -> None:
     assert rows > 10_000  # the samples' points, each solved several times
 
 
+def same_cols(got: ik.PlatformCols, want: ik.PlatformCols) -> bool:
+    """Every column of two platform solutions equal to the bit."""
+    return all(
+        same_bits(getattr(got, f.name), getattr(want, f.name))
+        for f in dataclasses.fields(ik.PlatformCols)
+    )
+
+
+def test_sample_programs_platform_cols_are_bit_identical(tmp_path: Path) -> None:
+    """Step 1 of the IK alone (the FK's warm start, IKResult.pose), as the sample
+    programs call it."""
+    _ik = compiled("_ik")
+    calls = record("_platform_cols", tmp_path)
+    assert len(calls) >= 3  # every G-code run's chunks
+    for m, q, tz in calls:
+        assert same_cols(_ik.platform_cols(m, q, tz), ik.platform_cols(m, q, tz))
+    assert sum(len(q) for _, q, _ in calls) > 5_000
+
+
 #: tilts to ±180°: beyond about 50° some poses have no solution (NaN rows)
 POSE = st.tuples(
     st.floats(-150, 150),
@@ -82,6 +101,7 @@ def test_generated_poses_are_bit_identical(
     q = np.array(poses, dtype=float)
     tz = ik.tool_z(m, len(q), tool)
     assert same_bits(_ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz))
+    assert same_cols(_ik.platform_cols(m, q, tz), ik.platform_cols(m, q, tz))
 
 
 def test_unreachable_rows_are_nan_in_both() -> None:
@@ -97,6 +117,7 @@ def test_unreachable_rows_are_nan_in_both() -> None:
     tz = ik.tool_z(m, 3, None)
     got, want = _ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz)
     assert same_bits(got, want)
+    assert same_cols(_ik.platform_cols(m, q, tz), ik.platform_cols(m, q, tz))
     assert np.isfinite(got[0]).all() and np.isnan(got[1:, :3]).any(axis=1).all()
 
 

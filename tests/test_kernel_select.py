@@ -21,7 +21,7 @@ from .kernel_cases import REQUIRE
 #: machine without a compiler
 WITHOUT_EXTENSION = (
     "import sys\n"
-    + "".join(f"sys.modules['prsxy_post.kernel.{n}'] = None\n" for n in kernel.TWINS)
+    + "".join(f"sys.modules['prsxy_post.kernel.{n}'] = None\n" for n in kernel.TWINS.values())
     + "from prsxy_post.cli import main\n"
     "main(sys.argv[1:], prog_name='prsxy-post')\n"
 )

@@ -1,9 +1,9 @@
 """The kernel: per-point numerical work as functions over arrays.
 
-Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``) and a
-compiled twin in Cython (``_ik.pyx``, ``_text.pyx``, ``_legendre.pyx``, built when the
-package is installed) that gives the same bits. This module picks one set for the
-whole program, once, at import:
+Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``, ``fk.py``,
+...: :data:`TWINS`) and a compiled twin in Cython (``_ik.pyx``, ...; built when the
+package is installed) that gives the same bits. This module picks one set for the whole
+program, once, at import:
 
 - ``PRSXY_KERNEL=pure`` in the environment: the numpy reference (CI's pure leg);
 - otherwise the compiled kernels when the extension imports, else the reference.
@@ -22,51 +22,55 @@ command line: its inputs are arrays and small frozen records of arrays.
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from types import ModuleType
 
 import numpy as np
 
-from . import ik, legendre, text
+from . import fk, ik, legendre
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
 
 InverseRows = Callable[[ik.IKArrays, np.ndarray, np.ndarray], np.ndarray]
 FixedRows = Callable[..., list[str]]
-#: the compiled modules, each the twin of the reference module of its name
-TWINS = ("_ik", "_text", "_legendre")
+#: each reference module's compiled twin
+TWINS = {"ik": "_ik", "text": "_text", "legendre": "_legendre", "fk": "_fk"}
 
 
-def _load() -> tuple[Any, Any, Any, str, str]:
-    """(inverse_rows, format_fixed_rows, map_rows, name, why the reference runs or "")."""
-    pure = (ik.inverse_rows, text.format_fixed_rows, legendre.map_rows)
+def _load() -> tuple[dict[str, ModuleType], str, str]:
+    """(the module that runs for each reference module, name, why the reference
+    runs or "")."""
+    refs = {n: importlib.import_module(f"{__name__}.{n}") for n in TWINS}
     if os.environ.get(ENV, "").strip().lower() == "pure":
-        return (*pure, "pure numpy (PRSXY_KERNEL=pure)", f"{ENV}=pure")
+        return refs, "pure numpy (PRSXY_KERNEL=pure)", f"{ENV}=pure"
     try:
-        from . import _ik, _legendre, _text  # type: ignore[attr-defined]
+        twins = {n: importlib.import_module(f"{__name__}.{t}") for n, t in TWINS.items()}
     except ImportError as e:
-        absent = [n for n in TWINS if importlib.util.find_spec(f"{__name__}.{n}") is None]
+        absent = [t for t in TWINS.values() if importlib.util.find_spec(f"{__name__}.{t}") is None]
         why = (
             f"the compiled extension is not built (no {', '.join(absent)} "
             f"in {Path(__file__).parent})"
             if absent
             else f"the compiled extension does not import ({e})"
         )
-        return (*pure, f"pure numpy ({why})", why)
-    return (
-        _ik.inverse_rows,
-        _text.format_fixed_rows,
-        _legendre.map_rows,
-        f"compiled (Cython {_ik.CYTHON})",
-        "",
-    )
+        return refs, f"pure numpy ({why})", why
+    return twins, f"compiled (Cython {twins['ik'].CYTHON})", ""
 
 
-_inverse_rows, _fixed_rows, _map_rows, NAME, WHY_PURE = _load()
+_RUN, NAME, WHY_PURE = _load()
+# the selected functions, each a module attribute (the differential tests record
+# the calls the conversions make by replacing one)
+_inverse_rows = _RUN["ik"].inverse_rows
+_platform_cols = _RUN["ik"].platform_cols
+_fixed_rows = _RUN["text"].format_fixed_rows
+_pvt_segment = _RUN["text"].pvt_segment_text
+_map_rows = _RUN["legendre"].map_rows
+_fk_mod = _RUN["fk"]
 #: True when the compiled kernels run.
 COMPILED: bool = not WHY_PURE
 #: True when the reference runs because the extension is missing (not asked for).
@@ -80,10 +84,76 @@ def inverse_rows(m: ik.IKArrays, q: np.ndarray, tz: np.ndarray) -> np.ndarray:
     return out
 
 
+def platform_cols(m: ik.IKArrays, q: np.ndarray, tz: np.ndarray) -> ik.PlatformCols:
+    """Step 1 of the IK, the platform's spin and centre for poses ``q`` (N, 5):
+    :func:`ik.platform_cols`, compiled when :data:`COMPILED`."""
+    out: ik.PlatformCols = _platform_cols(m, q, tz)
+    return out
+
+
 def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str = "\n") -> list[str]:
     """Rows of fixed-point text: :func:`text.format_fixed_rows`, compiled when
     :data:`COMPILED`."""
     out: list[str] = _fixed_rows(columns, end)
+    return out
+
+
+def pvt_segment_text(
+    columns: Sequence[tuple[str, np.ndarray, int]],
+    line: np.ndarray,
+    new_line: np.ndarray,
+    quanta: np.ndarray,
+    new_time: np.ndarray,
+    other_rows: np.ndarray,
+    other_text: Sequence[str],
+) -> str:
+    """A PVT program's points as one text: :func:`text.pvt_segment_text`, compiled
+    when :data:`COMPILED`."""
+    out: str = _pvt_segment(columns, line, new_line, quanta, new_time, other_rows, other_text)
+    return out
+
+
+def rotation_cs(
+    ca: np.ndarray, sa: np.ndarray, cb: np.ndarray, sb: np.ndarray, cg: np.ndarray, sg: np.ndarray
+) -> np.ndarray:
+    """R_y(B) R_x(A) R_z(γ) (N, 3, 3) from the angles' cosines and sines:
+    :func:`fk.rotation_cs`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _fk_mod.rotation_cs(ca, sa, cb, sb, cg, sg)
+    return out
+
+
+def fk_equations(
+    m: fk.FKArrays, c: np.ndarray, rb: np.ndarray, p3: np.ndarray, off: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """w, |w| and the six FK equations: :func:`fk.fk_equations`, compiled when
+    :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _fk_mod.fk_equations(m, c, rb, p3, off)
+    return out
+
+
+def fk_jacobian_parts(
+    m: fk.FKArrays,
+    R: np.ndarray,
+    rb: np.ndarray,
+    w: np.ndarray,
+    norm_w: np.ndarray,
+    cb: np.ndarray,
+    sb: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The FK Jacobian's columns of c and the factors of its angle columns:
+    :func:`fk.fk_jacobian_parts`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _fk_mod.fk_jacobian_parts(
+        m, R, rb, w, norm_w, cb, sb
+    )
+    return out
+
+
+def newton_step(
+    x: np.ndarray, step: np.ndarray, limit: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """x + step, done, bad (N,): one batched Newton update of the FK:
+    :func:`fk.newton_step`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _fk_mod.newton_step(x, step, limit)
     return out
 
 

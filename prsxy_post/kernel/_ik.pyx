@@ -38,6 +38,125 @@ cdef inline double _wrap(double a) nogil:
     return mod - M_PI
 
 
+cdef struct _Geo:
+    double u[3][3]
+    double b[3][3]
+    double g[3][3]
+    double d[3][3]
+    double L2[3]
+    double gu[3]
+    double nul[4]
+    double Mp[3][4]
+    double origin[3]
+    double tx
+    double ty
+
+
+cdef _Geo _geo(m):
+    """The geometry's arrays as C doubles."""
+    cdef _Geo G
+    cdef Py_ssize_t k, j
+    G.tx = float(m.tool[0])
+    G.ty = float(m.tool[1])
+    for k in range(3):
+        G.L2[k] = float(m.L2[k])
+        G.gu[k] = float(m.gu[k])
+        G.origin[k] = float(m.origin[k])
+        for j in range(3):
+            G.u[k][j] = float(m.u[k, j])
+            G.b[k][j] = float(m.b[k, j])
+            G.g[k][j] = float(m.g[k, j])
+            G.d[k][j] = float(m.d[k, j])
+        for j in range(4):
+            G.Mp[k][j] = float(m.Mp[k, j])
+    for j in range(4):
+        G.nul[j] = float(m.nul[j])
+    return G
+
+
+cdef inline void _platform(
+    const _Geo* G, double qz, double qa, double qb, double tzi, double* o
+) noexcept nogil:
+    """Step 1 of the IK for one pose (``ik.platform_cols``): o = (ca, sa, cb, sb,
+    cg, sg, gamma, c0, c1, c2)."""
+    cdef double a_rad, b_rad, ca, sa, cb, sb, uR0, uR1, uR2
+    cdef double const_legs[3]
+    cdef double cos_legs[3]
+    cdef double sin_legs[3]
+    cdef double r_legs[3]
+    cdef double rz0, rz1, rz2, const_z, cos_z, sin_z, K0, Kc, Ks, rho, phi, ratio, delta
+    cdef double g1, g2, gamma, cg, sg, r_z
+    cdef int k, j
+    a_rad = qa * DEG2RAD
+    b_rad = qb * DEG2RAD
+    ca = cos(a_rad)
+    sa = sin(a_rad)
+    cb = cos(b_rad)
+    sb = sin(b_rad)
+    for k in range(3):
+        uR0 = cb * G.u[k][0] - sb * G.u[k][2]
+        uR1 = sb * sa * G.u[k][0] + ca * G.u[k][1] + cb * sa * G.u[k][2]
+        uR2 = sb * ca * G.u[k][0] - sa * G.u[k][1] + cb * ca * G.u[k][2]
+        const_legs[k] = G.gu[k] - uR2 * G.b[k][2]
+        cos_legs[k] = -(uR0 * G.b[k][0] + uR1 * G.b[k][1])
+        sin_legs[k] = -(uR1 * G.b[k][0] - uR0 * G.b[k][1])
+    rz0 = -sb
+    rz1 = cb * sa
+    rz2 = cb * ca
+    const_z = G.origin[2] + qz - rz2 * tzi
+    cos_z = -(rz0 * G.tx + rz1 * G.ty)
+    sin_z = -(rz1 * G.tx - rz0 * G.ty)
+    K0 = const_legs[0] * G.nul[0] + const_legs[1] * G.nul[1] + const_legs[2] * G.nul[2] + const_z * G.nul[3]
+    Kc = cos_legs[0] * G.nul[0] + cos_legs[1] * G.nul[1] + cos_legs[2] * G.nul[2] + cos_z * G.nul[3]
+    Ks = sin_legs[0] * G.nul[0] + sin_legs[1] * G.nul[1] + sin_legs[2] * G.nul[2] + sin_z * G.nul[3]
+    rho = sqrt(Kc * Kc + Ks * Ks)
+    phi = atan2(Ks, Kc)
+    ratio = -K0 / rho
+    if fabs(ratio) <= 1.0:
+        delta = acos(ratio)
+    else:
+        delta = NAN
+    g1 = _wrap(phi + delta)
+    g2 = _wrap(phi - delta)
+    gamma = g1 if fabs(g1) <= fabs(g2) else g2
+    cg = cos(gamma)
+    sg = sin(gamma)
+    for k in range(3):
+        r_legs[k] = const_legs[k] + cos_legs[k] * cg + sin_legs[k] * sg
+    r_z = const_z + cos_z * cg + sin_z * sg
+    for j in range(3):
+        o[7 + j] = r_legs[0] * G.Mp[j][0] + r_legs[1] * G.Mp[j][1] + r_legs[2] * G.Mp[j][2] + r_z * G.Mp[j][3]
+    o[0] = ca
+    o[1] = sa
+    o[2] = cb
+    o[3] = sb
+    o[4] = cg
+    o[5] = sg
+    o[6] = gamma
+
+
+def platform_cols(m, const double[:, :] q, const double[:] tz):
+    """Step 1 of the IK, spin γ and centre c for poses ``q`` (N, 5) [mm, deg]: the
+    compiled twin of ``ik.platform_cols``."""
+    cdef Py_ssize_t n = q.shape[0], i, j
+    if q.shape[1] != 5 or tz.shape[0] != n:
+        raise ValueError("q must be (N, 5) and tz (N,)")
+    cdef _Geo G = _geo(m)
+    cols_a = np.empty((7, n))
+    c_a = np.empty((n, 3))
+    cdef double[:, ::1] cols = cols_a
+    cdef double[:, ::1] c = c_a
+    cdef double o[10]
+    with nogil:
+        for i in range(n):
+            _platform(&G, q[i, 2], q[i, 3], q[i, 4], tz[i], o)
+            for j in range(7):
+                cols[j, i] = o[j]
+            for j in range(3):
+                c[i, j] = o[7 + j]
+    return _pure.PlatformCols(*cols_a, c_a)
+
+
 def inverse_rows(m, const double[:, :] q, const double[:] tz):
     """Motor positions P (N, 5) [mm]; the compiled twin of ``ik.inverse_rows``.
     A geometry with bowed guides goes to the reference (its Newton sums are
@@ -47,16 +166,7 @@ def inverse_rows(m, const double[:, :] q, const double[:] tz):
     cdef Py_ssize_t n = q.shape[0], i, k, j
     if q.shape[1] != 5 or tz.shape[0] != n:
         raise ValueError("q must be (N, 5) and tz (N,)")
-    cdef double u[3][3]
-    cdef double b[3][3]
-    cdef double g[3][3]
-    cdef double d[3][3]
-    cdef double L2[3]
-    cdef double gu[3]
-    cdef double nul[4]
-    cdef double Mp[3][4]
-    cdef double origin[3]
-    cdef double tx = float(m.tool[0]), ty = float(m.tool[1])
+    cdef _Geo G = _geo(m)
     cdef double sx1 = 1.0 + float(m.scale_x), sy1 = 1.0 + float(m.scale_y)
     cdef double sq = float(m.squareness)
     cdef bint straight = m.straightness is not None
@@ -64,78 +174,32 @@ def inverse_rows(m, const double[:, :] q, const double[:] tz):
     if straight:
         kx = float(m.straightness[0])
         ky = float(m.straightness[1])
-    for k in range(3):
-        L2[k] = float(m.L2[k])
-        gu[k] = float(m.gu[k])
-        origin[k] = float(m.origin[k])
-        for j in range(3):
-            u[k][j] = float(m.u[k, j])
-            b[k][j] = float(m.b[k, j])
-            g[k][j] = float(m.g[k, j])
-            d[k][j] = float(m.d[k, j])
-        for j in range(4):
-            Mp[k][j] = float(m.Mp[k, j])
-    for j in range(4):
-        nul[j] = float(m.nul[j])
 
     out = np.empty((n, 5))
     cdef double[:, :] P = out
-    cdef double a_rad, b_rad, ca, sa, cb, sb, uR0, uR1, uR2
-    cdef double const_legs[3]
-    cdef double cos_legs[3]
-    cdef double sin_legs[3]
-    cdef double r_legs[3]
+    cdef double ca, sa, cb, sb, cg, sg
+    cdef double o[10]
     cdef double c[3]
     cdef double v[3]
-    cdef double rz0, rz1, rz2, const_z, cos_z, sin_z, K0, Kc, Ks, rho, phi, ratio, delta
-    cdef double g1, g2, gamma, cg, sg, r_z, x, y, y2, z2, w0, w1, w2, rbx, rby, rbz
+    cdef double x, y, y2, z2, w0, w1, w2, rbx, rby, rbz
     cdef double dv, disc, Dx, Dy, p5, p6, t0, t1, t2
     with nogil:
         for i in range(n):
-            a_rad = q[i, 3] * DEG2RAD
-            b_rad = q[i, 4] * DEG2RAD
-            ca = cos(a_rad)
-            sa = sin(a_rad)
-            cb = cos(b_rad)
-            sb = sin(b_rad)
-            for k in range(3):
-                uR0 = cb * u[k][0] - sb * u[k][2]
-                uR1 = sb * sa * u[k][0] + ca * u[k][1] + cb * sa * u[k][2]
-                uR2 = sb * ca * u[k][0] - sa * u[k][1] + cb * ca * u[k][2]
-                const_legs[k] = gu[k] - uR2 * b[k][2]
-                cos_legs[k] = -(uR0 * b[k][0] + uR1 * b[k][1])
-                sin_legs[k] = -(uR1 * b[k][0] - uR0 * b[k][1])
-            rz0 = -sb
-            rz1 = cb * sa
-            rz2 = cb * ca
-            const_z = origin[2] + q[i, 2] - rz2 * tz[i]
-            cos_z = -(rz0 * tx + rz1 * ty)
-            sin_z = -(rz1 * tx - rz0 * ty)
-            K0 = const_legs[0] * nul[0] + const_legs[1] * nul[1] + const_legs[2] * nul[2] + const_z * nul[3]
-            Kc = cos_legs[0] * nul[0] + cos_legs[1] * nul[1] + cos_legs[2] * nul[2] + cos_z * nul[3]
-            Ks = sin_legs[0] * nul[0] + sin_legs[1] * nul[1] + sin_legs[2] * nul[2] + sin_z * nul[3]
-            rho = sqrt(Kc * Kc + Ks * Ks)
-            phi = atan2(Ks, Kc)
-            ratio = -K0 / rho
-            if fabs(ratio) <= 1.0:
-                delta = acos(ratio)
-            else:
-                delta = NAN
-            g1 = _wrap(phi + delta)
-            g2 = _wrap(phi - delta)
-            gamma = g1 if fabs(g1) <= fabs(g2) else g2
-            cg = cos(gamma)
-            sg = sin(gamma)
-            for k in range(3):
-                r_legs[k] = const_legs[k] + cos_legs[k] * cg + sin_legs[k] * sg
-            r_z = const_z + cos_z * cg + sin_z * sg
-            for j in range(3):
-                c[j] = r_legs[0] * Mp[j][0] + r_legs[1] * Mp[j][1] + r_legs[2] * Mp[j][2] + r_z * Mp[j][3]
+            _platform(&G, q[i, 2], q[i, 3], q[i, 4], tz[i], o)
+            ca = o[0]
+            sa = o[1]
+            cb = o[2]
+            sb = o[3]
+            cg = o[4]
+            sg = o[5]
+            c[0] = o[7]
+            c[1] = o[8]
+            c[2] = o[9]
             for k in range(3):
                 # R b_k (ik.rotate), then v_k = c + R b_k − g_k
-                w0 = b[k][0]
-                w1 = b[k][1]
-                w2 = b[k][2]
+                w0 = G.b[k][0]
+                w1 = G.b[k][1]
+                w2 = G.b[k][2]
                 x = cg * w0 - sg * w1
                 y = sg * w0 + cg * w1
                 y2 = ca * y - sa * w2
@@ -143,22 +207,22 @@ def inverse_rows(m, const double[:, :] q, const double[:] tz):
                 rbx = cb * x + sb * z2
                 rby = y2
                 rbz = -sb * x + cb * z2
-                v[0] = c[0] + rbx - g[k][0]
-                v[1] = c[1] + rby - g[k][1]
-                v[2] = c[2] + rbz - g[k][2]
-                dv = v[0] * d[k][0] + v[1] * d[k][1] + v[2] * d[k][2]
-                disc = dv * dv - (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + L2[k]
+                v[0] = c[0] + rbx - G.g[k][0]
+                v[1] = c[1] + rby - G.g[k][1]
+                v[2] = c[2] + rbz - G.g[k][2]
+                dv = v[0] * G.d[k][0] + v[1] * G.d[k][1] + v[2] * G.d[k][2]
+                disc = dv * dv - (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + G.L2[k]
                 P[i, k] = dv + sqrt(disc)
             # R t
-            t0 = tx
-            t1 = ty
+            t0 = G.tx
+            t1 = G.ty
             t2 = tz[i]
             x = cg * t0 - sg * t1
             y = sg * t0 + cg * t1
             y2 = ca * y - sa * t2
             z2 = sa * y + ca * t2
-            Dx = origin[0] + q[i, 0] - (c[0] + (cb * x + sb * z2))
-            Dy = origin[1] + q[i, 1] - (c[1] + y2)
+            Dx = G.origin[0] + q[i, 0] - (c[0] + (cb * x + sb * z2))
+            Dy = G.origin[1] + q[i, 1] - (c[1] + y2)
             p6 = Dy / sy1
             p5 = (Dx - sq * p6) / sx1
             if straight:

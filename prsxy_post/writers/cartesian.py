@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import kinematics
 from ..errors import ReachError
+from .numbers import format_fixed_rows
 
 if TYPE_CHECKING:
     from ..points import PointChunk
@@ -35,3 +36,18 @@ def written_points(cgeo: kinematics.Geometry, chunk: PointChunk) -> np.ndarray:
             expected="a pose within reach of [controller_kinematics]",
         )
     return q
+
+
+def feed_words(dt: np.ndarray) -> dict[float, str]:
+    """G93's feed word for each distinct segment time t > 0 [s] of ``dt``:
+    ``F`` 60 / t (inverse time: 1 / minutes) with three decimals, the text of
+    ``f"F{60.0 / t:.3f}"``, made for the whole chunk in one kernel call.
+
+    A line whose time is a sum of segments (points dropped in between) is not
+    here: the writer formats it itself.
+    """
+    t = np.unique(dt[(dt > 0.0) & np.isfinite(dt)])
+    with np.errstate(over="ignore"):  # as Python's 60.0 / t: inf, no error
+        f = 60.0 / t
+    words = format_fixed_rows([("F", f, 3)])
+    return dict(zip(t.tolist(), [w[:-1] for w in words], strict=True))

@@ -77,7 +77,7 @@ from .. import kinematics
 from ..interpolate.geometry import CORNER_SHARE
 from ..profile.output import OUTPUT_SETTINGS
 from .base import Dialect, Piece, Provenance, header, words_text
-from .cartesian import written_points
+from .cartesian import feed_words, written_points
 from .numbers import format_fixed_rows, round_clean
 
 if TYPE_CHECKING:
@@ -156,6 +156,8 @@ class GcodeWriter:
         #: far LinuxCNC would cut the corner there: (point, its segment's time,
         #: its words)
         self.corner: tuple[list[float], float, str] | None = None
+        #: the F words of this chunk's segment times (cartesian.feed_words)
+        self.f_words: dict[float, str] = {}
 
     def begin(self) -> list[Piece]:
         ck = (
@@ -202,6 +204,7 @@ class GcodeWriter:
             [((" " if i else "") + a, q_arr[:, i], self.dec) for i, a in enumerate("XYZAB")]
         )
         texts = [row[:-1] for row in rows]  # without the newline
+        self.f_words = feed_words(chunk.dt)
         q = q_arr.tolist()
         dt = chunk.dt.tolist()
         line_no = chunk.line.tolist()
@@ -289,7 +292,7 @@ class GcodeWriter:
         if mode != self.exact:
             lines.append("G61" if mode else f"G64 P{self.blend:g}")
             self.exact = mode
-        lines.append(f"G1 {text} F{60.0 / t:.3f}")
+        lines.append(f"G1 {text} {self.f_words.get(t) or f'F{60.0 / t:.3f}'}")
         self.after_settle = exact
         if exact:
             # LinuxCNC ends a line mid servo cycle and starts the next in the same

@@ -16,3 +16,7 @@ def round_clean(x: np.ndarray, decimals: int) -> np.ndarray:
 #: ``"%s%.{d}f" % (prefix, value)`` per column: the kernel's
 #: (:func:`prsxy_post.kernel.text.format_fixed_rows`, compiled when built).
 format_fixed_rows = kernel.format_fixed_rows
+
+#: A PVT program's points as one text, rows with the line comments and PVT times
+#: before them (:func:`prsxy_post.kernel.text.pvt_segment_text`, compiled when built).
+pvt_segment_text = kernel.pvt_segment_text

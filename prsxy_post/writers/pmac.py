@@ -21,10 +21,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import LimitError
+from ..kernel import text as ktext
 from ..profile import MOTORS
 from ..profile.output import OUTPUT_SETTINGS
 from .base import Dialect, Piece, Provenance, header, words_text
-from .numbers import format_fixed_rows, round_clean
+from .numbers import pvt_segment_text, round_clean
 
 if TYPE_CHECKING:
     from ..points import PointChunk
@@ -40,6 +41,12 @@ PVT_MAX_MS = 4095.9998
 #: times are written as whole quanta, each rounded up (never faster than planned):
 #: the controller runs exactly the written time.
 PVT_QUANTA_PER_MS = 4096
+# the kernel writes a quantum as QUANTUM_E12 x 1e-12 ms
+assert ktext.QUANTUM_E12 * PVT_QUANTA_PER_MS == 10**12
+#: A PVT time of ``quanta`` / 4096 ms, exactly, as decimal text with at least four
+#: decimals: 40960 → ``10.0000``, 1000 → ``0.244140625`` (the kernel's definition,
+#: which the points' text follows, :func:`prsxy_post.kernel.text.pvt_ms_text`).
+pvt_ms_text = ktext.pvt_ms_text
 #: DWELL{data}: 0 to 8,388,607 ms (Software Reference, DWELL{data}); longer dwells
 #: are written as several.
 DWELL_MAX_MS = 8_388_607.0
@@ -53,17 +60,6 @@ WORDS_PER_LINE = 2 * len(MOTORS) + 2
 RESERVED_PROGRAMS = range(1000, 1004)
 
 SETTINGS = OUTPUT_SETTINGS["pmac"]
-
-
-def pvt_ms_text(quanta: int) -> str:
-    """A PVT time of ``quanta`` / 4096 ms, exactly, as decimal text with at least four
-    decimals: 40960 → ``10.0000``, 1000 → ``0.244140625``.
-
-    A whole number of 2^-12 has at most twelve decimals, and its double is exact.
-    """
-    text = f"{quanta / PVT_QUANTA_PER_MS:.12f}".rstrip("0")
-    whole, frac = text.split(".")
-    return f"{whole}.{frac:0<4}"
 
 
 class PmacWriter:
@@ -204,14 +200,6 @@ class PmacWriter:
             return []
         P = round_clean(chunk.P_cmd, self.dec)
         V = round_clean(chunk.V_cmd, 4)
-        # all text that can be made for the whole chunk at once is made here
-        rows = format_fixed_rows(
-            [
-                col
-                for i, a in enumerate(self.names)
-                for col in ((f"{' ' if i else ''}{a}", P[:, i], self.dec), (":", V[:, i], 4))
-            ]
-        )
         prev = np.vstack([self.last_P[None, :] if self.last_P is not None else P[:1], P[:-1]])
         # the path and the motors stand (a dwell, a function): no PVT segment
         still = np.all(P == prev, axis=1) & chunk.dwell
@@ -235,7 +223,7 @@ class PmacWriter:
             splits = np.flatnonzero(chunk.split[k:] > 0) if not self.rot else np.zeros(0, int)
             if splits.size:
                 stop = k + int(splits[0]) + 1
-            out.append(self._segment(chunk, rows, quanta, still, k, stop))
+            out.append(self._segment(chunk, P, V, quanta, still, k, stop))
             self.n += stop - k
             k = stop
             if splits.size:
@@ -264,7 +252,8 @@ class PmacWriter:
     def _segment(
         self,
         pts: PointChunk,
-        rows: list[str],
+        P: np.ndarray,
+        V: np.ndarray,
         quanta: np.ndarray,
         still: np.ndarray,
         k0: int,
@@ -272,7 +261,8 @@ class PmacWriter:
     ) -> str:
         """Points k0..k1: each with its line comment when the G-code line changes, a
         PVT time when the segment time changes, and its row (or a DWELL where the
-        machine stands, or the machine functions)."""
+        machine stands, or the machine functions): the text made in one kernel call
+        (:func:`prsxy_post.kernel.text.pvt_segment_text`)."""
         if not self.open:
             return ""
         m = k1 - k0
@@ -283,29 +273,36 @@ class PmacWriter:
         # program was chunked
         dt = np.where(stand, pts.dt[k0:k1], quanta[k0:k1] / (1000.0 * PVT_QUANTA_PER_MS))
         self.t_total = float(np.add.accumulate(np.concatenate([[self.t_total], dt]))[-1])
-        text = np.empty((m, 3), dtype=object)
-        text[:] = ""
         prev_line = np.concatenate([[-1 if self.last_line is None else self.last_line], line[:-1]])
-        changed = np.flatnonzero(line != prev_line)
-        text[changed, 0] = [f"; line {ln}\n" for ln in line[changed].tolist()]
         self.last_line = int(line[-1])
         fn = pts.fn[k0:k1]
+        new_time = np.zeros(m, dtype=bool)
         moving = np.flatnonzero(~stand)
         if moving.size:
             mv = quanta[k0 + moving]
             before = np.concatenate([[-1 if self.tm_cur is None else self.tm_cur], mv[:-1]])
-            new = np.flatnonzero(mv != before)
-            text[moving[new], 1] = [f"PVT{pvt_ms_text(q)}\n" for q in mv[new].tolist()]
+            new_time[moving[mv != before]] = True
             self.tm_cur = int(mv[-1])
-        text[:, 2] = rows[k0:k1]
-        for i in np.flatnonzero(stand).tolist():
+        others = np.flatnonzero(stand)
+        other_text = []
+        for i in others.tolist():
             words = fn[i]
             if words is not None:
                 # DWELL0 waits for the motion to end, so the function runs at rest
-                text[i, 2] = "DWELL0\n" + self._function(words) + "\n"
+                other_text.append("DWELL0\n" + self._function(words) + "\n")
             else:
-                text[i, 2] = self._dwell(float(pts.dt[k0 + i]) * 1000.0)
-        return "".join(text.ravel().tolist())
+                other_text.append(self._dwell(float(pts.dt[k0 + i]) * 1000.0))
+        columns = [
+            col
+            for i, a in enumerate(self.names)
+            for col in (
+                (f"{' ' if i else ''}{a}", P[k0:k1, i], self.dec),
+                (":", V[k0:k1, i], 4),
+            )
+        ]
+        return pvt_segment_text(
+            columns, line, line != prev_line, quanta[k0:k1], new_time, others, other_text
+        )
 
     def _dwell(self, ms: float) -> str:
         out = []
