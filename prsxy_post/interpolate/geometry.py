@@ -28,7 +28,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import kernel
 from ..gcode import EXACT_STOP, Motion
+from ..kernel.path import PathArrays
 
 KIND_RAPID, KIND_FEED, KIND_ARC, KIND_DWELL, KIND_FUNCTION, KIND_CURVE = 0, 1, 2, 3, 4, 5
 _KIND = {
@@ -455,8 +457,30 @@ def _tolerances(path_tol: np.ndarray, limits: PlanLimits) -> tuple[np.ndarray, n
     return tol, tol_deg
 
 
+def path_arrays(b: Blocks) -> PathArrays:
+    """The blocks' lines and arcs as the path kernel takes them
+    (:class:`~prsxy_post.kernel.path.PathArrays`)."""
+    plane = b.plane
+    return PathArrays(
+        start=b.start,
+        end=b.end,
+        length=b.length,
+        arc=b.kind == KIND_ARC,
+        theta0=b.theta0,
+        sweep=b.sweep,
+        r0=b.r0,
+        r1=b.r1,
+        center=b.center,
+        # PLANE_AXES' in-plane axes (G17 where no plane is set: lines)
+        iu=np.where(plane == 18, 2, np.where(plane == 19, 1, 0)),
+        iv=np.where(plane == 18, 0, np.where(plane == 19, 2, 1)),
+    )
+
+
 def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pose q(s) and tangent dq/ds at path distance ``s`` into blocks ``k``.
+
+    Lines and arcs: :func:`prsxy_post.kernel.path.poses`; curves here.
 
     Returns
     -------
@@ -464,47 +488,26 @@ def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.nda
     dq_ds : (N, 5) [mm/mm, deg/mm] (per degree for rotary-only moves; zero for
         dwells and functions)
     """
-    k = np.asarray(k, dtype=int)
+    k = np.asarray(k, dtype=np.intp)
     s = np.asarray(s, dtype=float)
-    st, en = b.start[k], b.end[k]
-    L = b.length[k]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        frac = np.where(L > 0, np.clip(s / L, 0.0, 1.0), 1.0)
-        dq = np.where(L[:, None] > 0, (en - st) / L[:, None], 0.0)
-    q = st + (en - st) * frac[:, None]
-    arc = b.kind[k] == KIND_ARC
-    if np.any(arc):
-        ka = k[arc]
-        fa = frac[arc]
-        La = L[arc]
-        th = b.theta0[ka] + b.sweep[ka] * fa
-        dr = b.r1[ka] - b.r0[ka]
-        r = b.r0[ka] + dr * fa
-        c, sn = np.cos(th), np.sin(th)
-        iu, iv, _ = _plane_axes(b.plane[ka])
-        rows = np.flatnonzero(arc)
-        cen = b.center[ka]
-        m = np.arange(len(ka))
-        q[rows, iu] = cen[m, iu] + r * c
-        q[rows, iv] = cen[m, iv] + r * sn
-        dq[rows, iu] = (dr * c - r * b.sweep[ka] * sn) / La
-        dq[rows, iv] = (dr * sn + r * b.sweep[ka] * c) / La
-        # the exact end point, not cos/sin of an angle that lands a rounding off it
-        end_hit = fa >= 1.0
-        q[rows[end_hit]] = en[arc][end_hit]
+    q, dq = kernel.poses(path_arrays(b), k, s)
     on_curve = b.kind[k] == KIND_CURVE
     if np.any(on_curve):
         rows = np.flatnonzero(on_curve)
+        L = b.length[k[rows]]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            frac = np.where(L > 0, np.clip(s[rows] / L, 0.0, 1.0), 1.0)
         for kb in np.unique(k[rows]).tolist():
-            sel = rows[k[rows] == kb]
+            at = k[rows] == kb
+            sel = rows[at]
             c = b.curve[kb]
             u = c.u_at(s[sel])
             _, d1, _ = c.derivatives(u)
             q[sel, :3] = c.point(u)
             norm = np.linalg.norm(d1, axis=1)
             dq[sel, :3] = d1 / np.where(norm > 0, norm, 1.0)[:, None]
-            end_hit = frac[sel] >= 1.0
-            q[sel[end_hit]] = en[sel[end_hit]]
+            end_hit = frac[at] >= 1.0
+            q[sel[end_hit]] = b.end[kb]
     return q, dq
 
 

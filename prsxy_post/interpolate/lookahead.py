@@ -44,6 +44,7 @@ from dataclasses import fields
 import numpy as np
 
 from ..gcode import EXACT_STOP
+from ..kernel import backward_pass, forward_pass
 from .geometry import CORNER_SHARE, Blocks, PlanLimits, segment_limit
 from .timelaw import TimeLaw, time_law
 
@@ -233,41 +234,6 @@ def effective_accel(b: Blocks, corner: np.ndarray) -> np.ndarray:
     corner (module docstring), its limit elsewhere."""
     near = corner[:-1] | corner[1:]
     return np.where(near & ~b.stops, b.accel * math.sqrt(1.0 - KAPPA**2), b.accel)
-
-
-def backward_pass(length: np.ndarray, accel: np.ndarray, vj: np.ndarray) -> np.ndarray:
-    """v_out[k] ≤ sqrt(v_out[k+1]² + 2 a_{k+1} L_{k+1}): every block can slow down in time.
-
-    A plain loop over Python floats: its arithmetic does not depend on where a
-    stream was cut, which keeps streamed output identical to one-shot output.
-    """
-    n = len(vj)
-    v = vj.tolist()
-    two_al = (2.0 * accel * length).tolist()
-    sqrt = math.sqrt
-    nxt = v[-1] if n else 0.0
-    for k in range(n - 2, -1, -1):
-        lim = sqrt(nxt * nxt + two_al[k + 1])
-        if v[k] > lim:
-            v[k] = lim
-        nxt = v[k]
-    return np.array(v, dtype=float)
-
-
-def forward_pass(
-    length: np.ndarray, accel: np.ndarray, v_back: np.ndarray, v_start: float = 0.0
-) -> np.ndarray:
-    """v_out[k] ≤ sqrt(v_out[k−1]² + 2 a_k L_k): every block can speed up in time."""
-    v = v_back.tolist()
-    two_al = (2.0 * accel * length).tolist()
-    sqrt = math.sqrt
-    prev = v_start
-    for k in range(len(v)):
-        lim = sqrt(prev * prev + two_al[k])
-        if v[k] > lim:
-            v[k] = lim
-        prev = v[k]
-    return np.array(v, dtype=float)
 
 
 class Planner:

@@ -16,9 +16,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from .. import kernel
 from .geometry import KIND_DWELL, KIND_FUNCTION, Blocks, PlanLimits, pose_at, segment_limit
 from .lookahead import Plan
-from .timelaw import TimeLaw, distance, speed
+from .timelaw import TimeLaw
 
 
 @dataclass(frozen=True)
@@ -123,9 +124,10 @@ def sample(plan: Plan, limits: PlanLimits) -> Samples:
     first[1:] = blk[1:] != blk[:-1]
 
     stand = b.stops[blk]
-    s = np.where(last_of_block | stand, b.length[blk], distance(law, blk, tau))
+    along, v_along = kernel.along(law, blk, tau)
+    s = np.where(last_of_block | stand, b.length[blk], along)
     q, dq = pose_at(b, blk, s)
-    v = np.where(stand, 0.0, speed(law, blk, tau))
+    v = np.where(stand, 0.0, v_along)
     v = np.where(last_of_block & ~stand, law.v1[blk], v)
     qdot = v[:, None] * dq
     # a junction taken at speed: the mean of the velocities on its two sides (the
@@ -159,7 +161,6 @@ def at_times(plan: Plan, k: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np
     """Pose and planned velocity at local times ``tau`` inside blocks ``k`` (no corner
     averaging: for points strictly inside a block)."""
     b, law = plan.blocks, plan.law
-    s = distance(law, k, tau)
+    s, v = kernel.along(law, k, tau)
     q, dq = pose_at(b, k, s)
-    v = speed(law, k, tau)
     return q, v[:, None] * dq

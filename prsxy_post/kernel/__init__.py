@@ -1,8 +1,9 @@
 """The kernel: per-point numerical work as functions over arrays.
 
-Each kernel has a numpy reference (``ik.py``, ``text.py``) and a compiled twin in
-Cython (``_ik.pyx``, ``_text.pyx``, built when the package is installed) that gives
-the same bits. This module picks one set for the whole program, once, at import:
+Each kernel has a numpy reference (``ik.py``, ``text.py``; the planner's
+``timelaw.py`` and ``path.py``) and a compiled twin in Cython (``_ik.pyx``,
+``_text.pyx``, ``_timelaw.pyx``, ``_path.pyx``, built when the package is installed)
+that gives the same bits. This module picks one set for the whole program, once, at import:
 
 - ``PRSXY_KERNEL=pure`` in the environment: the numpy reference (CI's pure leg);
 - otherwise the compiled kernels when the extension imports, else the reference.
@@ -29,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from . import ik, text
+from . import ik, path, text, timelaw
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
@@ -44,10 +45,12 @@ def _load() -> tuple[Any, Any, str, str]:
     if os.environ.get(ENV, "").strip().lower() == "pure":
         return (*pure, "pure numpy (PRSXY_KERNEL=pure)", f"{ENV}=pure")
     try:
-        from . import _ik, _text  # type: ignore[attr-defined]
+        from . import _ik, _path, _text, _timelaw  # type: ignore[attr-defined]  # noqa: F401
     except ImportError as e:
         absent = [
-            n for n in ("_ik", "_text") if importlib.util.find_spec(f"{__name__}.{n}") is None
+            n
+            for n in ("_ik", "_text", "_path", "_timelaw")
+            if importlib.util.find_spec(f"{__name__}.{n}") is None
         ]
         why = (
             f"the compiled extension is not built (no {', '.join(absent)} "
@@ -65,6 +68,19 @@ COMPILED: bool = not WHY_PURE
 #: True when the reference runs because the extension is missing (not asked for).
 MISSING: bool = bool(WHY_PURE) and not WHY_PURE.startswith(ENV)
 
+# the planner's kernels: the time law and the poses on lines and arcs (_load has
+# imported the compiled ones when COMPILED)
+_plan_mods: tuple[Any, Any] = (timelaw, path)
+if COMPILED:
+    from . import _path, _timelaw  # type: ignore[attr-defined]
+
+    _plan_mods = (_timelaw, _path)
+_trapezoids = _plan_mods[0].trapezoids
+_along = _plan_mods[0].along
+_backward_pass = _plan_mods[0].backward_pass
+_forward_pass = _plan_mods[0].forward_pass
+_poses = _plan_mods[1].poses
+
 
 def inverse_rows(m: ik.IKArrays, q: np.ndarray, tz: np.ndarray) -> np.ndarray:
     """Motor positions (N, 5) [mm] for poses ``q`` (N, 5) and tool heights ``tz``
@@ -77,4 +93,50 @@ def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str =
     """Rows of fixed-point text: :func:`text.format_fixed_rows`, compiled when
     :data:`COMPILED`."""
     out: list[str] = _fixed_rows(columns, end)
+    return out
+
+
+def trapezoids(
+    v0: np.ndarray,
+    v1: np.ndarray,
+    length: np.ndarray,
+    accel: np.ndarray,
+    vmax: np.ndarray,
+    stop: np.ndarray,
+    duration: np.ndarray,
+    min_phase: float,
+) -> timelaw.TimeLaw:
+    """Each block's trapezoid between its entry and exit speeds:
+    :func:`timelaw.trapezoids`, compiled when :data:`COMPILED`."""
+    out: timelaw.TimeLaw = _trapezoids(v0, v1, length, accel, vmax, stop, duration, min_phase)
+    return out
+
+
+def along(law: timelaw.TimeLaw, k: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distance and speed at local times ``tau`` of blocks ``k``: :func:`timelaw.along`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _along(law, k, tau)
+    return out
+
+
+def backward_pass(length: np.ndarray, accel: np.ndarray, vj: np.ndarray) -> np.ndarray:
+    """The look-ahead's backward pass: :func:`timelaw.backward_pass`, compiled when
+    :data:`COMPILED`."""
+    out: np.ndarray = _backward_pass(length, accel, vj)
+    return out
+
+
+def forward_pass(
+    length: np.ndarray, accel: np.ndarray, v_back: np.ndarray, v_start: float = 0.0
+) -> np.ndarray:
+    """The look-ahead's forward pass: :func:`timelaw.forward_pass`, compiled when
+    :data:`COMPILED`."""
+    out: np.ndarray = _forward_pass(length, accel, v_back, v_start)
+    return out
+
+
+def poses(p: path.PathArrays, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Poses and tangents on lines and arcs: :func:`path.poses`, compiled when
+    :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _poses(p, k, s)
     return out

@@ -1,0 +1,212 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
+# cython: initializedcheck=False
+"""The time law compiled: :mod:`prsxy_post.kernel.timelaw` block by block (and point
+by point), the same operations in the same order, so the two agree to the bit.
+Compiled with -O2 -ffp-contract=off (no fused multiply-adds, which would round
+differently from numpy's separate multiply and add)."""
+
+import numpy as np
+
+from libc.math cimport INFINITY, sqrt
+
+from .timelaw import BISECT_STEPS as _STEPS
+from .timelaw import TimeLaw
+
+cdef int BISECT_STEPS = _STEPS
+
+
+cdef inline double _max(double a, double b) noexcept nogil:
+    # numpy's maximum: the first when it is NaN or not below the second (NaN carries)
+    return a if (a >= b or a != a) else b
+
+
+cdef inline double _clip_lo(double x, double lo) noexcept nogil:
+    # numpy's clip of a float below: x when NaN, else the larger (lo on a tie)
+    if x != x:
+        return x
+    return x if x > lo else lo
+
+
+cdef inline double _clip_hi(double x, double hi) noexcept nogil:
+    if x != x:
+        return x
+    return x if x < hi else hi
+
+
+cdef inline double _t(double d, double a, double hmin) noexcept nogil:
+    # timelaw._phases: a phase's time, max(Δv / a, hmin) where the speed changes
+    return _max(d / a, hmin) if d > 0 else 0.0
+
+
+cdef inline double _room(
+    double vp, double v0, double v1, double a, double L, double hmin
+) noexcept nogil:
+    # timelaw.trapezoids' room: L − s1 − s3 at peak vp
+    cdef double t1 = _t(vp - v0, a, hmin)
+    cdef double t3 = _t(vp - v1, a, hmin)
+    cdef double s1 = 0.5 * (v0 + vp) * t1
+    cdef double s3 = 0.5 * (v1 + vp) * t3
+    return L - s1 - s3
+
+
+cdef double _bisect(
+    double lo, double hi, double v0, double v1, double a, double L, double hmin, bint cruise
+) noexcept nogil:
+    # the largest x in [lo, hi] with room(x) >= 0 (or >= hmin x for a cruise)
+    cdef double mid, r
+    cdef int i
+    for i in range(BISECT_STEPS):
+        mid = 0.5 * (lo + hi)
+        r = _room(mid, v0, v1, a, L, hmin)
+        if (r >= hmin * mid) if cruise else (r >= 0):
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def trapezoids(v0_in, v1_in, length, accel, vmax, stop, duration, double min_phase):
+    """The compiled twin of ``timelaw.trapezoids``: the same TimeLaw."""
+    cdef const double[:] v0 = v0_in, v1 = v1_in, L_ = length, a_ = accel, vm = vmax
+    cdef const double[:] dur = duration
+    cdef Py_ssize_t n = v0.shape[0], i
+    if not (
+        v1.shape[0] == n and L_.shape[0] == n and a_.shape[0] == n
+        and vm.shape[0] == n and dur.shape[0] == n and len(stop) == n
+    ):
+        raise ValueError("every input must have one row per block")
+    cdef const unsigned char[:] st = np.ascontiguousarray(stop, dtype=np.uint8)
+    out = np.empty((7, n))
+    cdef double[:, :] o = out
+    cdef double a, L, b0, b1, hmin = min_phase, top, lo, t2_top, vp, t1, t2, t3
+    cdef double left, tau
+    cdef bint single
+    with nogil:
+        for i in range(n):
+            b0 = v0[i]
+            b1 = v1[i]
+            a = a_[i]
+            L = L_[i]
+            top = _max(vm[i], _max(b0, b1))
+            lo = _max(b0, b1)
+            if not (_room(top, b0, b1, a, L, hmin) >= 0):
+                top = _bisect(lo, top, b0, b1, a, L, hmin, False)
+            t2_top = _room(top, b0, b1, a, L, hmin) / top if top > 0 else INFINITY
+            if (t2_top * top > 1e-9 * _max(1.0, L)) and (t2_top < hmin):
+                top = _bisect(lo, top, b0, b1, a, L, hmin, True)
+            vp = top
+            t1 = _t(vp - b0, a, hmin)
+            t3 = _t(vp - b1, a, hmin)
+            left = L - 0.5 * (b0 + vp) * t1 - 0.5 * (b1 + vp) * t3
+            if left <= 1e-9 * _max(L, 1.0):
+                left = 0.0
+            t2 = left / vp if vp > 0 else 0.0
+            single = not st[i] and (
+                (_room(lo, b0, b1, a, L, hmin) < 0)
+                or ((t2 > 0) and (t2 < hmin) and (t1 + t3 > 0))
+            )
+            if single and b0 + b1 > 0:
+                tau = 2.0 * L / (b0 + b1)
+                if b1 >= b0:
+                    vp = b1
+                    t1 = tau
+                    t3 = 0.0
+                elif b1 < b0:
+                    vp = b0
+                    t1 = 0.0
+                    t3 = tau
+                t2 = 0.0
+            o[0, i] = vp
+            o[1, i] = (vp - b0) / t1 if t1 > 0 else 0.0
+            o[2, i] = (vp - b1) / t3 if t3 > 0 else 0.0
+            if st[i]:
+                t1 = 0.0
+                t2 = dur[i]
+                t3 = 0.0
+            o[3, i] = t1
+            o[4, i] = t2
+            o[5, i] = t3
+            o[6, i] = t1 + t2 + t3
+    return TimeLaw(v0_in, v1_in, *out)
+
+
+def along(law, k, tau):
+    """The compiled twin of ``timelaw.along``: (s, v) at local times ``tau`` of
+    blocks ``k``."""
+    cdef const double[:] v0 = law.v0, v1 = law.v1, vp = law.vp, a1 = law.a1, a3 = law.a3
+    cdef const double[:] t1 = law.t1, t2 = law.t2, t3 = law.t3
+    cdef const Py_ssize_t[:] kk = np.ascontiguousarray(k, dtype=np.intp)
+    cdef const double[:] tt = np.ascontiguousarray(tau, dtype=float)
+    cdef Py_ssize_t n = kk.shape[0], i, j, nb = v0.shape[0]
+    if tt.shape[0] != n:
+        raise ValueError("k and tau must have one row per point")
+    for i in range(n):
+        if not 0 <= kk[i] < nb:
+            raise IndexError(f"block {kk[i]} is out of range for {nb} blocks")
+    s_out = np.empty(n)
+    v_out = np.empty(n)
+    cdef double[:] s = s_out, v = v_out
+    cdef double b0, p, c1, c3, p1, p2, p3, x, tc, td, s1
+    with nogil:
+        for i in range(n):
+            j = kk[i]
+            b0 = v0[j]
+            p = vp[j]
+            c1 = a1[j]
+            c3 = a3[j]
+            p1 = t1[j]
+            p2 = t2[j]
+            p3 = t3[j]
+            x = tt[i]
+            s1 = b0 * p1 + 0.5 * c1 * (p1 * p1)
+            tc = _max(x, 0.0)
+            if tc <= p1:
+                s[i] = b0 * tc + 0.5 * c1 * (tc * tc)
+            elif tc <= p1 + p2:
+                s[i] = s1 + p * (tc - p1)
+            else:
+                td = _clip_hi(_clip_lo(tc - p1 - p2, 0.0), p3)
+                s[i] = s1 + p * p2 + p * td - 0.5 * c3 * (td * td)
+            if x <= p1:
+                v[i] = b0 + c1 * x
+            elif x <= p1 + p2:
+                v[i] = p
+            else:
+                v[i] = _max(p - c3 * (x - p1 - p2), v1[j])
+    return s_out, v_out
+
+
+def backward_pass(const double[:] length, const double[:] accel, const double[:] vj):
+    """The compiled twin of ``timelaw.backward_pass``."""
+    cdef Py_ssize_t n = vj.shape[0], k
+    if length.shape[0] != n or accel.shape[0] != n:
+        raise ValueError("every input must have one row per block")
+    out = np.array(vj, dtype=float)
+    cdef double[:] v = out
+    cdef double nxt = v[n - 1] if n else 0.0, lim
+    with nogil:
+        for k in range(n - 2, -1, -1):
+            lim = sqrt(nxt * nxt + 2.0 * accel[k + 1] * length[k + 1])
+            if v[k] > lim:
+                v[k] = lim
+            nxt = v[k]
+    return out
+
+
+def forward_pass(
+    const double[:] length, const double[:] accel, const double[:] v_back, double v_start=0.0
+):
+    """The compiled twin of ``timelaw.forward_pass``."""
+    cdef Py_ssize_t n = v_back.shape[0], k
+    if length.shape[0] != n or accel.shape[0] != n:
+        raise ValueError("every input must have one row per block")
+    out = np.array(v_back, dtype=float)
+    cdef double[:] v = out
+    cdef double prev = v_start, lim
+    with nogil:
+        for k in range(n):
+            lim = sqrt(prev * prev + 2.0 * accel[k] * length[k])
+            if v[k] > lim:
+                v[k] = lim
+            prev = v[k]
+    return out
