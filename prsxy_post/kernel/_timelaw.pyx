@@ -14,6 +14,23 @@ from .timelaw import TimeLaw
 
 cdef int BISECT_STEPS = _STEPS
 
+cdef extern from *:
+    """
+    #include <stdint.h>
+    #include <string.h>
+    /* c ? a : b, bit for bit, with no branch: the bisection's choices are as
+       good as random, and a mispredicted branch costs more than the arithmetic */
+    static inline double prsxy_pick(int c, double a, double b) {
+        uint64_t ua, ub, m = (uint64_t)0 - (uint64_t)(c != 0);
+        memcpy(&ua, &a, sizeof ua);
+        memcpy(&ub, &b, sizeof ub);
+        ua = (ua & m) | (ub & ~m);
+        memcpy(&a, &ua, sizeof a);
+        return a;
+    }
+    """
+    double prsxy_pick(int c, double a, double b) nogil
+
 
 cdef inline double _max(double a, double b) noexcept nogil:
     # numpy's maximum: the first when it is NaN or not below the second (NaN carries)
@@ -35,7 +52,9 @@ cdef inline double _clip_hi(double x, double hi) noexcept nogil:
 
 cdef inline double _t(double d, double a, double hmin) noexcept nogil:
     # timelaw._phases: a phase's time, max(Δv / a, hmin) where the speed changes
-    return _max(d / a, hmin) if d > 0 else 0.0
+    # (hmin is a number: numpy's maximum keeps d / a when it is NaN or not below)
+    cdef double x = d / a
+    return prsxy_pick(d > 0, x if not (hmin > x) else hmin, 0.0)
 
 
 cdef inline double _room(
@@ -49,27 +68,44 @@ cdef inline double _room(
     return L - s1 - s3
 
 
-cdef double _bisect(
-    double lo, double hi, double v0, double v1, double a, double L, double hmin, bint cruise
+cdef void _bisect(
+    Py_ssize_t m,
+    const Py_ssize_t* idx,
+    double* lo,
+    double* hi,
+    const double* v0,
+    const double* v1,
+    const double* a,
+    const double* L,
+    double hmin,
+    bint cruise,
 ) noexcept nogil:
-    # the largest x in [lo, hi] with room(x) >= 0 (or >= hmin x for a cruise)
+    # for each of the m blocks idx: the largest x in [lo, hi] with room(x) >= 0 (or
+    # >= hmin x for a cruise), into lo. The blocks side by side in the inner loop,
+    # as numpy's arrays, so the divisions of one block do not wait for another's
     cdef double mid, r
-    cdef int i
-    for i in range(BISECT_STEPS):
-        mid = 0.5 * (lo + hi)
-        r = _room(mid, v0, v1, a, L, hmin)
-        if (r >= hmin * mid) if cruise else (r >= 0):
-            lo = mid
-        else:
-            hi = mid
-    return lo
+    cdef Py_ssize_t j, i
+    cdef int step
+    cdef bint good
+    for step in range(BISECT_STEPS):
+        for j in range(m):
+            i = idx[j]
+            mid = 0.5 * (lo[j] + hi[j])
+            r = _room(mid, v0[i], v1[i], a[i], L[i], hmin)
+            good = (r >= hmin * mid) if cruise else (r >= 0)
+            lo[j] = prsxy_pick(good, mid, lo[j])
+            hi[j] = prsxy_pick(good, hi[j], mid)
 
 
 def trapezoids(v0_in, v1_in, length, accel, vmax, stop, duration, double min_phase):
     """The compiled twin of ``timelaw.trapezoids``: the same TimeLaw."""
-    cdef const double[:] v0 = v0_in, v1 = v1_in, L_ = length, a_ = accel, vm = vmax
-    cdef const double[:] dur = duration
-    cdef Py_ssize_t n = v0.shape[0], i
+    v0_c = np.ascontiguousarray(v0_in, dtype=float)
+    v1_c = np.ascontiguousarray(v1_in, dtype=float)
+    L_c = np.ascontiguousarray(length, dtype=float)
+    a_c = np.ascontiguousarray(accel, dtype=float)
+    cdef const double[::1] v0 = v0_c, v1 = v1_c, L_ = L_c, a_ = a_c
+    cdef const double[:] vm = vmax, dur = duration
+    cdef Py_ssize_t n = v0.shape[0], i, j, m
     if not (
         v1.shape[0] == n and L_.shape[0] == n and a_.shape[0] == n
         and vm.shape[0] == n and dur.shape[0] == n and len(stop) == n
@@ -78,23 +114,50 @@ def trapezoids(v0_in, v1_in, length, accel, vmax, stop, duration, double min_pha
     cdef const unsigned char[:] st = np.ascontiguousarray(stop, dtype=np.uint8)
     out = np.empty((7, n))
     cdef double[:, :] o = out
+    work = np.empty((3, n))
+    cdef double[:, ::1] w = work  # the peak, then the bisections' lo and hi
+    idx_a = np.empty(n, dtype=np.intp)
+    cdef Py_ssize_t[::1] idx = idx_a
     cdef double a, L, b0, b1, hmin = min_phase, top, lo, t2_top, vp, t1, t2, t3
     cdef double left, tau
     cdef bint single
+    if n == 0:
+        return TimeLaw(v0_in, v1_in, *out)
     with nogil:
+        # the highest peak with the rising and falling phases fitting in the block
+        m = 0
+        for i in range(n):
+            top = _max(vm[i], _max(v0[i], v1[i]))
+            w[0, i] = top
+            if not (_room(top, v0[i], v1[i], a_[i], L_[i], hmin) >= 0):
+                idx[m] = i
+                w[1, m] = _max(v0[i], v1[i])
+                w[2, m] = top
+                m += 1
+        _bisect(m, &idx[0], &w[1, 0], &w[2, 0], &v0[0], &v1[0], &a_[0], &L_[0], hmin, False)
+        for j in range(m):
+            w[0, idx[j]] = w[1, j]
+        # the cruise between them: none, or at least min_phase long
+        m = 0
+        for i in range(n):
+            top = w[0, i]
+            L = L_[i]
+            t2_top = _room(top, v0[i], v1[i], a_[i], L, hmin) / top if top > 0 else INFINITY
+            if (t2_top * top > 1e-9 * _max(1.0, L)) and (t2_top < hmin):
+                idx[m] = i
+                w[1, m] = _max(v0[i], v1[i])
+                w[2, m] = top
+                m += 1
+        _bisect(m, &idx[0], &w[1, 0], &w[2, 0], &v0[0], &v1[0], &a_[0], &L_[0], hmin, True)
+        for j in range(m):
+            w[0, idx[j]] = w[1, j]
         for i in range(n):
             b0 = v0[i]
             b1 = v1[i]
             a = a_[i]
             L = L_[i]
-            top = _max(vm[i], _max(b0, b1))
             lo = _max(b0, b1)
-            if not (_room(top, b0, b1, a, L, hmin) >= 0):
-                top = _bisect(lo, top, b0, b1, a, L, hmin, False)
-            t2_top = _room(top, b0, b1, a, L, hmin) / top if top > 0 else INFINITY
-            if (t2_top * top > 1e-9 * _max(1.0, L)) and (t2_top < hmin):
-                top = _bisect(lo, top, b0, b1, a, L, hmin, True)
-            vp = top
+            vp = w[0, i]
             t1 = _t(vp - b0, a, hmin)
             t3 = _t(vp - b1, a, hmin)
             left = L - 0.5 * (b0 + vp) * t1 - 0.5 * (b1 + vp) * t3
