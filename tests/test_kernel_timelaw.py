@@ -32,7 +32,7 @@ def _same_law(got: timelaw.TimeLaw, want: timelaw.TimeLaw) -> bool:
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[Any, ...]]]:
     compiled("_timelaw")
-    attrs = ["_trapezoids", "_along", "_backward_pass", "_forward_pass"]
+    attrs = ["_trapezoids", "_along", "_backward_pass", "_forward_pass", "_play_stops"]
     return record_many(attrs, tmp_path_factory.mktemp("timelaw"))
 
 
@@ -78,6 +78,20 @@ def test_sample_programs_passes_are_bit_identical(
         assert same_bits(_tl.backward_pass(*args), timelaw.backward_pass(*args))
     for args in recorded["_forward_pass"]:
         assert same_bits(_tl.forward_pass(*args), timelaw.forward_pass(*args))
+
+
+def test_sample_programs_play_stops_are_the_same(
+    recorded: dict[str, list[tuple[Any, ...]]],
+) -> None:
+    _tl = compiled("_timelaw")
+    calls = recorded["_play_stops"]
+    assert len(calls) >= 7
+    stops = 0
+    for args in calls:
+        want = timelaw.play_stops(*args)
+        assert np.array_equal(_tl.play_stops(*args), want)
+        stops += int(np.count_nonzero(want))
+    assert stops > 0
 
 
 #: one block: L [mm], a [mm/s²], vmax [mm/s], v0 and v1 as shares of vmax (above 1:
@@ -204,3 +218,53 @@ def test_a_cruise_too_short_is_lengthened_or_dropped() -> None:
         assert law.t2[0] == 0.0 or law.t2[0] >= 0.0025 * (1 - 1e-9)
         assert min(law.t1[0], law.t3[0]) >= 0.0025
     assert _same_law(_tl.trapezoids(*args, 0.0025), timelaw.trapezoids(*args, 0.0025))
+
+
+#: a motor's dP/ds [mm/mm]: standing, creeping, moving either way
+SLOPE = st.one_of(
+    st.sampled_from([0.0, -0.0, 1e-7, -1e-7, 1e-3, -1e-3, 2e-3, -2e-3]),
+    st.floats(-2.0, 2.0),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.lists(SLOPE, min_size=5, max_size=5),
+            st.lists(SLOPE, min_size=5, max_size=5),
+            st.lists(st.floats(-1.0, 1.0), min_size=5, max_size=5),
+            st.lists(st.floats(-1.0, 1.0), min_size=5, max_size=5),
+            st.booleans(),
+        ),
+        min_size=1,
+        max_size=20,
+    )
+)
+def test_generated_play_stops_are_the_same(rows: list[tuple[Any, ...]]) -> None:
+    _tl = compiled("_timelaw")
+    P_out, P_in, t_out, t_in, cross = (np.array(c) for c in zip(*rows, strict=True))
+    args = (t_out, t_in, P_out, P_in, cross, 3, 1e-3, 1e-6, (1.0 + 1e-4) ** 2)
+    assert np.array_equal(_tl.play_stops(*args), timelaw.play_stops(*args))
+
+
+def test_a_head_motor_reversing_is_a_stop() -> None:
+    """Motor 2 (a head motor) moves up at 0.5 mm/mm into the junction and down at
+    0.4 out of it: the junction is a stop; the same with the slopes the same way is
+    not. The path turns back along x, and table motor X with it: a stop only where
+    a head motor sets off there (its standing does not speed the tip up)."""
+    _tl = compiled("_timelaw")
+    t = np.array([[1.0, 0.0, 0.0, 0.0, 0.0], [-1.0, 0.0, 0.0, 0.0, 0.0]])
+    P_out = np.zeros((2, 5))
+    P_in = np.zeros((2, 5))
+
+    def stop(kern: Any, p_out: list[float], p_in: list[float]) -> bool:
+        P_out[0], P_in[1] = p_out, p_in
+        args = (t, t, P_out, P_in, np.zeros(2, bool), 3, 1e-3, 1e-6, (1.0 + 1e-4) ** 2)
+        return bool(kern.play_stops(*args)[0])
+
+    for kern in (timelaw, _tl):
+        assert stop(kern, [0, 0.5, 0, 0, 0], [0, -0.4, 0, 0, 0])
+        assert not stop(kern, [0, 0.5, 0, 0, 0], [0, 0.4, 0, 0, 0])
+        assert not stop(kern, [0, 0.3, 0, 0.5, 0], [0, 0.3, 0, -0.4, 0])
+        assert stop(kern, [0, 0.0, 0, 0.5, 0], [0, 0.3, 0, -0.4, 0])

@@ -79,6 +79,7 @@ _trapezoids = _plan_mods[0].trapezoids
 _along = _plan_mods[0].along
 _backward_pass = _plan_mods[0].backward_pass
 _forward_pass = _plan_mods[0].forward_pass
+_play_stops = _plan_mods[0].play_stops
 _poses = _plan_mods[1].poses
 
 
@@ -132,6 +133,25 @@ def forward_pass(
     """The look-ahead's forward pass: :func:`timelaw.forward_pass`, compiled when
     :data:`COMPILED`."""
     out: np.ndarray = _forward_pass(length, accel, v_back, v_start)
+    return out
+
+
+def play_stops(
+    dq_out: np.ndarray,
+    dq_in: np.ndarray,
+    dP_out: np.ndarray,
+    dP_in: np.ndarray,
+    cross_in: np.ndarray,
+    head: int,
+    reversal_slope: float,
+    stand_slope: float,
+    gain_max: float,
+) -> np.ndarray:
+    """The junctions where a motor with play crosses it at rest:
+    :func:`timelaw.play_stops`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_stops(
+        dq_out, dq_in, dP_out, dP_in, cross_in, head, reversal_slope, stand_slope, gain_max
+    )
     return out
 
 

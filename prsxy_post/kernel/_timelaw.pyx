@@ -7,7 +7,7 @@ differently from numpy's separate multiply and add)."""
 
 import numpy as np
 
-from libc.math cimport INFINITY, sqrt
+from libc.math cimport INFINITY, fabs, sqrt
 
 from .timelaw import BISECT_STEPS as _STEPS
 from .timelaw import TimeLaw
@@ -272,4 +272,63 @@ def forward_pass(
             if v[k] > lim:
                 v[k] = lim
             prev = v[k]
+    return out
+
+
+cdef inline double _min(double a, double b) noexcept nogil:
+    # numpy's minimum: the first when it is NaN or not above the second
+    return a if (a <= b or a != a) else b
+
+
+def play_stops(
+    dq_out_in, dq_in_in, dP_out_in, dP_in_in, cross_in, Py_ssize_t head,
+    double reversal_slope, double stand_slope, double gain_max,
+):
+    """The compiled twin of ``timelaw.play_stops``."""
+    cdef const double[:, :] dq_out = dq_out_in, dq_in = dq_in_in
+    cdef const double[:, :] dP_out = dP_out_in, dP_in = dP_in_in
+    cdef const unsigned char[:] cross = np.ascontiguousarray(cross_in, dtype=np.uint8)
+    cdef Py_ssize_t n = dq_out.shape[0], i, c, m = max(n - 1, 0)
+    for arr in (dq_out_in, dq_in_in, dP_out_in, dP_in_in):
+        if arr.shape != (n, 5):
+            raise ValueError("tangents and motor slopes must be (n, 5) each")
+    if cross.shape[0] != n or head != 3:
+        raise ValueError("cross_in must be (n,), and the head's motors the first three")
+    out = np.zeros(m, dtype=bool)
+    cdef unsigned char[:] stop = out.view(np.uint8)
+    cdef double a, b, lo, hi, t, p, gain
+    cdef bint rev_head, rev_table, head_off, faster
+    cdef bint rev[5]
+    with nogil:
+        for i in range(m):
+            rev_head = False
+            rev_table = False
+            head_off = False
+            for c in range(5):
+                a = fabs(dP_out[i, c])
+                b = fabs(dP_in[i + 1, c])
+                lo = _min(a, b)
+                hi = _max(a, b)
+                rev[c] = (dP_out[i, c] * dP_in[i + 1, c] < 0.0) and (
+                    hi > reversal_slope) and (lo > stand_slope)
+                if c < head:
+                    rev_head = rev_head or rev[c]
+                    head_off = head_off or ((hi > reversal_slope) and (lo <= stand_slope))
+                else:
+                    rev_table = rev_table or rev[c]
+            faster = False
+            for c in range(head, 5):
+                # the table motor's column against the path's tangent along its
+                # axis (x for the first table motor, y for the second)
+                t = dq_out[i, c - head]
+                p = dP_out[i, c]
+                gain = 1.0 - 2.0 * t * p + p * p
+                faster = faster or (rev[c] and gain > gain_max)
+                t = dq_in[i + 1, c - head]
+                p = dP_in[i + 1, c]
+                gain = 1.0 - 2.0 * t * p + p * p
+                faster = faster or (rev[c] and gain > gain_max)
+            stop[i] = (
+                rev_head or (rev_table and head_off) or faster or (cross[i + 1] and head_off)
+            )
     return out

@@ -8,9 +8,10 @@ at vp, constant deceleration a3 to the exit speed v1. Here, for a batch of block
   length L, the acceleration limit a and the speed limit (a bisection of 60 halvings
   for the blocks whose peak the limits do not give directly);
 - :func:`along`: the distance s(τ) and the speed v(τ) at local times τ;
-- :func:`phase_times`: the points' local times, a phase cut into equal steps;
 - :func:`backward_pass`, :func:`forward_pass`: the look-ahead's limits on the
-  junction speeds, v² changing by at most 2aL per block.
+  junction speeds, v² changing by at most 2aL per block;
+- :func:`play_stops`: the junctions where a motor with play must cross it at rest
+  (:func:`prsxy_post.interpolate.lookahead.junction_limits` says why).
 
 Every block's arithmetic depends on its own values only (so a program cut into
 chunks gets the same bits as one planned at once), and every operation is written
@@ -215,3 +216,54 @@ def forward_pass(
             v[k] = lim
         prev = v[k]
     return np.array(v, dtype=float)
+
+
+def play_stops(
+    dq_out: np.ndarray,
+    dq_in: np.ndarray,
+    dP_out: np.ndarray,
+    dP_in: np.ndarray,
+    cross_in: np.ndarray,
+    head: int,
+    reversal_slope: float,
+    stand_slope: float,
+    gain_max: float,
+) -> np.ndarray:
+    """(n − 1,) bool, the junctions between n blocks where a motor with play crosses
+    its play at rest.
+
+    Parameters
+    ----------
+    dq_out, dq_in : (n, 5) the path's tangents at each block's end and start
+    dP_out, dP_in : (n, 5) the motors' dP/ds there [mm/mm] (zero for motors
+        without play); the first ``head`` (3: the contract's) columns move the
+        head, the last two the table along x and y
+    cross_in : (n,) bool, a motor sets off at the block's start against the way
+        it last moved
+    reversal_slope, stand_slope : a motor reverses where it moves faster than the
+        first on one side and the other way faster than the second on the other
+    gain_max : the largest squared speed-up of the tip a table motor standing in
+        its play may cause, 1 − 2 t p + p² (t the tangent along its axis, p its dP/ds)
+
+    A junction is a stop where a head motor reverses; where a table motor reverses
+    and a head motor sets off or stops there, or its standing would speed the tip
+    up by more than ``gain_max``; where a motor sets off against the way it last
+    moved and a head motor sets off or stops.
+    """
+    if head != 3:
+        raise ValueError("the head's motors must be the first three")
+    lo = np.minimum(np.abs(dP_out[:-1]), np.abs(dP_in[1:]))
+    hi = np.maximum(np.abs(dP_out[:-1]), np.abs(dP_in[1:]))
+    reverses = (dP_out[:-1] * dP_in[1:] < 0.0) & (hi > reversal_slope) & (lo > stand_slope)
+    head_sets_off = (hi > reversal_slope) & (lo <= stand_slope)
+    stop = np.any(reverses[:, :head], axis=1)
+    stop |= np.any(reverses[:, head:], axis=1) & np.any(head_sets_off[:, :head], axis=1)
+    faster = np.zeros(len(lo), dtype=bool)
+    for t, p in ((dq_out[:-1], dP_out[:-1]), (dq_in[1:], dP_in[1:])):
+        tt, pp = t[:, 0:2], p[:, head:]
+        gain = 1.0 - 2.0 * tt * pp + pp * pp
+        faster |= np.any(reverses[:, head:] & (gain > gain_max), axis=1)
+    stop |= faster
+    stop |= cross_in[1:] & np.any(head_sets_off[:, :head], axis=1)
+    out: np.ndarray = stop
+    return out
