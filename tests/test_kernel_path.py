@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from prsxy_post.kernel import libm, path
 
-from .kernel_cases import compiled, record, same_bits
+from .kernel_cases import compiled, record_many, same_bits
 
 #: in-plane axes (u, v) of G17, G18, G19 (interpolate.geometry.PLANE_AXES)
 PLANES = [(0, 1), (2, 0), (1, 2)]
@@ -28,7 +28,11 @@ PLANES = [(0, 1), (2, 0), (1, 2)]
 
 def test_sample_programs_poses_are_bit_identical(tmp_path: Path) -> None:
     _path = compiled("_path")
-    calls = record("_poses", tmp_path)
+    recorded = record_many(["_poses", "_velocities"], tmp_path)
+    for args in recorded["_velocities"]:
+        assert same_bits(_path.velocities(*args), path.velocities(*args))
+    assert sum(int(np.count_nonzero(a[3])) for a in recorded["_velocities"]) > 20  # 38 corners
+    calls = recorded["_poses"]
     assert len(calls) > 20
     points = on_arcs = 0
     for p, k, s in calls:
@@ -89,6 +93,12 @@ def test_generated_poses_are_bit_identical(
     want = path.poses(p, k, s)
     got = _path.poses(p, k, s)
     assert same_bits(got[0], want[0]) and same_bits(got[1], want[1])
+    # the velocities at the points, every third a corner taken at speed
+    v = np.abs(s) + 1.0
+    corner = np.arange(len(k)) % 3 == 0
+    dq_next = np.roll(p.end - p.start, 1, axis=0)
+    args = (v, want[1], k, corner, p.end - p.start, dq_next)
+    assert same_bits(_path.velocities(*args), path.velocities(*args))
 
 
 def test_an_arc_ends_on_its_end_point_and_its_tangent_is_the_circles() -> None:

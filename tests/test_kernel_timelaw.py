@@ -32,7 +32,14 @@ def _same_law(got: timelaw.TimeLaw, want: timelaw.TimeLaw) -> bool:
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[Any, ...]]]:
     compiled("_timelaw")
-    attrs = ["_trapezoids", "_along", "_backward_pass", "_forward_pass", "_play_stops"]
+    attrs = [
+        "_trapezoids",
+        "_along",
+        "_phase_times",
+        "_backward_pass",
+        "_forward_pass",
+        "_play_stops",
+    ]
     return record_many(attrs, tmp_path_factory.mktemp("timelaw"))
 
 
@@ -67,6 +74,29 @@ def test_sample_programs_points_are_bit_identical(
         assert same_bits(got[0], want[0]) and same_bits(got[1], want[1])
         points += len(k)
     assert points > 10_000
+
+
+def _same_times(got: tuple[np.ndarray, ...], want: tuple[np.ndarray, ...]) -> bool:
+    blk, tau, step, last = got
+    return (
+        blk.dtype == want[0].dtype
+        and np.array_equal(blk, want[0])
+        and same_bits(tau, want[1])
+        and same_bits(step, want[2])
+        and last.dtype == bool
+        and np.array_equal(last, want[3])
+    )
+
+
+def test_sample_programs_point_times_are_bit_identical(
+    recorded: dict[str, list[tuple[Any, ...]]],
+) -> None:
+    _tl = compiled("_timelaw")
+    calls = recorded["_phase_times"]
+    assert len(calls) >= 7
+    for law, counts in calls:
+        assert _same_times(_tl.phase_times(law, counts), timelaw.phase_times(law, counts))
+    assert sum(int(c.sum()) for _, c in calls) > 10_000
 
 
 def test_sample_programs_passes_are_bit_identical(
@@ -135,6 +165,11 @@ def test_generated_blocks_are_bit_identical(
     got_s, got_v = _tl.along(want, k, tau)
     want_s, want_v = timelaw.along(want, k, tau)
     assert same_bits(got_s, want_s) and same_bits(got_v, want_v)
+    # each phase cut into 0 to 5 steps (a dwell: one), some blocks of no points
+    counts = np.array([[len(r) % 3, (i * 7) % 6, i % 2] for i, r in enumerate(rows)], np.int64)
+    counts[args[5]] = [0, 1, 0]
+    got_t = _tl.phase_times(want, counts)
+    assert _same_times(got_t, timelaw.phase_times(want, counts))
 
 
 @settings(max_examples=200, deadline=None)

@@ -77,10 +77,12 @@ if COMPILED:
     _plan_mods = (_timelaw, _path)
 _trapezoids = _plan_mods[0].trapezoids
 _along = _plan_mods[0].along
+_phase_times = _plan_mods[0].phase_times
 _backward_pass = _plan_mods[0].backward_pass
 _forward_pass = _plan_mods[0].forward_pass
 _play_stops = _plan_mods[0].play_stops
 _poses = _plan_mods[1].poses
+_velocities = _plan_mods[1].velocities
 
 
 def inverse_rows(m: ik.IKArrays, q: np.ndarray, tz: np.ndarray) -> np.ndarray:
@@ -117,6 +119,15 @@ def along(law: timelaw.TimeLaw, k: np.ndarray, tau: np.ndarray) -> tuple[np.ndar
     """Distance and speed at local times ``tau`` of blocks ``k``: :func:`timelaw.along`,
     compiled when :data:`COMPILED`."""
     out: tuple[np.ndarray, np.ndarray] = _along(law, k, tau)
+    return out
+
+
+def phase_times(
+    law: timelaw.TimeLaw, counts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The points' blocks, local times, steps and block ends for phases cut into
+    ``counts`` steps: :func:`timelaw.phase_times`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _phase_times(law, counts)
     return out
 
 
@@ -159,4 +170,18 @@ def poses(p: path.PathArrays, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray,
     """Poses and tangents on lines and arcs: :func:`path.poses`, compiled when
     :data:`COMPILED`."""
     out: tuple[np.ndarray, np.ndarray] = _poses(p, k, s)
+    return out
+
+
+def velocities(
+    v: np.ndarray,
+    dq: np.ndarray,
+    blk: np.ndarray,
+    corner: np.ndarray,
+    dq_out: np.ndarray,
+    dq_next: np.ndarray,
+) -> np.ndarray:
+    """The points' planned velocities, the mean of both sides at corners:
+    :func:`path.velocities`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _velocities(v, dq, blk, corner, dq_out, dq_next)
     return out

@@ -69,3 +69,33 @@ def poses(p, k, s):
                     for c in range(5):
                         q[i, c] = end[j, c]
     return q_out, dq_out
+
+
+def velocities(v_in, dq_in, blk_in, corner_in, dq_out_in, dq_next_in):
+    """The compiled twin of ``path.velocities``: (N, 5)."""
+    cdef const double[:] v = np.ascontiguousarray(v_in, dtype=float)
+    cdef const double[:, :] dq = dq_in, dq_out = dq_out_in, dq_next = dq_next_in
+    cdef const Py_ssize_t[:] blk = np.ascontiguousarray(blk_in, dtype=np.intp)
+    cdef const unsigned char[:] corner = np.ascontiguousarray(corner_in, dtype=np.uint8)
+    cdef Py_ssize_t n = v.shape[0], nb = dq_out.shape[0], i, c, k
+    if dq_in.shape != (n, 5) or blk.shape[0] != n or corner.shape[0] != n:
+        raise ValueError("v, dq, blk and corner must have one row per point, dq five columns")
+    if dq_out_in.shape != (nb, 5) or dq_next_in.shape != (nb, 5):
+        raise ValueError("dq_out and dq_next must be (n, 5) for n blocks")
+    for i in range(n):
+        if corner[i] and not 0 <= blk[i] < nb:
+            raise IndexError(f"block {blk[i]} is out of range for {nb} blocks")
+    out = np.empty((n, 5))
+    cdef double[:, :] q = out
+    cdef double h
+    with nogil:
+        for i in range(n):
+            if corner[i]:
+                k = blk[i]
+                h = 0.5 * v[i]
+                for c in range(5):
+                    q[i, c] = h * (dq_out[k, c] + dq_next[k, c])
+            else:
+                for c in range(5):
+                    q[i, c] = v[i] * dq[i, c]
+    return out

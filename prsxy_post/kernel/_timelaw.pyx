@@ -239,6 +239,53 @@ def along(law, k, tau):
     return s_out, v_out
 
 
+def phase_times(law, counts):
+    """The compiled twin of ``timelaw.phase_times``: (blk, tau, step, last)."""
+    cdef const double[:] t1 = law.t1, t2 = law.t2, t3 = law.t3, dur = law.duration
+    cdef const long long[:, :] c = np.ascontiguousarray(counts, dtype=np.int64)
+    cdef Py_ssize_t nb = c.shape[0], b, ph, j, k, p = 0, n = 0
+    if c.shape[1] != 3 or t1.shape[0] != nb:
+        raise ValueError("counts must be (n, 3) for n blocks")
+    for b in range(nb):
+        for ph in range(3):
+            if c[b, ph] < 0:
+                raise ValueError("a phase cannot have fewer than no steps")
+            n += c[b, ph]
+    blk_a = np.empty(n, dtype=np.intp)
+    tau_a = np.empty(n)
+    step_a = np.empty(n)
+    last_a = np.zeros(n, dtype=bool)
+    cdef Py_ssize_t[:] blk = blk_a
+    cdef double[:] tau = tau_a, stp = step_a
+    cdef unsigned char[:] last = last_a.view(np.uint8)
+    cdef double before[3]
+    cdef double length[3]
+    cdef double h
+    with nogil:
+        for b in range(nb):
+            before[0] = 0.0
+            before[1] = t1[b]
+            before[2] = t1[b] + t2[b]
+            length[0] = t1[b]
+            length[1] = t2[b]
+            length[2] = t3[b]
+            for ph in range(3):
+                k = c[b, ph]
+                if k == 0:
+                    continue
+                h = length[ph] / <double>k
+                for j in range(1, k + 1):
+                    blk[p] = b
+                    stp[p] = h
+                    tau[p] = before[ph] + <double>j * h
+                    p += 1
+            # numpy marks the point before a block of no points again: the same
+            if c[b, 0] + c[b, 1] + c[b, 2] > 0:
+                last[p - 1] = 1
+                tau[p - 1] = dur[b]
+    return blk_a, tau_a, step_a, last_a
+
+
 def backward_pass(const double[:] length, const double[:] accel, const double[:] vj):
     """The compiled twin of ``timelaw.backward_pass``."""
     cdef Py_ssize_t n = vj.shape[0], k

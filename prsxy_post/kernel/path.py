@@ -87,3 +87,27 @@ def poses(p: PathArrays, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.n
         end_hit = fa >= 1.0
         q[rows[end_hit]] = en[arc][end_hit]
     return q, dq
+
+
+def velocities(
+    v: np.ndarray,
+    dq: np.ndarray,
+    blk: np.ndarray,
+    corner: np.ndarray,
+    dq_out: np.ndarray,
+    dq_next: np.ndarray,
+) -> np.ndarray:
+    """(N, 5) the planned velocity dq/dt = v · dq/ds at each point [mm/s, deg/s].
+
+    v : (N,) planned speed;  dq : (N, 5) tangent at the point;  blk : (N,) its block
+    corner : (N,) bool, the point is a junction taken at speed: its velocity is the
+        mean of its two sides', v (t_out + t_in) / 2, with t_out = ``dq_out[blk]``
+        (n, 5) the block's end tangent and t_in = ``dq_next[blk]`` (n, 5) the next
+        block's start tangent
+    """
+    qdot = v[:, None] * dq
+    at = np.flatnonzero(corner)
+    if at.size:
+        kb = blk[at]
+        qdot[at] = 0.5 * v[at, None] * (dq_out[kb] + dq_next[kb])
+    return qdot

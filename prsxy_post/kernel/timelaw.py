@@ -8,6 +8,7 @@ at vp, constant deceleration a3 to the exit speed v1. Here, for a batch of block
   length L, the acceleration limit a and the speed limit (a bisection of 60 halvings
   for the blocks whose peak the limits do not give directly);
 - :func:`along`: the distance s(τ) and the speed v(τ) at local times τ;
+- :func:`phase_times`: the points' local times, each phase cut into equal steps;
 - :func:`backward_pass`, :func:`forward_pass`: the look-ahead's limits on the
   junction speeds, v² changing by at most 2aL per block;
 - :func:`play_stops`: the junctions where a motor with play must cross it at rest
@@ -182,6 +183,37 @@ def along(law: TimeLaw, k: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.
         np.where(tau <= t1 + t2, vp, np.maximum(vp - a3 * (tau - t1 - t2), law.v1[k])),
     )
     return s, v
+
+
+def phase_times(
+    law: TimeLaw, counts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The points of blocks whose phases are cut into ``counts`` (n, 3) equal steps.
+
+    Returns
+    -------
+    blk : (N,) the block of each point, in time order (N = counts.sum())
+    tau : (N,) [s] its local time: the phase's start + j · step for the j-th
+        (1-based) step of the phase; a block's last point at its duration
+    step : (N,) [s] the step that ends at it, the phase's time / its count
+    last : (N,) bool, the block's last point
+    """
+    nb = len(counts)
+    flat = counts.reshape(-1)
+    blk = np.repeat(np.repeat(np.arange(nb), 3), flat)
+    phase = np.repeat(np.tile(np.arange(3), nb), flat)
+    starts = np.cumsum(flat) - flat
+    j = np.arange(len(blk)) - np.repeat(starts, flat) + 1  # 1..n within the phase
+    t_ph = np.column_stack([law.t1, law.t2, law.t3])
+    t_before = np.column_stack([np.zeros(nb), law.t1, law.t1 + law.t2])
+    nj = counts[blk, phase]
+    step = t_ph[blk, phase] / nj
+    tau = t_before[blk, phase] + j * step
+    last = np.zeros(len(blk), dtype=bool)
+    if len(blk):
+        last[np.cumsum(flat.reshape(nb, 3).sum(axis=1)) - 1] = True
+    tau = np.where(last, law.duration[blk], tau)
+    return blk, tau, step, last
 
 
 def backward_pass(length: np.ndarray, accel: np.ndarray, vj: np.ndarray) -> np.ndarray:
