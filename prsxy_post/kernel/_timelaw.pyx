@@ -28,8 +28,72 @@ cdef extern from *:
         memcpy(&a, &ua, sizeof a);
         return a;
     }
+
+    /* timelaw.trapezoids' room at peak x, L - s1 - s3, the reference's operations in
+       its order; a phase's time max(dv / a, h) where dv > 0 (h a number: h > t ? h : t
+       is numpy's maximum(t, h), NaN kept) */
+    static inline double prsxy_room(double x, double v0, double v1, double a, double L,
+                                    double h) {
+        double d0 = x - v0, d1 = x - v1, t1 = d0 / a, t3 = d1 / a;
+        t1 = prsxy_pick(d0 > 0, h > t1 ? h : t1, 0.0);
+        t3 = prsxy_pick(d1 > 0, h > t3 ? h : t3, 0.0);
+        return L - 0.5 * (v0 + x) * t1 - 0.5 * (v1 + x) * t3;
+    }
+
+    #if defined(__SSE2__)
+    #include <emmintrin.h>
+    #endif
+
+    /* for m blocks side by side (contiguous v0, v1, a, L): the largest x in [lo, hi]
+       with room(x) >= 0 (cruise: >= h x) after `steps` halvings, into lo. Two blocks a
+       vector where SSE2 is there: each lane rounds as the scalar operation does
+       (maxpd(h, t) is h > t ? h : t; and/andnot select bits), so the same bits */
+    static void prsxy_bisect(Py_ssize_t m, double *lo, double *hi, const double *v0,
+                             const double *v1, const double *a, const double *L,
+                             double h, int cruise, int steps) {
+        Py_ssize_t j, pairs = 0;
+        int s;
+        double mid, r;
+        int good;
+    #if defined(__SSE2__)
+        const __m128d half = _mm_set1_pd(0.5), zero = _mm_setzero_pd(), hv = _mm_set1_pd(h);
+        pairs = m / 2 * 2;
+    #endif
+        for (s = 0; s < steps; s++) {
+    #if defined(__SSE2__)
+            for (j = 0; j < pairs; j += 2) {
+                __m128d l = _mm_loadu_pd(lo + j), u = _mm_loadu_pd(hi + j);
+                __m128d b0 = _mm_loadu_pd(v0 + j), b1 = _mm_loadu_pd(v1 + j);
+                __m128d x = _mm_mul_pd(half, _mm_add_pd(l, u));
+                __m128d d0 = _mm_sub_pd(x, b0), d1 = _mm_sub_pd(x, b1);
+                __m128d ac = _mm_loadu_pd(a + j);
+                __m128d t1 = _mm_and_pd(_mm_cmpgt_pd(d0, zero), _mm_max_pd(hv, _mm_div_pd(d0, ac)));
+                __m128d t3 = _mm_and_pd(_mm_cmpgt_pd(d1, zero), _mm_max_pd(hv, _mm_div_pd(d1, ac)));
+                __m128d s1 = _mm_mul_pd(_mm_mul_pd(half, _mm_add_pd(b0, x)), t1);
+                __m128d s3 = _mm_mul_pd(_mm_mul_pd(half, _mm_add_pd(b1, x)), t3);
+                __m128d rv = _mm_sub_pd(_mm_sub_pd(_mm_loadu_pd(L + j), s1), s3);
+                __m128d g = cruise ? _mm_cmpge_pd(rv, _mm_mul_pd(hv, x))
+                                   : _mm_cmpge_pd(rv, zero);
+                _mm_storeu_pd(lo + j, _mm_or_pd(_mm_and_pd(g, x), _mm_andnot_pd(g, l)));
+                _mm_storeu_pd(hi + j, _mm_or_pd(_mm_and_pd(g, u), _mm_andnot_pd(g, x)));
+            }
+    #endif
+            for (j = pairs; j < m; j++) {
+                mid = 0.5 * (lo[j] + hi[j]);
+                r = prsxy_room(mid, v0[j], v1[j], a[j], L[j], h);
+                good = cruise ? (r >= h * mid) : (r >= 0);
+                lo[j] = prsxy_pick(good, mid, lo[j]);
+                hi[j] = prsxy_pick(good, hi[j], mid);
+            }
+        }
+    }
     """
     double prsxy_pick(int c, double a, double b) nogil
+    double prsxy_room(double x, double v0, double v1, double a, double L, double h) nogil
+    void prsxy_bisect(
+        Py_ssize_t m, double *lo, double *hi, const double *v0, const double *v1,
+        const double *a, const double *L, double h, int cruise, int steps,
+    ) nogil
 
 
 cdef inline double _max(double a, double b) noexcept nogil:
@@ -57,44 +121,36 @@ cdef inline double _t(double d, double a, double hmin) noexcept nogil:
     return prsxy_pick(d > 0, x if not (hmin > x) else hmin, 0.0)
 
 
-cdef inline double _room(
-    double vp, double v0, double v1, double a, double L, double hmin
-) noexcept nogil:
-    # timelaw.trapezoids' room: L − s1 − s3 at peak vp
-    cdef double t1 = _t(vp - v0, a, hmin)
-    cdef double t3 = _t(vp - v1, a, hmin)
-    cdef double s1 = 0.5 * (v0 + vp) * t1
-    cdef double s3 = 0.5 * (v1 + vp) * t3
-    return L - s1 - s3
-
-
-cdef void _bisect(
+cdef void _bisect_some(
+    double[:, ::1] w,
+    const Py_ssize_t[::1] idx,
     Py_ssize_t m,
-    const Py_ssize_t* idx,
-    double* lo,
-    double* hi,
-    const double* v0,
-    const double* v1,
-    const double* a,
-    const double* L,
+    const double[::1] v0,
+    const double[::1] v1,
+    const double[::1] a,
+    const double[::1] L,
     double hmin,
     bint cruise,
 ) noexcept nogil:
-    # for each of the m blocks idx: the largest x in [lo, hi] with room(x) >= 0 (or
-    # >= hmin x for a cruise), into lo. The blocks side by side in the inner loop,
-    # as numpy's arrays, so the divisions of one block do not wait for another's
-    cdef double mid, r
+    # the peaks w[0] of blocks idx[:m] bisected from [max(v0, v1), w[0]]: their
+    # values gathered side by side into w[1:7], then the peaks back
     cdef Py_ssize_t j, i
-    cdef int step
-    cdef bint good
-    for step in range(BISECT_STEPS):
-        for j in range(m):
-            i = idx[j]
-            mid = 0.5 * (lo[j] + hi[j])
-            r = _room(mid, v0[i], v1[i], a[i], L[i], hmin)
-            good = (r >= hmin * mid) if cruise else (r >= 0)
-            lo[j] = prsxy_pick(good, mid, lo[j])
-            hi[j] = prsxy_pick(good, hi[j], mid)
+    if m == 0:
+        return
+    for j in range(m):
+        i = idx[j]
+        w[1, j] = _max(v0[i], v1[i])
+        w[2, j] = w[0, i]
+        w[3, j] = v0[i]
+        w[4, j] = v1[i]
+        w[5, j] = a[i]
+        w[6, j] = L[i]
+    prsxy_bisect(
+        m, &w[1, 0], &w[2, 0], &w[3, 0], &w[4, 0], &w[5, 0], &w[6, 0], hmin, cruise,
+        BISECT_STEPS,
+    )
+    for j in range(m):
+        w[0, idx[j]] = w[1, j]
 
 
 def trapezoids(v0_in, v1_in, length, accel, vmax, stop, duration, double min_phase):
@@ -114,8 +170,9 @@ def trapezoids(v0_in, v1_in, length, accel, vmax, stop, duration, double min_pha
     cdef const unsigned char[:] st = np.ascontiguousarray(stop, dtype=np.uint8)
     out = np.empty((7, n))
     cdef double[:, :] o = out
-    work = np.empty((3, n))
-    cdef double[:, ::1] w = work  # the peak, then the bisections' lo and hi
+    work = np.empty((7, n))
+    # the peak; the bisections' lo and hi; their blocks' v0, v1, a and L side by side
+    cdef double[:, ::1] w = work
     idx_a = np.empty(n, dtype=np.intp)
     cdef Py_ssize_t[::1] idx = idx_a
     cdef double a, L, b0, b1, hmin = min_phase, top, lo, t2_top, vp, t1, t2, t3
@@ -129,28 +186,20 @@ def trapezoids(v0_in, v1_in, length, accel, vmax, stop, duration, double min_pha
         for i in range(n):
             top = _max(vm[i], _max(v0[i], v1[i]))
             w[0, i] = top
-            if not (_room(top, v0[i], v1[i], a_[i], L_[i], hmin) >= 0):
+            if not (prsxy_room(top, v0[i], v1[i], a_[i], L_[i], hmin) >= 0):
                 idx[m] = i
-                w[1, m] = _max(v0[i], v1[i])
-                w[2, m] = top
                 m += 1
-        _bisect(m, &idx[0], &w[1, 0], &w[2, 0], &v0[0], &v1[0], &a_[0], &L_[0], hmin, False)
-        for j in range(m):
-            w[0, idx[j]] = w[1, j]
+        _bisect_some(w, idx, m, v0, v1, a_, L_, hmin, False)
         # the cruise between them: none, or at least min_phase long
         m = 0
         for i in range(n):
             top = w[0, i]
             L = L_[i]
-            t2_top = _room(top, v0[i], v1[i], a_[i], L, hmin) / top if top > 0 else INFINITY
+            t2_top = prsxy_room(top, v0[i], v1[i], a_[i], L, hmin) / top if top > 0 else INFINITY
             if (t2_top * top > 1e-9 * _max(1.0, L)) and (t2_top < hmin):
                 idx[m] = i
-                w[1, m] = _max(v0[i], v1[i])
-                w[2, m] = top
                 m += 1
-        _bisect(m, &idx[0], &w[1, 0], &w[2, 0], &v0[0], &v1[0], &a_[0], &L_[0], hmin, True)
-        for j in range(m):
-            w[0, idx[j]] = w[1, j]
+        _bisect_some(w, idx, m, v0, v1, a_, L_, hmin, True)
         for i in range(n):
             b0 = v0[i]
             b1 = v1[i]
@@ -165,7 +214,7 @@ def trapezoids(v0_in, v1_in, length, accel, vmax, stop, duration, double min_pha
                 left = 0.0
             t2 = left / vp if vp > 0 else 0.0
             single = not st[i] and (
-                (_room(lo, b0, b1, a, L, hmin) < 0)
+                (prsxy_room(lo, b0, b1, a, L, hmin) < 0)
                 or ((t2 > 0) and (t2 < hmin) and (t1 + t3 > 0))
             )
             if single and b0 + b1 > 0:
