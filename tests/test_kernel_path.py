@@ -151,3 +151,18 @@ def test_compiled_poses_refuse_bad_indices() -> None:
         _path.poses(p, np.array([1]), np.zeros(1))
     with pytest.raises(ValueError, match="one row per point"):
         _path.poses(p, np.array([0]), np.zeros(2))
+
+
+def test_the_blocks_arcs_reach_the_kernel_in_their_planes() -> None:
+    """geometry.path_arrays gives the kernel each arc's in-plane axes as
+    PLANE_AXES orders them (G17 XY, G18 ZX, G19 YZ); lines G17's."""
+    from prsxy_post.interpolate.geometry import PLANE_AXES, Blocks, path_arrays
+
+    plane = np.array([0, 17, 18, 19])
+    b = Blocks(**{f: np.zeros(4) for f in Blocks.__dataclass_fields__})
+    b.plane = plane
+    b.kind = np.array([1, 2, 2, 2])
+    p = path_arrays(b)
+    assert p.iu.tolist() == [0] + [PLANE_AXES[int(pl)][0] for pl in plane[1:]]
+    assert p.iv.tolist() == [1] + [PLANE_AXES[int(pl)][1] for pl in plane[1:]]
+    assert p.arc.tolist() == [False, True, True, True]

@@ -478,10 +478,21 @@ def path_arrays(b: Blocks) -> PathArrays:
         r0=b.r0,
         r1=b.r1,
         center=b.center,
-        # PLANE_AXES' in-plane axes (G17 where no plane is set: lines)
-        iu=np.where(plane == 18, 2, np.where(plane == 19, 1, 0)),
-        iv=np.where(plane == 18, 0, np.where(plane == 19, 2, 1)),
+        iu=_IN_PLANE[0][plane],
+        iv=_IN_PLANE[1][plane],
     )
+
+
+def _in_plane() -> np.ndarray:
+    """(2, 20) the in-plane axes (u, v) by plane code (PLANE_AXES; G17's where no
+    plane is set: lines), looked up in one pass per batch."""
+    out = np.array([[0] * 20, [1] * 20], dtype=np.intp)
+    for pl, (u, v, _) in PLANE_AXES.items():
+        out[:, pl] = u, v
+    return out
+
+
+_IN_PLANE = _in_plane()
 
 
 def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
