@@ -219,7 +219,9 @@ def phase_times(
 def backward_pass(length: np.ndarray, accel: np.ndarray, vj: np.ndarray) -> np.ndarray:
     """v_out[k] ≤ sqrt(v_out[k+1]² + 2 a_{k+1} L_{k+1}): every block can slow down in time.
 
-    A plain loop over Python floats (each step needs the one after it).
+    A plain loop over Python floats (each step needs the one after it): its
+    arithmetic does not depend on where a stream was cut, which keeps streamed
+    output identical to one-shot output.
     """
     n = len(vj)
     v = vj.tolist()
