@@ -553,7 +553,12 @@ def segment_limit(b: Blocks, limits: PlanLimits) -> np.ndarray:
     speed errs too, and on tight curves that bounds h v first.
     """
     tol = CURVE_SHARE * limits.tolerance_mm
-    r = b.curv_r
+    out = np.full(len(b), np.inf)
+    # lines (r = inf, and NaN) have no limit: the powers run over the curves only
+    k = np.flatnonzero(np.isfinite(b.curv_r))
+    if not k.size:
+        return out
+    r = b.curv_r[k]
     with np.errstate(invalid="ignore", over="ignore"):
         if limits.segment == "chord":
             hv = np.sqrt(8.0 * r * tol)
@@ -561,7 +566,8 @@ def segment_limit(b: Blocks, limits: PlanLimits) -> np.ndarray:
             # the cubic's velocity errs by up to h^3 max|q''''| / (72 sqrt 3), about
             # (h v)^3 v / (125 r^3): within SPEED_SHARE of the speed on tight curves
             hv = np.minimum((384.0 * tol * r**3) ** 0.25, r * (125.0 * SPEED_SHARE) ** (1 / 3))
-    return np.where(np.isfinite(hv), hv, np.inf)
+    out[k] = np.where(np.isfinite(hv), hv, np.inf)
+    return out
 
 
 def point_bound(b: Blocks, limits: PlanLimits) -> np.ndarray:
