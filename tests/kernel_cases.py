@@ -58,17 +58,27 @@ def record(attr: str, tmp: Path) -> list[tuple[Any, ...]]:
     """The arguments of every call of the selected kernel ``kernel.<attr>``
     (``_inverse_rows``, ``_fixed_rows``) while the sample programs convert
     (:data:`RUNS`), in this process."""
-    calls: list[tuple[Any, ...]] = []
-    inner: Callable[..., Any] = getattr(kernel, attr)
+    return record_many([attr], tmp)[attr]
 
-    def spy(*args: Any) -> Any:
-        calls.append(
-            tuple(copy.deepcopy(a) if isinstance(a, np.ndarray | list) else a for a in args)
-        )
-        return inner(*args)
+
+def record_many(attrs: list[str], tmp: Path) -> dict[str, list[tuple[Any, ...]]]:
+    """:func:`record` for several kernels in one conversion of the samples."""
+    calls: dict[str, list[tuple[Any, ...]]] = {a: [] for a in attrs}
+
+    def spy(attr: str) -> Callable[..., Any]:
+        inner: Callable[..., Any] = getattr(kernel, attr)
+
+        def call(*args: Any) -> Any:
+            # deep copies: a record of arrays (TimeLaw, PathArrays) holds the
+            # caller's arrays, which it may change later
+            calls[attr].append(tuple(copy.deepcopy(a) for a in args))
+            return inner(*args)
+
+        return call
 
     mp = pytest.MonkeyPatch()
-    mp.setattr(kernel, attr, spy)
+    for attr in attrs:
+        mp.setattr(kernel, attr, spy(attr))
     try:
         for i, (sample, fmt, prof) in enumerate(RUNS):
             job = ConvertJob(

@@ -197,3 +197,34 @@ def test_a_short_block_between_two_stops_rises_and_falls() -> None:
     assert law.a1[0] <= b.accel[0] * (1 + 1e-12) and law.a3[0] <= b.accel[0] * (1 + 1e-12)
     end = distance(law, np.zeros(1, dtype=int), law.duration)
     assert end[0] == pytest.approx(b.length[0], rel=1e-12)
+
+
+@pytest.mark.parametrize("segment", ["cubic", "chord"])
+def test_segment_limit_bounds_curves_and_leaves_lines_free(segment: str) -> None:
+    """The longest step at speed 1 on a curve of radius r: the cubic's error
+    (h v)⁴ / (384 r³) or the chord's (h v)² / (8 r) at CURVE_SHARE of the
+    tolerance, the cubic's also its speed error; none on lines (r = inf, NaN).
+    Computed over the curves alone, each to the bit of the formula over every
+    block."""
+    from prsxy_post.interpolate import geometry as g
+
+    rng = np.random.default_rng(5)
+    r = np.concatenate([rng.uniform(0, 500, 500), np.full(300, np.inf), [0.0, np.nan, 1e300]])
+    rng.shuffle(r)
+    b = g.Blocks(**{f: np.zeros(len(r)) for f in g.Blocks.__dataclass_fields__})
+    b.curv_r = r
+    lim = g.PlanLimits(segment=segment)
+    tol = g.CURVE_SHARE * lim.tolerance_mm
+    with np.errstate(invalid="ignore", over="ignore"):
+        if segment == "chord":
+            hv = np.sqrt(8.0 * r * tol)
+        else:
+            speed = r * (125.0 * g.SPEED_SHARE) ** (1 / 3)
+            hv = np.minimum((384.0 * tol * r**3) ** 0.25, speed)
+    want = np.where(np.isfinite(hv), hv, np.inf)
+    got = g.segment_limit(b, lim)
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))
+    assert np.all(np.isinf(got[~np.isfinite(r)]))
+    one = np.flatnonzero(np.isfinite(r) & (r > 1))[0]
+    if segment == "chord":  # the chord's sagitta at the step is the share of tol
+        assert np.isclose(got[one] ** 2 / (8 * r[one]), tol, rtol=1e-12)

@@ -6,6 +6,11 @@
 - :mod:`.timelaw`: the speed along each block (trapezoids with no short phases);
 - :mod:`.sampling`: the points and the planned velocity at each.
 
+Their per-block and per-point arithmetic (the trapezoids and their bisections,
+the look-ahead's passes and play stops, the points' times, distances, speeds,
+poses on lines and arcs and velocities) runs in the kernel
+(:mod:`prsxy_post.kernel.timelaw`, :mod:`prsxy_post.kernel.path`), compiled.
+
 The path is exact regardless of the speed plan: points are evaluated on the
 programmed geometry, and the velocity at each is the plan's, so the cubic a
 PVT controller runs between two points stays on the path (see the modules for

@@ -28,7 +28,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import kernel
 from ..gcode import EXACT_STOP, Motion
+from ..kernel.path import PathArrays
 
 KIND_RAPID, KIND_FEED, KIND_ARC, KIND_DWELL, KIND_FUNCTION, KIND_CURVE = 0, 1, 2, 3, 4, 5
 _KIND = {
@@ -298,6 +300,12 @@ class _MotionColumns(NamedTuple):
     rotation: np.ndarray
 
 
+def _poses(col: Sequence[Sequence[float]]) -> np.ndarray:
+    """(n, 5) the poses of a column of them (each five numbers: gcode.Pose)."""
+    # one flat pass: twice as fast as numpy finding the nested tuples' shape
+    return np.fromiter(itertools.chain.from_iterable(col), float, 5 * len(col)).reshape(-1, 5)
+
+
 def _motion_columns(motions: Sequence[Motion]) -> _MotionColumns:
     """The motions' fields as columns (:class:`_MotionColumns`)."""
     n = len(motions)
@@ -326,17 +334,18 @@ def _motion_columns(motions: Sequence[Motion]) -> _MotionColumns:
     rotation = np.zeros(n, dtype=int)
     arcs = np.flatnonzero(is_arc).tolist()
     if arcs:
-        plane[is_arc] = [cols[f("plane")][i] for i in arcs]
-        center[is_arc] = np.array([cols[f("center")][i] for i in arcs], dtype=float)
-        rotation[is_arc] = [cols[f("rotation")][i] for i in arcs]
+        planes, centers, rotations = cols[f("plane")], cols[f("center")], cols[f("rotation")]
+        plane[is_arc] = [planes[i] for i in arcs]
+        center[is_arc] = np.array([centers[i] for i in arcs], dtype=float)
+        rotation[is_arc] = [rotations[i] for i in arcs]
     return _MotionColumns(
         kind=kind,
-        start=np.array(cols[f("start")], dtype=float).reshape(n, 5),
-        end=np.array(cols[f("end")], dtype=float).reshape(n, 5),
-        line=np.array(cols[f("line")], dtype=int).reshape(n),
-        tool_length=np.array(cols[f("tool_length")], dtype=float).reshape(n),
-        feed=np.array(cols[f("feed")], dtype=float).reshape(n),
-        duration=np.array(cols[f("duration")], dtype=float).reshape(n),
+        start=_poses(cols[f("start")]),
+        end=_poses(cols[f("end")]),
+        line=np.fromiter(cols[f("line")], int, n),
+        tool_length=np.fromiter(cols[f("tool_length")], float, n),
+        feed=np.fromiter(cols[f("feed")], float, n),
+        duration=np.fromiter(cols[f("duration")], float, n),
         path_tol=path_tol,
         fn=fn,
         curve=curve,
@@ -455,8 +464,41 @@ def _tolerances(path_tol: np.ndarray, limits: PlanLimits) -> tuple[np.ndarray, n
     return tol, tol_deg
 
 
+def path_arrays(b: Blocks) -> PathArrays:
+    """The blocks' lines and arcs as the path kernel takes them
+    (:class:`~prsxy_post.kernel.path.PathArrays`)."""
+    plane = b.plane
+    return PathArrays(
+        start=b.start,
+        end=b.end,
+        length=b.length,
+        arc=b.kind == KIND_ARC,
+        theta0=b.theta0,
+        sweep=b.sweep,
+        r0=b.r0,
+        r1=b.r1,
+        center=b.center,
+        iu=_IN_PLANE[0][plane],
+        iv=_IN_PLANE[1][plane],
+    )
+
+
+def _in_plane() -> np.ndarray:
+    """(2, 20) the in-plane axes (u, v) by plane code (PLANE_AXES; G17's where no
+    plane is set: lines), looked up in one pass per batch."""
+    out = np.array([[0] * 20, [1] * 20], dtype=np.intp)
+    for pl, (u, v, _) in PLANE_AXES.items():
+        out[:, pl] = u, v
+    return out
+
+
+_IN_PLANE = _in_plane()
+
+
 def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pose q(s) and tangent dq/ds at path distance ``s`` into blocks ``k``.
+
+    Lines and arcs: :func:`prsxy_post.kernel.path.poses`; curves here.
 
     Returns
     -------
@@ -464,47 +506,26 @@ def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.nda
     dq_ds : (N, 5) [mm/mm, deg/mm] (per degree for rotary-only moves; zero for
         dwells and functions)
     """
-    k = np.asarray(k, dtype=int)
+    k = np.asarray(k, dtype=np.intp)
     s = np.asarray(s, dtype=float)
-    st, en = b.start[k], b.end[k]
-    L = b.length[k]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        frac = np.where(L > 0, np.clip(s / L, 0.0, 1.0), 1.0)
-        dq = np.where(L[:, None] > 0, (en - st) / L[:, None], 0.0)
-    q = st + (en - st) * frac[:, None]
-    arc = b.kind[k] == KIND_ARC
-    if np.any(arc):
-        ka = k[arc]
-        fa = frac[arc]
-        La = L[arc]
-        th = b.theta0[ka] + b.sweep[ka] * fa
-        dr = b.r1[ka] - b.r0[ka]
-        r = b.r0[ka] + dr * fa
-        c, sn = np.cos(th), np.sin(th)
-        iu, iv, _ = _plane_axes(b.plane[ka])
-        rows = np.flatnonzero(arc)
-        cen = b.center[ka]
-        m = np.arange(len(ka))
-        q[rows, iu] = cen[m, iu] + r * c
-        q[rows, iv] = cen[m, iv] + r * sn
-        dq[rows, iu] = (dr * c - r * b.sweep[ka] * sn) / La
-        dq[rows, iv] = (dr * sn + r * b.sweep[ka] * c) / La
-        # the exact end point, not cos/sin of an angle that lands a rounding off it
-        end_hit = fa >= 1.0
-        q[rows[end_hit]] = en[arc][end_hit]
+    q, dq = kernel.poses(path_arrays(b), k, s)
     on_curve = b.kind[k] == KIND_CURVE
     if np.any(on_curve):
         rows = np.flatnonzero(on_curve)
+        L = b.length[k[rows]]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            frac = np.where(L > 0, np.clip(s[rows] / L, 0.0, 1.0), 1.0)
         for kb in np.unique(k[rows]).tolist():
-            sel = rows[k[rows] == kb]
+            at = k[rows] == kb
+            sel = rows[at]
             c = b.curve[kb]
             u = c.u_at(s[sel])
             _, d1, _ = c.derivatives(u)
             q[sel, :3] = c.point(u)
             norm = np.linalg.norm(d1, axis=1)
             dq[sel, :3] = d1 / np.where(norm > 0, norm, 1.0)[:, None]
-            end_hit = frac[sel] >= 1.0
-            q[sel[end_hit]] = en[sel[end_hit]]
+            end_hit = frac[at] >= 1.0
+            q[sel[end_hit]] = b.end[kb]
     return q, dq
 
 
@@ -532,7 +553,12 @@ def segment_limit(b: Blocks, limits: PlanLimits) -> np.ndarray:
     speed errs too, and on tight curves that bounds h v first.
     """
     tol = CURVE_SHARE * limits.tolerance_mm
-    r = b.curv_r
+    out = np.full(len(b), np.inf)
+    # lines (r = inf, and NaN) have no limit: the powers run over the curves only
+    k = np.flatnonzero(np.isfinite(b.curv_r))
+    if not k.size:
+        return out
+    r = b.curv_r[k]
     with np.errstate(invalid="ignore", over="ignore"):
         if limits.segment == "chord":
             hv = np.sqrt(8.0 * r * tol)
@@ -540,7 +566,8 @@ def segment_limit(b: Blocks, limits: PlanLimits) -> np.ndarray:
             # the cubic's velocity errs by up to h^3 max|q''''| / (72 sqrt 3), about
             # (h v)^3 v / (125 r^3): within SPEED_SHARE of the speed on tight curves
             hv = np.minimum((384.0 * tol * r**3) ** 0.25, r * (125.0 * SPEED_SHARE) ** (1 / 3))
-    return np.where(np.isfinite(hv), hv, np.inf)
+    out[k] = np.where(np.isfinite(hv), hv, np.inf)
+    return out
 
 
 def point_bound(b: Blocks, limits: PlanLimits) -> np.ndarray:

@@ -44,6 +44,7 @@ from dataclasses import fields
 import numpy as np
 
 from ..gcode import EXACT_STOP
+from ..kernel import backward_pass, forward_pass, play_stops
 from .geometry import CORNER_SHARE, Blocks, PlanLimits, segment_limit
 from .timelaw import TimeLaw, time_law
 
@@ -183,32 +184,24 @@ def _play_stops(b: Blocks) -> np.ndarray:
     # (its crossing window then takes the place of the head's blend,
     # reversals.blend_shift, and the table's blend reached the tip: 8 % over F60),
     # or the table cancels the head's motion along its axis (TABLE_STAND_SHARE:
-    # 2.9 % over F60)
-    lo = np.minimum(np.abs(b.dP_out[:-1]), np.abs(b.dP_in[1:]))
-    hi = np.maximum(np.abs(b.dP_out[:-1]), np.abs(b.dP_in[1:]))
-    reverses = (b.dP_out[:-1] * b.dP_in[1:] < 0.0) & (hi > REVERSAL_SLOPE) & (lo > STAND_SLOPE)
-    head_sets_off = (hi > REVERSAL_SLOPE) & (lo <= STAND_SLOPE)
-    stop = np.any(reverses[:, :HEAD_MOTORS], axis=1)
-    stop |= np.any(reverses[:, HEAD_MOTORS:], axis=1) & np.any(
-        head_sets_off[:, :HEAD_MOTORS], axis=1
+    # 2.9 % over F60; the table motors X, Y move the tip along x, y one for one,
+    # the contract's table equation, to its scale and squareness errors). A motor
+    # with play that sets off against the way it last moved crosses its play at
+    # the junction; where the head sets off or stops there too, its window would
+    # take the place of the head's blend (reversals.corners), and the blend's mean
+    # cubics swing the head's motors back where their parts cannot follow (a tilt
+    # starting after a straight at F300: 4.6 % over F60)
+    return play_stops(
+        b.dq_out,
+        b.dq_in,
+        b.dP_out,
+        b.dP_in,
+        b.cross_in,
+        HEAD_MOTORS,
+        REVERSAL_SLOPE,
+        STAND_SLOPE,
+        (1.0 + TABLE_STAND_SHARE) ** 2,
     )
-    # the table motors X, Y move the tip along x, y one for one (the contract's
-    # table equation, to its scale and squareness errors)
-    faster = np.zeros(len(b) - 1, dtype=bool)
-    for t, p in ((b.dq_out[:-1], b.dP_out[:-1]), (b.dq_in[1:], b.dP_in[1:])):
-        tt, pp = t[:, 0:2], p[:, HEAD_MOTORS:]
-        gain = 1.0 - 2.0 * tt * pp + pp * pp
-        faster |= np.any(
-            reverses[:, HEAD_MOTORS:] & (gain > (1.0 + TABLE_STAND_SHARE) ** 2), axis=1
-        )
-    stop |= faster
-    # a motor with play that sets off against the way it last moved crosses its
-    # play at the junction; where the head sets off or stops there too, its window
-    # would take the place of the head's blend (reversals.corners), and the
-    # blend's mean cubics swing the head's motors back where their parts cannot
-    # follow (a tilt starting after a straight at F300: 4.6 % over F60)
-    stop |= b.cross_in[1:] & np.any(head_sets_off[:, :HEAD_MOTORS], axis=1)
-    return stop
 
 
 def corner_bend(b: Blocks) -> np.ndarray:
@@ -233,41 +226,6 @@ def effective_accel(b: Blocks, corner: np.ndarray) -> np.ndarray:
     corner (module docstring), its limit elsewhere."""
     near = corner[:-1] | corner[1:]
     return np.where(near & ~b.stops, b.accel * math.sqrt(1.0 - KAPPA**2), b.accel)
-
-
-def backward_pass(length: np.ndarray, accel: np.ndarray, vj: np.ndarray) -> np.ndarray:
-    """v_out[k] ≤ sqrt(v_out[k+1]² + 2 a_{k+1} L_{k+1}): every block can slow down in time.
-
-    A plain loop over Python floats: its arithmetic does not depend on where a
-    stream was cut, which keeps streamed output identical to one-shot output.
-    """
-    n = len(vj)
-    v = vj.tolist()
-    two_al = (2.0 * accel * length).tolist()
-    sqrt = math.sqrt
-    nxt = v[-1] if n else 0.0
-    for k in range(n - 2, -1, -1):
-        lim = sqrt(nxt * nxt + two_al[k + 1])
-        if v[k] > lim:
-            v[k] = lim
-        nxt = v[k]
-    return np.array(v, dtype=float)
-
-
-def forward_pass(
-    length: np.ndarray, accel: np.ndarray, v_back: np.ndarray, v_start: float = 0.0
-) -> np.ndarray:
-    """v_out[k] ≤ sqrt(v_out[k−1]² + 2 a_k L_k): every block can speed up in time."""
-    v = v_back.tolist()
-    two_al = (2.0 * accel * length).tolist()
-    sqrt = math.sqrt
-    prev = v_start
-    for k in range(len(v)):
-        lim = sqrt(prev * prev + two_al[k])
-        if v[k] > lim:
-            v[k] = lim
-        prev = v[k]
-    return np.array(v, dtype=float)
 
 
 class Planner:

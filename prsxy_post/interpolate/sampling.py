@@ -16,9 +16,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from .. import kernel
 from .geometry import KIND_DWELL, KIND_FUNCTION, Blocks, PlanLimits, pose_at, segment_limit
 from .lookahead import Plan
-from .timelaw import TimeLaw, distance, speed
+from .timelaw import TimeLaw
 
 
 @dataclass(frozen=True)
@@ -103,37 +104,21 @@ def next_tangent(plan: Plan, blk: np.ndarray) -> np.ndarray:
 def sample(plan: Plan, limits: PlanLimits) -> Samples:
     """Points of a plan's blocks, in time order, each block's end point last."""
     b, law = plan.blocks, plan.law
-    n_ph = steps(b, law, limits)
-    counts = n_ph.reshape(-1)
-    nb = len(b)
-    blk = np.repeat(np.repeat(np.arange(nb), 3), counts)
-    phase = np.repeat(np.tile(np.arange(3), nb), counts)
-    starts = np.cumsum(counts) - counts
-    j = np.arange(len(blk)) - np.repeat(starts, counts) + 1  # 1..n within the phase
-    t_ph = np.column_stack([law.t1, law.t2, law.t3])
-    t_before = np.column_stack([np.zeros(nb), law.t1, law.t1 + law.t2])
-    nj = n_ph[blk, phase]
-    step = t_ph[blk, phase] / nj
-    tau = t_before[blk, phase] + j * step
-    last_of_block = np.zeros(len(blk), dtype=bool)
-    if len(blk):
-        last_of_block[np.cumsum(counts.reshape(nb, 3).sum(axis=1)) - 1] = True
-    tau = np.where(last_of_block, law.duration[blk], tau)
+    blk, tau, step, last_of_block = kernel.phase_times(law, steps(b, law, limits))
     first = np.ones(len(blk), dtype=bool)
     first[1:] = blk[1:] != blk[:-1]
 
     stand = b.stops[blk]
-    s = np.where(last_of_block | stand, b.length[blk], distance(law, blk, tau))
+    along, v_along = kernel.along(law, blk, tau)
+    s = np.where(last_of_block | stand, b.length[blk], along)
     q, dq = pose_at(b, blk, s)
-    v = np.where(stand, 0.0, speed(law, blk, tau))
+    v = np.where(stand, 0.0, v_along)
     v = np.where(last_of_block & ~stand, law.v1[blk], v)
-    qdot = v[:, None] * dq
     # a junction taken at speed: the mean of the velocities on its two sides (the
     # same vector where the path is tangent)
-    at_end = np.flatnonzero(last_of_block & ~stand & (v > 0))
-    if at_end.size:
-        kb = blk[at_end]
-        qdot[at_end] = 0.5 * v[at_end, None] * (b.dq_out[kb] + next_tangent(plan, kb))
+    at_speed = last_of_block & ~stand & (v > 0)
+    dq_next = np.vstack([b.dq_in[1:], plan.next_dq_in[None, :]])[: len(b)]
+    qdot = kernel.velocities(v, dq, blk, at_speed, b.dq_out, dq_next)
     dt = np.where(stand, np.where(b.kind[blk] == KIND_DWELL, b.duration[blk], 0.0), step)
     fn = np.empty(len(blk), dtype=object)
     is_fn = b.kind[blk] == KIND_FUNCTION
@@ -159,7 +144,6 @@ def at_times(plan: Plan, k: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np
     """Pose and planned velocity at local times ``tau`` inside blocks ``k`` (no corner
     averaging: for points strictly inside a block)."""
     b, law = plan.blocks, plan.law
-    s = distance(law, k, tau)
+    s, v = kernel.along(law, k, tau)
     q, dq = pose_at(b, k, s)
-    v = speed(law, k, tau)
     return q, v[:, None] * dq

@@ -1,9 +1,9 @@
 """The kernel: per-point numerical work as functions over arrays.
 
 Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``, ``fk.py``,
-...: :data:`TWINS`) and a compiled twin in Cython (``_ik.pyx``, ...; built when the
-package is installed) that gives the same bits. This module picks one set for the whole
-program, once, at import:
+the planner's ``timelaw.py`` and ``path.py``, ...: :data:`TWINS`) and a compiled twin
+in Cython (``_ik.pyx``, ...; built when the package is installed) that gives the same
+bits. This module picks one set for the whole program, once, at import:
 
 - ``PRSXY_KERNEL=pure`` in the environment: the numpy reference (CI's pure leg);
 - otherwise the compiled kernels when the extension imports, else the reference.
@@ -31,7 +31,7 @@ from types import ModuleType
 
 import numpy as np
 
-from . import fk, ik, legendre
+from . import fk, ik, legendre, path, timelaw
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
@@ -39,7 +39,14 @@ ENV = "PRSXY_KERNEL"
 InverseRows = Callable[[ik.IKArrays, np.ndarray, np.ndarray], np.ndarray]
 FixedRows = Callable[..., list[str]]
 #: each reference module's compiled twin
-TWINS = {"ik": "_ik", "text": "_text", "legendre": "_legendre", "fk": "_fk"}
+TWINS = {
+    "ik": "_ik",
+    "text": "_text",
+    "legendre": "_legendre",
+    "fk": "_fk",
+    "timelaw": "_timelaw",
+    "path": "_path",
+}
 
 
 def _load() -> tuple[dict[str, ModuleType], str, str]:
@@ -71,6 +78,14 @@ _fixed_rows = _RUN["text"].format_fixed_rows
 _pvt_segment = _RUN["text"].pvt_segment_text
 _map_rows = _RUN["legendre"].map_rows
 _fk_mod = _RUN["fk"]
+_trapezoids = _RUN["timelaw"].trapezoids
+_along = _RUN["timelaw"].along
+_phase_times = _RUN["timelaw"].phase_times
+_backward_pass = _RUN["timelaw"].backward_pass
+_forward_pass = _RUN["timelaw"].forward_pass
+_play_stops = _RUN["timelaw"].play_stops
+_poses = _RUN["path"].poses
+_velocities = _RUN["path"].velocities
 #: True when the compiled kernels run.
 COMPILED: bool = not WHY_PURE
 #: True when the reference runs because the extension is missing (not asked for).
@@ -161,4 +176,92 @@ def map_rows(m: legendre.MapArrays, q: np.ndarray) -> np.ndarray:
     """The virtual-axis error e(q) (N, 5) [mm, mm, mm, deg, deg] for poses ``q``
     (N, 5): :func:`legendre.map_rows`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _map_rows(m, q)
+    return out
+
+
+def trapezoids(
+    v0: np.ndarray,
+    v1: np.ndarray,
+    length: np.ndarray,
+    accel: np.ndarray,
+    vmax: np.ndarray,
+    stop: np.ndarray,
+    duration: np.ndarray,
+    min_phase: float,
+) -> timelaw.TimeLaw:
+    """Each block's trapezoid between its entry and exit speeds:
+    :func:`timelaw.trapezoids`, compiled when :data:`COMPILED`."""
+    out: timelaw.TimeLaw = _trapezoids(v0, v1, length, accel, vmax, stop, duration, min_phase)
+    return out
+
+
+def along(law: timelaw.TimeLaw, k: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distance and speed at local times ``tau`` of blocks ``k``: :func:`timelaw.along`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _along(law, k, tau)
+    return out
+
+
+def phase_times(
+    law: timelaw.TimeLaw, counts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The points' blocks, local times, steps and block ends for phases cut into
+    ``counts`` steps: :func:`timelaw.phase_times`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _phase_times(law, counts)
+    return out
+
+
+def backward_pass(length: np.ndarray, accel: np.ndarray, vj: np.ndarray) -> np.ndarray:
+    """The look-ahead's backward pass: :func:`timelaw.backward_pass`, compiled when
+    :data:`COMPILED`."""
+    out: np.ndarray = _backward_pass(length, accel, vj)
+    return out
+
+
+def forward_pass(
+    length: np.ndarray, accel: np.ndarray, v_back: np.ndarray, v_start: float = 0.0
+) -> np.ndarray:
+    """The look-ahead's forward pass: :func:`timelaw.forward_pass`, compiled when
+    :data:`COMPILED`."""
+    out: np.ndarray = _forward_pass(length, accel, v_back, v_start)
+    return out
+
+
+def play_stops(
+    dq_out: np.ndarray,
+    dq_in: np.ndarray,
+    dP_out: np.ndarray,
+    dP_in: np.ndarray,
+    cross_in: np.ndarray,
+    head: int,
+    reversal_slope: float,
+    stand_slope: float,
+    gain_max: float,
+) -> np.ndarray:
+    """The junctions where a motor with play crosses it at rest:
+    :func:`timelaw.play_stops`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_stops(
+        dq_out, dq_in, dP_out, dP_in, cross_in, head, reversal_slope, stand_slope, gain_max
+    )
+    return out
+
+
+def poses(p: path.PathArrays, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Poses and tangents on lines and arcs: :func:`path.poses`, compiled when
+    :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _poses(p, k, s)
+    return out
+
+
+def velocities(
+    v: np.ndarray,
+    dq: np.ndarray,
+    blk: np.ndarray,
+    corner: np.ndarray,
+    dq_out: np.ndarray,
+    dq_next: np.ndarray,
+) -> np.ndarray:
+    """The points' planned velocities, the mean of both sides at corners:
+    :func:`path.velocities`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _velocities(v, dq, blk, corner, dq_out, dq_next)
     return out
