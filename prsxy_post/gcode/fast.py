@@ -1,11 +1,23 @@
-"""The fast path: the common CAM block, matched over a batch of lines at once."""
+"""The fast path: the common CAM block, matched over a batch of lines at once.
+
+Two implementations give the same motions, bit for bit: this module's
+:func:`fast_run` (the reference: a regex over the batch, a Python loop) and its
+compiled twin ``_fast.pyx`` (a scanner that accepts what the regex matches, the
+same arithmetic in C, the same arcs through :func:`_fast_arc`). :data:`SELECTED`
+is the one the stream runs, picked once at import as the kernel's are
+(``PRSXY_KERNEL=pure`` selects the reference; without the built extension the
+reference runs too).
+"""
 
 from __future__ import annotations
 
 import itertools
 import math
 import re
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
+from .. import kernel
 from ..errors import GCodeError
 from .codes import AXES
 from .execute import Interpreter
@@ -174,3 +186,39 @@ def _fast_arc(it: Interpreter, motion: int, words: tuple[str, ...], n: int) -> b
     st.motion = motion
     it.started = True
     return True
+
+
+def pure_matches(batch: list[str]) -> list[tuple[str, ...]]:
+    """The regex's groups of each line of a batch, for :func:`fast_run`; none (no
+    fast path) when a line holds a character that ends lines."""
+    matches = _FAST_LINE.findall("\n".join(batch))
+    return matches if len(matches) == len(batch) else []
+
+
+class FastPath(NamedTuple):
+    """One implementation of the fast path: ``run(it, matches(batch), i, n0)``."""
+
+    name: str
+    matches: Callable[[list[str]], list[Any]]
+    run: Callable[[Interpreter, list[Any], int, int], int]
+
+
+#: the reference
+PURE = FastPath("pure", pure_matches, fast_run)
+
+
+def _compiled() -> FastPath | None:
+    """The compiled twin bound to this module's pieces, or None where it is not
+    built."""
+    try:
+        from ._fast import bind, matches_of
+        from ._fast import fast_run as compiled_run
+    except ImportError:
+        return None
+    bind(Motion, _fast_arc, fast_run, pure_matches, MM_PER_INCH, math.nan)
+    return FastPath("compiled", matches_of, compiled_run)
+
+
+#: the compiled twin (None when not built), and the one the stream runs
+COMPILED = _compiled()
+SELECTED = PURE if COMPILED is None or kernel.pure_asked() else COMPILED

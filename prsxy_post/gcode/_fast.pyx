@@ -1,0 +1,386 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
+# cython: initializedcheck=False
+"""The fast path compiled: the twin of :func:`prsxy_post.gcode.fast.fast_run`.
+
+It reads each line itself instead of taking the regex's groups: a scanner that
+accepts exactly what ``fast._FAST_LINE`` matches (the same groups, the same
+``rest``), numbers parsed to the bits of Python's ``float()`` (an exact decimal
+of at most 15 digits and 22 decimals is one correctly rounded division, as in
+David Gay's strtod; any other goes through ``PyOS_string_to_double``, which is
+what ``float()`` calls), the same arithmetic in the same order (``(ex - x) ** 2``
+through libm's ``pow``, as CPython's ``float ** float`` does, with its
+OverflowError), and :class:`~prsxy_post.gcode.motion.Motion` made here. Arcs go
+through the reference's ``_fast_arc`` (the interpreter's own arc code), with
+the matched words as text.
+
+Bound to the reference by :func:`bind` (this module imports nothing from the
+package, so the package imports it, not the other way round).
+"""
+
+from libc.errno cimport ERANGE, errno
+from libc.math cimport isfinite, isinf
+from libc.stdint cimport uint64_t
+from cpython.float cimport PyFloat_AS_DOUBLE
+from cpython.list cimport PyList_Append
+from cpython.ref cimport PyObject
+
+cdef extern from "Python.h":
+    double PyOS_string_to_double(const char *s, char **endptr,
+                                 PyObject *overflow_exception) except? -1.0
+    object PyErr_SetFromErrno(object exc)
+    Py_ssize_t PyUnicode_FindChar(object s, Py_UCS4 ch, Py_ssize_t start,
+                                  Py_ssize_t end, int direction) except -2
+
+cdef extern from *:
+    """
+    #include <math.h>
+    /* pow(d, 2.0) as CPython's float ** 2 calls it: the 2 is not a constant the
+       compiler could turn into d * d (glibc's pow need not round as d * d does) */
+    static double prsxy_square(double d) {
+        volatile double two = 2.0;
+        return pow(d, two);
+    }
+    /* a Motion (a tuple subclass) filled in place, as tuple.__new__(cls, fields)
+       does: `head` holds the 11 fields after line, kind, start, end and feed */
+    static PyObject *prsxy_motion(PyObject *tp, PyObject *line, PyObject *kind,
+                                  PyObject *start, PyObject *end, PyObject *rate,
+                                  PyObject *head) {
+        Py_ssize_t n = PyTuple_GET_SIZE(head), i;
+        PyObject *o = ((PyTypeObject *)tp)->tp_alloc((PyTypeObject *)tp, n + 5);
+        if (o == NULL) return NULL;
+        PyObject *first[5] = {line, kind, start, end, rate};
+        for (i = 0; i < 5; i++) {
+            Py_INCREF(first[i]);
+            PyTuple_SET_ITEM(o, i, first[i]);
+        }
+        for (i = 0; i < n; i++) {
+            PyObject *v = PyTuple_GET_ITEM(head, i);
+            Py_INCREF(v);
+            PyTuple_SET_ITEM(o, i + 5, v);
+        }
+        return o;
+    }
+    """
+    double prsxy_square(double d) nogil
+    object prsxy_motion(object tp, object line, object kind, object start, object end,
+                        object rate, tuple head)
+
+#: 10^k, exact as doubles for k <= 22
+cdef double _P10[23]
+_P10[0] = 1.0
+for _k in range(1, 23):
+    _P10[_k] = _P10[_k - 1] * 10.0
+
+#: the word letters after G, in the regex's order, upper and lower case
+cdef Py_UCS4 _UP[10]
+cdef Py_UCS4 _LOW[10]
+for _k, _c in enumerate("XYZABIJKRF"):
+    _UP[_k] = ord(_c)
+    _LOW[_k] = ord(_c.lower())
+
+# bound by bind(): Motion, the reference's _fast_arc and fast_run, the pure matcher
+cdef object _Motion = None
+cdef object _fast_arc = None
+cdef object _pure_run = None
+cdef object _pure_matches = None
+cdef object _NAN = float("nan")
+cdef double _MM_PER_INCH = 25.4
+
+
+def bind(motion_type, fast_arc, pure_run, pure_matches, double mm_per_inch, nan):
+    """The reference's pieces this twin uses (gcode.fast calls it once); ``nan``:
+    the very object the reference puts in a rapid (math.nan), so that motions
+    compare equal as tuples (a tuple compares NaN by identity)."""
+    global _Motion, _fast_arc, _pure_run, _pure_matches, _NAN, _MM_PER_INCH
+    _Motion, _fast_arc, _pure_run, _pure_matches = motion_type, fast_arc, pure_run, pure_matches
+    _MM_PER_INCH = mm_per_inch
+    _NAN = nan
+
+
+cdef struct Groups:
+    int g  # the G group's digit, -1 when it did not match
+    Py_ssize_t s[10]  # start of each number (sign included), -1 when absent
+    Py_ssize_t e[10]  # its end
+    bint rest  # text after the matched words
+
+
+cdef inline bint _blank(Py_UCS4 c) noexcept:
+    return c == 32 or c == 9
+
+
+cdef inline bint _digit(Py_UCS4 c) noexcept:
+    return 48 <= c <= 57
+
+
+cdef inline Py_UCS4 _at(str s, Py_ssize_t i, Py_ssize_t n) noexcept:
+    return s[i] if i < n else 0
+
+
+cdef void _scan(str s, Groups *gr) noexcept:
+    """The groups ``fast._FAST_LINE`` gives for line ``s`` (possessive: each optional
+    group matches as far as it can or not at all)."""
+    cdef Py_ssize_t n = len(s), p = 0, q, z
+    cdef Py_UCS4 c
+    cdef int k
+    gr.g = -1
+    while p < n and _blank(s[p]):
+        p += 1
+    # [Nn] blanks digits+ blanks
+    c = _at(s, p, n)
+    if c == 78 or c == 110:
+        q = p + 1
+        while q < n and _blank(s[q]):
+            q += 1
+        if q < n and _digit(s[q]):
+            while q < n and _digit(s[q]):
+                q += 1
+            while q < n and _blank(s[q]):
+                q += 1
+            p = q
+    # [Gg] blanks 0*([0-3])(?![0-9.]) blanks: 0* gives one zero back for G00
+    c = _at(s, p, n)
+    if c == 71 or c == 103:
+        q = p + 1
+        while q < n and _blank(s[q]):
+            q += 1
+        z = q
+        while q < n and s[q] == 48:
+            q += 1
+        c = _at(s, q, n)
+        if 49 <= c <= 51 and not (_digit(_at(s, q + 1, n)) or _at(s, q + 1, n) == 46):
+            gr.g = <int>c - 48
+            q += 1
+        elif q > z and not (_digit(c) or c == 46):
+            gr.g = 0
+        if gr.g >= 0:
+            while q < n and _blank(s[q]):
+                q += 1
+            p = q
+    # each word: letter blanks ([-+]? (digits+ .? digits* | . digits+)) blanks
+    for k in range(10):
+        gr.s[k] = -1
+        c = _at(s, p, n)
+        if c != _UP[k] and c != _LOW[k]:
+            continue
+        q = p + 1
+        while q < n and _blank(s[q]):
+            q += 1
+        z = q
+        c = _at(s, q, n)
+        if c == 43 or c == 45:
+            q += 1
+        c = _at(s, q, n)
+        if _digit(c):
+            while q < n and _digit(s[q]):
+                q += 1
+            if q < n and s[q] == 46:
+                q += 1
+            while q < n and _digit(s[q]):
+                q += 1
+        elif c == 46 and _digit(_at(s, q + 1, n)):
+            q += 1
+            while q < n and _digit(s[q]):
+                q += 1
+        else:
+            continue
+        gr.s[k] = z
+        gr.e[k] = q
+        while q < n and _blank(s[q]):
+            q += 1
+        p = q
+    gr.rest = p < n
+
+
+cdef double _number(str s, Py_ssize_t a, Py_ssize_t b) except? -1.0:
+    """float(s[a:b]) for a matched number (ASCII: sign, digits, at most one dot)."""
+    cdef bint neg = False
+    cdef uint64_t m = 0
+    cdef int digits = 0, decimals = 0
+    cdef bint dot = False
+    cdef Py_ssize_t p = a
+    cdef Py_UCS4 c
+    c = s[p]
+    if c == 45 or c == 43:
+        neg = c == 45
+        p += 1
+    while p < b:
+        c = s[p]
+        p += 1
+        if c == 46:
+            dot = True
+            continue
+        if dot:
+            decimals += 1
+        if m == 0 and c == 48:
+            continue  # a leading zero: no significant digit
+        digits += 1
+        m = m * 10 + (<int>c - 48)
+        if digits > 15:
+            return _slow(s, a, b)
+    if decimals > 22:
+        return _slow(s, a, b)
+    cdef double v = <double>m / _P10[decimals]
+    return -v if neg else v
+
+
+cdef double _slow(str s, Py_ssize_t a, Py_ssize_t b) except? -1.0:
+    cdef bytes t = s[a:b].encode("ascii")
+    return PyOS_string_to_double(t, NULL, NULL)
+
+
+cdef inline double _square(double d) except? -1.0:
+    """``d ** 2`` as CPython's float_pow: OverflowError when a finite d overflows."""
+    cdef double r = prsxy_square(d)
+    if isinf(r) and isfinite(d):
+        errno = ERANGE
+        PyErr_SetFromErrno(OverflowError)
+        return -1.0
+    return r
+
+
+def matches_of(list batch):
+    """What :func:`fast_run` reads for a batch: the lines themselves, or none (no
+    fast path) when a line holds a line end (the regex would see two lines)."""
+    for line in batch:
+        if PyUnicode_FindChar(line, 10, 0, len(<str>line), 1) >= 0:
+            return []
+    return batch
+
+
+cdef tuple _words(str s, Groups *gr):
+    """The regex's groups as text (G, X .. F, rest) for the reference's _fast_arc."""
+    cdef int k
+    out = [str(gr.g) if gr.g >= 0 else ""]
+    for k in range(10):
+        out.append(s[gr.s[k]:gr.e[k]] if gr.s[k] >= 0 else "")
+    out.append("")
+    return tuple(out)
+
+
+cdef bint _floats(object seq):
+    for v in seq:
+        if type(v) is not float:
+            return False
+    return True
+
+
+def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
+    """:func:`prsxy_post.gcode.fast.fast_run` over ``lines`` (the batch) from ``i``:
+    the same motions and state, the index of the first line not taken."""
+    cdef Groups gr
+    cdef Py_ssize_t nlines = len(lines), k
+    cdef str s
+    if i >= nlines:
+        return i
+    s = lines[i]
+    _scan(s, &gr)
+    if gr.rest or (gr.s[0] < 0 and gr.s[1] < 0 and gr.s[2] < 0 and gr.s[3] < 0 and gr.s[4] < 0):
+        return i
+    st = it.st
+    if (
+        st.ended
+        or st.inverse_time
+        or st.comp_side
+        or st.rotation
+        or st.arc_not_allowed
+        or it.detached is not None
+        or it.queue
+    ):
+        return i
+    pos = st.pos
+    feed_obj = st.feed
+    off = it.offset()
+    if not (type(feed_obj) is float and _floats(pos) and _floats(off) and len(pos) == 5):
+        # a state the reference keeps other types in: it runs (the types stay)
+        return _pure_run(it, _pure_matches(lines), i, n0)
+    cdef double x = pos[0], y = pos[1], z = pos[2], a = pos[3], b = pos[4]
+    cdef double ox = off[0], oy = off[1], oz = off[2], oa = off[3], ob = off[4]
+    cdef double feed = PyFloat_AS_DOUBLE(feed_obj)
+    motion = st.motion
+    cdef int mcode = -1, m, c
+    for c in range(4):
+        if motion is not None and motion == c:
+            mcode = c
+            break
+    cdef double sc = _MM_PER_INCH if st.units == "inch" else 1.0
+    cdef bint absolute = st.absolute
+    head = (0, None, 0, 0.0, st.tool_length, st.tool, st.spindle * st.spindle_dir, False,
+            st.path_tol, (), None)
+    out = it.out
+    cdef bint new_motion = False, moved
+    cdef double f, ex, ey, ez, ea, eb, d2
+    k = i
+    while k < nlines:
+        if k > i:
+            s = lines[k]
+            _scan(s, &gr)
+            if gr.rest or (
+                gr.s[0] < 0 and gr.s[1] < 0 and gr.s[2] < 0 and gr.s[3] < 0 and gr.s[4] < 0
+            ):
+                break
+        m = gr.g if gr.g >= 0 else mcode
+        if m < 0:
+            break
+        if gr.s[9] >= 0:
+            f = _number(s, gr.s[9], gr.e[9])
+            if f < 0 or (f == 0 and m):
+                break
+        elif m and feed <= 0:
+            break
+        else:
+            f = feed
+        if m >= 2:
+            st.pos, st.motion, st.feed = [x, y, z, a, b], motion, feed_obj
+            if not _fast_arc(it, m, _words(s, &gr), n0 + k + 1):
+                break
+            pos = st.pos
+            x, y, z, a, b = pos[0], pos[1], pos[2], pos[3], pos[4]
+            motion, feed_obj = st.motion, st.feed
+            feed = feed_obj
+            mcode = m  # the reference's _fast_arc leaves st.motion = m
+            k += 1
+            continue
+        if gr.s[5] >= 0 or gr.s[6] >= 0 or gr.s[7] >= 0 or gr.s[8] >= 0:
+            break
+        if absolute:
+            ex = _number(s, gr.s[0], gr.e[0]) * sc + ox if gr.s[0] >= 0 else x
+            ey = _number(s, gr.s[1], gr.e[1]) * sc + oy if gr.s[1] >= 0 else y
+            ez = _number(s, gr.s[2], gr.e[2]) * sc + oz if gr.s[2] >= 0 else z
+            ea = _number(s, gr.s[3], gr.e[3]) + oa if gr.s[3] >= 0 else a
+            eb = _number(s, gr.s[4], gr.e[4]) + ob if gr.s[4] >= 0 else b
+        else:
+            ex = x + _number(s, gr.s[0], gr.e[0]) * sc if gr.s[0] >= 0 else x
+            ey = y + _number(s, gr.s[1], gr.e[1]) * sc if gr.s[1] >= 0 else y
+            ez = z + _number(s, gr.s[2], gr.e[2]) * sc if gr.s[2] >= 0 else z
+            ea = a + _number(s, gr.s[3], gr.e[3]) if gr.s[3] >= 0 else a
+            eb = b + _number(s, gr.s[4], gr.e[4]) if gr.s[4] >= 0 else b
+        if gr.s[9] >= 0:
+            feed = f
+            feed_obj = f
+        if gr.g >= 0:
+            motion = gr.g
+            mcode = gr.g
+            new_motion = True
+        if m == 0:
+            rate = _NAN
+            kind = "rapid"
+        else:
+            kind = "feed"
+            d2 = _square(ex - x)
+            d2 = d2 + _square(ey - y)
+            d2 = d2 + _square(ez - z)
+            moved = d2 > 1e-24
+            rate = f * sc if (moved or (ea == a and eb == b)) else f
+        PyList_Append(out, prsxy_motion(
+            _Motion, n0 + k + 1, kind, (x, y, z, a, b), (ex, ey, ez, ea, eb), rate, head
+        ))
+        x, y, z, a, b = ex, ey, ez, ea, eb
+        k += 1
+    if k > i:
+        st.pos = [x, y, z, a, b]
+        st.motion = motion
+        st.feed = feed_obj
+        if new_motion:
+            st.cycle_il = None
+        it.started = True
+    return k
