@@ -165,6 +165,9 @@ GOOD_NUMBER = st.one_of(
     st.builds(lambda s, f: s + "." + f, st.sampled_from(["", "-", "+"]), DIGITS),  # .5
     st.builds(lambda d: d + ".", DIGITS),  # 3.
     st.sampled_from(["0", "-0", "-.0", "0.", "+0", "007.50", "0.1", "0.3", "2.675"]),
+    # moves of about 1e-12 mm: the squared length beside the fast path's 1e-24
+    st.builds(lambda s, d: s + "0.00000000000" + d, st.sampled_from(["", "-"]), DIGITS),
+    st.builds(lambda d: "0.0000000000000" + d, DIGITS),  # the same in inch
 )
 #: past 15 digits or 22 decimals: Python's own parser in the compiled path
 LONG_NUMBER = st.builds(
@@ -237,11 +240,25 @@ MODAL = st.sampled_from(
 )  # fmt: skip
 
 
+#: squared lengths beside the fast path's 1e-24 mm^2 (inch): moved, not, not, moved
+BESIDE_THE_THRESHOLD = [
+    "G20 G1 F10 X0",
+    "X.0000000000000394 A1",
+    "X.0000000000000787 A2",
+    "X.000000000000118 A3",
+    "X.0000000000001574 A4",
+]
+
+
 @settings(max_examples=600, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.integers(0, 9).flatmap(lambda k: MODAL if k == 0 else cam_line()), max_size=30))
 @example(["G1 X1.", "X.5 Y-.25", "x 1 y\t2", "N10 G00 X0", "G2 X1 Y1 R1", "G3 X0 Y0 I-.5 J-.5"])
 @example(["G20", "G91 G1 X1.23456789012345678 F10", "A1 B-1", "A-1 F+20", "Z" + "9" * 400])
 @example(["G1 X1 F10", "X1" + "0" * 200, "X2"])  # (1e200 - 1) ** 2 overflows
+@example(BESIDE_THE_THRESHOLD)
+@example(
+    ["G1 F10 X0 A0", "X0.000000000001 A1", "Y0.0000000000007 B1", "Z.00000000000071 A2"]
+)  # (1e200 - 1) ** 2 overflows
 def test_generated_cam_lines(body: list[str]) -> None:
     same(["G21 G90 G17 G94 G1 F500", *body, "M2"])
 

@@ -18,7 +18,6 @@ package, so the package imports it, not the other way round).
 """
 
 from libc.errno cimport ERANGE, errno
-from libc.math cimport isfinite, isinf
 from libc.stdint cimport uint64_t
 from cpython.float cimport PyFloat_AS_DOUBLE
 from cpython.list cimport PyList_Append
@@ -30,15 +29,59 @@ cdef extern from "Python.h":
     object PyErr_SetFromErrno(object exc)
     Py_ssize_t PyUnicode_FindChar(object s, Py_UCS4 ch, Py_ssize_t start,
                                   Py_ssize_t end, int direction) except -2
+    int PyUnicode_KIND(object s)
+    void *PyUnicode_DATA(object s)
+    Py_UCS4 PyUnicode_READ(int kind, void *data, Py_ssize_t index) nogil
 
 cdef extern from *:
     """
     #include <math.h>
+    #include <string.h>
     /* pow(d, 2.0) as CPython's float ** 2 calls it: the 2 is not a constant the
        compiler could turn into d * d (glibc's pow need not round as d * d does) */
     static double prsxy_square(double d) {
         volatile double two = 2.0;
         return pow(d, two);
+    }
+    /* whether a feed move moves in XYZ: (dx ** 2 + dy ** 2 + dz ** 2) > 1e-24 with
+       CPython's pow. d * d is within an ulp of pow(d, 2) (glibc's pow is within
+       one ulp), so away from the threshold (a factor of 10 either side) and from
+       overflow the products decide the same; near it, and for NaN, infinities
+       and huge values, pow decides. -1: pow overflowed (CPython's float_pow
+       raises OverflowError there). */
+    static int prsxy_moved(double dx, double dy, double dz) {
+        if (fabs(dx) < 1e150 && fabs(dy) < 1e150 && fabs(dz) < 1e150) {
+            double s = dx * dx + dy * dy + dz * dz;
+            if (!(s >= 1e-25 && s <= 1e-23)) return s > 1e-24;
+        }
+        double d[3] = {dx, dy, dz}, sum = 0.0;
+        for (int i = 0; i < 3; i++) {
+            double r = prsxy_square(d[i]);
+            if (isinf(r) && isfinite(d[i])) return -1;
+            sum = i ? sum + r : r;
+        }
+        return sum > 1e-24;
+    }
+    /* the end point of a move: a new float where an axis word gave one, the start's
+       own object where none did (the same value) */
+    static PyObject *prsxy_end(PyObject *start, const double *e, const int *given) {
+        PyObject *o = PyTuple_New(5);
+        if (o == NULL) return NULL;
+        for (int i = 0; i < 5; i++) {
+            PyObject *v;
+            if (given[i]) {
+                v = PyFloat_FromDouble(e[i]);
+                if (v == NULL) { Py_DECREF(o); return NULL; }
+            } else {
+                v = PyTuple_GET_ITEM(start, i);
+                Py_INCREF(v);
+            }
+            PyTuple_SET_ITEM(o, i, v);
+        }
+        return o;
+    }
+    static int prsxy_same_bits(double a, double b) {
+        return memcmp(&a, &b, sizeof a) == 0;
     }
     /* a Motion (a tuple subclass) filled in place, as tuple.__new__(cls, fields)
        does: `head` holds the 11 fields after line, kind, start, end and feed */
@@ -62,6 +105,9 @@ cdef extern from *:
     }
     """
     double prsxy_square(double d) nogil
+    int prsxy_moved(double dx, double dy, double dz) nogil
+    tuple prsxy_end(tuple start, const double *e, const int *given)
+    bint prsxy_same_bits(double a, double b) nogil
     object prsxy_motion(object tp, object line, object kind, object start, object end,
                         object rate, tuple head)
 
@@ -97,6 +143,18 @@ def bind(motion_type, fast_arc, pure_run, pure_matches, double mm_per_inch, nan)
     _NAN = nan
 
 
+cdef struct Text:
+    int kind  # the str's storage, for PyUnicode_READ
+    void *data
+    Py_ssize_t n
+
+
+cdef inline void _text(str s, Text *t) noexcept:
+    t.kind = PyUnicode_KIND(s)
+    t.data = PyUnicode_DATA(s)
+    t.n = len(s)
+
+
 cdef struct Groups:
     int g  # the G group's digit, -1 when it did not match
     Py_ssize_t s[10]  # start of each number (sign included), -1 when absent
@@ -112,99 +170,100 @@ cdef inline bint _digit(Py_UCS4 c) noexcept:
     return 48 <= c <= 57
 
 
-cdef inline Py_UCS4 _at(str s, Py_ssize_t i, Py_ssize_t n) noexcept:
-    return s[i] if i < n else 0
+cdef inline Py_UCS4 _at(Text *t, Py_ssize_t i) noexcept:
+    return PyUnicode_READ(t.kind, t.data, i) if i < t.n else 0
 
 
-cdef void _scan(str s, Groups *gr) noexcept:
-    """The groups ``fast._FAST_LINE`` gives for line ``s`` (possessive: each optional
+cdef void _scan(Text *t, Groups *gr) noexcept:
+    """The groups ``fast._FAST_LINE`` gives for a line (possessive: each optional
     group matches as far as it can or not at all)."""
-    cdef Py_ssize_t n = len(s), p = 0, q, z
+    cdef Py_ssize_t n = t.n, p = 0, q, z
     cdef Py_UCS4 c
     cdef int k
     gr.g = -1
-    while p < n and _blank(s[p]):
+    while p < n and _blank(_at(t, p)):
         p += 1
     # [Nn] blanks digits+ blanks
-    c = _at(s, p, n)
+    c = _at(t, p)
     if c == 78 or c == 110:
         q = p + 1
-        while q < n and _blank(s[q]):
+        while q < n and _blank(_at(t, q)):
             q += 1
-        if q < n and _digit(s[q]):
-            while q < n and _digit(s[q]):
+        if q < n and _digit(_at(t, q)):
+            while q < n and _digit(_at(t, q)):
                 q += 1
-            while q < n and _blank(s[q]):
+            while q < n and _blank(_at(t, q)):
                 q += 1
             p = q
     # [Gg] blanks 0*([0-3])(?![0-9.]) blanks: 0* gives one zero back for G00
-    c = _at(s, p, n)
+    c = _at(t, p)
     if c == 71 or c == 103:
         q = p + 1
-        while q < n and _blank(s[q]):
+        while q < n and _blank(_at(t, q)):
             q += 1
         z = q
-        while q < n and s[q] == 48:
+        while q < n and _at(t, q) == 48:
             q += 1
-        c = _at(s, q, n)
-        if 49 <= c <= 51 and not (_digit(_at(s, q + 1, n)) or _at(s, q + 1, n) == 46):
+        c = _at(t, q)
+        if 49 <= c <= 51 and not (_digit(_at(t, q + 1)) or _at(t, q + 1) == 46):
             gr.g = <int>c - 48
             q += 1
         elif q > z and not (_digit(c) or c == 46):
             gr.g = 0
         if gr.g >= 0:
-            while q < n and _blank(s[q]):
+            while q < n and _blank(_at(t, q)):
                 q += 1
             p = q
     # each word: letter blanks ([-+]? (digits+ .? digits* | . digits+)) blanks
     for k in range(10):
         gr.s[k] = -1
-        c = _at(s, p, n)
+        c = _at(t, p)
         if c != _UP[k] and c != _LOW[k]:
             continue
         q = p + 1
-        while q < n and _blank(s[q]):
+        while q < n and _blank(_at(t, q)):
             q += 1
         z = q
-        c = _at(s, q, n)
+        c = _at(t, q)
         if c == 43 or c == 45:
             q += 1
-        c = _at(s, q, n)
+        c = _at(t, q)
         if _digit(c):
-            while q < n and _digit(s[q]):
+            while q < n and _digit(_at(t, q)):
                 q += 1
-            if q < n and s[q] == 46:
+            if q < n and _at(t, q) == 46:
                 q += 1
-            while q < n and _digit(s[q]):
+            while q < n and _digit(_at(t, q)):
                 q += 1
-        elif c == 46 and _digit(_at(s, q + 1, n)):
+        elif c == 46 and _digit(_at(t, q + 1)):
             q += 1
-            while q < n and _digit(s[q]):
+            while q < n and _digit(_at(t, q)):
                 q += 1
         else:
             continue
         gr.s[k] = z
         gr.e[k] = q
-        while q < n and _blank(s[q]):
+        while q < n and _blank(_at(t, q)):
             q += 1
         p = q
     gr.rest = p < n
 
 
-cdef double _number(str s, Py_ssize_t a, Py_ssize_t b) except? -1.0:
-    """float(s[a:b]) for a matched number (ASCII: sign, digits, at most one dot)."""
+cdef double _number(Text *t, str s, Py_ssize_t a, Py_ssize_t b) except? -1.0:
+    """float(s[a:b]) for a matched number (ASCII: sign, digits, at most one dot);
+    ``t``: the text of ``s``."""
     cdef bint neg = False
     cdef uint64_t m = 0
     cdef int digits = 0, decimals = 0
     cdef bint dot = False
     cdef Py_ssize_t p = a
     cdef Py_UCS4 c
-    c = s[p]
+    c = _at(t, p)
     if c == 45 or c == 43:
         neg = c == 45
         p += 1
     while p < b:
-        c = s[p]
+        c = _at(t, p)
         p += 1
         if c == 46:
             dot = True
@@ -226,16 +285,6 @@ cdef double _number(str s, Py_ssize_t a, Py_ssize_t b) except? -1.0:
 cdef double _slow(str s, Py_ssize_t a, Py_ssize_t b) except? -1.0:
     cdef bytes t = s[a:b].encode("ascii")
     return PyOS_string_to_double(t, NULL, NULL)
-
-
-cdef inline double _square(double d) except? -1.0:
-    """``d ** 2`` as CPython's float_pow: OverflowError when a finite d overflows."""
-    cdef double r = prsxy_square(d)
-    if isinf(r) and isfinite(d):
-        errno = ERANGE
-        PyErr_SetFromErrno(OverflowError)
-        return -1.0
-    return r
 
 
 def matches_of(list batch):
@@ -268,12 +317,14 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
     """:func:`prsxy_post.gcode.fast.fast_run` over ``lines`` (the batch) from ``i``:
     the same motions and state, the index of the first line not taken."""
     cdef Groups gr
+    cdef Text t
     cdef Py_ssize_t nlines = len(lines), k
     cdef str s
     if i >= nlines:
         return i
     s = lines[i]
-    _scan(s, &gr)
+    _text(s, &t)
+    _scan(&t, &gr)
     if gr.rest or (gr.s[0] < 0 and gr.s[1] < 0 and gr.s[2] < 0 and gr.s[3] < 0 and gr.s[4] < 0):
         return i
     st = it.st
@@ -307,13 +358,20 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
     head = (0, None, 0, 0.0, st.tool_length, st.tool, st.spindle * st.spindle_dir, False,
             st.path_tol, (), None)
     out = it.out
-    cdef bint new_motion = False, moved
-    cdef double f, ex, ey, ez, ea, eb, d2
+    cdef bint new_motion = False
+    cdef int moved, j
+    cdef double f, d2
+    cdef double e[5]
+    cdef int given[5]
+    cdef double last_rate = 0.0
+    last_rate_obj = None
+    here = (pos[0], pos[1], pos[2], pos[3], pos[4])  # the start, as float objects
     k = i
     while k < nlines:
         if k > i:
             s = lines[k]
-            _scan(s, &gr)
+            _text(s, &t)
+            _scan(&t, &gr)
             if gr.rest or (
                 gr.s[0] < 0 and gr.s[1] < 0 and gr.s[2] < 0 and gr.s[3] < 0 and gr.s[4] < 0
             ):
@@ -322,7 +380,7 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
         if m < 0:
             break
         if gr.s[9] >= 0:
-            f = _number(s, gr.s[9], gr.e[9])
+            f = _number(&t, s, gr.s[9], gr.e[9])
             if f < 0 or (f == 0 and m):
                 break
         elif m and feed <= 0:
@@ -334,6 +392,7 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
             if not _fast_arc(it, m, _words(s, &gr), n0 + k + 1):
                 break
             pos = st.pos
+            here = (pos[0], pos[1], pos[2], pos[3], pos[4])
             x, y, z, a, b = pos[0], pos[1], pos[2], pos[3], pos[4]
             motion, feed_obj = st.motion, st.feed
             feed = feed_obj
@@ -342,18 +401,20 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
             continue
         if gr.s[5] >= 0 or gr.s[6] >= 0 or gr.s[7] >= 0 or gr.s[8] >= 0:
             break
+        for j in range(5):
+            given[j] = gr.s[j] >= 0
         if absolute:
-            ex = _number(s, gr.s[0], gr.e[0]) * sc + ox if gr.s[0] >= 0 else x
-            ey = _number(s, gr.s[1], gr.e[1]) * sc + oy if gr.s[1] >= 0 else y
-            ez = _number(s, gr.s[2], gr.e[2]) * sc + oz if gr.s[2] >= 0 else z
-            ea = _number(s, gr.s[3], gr.e[3]) + oa if gr.s[3] >= 0 else a
-            eb = _number(s, gr.s[4], gr.e[4]) + ob if gr.s[4] >= 0 else b
+            e[0] = _number(&t, s, gr.s[0], gr.e[0]) * sc + ox if given[0] else x
+            e[1] = _number(&t, s, gr.s[1], gr.e[1]) * sc + oy if given[1] else y
+            e[2] = _number(&t, s, gr.s[2], gr.e[2]) * sc + oz if given[2] else z
+            e[3] = _number(&t, s, gr.s[3], gr.e[3]) + oa if given[3] else a
+            e[4] = _number(&t, s, gr.s[4], gr.e[4]) + ob if given[4] else b
         else:
-            ex = x + _number(s, gr.s[0], gr.e[0]) * sc if gr.s[0] >= 0 else x
-            ey = y + _number(s, gr.s[1], gr.e[1]) * sc if gr.s[1] >= 0 else y
-            ez = z + _number(s, gr.s[2], gr.e[2]) * sc if gr.s[2] >= 0 else z
-            ea = a + _number(s, gr.s[3], gr.e[3]) if gr.s[3] >= 0 else a
-            eb = b + _number(s, gr.s[4], gr.e[4]) if gr.s[4] >= 0 else b
+            e[0] = x + _number(&t, s, gr.s[0], gr.e[0]) * sc if given[0] else x
+            e[1] = y + _number(&t, s, gr.s[1], gr.e[1]) * sc if given[1] else y
+            e[2] = z + _number(&t, s, gr.s[2], gr.e[2]) * sc if given[2] else z
+            e[3] = a + _number(&t, s, gr.s[3], gr.e[3]) if given[3] else a
+            e[4] = b + _number(&t, s, gr.s[4], gr.e[4]) if given[4] else b
         if gr.s[9] >= 0:
             feed = f
             feed_obj = f
@@ -366,15 +427,18 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
             kind = "rapid"
         else:
             kind = "feed"
-            d2 = _square(ex - x)
-            d2 = d2 + _square(ey - y)
-            d2 = d2 + _square(ez - z)
-            moved = d2 > 1e-24
-            rate = f * sc if (moved or (ea == a and eb == b)) else f
-        PyList_Append(out, prsxy_motion(
-            _Motion, n0 + k + 1, kind, (x, y, z, a, b), (ex, ey, ez, ea, eb), rate, head
-        ))
-        x, y, z, a, b = ex, ey, ez, ea, eb
+            moved = prsxy_moved(e[0] - x, e[1] - y, e[2] - z)
+            if moved < 0:
+                errno = ERANGE
+                PyErr_SetFromErrno(OverflowError)
+            d2 = f * sc if (moved or (e[3] == a and e[4] == b)) else f
+            if last_rate_obj is None or not prsxy_same_bits(d2, last_rate):
+                last_rate, last_rate_obj = d2, d2  # one float object per rate
+            rate = last_rate_obj
+        end = prsxy_end(here, e, given)
+        PyList_Append(out, prsxy_motion(_Motion, n0 + k + 1, kind, here, end, rate, head))
+        here = end
+        x, y, z, a, b = e[0], e[1], e[2], e[3], e[4]
         k += 1
     if k > i:
         st.pos = [x, y, z, a, b]
