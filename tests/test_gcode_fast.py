@@ -269,3 +269,41 @@ def test_a_line_that_holds_a_line_end_leaves_the_batch_to_the_full_path() -> Non
     lines = ["G1 X1 F100", "X2\nX3", "X4", "M2"]
     assert same(lines) == 0
     assert same(["G1 X1 F100", "X2", "X4", "M2"]) == 3
+
+
+#: each plane: its axes, its normal and its centre words
+PLANES = {"G17": ("XY", "Z", "IJ"), "G18": ("ZX", "Y", "KI"), "G19": ("YZ", "X", "JK")}
+
+
+@st.composite
+def arc_program(draw: st.DrawFn) -> list[str]:
+    """Arcs the interpreter accepts, mostly: R arcs with a radius that reaches,
+    helixes about a centre (the end point on the circle), in every plane, unit,
+    distance mode and centre mode, after offsets."""
+    plane = draw(st.sampled_from(sorted(PLANES)))
+    axes, normal, centre = PLANES[plane]
+    modes = [draw(st.sampled_from(pair)) for pair in (("G20", "G21"), ("G90", "G91"))]
+    modes += [draw(st.sampled_from(pair)) for pair in (("G90.1", "G91.1"), ("G54", "G55"))]
+    out = [f"{plane} {' '.join(modes)} G1 F{draw(DIGITS)}1"]
+    if draw(st.booleans()):
+        out.append("G92 X3 Y-1 Z.5")
+    for k in range(draw(st.integers(1, 8))):
+        g = draw(G_ARC) if k else draw(st.sampled_from(["G2", "G03"]))
+        if draw(st.booleans()):
+            a, b = draw(GOOD_NUMBER), draw(GOOD_NUMBER)
+            r = draw(st.sampled_from(["", "-"])) + "1" + draw(DIGITS) + "000"
+            words = [f"{axes[0]}{a}", f"{axes[1]}{b}", f"R{r}"]
+        else:
+            words = [f"{normal}{draw(GOOD_NUMBER)}", f"{centre[0]}{draw(GOOD_NUMBER)}"]
+            words.append(f"{centre[1]}{draw(GOOD_NUMBER)}")
+        words.sort(key=lambda w: LETTERS.index(w[0]))
+        if draw(st.booleans()):
+            words.append(f"F{draw(DIGITS)}")
+        out.append(" ".join([g, *words]))
+    return out
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(arc_program())
+def test_generated_arcs(body: list[str]) -> None:
+    same(["G21 G90 G94 G0 X1 Y2 Z3", *body, "M2"])

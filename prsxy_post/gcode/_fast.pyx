@@ -18,6 +18,7 @@ package, so the package imports it, not the other way round).
 """
 
 from libc.errno cimport ERANGE, errno
+from libc.math cimport asin, atan2, cos, fabs, isfinite, sin
 from libc.stdint cimport uint64_t
 from cpython.float cimport PyFloat_AS_DOUBLE
 from cpython.list cimport PyList_Append
@@ -103,7 +104,19 @@ cdef extern from *:
         }
         return o;
     }
+    static PyObject *prsxy_motion_of(PyObject *tp, PyObject *fields) {
+        Py_ssize_t n = PyTuple_GET_SIZE(fields), i;
+        PyObject *o = ((PyTypeObject *)tp)->tp_alloc((PyTypeObject *)tp, n);
+        if (o == NULL) return NULL;
+        for (i = 0; i < n; i++) {
+            PyObject *v = PyTuple_GET_ITEM(fields, i);
+            Py_INCREF(v);
+            PyTuple_SET_ITEM(o, i, v);
+        }
+        return o;
+    }
     """
+    object prsxy_motion_of(object tp, tuple fields)
     double prsxy_square(double d) nogil
     int prsxy_moved(double dx, double dy, double dz) nogil
     tuple prsxy_end(tuple start, const double *e, const int *given)
@@ -131,16 +144,28 @@ cdef object _pure_run = None
 cdef object _pure_matches = None
 cdef object _NAN = float("nan")
 cdef double _MM_PER_INCH = 25.4
+cdef object _hypot = None
+cdef double _RT[2]  # LinuxCNC's radius tolerance, mm and inch
+cdef double _SA[2]  # the spiral's absolute tolerance, mm and inch
+cdef double _SR = 0.0  # its relative tolerance
+cdef double _PI = 3.141592653589793
 
 
-def bind(motion_type, fast_arc, pure_run, pure_matches, double mm_per_inch, nan):
-    """The reference's pieces this twin uses (gcode.fast calls it once); ``nan``:
-    the very object the reference puts in a rapid (math.nan), so that motions
-    compare equal as tuples (a tuple compares NaN by identity)."""
-    global _Motion, _fast_arc, _pure_run, _pure_matches, _NAN, _MM_PER_INCH
+def bind(motion_type, fast_arc, pure_run, pure_matches, double mm_per_inch, nan, hypot,
+         radius_tol, spiral_abs, double spiral_rel):
+    """The reference's pieces this twin uses (gcode.fast calls it once): ``nan``
+    is the very object the reference puts in a rapid (math.nan), so that motions
+    compare equal as tuples (a tuple compares NaN by identity); ``hypot`` is
+    Python's math.hypot (not libm's: CPython computes its own); the arc
+    tolerances are moves.py's, by unit."""
+    global _Motion, _fast_arc, _pure_run, _pure_matches, _NAN, _MM_PER_INCH, _hypot, _SR
     _Motion, _fast_arc, _pure_run, _pure_matches = motion_type, fast_arc, pure_run, pure_matches
     _MM_PER_INCH = mm_per_inch
     _NAN = nan
+    _hypot = hypot
+    _RT[0], _RT[1] = radius_tol["mm"], radius_tol["inch"]
+    _SA[0], _SA[1] = spiral_abs["mm"], spiral_abs["inch"]
+    _SR = spiral_rel
 
 
 cdef struct Text:
@@ -287,6 +312,109 @@ cdef double _slow(str s, Py_ssize_t a, Py_ssize_t b) except? -1.0:
     return PyOS_string_to_double(t, NULL, NULL)
 
 
+cdef inline double _hyp(double a, double b) except? -1.0:
+    return _hypot(a, b)  # CPython's own hypot, as moves.py's
+
+
+cdef inline bint _finite5(const double *v) noexcept:
+    return isfinite(v[0]) and isfinite(v[1]) and isfinite(v[2]) and isfinite(v[3]) and isfinite(v[4])
+
+
+cdef object _arc(Text *t, str s, Groups *gr, int m, int plane, bint inch, double sc,
+                 bint absolute, bint arc_absolute, const double *off, const double *h,
+                 tuple here, double feed, double *e, int *given, object line,
+                 object plane_obj, tuple tail):
+    """The Motion of a G2/G3 as moves.arc makes it (target, arc_center, sweep_of,
+    arc_length, feed_rate; one turn, G94, no rotation), or None where the reference
+    must decide: a block it refuses, or numbers that are not finite."""
+    cdef int iu, iv, iw, la, lb, third, j
+    cdef double v, u0, v0, u1, v1, cu, cv, r, mu, mv, half, ar, theta, turn2, d
+    cdef double ca, cb, r1, r2, ae, re_, rad, a1, b1, sweep, length, rate
+    if plane == 17:
+        iu, iv, iw, la, lb, third = 0, 1, 2, 5, 6, 7  # word indices: I 5, J 6, K 7
+    elif plane == 18:
+        iu, iv, iw, la, lb, third = 2, 0, 1, 7, 5, 6
+    elif plane == 19:
+        iu, iv, iw, la, lb, third = 1, 2, 0, 6, 7, 5
+    else:
+        return None
+    for j in range(5):  # moves.target
+        given[j] = gr.s[j] >= 0
+        if given[j]:
+            v = _number(t, s, gr.s[j], gr.e[j]) * (sc if j < 3 else 1.0)
+            e[j] = v + off[j] if absolute else h[j] + v
+        else:
+            e[j] = h[j]
+    if not (_finite5(e) and _finite5(h)) or feed <= 0:
+        return None
+    u0, v0, u1, v1 = h[iu] / sc, h[iv] / sc, e[iu] / sc, e[iv] / sc
+    if gr.s[8] >= 0:  # moves.arc_center, R
+        if gr.s[5] >= 0 or gr.s[6] >= 0 or gr.s[7] >= 0:
+            return None
+        r = _number(t, s, gr.s[8], gr.e[8])
+        if not isfinite(r) or (u0 == u1 and v0 == v1):
+            return None
+        mu, mv = (u0 + u1) / 2.0, (v0 + v1) / 2.0
+        half = _hyp(mu - u1, mv - v1)
+        ar = fabs(r)
+        if half - ar > _RT[inch]:
+            return None
+        if ar == 0 or half / ar > 1 - 1e-12:
+            half = ar
+        if (m == 2 and r > 0) or (m == 3 and r < 0):
+            theta = atan2(v1 - v0, u1 - u0) - _PI / 2
+        else:
+            theta = atan2(v1 - v0, u1 - u0) + _PI / 2
+        turn2 = asin(half / ar) if ar > 0 else 0.0
+        d = ar * cos(turn2)
+        cu, cv = mu + d * cos(theta), mv + d * sin(theta)
+    else:  # moves.arc_center, I J K
+        if (gr.s[la] < 0 and gr.s[lb] < 0) or gr.s[third] >= 0:
+            return None
+        if arc_absolute and (gr.s[la] < 0 or gr.s[lb] < 0):
+            return None
+        ca = _number(t, s, gr.s[la], gr.e[la]) if gr.s[la] >= 0 else 0.0
+        cb = _number(t, s, gr.s[lb], gr.e[lb]) if gr.s[lb] >= 0 else 0.0
+        if not (isfinite(ca) and isfinite(cb)):
+            return None
+        if arc_absolute:
+            cu = ca + off[iu] / sc
+            cv = cb + off[iv] / sc
+        else:
+            cu, cv = u0 + ca, v0 + cb
+        r1 = _hyp(cu - u0, cv - v0)
+        r2 = _hyp(cu - u1, cv - v1)
+        if r1 < _RT[inch] or r2 < _RT[inch]:
+            return None
+        ae = fabs(r1 - r2)
+        re_ = ae / (r2 if r2 > r1 else r1)  # Python's max(r1, r2)
+        if ae > _SA[inch] * 100.0 or (re_ > _SR and ae > _SA[inch]):
+            return None
+    rad = _hyp(u0 - cu, v0 - cv) * sc
+    a1 = atan2(v0 - cv, u0 - cu)  # moves.sweep_of, one turn
+    b1 = atan2(v1 - cv, u1 - cu)
+    if m == 3:
+        if b1 <= a1:
+            b1 += 2 * _PI
+        sweep = (b1 - a1) + 0.0  # + (rotation - 1) * 2 * pi
+    else:
+        if a1 <= b1:
+            a1 += 2 * _PI
+        sweep = (b1 - a1) + 0.0  # + (rotation + 1) * 2 * pi
+    length = _hyp(rad * sweep, e[iw] - h[iw])
+    if length > 1e-12 or (h[3] - e[3] == 0 and h[4] - e[4] == 0):  # moves.feed_rate
+        rate = feed * (_MM_PER_INCH if inch else 1.0)
+    else:
+        rate = feed
+    cdef double c[3]
+    c[iu], c[iv], c[iw] = cu * sc, cv * sc, e[iw]
+    end = prsxy_end(here, e, given)
+    return prsxy_motion_of(
+        _Motion, (line, "arc", here, end, rate, plane_obj, (c[0], c[1], c[2]), 1 if m == 3 else -1)
+        + tail
+    )
+
+
 def matches_of(list batch):
     """What :func:`fast_run` reads for a batch: the lines themselves, or none (no
     fast path) when a line holds a line end (the regex would see two lines)."""
@@ -355,8 +483,16 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
             break
     cdef double sc = _MM_PER_INCH if st.units == "inch" else 1.0
     cdef bint absolute = st.absolute
+    cdef bint inch = st.units == "inch"
+    cdef bint arc_absolute = st.arc_absolute
+    plane_obj = st.plane
+    cdef int plane = plane_obj if type(plane_obj) is int else 0
+    cdef double offs[5]
+    cdef double h[5]
+    offs[0], offs[1], offs[2], offs[3], offs[4] = ox, oy, oz, oa, ob
     head = (0, None, 0, 0.0, st.tool_length, st.tool, st.spindle * st.spindle_dir, False,
             st.path_tol, (), None)
+    tail = head[3:]
     out = it.out
     cdef bint new_motion = False
     cdef int moved, j
@@ -388,6 +524,22 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
         else:
             f = feed
         if m >= 2:
+            h[0], h[1], h[2], h[3], h[4] = x, y, z, a, b
+            done = _arc(&t, s, &gr, m, plane, inch, sc, absolute, arc_absolute, offs, h, here,
+                        f, e, given, n0 + k + 1, plane_obj, tail)
+            if done is not None:
+                PyList_Append(out, done)
+                here = done[3]
+                x, y, z, a, b = e[0], e[1], e[2], e[3], e[4]
+                if gr.s[9] >= 0:
+                    feed = f
+                    feed_obj = f
+                if gr.g >= 0:
+                    new_motion = True  # the reference's _fast_arc clears cycle_il
+                motion = m
+                mcode = m
+                k += 1
+                continue
             st.pos, st.motion, st.feed = [x, y, z, a, b], motion, feed_obj
             if not _fast_arc(it, m, _words(s, &gr), n0 + k + 1):
                 break

@@ -22,7 +22,7 @@ from ..errors import GCodeError
 from .codes import AXES
 from .execute import Interpreter
 from .motion import MM_PER_INCH, Motion
-from .moves import arc
+from .moves import RADIUS_TOLERANCE, SPIRAL_ABS_TOLERANCE, SPIRAL_REL_TOLERANCE, arc
 from .read import Word
 
 #: The common CAM block: an optional N, an optional G0/G1/G2/G3, axis words in the
@@ -215,7 +215,18 @@ def _compiled() -> FastPath | None:
         from ._fast import fast_run as compiled_run
     except ImportError:
         return None
-    bind(Motion, _fast_arc, fast_run, pure_matches, MM_PER_INCH, math.nan)
+    bind(
+        Motion,
+        _fast_arc,
+        fast_run,
+        pure_matches,
+        MM_PER_INCH,
+        math.nan,
+        math.hypot,
+        RADIUS_TOLERANCE,
+        SPIRAL_ABS_TOLERANCE,
+        SPIRAL_REL_TOLERANCE,
+    )
     return FastPath("compiled", matches_of, compiled_run)
 
 
