@@ -1,5 +1,5 @@
-"""Builds the compiled kernel (prsxy_post/kernel/*.pyx) and the G-code fast path
-(prsxy_post/gcode/_fast.pyx) when a C compiler is there.
+"""Builds the compiled kernel (prsxy_post/kernel/*.pyx) and the G-code fast path's
+twin (prsxy_post/gcode/_fast.pyx) when a C compiler is there.
 
 Everything else is in pyproject.toml. The extension is optional: where it cannot be
 compiled (no compiler, no Python headers) the package installs without it and runs
@@ -51,13 +51,17 @@ def extensions() -> list[Extension]:
         return []
     mods = [
         Extension(
-            f"prsxy_post.{name.replace('/', '.')}",
-            [f"prsxy_post/{name}.pyx"],
+            f"prsxy_post.kernel.{name}",
+            [f"prsxy_post/kernel/{name}.pyx"],
             extra_compile_args=FLAGS,
             define_macros=[("PRSXY_CYTHON_VERSION", f'"{Cython.__version__}"')],
         )
-        for name in ("kernel/_ik", "kernel/_text", "gcode/_fast")
+        for name in ("_ik", "_text")
     ]
+    # the G-code fast path's twin: its reference is gcode/fast.py
+    fast = Extension("prsxy_post.gcode._fast", ["prsxy_post/gcode/_fast.pyx"])
+    fast.extra_compile_args = FLAGS
+    mods.append(fast)
     try:
         # the generated C goes under build/, not beside the package (nor into wheels)
         return list(

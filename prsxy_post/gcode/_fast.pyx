@@ -7,11 +7,13 @@ accepts exactly what ``fast._FAST_LINE`` matches (the same groups, the same
 ``rest``), numbers parsed to the bits of Python's ``float()`` (an exact decimal
 of at most 15 digits and 22 decimals is one correctly rounded division, as in
 David Gay's strtod; any other goes through ``PyOS_string_to_double``, which is
-what ``float()`` calls), the same arithmetic in the same order (``(ex - x) ** 2``
-through libm's ``pow``, as CPython's ``float ** float`` does, with its
-OverflowError), and :class:`~prsxy_post.gcode.motion.Motion` made here. Arcs go
-through the reference's ``_fast_arc`` (the interpreter's own arc code), with
-the matched words as text.
+what ``float()`` calls), the same arithmetic in the same order, and
+:class:`~prsxy_post.gcode.motion.Motion` made here. ``(dx ** 2 + dy ** 2 + dz **
+2) > 1e-24`` is decided by products where that cannot differ from CPython's
+``pow``, by libm's ``pow`` (and its OverflowError) elsewhere. G2/G3 are computed
+as ``moves.arc`` computes them (libm where ``math`` calls libm, CPython's own
+``math.hypot``); a block the reference would refuse, or any number that is not
+finite, goes to the reference's ``_fast_arc`` with the matched words as text.
 
 Bound to the reference by :func:`bind` (this module imports nothing from the
 package, so the package imports it, not the other way round).

@@ -34,20 +34,21 @@ from . import ik, text
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
 
-InverseRows = Callable[[ik.IKArrays, np.ndarray, np.ndarray], np.ndarray]
-FixedRows = Callable[..., list[str]]
-
 
 def pure_asked() -> bool:
-    """True when the environment selects the reference (``PRSXY_KERNEL=pure``);
-    compiled twins outside the kernel (the G-code fast path) follow it too."""
+    """True when the environment selects the references (``PRSXY_KERNEL=pure``):
+    the compiled twins outside the kernel (the G-code fast path) follow it too."""
     return os.environ.get(ENV, "").strip().lower() == "pure"
+
+
+InverseRows = Callable[[ik.IKArrays, np.ndarray, np.ndarray], np.ndarray]
+FixedRows = Callable[..., list[str]]
 
 
 def _load() -> tuple[Any, Any, str, str]:
     """(inverse_rows, format_fixed_rows, name, why the reference runs or "")."""
     pure = (ik.inverse_rows, text.format_fixed_rows)
-    if pure_asked():
+    if os.environ.get(ENV, "").strip().lower() == "pure":
         return (*pure, "pure numpy (PRSXY_KERNEL=pure)", f"{ENV}=pure")
     try:
         from . import _ik, _text  # type: ignore[attr-defined]
