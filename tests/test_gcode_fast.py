@@ -307,3 +307,13 @@ def arc_program(draw: st.DrawFn) -> list[str]:
 @given(arc_program())
 def test_generated_arcs(body: list[str]) -> None:
     same(["G21 G90 G94 G0 X1 Y2 Z3", *body, "M2"])
+
+
+def test_a_move_whose_square_overflows_is_a_move_on_every_path() -> None:
+    """(1e200 - 1) ** 2 overflows a float: the fast path raised OverflowError (a
+    traceback) where the full interpreter takes the move; now all three agree."""
+    lines = ["G21 G90 G1 F10 X1", "X1" + "0" * 200, "Y2", "M2"]
+    full = [bits(m) for m in gcode.iter_motions(lines, CFG, "t.ngc", fast=False)]
+    want = outcome(lines, fast.PURE)
+    assert want == (full, None, 2)
+    assert outcome(lines, compiled()) == want

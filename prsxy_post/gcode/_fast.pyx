@@ -10,7 +10,8 @@ David Gay's strtod; any other goes through ``PyOS_string_to_double``, which is
 what ``float()`` calls), the same arithmetic in the same order, and
 :class:`~prsxy_post.gcode.motion.Motion` made here. ``(dx ** 2 + dy ** 2 + dz **
 2) > 1e-24`` is decided by products where that cannot differ from CPython's
-``pow``, by libm's ``pow`` (and its OverflowError) elsewhere. G2/G3 are computed
+``pow``, by libm's ``pow`` elsewhere (an overflow: moved, as the reference's
+OverflowError says). G2/G3 are computed
 as ``moves.arc`` computes them (libm where ``math`` calls libm, CPython's own
 ``math.hypot``); a block the reference would refuse, or any number that is not
 finite, goes to the reference's ``_fast_arc`` with the matched words as text.
@@ -19,7 +20,6 @@ Bound to the reference by :func:`bind` (this module imports nothing from the
 package, so the package imports it, not the other way round).
 """
 
-from libc.errno cimport ERANGE, errno
 from libc.math cimport asin, atan2, cos, fabs, isfinite, sin
 from libc.stdint cimport uint64_t
 from cpython.float cimport PyFloat_AS_DOUBLE
@@ -29,7 +29,6 @@ from cpython.ref cimport PyObject
 cdef extern from "Python.h":
     double PyOS_string_to_double(const char *s, char **endptr,
                                  PyObject *overflow_exception) except? -1.0
-    object PyErr_SetFromErrno(object exc)
     Py_ssize_t PyUnicode_FindChar(object s, Py_UCS4 ch, Py_ssize_t start,
                                   Py_ssize_t end, int direction) except -2
     int PyUnicode_KIND(object s)
@@ -50,8 +49,8 @@ cdef extern from *:
        CPython's pow. d * d is within an ulp of pow(d, 2) (glibc's pow is within
        one ulp), so away from the threshold (a factor of 10 either side) and from
        overflow the products decide the same; near it, and for NaN, infinities
-       and huge values, pow decides. -1: pow overflowed (CPython's float_pow
-       raises OverflowError there). */
+       and huge values, pow decides. -1: pow overflowed (where CPython's
+       float_pow raises OverflowError). */
     static int prsxy_moved(double dx, double dy, double dz) {
         if (fabs(dx) < 1e150 && fabs(dy) < 1e150 && fabs(dz) < 1e150) {
             double s = dx * dx + dy * dy + dz * dz;
@@ -583,8 +582,7 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
             kind = "feed"
             moved = prsxy_moved(e[0] - x, e[1] - y, e[2] - z)
             if moved < 0:
-                errno = ERANGE
-                PyErr_SetFromErrno(OverflowError)
+                moved = 1  # a square past the largest float (the reference's OverflowError)
             d2 = f * sc if (moved or (e[3] == a and e[4] == b)) else f
             if last_rate_obj is None or not prsxy_same_bits(d2, last_rate):
                 last_rate, last_rate_obj = d2, d2  # one float object per rate

@@ -127,7 +127,10 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
             kind, rate = "rapid", math.nan
         else:
             kind = "feed"
-            moved = (ex - x) ** 2 + (ey - y) ** 2 + (ez - z) ** 2 > 1e-24
+            try:
+                moved = (ex - x) ** 2 + (ey - y) ** 2 + (ez - z) ** 2 > 1e-24
+            except OverflowError:  # a square past the largest float: it moved
+                moved = True
             rate = f * sc if (moved or (ea == a and eb == b)) else f
         append(
             _motion_of(
