@@ -109,12 +109,12 @@ def same(lines: list[str], source: str = "t.ngc") -> int:
 
 def test_the_selection_follows_the_kernel_selector() -> None:
     """PRSXY_KERNEL=pure selects the reference here too; otherwise the compiled twin
-    runs when it is built."""
+    runs when it is built, and the reference where it is not (no compiler)."""
     compiled()
     code = "from prsxy_post.gcode import fast; print(fast.SELECTED.name)"
     env = {k: v for k, v in os.environ.items() if k != kernel.ENV}
 
-    def name(**extra: str) -> str:
+    def run(code: str, **extra: str) -> str:
         return subprocess.run(
             [sys.executable, "-c", code],
             cwd=ROOT,
@@ -124,8 +124,11 @@ def test_the_selection_follows_the_kernel_selector() -> None:
             check=True,
         ).stdout.strip()
 
-    assert name() == "compiled"
-    assert name(PRSXY_KERNEL="pure") == "pure"
+    assert run(code) == "compiled"
+    assert run(code, PRSXY_KERNEL="pure") == "pure"
+    without = "import sys; sys.modules['prsxy_post.gcode._fast'] = None; " + code
+    motions = "; from prsxy_post import gcode; print(len(gcode.interpret('G0 X1\\nM2')))"
+    assert run(without + motions).split() == ["pure", "2"]
 
 
 def _programs() -> Iterator[Path]:
