@@ -3,7 +3,8 @@
 Two implementations give the same motions, bit for bit: this module's
 :func:`fast_run` (the reference: a regex over the batch, a Python loop) and its
 compiled twin ``_fast.pyx`` (a scanner that accepts what the regex matches, the
-same arithmetic in C, the same arcs through :func:`_fast_arc`). :data:`SELECTED`
+same arithmetic in C, arcs as ``moves.arc`` computes them, and :func:`_fast_arc`
+for any arc the interpreter may refuse). :data:`SELECTED`
 is the one the stream runs, picked once at import as the kernel's are
 (``PRSXY_KERNEL=pure`` selects the reference; without the built extension the
 reference runs too).
