@@ -236,4 +236,6 @@ def _compiled() -> FastPath | None:
 
 #: the compiled twin (None when not built), and the one the stream runs
 COMPILED = _compiled()
-SELECTED = PURE if COMPILED is None or kernel.pure_asked() else COMPILED
+#: (the kernel's own choice: PRSXY_KERNEL=pure, which it names as why the
+#: reference runs, selects every reference)
+SELECTED = PURE if COMPILED is None or kernel.WHY_PURE.startswith(kernel.ENV) else COMPILED

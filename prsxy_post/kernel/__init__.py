@@ -34,13 +34,6 @@ from . import ik, text
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
 
-
-def pure_asked() -> bool:
-    """True when the environment selects the references (``PRSXY_KERNEL=pure``):
-    the compiled twins outside the kernel (the G-code fast path) follow it too."""
-    return os.environ.get(ENV, "").strip().lower() == "pure"
-
-
 InverseRows = Callable[[ik.IKArrays, np.ndarray, np.ndarray], np.ndarray]
 FixedRows = Callable[..., list[str]]
 
