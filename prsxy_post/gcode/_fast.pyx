@@ -321,45 +321,82 @@ cdef inline bint _finite5(const double *v) noexcept:
     return isfinite(v[0]) and isfinite(v[1]) and isfinite(v[2]) and isfinite(v[3]) and isfinite(v[4])
 
 
-cdef object _arc(Text *t, str s, Groups *gr, int m, int plane, bint inch, double sc,
-                 bint absolute, bint arc_absolute, const double *off, const double *h,
-                 tuple here, double feed, double *e, int *given, object line,
-                 object plane_obj, tuple tail):
-    """The Motion of a G2/G3 as moves.arc makes it (target, arc_center, sweep_of,
-    arc_length, feed_rate; one turn, G94, no rotation), or None where the reference
-    must decide: a block it refuses, or numbers that are not finite."""
-    cdef int iu, iv, iw, la, lb, third, j
-    cdef double v, u0, v0, u1, v1, cu, cv, r, mu, mv, half, ar, theta, turn2, d
-    cdef double ca, cb, r1, r2, ae, re_, rad, a1, b1, sweep, length, rate
-    if plane == 17:
-        iu, iv, iw, la, lb, third = 0, 1, 2, 5, 6, 7  # word indices: I 5, J 6, K 7
-    elif plane == 18:
-        iu, iv, iw, la, lb, third = 2, 0, 1, 7, 5, 6
-    elif plane == 19:
-        iu, iv, iw, la, lb, third = 1, 2, 0, 6, 7, 5
-    else:
-        return None
-    for j in range(5):  # moves.target
+cdef struct Modal:
+    double p[5]  # the position (st.pos) [mm, deg]
+    double off[5]  # the program origin (it.offset())
+    double feed  # st.feed
+    double sc  # mm per program unit
+    bint absolute
+    bint inch
+    bint arc_absolute
+    int plane  # 17, 18 or 19; 0 for anything else (its arcs go to the reference)
+    int mcode  # st.motion when it is 0, 1, 2 or 3, else -1
+
+
+cdef bint _floats(object seq):
+    for v in seq:
+        if type(v) is not float:
+            return False
+    return True
+
+
+cdef bint _modal(it, st, Modal *md) except -1:
+    """The modal state the fast path reads, into ``md``; False where the state
+    holds other types than the reference's floats (the reference runs then)."""
+    cdef int j
+    pos, off, feed = st.pos, it.offset(), st.feed
+    if not (type(feed) is float and len(pos) == 5 and _floats(pos) and _floats(off)):
+        return False
+    for j in range(5):
+        md.p[j], md.off[j] = pos[j], off[j]
+    md.feed = feed
+    md.inch = st.units == "inch"
+    md.sc = _MM_PER_INCH if md.inch else 1.0
+    md.absolute, md.arc_absolute = st.absolute, st.arc_absolute
+    md.plane = st.plane if type(st.plane) is int and st.plane in (17, 18, 19) else 0
+    md.mcode = -1
+    motion = st.motion
+    for j in range(4):
+        if motion is not None and motion == j:
+            md.mcode = j
+            break
+    return True
+
+
+cdef void _end_point(Modal *md, Text *t, str s, Groups *gr, double *e, int *given) except *:
+    """Where a move ends (moves.target; fast_run's own arithmetic, the same): a
+    given word's value in mm from the program origin or, G91, from here."""
+    cdef int j
+    cdef double v
+    for j in range(5):
         given[j] = gr.s[j] >= 0
         if given[j]:
-            v = _number(t, s, gr.s[j], gr.e[j]) * (sc if j < 3 else 1.0)
-            e[j] = v + off[j] if absolute else h[j] + v
+            v = _number(t, s, gr.s[j], gr.e[j])
+            if j < 3:
+                v = v * md.sc
+            e[j] = v + md.off[j] if md.absolute else md.p[j] + v
         else:
-            e[j] = h[j]
-    if not (_finite5(e) and _finite5(h)) or feed <= 0:
-        return None
-    u0, v0, u1, v1 = h[iu] / sc, h[iv] / sc, e[iu] / sc, e[iv] / sc
-    if gr.s[8] >= 0:  # moves.arc_center, R
+            e[j] = md.p[j]
+
+
+cdef int _center(Modal *md, Text *t, str s, Groups *gr, int m, const int *ax, double u0,
+                 double v0, double u1, double v1, double *cu, double *cv) except -1:
+    """moves.arc_center in the plane's axes ``ax`` (u, v, normal, and the word
+    indices of the centre's two words and the third): 1 with the centre in
+    ``cu``, ``cv`` [program units], 0 where the reference refuses the arc."""
+    cdef double r, mu, mv, half, ar, theta, turn2, d, ca, cb, r1, r2, ae, re_
+    cdef int la = ax[3], lb = ax[4]
+    if gr.s[8] >= 0:  # R
         if gr.s[5] >= 0 or gr.s[6] >= 0 or gr.s[7] >= 0:
-            return None
+            return 0
         r = _number(t, s, gr.s[8], gr.e[8])
         if not isfinite(r) or (u0 == u1 and v0 == v1):
-            return None
+            return 0
         mu, mv = (u0 + u1) / 2.0, (v0 + v1) / 2.0
         half = _hyp(mu - u1, mv - v1)
         ar = fabs(r)
-        if half - ar > _RT[inch]:
-            return None
+        if half - ar > _RT[md.inch]:
+            return 0
         if ar == 0 or half / ar > 1 - 1e-12:
             half = ar
         if (m == 2 and r > 0) or (m == 3 and r < 0):
@@ -368,30 +405,58 @@ cdef object _arc(Text *t, str s, Groups *gr, int m, int plane, bint inch, double
             theta = atan2(v1 - v0, u1 - u0) + _PI / 2
         turn2 = asin(half / ar) if ar > 0 else 0.0
         d = ar * cos(turn2)
-        cu, cv = mu + d * cos(theta), mv + d * sin(theta)
-    else:  # moves.arc_center, I J K
-        if (gr.s[la] < 0 and gr.s[lb] < 0) or gr.s[third] >= 0:
-            return None
-        if arc_absolute and (gr.s[la] < 0 or gr.s[lb] < 0):
-            return None
-        ca = _number(t, s, gr.s[la], gr.e[la]) if gr.s[la] >= 0 else 0.0
-        cb = _number(t, s, gr.s[lb], gr.e[lb]) if gr.s[lb] >= 0 else 0.0
-        if not (isfinite(ca) and isfinite(cb)):
-            return None
-        if arc_absolute:
-            cu = ca + off[iu] / sc
-            cv = cb + off[iv] / sc
-        else:
-            cu, cv = u0 + ca, v0 + cb
-        r1 = _hyp(cu - u0, cv - v0)
-        r2 = _hyp(cu - u1, cv - v1)
-        if r1 < _RT[inch] or r2 < _RT[inch]:
-            return None
-        ae = fabs(r1 - r2)
-        re_ = ae / (r2 if r2 > r1 else r1)  # Python's max(r1, r2)
-        if ae > _SA[inch] * 100.0 or (re_ > _SR and ae > _SA[inch]):
-            return None
-    rad = _hyp(u0 - cu, v0 - cv) * sc
+        cu[0], cv[0] = mu + d * cos(theta), mv + d * sin(theta)
+        return 1
+    if (gr.s[la] < 0 and gr.s[lb] < 0) or gr.s[ax[5]] >= 0:  # I J K
+        return 0
+    if md.arc_absolute and (gr.s[la] < 0 or gr.s[lb] < 0):
+        return 0
+    ca = _number(t, s, gr.s[la], gr.e[la]) if gr.s[la] >= 0 else 0.0
+    cb = _number(t, s, gr.s[lb], gr.e[lb]) if gr.s[lb] >= 0 else 0.0
+    if not (isfinite(ca) and isfinite(cb)):
+        return 0
+    if md.arc_absolute:
+        cu[0] = ca + md.off[ax[0]] / md.sc
+        cv[0] = cb + md.off[ax[1]] / md.sc
+    else:
+        cu[0], cv[0] = u0 + ca, v0 + cb
+    r1 = _hyp(cu[0] - u0, cv[0] - v0)
+    r2 = _hyp(cu[0] - u1, cv[0] - v1)
+    if r1 < _RT[md.inch] or r2 < _RT[md.inch]:
+        return 0
+    ae = fabs(r1 - r2)
+    re_ = ae / (r2 if r2 > r1 else r1)  # Python's max(r1, r2)
+    if ae > _SA[md.inch] * 100.0 or (re_ > _SR and ae > _SA[md.inch]):
+        return 0
+    return 1
+
+
+#: per plane: u, v, normal (indices into x y z a b), the centre's words, the third
+cdef int _AXES[3][6]
+_AXES[0] = [0, 1, 2, 5, 6, 7]  # G17: I J (word indices: I 5, J 6, K 7)
+_AXES[1] = [2, 0, 1, 7, 5, 6]  # G18: K I
+_AXES[2] = [1, 2, 0, 6, 7, 5]  # G19: J K
+
+
+cdef object _arc(Modal *md, Text *t, str s, Groups *gr, int m, double feed, tuple here,
+                 double *e, int *given, object line, object plane_obj, tuple tail):
+    """The Motion of a G2/G3 as moves.arc makes it (target, arc_center, sweep_of,
+    arc_length, feed_rate; one turn, G94, no rotation), or None where the reference
+    must decide: a block it refuses, or numbers that are not finite."""
+    cdef double u0, v0, u1, v1, cu, cv, rad, a1, b1, sweep, length, rate
+    cdef double c[3]
+    cdef const int *ax
+    if md.plane == 0:
+        return None
+    ax = _AXES[md.plane - 17]
+    _end_point(md, t, s, gr, e, given)
+    if not (_finite5(e) and _finite5(md.p)) or feed <= 0:
+        return None
+    u0, v0 = md.p[ax[0]] / md.sc, md.p[ax[1]] / md.sc
+    u1, v1 = e[ax[0]] / md.sc, e[ax[1]] / md.sc
+    if not _center(md, t, s, gr, m, ax, u0, v0, u1, v1, &cu, &cv):
+        return None
+    rad = _hyp(u0 - cu, v0 - cv) * md.sc
     a1 = atan2(v0 - cv, u0 - cu)  # moves.sweep_of, one turn
     b1 = atan2(v1 - cv, u1 - cu)
     if m == 3:
@@ -402,17 +467,16 @@ cdef object _arc(Text *t, str s, Groups *gr, int m, int plane, bint inch, double
         if a1 <= b1:
             a1 += 2 * _PI
         sweep = (b1 - a1) + 0.0  # + (rotation + 1) * 2 * pi
-    length = _hyp(rad * sweep, e[iw] - h[iw])
-    if length > 1e-12 or (h[3] - e[3] == 0 and h[4] - e[4] == 0):  # moves.feed_rate
-        rate = feed * (_MM_PER_INCH if inch else 1.0)
+    length = _hyp(rad * sweep, e[ax[2]] - md.p[ax[2]])
+    if length > 1e-12 or (md.p[3] - e[3] == 0 and md.p[4] - e[4] == 0):  # moves.feed_rate
+        rate = feed * (_MM_PER_INCH if md.inch else 1.0)
     else:
         rate = feed
-    cdef double c[3]
-    c[iu], c[iv], c[iw] = cu * sc, cv * sc, e[iw]
+    c[ax[0]], c[ax[1]], c[ax[2]] = cu * md.sc, cv * md.sc, e[ax[2]]
     end = prsxy_end(here, e, given)
+    rotation = 1 if m == 3 else -1
     return prsxy_motion_of(
-        _Motion, (line, "arc", here, end, rate, plane_obj, (c[0], c[1], c[2]), 1 if m == 3 else -1)
-        + tail
+        _Motion, (line, "arc", here, end, rate, plane_obj, (c[0], c[1], c[2]), rotation) + tail
     )
 
 
@@ -435,11 +499,20 @@ cdef tuple _words(str s, Groups *gr):
     return tuple(out)
 
 
-cdef bint _floats(object seq):
-    for v in seq:
-        if type(v) is not float:
-            return False
-    return True
+cdef inline bint _taken(Groups *gr) noexcept:
+    """A line the fast path may take: nothing after its words, an axis word."""
+    return not gr.rest and (
+        gr.s[0] >= 0 or gr.s[1] >= 0 or gr.s[2] >= 0 or gr.s[3] >= 0 or gr.s[4] >= 0
+    )
+
+
+cdef double _straight_rate(Modal *md, int m, double f, const double *e) noexcept:
+    """fast_run's feed of a G1: f in mm/min when XYZ move (or A and B stay), else
+    deg/min."""
+    cdef int moved = prsxy_moved(e[0] - md.p[0], e[1] - md.p[1], e[2] - md.p[2])
+    if moved < 0:
+        moved = 1  # a square past the largest float (the reference's OverflowError)
+    return f * md.sc if (moved or (e[3] == md.p[3] and e[4] == md.p[4])) else f
 
 
 def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
@@ -447,155 +520,86 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
     the same motions and state, the index of the first line not taken."""
     cdef Groups gr
     cdef Text t
-    cdef Py_ssize_t nlines = len(lines), k
-    cdef str s
+    cdef Modal md
+    cdef Py_ssize_t nlines = len(lines), k = i
+    cdef bint new_motion = False
+    cdef int m
+    cdef int given[5]
+    cdef double f, rate_d, last_rate = 0.0
+    cdef double e[5]
     if i >= nlines:
         return i
-    s = lines[i]
+    cdef str s = lines[i]
     _text(s, &t)
     _scan(&t, &gr)
-    if gr.rest or (gr.s[0] < 0 and gr.s[1] < 0 and gr.s[2] < 0 and gr.s[3] < 0 and gr.s[4] < 0):
-        return i
     st = it.st
-    if (
-        st.ended
-        or st.inverse_time
-        or st.comp_side
-        or st.rotation
-        or st.arc_not_allowed
-        or it.detached is not None
-        or it.queue
+    if not _taken(&gr) or (
+        st.ended or st.inverse_time or st.comp_side or st.rotation or st.arc_not_allowed
+        or it.detached is not None or it.queue
     ):
         return i
-    pos = st.pos
-    feed_obj = st.feed
-    off = it.offset()
-    if not (type(feed_obj) is float and _floats(pos) and _floats(off) and len(pos) == 5):
-        # a state the reference keeps other types in: it runs (the types stay)
+    if not _modal(it, st, &md):  # a state the reference keeps other types in
         return _pure_run(it, _pure_matches(lines), i, n0)
-    cdef double x = pos[0], y = pos[1], z = pos[2], a = pos[3], b = pos[4]
-    cdef double ox = off[0], oy = off[1], oz = off[2], oa = off[3], ob = off[4]
-    cdef double feed = PyFloat_AS_DOUBLE(feed_obj)
-    motion = st.motion
-    cdef int mcode = -1, m, c
-    for c in range(4):
-        if motion is not None and motion == c:
-            mcode = c
-            break
-    cdef double sc = _MM_PER_INCH if st.units == "inch" else 1.0
-    cdef bint absolute = st.absolute
-    cdef bint inch = st.units == "inch"
-    cdef bint arc_absolute = st.arc_absolute
-    plane_obj = st.plane
-    cdef int plane = plane_obj if type(plane_obj) is int else 0
-    cdef double offs[5]
-    cdef double h[5]
-    offs[0], offs[1], offs[2], offs[3], offs[4] = ox, oy, oz, oa, ob
+    motion, feed_obj, last_rate_obj = st.motion, st.feed, None
     head = (0, None, 0, 0.0, st.tool_length, st.tool, st.spindle * st.spindle_dir, False,
             st.path_tol, (), None)
-    tail = head[3:]
-    out = it.out
-    cdef bint new_motion = False
-    cdef int moved, j
-    cdef double f, d2
-    cdef double e[5]
-    cdef int given[5]
-    cdef double last_rate = 0.0
-    last_rate_obj = None
-    here = (pos[0], pos[1], pos[2], pos[3], pos[4])  # the start, as float objects
-    k = i
+    out, here = it.out, tuple(st.pos)  # the start, as the position's float objects
     while k < nlines:
         if k > i:
             s = lines[k]
             _text(s, &t)
             _scan(&t, &gr)
-            if gr.rest or (
-                gr.s[0] < 0 and gr.s[1] < 0 and gr.s[2] < 0 and gr.s[3] < 0 and gr.s[4] < 0
-            ):
+            if not _taken(&gr):
                 break
-        m = gr.g if gr.g >= 0 else mcode
+        m = gr.g if gr.g >= 0 else md.mcode
         if m < 0:
             break
         if gr.s[9] >= 0:
             f = _number(&t, s, gr.s[9], gr.e[9])
             if f < 0 or (f == 0 and m):
                 break
-        elif m and feed <= 0:
+        elif m and md.feed <= 0:
             break
         else:
-            f = feed
+            f = md.feed
         if m >= 2:
-            h[0], h[1], h[2], h[3], h[4] = x, y, z, a, b
-            done = _arc(&t, s, &gr, m, plane, inch, sc, absolute, arc_absolute, offs, h, here,
-                        f, e, given, n0 + k + 1, plane_obj, tail)
-            if done is not None:
-                PyList_Append(out, done)
-                here = done[3]
-                x, y, z, a, b = e[0], e[1], e[2], e[3], e[4]
-                if gr.s[9] >= 0:
-                    feed = f
-                    feed_obj = f
-                if gr.g >= 0:
-                    new_motion = True  # the reference's _fast_arc clears cycle_il
-                motion = m
-                mcode = m
+            done = _arc(&md, &t, s, &gr, m, f, here, e, given, n0 + k + 1, st.plane, head[3:])
+            if done is None:  # the reference decides, with the words as text
+                st.pos, st.motion, st.feed = list(md.p), motion, feed_obj
+                if not _fast_arc(it, m, _words(s, &gr), n0 + k + 1):
+                    break
+                pos = st.pos
+                here, md.p = tuple(pos), pos
+                motion, feed_obj = st.motion, st.feed
+                md.feed, md.mcode = feed_obj, m  # _fast_arc leaves st.motion = m
                 k += 1
                 continue
-            st.pos, st.motion, st.feed = [x, y, z, a, b], motion, feed_obj
-            if not _fast_arc(it, m, _words(s, &gr), n0 + k + 1):
+            PyList_Append(out, done)
+            here = done[3]
+        else:
+            if gr.s[5] >= 0 or gr.s[6] >= 0 or gr.s[7] >= 0 or gr.s[8] >= 0:
                 break
-            pos = st.pos
-            here = (pos[0], pos[1], pos[2], pos[3], pos[4])
-            x, y, z, a, b = pos[0], pos[1], pos[2], pos[3], pos[4]
-            motion, feed_obj = st.motion, st.feed
-            feed = feed_obj
-            mcode = m  # the reference's _fast_arc leaves st.motion = m
-            k += 1
-            continue
-        if gr.s[5] >= 0 or gr.s[6] >= 0 or gr.s[7] >= 0 or gr.s[8] >= 0:
-            break
-        for j in range(5):
-            given[j] = gr.s[j] >= 0
-        if absolute:
-            e[0] = _number(&t, s, gr.s[0], gr.e[0]) * sc + ox if given[0] else x
-            e[1] = _number(&t, s, gr.s[1], gr.e[1]) * sc + oy if given[1] else y
-            e[2] = _number(&t, s, gr.s[2], gr.e[2]) * sc + oz if given[2] else z
-            e[3] = _number(&t, s, gr.s[3], gr.e[3]) + oa if given[3] else a
-            e[4] = _number(&t, s, gr.s[4], gr.e[4]) + ob if given[4] else b
-        else:
-            e[0] = x + _number(&t, s, gr.s[0], gr.e[0]) * sc if given[0] else x
-            e[1] = y + _number(&t, s, gr.s[1], gr.e[1]) * sc if given[1] else y
-            e[2] = z + _number(&t, s, gr.s[2], gr.e[2]) * sc if given[2] else z
-            e[3] = a + _number(&t, s, gr.s[3], gr.e[3]) if given[3] else a
-            e[4] = b + _number(&t, s, gr.s[4], gr.e[4]) if given[4] else b
+            _end_point(&md, &t, s, &gr, e, given)
+            if m == 0:
+                rate, kind = _NAN, "rapid"
+            else:
+                rate_d, kind = _straight_rate(&md, m, f, e), "feed"
+                if last_rate_obj is None or not prsxy_same_bits(rate_d, last_rate):
+                    last_rate, last_rate_obj = rate_d, rate_d  # one float object per rate
+                rate = last_rate_obj
+            end = prsxy_end(here, e, given)
+            PyList_Append(out, prsxy_motion(_Motion, n0 + k + 1, kind, here, end, rate, head))
+            here = end
         if gr.s[9] >= 0:
-            feed = f
-            feed_obj = f
+            md.feed, feed_obj = f, f
         if gr.g >= 0:
-            motion = gr.g
-            mcode = gr.g
-            new_motion = True
-        if m == 0:
-            rate = _NAN
-            kind = "rapid"
-        else:
-            kind = "feed"
-            moved = prsxy_moved(e[0] - x, e[1] - y, e[2] - z)
-            if moved < 0:
-                moved = 1  # a square past the largest float (the reference's OverflowError)
-            d2 = f * sc if (moved or (e[3] == a and e[4] == b)) else f
-            if last_rate_obj is None or not prsxy_same_bits(d2, last_rate):
-                last_rate, last_rate_obj = d2, d2  # one float object per rate
-            rate = last_rate_obj
-        end = prsxy_end(here, e, given)
-        PyList_Append(out, prsxy_motion(_Motion, n0 + k + 1, kind, here, end, rate, head))
-        here = end
-        x, y, z, a, b = e[0], e[1], e[2], e[3], e[4]
+            new_motion = True  # (an arc: the reference's _fast_arc clears cycle_il)
+        if gr.g >= 0 or m >= 2:
+            motion, md.mcode = m, m
+        md.p = e
         k += 1
     if k > i:
-        st.pos = [x, y, z, a, b]
-        st.motion = motion
-        st.feed = feed_obj
+        st.pos, st.motion, st.feed = list(md.p), motion, feed_obj
         if new_motion:
             st.cycle_il = None
         it.started = True
