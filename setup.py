@@ -1,5 +1,5 @@
-"""Builds the compiled kernel (prsxy_post/kernel/*.pyx) and the G-code fast path's
-twin (prsxy_post/gcode/_fast.pyx) when a C compiler is there.
+"""Builds the compiled twins (prsxy_post/kernel/_*.pyx, prsxy_post/gcode/_fast.pyx) when
+a C compiler is there.
 
 Everything else is in pyproject.toml. The extension is optional: where it cannot be
 compiled (no compiler, no Python headers) the package installs without it and runs
@@ -12,6 +12,7 @@ or -ffast-math (both change results from one machine to another).
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
@@ -49,19 +50,17 @@ def extensions() -> list[Extension]:
     except ImportError as e:
         sys.stderr.write(f"prsxy-post: Cython is missing ({e}); installing the pure kernel\n")
         return []
+    # every compiled twin in the package: prsxy_post/<package>/_<name>.pyx, each the
+    # twin of the reference module <name>.py beside it
     mods = [
         Extension(
-            f"prsxy_post.kernel.{name}",
-            [f"prsxy_post/kernel/{name}.pyx"],
+            ".".join(pyx.with_suffix("").parts),
+            [pyx.as_posix()],
             extra_compile_args=FLAGS,
             define_macros=[("PRSXY_CYTHON_VERSION", f'"{Cython.__version__}"')],
         )
-        for name in ("_ik", "_text")
+        for pyx in sorted(Path("prsxy_post").rglob("_*.pyx"))
     ]
-    # the G-code fast path's twin: its reference is gcode/fast.py
-    fast = Extension("prsxy_post.gcode._fast", ["prsxy_post/gcode/_fast.pyx"])
-    fast.extra_compile_args = FLAGS
-    mods.append(fast)
     try:
         # the generated C goes under build/, not beside the package (nor into wheels)
         return list(
