@@ -1,16 +1,29 @@
-"""The fast path: the common CAM block, matched over a batch of lines at once."""
+"""The fast path: the common CAM block, matched over a batch of lines at once.
+
+Two implementations give the same motions, bit for bit: this module's
+:func:`fast_run` (the reference: a regex over the batch, a Python loop) and its
+compiled twin ``_fast.pyx`` (a scanner that accepts what the regex matches, the
+same arithmetic in C, arcs as ``moves.arc`` computes them, and :func:`_fast_arc`
+for any arc the interpreter may refuse). :data:`SELECTED`
+is the one the stream runs, picked once at import as the kernel's are
+(``PRSXY_KERNEL=pure`` selects the reference; without the built extension the
+reference runs too).
+"""
 
 from __future__ import annotations
 
 import itertools
 import math
 import re
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
+from .. import kernel
 from ..errors import GCodeError
 from .codes import AXES
 from .execute import Interpreter
 from .motion import MM_PER_INCH, Motion
-from .moves import arc
+from .moves import RADIUS_TOLERANCE, SPIRAL_ABS_TOLERANCE, SPIRAL_REL_TOLERANCE, arc
 from .read import Word
 
 #: The common CAM block: an optional N, an optional G0/G1/G2/G3, axis words in the
@@ -115,7 +128,10 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
             kind, rate = "rapid", math.nan
         else:
             kind = "feed"
-            moved = (ex - x) ** 2 + (ey - y) ** 2 + (ez - z) ** 2 > 1e-24
+            try:
+                moved = (ex - x) ** 2 + (ey - y) ** 2 + (ez - z) ** 2 > 1e-24
+            except OverflowError:  # a square past the largest float: it moved
+                moved = True
             rate = f * sc if (moved or (ea == a and eb == b)) else f
         append(
             _motion_of(
@@ -174,3 +190,52 @@ def _fast_arc(it: Interpreter, motion: int, words: tuple[str, ...], n: int) -> b
     st.motion = motion
     it.started = True
     return True
+
+
+def pure_matches(batch: list[str]) -> list[tuple[str, ...]]:
+    """The regex's groups of each line of a batch, for :func:`fast_run`; none (no
+    fast path) when a line holds a character that ends lines."""
+    matches = _FAST_LINE.findall("\n".join(batch))
+    return matches if len(matches) == len(batch) else []
+
+
+class FastPath(NamedTuple):
+    """One implementation of the fast path: ``run(it, matches(batch), i, n0)``."""
+
+    name: str
+    matches: Callable[[list[str]], list[Any]]
+    run: Callable[[Interpreter, list[Any], int, int], int]
+
+
+#: the reference
+PURE = FastPath("pure", pure_matches, fast_run)
+
+
+def _compiled() -> FastPath | None:
+    """The compiled twin bound to this module's pieces, or None where it is not
+    built."""
+    try:
+        from ._fast import bind, matches_of
+        from ._fast import fast_run as compiled_run
+    except ImportError:
+        return None
+    bind(
+        Motion,
+        _fast_arc,
+        fast_run,
+        pure_matches,
+        MM_PER_INCH,
+        math.nan,
+        math.hypot,
+        RADIUS_TOLERANCE,
+        SPIRAL_ABS_TOLERANCE,
+        SPIRAL_REL_TOLERANCE,
+    )
+    return FastPath("compiled", matches_of, compiled_run)
+
+
+#: the compiled twin (None when not built), and the one the stream runs
+COMPILED = _compiled()
+#: (the kernel's own choice: PRSXY_KERNEL=pure, which it names as why the
+#: reference runs, selects every reference)
+SELECTED = PURE if COMPILED is None or kernel.WHY_PURE.startswith(kernel.ENV) else COMPILED

@@ -15,10 +15,10 @@ from __future__ import annotations
 from collections.abc import Callable, Generator, Iterable, Iterator
 
 from ..errors import GCodeError
+from . import fast as fastpath
 from .config import InterpreterConfig
 from .control import Control, Jump
 from .execute import Interpreter
-from .fast import _FAST_LINE, fast_run
 from .lines import BATCH, ProgramLines, split_lines
 from .motion import Motion
 from .read import BLANK, PERCENT, Block, OWord, Parsed, evaluate, fail, parse
@@ -104,6 +104,8 @@ def _run(
     last_text = 0
     remembered = False
     add_named = params.add_named
+    path = fastpath.SELECTED
+    fast_matches, fast_run = path.matches, path.run
     while True:
         if i >= len(batch):
             if out:
@@ -116,9 +118,7 @@ def _run(
             batch = nxt
             i = 0
             if fast and in_main:
-                matches = _FAST_LINE.findall("\n".join(batch))
-                if len(matches) != len(batch):  # a line with a character that ends lines
-                    matches = []
+                matches = fast_matches(batch)
             else:
                 matches = []
         if matches and ctl.skipping_o is None:
