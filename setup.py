@@ -55,7 +55,7 @@ def extensions() -> list[Extension]:
             extra_compile_args=FLAGS,
             define_macros=[("PRSXY_CYTHON_VERSION", f'"{Cython.__version__}"')],
         )
-        for name in ("_ik", "_text")
+        for name in ("_ik", "_text", "_play")
     ]
     try:
         # the generated C goes under build/, not beside the package (nor into wheels)

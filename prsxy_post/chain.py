@@ -995,7 +995,7 @@ class Pipeline:
         if rest.start < len(pc):
             y0 = float(
                 reversals.follow(
-                    table, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest], cubic
+                    table.flat, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest], cubic
                 )[0][-1]
             )
         self.play_y[col] = y0
@@ -1040,7 +1040,7 @@ class Pipeline:
         # from there the corrected commands carry it, below
         upto = slice(0, int(e.max()) + 1)
         y_pt, lo, hi = reversals.follow(
-            table, y0, P0, V0, P_cmd[upto, col], V_cmd[upto, col], pc.dt[upto], cubic
+            table.flat, y0, P0, V0, P_cmd[upto, col], V_cmd[upto, col], pc.dt[upto], cubic
         )
         # where the part stands when the crossing begins: the extreme it
         # reached on the old side, over the window (its start included)
@@ -1109,7 +1109,7 @@ class Pipeline:
         P_w = P_cmd[pts, col]
         P_w[np.cumsum(span) - 1] = x.made_end[todo]  # the crossings' ends as made
         y_w, lo_w, hi_w = reversals.follow_stretches(
-            table,
+            table.flat,
             y_s[todo - 1],
             P_cmd[ep, col],
             V_cmd[ep, col],

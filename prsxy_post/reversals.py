@@ -43,6 +43,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+from . import kernel
+from .kernel.play import PlayTable
+from .kernel.play import hermite as _hermite
+from .kernel.play import velocity_quadratic as _velocity_quadratic
+
 #: ``edge_speed(k, s, col, accel)``: the fastest [mm/s] motor ``col`` may move
 #: while its part stands before and after (two arrays) its reversal in step ``k``
 #: at the fraction ``s`` of it, at acceleration ``accel`` there
@@ -235,28 +240,6 @@ class Insertions:
 
     def __bool__(self) -> bool:
         return bool(self.stand) or len(self.mid_k) > 0
-
-
-def _velocity_quadratic(
-    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(a, b, c) of the Hermite cubic's velocity a s² + b s + c in s = t / h:
-    c = V0, a = 6 (P0 − P1)/h + 3 (V0 + V1), b = −6 (P0 − P1)/h − 4 V0 − 2 V1.
-    """
-    d = (P0 - P1) / h
-    return 6.0 * d + 3.0 * (V0 + V1), -6.0 * d - 4.0 * V0 - 2.0 * V1, V0
-
-
-def _hermite(
-    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray, s: np.ndarray
-) -> np.ndarray:
-    """The cubic through (P0, V0) and (P1, V1) over time h (n,) at fractions s (n, k)
-    of each step: (n, k) positions."""
-    h00 = 2 * s**3 - 3 * s**2 + 1
-    h10 = s**3 - 2 * s**2 + s
-    h01 = -2 * s**3 + 3 * s**2
-    h11 = s**3 - s**2
-    return h00 * P0[:, None] + h10 * (h * V0)[:, None] + h01 * P1[:, None] + h11 * (h * V1)[:, None]
 
 
 def velocity_roots(
@@ -1635,7 +1618,7 @@ class Crossings(NamedTuple):
 
 
 def follow(
-    table: object,
+    table: PlayTable,
     y0: float,
     P0: float,
     V0: float,
@@ -1655,6 +1638,10 @@ def follow(
     step is taken at its turning points (the roots of its velocity, a quadratic)
     and its end, and the result is exact, with one or three samples a step.
 
+    Parameters
+    ----------
+    table : the motor's table as the kernel takes it (``MotorTable.flat``)
+
     Returns
     -------
     y_end : (n,) the part at each point
@@ -1668,7 +1655,7 @@ def follow(
 
 
 def follow_stretches(
-    table: object,
+    table: PlayTable,
     y0: np.ndarray,
     P0: np.ndarray,
     V0: np.ndarray,
@@ -1679,7 +1666,8 @@ def follow_stretches(
     cubic: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`follow` over several stretches of commands at once, each from where
-    its part stands at its start (the play model's scan starts again at each).
+    its part stands at its start (the play model's scan starts again at each):
+    :func:`.kernel.play.follow_stretches`.
 
     Parameters
     ----------
@@ -1693,54 +1681,4 @@ def follow_stretches(
     -------
     y_end, y_min, y_max : (k,) as :func:`follow`'s, step by step
     """
-    from .axiscomp import _clamp_scan
-
-    n = len(P)
-    first = (np.cumsum(steps) - steps)[steps > 0]
-    opening = np.zeros(n, dtype=np.int64)
-    opening[first] = 1
-    Pa = np.concatenate([[0.0], P[:-1]])
-    Va = np.concatenate([[0.0], V[:-1]])
-    Pa[first], Va[first] = P0[steps > 0], V0[steps > 0]
-    h = dt
-    # a step of no time (a standing point's twin) has no cubic: h = ∞ makes it flat
-    a, b, c = _velocity_quadratic(Pa, Va, P, V, np.where(h > 0, h, np.inf))
-    disc = b * b - 4.0 * a * c
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sq = np.sqrt(np.maximum(disc, 0.0))
-        r1 = np.where(np.abs(a) > 1e-300, (-b - sq) / (2 * a), np.where(b != 0, -c / b, -1.0))
-        r2 = np.where(np.abs(a) > 1e-300, (-b + sq) / (2 * a), -1.0)
-    ok1 = (disc >= 0) & (r1 > 0) & (r1 < 1) & (h > 0) & cubic
-    ok2 = (disc >= 0) & (r2 > 0) & (r2 < 1) & (h > 0) & (np.abs(r2 - r1) > 0) & cubic
-    # samples of each step in time order: its turning points, then its end. Most
-    # steps have none, so the cubic is evaluated only where it turns (the end of a
-    # step is its point, P). Each stretch opens with one more: where its part
-    # stands (lo = hi = y0: the scan is clamped to it, whatever came before).
-    count = 1 + opening + ok1 + ok2
-    last_of = np.cumsum(count) - 1
-    flat = np.empty(int(last_of[-1]) + 1 if n else 0)
-    flat[last_of] = P
-    turns = np.flatnonzero(ok1 | ok2)
-    if turns.size:
-        a1, a2 = ok1[turns], ok2[turns]
-        q1, q2 = r1[turns], r2[turns]
-        early = np.where(a1 & a2, np.minimum(q1, q2), np.where(a1, q1, q2))
-        late = np.where(a1 & a2, np.maximum(q1, q2), np.nan)
-        cmd = _hermite(
-            Pa[turns], Va[turns], P[turns], V[turns], h[turns], np.column_stack([early, late])
-        )
-        at = (last_of - count + 1 + opening)[turns]
-        flat[at] = cmd[:, 0]
-        two = a1 & a2
-        flat[at[two] + 1] = cmd[two, 1]
-    lo = table.lo(flat)  # type: ignore[attr-defined]
-    hi = table.hi(flat)  # type: ignore[attr-defined]
-    opens = (last_of - count + 1)[first]
-    lo[opens] = hi[opens] = y0[steps > 0]
-    y = _clamp_scan(lo, hi)
-    # each step's samples, a stretch's opening one counted as its first step's
-    # next (so that it is no extreme of that step)
-    bounds = last_of - count + 1
-    inside = y.copy()
-    inside[opens] = y[opens + 1]
-    return y[last_of], np.minimum.reduceat(inside, bounds), np.maximum.reduceat(inside, bounds)
+    return kernel.follow_stretches(table, y0, P0, V0, P, V, dt, steps, cubic)

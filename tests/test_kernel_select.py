@@ -23,6 +23,7 @@ WITHOUT_EXTENSION = (
     "import sys\n"
     "sys.modules['prsxy_post.kernel._ik'] = None\n"
     "sys.modules['prsxy_post.kernel._text'] = None\n"
+    "sys.modules['prsxy_post.kernel._play'] = None\n"
     "from prsxy_post.cli import main\n"
     "main(sys.argv[1:], prog_name='prsxy-post')\n"
 )
@@ -90,7 +91,9 @@ def test_the_kernel_imports_nothing_above_it() -> None:
         "prsxy_post.kernel",
         "prsxy_post.kernel.ik",
         "prsxy_post.kernel.libm",
+        "prsxy_post.kernel.play",
         "prsxy_post.kernel.text",
         "prsxy_post.kernel._ik",
+        "prsxy_post.kernel._play",
         "prsxy_post.kernel._text",
     }, mods

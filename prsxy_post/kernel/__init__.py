@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from . import ik, text
+from . import ik, play, text
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
@@ -38,16 +38,19 @@ InverseRows = Callable[[ik.IKArrays, np.ndarray, np.ndarray], np.ndarray]
 FixedRows = Callable[..., list[str]]
 
 
-def _load() -> tuple[Any, Any, str, str]:
-    """(inverse_rows, format_fixed_rows, name, why the reference runs or "")."""
-    pure = (ik.inverse_rows, text.format_fixed_rows)
+def _load() -> tuple[Any, Any, Any, str, str]:
+    """(inverse_rows, format_fixed_rows, the play model's module, name, why the
+    reference runs or "")."""
+    pure = (ik.inverse_rows, text.format_fixed_rows, play)
     if os.environ.get(ENV, "").strip().lower() == "pure":
         return (*pure, "pure numpy (PRSXY_KERNEL=pure)", f"{ENV}=pure")
     try:
-        from . import _ik, _text  # type: ignore[attr-defined]
+        from . import _ik, _play, _text  # type: ignore[attr-defined]
     except ImportError as e:
         absent = [
-            n for n in ("_ik", "_text") if importlib.util.find_spec(f"{__name__}.{n}") is None
+            n
+            for n in ("_ik", "_text", "_play")
+            if importlib.util.find_spec(f"{__name__}.{n}") is None
         ]
         why = (
             f"the compiled extension is not built (no {', '.join(absent)} "
@@ -56,10 +59,16 @@ def _load() -> tuple[Any, Any, str, str]:
             else f"the compiled extension does not import ({e})"
         )
         return (*pure, f"pure numpy ({why})", why)
-    return _ik.inverse_rows, _text.format_fixed_rows, f"compiled (Cython {_ik.CYTHON})", ""
+    return (
+        _ik.inverse_rows,
+        _text.format_fixed_rows,
+        _play,
+        f"compiled (Cython {_ik.CYTHON})",
+        "",
+    )
 
 
-_inverse_rows, _fixed_rows, NAME, WHY_PURE = _load()
+_inverse_rows, _fixed_rows, _play_kernel, NAME, WHY_PURE = _load()
 #: True when the compiled kernels run.
 COMPILED: bool = not WHY_PURE
 #: True when the reference runs because the extension is missing (not asked for).
@@ -77,4 +86,77 @@ def format_fixed_rows(columns: Sequence[tuple[str, np.ndarray, int]], end: str =
     """Rows of fixed-point text: :func:`text.format_fixed_rows`, compiled when
     :data:`COMPILED`."""
     out: list[str] = _fixed_rows(columns, end)
+    return out
+
+
+# the play model (kernel/play.py and its twin _play.pyx), one name each so that a
+# test can watch the calls
+_play_lo = _play_kernel.lo
+_play_hi = _play_kernel.hi
+_play_lo_inv = _play_kernel.lo_inv
+_play_hi_inv = _play_kernel.hi_inv
+_play_slope = _play_kernel.slope
+_compensate_sided = _play_kernel.compensate_sided
+_clamp_scan = _play_kernel.clamp_scan
+_follow_stretches = _play_kernel.follow_stretches
+
+
+def play_lo(t: play.PlayTable, p: np.ndarray) -> np.ndarray:
+    """lo(p) (n,) [mm]: :func:`play.lo`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_lo(t, p)
+    return out
+
+
+def play_hi(t: play.PlayTable, p: np.ndarray) -> np.ndarray:
+    """hi(p) (n,) [mm]: :func:`play.hi`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_hi(t, p)
+    return out
+
+
+def play_lo_inv(t: play.PlayTable, target: np.ndarray) -> np.ndarray:
+    """lo⁻¹ (n,) [mm]: :func:`play.lo_inv`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_lo_inv(t, target)
+    return out
+
+
+def play_hi_inv(t: play.PlayTable, target: np.ndarray) -> np.ndarray:
+    """hi⁻¹ (n,) [mm]: :func:`play.hi_inv`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_hi_inv(t, target)
+    return out
+
+
+def play_slope(t: play.PlayTable, p: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """d lo/dp or d hi/dp (n,): :func:`play.slope`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_slope(t, p, side)
+    return out
+
+
+def compensate_sided(t: play.PlayTable, target: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """Commands (n,) [mm]: :func:`play.compensate_sided`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _compensate_sided(t, target, side)
+    return out
+
+
+def clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The play model's scan (n,): :func:`play.clamp_scan`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _clamp_scan(lo, hi)
+    return out
+
+
+def follow_stretches(
+    t: play.PlayTable,
+    y0: np.ndarray,
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    dt: np.ndarray,
+    steps: np.ndarray,
+    cubic: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The part along the commands' cubics: :func:`play.follow_stretches`, compiled
+    when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _follow_stretches(
+        t, y0, P0, V0, P, V, dt, steps, cubic
+    )
     return out

@@ -6,12 +6,13 @@ the C library's in the last bit for 8–9 % of arguments, measured in
 ``tests/test_kernel_ik.py``), so results made with them would depend on the
 processor, and a compiled kernel calling the C library could not match them. The
 reference kernels call these functions through :mod:`math` instead, which calls the
-C library (``acos``, ``atan2``), exactly as the compiled kernels do.
+C library (``acos``, ``atan2``, ``sin``, ``cos``), exactly as the compiled kernels do.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -31,3 +32,21 @@ def atan2(y: np.ndarray, x: np.ndarray) -> np.ndarray:
     return np.fromiter(
         map(math.atan2, y.ravel().tolist(), x.ravel().tolist()), float, y.size
     ).reshape(y.shape)
+
+
+def _finite(f: Callable[[float], float], x: np.ndarray) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    out = np.full(x.shape, np.nan)
+    ok = np.isfinite(x)  # math's raise at ±inf; the C library's give NaN
+    out[ok] = np.fromiter(map(f, x[ok].tolist()), float, int(np.count_nonzero(ok)))
+    return out
+
+
+def sin(x: np.ndarray) -> np.ndarray:
+    """sin of each element (C library); NaN at ±inf and NaN."""
+    return _finite(math.sin, x)
+
+
+def cos(x: np.ndarray) -> np.ndarray:
+    """cos of each element (C library); NaN at ±inf and NaN."""
+    return _finite(math.cos, x)

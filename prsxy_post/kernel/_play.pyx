@@ -1,0 +1,419 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
+# cython: initializedcheck=False
+"""The play model compiled: :mod:`prsxy_post.kernel.play` point by point, the same
+operations in the same order (see that module), so the two agree to the bit.
+
+numpy's ``interp`` is written out as numpy does it (the slope of the interval,
+times the distance from its left end, plus its left value); numpy's ``maximum`` and
+``minimum`` as numpy's (a NaN wins); the clamp scan runs as the sequential loop its
+doubling steps compose to (every value is one of the inputs). The cubic's ``s**3``
+at a turning point is numpy's power on the array the reference makes (it is not the
+C library's pow on every processor); the periodic terms call the C library's sin
+and cos, as the reference does through :mod:`math`. Compiled with -O2
+-ffp-contract=off (no fused multiply-adds)."""
+
+import numpy as np
+
+from libc.math cimport sin, cos, sqrt, fabs, INFINITY, NAN, M_PI
+
+cdef double TWO_PI = 2 * M_PI
+
+
+cdef struct Tab:
+    const double* breaks
+    const double* lo_err
+    const double* hi_err
+    const double* lo_vals
+    const double* hi_vals
+    const double* s_lo
+    const double* s_hi
+    const double* amp
+    const double* period
+    const double* phase
+    Py_ssize_t nb
+    Py_ssize_t nc
+
+
+cdef inline double _max(double a, double b) noexcept nogil:
+    # numpy's maximum: the first when it is not less, or NaN
+    return a if (a >= b or a != a) else b
+
+
+cdef inline double _min(double a, double b) noexcept nogil:
+    return a if (a <= b or a != a) else b
+
+
+cdef inline double _interp(double x, const double* xp, const double* fp, Py_ssize_t n) noexcept nogil:
+    """numpy's interp (compiled_base.c, arr_interp) at one x, end values held."""
+    cdef Py_ssize_t lo, hi, mid, j
+    cdef double slope, r
+    if n == 1:
+        return fp[0]
+    if x != x:
+        return x
+    if x < xp[0]:
+        return fp[0]
+    if x > xp[n - 1]:
+        return fp[n - 1]
+    if x == xp[n - 1]:
+        return fp[n - 1]
+    lo = 0
+    hi = n - 1  # xp[lo] <= x < xp[hi]
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if xp[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    j = lo
+    if xp[j] == x:
+        return fp[j]
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    r = slope * (x - xp[j]) + fp[j]
+    if r != r:
+        r = slope * (x - xp[j + 1]) + fp[j + 1]
+        if r != r and fp[j] == fp[j + 1]:
+            r = fp[j]
+    return r
+
+
+cdef inline double _cyc(const Tab* t, double p) noexcept nogil:
+    cdef double out = 0.0
+    cdef Py_ssize_t k
+    for k in range(t.nc):
+        out = out + t.amp[k] * sin(TWO_PI * p / t.period[k] + t.phase[k])
+    return out
+
+
+cdef inline double _lo(const Tab* t, double p) noexcept nogil:
+    return p + _interp(p, t.breaks, t.lo_err, t.nb) + _cyc(t, p)
+
+
+cdef inline double _hi(const Tab* t, double p) noexcept nogil:
+    return p + _interp(p, t.breaks, t.hi_err, t.nb) + _cyc(t, p)
+
+
+cdef inline double _invert(double x, const double* vals, const double* breaks,
+                           const double* err, Py_ssize_t n) noexcept nogil:
+    cdef double out = _interp(x, vals, breaks, n)
+    if x < vals[0]:
+        out = x - err[0]
+    elif x > vals[n - 1]:
+        out = x - err[n - 1]
+    return out
+
+
+cdef void _solve(const Tab* t, const double* target, double* out, Py_ssize_t n,
+                 bint up, double* scratch) noexcept nogil:
+    """lo⁻¹ (``up``) or hi⁻¹ of ``target`` (n,) into ``out``; ``scratch`` (n,)."""
+    cdef const double* vals = t.lo_vals if up else t.hi_vals
+    cdef const double* err = t.lo_err if up else t.hi_err
+    cdef Py_ssize_t i, it
+    cdef double big, d
+    cdef bint nan
+    for i in range(n):
+        out[i] = _invert(target[i], vals, t.breaks, err, t.nb)
+    if t.nc == 0:
+        return
+    for it in range(30):
+        big = 0.0
+        nan = False
+        for i in range(n):
+            scratch[i] = _invert(target[i] - _cyc(t, out[i]), vals, t.breaks, err, t.nb)
+            d = fabs(scratch[i] - out[i])
+            if d != d:
+                nan = True
+            elif d > big:
+                big = d
+        for i in range(n):
+            out[i] = scratch[i]
+        if not nan and big < 1e-13:
+            break
+
+
+cdef class _Table:
+    """A PlayTable's arrays held as contiguous doubles, and the struct on them."""
+    cdef Tab tab
+    cdef object keep
+
+    def __init__(self, t):
+        cdef const double[::1] v
+        cdef const double* ptr[10]
+        cdef Py_ssize_t size[10]
+        cdef int k
+        self.keep = [np.ascontiguousarray(a, dtype=np.float64) for a in t]
+        for k in range(10):
+            v = self.keep[k]
+            size[k] = v.shape[0]
+            ptr[k] = &v[0] if v.shape[0] else NULL
+        self.tab.breaks, self.tab.lo_err, self.tab.hi_err = ptr[0], ptr[1], ptr[2]
+        self.tab.lo_vals, self.tab.hi_vals = ptr[3], ptr[4]
+        self.tab.s_lo, self.tab.s_hi = ptr[5], ptr[6]
+        self.tab.amp, self.tab.period, self.tab.phase = ptr[7], ptr[8], ptr[9]
+        self.tab.nb = size[0]
+        self.tab.nc = size[7]
+
+
+cdef _Table _table(t):
+    return _Table(t)
+
+
+def _vec(p):
+    return np.ascontiguousarray(p, dtype=np.float64)
+
+
+def lo(t, p):
+    """lo(p) [mm]: :func:`play.lo`."""
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(p)
+    out = np.empty(x.shape[0])
+    cdef double[::1] o = out
+    cdef Py_ssize_t i
+    for i in range(x.shape[0]):
+        o[i] = _lo(&tb.tab, x[i])
+    return out
+
+
+def hi(t, p):
+    """hi(p) [mm]: :func:`play.hi`."""
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(p)
+    out = np.empty(x.shape[0])
+    cdef double[::1] o = out
+    cdef Py_ssize_t i
+    for i in range(x.shape[0]):
+        o[i] = _hi(&tb.tab, x[i])
+    return out
+
+
+def _inv(t, target, bint up):
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(target)
+    cdef Py_ssize_t n = x.shape[0]
+    out = np.empty(n)
+    scratch = np.empty(n)
+    cdef double[::1] o = out
+    cdef double[::1] s = scratch
+    if n:
+        _solve(&tb.tab, &x[0], &o[0], n, up, &s[0])
+    return out
+
+
+def lo_inv(t, target):
+    """p [mm] with lo(p) = target: :func:`play.lo_inv`."""
+    return _inv(t, target, True)
+
+
+def hi_inv(t, target):
+    """p [mm] with hi(p) = target: :func:`play.hi_inv`."""
+    return _inv(t, target, False)
+
+
+def slope(t, p, side):
+    """d lo/dp or d hi/dp: :func:`play.slope`."""
+    cdef _Table tb = _table(t)
+    cdef const Tab* T = &tb.tab
+    cdef const double[::1] x = _vec(p)
+    cdef const double[::1] sd = _vec(side)
+    cdef Py_ssize_t n = x.shape[0], i, k, lo_i, hi_i, mid
+    out = np.empty(n)
+    cdef double[::1] o = out
+    cdef double v, pi_, w
+    for i in range(n):
+        v = 1.0
+        pi_ = x[i]
+        if T.nb > 1:
+            if pi_ >= T.breaks[0] and pi_ < T.breaks[T.nb - 1]:
+                lo_i = 0
+                hi_i = T.nb - 1  # breaks[lo_i] <= p < breaks[hi_i]
+                while hi_i - lo_i > 1:
+                    mid = (lo_i + hi_i) >> 1
+                    if T.breaks[mid] <= pi_:
+                        lo_i = mid
+                    else:
+                        hi_i = mid
+                v = v + (T.s_lo[lo_i] if sd[i] > 0 else T.s_hi[lo_i])
+            else:
+                v = v + 0.0
+        for k in range(T.nc):
+            w = TWO_PI / T.period[k]
+            v = v + T.amp[k] * w * cos(w * pi_ + T.phase[k])
+        o[i] = v
+    return out
+
+
+def compensate_sided(t, target, side):
+    """Commands pushed from ``side``: :func:`play.compensate_sided`."""
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(target)
+    cdef const double[::1] sd = _vec(side)
+    cdef Py_ssize_t n = x.shape[0], i, nu = 0, nd = 0
+    out = np.empty(n)
+    cdef double[::1] o = out
+    if n == 0:
+        return out
+    gather = np.empty(n)
+    res = np.empty(n)
+    scratch = np.empty(n)
+    cdef double[::1] g = gather
+    cdef double[::1] r = res
+    cdef double[::1] s = scratch
+    # each side solved as one array (the periodic terms' iteration runs until the
+    # whole array has settled, as the reference's)
+    for i in range(n):
+        if sd[i] > 0:
+            g[nu] = x[i]
+            nu += 1
+    if nu:
+        _solve(&tb.tab, &g[0], &r[0], nu, True, &s[0])
+        nu = 0
+        for i in range(n):
+            if sd[i] > 0:
+                o[i] = r[nu]
+                nu += 1
+    for i in range(n):
+        if not sd[i] > 0:
+            g[nd] = x[i]
+            nd += 1
+    if nd:
+        _solve(&tb.tab, &g[0], &r[0], nd, False, &s[0])
+        nd = 0
+        for i in range(n):
+            if not sd[i] > 0:
+                o[i] = r[nd]
+                nd += 1
+    return out
+
+
+def clamp_scan(lo, hi):
+    """The play model's scan: :func:`play.clamp_scan`."""
+    cdef const double[::1] a = _vec(lo)
+    cdef const double[::1] b = _vec(hi)
+    cdef Py_ssize_t n = a.shape[0], i
+    out = np.empty(n)
+    cdef double[::1] o = out
+    cdef double y
+    if n == 0:
+        return out
+    y = a[0]
+    o[0] = y
+    for i in range(1, n):
+        y = _min(_max(y, a[i]), b[i])
+        o[i] = y
+    return out
+
+
+def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
+    """The part along the commands' cubics: :func:`play.follow_stretches`."""
+    cdef _Table tb = _table(t)
+    cdef const Tab* T = &tb.tab
+    cdef const double[::1] y0v = _vec(y0)
+    cdef const double[::1] P0v = _vec(P0)
+    cdef const double[::1] V0v = _vec(V0)
+    cdef const double[::1] Pv = _vec(P)
+    cdef const double[::1] Vv = _vec(V)
+    cdef const double[::1] hv = _vec(dt)
+    cdef const long[::1] st = np.ascontiguousarray(steps, dtype=np.int_)
+    cdef Py_ssize_t n = Pv.shape[0], w = st.shape[0]
+    cdef Py_ssize_t i, j, k, m, nt = 0, ti
+    if int(np.sum(st)) != n or y0v.shape[0] != w or P0v.shape[0] != w or V0v.shape[0] != w:
+        raise ValueError("steps must sum to len(P), and y0, P0, V0 have one value a stretch")
+    if Vv.shape[0] != n or hv.shape[0] != n:
+        raise ValueError("P, V and dt must have one value a step")
+    y_end = np.empty(n)
+    y_min = np.empty(n)
+    y_max = np.empty(n)
+    if n == 0:
+        return y_end, y_min, y_max
+    cdef double[::1] ye = y_end
+    cdef double[::1] ymn = y_min
+    cdef double[::1] ymx = y_max
+    # per step: the command before it and its turning points (0, 1 or 2)
+    Pa_a = np.empty(n)
+    Va_a = np.empty(n)
+    kind_a = np.zeros(n, dtype=np.int8)  # 0: none, 1: one turn, 2: two
+    cdef double[::1] Pa = Pa_a
+    cdef double[::1] Va = Va_a
+    cdef signed char[::1] kind = kind_a
+    S_a = np.empty((n, 2))
+    cdef double[:, ::1] S = S_a
+    cdef double h, hh, d, a, b, c, disc, sq, r1, r2
+    cdef bint ok1, ok2
+    i = 0
+    for j in range(w):
+        for k in range(st[j]):
+            if k == 0:
+                Pa[i] = P0v[j]
+                Va[i] = V0v[j]
+            else:
+                Pa[i] = Pv[i - 1]
+                Va[i] = Vv[i - 1]
+            i += 1
+    for i in range(n):
+        h = hv[i]
+        hh = h if h > 0 else INFINITY
+        d = (Pa[i] - Pv[i]) / hh
+        a = 6.0 * d + 3.0 * (Va[i] + Vv[i])
+        b = -6.0 * d - 4.0 * Va[i] - 2.0 * Vv[i]
+        c = Va[i]
+        disc = b * b - 4.0 * a * c
+        sq = sqrt(_max(disc, 0.0))
+        if fabs(a) > 1e-300:
+            r1 = (-b - sq) / (2 * a)
+            r2 = (-b + sq) / (2 * a)
+        else:
+            r1 = -c / b if b != 0 else -1.0
+            r2 = -1.0
+        ok1 = disc >= 0 and r1 > 0 and r1 < 1 and h > 0 and cubic
+        ok2 = disc >= 0 and r2 > 0 and r2 < 1 and h > 0 and fabs(r2 - r1) > 0 and cubic
+        if ok1 and ok2:
+            S[nt, 0] = _min(r1, r2)
+            S[nt, 1] = _max(r1, r2)
+            kind[i] = 2
+            nt += 1
+        elif ok1 or ok2:
+            S[nt, 0] = r1 if ok1 else r2
+            S[nt, 1] = NAN
+            kind[i] = 1
+            nt += 1
+    # s**3 as the reference takes it: numpy's power over the (turns, 2) array
+    cdef double[:, ::1] S3
+    if nt:
+        S3 = np.ascontiguousarray(S_a[:nt]) ** 3
+    cdef double s, s2, s3, h00, h10, h01, h11, x, y = 0.0, lo_x, hi_x, mn, mx
+    cdef bint started = False
+    i = 0
+    ti = 0
+    for j in range(w):
+        for k in range(st[j]):
+            if k == 0:
+                # the stretch opens where its part stands
+                y = y0v[j] if not started else _min(_max(y, y0v[j]), y0v[j])
+                started = True
+            mn = INFINITY
+            mx = -INFINITY
+            for m in range(kind[i] + 1):
+                if m < kind[i]:
+                    s = S[ti, m]
+                    s3 = S3[ti, m]
+                    s2 = s * s
+                    h00 = 2 * s3 - 3 * s2 + 1
+                    h10 = s3 - 2 * s2 + s
+                    h01 = -2 * s3 + 3 * s2
+                    h11 = s3 - s2
+                    h = hv[i]
+                    x = h00 * Pa[i] + h10 * (h * Va[i]) + h01 * Pv[i] + h11 * (h * Vv[i])
+                else:
+                    x = Pv[i]
+                lo_x = _lo(T, x)
+                hi_x = _hi(T, x)
+                y = _min(_max(y, lo_x), hi_x)
+                mn = _min(mn, y)  # numpy's reduce: a NaN wins
+                mx = _max(mx, y)
+            if kind[i]:
+                ti += 1
+            ye[i] = y
+            ymn[i] = mn
+            ymx[i] = mx
+            i += 1
+    return y_end, y_min, y_max

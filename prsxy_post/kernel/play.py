@@ -1,0 +1,295 @@
+"""The real-axis play model over arrays: one motor's table as a flat record, its
+lo/hi envelopes, their inverses and slopes, the clamp scan, and the part followed
+along the cubics a controller runs through commands.
+
+This is the numpy reference; ``_play.pyx`` is its compiled twin (the same operations
+in the same order, so the two agree to the bit). The contract's model, for forward
+errors F(p) and reverse errors R(p) of a motor (linear between table points, end
+values held outside) and periodic terms c(p) = Σ a sin(2π p / L + φ):
+
+    lo(p) = p + min(F(p), R(p)) + c(p),   hi(p) = p + max(F(p), R(p)) + c(p)
+    y_0 = lo(p_0),   y_k = min(max(y_(k−1), lo(p_k)), hi(p_k))
+
+The sine and cosine of the periodic terms are the C library's (:mod:`.libm`), as the
+compiled twin's; ``s**3`` of a turning point's fraction is numpy's power, which the
+twin calls too (on this machine it differs from the C library's pow in the last bit).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from . import libm
+
+
+class PlayTable(NamedTuple):
+    """One motor's play model, flattened once (``axiscomp.MotorTable.flat``).
+
+    breaks : (b,) ascending positions [mm] between which lo_err and hi_err are linear
+    lo_err, hi_err : (b,) min(F, R) and max(F, R) at the breaks [mm]
+    lo_vals, hi_vals : (b,) breaks + lo_err, breaks + hi_err: the inverses' abscissae
+        (strictly increasing: the profile rejects slopes <= −0.5)
+    s_lo, s_hi : (b − 1,) the slopes of lo_err and hi_err between the breaks
+    amp, period, phase : (c,) the periodic terms [mm, mm, rad]
+    """
+
+    breaks: np.ndarray
+    lo_err: np.ndarray
+    hi_err: np.ndarray
+    lo_vals: np.ndarray
+    hi_vals: np.ndarray
+    s_lo: np.ndarray
+    s_hi: np.ndarray
+    amp: np.ndarray
+    period: np.ndarray
+    phase: np.ndarray
+
+
+def play_table(
+    breaks: np.ndarray,
+    lo_err: np.ndarray,
+    hi_err: np.ndarray,
+    cyclic: tuple[tuple[float, float, float], ...] = (),
+) -> PlayTable:
+    """The flat record of a motor's envelopes and its periodic terms (amplitude mm,
+    period mm, phase deg)."""
+    b = np.ascontiguousarray(breaks, dtype=float)
+    lo = np.ascontiguousarray(lo_err, dtype=float)
+    hi = np.ascontiguousarray(hi_err, dtype=float)
+    db = np.diff(b)
+    terms = np.array(cyclic, dtype=float).reshape(-1, 3)
+    return PlayTable(
+        b,
+        lo,
+        hi,
+        b + lo,
+        b + hi,
+        np.diff(lo) / db,
+        np.diff(hi) / db,
+        np.ascontiguousarray(terms[:, 0]),
+        np.ascontiguousarray(terms[:, 1]),
+        np.array([float(np.radians(ph)) for ph in terms[:, 2].tolist()]),
+    )
+
+
+def cyclic(t: PlayTable, p: np.ndarray) -> np.ndarray | float:
+    """c(p) [mm] at positions ``p`` [mm] (0.0 without terms): Σ a sin(2π p / L + φ)."""
+    out: np.ndarray | float = 0.0
+    for a, per, ph in zip(t.amp.tolist(), t.period.tolist(), t.phase.tolist(), strict=True):
+        out = out + a * libm.sin(2 * np.pi * p / per + ph)
+    return out
+
+
+def lo(t: PlayTable, p: np.ndarray) -> np.ndarray:
+    """lo(p) [mm]: where the part ends when approached moving + (forward error)."""
+    out: np.ndarray = p + np.interp(p, t.breaks, t.lo_err) + cyclic(t, p)
+    return out
+
+
+def hi(t: PlayTable, p: np.ndarray) -> np.ndarray:
+    """hi(p) [mm]: where the part ends when approached moving − (reverse error)."""
+    out: np.ndarray = p + np.interp(p, t.breaks, t.hi_err) + cyclic(t, p)
+    return out
+
+
+def _invert(
+    target: np.ndarray, vals: np.ndarray, breaks: np.ndarray, err: np.ndarray
+) -> np.ndarray:
+    """p with p + err(p) = target for the piecewise-linear err alone (``vals`` =
+    breaks + err, strictly increasing); end values held outside."""
+    out = np.interp(target, vals, breaks)
+    below = target < vals[0]
+    above = target > vals[-1]
+    out[below] = target[below] - err[0]
+    out[above] = target[above] - err[-1]
+    return out
+
+
+def _solve(t: PlayTable, target: np.ndarray, vals: np.ndarray, err: np.ndarray) -> np.ndarray:
+    p = _invert(target, vals, t.breaks, err)
+    if len(t.amp):
+        # p = inv(T − c(p)): a contraction while |c'| ≪ 1 (µm over mm); the whole
+        # array iterates until its largest change is below 1e-13 mm
+        for _ in range(30):
+            p_new = _invert(target - cyclic(t, p), vals, t.breaks, err)
+            if np.max(np.abs(p_new - p), initial=0.0) < 1e-13:
+                p = p_new
+                break
+            p = p_new
+    return p
+
+
+def lo_inv(t: PlayTable, target: np.ndarray) -> np.ndarray:
+    """p [mm] with lo(p) = target [mm]."""
+    return _solve(t, target, t.lo_vals, t.lo_err)
+
+
+def hi_inv(t: PlayTable, target: np.ndarray) -> np.ndarray:
+    """p [mm] with hi(p) = target [mm]."""
+    return _solve(t, target, t.hi_vals, t.hi_err)
+
+
+def slope(t: PlayTable, p: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """d lo/dp (side > 0) or d hi/dp (side ≤ 0) at ``p`` (n,) [mm]: the slope of the
+    table's interval holding p (the one above it at a break), zero outside the
+    table, plus the periodic terms' a (2π/L) cos(2π p / L + φ)."""
+    out = np.ones_like(p)
+    nb = len(t.breaks)
+    if nb > 1:
+        i = np.clip(np.searchsorted(t.breaks, p, side="right") - 1, 0, nb - 2)
+        inside = (p >= t.breaks[0]) & (p < t.breaks[-1])
+        out = out + np.where(inside, np.where(side > 0, t.s_lo[i], t.s_hi[i]), 0.0)
+    for a, per, ph in zip(t.amp.tolist(), t.period.tolist(), t.phase.tolist(), strict=True):
+        w = 2 * np.pi / per
+        out = out + a * w * libm.cos(w * p + ph)
+    return out
+
+
+def compensate_sided(t: PlayTable, target: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """Commands [mm] whose result is ``target`` (n,) [mm] with the part pushed from
+    ``side`` (n,) (> 0: lo⁻¹, else hi⁻¹); each side solved as one array."""
+    up = side > 0
+    out = np.empty_like(target)
+    if np.any(up):
+        out[up] = lo_inv(t, target[up])
+    if not np.all(up):
+        out[~up] = hi_inv(t, target[~up])
+    return out
+
+
+def clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The play model y_0 = lo_0, y_k = min(max(y_(k−1), lo_k), hi_k) for (n,)
+    envelopes.
+
+    Clamps compose into clamps: clamp(clamp(y, a1, b1), a2, b2) =
+    clamp(y, clamp(a1, a2, b2), clamp(b1, a2, b2)), so the model is an associative
+    scan, done here in log2(n) vectorised doubling steps (every value is one of
+    the inputs: the sequential loop of the compiled twin gives the same bits).
+    """
+    a = lo.copy()
+    b = hi.copy()
+    n = len(a)
+    off = 1
+    while off < n:
+        lo_k, hi_k = a[off:], b[off:]
+        a_new = np.minimum(np.maximum(a[:-off], lo_k), hi_k)
+        b_new = np.minimum(np.maximum(b[:-off], lo_k), hi_k)
+        a[off:] = a_new
+        b[off:] = b_new
+        off *= 2
+    return a
+
+
+def velocity_quadratic(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(a, b, c) of the Hermite cubic's velocity a s² + b s + c in s = t / h:
+    c = V0, a = 6 (P0 − P1)/h + 3 (V0 + V1), b = −6 (P0 − P1)/h − 4 V0 − 2 V1.
+    """
+    d = (P0 - P1) / h
+    return 6.0 * d + 3.0 * (V0 + V1), -6.0 * d - 4.0 * V0 - 2.0 * V1, V0
+
+
+def hermite(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray, s: np.ndarray
+) -> np.ndarray:
+    """The cubic through (P0, V0) and (P1, V1) over time h (n,) at fractions s (n, k)
+    of each step: (n, k) positions."""
+    h00 = 2 * s**3 - 3 * s**2 + 1
+    h10 = s**3 - 2 * s**2 + s
+    h01 = -2 * s**3 + 3 * s**2
+    h11 = s**3 - s**2
+    out: np.ndarray = (
+        h00 * P0[:, None] + h10 * (h * V0)[:, None] + h01 * P1[:, None] + h11 * (h * V1)[:, None]
+    )
+    return out
+
+
+def follow_stretches(
+    t: PlayTable,
+    y0: np.ndarray,
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    dt: np.ndarray,
+    steps: np.ndarray,
+    cubic: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where a motor's driven part is along the cubics (``cubic``) or straight lines
+    a controller runs through commands, over stretches of steps, each from where its
+    part stands at its start (the play model's scan starts again at each).
+
+    The play model is rate-independent: its result after a monotone stretch of
+    commands depends only on where the stretch ends. So the command's cubic in each
+    step is taken at its turning points (the roots of its velocity, a quadratic)
+    and its end, and the result is exact, with one to three samples a step.
+
+    Parameters
+    ----------
+    t : the motor's table
+    y0, P0, V0 : (w,) where each stretch's part stands at its start, and the
+        command's position and velocity there [mm, mm, mm/s]
+    P, V, dt : (k,) the commands and durations of the stretches' steps, stretch
+        after stretch [mm, mm/s, s]
+    steps : (w,) how many steps each stretch has (summing to k)
+
+    Returns
+    -------
+    y_end : (k,) the part at each point
+    y_min, y_max : (k,) the least and greatest position of the part within each
+        step (its end included)
+    """
+    n = len(P)
+    first = (np.cumsum(steps) - steps)[steps > 0]
+    opening = np.zeros(n, dtype=np.int64)
+    opening[first] = 1
+    Pa = np.concatenate([[0.0], P[:-1]])
+    Va = np.concatenate([[0.0], V[:-1]])
+    Pa[first], Va[first] = P0[steps > 0], V0[steps > 0]
+    h = dt
+    # a step of no time (a standing point's twin) has no cubic: h = ∞ makes it flat
+    a, b, c = velocity_quadratic(Pa, Va, P, V, np.where(h > 0, h, np.inf))
+    disc = b * b - 4.0 * a * c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sq = np.sqrt(np.maximum(disc, 0.0))
+        r1 = np.where(np.abs(a) > 1e-300, (-b - sq) / (2 * a), np.where(b != 0, -c / b, -1.0))
+        r2 = np.where(np.abs(a) > 1e-300, (-b + sq) / (2 * a), -1.0)
+    ok1 = (disc >= 0) & (r1 > 0) & (r1 < 1) & (h > 0) & cubic
+    ok2 = (disc >= 0) & (r2 > 0) & (r2 < 1) & (h > 0) & (np.abs(r2 - r1) > 0) & cubic
+    # samples of each step in time order: its turning points, then its end. Most
+    # steps have none, so the cubic is evaluated only where it turns (the end of a
+    # step is its point, P). Each stretch opens with one more: where its part
+    # stands (lo = hi = y0: the scan is clamped to it, whatever came before).
+    count = 1 + opening + ok1 + ok2
+    last_of = np.cumsum(count) - 1
+    flat = np.empty(int(last_of[-1]) + 1 if n else 0)
+    flat[last_of] = P
+    turns = np.flatnonzero(ok1 | ok2)
+    if turns.size:
+        a1, a2 = ok1[turns], ok2[turns]
+        q1, q2 = r1[turns], r2[turns]
+        early = np.where(a1 & a2, np.minimum(q1, q2), np.where(a1, q1, q2))
+        late = np.where(a1 & a2, np.maximum(q1, q2), np.nan)
+        cmd = hermite(
+            Pa[turns], Va[turns], P[turns], V[turns], h[turns], np.column_stack([early, late])
+        )
+        at = (last_of - count + 1 + opening)[turns]
+        flat[at] = cmd[:, 0]
+        two = a1 & a2
+        flat[at[two] + 1] = cmd[two, 1]
+    y_lo = lo(t, flat)
+    y_hi = hi(t, flat)
+    opens = (last_of - count + 1)[first]
+    y_lo[opens] = y_hi[opens] = y0[steps > 0]
+    y = clamp_scan(y_lo, y_hi)
+    # each step's samples, a stretch's opening one counted as its first step's
+    # next (so that it is no extreme of that step)
+    bounds = last_of - count + 1
+    inside = y.copy()
+    inside[opens] = y[opens + 1]
+    if not n:
+        return y, y.copy(), y.copy()
+    return y[last_of], np.minimum.reduceat(inside, bounds), np.maximum.reduceat(inside, bounds)
