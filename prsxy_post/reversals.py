@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernel
-from .kernel.play import PlayTable
+from .kernel.play import PlayTable, ranges
 from .kernel.play import hermite as _hermite
 from .kernel.play import velocity_quadratic as _velocity_quadratic
 
@@ -120,12 +120,6 @@ CORNER_TURN_MM = 1e-6
 #: path tolerance alone, a 1 ms window about a head motor's reversal on a tilting
 #: line at F400 ran 1.0010 x F (test_controller_truth's found programs).
 CROSSING_SPEED_SHARE = 5e-4
-
-
-def ranges(first: np.ndarray, length: np.ndarray) -> np.ndarray:
-    """The indices first[i], first[i] + 1, … (length[i] of them) of every range, one
-    after another: one array for all the ranges, without a loop."""
-    return np.repeat(first - np.cumsum(length) + length, length) + np.arange(int(length.sum()))
 
 
 def signs(V: np.ndarray) -> np.ndarray:
@@ -1452,144 +1446,7 @@ def catch_up(
         where ``stop`` is the chunk's length at its last point, carried into the
         next chunk [mm]
     """
-    n = len(s_path)
-    ahead_way = (off0 * way > 0) & (motion is not None)
-    off0 = np.where((off0 * way < 0) | ahead_way, off0, 0.0)
-    if n == 0:
-        none = np.zeros(0)
-        return none.astype(int), none, none, off0
-    first = start + 1
-    s0 = np.where(start >= 0, s_path[np.maximum(start, 0)], 0.0)
-    # the last point whose command carries the offset: the next crossing's start,
-    # or the chunk's last point
-    last = np.where(stop < n, stop, n - 1)
-    rate = _catch_up_rates(off0, start, stop, last, s0, s_path, share)
-    # the points up to where the offset is gone; a part ahead: where it is gone
-    # depends on the motor's moves too (below)
-    gone = np.searchsorted(s_path, s0 + np.abs(off0) / rate, "left")
-    end = np.where(ahead_way, last + 1, np.minimum(last + 1, gone))
-    length = np.maximum(end - first, 0)
-    idx = ranges(first, length)
-    run = s_path[idx] - np.repeat(s0, length)
-    mag = np.maximum(np.repeat(np.abs(off0), length) - np.repeat(rate, length) * run, 0.0)
-    steep_motor = np.full(len(idx), np.inf)
-    if motion is not None and np.any(ahead_way):
-        mag, steep_motor = _taken_up_ahead(
-            off0, way, ahead_way, rate, idx, length, mag, s_path, motion
-        )
-    off = np.copysign(mag, np.repeat(off0, length))
-    left = _left_at_last(off0, start, last, s0, rate, s_path, ahead_way, length, mag)
-    keep = mag > 0
-    slope = _catch_up_slopes(idx, off, mag, np.repeat(rate, length), steep_motor, s_path)
-    return idx[keep], off[keep], slope[keep], left
-
-
-def _catch_up_rates(
-    off0: np.ndarray,
-    start: np.ndarray,
-    stop: np.ndarray,
-    last: np.ndarray,
-    s0: np.ndarray,
-    s_path: np.ndarray,
-    share: float,
-) -> np.ndarray:
-    """The rate (m,) [mm of offset per mm of path] at which each offset ``off0``
-    (m,) [mm] is taken up after the crossing ending at ``start`` (path length
-    ``s0`` there [mm]): ``share``, or up to CATCH_UP_HURRY times it where that has
-    it gone by the point ``last`` before the next crossing (``stop`` < n)."""
-    n = len(s_path)
-    # a little faster where that has it gone by the next crossing
-    room = np.where((stop < n) & (last > start), s_path[last] - s0, 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        need = np.where(room > 0, np.abs(off0) / room, np.inf)
-    return np.where(need <= CATCH_UP_HURRY * share, np.maximum(need, share), share)
-
-
-def _taken_up_ahead(
-    off0: np.ndarray,
-    way: np.ndarray,
-    ahead_way: np.ndarray,
-    rate: np.ndarray,
-    idx: np.ndarray,
-    length: np.ndarray,
-    mag: np.ndarray,
-    s_path: np.ndarray,
-    motion: tuple[np.ndarray, np.ndarray, np.ndarray],
-) -> tuple[np.ndarray, np.ndarray]:
-    """The offsets' magnitudes (k,) [mm] at the points ``idx`` (k,) of the
-    crossings (``length`` (m,) points each), those of parts ahead of their motor's
-    way (``ahead_way`` (m,)) taken up at ``rate`` (m,) but over no step by more
-    than half the motor's own move its way; and for those points the steepest
-    d off / d s that keeps (half the motor's velocity its way over the path
-    speed), inf elsewhere. ``motion`` as :func:`catch_up`'s."""
-    dP, V, speed = motion
-    which = np.repeat(np.arange(len(off0)), length)
-    mine = ahead_way[which]
-    # the step into each point takes the share of its path, or half the
-    # motor's move its way, whichever is less
-    ds = s_path[idx] - np.where(idx >= 1, s_path[np.maximum(idx - 1, 0)], 0.0)
-    w = way[which]
-    take = np.where(mine, np.minimum(rate[which] * ds, np.maximum(0.5 * w * dP[idx], 0.0)), 0.0)
-    # the cumulative take within each range: less what the ranges before took
-    cum = np.concatenate([[0.0], np.cumsum(take)])
-    before = np.repeat(cum[np.cumsum(length) - length], length)
-    mag = np.where(mine, np.maximum(np.abs(off0)[which] - (cum[1:] - before), 0.0), mag)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        steep_motor = np.where(
-            mine & (speed[idx] > 0),
-            np.maximum(0.5 * w * V[idx], 0.0) / speed[idx],
-            np.inf,
-        )
-    return mag, steep_motor
-
-
-def _left_at_last(
-    off0: np.ndarray,
-    start: np.ndarray,
-    last: np.ndarray,
-    s0: np.ndarray,
-    rate: np.ndarray,
-    s_path: np.ndarray,
-    ahead_way: np.ndarray,
-    length: np.ndarray,
-    mag: np.ndarray,
-) -> np.ndarray:
-    """The offset (m,) [mm] each crossing leaves at its ``last`` point: of
-    ``off0`` (m,), taken up at ``rate`` (m,) from the path length ``s0`` (m,) at
-    its ``start``; for a part ahead of its motor's way, the magnitude its range's
-    last point keeps (``mag``, ``length`` points a crossing)."""
-    # left at the last point: a part behind by the closed form (all of it where
-    # there is no point to take it), a part ahead what its range's last point keeps
-    s_last = np.where(last > start, s_path[np.maximum(last, 0)], s0)
-    left_mag = np.maximum(np.abs(off0) - rate * (s_last - s0), 0.0)
-    if np.any(ahead_way):
-        last_of = np.maximum(np.cumsum(length) - 1, 0)
-        kept = mag[last_of] if len(mag) else np.zeros(len(off0))
-        left_mag = np.where(ahead_way, np.where(length > 0, kept, np.abs(off0)), left_mag)
-    return np.copysign(left_mag, off0)
-
-
-def _catch_up_slopes(
-    idx: np.ndarray,
-    off: np.ndarray,
-    mag: np.ndarray,
-    rate: np.ndarray,
-    steep_motor: np.ndarray,
-    s_path: np.ndarray,
-) -> np.ndarray:
-    """d off / d s (k,) at the points ``idx`` (k,) with offsets ``off`` (k,) [mm]
-    (magnitudes ``mag``), taken up at ``rate`` (k,) [mm/mm] and no steeper than
-    ``steep_motor`` (k,)."""
-    n = len(s_path)
-    # its slope at each point: over the step after it (a last bit of offset gone
-    # early in that step gives the point a velocity to match, not the whole rate),
-    # and for a part ahead no more than half its motor's velocity its way
-    nxt = np.minimum(idx + 1, n - 1)
-    ahead = np.where(idx + 1 < n, s_path[nxt] - s_path[idx], np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        steep = np.minimum(rate, np.where(ahead > 0, mag / ahead, np.inf))
-    steep = np.minimum(steep, steep_motor)
-    return -np.sign(off) * steep
+    return kernel.catch_up(off0, way, start, stop, s_path, share, CATCH_UP_HURRY, motion)
 
 
 class Crossings(NamedTuple):

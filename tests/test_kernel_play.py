@@ -36,6 +36,7 @@ ENTRIES = {
     "_compensate_sided": play.compensate_sided,
     "_clamp_scan": play.clamp_scan,
     "_follow_stretches": play.follow_stretches,
+    "_catch_up": play.catch_up,
 }
 
 
@@ -55,6 +56,7 @@ RECORDED = {
     "_play_slope": 10,
     "_compensate_sided": 10,
     "_follow_stretches": 10,
+    "_catch_up": 3,
 }
 
 
@@ -66,6 +68,8 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
     for args in calls:
         want = ENTRIES[attr](*args)
         got = getattr(_play, attr.removeprefix("_play_").removeprefix("_"))(*args)
+        if attr == "_catch_up":
+            assert got[0].dtype == want[0].dtype
         assert _same(got, want), f"{attr}: compiled and reference differ"
 
 
@@ -162,6 +166,44 @@ def test_generated_follows_are_bit_identical(
     got = _play.follow_stretches(t, y0, P0, V0, P, V, dt, st_, cubic)
     want = play.follow_stretches(t, y0, P0, V0, P, V, dt, st_, cubic)
     assert _same(got, want)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.integers(0, 60),
+    st.lists(st.integers(-1, 59), max_size=6, unique=True),
+    st.integers(0, 2**32 - 1),
+    st.booleans(),
+    st.sampled_from([5e-5, 1e-3, 0.5]),
+)
+def test_generated_catch_ups_are_bit_identical(
+    n: int, starts: list[int], seed: int, with_motion: bool, share: float
+) -> None:
+    """Crossings ending anywhere in a chunk (at the point before it too), offsets
+    behind and ahead of their motor's way, paths that stand (equal lengths) and
+    run, with and without the motor's motion, slow and fast rates."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    start = np.array(sorted(x for x in starts if x < n), dtype=int)
+    m = len(start)
+    stop = np.append(start[1:], n).astype(int)
+    stop = np.where(rng.random(m) < 0.3, n, stop)  # some go on into the next chunk
+    s_path = np.cumsum(np.where(rng.random(n) < 0.2, 0.0, rng.uniform(0, 0.5, n)))
+    off0 = rng.normal(0, 1e-4, m) * np.where(rng.random(m) < 0.2, 0.0, 1.0)
+    way = rng.choice([-1, 1], m)
+    motion = (
+        (
+            rng.normal(0, 0.01, n),
+            rng.normal(0, 5, n),
+            np.abs(rng.normal(0, 5, n)) * (rng.random(n) > 0.1),
+        )
+        if with_motion
+        else None
+    )
+    got = _play.catch_up(off0, way, start, stop, s_path, share, 2.0, motion)
+    want = play.catch_up(off0, way, start, stop, s_path, share, 2.0, motion)
+    assert _same(got, want)
+    assert got[0].dtype == want[0].dtype
 
 
 def test_the_twin_turns_where_the_reference_does() -> None:

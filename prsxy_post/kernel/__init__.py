@@ -160,3 +160,24 @@ def follow_stretches(
         t, y0, P0, V0, P, V, dt, steps, cubic
     )
     return out
+
+
+_catch_up = _play_kernel.catch_up
+
+
+def catch_up(
+    off0: np.ndarray,
+    way: np.ndarray,
+    start: np.ndarray,
+    stop: np.ndarray,
+    s_path: np.ndarray,
+    share: float,
+    hurry: float,
+    motion: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The offsets taken up after crossings: :func:`play.catch_up`, compiled when
+    :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _catch_up(
+        off0, way, start, stop, s_path, share, hurry, motion
+    )
+    return out

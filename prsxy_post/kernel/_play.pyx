@@ -14,7 +14,7 @@ and cos, as the reference does through :mod:`math`. Compiled with -O2
 
 import numpy as np
 
-from libc.math cimport sin, cos, sqrt, fabs, INFINITY, NAN, M_PI
+from libc.math cimport sin, cos, sqrt, fabs, copysign, INFINITY, NAN, M_PI
 
 cdef double TWO_PI = 2 * M_PI
 
@@ -43,20 +43,24 @@ cdef inline double _min(double a, double b) noexcept nogil:
     return a if (a <= b or a != a) else b
 
 
-cdef inline double _interp(double x, const double* xp, const double* fp, Py_ssize_t n) noexcept nogil:
-    """numpy's interp (compiled_base.c, arr_interp) at one x, end values held."""
-    cdef Py_ssize_t lo, hi, mid, j
-    cdef double slope, r
-    if n == 1:
-        return fp[0]
-    if x != x:
-        return x
+cdef inline Py_ssize_t _find(double x, const double* xp, Py_ssize_t n, Py_ssize_t g) noexcept nogil:
+    """numpy's binary_search_with_guess for x (not NaN) in xp (n >= 2, strictly
+    increasing): −1 below, n above, n − 1 at its last value, else the j with
+    xp[j] <= x < xp[j + 1] (unique, however found: the guess g first)."""
+    cdef Py_ssize_t lo, hi, mid
     if x < xp[0]:
-        return fp[0]
+        return -1
     if x > xp[n - 1]:
-        return fp[n - 1]
+        return n
     if x == xp[n - 1]:
-        return fp[n - 1]
+        return n - 1
+    if 0 <= g < n - 1 and xp[g] <= x:
+        if x < xp[g + 1]:
+            return g
+        if g + 2 < n and x < xp[g + 2]:
+            return g + 1
+    elif 1 <= g < n and xp[g - 1] <= x:
+        return g - 1  # x < xp[g] here
     lo = 0
     hi = n - 1  # xp[lo] <= x < xp[hi]
     while hi - lo > 1:
@@ -65,7 +69,18 @@ cdef inline double _interp(double x, const double* xp, const double* fp, Py_ssiz
             lo = mid
         else:
             hi = mid
-    j = lo
+    return lo
+
+
+cdef inline double _at(double x, Py_ssize_t j, const double* xp, const double* fp,
+                       Py_ssize_t n) noexcept nogil:
+    """numpy's interp (compiled_base.c, arr_interp) at x (not NaN) in the interval
+    j of :func:`_find`, end values held."""
+    cdef double slope, r
+    if j == -1:
+        return fp[0]
+    if j >= n - 1:
+        return fp[n - 1]
     if xp[j] == x:
         return fp[j]
     slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
@@ -75,6 +90,15 @@ cdef inline double _interp(double x, const double* xp, const double* fp, Py_ssiz
         if r != r and fp[j] == fp[j + 1]:
             r = fp[j]
     return r
+
+
+cdef inline double _interp(double x, const double* xp, const double* fp, Py_ssize_t n) noexcept nogil:
+    """numpy's interp at one x."""
+    if n == 1:
+        return fp[0]
+    if x != x:
+        return x
+    return _at(x, _find(x, xp, n, -1), xp, fp, n)
 
 
 cdef inline double _cyc(const Tab* t, double p) noexcept nogil:
@@ -91,6 +115,25 @@ cdef inline double _lo(const Tab* t, double p) noexcept nogil:
 
 cdef inline double _hi(const Tab* t, double p) noexcept nogil:
     return p + _interp(p, t.breaks, t.hi_err, t.nb) + _cyc(t, p)
+
+
+cdef inline Py_ssize_t _lo_hi(const Tab* t, double p, double* lo, double* hi,
+                             Py_ssize_t g) noexcept nogil:
+    """lo(p) and hi(p) (as :func:`_lo`, :func:`_hi`) on one search of the breaks,
+    from the guess g; returns the interval found."""
+    cdef double c = _cyc(t, p)
+    cdef Py_ssize_t j = g
+    if t.nb == 1:
+        lo[0] = p + t.lo_err[0] + c
+        hi[0] = p + t.hi_err[0] + c
+    elif p != p:
+        lo[0] = p + p + c
+        hi[0] = lo[0]
+    else:
+        j = _find(p, t.breaks, t.nb, g)
+        lo[0] = p + _at(p, j, t.breaks, t.lo_err, t.nb) + c
+        hi[0] = p + _at(p, j, t.breaks, t.hi_err, t.nb) + c
+    return j
 
 
 cdef inline double _invert(double x, const double* vals, const double* breaks,
@@ -382,6 +425,7 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
         S3 = np.ascontiguousarray(S_a[:nt]) ** 3
     cdef double s, s2, s3, h00, h10, h01, h11, x, y = 0.0, lo_x, hi_x, mn, mx
     cdef bint started = False
+    cdef Py_ssize_t g = -1
     i = 0
     ti = 0
     for j in range(w):
@@ -405,8 +449,7 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
                     x = h00 * Pa[i] + h10 * (h * Va[i]) + h01 * Pv[i] + h11 * (h * Vv[i])
                 else:
                     x = Pv[i]
-                lo_x = _lo(T, x)
-                hi_x = _hi(T, x)
+                g = _lo_hi(T, x, &lo_x, &hi_x, g)
                 y = _min(_max(y, lo_x), hi_x)
                 mn = _min(mn, y)  # numpy's reduce: a NaN wins
                 mx = _max(mx, y)
@@ -417,3 +460,156 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
             ymx[i] = mx
             i += 1
     return y_end, y_min, y_max
+
+
+cdef inline bint _lt(double a, double b) noexcept nogil:
+    # numpy's sort order (NaN last), as searchsorted compares
+    return a < b or (b != b and a == a)
+
+
+cdef inline double _sign(double x) noexcept nogil:
+    if x > 0:
+        return 1.0
+    if x < 0:
+        return -1.0
+    if x == 0:
+        return 0.0
+    return x
+
+
+def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=None):
+    """The offsets taken up after crossings: :func:`play.catch_up`."""
+    cdef const double[::1] o0 = _vec(off0)
+    cdef const double[::1] wy = _vec(way)
+    cdef const long[::1] st = np.ascontiguousarray(start, dtype=np.int_)
+    cdef const long[::1] sp = np.ascontiguousarray(stop, dtype=np.int_)
+    cdef const double[::1] s = _vec(s_path)
+    cdef Py_ssize_t m = o0.shape[0], n = s.shape[0], i, j, k, K, lo_, hi_, mid
+    cdef bint has_motion = motion is not None
+    cdef const double[::1] dP
+    cdef const double[::1] Vm
+    cdef const double[::1] speed
+    if has_motion:
+        dP = _vec(motion[0])
+        Vm = _vec(motion[1])
+        speed = _vec(motion[2])
+    off_a = np.empty(m)
+    ahead_a = np.zeros(m, dtype=np.int8)
+    cdef double[::1] off = off_a
+    cdef signed char[::1] ahead = ahead_a
+    cdef bint any_ahead = False
+    cdef double x
+    for i in range(m):
+        x = o0[i] * wy[i]
+        ahead[i] = x > 0 and has_motion
+        any_ahead = any_ahead or ahead[i]
+        off[i] = o0[i] if (x < 0 or ahead[i]) else 0.0
+    if n == 0:
+        none = np.zeros(0)
+        return none.astype(int), none, none, off_a
+    s0_a = np.empty(m)
+    rate_a = np.empty(m)
+    last_a = np.empty(m, dtype=np.int_)
+    len_a = np.empty(m, dtype=np.int_)
+    cdef double[::1] s0 = s0_a
+    cdef double[::1] rate = rate_a
+    cdef long[::1] last = last_a
+    cdef long[::1] length = len_a
+    cdef double room, need, key, mag0
+    cdef long gone, end, first
+    K = 0
+    for i in range(m):
+        s0[i] = s[st[i] if st[i] > 0 else 0] if st[i] >= 0 else 0.0
+        last[i] = sp[i] if sp[i] < n else n - 1
+        # _catch_up_rates
+        room = s[last[i]] - s0[i] if (sp[i] < n and last[i] > st[i]) else 0.0
+        need = fabs(off[i]) / room if room > 0 else INFINITY
+        rate[i] = _max(need, share) if need <= hurry * share else share
+        # the first point where the path has run the offset off: searchsorted left
+        key = s0[i] + fabs(off[i]) / rate[i]
+        lo_ = 0
+        hi_ = n
+        while lo_ < hi_:
+            mid = (lo_ + hi_) >> 1
+            if _lt(s[mid], key):
+                lo_ = mid + 1
+            else:
+                hi_ = mid
+        gone = lo_
+        end = last[i] + 1 if ahead[i] else (last[i] + 1 if last[i] + 1 < gone else gone)
+        first = st[i] + 1
+        length[i] = end - first if end - first > 0 else 0
+        K += length[i]
+    idx_a = np.empty(K, dtype=np.int_)
+    mag_a = np.empty(K)
+    steep_a = np.full(K, INFINITY)
+    cdef long[::1] idx = idx_a
+    cdef double[::1] mag = mag_a
+    cdef double[::1] steep_motor = steep_a
+    k = 0
+    for i in range(m):
+        mag0 = fabs(off[i])
+        for j in range(length[i]):
+            idx[k] = st[i] + 1 + j
+            mag[k] = _max(mag0 - rate[i] * (s[idx[k]] - s0[i]), 0.0)
+            k += 1
+    cdef double cum = 0.0, before, ds, take, w, sv
+    if has_motion and any_ahead:
+        # _taken_up_ahead: the take summed over every crossing's points in one
+        # running sum, each range's sum less the sum before it (as the reference)
+        k = 0
+        for i in range(m):
+            before = cum
+            w = wy[i]
+            for j in range(length[i]):
+                if ahead[i]:
+                    ds = s[idx[k]] - (s[idx[k] - 1] if idx[k] >= 1 else 0.0)
+                    take = _min(rate[i] * ds, _max(0.5 * w * dP[idx[k]], 0.0))
+                else:
+                    take = 0.0
+                cum = cum + take
+                if ahead[i]:
+                    mag[k] = _max(fabs(off[i]) - (cum - before), 0.0)
+                    sv = speed[idx[k]]
+                    if sv > 0:
+                        steep_motor[k] = _max(0.5 * w * Vm[idx[k]], 0.0) / sv
+                k += 1
+    # _left_at_last
+    left_a = np.empty(m)
+    cdef double[::1] left = left_a
+    cdef double s_last, lm
+    k = 0
+    for i in range(m):
+        s_last = s[last[i] if last[i] > 0 else 0] if last[i] > st[i] else s0[i]
+        lm = _max(fabs(off[i]) - rate[i] * (s_last - s0[i]), 0.0)
+        k += length[i]
+        if any_ahead and ahead[i]:
+            lm = mag[k - 1] if length[i] > 0 else fabs(off[i])
+        left[i] = copysign(lm, off[i])
+    # _catch_up_slopes, and only the points with an offset left
+    cdef Py_ssize_t nk = 0
+    for k in range(K):
+        if mag[k] > 0:
+            nk += 1
+    oidx_a = np.empty(nk, dtype=np.int_)
+    ooff_a = np.empty(nk)
+    oslope_a = np.empty(nk)
+    cdef long[::1] oidx = oidx_a
+    cdef double[::1] ooff = ooff_a
+    cdef double[::1] oslope = oslope_a
+    cdef double ah, stp, offk
+    k = 0
+    j = 0
+    for i in range(m):
+        for _ in range(length[i]):
+            if mag[k] > 0:
+                offk = copysign(mag[k], off[i])
+                ah = s[idx[k] + 1] - s[idx[k]] if idx[k] + 1 < n else INFINITY
+                stp = _min(rate[i], mag[k] / ah if ah > 0 else INFINITY)
+                stp = _min(stp, steep_motor[k])
+                oidx[j] = idx[k]
+                ooff[j] = offk
+                oslope[j] = -_sign(offk) * stp
+                j += 1
+            k += 1
+    return oidx_a, ooff_a, oslope_a, left_a
