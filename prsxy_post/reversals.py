@@ -1449,31 +1449,6 @@ def catch_up(
     return kernel.catch_up(off0, way, start, stop, s_path, share, CATCH_UP_HURRY, motion)
 
 
-class Crossings(NamedTuple):
-    """One motor's c crossings in a chunk as the chain ends them where its part
-    stands and takes up the part's offset after them (chain.Pipeline._settle).
-
-    end, beg : (c,) int, the point where each crossing ends (the motor meets its
-        part) and where it began (−1: the point before the chunk)
-    up : (c,) bool, the motor crosses up (it was going down)
-    short : (c,) how far short of the contact the command at its end stays [mm]
-    stops : (c,) int, the point where the motor's next crossing begins, or the
-        chunk's length
-    made_end : (c,) the commands at the crossings' ends as first made [mm]
-    P_made, V_made : (n,) the motor's commands [mm, mm/s] with the crossings'
-        ends set, before any offset is taken up
-    """
-
-    end: np.ndarray
-    beg: np.ndarray
-    up: np.ndarray
-    short: np.ndarray
-    stops: np.ndarray
-    made_end: np.ndarray
-    P_made: np.ndarray
-    V_made: np.ndarray
-
-
 def follow(
     table: PlayTable,
     y0: float,

@@ -11,6 +11,7 @@ stretches). The reference calls the C library's sin and cos through :mod:`math`
 
 from __future__ import annotations
 
+import copy
 import math
 from pathlib import Path
 from typing import Any
@@ -27,16 +28,11 @@ from prsxy_post.profile import AxisComp
 from .kernel_cases import compiled, record, same_bits
 
 #: the kernel's entry points (prsxy_post.kernel's names) and their reference
-ENTRIES = {
+ENTRIES: dict[str, Any] = {
     "_play_lo": play.lo,
-    "_play_hi": play.hi,
-    "_play_lo_inv": play.lo_inv,
-    "_play_hi_inv": play.hi_inv,
     "_play_slope": play.slope,
     "_compensate_sided": play.compensate_sided,
-    "_clamp_scan": play.clamp_scan,
-    "_follow_stretches": play.follow_stretches,
-    "_catch_up": play.catch_up,
+    "_settle_crossings": play.settle_crossings,
 }
 
 
@@ -46,17 +42,23 @@ def _same(got: Any, want: Any) -> bool:
     return same_bits(got, want)
 
 
-#: what the chain calls, and how often at least while the samples convert (the
-#: envelopes alone at the start, the inverses at the crossings' contacts; hi and the
-#: scan are inside follow_stretches here: the generated cases below cover them)
+#: what the chain calls through the kernel's names, and how often at least while
+#: the samples convert (the envelopes alone at the start)
 RECORDED = {
     "_play_lo": 1,
-    "_play_lo_inv": 3,
-    "_play_hi_inv": 3,
     "_play_slope": 10,
     "_compensate_sided": 10,
-    "_follow_stretches": 10,
-    "_catch_up": 3,
+    "_settle_crossings": 3,
+}
+#: what the settle calls inside the kernel (recorded from the reference settle on
+#: the recorded settles' inputs), and how often at least
+INNER = {
+    "follow_stretches": 3,
+    "catch_up": 3,
+    "lo_inv": 3,
+    "hi_inv": 3,
+    "compensate_sided": 1,
+    "slope": 1,
 }
 
 
@@ -68,15 +70,51 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
     for args in calls:
         want = ENTRIES[attr](*args)
         got = getattr(_play, attr.removeprefix("_play_").removeprefix("_"))(*args)
-        if attr == "_catch_up":
-            assert got[0].dtype == want[0].dtype
-        assert _same(got, want), f"{attr}: compiled and reference differ"
+        assert _same(tuple(got) if attr == "_settle_crossings" else got, want), attr
 
 
-def test_sample_programs_follow_their_parts_through_turning_points(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def inner_calls(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[Any, ...]]]:
+    """The calls the reference settle makes of the pieces, on the settles the
+    sample programs make."""
+    settles = record("_settle_crossings", tmp_path_factory.mktemp("settle"))
+    calls: dict[str, list[tuple[Any, ...]]] = {k: [] for k in INNER}
+    mp = pytest.MonkeyPatch()
+    for name in INNER:
+        inner = getattr(play, name)
+
+        def spy(*args: Any, _inner: Any = inner, _name: str = name) -> Any:
+            calls[_name].append(tuple(copy.deepcopy(a) for a in args))
+            return _inner(*args)
+
+        mp.setattr(play, name, spy)
+    try:
+        for args in settles:
+            play.settle_crossings(*args)
+    finally:
+        mp.undo()
+    return calls
+
+
+@pytest.mark.parametrize("name", sorted(INNER))
+def test_sample_programs_settle_pieces_are_bit_identical(
+    name: str, inner_calls: dict[str, list[tuple[Any, ...]]]
+) -> None:
+    _play = compiled("_play")
+    calls = inner_calls[name]
+    assert len(calls) >= INNER[name]
+    for args in calls:
+        want = getattr(play, name)(*copy.deepcopy(args))
+        got = getattr(_play, name)(*copy.deepcopy(args))
+        assert _same(got, want), name
+
+
+def test_sample_programs_follow_their_parts_through_turning_points(
+    inner_calls: dict[str, list[tuple[Any, ...]]],
+) -> None:
     """The recorded follows are not all straight: in some steps the command's cubic
     turns back (the turning points, evaluated with numpy's power in both)."""
-    calls = record("_follow_stretches", tmp_path)
+    calls = inner_calls["follow_stretches"]
     assert sum(len(c[4]) for c in calls) > 1000
     turns = 0
     for _t, _y0, P0, V0, P, V, dt, steps, cubic in calls:
@@ -204,6 +242,97 @@ def test_generated_catch_ups_are_bit_identical(
     want = play.catch_up(off0, way, start, stop, s_path, share, 2.0, motion)
     assert _same(got, want)
     assert got[0].dtype == want[0].dtype
+
+
+def _motion(rng: np.random.Generator, n: int) -> play.Motion:
+    P_ideal = np.cumsum(rng.normal(0, 0.02, n))
+    s_path = np.cumsum(np.where(rng.random(n) < 0.1, 0.0, rng.uniform(0, 0.3, n)))
+    return play.Motion(
+        P_ideal,
+        rng.normal(0, 5, n),
+        np.diff(P_ideal, prepend=0.0),
+        np.abs(rng.normal(0, 10, n)),
+        np.where(rng.random(n) < 0.05, 0.0, rng.uniform(0.001, 0.01, n)),
+        s_path,
+        rng.choice([-1.0, 1.0], n),
+    )
+
+
+@settings(max_examples=150, deadline=None)
+@given(tables(), st.integers(0, 2**32 - 1), st.integers(4, 80), st.booleans())
+def test_generated_settles_are_bit_identical(
+    table: axiscomp.MotorTable, seed: int, n: int, cubic: bool
+) -> None:
+    """Chains of crossings (each window inside the gap the one before leaves),
+    parts off by up to a few µm, behind and ahead, with and without periodic
+    terms: the commands, the part and the carried offset, to the bit."""
+    _play = compiled("_play")
+    args = _settle_case(table.flat, seed, n, cubic)
+    if args is not None:
+        assert _same(tuple(_play.settle_crossings(*args)), tuple(play.settle_crossings(*args)))
+
+
+def _settle_case(t: play.PlayTable, seed: int, n: int, cubic: bool) -> tuple[Any, ...] | None:
+    """settle_crossings' arguments: up to four crossings in n points, commands off
+    their wanted positions by up to mm (None: no crossing drawn)."""
+    rng = np.random.default_rng(seed)
+    mo = _motion(rng, n)
+    mid = 0.5 * (t.breaks[0] + t.breaks[-1])
+    mo = mo._replace(P_ideal=mo.P_ideal + mid)
+    k = min(n + 1, 2 * int(rng.integers(1, 5)))
+    cuts = np.sort(rng.choice(np.arange(-1, n), size=k, replace=False))
+    e = cuts[1::2]
+    b = cuts[0::2][: len(e)]
+    if not len(e):
+        return None
+    short = np.abs(rng.normal(0, 1e-7, len(e)))
+    P = mo.P_ideal + rng.normal(0, 2e-3, n)
+    V = mo.V_ideal + rng.normal(0, 0.1, n)
+    before = (mid + rng.normal(0, 1e-3), mid + rng.normal(0, 1e-3), float(rng.normal(0, 5)))
+    return (t, mo, before, e, b, short, P, V, cubic, float(rng.choice([5e-5, 5e-3])), 2.0)
+
+
+def test_generated_settles_reckon_crossings_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The generated settles take offsets into later crossings (the rounds of
+    _reckon_again run), and agree to the bit there too."""
+    _play = compiled("_play")
+    rounds = 0
+    inner = play._reckon_again
+
+    def count(*args: Any) -> Any:
+        nonlocal rounds
+        rounds += 1
+        return inner(*args)
+
+    monkeypatch.setattr(play, "_reckon_again", count)
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-50.0, 0.0, 50.0]), np.zeros(3), np.array([0.004, 0.002, 0.004]))
+    ).flat
+    for seed in range(40):
+        args = _settle_case(t, seed, 60, seed % 2 == 0)
+        if args is not None:
+            assert _same(tuple(_play.settle_crossings(*args)), tuple(play.settle_crossings(*args)))
+    assert rounds > 10
+
+
+@settings(max_examples=100, deadline=None)
+@given(tables(), st.integers(0, 2**32 - 1), st.integers(1, 60))
+def test_generated_catch_up_commands_are_bit_identical(
+    table: axiscomp.MotorTable, seed: int, n: int
+) -> None:
+    _play = compiled("_play")
+    t = table.flat
+    rng = np.random.default_rng(seed)
+    mo = _motion(rng, n)
+    start = np.array(sorted(set(rng.integers(-1, n, 3).tolist())), dtype=int)
+    stop = np.append(start[1:], n)
+    off0 = rng.normal(0, 1e-3, len(start))
+    P, V = mo.P_ideal.copy(), mo.V_ideal.copy()
+    P2, V2 = P.copy(), V.copy()
+    want = play.catch_up_commands(t, mo, off0, start, stop, P, V, 5e-3, 2.0)
+    got = _play.catch_up_commands(t, mo, off0, start, stop, P2, V2, 5e-3, 2.0)
+    assert same_bits(got[0], want[0]) and same_bits(np.array(got[1]), np.array(want[1]))
+    assert same_bits(P2, P) and same_bits(V2, V)
 
 
 def test_the_twin_turns_where_the_reference_does() -> None:

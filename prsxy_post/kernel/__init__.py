@@ -181,3 +181,43 @@ def catch_up(
         off0, way, start, stop, s_path, share, hurry, motion
     )
     return out
+
+
+_catch_up_commands = _play_kernel.catch_up_commands
+_settle_crossings = _play_kernel.settle_crossings
+
+
+def catch_up_commands(
+    t: play.PlayTable,
+    mo: play.Motion,
+    off0: np.ndarray,
+    start: np.ndarray,
+    stop: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    share: float,
+    hurry: float,
+) -> tuple[np.ndarray, float]:
+    """The take-up's commands into ``P``, ``V`` (contiguous, in place):
+    :func:`play.catch_up_commands`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, float] = _catch_up_commands(t, mo, off0, start, stop, P, V, share, hurry)
+    return out
+
+
+def settle_crossings(
+    t: play.PlayTable,
+    mo: play.Motion,
+    before: tuple[float, float, float],
+    e: np.ndarray,
+    b: np.ndarray,
+    short: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    cubic: bool,
+    share: float,
+    hurry: float,
+) -> play.Settled:
+    """A motor's crossings ended where its part stands: :func:`play.settle_crossings`,
+    compiled when :data:`COMPILED`."""
+    out: play.Settled = _settle_crossings(t, mo, before, e, b, short, P, V, cubic, share, hurry)
+    return out

@@ -14,6 +14,8 @@ and cos, as the reference does through :mod:`math`. Compiled with -O2
 
 import numpy as np
 
+from . import play as _pure
+
 from libc.math cimport sin, cos, sqrt, fabs, copysign, INFINITY, NAN, M_PI
 
 cdef double TWO_PI = 2 * M_PI
@@ -613,3 +615,283 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
                 j += 1
             k += 1
     return oidx_a, ooff_a, oslope_a, left_a
+
+
+def catch_up_commands(t, mo, off0, start, stop, P, V, double share, double hurry):
+    """The take-up's commands: :func:`play.catch_up_commands` (``P``, ``V``
+    contiguous float arrays, updated in place)."""
+    cdef const double[::1] s_path = mo.s_path
+    cdef const double[::1] side = mo.side
+    cdef const double[::1] Pi = mo.P_ideal
+    cdef const double[::1] Vi = mo.V_ideal
+    cdef const double[::1] speed = mo.speed
+    cdef const long[::1] st = np.ascontiguousarray(start, dtype=np.int_)
+    cdef const long[::1] sp = np.ascontiguousarray(stop, dtype=np.int_)
+    cdef double[::1] Pv = P
+    cdef double[::1] Vv = V
+    cdef Py_ssize_t n = s_path.shape[0], m = st.shape[0], i, k, K
+    way_a = np.empty(m)
+    cdef double[::1] way = way_a
+    for i in range(m):
+        way[i] = side[st[i] if st[i] > 0 else 0]
+    idx_a, off_a, slope_a, left_a = catch_up(
+        off0, way_a, st.base, sp.base, mo.s_path, share, hurry, (mo.dP, mo.V_ideal, mo.speed)
+    )
+    cdef const long[::1] idx = idx_a
+    cdef const double[::1] off = off_a
+    cdef const double[::1] slp = slope_a
+    cdef double[::1] left = left_a
+    carry = NAN
+    if m and sp[m - 1] >= n and left[m - 1] != 0.0:
+        carry = left[m - 1]
+    K = idx.shape[0]
+    cdef double[::1] tg
+    cdef double[::1] sd
+    cdef double[::1] pk
+    cdef const double[::1] sl
+    if K:
+        tg_a = np.empty(K)
+        sd_a = np.empty(K)
+        tg = tg_a
+        sd = sd_a
+        for k in range(K):
+            tg[k] = Pi[idx[k]] + off[k]
+            sd[k] = side[idx[k]]
+        pk_a = compensate_sided(t, tg_a, sd_a)
+        pk = pk_a
+        sl_a = slope(t, pk_a, sd_a)
+        sl = sl_a
+        for k in range(K):
+            Pv[idx[k]] = pk[k]
+            Vv[idx[k]] = (Vi[idx[k]] + slp[k] * speed[idx[k]]) / sl[k]
+    for i in range(m):
+        if not sp[i] < n:
+            left[i] = 0.0
+    return left_a, carry
+
+
+cdef void _extreme(const double* lo, const double* hi, Py_ssize_t n, const long* cuts,
+                   const double* beg, const signed char* up, double* out,
+                   Py_ssize_t c) noexcept nogil:
+    """:func:`play._extreme`: numpy's reduceat over [cuts[2i], cuts[2i + 1]) (the
+    value at cuts[2i] where that is empty; ±inf past the end)."""
+    cdef Py_ssize_t i, j, a, z
+    cdef double x
+    for i in range(c):
+        a = cuts[2 * i]
+        z = cuts[2 * i + 1]
+        if up[i]:
+            x = lo[a] if a < n else INFINITY
+            for j in range(a + 1, z):
+                x = _min(x, lo[j] if j < n else INFINITY)
+            out[i] = _min(x, beg[i])
+        else:
+            x = hi[a] if a < n else -INFINITY
+            for j in range(a + 1, z):
+                x = _max(x, hi[j] if j < n else -INFINITY)
+            out[i] = _max(x, beg[i])
+
+
+def _contact(t, y, up, shortfall):
+    """:func:`play._contact` (lo⁻¹ and hi⁻¹ each over the whole array, as the
+    reference's np.where takes them)."""
+    cdef const double[::1] a = lo_inv(t, y)
+    cdef const double[::1] b = hi_inv(t, y)
+    cdef const signed char[::1] u = up
+    cdef const double[::1] s = shortfall
+    cdef Py_ssize_t i, c = a.shape[0]
+    out = np.empty(c)
+    cdef double[::1] o = out
+    for i in range(c):
+        o[i] = a[i] - s[i] if u[i] else b[i] + s[i]
+    return out
+
+
+def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double share,
+                     double hurry):
+    """The crossings ended where the parts stand: :func:`play.settle_crossings`."""
+    mo = type(mo)(*[np.ascontiguousarray(a, dtype=np.float64) for a in mo])
+    shortfall = np.ascontiguousarray(shortfall, dtype=np.float64)
+    P_a = np.array(P, dtype=np.float64)
+    V_a = np.array(V, dtype=np.float64)
+    cdef double[::1] Pv = P_a
+    cdef double[::1] Vv = V_a
+    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
+    cdef const long[::1] bv = np.ascontiguousarray(b, dtype=np.int_)
+    cdef const double[::1] side = mo.side
+    cdef const double[::1] Pi = mo.P_ideal
+    cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0], i, upto = 0
+    cdef double y0 = before[0], P0 = before[1], V0 = before[2]
+    for i in range(c):
+        if ev[i] + 1 > upto:
+            upto = ev[i] + 1
+    one = np.ones(1)
+    y_pt_a, lo_a, hi_a = follow_stretches(
+        t, y0 * one, P0 * one, V0 * one, P_a[:upto], V_a[:upto], mo.dt[:upto],
+        np.array([upto]), cubic
+    )
+    cdef const double[::1] y_pt = y_pt_a
+    cdef const double[::1] lo_ = lo_a
+    cdef const double[::1] hi_ = hi_a
+    at_beg_a = np.empty(c)
+    cuts_a = np.empty(2 * c, dtype=np.int_)
+    u_a = np.empty(c, dtype=np.int8)
+    stops_a = np.empty(c, dtype=np.int_)
+    made_a = np.empty(c)
+    y_s_a = np.empty(c)
+    off_a = np.empty(c)
+    cdef double[::1] at_beg = at_beg_a
+    cdef long[::1] cuts = cuts_a
+    cdef signed char[::1] u = u_a
+    cdef long[::1] stops = stops_a
+    cdef double[::1] made = made_a
+    cdef double[::1] y_s = y_s_a
+    cdef double[::1] off = off_a
+    for i in range(c):
+        at_beg[i] = y_pt[bv[i] if bv[i] > 0 else 0] if bv[i] >= 0 else y0
+        cuts[2 * i] = bv[i] + 1 if bv[i] + 1 > 0 else 0
+        cuts[2 * i + 1] = ev[i] + 1
+        u[i] = side[ev[i]] > 0
+        stops[i] = bv[i + 1] if i + 1 < c else n
+        made[i] = Pv[ev[i]]
+    _extreme(&lo_[0], &hi_[0], upto, &cuts[0], &at_beg[0], &u[0], &y_s[0], c)
+    cdef const double[::1] ct = _contact(t, y_s_a, u_a, shortfall)
+    for i in range(c):
+        Pv[ev[i]] = ct[i]
+        off[i] = y_s[i] - Pi[ev[i]]
+    P_made = P_a.copy()
+    V_made = V_a.copy()
+    left_a, carry = catch_up_commands(t, mo, off_a, ev.base, stops_a, P_a, V_a, share, hurry)
+    cdef double[::1] left = left_a
+    todo_l = [i for i in range(1, c) if left[i - 1] != 0.0]
+    x = (ev, bv, u, shortfall, stops, made, P_made, V_made)
+    while todo_l:
+        todo_l, cr = _reckon_again(t, mo, x, todo_l, y_s, left, P_a, V_a, cubic, share, hurry)
+        if cr == cr:
+            carry = cr
+    cdef Py_ssize_t k = 0
+    for i in range(c):
+        if ev[i] > ev[k]:
+            k = i
+    return _pure.Settled(P_a, V_a, y_s[k], Pv[upto - 1], Vv[upto - 1], carry)
+
+
+def _reckon_again(t, mo, x, list todo_l, double[::1] y_s, double[::1] left, P_a, V_a,
+                  bint cubic, double share, double hurry):
+    """One round: :func:`play._reckon_again`."""
+    cdef const long[::1] e
+    cdef const long[::1] b
+    cdef const signed char[::1] u
+    cdef long[::1] stops
+    cdef double[::1] made
+    e, b, u, short_a, stops, made, P_made_a, V_made_a = x
+    cdef const double[::1] shortfall = short_a
+    cdef const double[::1] P_made = P_made_a
+    cdef const double[::1] V_made = V_made_a
+    cdef double[::1] Pv = P_a
+    cdef double[::1] Vv = V_a
+    cdef const double[::1] dt = mo.dt
+    cdef const double[::1] Pi = mo.P_ideal
+    cdef Py_ssize_t n = Pv.shape[0], c = e.shape[0], w = len(todo_l), i, j, k, K = 0
+    cdef Py_ssize_t ti, ep, ej, bj, into, base
+    todo_a = np.array(todo_l, dtype=np.int_)
+    cdef const long[::1] todo = todo_a
+    span_a = np.empty(w, dtype=np.int_)
+    cdef long[::1] span = span_a
+    for i in range(w):
+        span[i] = e[todo[i]] - e[todo[i] - 1]
+        K += span[i]
+    y0_a = np.empty(w)
+    P0_a = np.empty(w)
+    V0_a = np.empty(w)
+    Pw_a = np.empty(K)
+    Vw_a = np.empty(K)
+    dtw_a = np.empty(K)
+    cdef double[::1] y0 = y0_a
+    cdef double[::1] P0 = P0_a
+    cdef double[::1] V0 = V0_a
+    cdef double[::1] Pw = Pw_a
+    cdef double[::1] Vw = Vw_a
+    cdef double[::1] dtw = dtw_a
+    k = 0
+    for i in range(w):
+        ti = todo[i]
+        ep = e[ti - 1]
+        y0[i] = y_s[ti - 1]
+        P0[i] = Pv[ep]
+        V0[i] = Vv[ep]
+        for j in range(span[i]):
+            Pw[k] = Pv[ep + 1 + j]
+            Vw[k] = Vv[ep + 1 + j]
+            dtw[k] = dt[ep + 1 + j]
+            k += 1
+    # the crossings' ends as made (numpy's order: the last write wins, index −1
+    # the last element)
+    k = 0
+    for i in range(w):
+        k += span[i]
+        if K:
+            Pw[k - 1 if k >= 1 else K - 1] = made[todo[i]]
+    y_w_a, lo_w_a, hi_w_a = follow_stretches(
+        t, y0_a, P0_a, V0_a, Pw_a, Vw_a, dtw_a, span_a, cubic
+    )
+    cdef const double[::1] y_w = y_w_a
+    cdef const double[::1] lo_w = lo_w_a
+    cdef const double[::1] hi_w = hi_w_a
+    beg_a = np.empty(w)
+    cuts_a = np.empty(2 * w, dtype=np.int_)
+    uu_a = np.empty(w, dtype=np.int8)
+    ys_a = np.empty(w)
+    sh_a = np.empty(w)
+    cdef double[::1] beg = beg_a
+    cdef long[::1] cuts = cuts_a
+    cdef signed char[::1] uu = uu_a
+    cdef double[::1] ys = ys_a
+    cdef double[::1] sh = sh_a
+    base = 0
+    for i in range(w):
+        ti = todo[i]
+        ep = e[ti - 1]
+        into = b[ti] - ep if b[ti] - ep > 0 else 0
+        beg[i] = y_w[base + into - 1] if into > 0 else y_s[ti - 1]
+        cuts[2 * i] = base + into
+        cuts[2 * i + 1] = base + span[i]
+        uu[i] = u[ti]
+        sh[i] = shortfall[ti]
+        base += span[i]
+    _extreme(&lo_w[0], &hi_w[0], K, &cuts[0], &beg[0], &uu[0], &ys[0], w)
+    cdef const double[::1] ct = _contact(t, ys_a, uu_a, sh_a)
+    off_a = np.empty(w)
+    ej_a = np.empty(w, dtype=np.int_)
+    st_a = np.empty(w, dtype=np.int_)
+    cdef double[::1] off = off_a
+    cdef long[::1] ejv = ej_a
+    cdef long[::1] stv = st_a
+    cdef Py_ssize_t hi_end
+    for i in range(w):
+        ti = todo[i]
+        y_s[ti] = ys[i]
+    for i in range(w):
+        ti = todo[i]
+        ej = e[ti]
+        Pv[ej] = ct[i]
+    for i in range(w):
+        ti = todo[i]
+        ej = e[ti]
+        # their own take-up again, from the commands as made
+        hi_end = stops[ti] + 1 if stops[ti] + 1 < n else n
+        for j in range(ej + 1, hi_end):
+            Pv[j] = P_made[j]
+            Vv[j] = V_made[j]
+        off[i] = y_s[ti] - Pi[ej]
+        ejv[i] = ej
+        stv[i] = stops[ti]
+    new_left_a, carry = catch_up_commands(t, mo, off_a, ej_a, st_a, P_a, V_a, share, hurry)
+    cdef const double[::1] new_left = new_left_a
+    moved = []
+    for i in range(w):
+        ti = todo[i]
+        if new_left[i] != left[ti] and ti + 1 < c:
+            moved.append(ti + 1)
+        left[ti] = new_left[i]
+    return moved, carry

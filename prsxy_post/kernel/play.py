@@ -479,3 +479,196 @@ def _catch_up_slopes(
     steep = np.minimum(steep, steep_motor)
     out: np.ndarray = -np.sign(off) * steep
     return out
+
+
+class Motion(NamedTuple):
+    """One motor's columns over a chunk of n points, as the settle takes them.
+
+    P_ideal, V_ideal : (n,) its wanted position [mm] and velocity [mm/s]
+    dP : (n,) its wanted move into each point [mm] (the first from the point before)
+    speed : (n,) the path's planned speed [mm/s]
+    dt : (n,) each step's duration [s]
+    s_path : (n,) path length run by each point since the point before the chunk [mm]
+    side : (n,) the side of its play it is on at each point (+1 up, −1 down)
+    """
+
+    P_ideal: np.ndarray
+    V_ideal: np.ndarray
+    dP: np.ndarray
+    speed: np.ndarray
+    dt: np.ndarray
+    s_path: np.ndarray
+    side: np.ndarray
+
+
+def catch_up_commands(
+    t: PlayTable,
+    mo: Motion,
+    off0: np.ndarray,
+    start: np.ndarray,
+    stop: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    share: float,
+    hurry: float,
+) -> tuple[np.ndarray, float]:
+    """Command the motor to bring its part back onto its wanted position after
+    crossings that end at ``start`` (m,) with the part off by ``off0`` (m,) [mm]
+    (:func:`catch_up`, up to ``stop`` (m,)): ``P``, ``V`` (n,) [mm, mm/s] updated in
+    place. Returns the offset (m,) each leaves where the next crossing begins (0
+    where it goes on into the next chunk) and the offset the last leaves at the
+    chunk's end (NaN: none to carry)."""
+    n = len(mo.s_path)
+    way = mo.side[np.maximum(start, 0)]
+    idx, off, slope_, left = catch_up(
+        off0, way, start, stop, mo.s_path, share, hurry, (mo.dP, mo.V_ideal, mo.speed)
+    )
+    carry = float(left[-1]) if len(left) and stop[-1] >= n and left[-1] != 0.0 else np.nan
+    if len(idx):
+        sd = mo.side[idx]
+        P[idx] = compensate_sided(t, mo.P_ideal[idx] + off, sd)
+        V[idx] = (mo.V_ideal[idx] + slope_ * mo.speed[idx]) / slope(t, P[idx], sd)
+    return np.where(stop < n, left, 0.0), carry
+
+
+def _extreme(
+    lo: np.ndarray, hi: np.ndarray, cuts: np.ndarray, beg: np.ndarray, up: np.ndarray
+) -> np.ndarray:
+    """Where each part stands when its motor's crossing ends [mm], (c,): the extreme
+    it reached on the old side over the crossing's steps (``cuts`` (2c,): each
+    crossing's first and past-last step into the followed part's least and
+    greatest positions ``lo``, ``hi``) and where it stood at the crossing's start
+    ``beg`` (c,); the least where the crossing is ``up``."""
+    lo_x = np.minimum.reduceat(np.append(lo, np.inf), cuts)[::2]
+    hi_x = np.maximum.reduceat(np.append(hi, -np.inf), cuts)[::2]
+    out: np.ndarray = np.where(up, np.minimum(lo_x, beg), np.maximum(hi_x, beg))
+    return out
+
+
+def _contact(t: PlayTable, y: np.ndarray, up: np.ndarray, short: np.ndarray) -> np.ndarray:
+    """The command [mm] that meets the part at ``y`` (c,) [mm] on its new side (lo⁻¹
+    where ``up``, else hi⁻¹), ``short`` (c,) [mm] of it."""
+    out: np.ndarray = np.where(up, lo_inv(t, y) - short, hi_inv(t, y) + short)
+    return out
+
+
+class Settled(NamedTuple):
+    """What :func:`settle_crossings` leaves: the commands (n,) [mm, mm/s], where the
+    part stands at the last contact and the command's position and velocity there
+    [mm, mm, mm/s], and the offset carried into the next chunk (NaN: none)."""
+
+    P: np.ndarray
+    V: np.ndarray
+    y: float
+    P_last: float
+    V_last: float
+    carry: float
+
+
+def settle_crossings(
+    t: PlayTable,
+    mo: Motion,
+    before: tuple[float, float, float],
+    e: np.ndarray,
+    b: np.ndarray,
+    short: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    cubic: bool,
+    share: float,
+    hurry: float,
+) -> Settled:
+    """End each of a motor's crossings (ending at points ``e`` (c,), begun at ``b``
+    (c,), −1: before the chunk) where its part really stands, followed from
+    ``before`` (the part [mm], the command [mm, mm/s] before the chunk) through the
+    commands ``P``, ``V`` (n,) as made, ``short`` (c,) [mm] of the contact; take up
+    the part's offset after each (:func:`catch_up_commands`); a crossing taking in
+    an offset the one before left is reckoned again from where the part then is
+    (:func:`_reckon_again`), a round per crossing of a chain. (The method:
+    ``chain.Pipeline._settle``.)"""
+    P, V = P.copy(), V.copy()
+    n = len(P)
+    y0, P0, V0 = before
+    carry = np.nan
+    # followed up to the last contact only (the part's path is causal)
+    upto = int(e.max()) + 1
+    one = np.ones(1)
+    y_pt, lo_, hi_ = follow_stretches(
+        t, y0 * one, P0 * one, V0 * one, P[:upto], V[:upto], mo.dt[:upto], np.array([upto]), cubic
+    )
+    # where the part stands when the crossing begins: the extreme it reached on
+    # the old side, over the window (its start included)
+    at_beg = np.where(b >= 0, y_pt[np.maximum(b, 0)], y0)
+    first = np.maximum(b + 1, 0)
+    cuts = np.column_stack([first, e + 1]).ravel()
+    u = mo.side[e] > 0  # the new side: up, so it was going down
+    y_s = _extreme(lo_, hi_, cuts, at_beg, u)
+    stops = np.append(b[1:], n)
+    made_e = P[e].copy()
+    P[e] = _contact(t, y_s, u, short)
+    P_made, V_made = P.copy(), V.copy()
+    left, c = catch_up_commands(t, mo, y_s - mo.P_ideal[e], e, stops, P, V, share, hurry)
+    carry = c if not np.isnan(c) else carry
+    # a part still off where the next crossing begins takes that offset into it
+    todo = np.flatnonzero(np.concatenate([[0.0], left[:-1]]))
+    while todo.size:
+        todo, c = _reckon_again(
+            t,
+            mo,
+            (e, b, u, short, stops, made_e, P_made, V_made),
+            todo,
+            y_s,
+            left,
+            P,
+            V,
+            cubic,
+            (share, hurry),
+        )
+        carry = c if not np.isnan(c) else carry
+    k = int(np.argmax(e))
+    return Settled(P, V, float(y_s[k]), float(P[upto - 1]), float(V[upto - 1]), carry)
+
+
+def _reckon_again(
+    t: PlayTable,
+    mo: Motion,
+    x: tuple[np.ndarray, ...],
+    todo: np.ndarray,
+    y_s: np.ndarray,
+    left: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    cubic: bool,
+    rates: tuple[float, float],
+) -> tuple[np.ndarray, float]:
+    """One round of :func:`settle_crossings`: the crossings ``todo``, each taking in
+    an offset the crossing before left, ended where the part then stands (followed
+    from the crossing before through the commands as now written, its end as
+    made) and their take-up made again. Updates ``y_s``, ``left`` (c,) and the
+    commands in place; returns the crossings the next round reckons again (after
+    one whose offset left changed) and the offset carried into the next chunk."""
+    n = len(P)
+    e, b, u, short, stops, made_end, P_made, V_made = x
+    ep, ej, bj = e[todo - 1], e[todo], b[todo]
+    span = ej - ep
+    pts = ranges(ep + 1, span)
+    P_w = P[pts]
+    P_w[np.cumsum(span) - 1] = made_end[todo]  # the crossings' ends as made
+    y_w, lo_w, hi_w = follow_stretches(
+        t, y_s[todo - 1], P[ep], V[ep], P_w, V[pts], mo.dt[pts], span, cubic
+    )
+    base = np.cumsum(span) - span
+    into = np.maximum(bj - ep, 0)  # the window's first step in its stretch
+    beg = np.where(into > 0, y_w[base + into - 1], y_s[todo - 1])
+    cuts = np.column_stack([base + into, base + span]).ravel()
+    y_s[todo] = _extreme(lo_w, hi_w, cuts, beg, u[todo])
+    P[ej] = _contact(t, y_s[todo], u[todo], short[todo])
+    # their own take-up again, from the commands as made
+    redo = ranges(ej + 1, np.minimum(stops[todo] + 1, n) - ej - 1)
+    P[redo], V[redo] = P_made[redo], V_made[redo]
+    new_left, carry = catch_up_commands(
+        t, mo, y_s[todo] - mo.P_ideal[ej], ej, stops[todo], P, V, *rates
+    )
+    moved = todo[new_left != left[todo]]
+    left[todo] = new_left
+    return moved[moved + 1 < len(e)] + 1, carry
