@@ -33,6 +33,7 @@ ENTRIES: dict[str, Any] = {
     "_play_slope": play.slope,
     "_compensate_sided": play.compensate_sided,
     "_settle_crossings": play.settle_crossings,
+    "_carried": play.carried,
 }
 
 
@@ -49,6 +50,7 @@ RECORDED = {
     "_play_slope": 10,
     "_compensate_sided": 10,
     "_settle_crossings": 3,
+    "_carried": 10,
 }
 #: what the settle calls inside the kernel (recorded from the reference settle on
 #: the recorded settles' inputs), and how often at least
@@ -71,6 +73,8 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
         want = ENTRIES[attr](*args)
         got = getattr(_play, attr.removeprefix("_play_").removeprefix("_"))(*args)
         assert _same(tuple(got) if attr == "_settle_crossings" else got, want), attr
+        if attr == "_carried":
+            assert got.dtype == want.dtype
 
 
 @pytest.fixture(scope="module")
@@ -333,6 +337,24 @@ def test_generated_catch_up_commands_are_bit_identical(
     got = _play.catch_up_commands(t, mo, off0, start, stop, P2, V2, 5e-3, 2.0)
     assert same_bits(got[0], want[0]) and same_bits(np.array(got[1]), np.array(want[1]))
     assert same_bits(P2, P) and same_bits(V2, V)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 40), st.integers(0, 2**32 - 1), st.booleans())
+def test_generated_carried_sides_are_identical(n: int, seed: int, columns: bool) -> None:
+    """Directions carried through standing rows: one motor (ints, the side an int)
+    or several (floats, a side each), the same values and types in both."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    if columns:
+        sg = np.where(rng.random((n, 3)) < 0.5, 0.0, np.sign(rng.normal(size=(n, 3))))
+        side: Any = rng.choice([-1.0, 1.0], 3)
+    else:
+        sg = rng.integers(-1, 2, n) * (rng.random(n) < 0.5)
+        side = int(rng.choice([-1, 1]))
+    got, want = _play.carried(sg, side), play.carried(sg, side)
+    assert got.dtype == want.dtype and got.shape == want.shape
+    assert np.array_equal(got, want)
 
 
 def test_the_twin_turns_where_the_reference_does() -> None:

@@ -221,3 +221,13 @@ def settle_crossings(
     compiled when :data:`COMPILED`."""
     out: play.Settled = _settle_crossings(t, mo, before, e, b, short, P, V, cubic, share, hurry)
     return out
+
+
+_carried = _play_kernel.carried
+
+
+def carried(sg: np.ndarray, side: np.ndarray | float) -> np.ndarray:
+    """The side carried through rows without a direction: :func:`play.carried`,
+    compiled when :data:`COMPILED`."""
+    out: np.ndarray = _carried(sg, side)
+    return out

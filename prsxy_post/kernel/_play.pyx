@@ -895,3 +895,28 @@ def _reckon_again(t, mo, x, list todo_l, double[::1] y_s, double[::1] left, P_a,
             moved.append(ti + 1)
         left[ti] = new_left[i]
     return moved, carry
+
+
+def carried(sg, side):
+    """The side carried through the rows without a direction: :func:`play.carried`
+    (the result's type as numpy's where gives it)."""
+    a = np.asarray(sg)
+    dtype = np.result_type(a, side)
+    cdef Py_ssize_t n = a.shape[0], k, i, j
+    if n == 0:
+        return np.empty(np.broadcast_shapes(a.shape, np.shape(side)), dtype=dtype)
+    a2 = np.ascontiguousarray(a, dtype=np.float64).reshape(n, -1)
+    k = a2.shape[1]
+    cdef const double[:, ::1] x = a2
+    cdef const double[::1] s0 = np.ascontiguousarray(
+        np.broadcast_to(np.asarray(side, dtype=np.float64), (k,)))
+    out = np.empty((n, k))
+    cdef double[:, ::1] o = out
+    cdef double cur
+    for j in range(k):
+        cur = s0[j]
+        for i in range(n):
+            if x[i, j] != 0:
+                cur = x[i, j]
+            o[i, j] = cur
+    return out.reshape(a.shape).astype(dtype, copy=False)

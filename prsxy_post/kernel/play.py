@@ -672,3 +672,14 @@ def _reckon_again(
     moved = todo[new_left != left[todo]]
     left[todo] = new_left
     return moved[moved + 1 < len(e)] + 1, carry
+
+
+def carried(sg: np.ndarray, side: np.ndarray | float) -> np.ndarray:
+    """The last nonzero direction at or before each row of ``sg`` (along axis 0),
+    ``side`` before any: the side a motor is on, carried through the rows where it
+    has no direction. ``sg`` (m,) or (m, k); ``side`` a scalar or (k,)."""
+    n = len(sg)
+    rows = np.arange(n).reshape((n,) + (1,) * (sg.ndim - 1))
+    last = np.maximum.accumulate(np.where(sg != 0, rows, -1), axis=0)
+    out: np.ndarray = np.where(last >= 0, np.take_along_axis(sg, np.maximum(last, 0), 0), side)
+    return out
