@@ -49,7 +49,6 @@ from .points import PointChunk, Written
 from .profile import MOTORS, Profile, nominal_kinematics
 
 if TYPE_CHECKING:
-
     from .gcode import Motion
 
 

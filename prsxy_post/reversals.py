@@ -37,7 +37,6 @@ chord stands all along it.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -150,46 +149,7 @@ def _creeps(
     then creeping back (a table axis following the other's squareness while it
     moves alone) was seen to stay 17 µm "ahead" of it and left its part 0.61 µm
     behind (test_controller_truth's found programs)."""
-    out = np.zeros(len(sg), dtype=int)
-    start = 0
-    cur_side, cur_ref = side, ref
-    while start < len(sg):
-        seg, p = sg[start:], P[start:]
-        came, far = _farthest(seg, p, cur_side, cur_ref)
-        hits = np.flatnonzero((seg == 0) & (came * p - far < -drift))
-        if not hits.size:
-            # the rows from here on keep their signs: the last one's reach holds
-            return out, float(came[-1] * far[-1]) if np.isfinite(far[-1]) else math.nan
-        r = start + int(hits[0])
-        out[r] = -int(came[hits[0]])
-        cur_side, cur_ref = out[r], float(P[r])
-        start = r + 1
-    return out, cur_ref  # no rows, or the last row a reversal: it reaches there
-
-
-def _farthest(
-    sg: np.ndarray, P: np.ndarray, side: int, ref: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """The direction each row comes from (the last row's with one, else ``side``)
-    and how far that way the motor has got by then, as ``direction · position``
-    (−inf before any row with a direction when ``ref`` is NaN: nothing to measure
-    from). A running maximum that starts afresh at each row with a direction, made
-    in one pass by lifting each stretch above the one before (rounding: below a
-    picometre)."""
-    n = len(sg)
-    idx = np.where(sg != 0, np.arange(n), -1)
-    last = np.maximum.accumulate(idx)
-    came = np.where(last >= 0, sg[np.maximum(last, 0)], side)
-    v = came * P
-    if n == 0:
-        return came, v
-    stretch = np.cumsum(np.concatenate([[0], np.diff(last) != 0]))
-    lift = stretch * (float(np.max(v) - np.min(v)) + 1.0)
-    far = np.maximum.accumulate(v + lift) - lift
-    first = last < 0  # before any row with a direction: from where it came in
-    if np.any(first):
-        far[first] = -np.inf if np.isnan(ref) else np.maximum(far[first], side * ref)
-    return came, far
+    return kernel.creeps(sg, P, side, ref, drift)
 
 
 class Insertions:

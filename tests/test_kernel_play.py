@@ -34,6 +34,7 @@ ENTRIES: dict[str, Any] = {
     "_compensate_sided": play.compensate_sided,
     "_settle_crossings": play.settle_crossings,
     "_carried": play.carried,
+    "_creeps": play.creeps,
 }
 
 
@@ -51,6 +52,7 @@ RECORDED = {
     "_compensate_sided": 10,
     "_settle_crossings": 3,
     "_carried": 10,
+    "_creeps": 10,
 }
 #: what the settle calls inside the kernel (recorded from the reference settle on
 #: the recorded settles' inputs), and how often at least
@@ -355,6 +357,28 @@ def test_generated_carried_sides_are_identical(n: int, seed: int, columns: bool)
     got, want = _play.carried(sg, side), play.carried(sg, side)
     assert got.dtype == want.dtype and got.shape == want.shape
     assert np.array_equal(got, want)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.integers(0, 60),
+    st.integers(0, 2**32 - 1),
+    st.sampled_from([-1, 1]),
+    st.one_of(st.just(math.nan), st.floats(-50, 50)),
+    st.sampled_from([1e-4, 1e-3, 5e-3]),
+)
+def test_generated_creeps_are_bit_identical(
+    n: int, seed: int, side: int, ref: float, drift: float
+) -> None:
+    """Motors creeping (no direction) between rows with one, drifting back by more
+    and less than the allowance: the same reversals and the same reach, to the bit."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    sg = rng.choice([-1, 0, 0, 0, 1], n)
+    P = np.cumsum(rng.normal(0, 1e-3, n)) + rng.normal(0, 10)
+    got, want = _play.creeps(sg, P, side, ref, drift), play.creeps(sg, P, side, ref, drift)
+    assert np.array_equal(got[0], want[0]) and got[0].dtype == want[0].dtype
+    assert same_bits(np.array(got[1]), np.array(want[1]))
 
 
 def test_the_twin_turns_where_the_reference_does() -> None:

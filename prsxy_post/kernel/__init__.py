@@ -231,3 +231,15 @@ def carried(sg: np.ndarray, side: np.ndarray | float) -> np.ndarray:
     compiled when :data:`COMPILED`."""
     out: np.ndarray = _carried(sg, side)
     return out
+
+
+_creeps = _play_kernel.creeps
+
+
+def creeps(
+    sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float
+) -> tuple[np.ndarray, float]:
+    """Where a creeping motor drifted back: :func:`play.creeps`, compiled when
+    :data:`COMPILED`."""
+    out: tuple[np.ndarray, float] = _creeps(sg, P, side, ref, drift)
+    return out

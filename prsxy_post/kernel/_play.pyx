@@ -920,3 +920,66 @@ def carried(sg, side):
                 cur = x[i, j]
             o[i, j] = cur
     return out.reshape(a.shape).astype(dtype, copy=False)
+
+
+cdef Py_ssize_t _first_creep(const long* sg, const double* P, Py_ssize_t n, long side,
+                             double ref, double drift, long* came_out,
+                             double* far_out) noexcept nogil:
+    """:func:`play._farthest` over rows 0..n−1, then the first row that has drifted
+    back (``play.creeps``' hit), or −1; the last row's came and far go out."""
+    cdef Py_ssize_t i, last = -1, stretch = 0
+    cdef long came = side
+    cdef double v, vmax = -INFINITY, vmin = INFINITY, span, lift, acc = -INFINITY, far
+    cdef bint nan = False
+    # the lift needs the slice's span of came·P first (numpy's max, min: a NaN wins)
+    for i in range(n):
+        if sg[i] != 0:
+            came = sg[i]
+        v = came * P[i]
+        if v != v:
+            nan = True
+        else:
+            if v > vmax:
+                vmax = v
+            if v < vmin:
+                vmin = v
+    span = (NAN if nan else vmax - vmin) + 1.0
+    came = side
+    for i in range(n):
+        if sg[i] != 0:
+            if i >= 1 and last != i:
+                stretch += 1
+            last = i
+            came = sg[i]
+        v = came * P[i]
+        lift = stretch * span
+        acc = _max(acc, v + lift) if i else v + lift
+        far = acc - lift
+        if last < 0:
+            far = -INFINITY if ref != ref else _max(far, side * ref)
+        came_out[0] = came
+        far_out[0] = far
+        if sg[i] == 0 and came * P[i] - far < -drift:
+            return i
+    return -1
+
+
+def creeps(sg, P, side, double ref, double drift):
+    """Rows where a creeping motor drifted back: :func:`play.creeps`."""
+    cdef const long[::1] s = np.ascontiguousarray(sg, dtype=np.int_)
+    cdef const double[::1] p = _vec(P)
+    cdef Py_ssize_t n = s.shape[0], start = 0, r
+    out_a = np.zeros(n, dtype=int)
+    cdef long[::1] out = out_a
+    cdef long cur_side = int(side), came = 0
+    cdef double cur_ref = ref, far = 0.0
+    while start < n:
+        r = _first_creep(&s[start], &p[start], n - start, cur_side, cur_ref, drift, &came, &far)
+        if r < 0:
+            return out_a, (came * far if (far == far and far != INFINITY and far != -INFINITY) else NAN)
+        r += start
+        out[r] = -came
+        cur_side = out[r]
+        cur_ref = p[r]
+        start = r + 1
+    return out_a, cur_ref

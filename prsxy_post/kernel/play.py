@@ -17,6 +17,7 @@ twin calls too (on this machine it differs from the C library's pow in the last 
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -683,3 +684,55 @@ def carried(sg: np.ndarray, side: np.ndarray | float) -> np.ndarray:
     last = np.maximum.accumulate(np.where(sg != 0, rows, -1), axis=0)
     out: np.ndarray = np.where(last >= 0, np.take_along_axis(sg, np.maximum(last, 0), 0), side)
     return out
+
+
+def creeps(
+    sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float
+) -> tuple[np.ndarray, float]:
+    """Rows where a creeping motor (no direction in ``sg`` (n,)) has drifted back
+    by more than ``drift`` [mm] from the farthest it went its last way (positions
+    ``P`` (n,) [mm]; ``side`` and ``ref`` [mm] its way and reach before the chunk):
+    each becomes a reversal (the new sign), and the drift is measured afresh from
+    there. Also where the motor got farthest its last way by the last row (NaN
+    while it has had no direction). ``reversals._creeps`` tells why.
+    """
+    out = np.zeros(len(sg), dtype=int)
+    start = 0
+    cur_side, cur_ref = side, ref
+    while start < len(sg):
+        seg, p = sg[start:], P[start:]
+        came, far = _farthest(seg, p, cur_side, cur_ref)
+        hits = np.flatnonzero((seg == 0) & (came * p - far < -drift))
+        if not hits.size:
+            # the rows from here on keep their signs: the last one's reach holds
+            return out, float(came[-1] * far[-1]) if np.isfinite(far[-1]) else math.nan
+        r = start + int(hits[0])
+        out[r] = -int(came[hits[0]])
+        cur_side, cur_ref = out[r], float(P[r])
+        start = r + 1
+    return out, cur_ref  # no rows, or the last row a reversal: it reaches there
+
+
+def _farthest(
+    sg: np.ndarray, P: np.ndarray, side: int, ref: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The direction each row comes from (the last row's with one, else ``side``)
+    and how far that way the motor has got by then, as ``direction · position``
+    (−inf before any row with a direction when ``ref`` is NaN: nothing to measure
+    from). A running maximum that starts afresh at each row with a direction, made
+    in one pass by lifting each stretch above the one before (rounding: below a
+    picometre)."""
+    n = len(sg)
+    idx = np.where(sg != 0, np.arange(n), -1)
+    last = np.maximum.accumulate(idx)
+    came = np.where(last >= 0, sg[np.maximum(last, 0)], side)
+    v = came * P
+    if n == 0:
+        return came, v
+    stretch = np.cumsum(np.concatenate([[0], np.diff(last) != 0]))
+    lift = stretch * (float(np.max(v) - np.min(v)) + 1.0)
+    far = np.maximum.accumulate(v + lift) - lift
+    first = last < 0  # before any row with a direction: from where it came in
+    if np.any(first):
+        far[first] = -np.inf if np.isnan(ref) else np.maximum(far[first], side * ref)
+    return came, far
