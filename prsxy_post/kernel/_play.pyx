@@ -94,6 +94,25 @@ cdef inline double _at(double x, Py_ssize_t j, const double* xp, const double* f
     return r
 
 
+cdef inline double _at_s(double x, Py_ssize_t j, const double* xp, const double* fp,
+                         const double* slopes, Py_ssize_t n) noexcept nogil:
+    """:func:`_at` with the intervals' slopes made beforehand (numpy makes them so
+    when there are fewer table points than points asked for: the same division)."""
+    cdef double r
+    if j == -1:
+        return fp[0]
+    if j >= n - 1:
+        return fp[n - 1]
+    if xp[j] == x:
+        return fp[j]
+    r = slopes[j] * (x - xp[j]) + fp[j]
+    if r != r:
+        r = slopes[j] * (x - xp[j + 1]) + fp[j + 1]
+        if r != r and fp[j] == fp[j + 1]:
+            r = fp[j]
+    return r
+
+
 cdef inline double _interp(double x, const double* xp, const double* fp, Py_ssize_t n) noexcept nogil:
     """numpy's interp at one x."""
     if n == 1:
@@ -133,8 +152,8 @@ cdef inline Py_ssize_t _lo_hi(const Tab* t, double p, double* lo, double* hi,
         hi[0] = lo[0]
     else:
         j = _find(p, t.breaks, t.nb, g)
-        lo[0] = p + _at(p, j, t.breaks, t.lo_err, t.nb) + c
-        hi[0] = p + _at(p, j, t.breaks, t.hi_err, t.nb) + c
+        lo[0] = p + _at_s(p, j, t.breaks, t.lo_err, t.s_lo, t.nb) + c
+        hi[0] = p + _at_s(p, j, t.breaks, t.hi_err, t.s_hi, t.nb) + c
     return j
 
 
@@ -200,6 +219,9 @@ cdef class _Table:
 
 
 cdef _Table _table(t):
+    # the settle hands its pieces the table it made once
+    if type(t) is _Table:
+        return <_Table>t
     return _Table(t)
 
 
@@ -712,6 +734,7 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
     """The crossings ended where the parts stand: :func:`play.settle_crossings`."""
     mo = type(mo)(*[np.ascontiguousarray(a, dtype=np.float64) for a in mo])
     shortfall = np.ascontiguousarray(shortfall, dtype=np.float64)
+    t = _table(t)
     P_a = np.array(P, dtype=np.float64)
     V_a = np.array(V, dtype=np.float64)
     cdef double[::1] Pv = P_a
