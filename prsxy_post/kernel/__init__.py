@@ -1,8 +1,10 @@
 """The kernel: per-point numerical work as functions over arrays.
 
-Each kernel has a numpy reference (``ik.py``, ``text.py``) and a compiled twin in
-Cython (``_ik.pyx``, ``_text.pyx``, built when the package is installed) that gives
-the same bits. This module picks one set for the whole program, once, at import:
+Each kernel has a numpy reference (``ik.py``, ``text.py``, ``play.py``: the
+real-axis play model, the crossings' settle and catch-up) and a compiled twin in
+Cython (``_ik.pyx``, ``_text.pyx``, ``_play.pyx``, built when the package is
+installed) that gives the same bits. This module picks one set for the whole
+program, once, at import:
 
 - ``PRSXY_KERNEL=pure`` in the environment: the numpy reference (CI's pure leg);
 - otherwise the compiled kernels when the extension imports, else the reference.
