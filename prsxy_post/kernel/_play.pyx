@@ -370,6 +370,57 @@ def clamp_scan(lo, hi):
     return out
 
 
+cdef Py_ssize_t _roots(const double* Pa, const double* Va, const double* P, const double* V,
+                       const double* hv, Py_ssize_t n, bint cubic, signed char* kind,
+                       double* S) noexcept nogil:
+    """Each step's turning points inside it (0, 1 or 2 into ``kind``; their
+    fractions into the rows of S (n, 2), NaN for a missing second), as
+    :func:`play.follow_stretches` finds them; returns how many steps turn."""
+    cdef Py_ssize_t i, nt = 0
+    cdef double h, hh, d, a, b, c, disc, sq, r1, r2
+    cdef bint ok1, ok2
+    for i in range(n):
+        h = hv[i]
+        hh = h if h > 0 else INFINITY
+        d = (Pa[i] - P[i]) / hh
+        a = 6.0 * d + 3.0 * (Va[i] + V[i])
+        b = -6.0 * d - 4.0 * Va[i] - 2.0 * V[i]
+        c = Va[i]
+        disc = b * b - 4.0 * a * c
+        sq = sqrt(_max(disc, 0.0))
+        if fabs(a) > 1e-300:
+            r1 = (-b - sq) / (2 * a)
+            r2 = (-b + sq) / (2 * a)
+        else:
+            r1 = -c / b if b != 0 else -1.0
+            r2 = -1.0
+        ok1 = disc >= 0 and r1 > 0 and r1 < 1 and h > 0 and cubic
+        ok2 = disc >= 0 and r2 > 0 and r2 < 1 and h > 0 and fabs(r2 - r1) > 0 and cubic
+        kind[i] = 0
+        if ok1 and ok2:
+            S[2 * nt] = _min(r1, r2)
+            S[2 * nt + 1] = _max(r1, r2)
+            kind[i] = 2
+            nt += 1
+        elif ok1 or ok2:
+            S[2 * nt] = r1 if ok1 else r2
+            S[2 * nt + 1] = NAN
+            kind[i] = 1
+            nt += 1
+    return nt
+
+
+cdef inline double _hermite(double s, double s3, double P0, double V0, double P1,
+                            double V1, double h) noexcept nogil:
+    """:func:`play.hermite` at one fraction s (its cube ``s3`` as numpy made it)."""
+    cdef double s2 = s * s
+    cdef double h00 = 2 * s3 - 3 * s2 + 1
+    cdef double h10 = s3 - 2 * s2 + s
+    cdef double h01 = -2 * s3 + 3 * s2
+    cdef double h11 = s3 - s2
+    return h00 * P0 + h10 * (h * V0) + h01 * P1 + h11 * (h * V1)
+
+
 def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
     """The part along the commands' cubics: :func:`play.follow_stretches`."""
     cdef _Table tb = _table(t)
@@ -404,50 +455,18 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
     cdef signed char[::1] kind = kind_a
     S_a = np.empty((n, 2))
     cdef double[:, ::1] S = S_a
-    cdef double h, hh, d, a, b, c, disc, sq, r1, r2
-    cdef bint ok1, ok2
     i = 0
     for j in range(w):
         for k in range(st[j]):
-            if k == 0:
-                Pa[i] = P0v[j]
-                Va[i] = V0v[j]
-            else:
-                Pa[i] = Pv[i - 1]
-                Va[i] = Vv[i - 1]
+            Pa[i] = P0v[j] if k == 0 else Pv[i - 1]
+            Va[i] = V0v[j] if k == 0 else Vv[i - 1]
             i += 1
-    for i in range(n):
-        h = hv[i]
-        hh = h if h > 0 else INFINITY
-        d = (Pa[i] - Pv[i]) / hh
-        a = 6.0 * d + 3.0 * (Va[i] + Vv[i])
-        b = -6.0 * d - 4.0 * Va[i] - 2.0 * Vv[i]
-        c = Va[i]
-        disc = b * b - 4.0 * a * c
-        sq = sqrt(_max(disc, 0.0))
-        if fabs(a) > 1e-300:
-            r1 = (-b - sq) / (2 * a)
-            r2 = (-b + sq) / (2 * a)
-        else:
-            r1 = -c / b if b != 0 else -1.0
-            r2 = -1.0
-        ok1 = disc >= 0 and r1 > 0 and r1 < 1 and h > 0 and cubic
-        ok2 = disc >= 0 and r2 > 0 and r2 < 1 and h > 0 and fabs(r2 - r1) > 0 and cubic
-        if ok1 and ok2:
-            S[nt, 0] = _min(r1, r2)
-            S[nt, 1] = _max(r1, r2)
-            kind[i] = 2
-            nt += 1
-        elif ok1 or ok2:
-            S[nt, 0] = r1 if ok1 else r2
-            S[nt, 1] = NAN
-            kind[i] = 1
-            nt += 1
+    nt = _roots(&Pa[0], &Va[0], &Pv[0], &Vv[0], &hv[0], n, cubic, &kind[0], &S[0, 0])
     # s**3 as the reference takes it: numpy's power over the (turns, 2) array
     cdef double[:, ::1] S3
     if nt:
         S3 = np.ascontiguousarray(S_a[:nt]) ** 3
-    cdef double s, s2, s3, h00, h10, h01, h11, x, y = 0.0, lo_x, hi_x, mn, mx
+    cdef double x, y = 0.0, lo_x, hi_x, mn, mx
     cdef bint started = False
     cdef Py_ssize_t g = -1
     i = 0
@@ -462,15 +481,7 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
             mx = -INFINITY
             for m in range(kind[i] + 1):
                 if m < kind[i]:
-                    s = S[ti, m]
-                    s3 = S3[ti, m]
-                    s2 = s * s
-                    h00 = 2 * s3 - 3 * s2 + 1
-                    h10 = s3 - 2 * s2 + s
-                    h01 = -2 * s3 + 3 * s2
-                    h11 = s3 - s2
-                    h = hv[i]
-                    x = h00 * Pa[i] + h10 * (h * Va[i]) + h01 * Pv[i] + h11 * (h * Vv[i])
+                    x = _hermite(S[ti, m], S3[ti, m], Pa[i], Va[i], Pv[i], Vv[i], hv[i])
                 else:
                     x = Pv[i]
                 g = _lo_hi(T, x, &lo_x, &hi_x, g)
@@ -501,6 +512,105 @@ cdef inline double _sign(double x) noexcept nogil:
     return x
 
 
+cdef void _taken_up_ahead(const double* off, const double* wy, const signed char* ahead,
+                          const double* rate, const long* length, Py_ssize_t m,
+                          const long* idx, const double* s, const double* dP,
+                          const double* Vm, const double* speed, double* mag,
+                          double* steep_motor) noexcept nogil:
+    """:func:`play._taken_up_ahead`: the take summed over every crossing's points in
+    one running sum, each range's sum less the sum before it (as the reference)."""
+    cdef Py_ssize_t i, j, k = 0
+    cdef double cum = 0.0, before, ds, take, w, sv
+    for i in range(m):
+        before = cum
+        w = wy[i]
+        for j in range(length[i]):
+            if ahead[i]:
+                ds = s[idx[k]] - (s[idx[k] - 1] if idx[k] >= 1 else 0.0)
+                take = _min(rate[i] * ds, _max(0.5 * w * dP[idx[k]], 0.0))
+            else:
+                take = 0.0
+            cum = cum + take
+            if ahead[i]:
+                mag[k] = _max(fabs(off[i]) - (cum - before), 0.0)
+                sv = speed[idx[k]]
+                if sv > 0:
+                    steep_motor[k] = _max(0.5 * w * Vm[idx[k]], 0.0) / sv
+            k += 1
+
+
+cdef void _left_at_last(const double* off, const long* st, const long* last,
+                        const double* s0, const double* rate, const long* length,
+                        const signed char* ahead, bint any_ahead, Py_ssize_t m,
+                        const double* s, const double* mag, double* left) noexcept nogil:
+    """:func:`play._left_at_last`."""
+    cdef Py_ssize_t i, k = 0
+    cdef double s_last, lm
+    for i in range(m):
+        s_last = s[last[i] if last[i] > 0 else 0] if last[i] > st[i] else s0[i]
+        lm = _max(fabs(off[i]) - rate[i] * (s_last - s0[i]), 0.0)
+        k += length[i]
+        if any_ahead and ahead[i]:
+            lm = mag[k - 1] if length[i] > 0 else fabs(off[i])
+        left[i] = copysign(lm, off[i])
+
+
+cdef Py_ssize_t _rates(const double* off, const signed char* ahead, const long* st,
+                       const long* sp, Py_ssize_t m, const double* s, Py_ssize_t n,
+                       double share, double hurry, double* s0, double* rate, long* last,
+                       long* length) noexcept nogil:
+    """Each crossing's path length at its start, the last point carrying its offset,
+    its rate (:func:`play._catch_up_rates`) and how many points take it up (to
+    where the path has run the offset off: numpy's searchsorted, left); returns
+    the points of all."""
+    cdef Py_ssize_t i, lo_, hi_, mid, K = 0
+    cdef double room, need, key
+    cdef long gone, end, first
+    for i in range(m):
+        s0[i] = s[st[i] if st[i] > 0 else 0] if st[i] >= 0 else 0.0
+        last[i] = sp[i] if sp[i] < n else n - 1
+        room = s[last[i]] - s0[i] if (sp[i] < n and last[i] > st[i]) else 0.0
+        need = fabs(off[i]) / room if room > 0 else INFINITY
+        rate[i] = _max(need, share) if need <= hurry * share else share
+        key = s0[i] + fabs(off[i]) / rate[i]
+        lo_ = 0
+        hi_ = n
+        while lo_ < hi_:
+            mid = (lo_ + hi_) >> 1
+            if _lt(s[mid], key):
+                lo_ = mid + 1
+            else:
+                hi_ = mid
+        gone = lo_
+        end = last[i] + 1 if ahead[i] else (last[i] + 1 if last[i] + 1 < gone else gone)
+        first = st[i] + 1
+        length[i] = end - first if end - first > 0 else 0
+        K += length[i]
+    return K
+
+
+cdef void _slopes(const double* off, const double* rate, const long* length, Py_ssize_t m,
+                  const long* idx, const double* mag, const double* steep_motor,
+                  const double* s, Py_ssize_t n, long* oidx, double* ooff,
+                  double* oslope) noexcept nogil:
+    """:func:`play._catch_up_slopes` at the points with an offset left, which go
+    out with their offsets."""
+    cdef Py_ssize_t i, jj, j = 0, k = 0
+    cdef double ah, stp, offk
+    for i in range(m):
+        for jj in range(length[i]):
+            if mag[k] > 0:
+                offk = copysign(mag[k], off[i])
+                ah = s[idx[k] + 1] - s[idx[k]] if idx[k] + 1 < n else INFINITY
+                stp = _min(rate[i], mag[k] / ah if ah > 0 else INFINITY)
+                stp = _min(stp, steep_motor[k])
+                oidx[j] = idx[k]
+                ooff[j] = offk
+                oslope[j] = -_sign(offk) * stp
+                j += 1
+            k += 1
+
+
 def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=None):
     """The offsets taken up after crossings: :func:`play.catch_up`."""
     cdef const double[::1] o0 = _vec(off0)
@@ -508,7 +618,7 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
     cdef const long[::1] st = np.ascontiguousarray(start, dtype=np.int_)
     cdef const long[::1] sp = np.ascontiguousarray(stop, dtype=np.int_)
     cdef const double[::1] s = _vec(s_path)
-    cdef Py_ssize_t m = o0.shape[0], n = s.shape[0], i, j, k, K, lo_, hi_, mid
+    cdef Py_ssize_t m = o0.shape[0], n = s.shape[0], i, j, k, K
     cdef bint has_motion = motion is not None
     cdef const double[::1] dP
     cdef const double[::1] Vm
@@ -539,31 +649,9 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
     cdef double[::1] rate = rate_a
     cdef long[::1] last = last_a
     cdef long[::1] length = len_a
-    cdef double room, need, key, mag0
-    cdef long gone, end, first
-    K = 0
-    for i in range(m):
-        s0[i] = s[st[i] if st[i] > 0 else 0] if st[i] >= 0 else 0.0
-        last[i] = sp[i] if sp[i] < n else n - 1
-        # _catch_up_rates
-        room = s[last[i]] - s0[i] if (sp[i] < n and last[i] > st[i]) else 0.0
-        need = fabs(off[i]) / room if room > 0 else INFINITY
-        rate[i] = _max(need, share) if need <= hurry * share else share
-        # the first point where the path has run the offset off: searchsorted left
-        key = s0[i] + fabs(off[i]) / rate[i]
-        lo_ = 0
-        hi_ = n
-        while lo_ < hi_:
-            mid = (lo_ + hi_) >> 1
-            if _lt(s[mid], key):
-                lo_ = mid + 1
-            else:
-                hi_ = mid
-        gone = lo_
-        end = last[i] + 1 if ahead[i] else (last[i] + 1 if last[i] + 1 < gone else gone)
-        first = st[i] + 1
-        length[i] = end - first if end - first > 0 else 0
-        K += length[i]
+    cdef double mag0
+    K = _rates(&off[0], &ahead[0], &st[0], &sp[0], m, &s[0], n, share, hurry, &s0[0],
+               &rate[0], &last[0], &length[0])
     idx_a = np.empty(K, dtype=np.int_)
     mag_a = np.empty(K)
     steep_a = np.full(K, INFINITY)
@@ -577,39 +665,14 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
             idx[k] = st[i] + 1 + j
             mag[k] = _max(mag0 - rate[i] * (s[idx[k]] - s0[i]), 0.0)
             k += 1
-    cdef double cum = 0.0, before, ds, take, w, sv
     if has_motion and any_ahead:
-        # _taken_up_ahead: the take summed over every crossing's points in one
-        # running sum, each range's sum less the sum before it (as the reference)
-        k = 0
-        for i in range(m):
-            before = cum
-            w = wy[i]
-            for j in range(length[i]):
-                if ahead[i]:
-                    ds = s[idx[k]] - (s[idx[k] - 1] if idx[k] >= 1 else 0.0)
-                    take = _min(rate[i] * ds, _max(0.5 * w * dP[idx[k]], 0.0))
-                else:
-                    take = 0.0
-                cum = cum + take
-                if ahead[i]:
-                    mag[k] = _max(fabs(off[i]) - (cum - before), 0.0)
-                    sv = speed[idx[k]]
-                    if sv > 0:
-                        steep_motor[k] = _max(0.5 * w * Vm[idx[k]], 0.0) / sv
-                k += 1
-    # _left_at_last
+        _taken_up_ahead(&off[0], &wy[0], &ahead[0], &rate[0], &length[0], m, &idx[0] if K else NULL,
+                        &s[0], &dP[0], &Vm[0], &speed[0], &mag[0] if K else NULL,
+                        &steep_motor[0] if K else NULL)
     left_a = np.empty(m)
     cdef double[::1] left = left_a
-    cdef double s_last, lm
-    k = 0
-    for i in range(m):
-        s_last = s[last[i] if last[i] > 0 else 0] if last[i] > st[i] else s0[i]
-        lm = _max(fabs(off[i]) - rate[i] * (s_last - s0[i]), 0.0)
-        k += length[i]
-        if any_ahead and ahead[i]:
-            lm = mag[k - 1] if length[i] > 0 else fabs(off[i])
-        left[i] = copysign(lm, off[i])
+    _left_at_last(&off[0], &st[0], &last[0], &s0[0], &rate[0], &length[0], &ahead[0],
+                  any_ahead, m, &s[0], &mag[0] if K else NULL, &left[0])
     # _catch_up_slopes, and only the points with an offset left
     cdef Py_ssize_t nk = 0
     for k in range(K):
@@ -621,21 +684,9 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
     cdef long[::1] oidx = oidx_a
     cdef double[::1] ooff = ooff_a
     cdef double[::1] oslope = oslope_a
-    cdef double ah, stp, offk
-    k = 0
-    j = 0
-    for i in range(m):
-        for _ in range(length[i]):
-            if mag[k] > 0:
-                offk = copysign(mag[k], off[i])
-                ah = s[idx[k] + 1] - s[idx[k]] if idx[k] + 1 < n else INFINITY
-                stp = _min(rate[i], mag[k] / ah if ah > 0 else INFINITY)
-                stp = _min(stp, steep_motor[k])
-                oidx[j] = idx[k]
-                ooff[j] = offk
-                oslope[j] = -_sign(offk) * stp
-                j += 1
-            k += 1
+    if nk:
+        _slopes(&off[0], &rate[0], &length[0], m, &idx[0], &mag[0], &steep_motor[0], &s[0], n,
+                &oidx[0], &ooff[0], &oslope[0])
     return oidx_a, ooff_a, oslope_a, left_a
 
 
@@ -799,44 +850,26 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
     return _pure.Settled(P_a, V_a, y_s[k], Pv[upto - 1], Vv[upto - 1], carry)
 
 
-def _reckon_again(t, mo, x, list todo_l, double[::1] y_s, double[::1] left, P_a, V_a,
-                  bint cubic, double share, double hurry):
-    """One round: :func:`play._reckon_again`."""
-    cdef const long[::1] e
-    cdef const long[::1] b
-    cdef const signed char[::1] u
-    cdef long[::1] stops
-    cdef double[::1] made
-    e, b, u, short_a, stops, made, P_made_a, V_made_a = x
-    cdef const double[::1] shortfall = short_a
-    cdef const double[::1] P_made = P_made_a
-    cdef const double[::1] V_made = V_made_a
-    cdef double[::1] Pv = P_a
-    cdef double[::1] Vv = V_a
-    cdef const double[::1] dt = mo.dt
-    cdef const double[::1] Pi = mo.P_ideal
-    cdef Py_ssize_t n = Pv.shape[0], c = e.shape[0], w = len(todo_l), i, j, k, K = 0
-    cdef Py_ssize_t ti, ep, ej, bj, into, base
-    todo_a = np.array(todo_l, dtype=np.int_)
-    cdef const long[::1] todo = todo_a
+def _stretches(const long[::1] e, const long[::1] todo, const double[::1] y_s,
+               const double[::1] Pv, const double[::1] Vv, const double[::1] dt,
+               const double[::1] made):
+    """The stretches a round follows (:func:`play._reckon_again`): from each
+    crossing before to each crossing's end, its end as made; returns follow's
+    y0, P0, V0, P, V, dt and steps."""
+    cdef Py_ssize_t w = todo.shape[0], i, j, k = 0, K = 0, ti, ep
     span_a = np.empty(w, dtype=np.int_)
     cdef long[::1] span = span_a
     for i in range(w):
         span[i] = e[todo[i]] - e[todo[i] - 1]
         K += span[i]
-    y0_a = np.empty(w)
-    P0_a = np.empty(w)
-    V0_a = np.empty(w)
-    Pw_a = np.empty(K)
-    Vw_a = np.empty(K)
-    dtw_a = np.empty(K)
+    y0_a, P0_a, V0_a = np.empty(w), np.empty(w), np.empty(w)
+    Pw_a, Vw_a, dtw_a = np.empty(K), np.empty(K), np.empty(K)
     cdef double[::1] y0 = y0_a
     cdef double[::1] P0 = P0_a
     cdef double[::1] V0 = V0_a
     cdef double[::1] Pw = Pw_a
     cdef double[::1] Vw = Vw_a
     cdef double[::1] dtw = dtw_a
-    k = 0
     for i in range(w):
         ti = todo[i]
         ep = e[ti - 1]
@@ -855,23 +888,68 @@ def _reckon_again(t, mo, x, list todo_l, double[::1] y_s, double[::1] left, P_a,
         k += span[i]
         if K:
             Pw[k - 1 if k >= 1 else K - 1] = made[todo[i]]
-    y_w_a, lo_w_a, hi_w_a = follow_stretches(
-        t, y0_a, P0_a, V0_a, Pw_a, Vw_a, dtw_a, span_a, cubic
-    )
+    return y0_a, P0_a, V0_a, Pw_a, Vw_a, dtw_a, span_a
+
+
+def _taken_again(const long[::1] e, const long[::1] stops, const long[::1] todo,
+                 double[::1] y_s, const double[::1] ys, const double[::1] ct,
+                 double[::1] Pv, double[::1] Vv, const double[::1] P_made,
+                 const double[::1] V_made, const double[::1] Pi):
+    """A round's crossings ended where their parts stand (``ys``, commands ``ct``),
+    the take-up after each back to the commands as made; returns the offsets,
+    starts and stops of the take-ups to make again."""
+    cdef Py_ssize_t w = todo.shape[0], n = Pv.shape[0], i, j, ti, ej, hi_end
+    off_a = np.empty(w)
+    ej_a = np.empty(w, dtype=np.int_)
+    st_a = np.empty(w, dtype=np.int_)
+    cdef double[::1] off = off_a
+    cdef long[::1] ejv = ej_a
+    cdef long[::1] stv = st_a
+    for i in range(w):
+        y_s[todo[i]] = ys[i]
+    for i in range(w):
+        Pv[e[todo[i]]] = ct[i]
+    for i in range(w):
+        ti = todo[i]
+        ej = e[ti]
+        hi_end = stops[ti] + 1 if stops[ti] + 1 < n else n
+        for j in range(ej + 1, hi_end):
+            Pv[j] = P_made[j]
+            Vv[j] = V_made[j]
+        off[i] = y_s[ti] - Pi[ej]
+        ejv[i] = ej
+        stv[i] = stops[ti]
+    return off_a, ej_a, st_a
+
+
+def _reckon_again(t, mo, x, list todo_l, double[::1] y_s, double[::1] left, P_a, V_a,
+                  bint cubic, double share, double hurry):
+    """One round: :func:`play._reckon_again`."""
+    cdef const long[::1] e
+    cdef const long[::1] b
+    cdef const signed char[::1] u
+    cdef long[::1] stops
+    cdef double[::1] made
+    e, b, u, short_a, stops, made, P_made_a, V_made_a = x
+    cdef const double[::1] shortfall = short_a
+    cdef Py_ssize_t c = e.shape[0], w = len(todo_l), i, K, ti, ep, into, base = 0
+    todo_a = np.array(todo_l, dtype=np.int_)
+    cdef const long[::1] todo = todo_a
+    args = _stretches(e, todo, y_s, P_a, V_a, mo.dt, made)
+    cdef const long[::1] span = args[6]
+    K = args[3].shape[0]
+    y_w_a, lo_w_a, hi_w_a = follow_stretches(t, *args, cubic)
     cdef const double[::1] y_w = y_w_a
     cdef const double[::1] lo_w = lo_w_a
     cdef const double[::1] hi_w = hi_w_a
-    beg_a = np.empty(w)
+    beg_a, ys_a, sh_a = np.empty(w), np.empty(w), np.empty(w)
     cuts_a = np.empty(2 * w, dtype=np.int_)
     uu_a = np.empty(w, dtype=np.int8)
-    ys_a = np.empty(w)
-    sh_a = np.empty(w)
     cdef double[::1] beg = beg_a
     cdef long[::1] cuts = cuts_a
     cdef signed char[::1] uu = uu_a
     cdef double[::1] ys = ys_a
     cdef double[::1] sh = sh_a
-    base = 0
     for i in range(w):
         ti = todo[i]
         ep = e[ti - 1]
@@ -883,32 +961,10 @@ def _reckon_again(t, mo, x, list todo_l, double[::1] y_s, double[::1] left, P_a,
         sh[i] = shortfall[ti]
         base += span[i]
     _extreme(&lo_w[0], &hi_w[0], K, &cuts[0], &beg[0], &uu[0], &ys[0], w)
-    cdef const double[::1] ct = _contact(t, ys_a, uu_a, sh_a)
-    off_a = np.empty(w)
-    ej_a = np.empty(w, dtype=np.int_)
-    st_a = np.empty(w, dtype=np.int_)
-    cdef double[::1] off = off_a
-    cdef long[::1] ejv = ej_a
-    cdef long[::1] stv = st_a
-    cdef Py_ssize_t hi_end
-    for i in range(w):
-        ti = todo[i]
-        y_s[ti] = ys[i]
-    for i in range(w):
-        ti = todo[i]
-        ej = e[ti]
-        Pv[ej] = ct[i]
-    for i in range(w):
-        ti = todo[i]
-        ej = e[ti]
-        # their own take-up again, from the commands as made
-        hi_end = stops[ti] + 1 if stops[ti] + 1 < n else n
-        for j in range(ej + 1, hi_end):
-            Pv[j] = P_made[j]
-            Vv[j] = V_made[j]
-        off[i] = y_s[ti] - Pi[ej]
-        ejv[i] = ej
-        stv[i] = stops[ti]
+    ct = _contact(t, ys_a, uu_a, sh_a)
+    off_a, ej_a, st_a = _taken_again(
+        e, stops, todo, y_s, ys_a, ct, P_a, V_a, P_made_a, V_made_a, mo.P_ideal
+    )
     new_left_a, carry = catch_up_commands(t, mo, off_a, ej_a, st_a, P_a, V_a, share, hurry)
     cdef const double[::1] new_left = new_left_a
     moved = []
