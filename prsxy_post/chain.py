@@ -1132,7 +1132,7 @@ class Pipeline:
         if self.limits.segment == "cubic" or not np.any(inner > 0):
             return
         w = np.flatnonzero(inner > 0)
-        idx = reversals.ranges(b[w] + 1, inner[w])
+        idx = play.ranges(b[w] + 1, inner[w])
         bb, ee = np.repeat(b[w], inner[w]), np.repeat(e[w], inner[w])
         t = np.cumsum(pc.dt)  # since the point before the chunk
         t_b = np.where(bb >= 0, t[np.maximum(bb, 0)], 0.0)

@@ -43,7 +43,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernel
-from .kernel.play import PlayTable, ranges
+from .kernel.play import PlayTable
 from .kernel.play import hermite as _hermite
 from .kernel.play import velocity_quadratic as _velocity_quadratic
 
@@ -1322,25 +1322,25 @@ def sides(
     s_col = np.array([c for _, c, _ in ins.stands], dtype=int)
     s_new = np.array([n for _, _, n in ins.stands], dtype=int)
     for col in cols:
-        sg = np.where(resting, 0, signs(V[:, col]))
         mine = np.flatnonzero(ins.w_col == col)
         mine = mine[np.argsort(e_all[mine], kind="stable")]
-        f, e, new = f_all[mine], e_all[mine], ins.w_new[mine]
-        # the points after a window's end inside its step (another motor's window,
-        # a blend's point before a corner) are on the new side: where the path turns a corner
-        # the cubic's root is before the corner, the plan's velocity turns at it
-        after = np.maximum(last_row[mine] - e - 1, 0)
-        sg[ranges(e + 1, after)] = np.repeat(new, after)
-        # two crossings in one step (a dip): the second's old side starts after the
-        # first's end
-        f = np.maximum(f, np.concatenate([[0], e[:-1] + 1]))
-        length = np.maximum(e - f, 0)
-        idx = ranges(f, length)
-        sg[idx] = np.repeat(-new, length)
-        sg[e] = new
         here = s_col == col
-        sg[rows.first(s_k[here])] = s_new[here]
-        out[:, col] = carried(sg, side[col])
+        # the points after a window's end inside its step (another motor's window,
+        # a blend's point before a corner) are on the new side: where the path turns
+        # a corner the cubic's root is before the corner, the plan's velocity turns
+        # at it (kernel.play.motor_sides)
+        out[:, col] = kernel.motor_sides(
+            V[:, col],
+            resting,
+            f_all[mine],
+            e_all[mine],
+            ins.w_new[mine],
+            last_row[mine],
+            rows.first(s_k[here]),
+            s_new[here],
+            int(side[col]),
+            V_EPS,
+        )
     return out
 
 

@@ -35,6 +35,7 @@ ENTRIES: dict[str, Any] = {
     "_settle_crossings": play.settle_crossings,
     "_carried": play.carried,
     "_creeps": play.creeps,
+    "_motor_sides": play.motor_sides,
 }
 
 
@@ -53,6 +54,7 @@ RECORDED = {
     "_settle_crossings": 3,
     "_carried": 10,
     "_creeps": 10,
+    "_motor_sides": 10,
 }
 #: what the settle calls inside the kernel (recorded from the reference settle on
 #: the recorded settles' inputs), and how often at least
@@ -75,7 +77,7 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
         want = ENTRIES[attr](*args)
         got = getattr(_play, attr.removeprefix("_play_").removeprefix("_"))(*args)
         assert _same(tuple(got) if attr == "_settle_crossings" else got, want), attr
-        if attr == "_carried":
+        if attr in ("_carried", "_motor_sides"):
             assert got.dtype == want.dtype
 
 
@@ -379,6 +381,28 @@ def test_generated_creeps_are_bit_identical(
     got, want = _play.creeps(sg, P, side, ref, drift), play.creeps(sg, P, side, ref, drift)
     assert np.array_equal(got[0], want[0]) and got[0].dtype == want[0].dtype
     assert same_bits(np.array(got[1]), np.array(want[1]))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(1, 50), st.integers(0, 2**32 - 1), st.integers(0, 4), st.integers(0, 3))
+def test_generated_motor_sides_are_identical(n: int, seed: int, w: int, s: int) -> None:
+    """Windows anywhere in a chunk (one ending before it, at −1; two in one step;
+    points after a window in its step), crossings at standing points, creeping
+    and resting rows: the same sides, the same type."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    V = rng.normal(0, 1e-3, n) * np.where(rng.random(n) < 0.5, 1.0, 1e4)
+    resting = rng.random(n) < 0.2
+    e = np.sort(rng.integers(-1, n, w))
+    f = np.maximum(e - rng.integers(0, 4, w), 0)
+    last_row = np.minimum(e + rng.integers(0, 4, w), n - 1)
+    new = rng.choice([-1, 1], w)
+    s_first = rng.integers(0, n, s)
+    s_new = rng.choice([-1, 1], s)
+    side = int(rng.choice([-1, 1]))
+    args = (V, resting, f, e, new, last_row, s_first, s_new, side, 5e-4)
+    got, want = _play.motor_sides(*args), play.motor_sides(*args)
+    assert got.dtype == want.dtype and np.array_equal(got, want)
 
 
 def test_the_twin_turns_where_the_reference_does() -> None:

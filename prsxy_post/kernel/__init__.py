@@ -245,3 +245,24 @@ def creeps(
     :data:`COMPILED`."""
     out: tuple[np.ndarray, float] = _creeps(sg, P, side, ref, drift)
     return out
+
+
+_motor_sides = _play_kernel.motor_sides
+
+
+def motor_sides(
+    V: np.ndarray,
+    resting: np.ndarray,
+    f: np.ndarray,
+    e: np.ndarray,
+    new: np.ndarray,
+    last_row: np.ndarray,
+    s_first: np.ndarray,
+    s_new: np.ndarray,
+    side: int,
+    eps: float,
+) -> np.ndarray:
+    """A motor's side at each point: :func:`play.motor_sides`, compiled when
+    :data:`COMPILED`."""
+    out: np.ndarray = _motor_sides(V, resting, f, e, new, last_row, s_first, s_new, side, eps)
+    return out

@@ -1062,3 +1062,37 @@ def creeps(sg, P, side, double ref, double drift):
         cur_ref = p[r]
         start = r + 1
     return out_a, cur_ref
+
+
+def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, double eps):
+    """A motor's side at each point: :func:`play.motor_sides` (a window ending at
+    −1 sets the last point, as numpy's index −1 does)."""
+    cdef const double[::1] v = _vec(V)
+    cdef const unsigned char[::1] rest = np.ascontiguousarray(resting, dtype=np.uint8)
+    cdef const long[::1] fv = np.ascontiguousarray(f, dtype=np.int_)
+    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
+    cdef const long[::1] nv = np.ascontiguousarray(new, dtype=np.int_)
+    cdef const long[::1] lv = np.ascontiguousarray(last_row, dtype=np.int_)
+    cdef const long[::1] sf = np.ascontiguousarray(s_first, dtype=np.int_)
+    cdef const long[::1] sn = np.ascontiguousarray(s_new, dtype=np.int_)
+    cdef Py_ssize_t m = v.shape[0], w = ev.shape[0], i, j, k
+    cdef long lo_f
+    out = np.empty(m, dtype=int)
+    cdef long[::1] sg = out
+    for i in range(m):
+        sg[i] = 0 if rest[i] else (1 if v[i] > eps else (-1 if v[i] < -eps else 0))
+    for i in range(w):
+        for j in range(lv[i] - ev[i] - 1):
+            sg[ev[i] + 1 + j] = nv[i]
+    for i in range(w):
+        lo_f = 0 if i == 0 else ev[i - 1] + 1
+        lo_f = fv[i] if fv[i] > lo_f else lo_f
+        for j in range(ev[i] - lo_f):
+            sg[lo_f + j] = -nv[i]
+    for i in range(w):
+        k = ev[i] if ev[i] >= 0 else ev[i] + m
+        sg[k] = nv[i]
+    for i in range(sf.shape[0]):
+        k = sf[i] if sf[i] >= 0 else sf[i] + m
+        sg[k] = sn[i]
+    return carried(out, side)

@@ -736,3 +736,36 @@ def _farthest(
     if np.any(first):
         far[first] = -np.inf if np.isnan(ref) else np.maximum(far[first], side * ref)
     return came, far
+
+
+def motor_sides(
+    V: np.ndarray,
+    resting: np.ndarray,
+    f: np.ndarray,
+    e: np.ndarray,
+    new: np.ndarray,
+    last_row: np.ndarray,
+    s_first: np.ndarray,
+    s_new: np.ndarray,
+    side: int,
+    eps: float,
+) -> np.ndarray:
+    """The side (+1, −1) a motor is on at each of a chunk's m points
+    (``reversals.sides`` tells the rules): the direction of its planned velocity
+    ``V`` (m,) [mm/s] (none while the path is ``resting`` or slower than ``eps``),
+    its w crossing windows (sorted by their ends ``e`` (w,), begun at the steps'
+    first plain points ``f``, to the side ``new``; ``last_row`` the last point of
+    each end's step) and its crossings at standing points (``s_first``, ``s_new``),
+    carried through the points without a direction from ``side``."""
+    sg = np.where(resting, 0, np.where(V > eps, 1, np.where(V < -eps, -1, 0)))
+    # the points after a window's end inside its step are on the new side
+    after = np.maximum(last_row - e - 1, 0)
+    sg[ranges(e + 1, after)] = np.repeat(new, after)
+    # two crossings in one step (a dip): the second's old side starts after the
+    # first's end
+    f = np.maximum(f, np.concatenate([[0], e[:-1] + 1]))
+    length = np.maximum(e - f, 0)
+    sg[ranges(f, length)] = np.repeat(-new, length)
+    sg[e] = new
+    sg[s_first] = s_new
+    return carried(sg, side)
