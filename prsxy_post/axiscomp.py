@@ -20,9 +20,12 @@ chunks with a :class:`PlayState`.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
+from . import kernel
+from .kernel.play import PlayTable, play_table
 from .profile import AxisComp, Effects, Profile
 
 #: A wanted position that moves by less than this between two points stands still.
@@ -57,10 +60,6 @@ class MotorTable:
     hi_err: np.ndarray
     cyclic: tuple[tuple[float, float, float], ...] = ()  # (amplitude, period, phase deg)
 
-    def _cyc(self, p: np.ndarray) -> np.ndarray | float:
-        """Periodic error terms (profile ``[[effects.cyclic]]``), both directions alike."""
-        return cyclic_error(p, self.cyclic)
-
     def with_cyclic(self, terms: tuple[tuple[float, float, float], ...]) -> MotorTable:
         return MotorTable(self.motor, self.breaks, self.lo_err, self.hi_err, terms)
 
@@ -78,43 +77,31 @@ class MotorTable:
         rb = np.interp(breaks, p, r)
         return cls(comp.motor, breaks, np.minimum(fb, rb), np.maximum(fb, rb))
 
+    @cached_property
+    def flat(self) -> PlayTable:
+        """The table as the kernel takes it (made once)."""
+        return play_table(self.breaks, self.lo_err, self.hi_err, self.cyclic)
+
     def lo(self, p: np.ndarray) -> np.ndarray:
         """Where the part ends when approached moving + (forward error)."""
-        return p + np.interp(p, self.breaks, self.lo_err) + self._cyc(p)
+        p = np.asarray(p, dtype=float)
+        return kernel.play_lo(self.flat, p.ravel()).reshape(p.shape)
 
     def hi(self, p: np.ndarray) -> np.ndarray:
         """Where the part ends when approached moving − (reverse error)."""
-        return p + np.interp(p, self.breaks, self.hi_err) + self._cyc(p)
-
-    def _solve(self, target: np.ndarray, err: np.ndarray) -> np.ndarray:
-        p = self._invert(target, self.breaks, err)
-        if self.cyclic:
-            # p = inv(T − cyc(p)): a contraction while |cyc'| ≪ 1 (µm over mm)
-            for _ in range(30):
-                p_new = self._invert(target - self._cyc(p), self.breaks, err)
-                if np.max(np.abs(p_new - p), initial=0.0) < 1e-13:
-                    p = p_new
-                    break
-                p = p_new
-        return p
-
-    @staticmethod
-    def _invert(target: np.ndarray, breaks: np.ndarray, err: np.ndarray) -> np.ndarray:
-        vals = breaks + err  # strictly increasing: the profile rejects slopes <= -0.5
-        out = np.interp(target, vals, breaks)
-        below = target < vals[0]
-        above = target > vals[-1]
-        out[below] = target[below] - err[0]
-        out[above] = target[above] - err[-1]
-        return out
+        p = np.asarray(p, dtype=float)
+        return kernel.play_hi(self.flat, p.ravel()).reshape(p.shape)
 
     def lo_inv(self, target: np.ndarray) -> np.ndarray:
-        """p with lo(p) = target."""
-        return self._solve(np.asarray(target, dtype=float), self.lo_err)
+        """p with lo(p) = target (the periodic terms by fixed-point iteration,
+        :func:`.kernel.play.lo_inv`)."""
+        t = np.asarray(target, dtype=float)
+        return kernel.play_lo_inv(self.flat, t.ravel()).reshape(t.shape)
 
     def hi_inv(self, target: np.ndarray) -> np.ndarray:
         """p with hi(p) = target."""
-        return self._solve(np.asarray(target, dtype=float), self.hi_err)
+        t = np.asarray(target, dtype=float)
+        return kernel.play_hi_inv(self.flat, t.ravel()).reshape(t.shape)
 
     def slope(self, p: np.ndarray, side: np.ndarray) -> np.ndarray:
         """d lo/dp (side > 0) or d hi/dp (side < 0) at p: how fast the driven part
@@ -122,18 +109,8 @@ class MotorTable:
         velocity. Piecewise-linear errors: the slope of the interval holding p
         (the one above it at a table point), zero outside the table."""
         p = np.asarray(p, dtype=float)
-        out = np.ones_like(p)
-        if len(self.breaks) > 1:
-            i = np.clip(np.searchsorted(self.breaks, p, side="right") - 1, 0, len(self.breaks) - 2)
-            inside = (p >= self.breaks[0]) & (p < self.breaks[-1])
-            db = np.diff(self.breaks)
-            s_lo = np.diff(self.lo_err) / db
-            s_hi = np.diff(self.hi_err) / db
-            out = out + np.where(inside, np.where(side > 0, s_lo[i], s_hi[i]), 0.0)
-        for amp, period, phase in self.cyclic:
-            w = 2 * np.pi / period
-            out = out + amp * w * np.cos(w * p + np.radians(phase))
-        return out
+        sd = np.broadcast_to(np.asarray(side), p.shape)
+        return kernel.play_slope(self.flat, p.ravel(), sd.ravel()).reshape(p.shape)
 
     @property
     def max_play(self) -> float:
@@ -152,29 +129,6 @@ class PlayState:
     y: float | None = None
     target: float | None = None
     command: float | None = None
-
-
-def _clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Prefix composition of y ↦ clamp(y, lo_k, hi_k), evaluated at y = −∞.
-
-    Clamps compose into clamps: clamp(clamp(y, a1, b1), a2, b2) =
-    clamp(y, clamp(a1, a2, b2), clamp(b1, a2, b2)). That makes the play model an
-    associative scan, done here in log2(N) vectorised doubling steps.
-    """
-    a = lo.copy()
-    b = hi.copy()
-    n = len(a)
-    off = 1
-    while off < n:
-        # clamp(x, lo, hi) = min(max(x, lo), hi), as np.clip defines it, without
-        # its per-call dispatch (this loop runs for every chunk and motor)
-        lo_k, hi_k = a[off:], b[off:]
-        a_new = np.minimum(np.maximum(a[:-off], lo_k), hi_k)
-        b_new = np.minimum(np.maximum(b[:-off], lo_k), hi_k)
-        a[off:] = a_new
-        b[off:] = b_new
-        off *= 2
-    return a
 
 
 def play_model(
@@ -197,9 +151,9 @@ def play_model(
     if state is not None and state.y is not None:
         lo = np.concatenate([[state.y], lo])
         hi = np.concatenate([[state.y], hi])
-        y = _clamp_scan(lo, hi)[1:]
+        y = kernel.clamp_scan(lo, hi)[1:]
     else:
-        y = _clamp_scan(lo, hi)
+        y = kernel.clamp_scan(lo, hi)
     if state is not None:
         state.y = float(y[-1])
     return y
@@ -259,13 +213,7 @@ def compensate_sided(table: MotorTable | None, target: np.ndarray, side: np.ndar
     target = np.asarray(target, dtype=float)
     if table is None or len(target) == 0:
         return target.copy()
-    up = side > 0
-    out = np.empty_like(target)
-    if np.any(up):
-        out[up] = table.lo_inv(target[up])
-    if not np.all(up):
-        out[~up] = table.hi_inv(target[~up])
-    return out
+    return kernel.compensate_sided(table.flat, target, np.asarray(side))
 
 
 def tables_by_motor(

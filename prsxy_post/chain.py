@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import axiscomp, kinematics, reversals
+from . import axiscomp, kernel, kinematics, reversals
 from . import effects as registry
 from . import rules as checks
 from .errors import LimitError, PrsxyError
@@ -44,12 +44,11 @@ from .interpolate.geometry import CURVE_SHARE, REVERSAL_SHARE
 from .interpolate.lookahead import KAPPA, REVERSAL_SLOPE, STAND_SLOPE
 from .interpolate.pieces import Pieces
 from .interpolate.sampling import sample, steps
+from .kernel import play
 from .points import PointChunk, Written
 from .profile import MOTORS, Profile, nominal_kinematics
 
 if TYPE_CHECKING:
-    from numpy.typing import ArrayLike
-
     from .gcode import Motion
 
 
@@ -957,7 +956,8 @@ class Pipeline:
         the motor's next crossing begins goes into that crossing, which is then
         reckoned again from where the part is (the part followed through the
         commands as written, :func:`.reversals.follow_stretches`), and what is left
-        at the chunk's end goes on in the next.
+        at the chunk's end goes on in the next. Per motor, the kernel does it over
+        arrays (:func:`.kernel.play.settle_crossings`).
         """
         s_path = self._path_run(pc)
         for col in self.play_cols:
@@ -999,15 +999,41 @@ class Pipeline:
         # made): a part left ahead of its way is taken up no faster than they go
         P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
         dP = np.diff(pc.P_ideal[:, col], prepend=P_before)
+        mo = play.Motion(
+            *(
+                np.ascontiguousarray(a, dtype=float)
+                for a in (
+                    pc.P_ideal[:, col],
+                    pc.V_ideal[:, col],
+                    dP,
+                    pc.speed,
+                    pc.dt,
+                    s_path,
+                    side[:, col],
+                )
+            )
+        )
         carried = self.catch.pop(col, 0.0)
         if carried:
             # what it leaves where the first crossing begins, the follow below sees
             stop = int(mine[0, 1]) if len(mine) else n
-            self._catch_up(pc, side, col, [carried], [-1], [stop], P_cmd, V_cmd, s_path, dP)
-        if len(mine):
-            y0, P0, V0 = self._settle_crossings(
-                pc, side, mine, col, (y0, P0, V0), P_cmd, V_cmd, s_path, dP
+            P, V = np.ascontiguousarray(P_cmd[:, col]), np.ascontiguousarray(V_cmd[:, col])
+            _, carry = kernel.catch_up_commands(
+                table.flat,
+                mo,
+                np.array([carried]),
+                np.array([-1]),
+                np.array([stop]),
+                P,
+                V,
+                reversals.CATCH_UP_SHARE,
+                reversals.CATCH_UP_HURRY,
             )
+            P_cmd[:, col], V_cmd[:, col] = P, V
+            if not np.isnan(carry):
+                self.catch[col] = carry
+        if len(mine):
+            y0, P0, V0 = self._settle_crossings(pc, mine, col, (y0, P0, V0), P_cmd, V_cmd, mo)
             # from the last contact on, the corrected commands carry the part
             rest = slice(int(mine[:, 0].max()) + 1, len(pc))
         else:
@@ -1015,7 +1041,7 @@ class Pipeline:
         if rest.start < len(pc):
             y0 = float(
                 reversals.follow(
-                    table, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest], cubic
+                    table.flat, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest], cubic
                 )[0][-1]
             )
         self.play_y[col] = y0
@@ -1034,156 +1060,44 @@ class Pipeline:
     def _settle_crossings(
         self,
         pc: PointChunk,
-        side: np.ndarray,
         mine: np.ndarray,
         col: int,
         before: tuple[float, float, float],
         P_cmd: np.ndarray,
         V_cmd: np.ndarray,
-        s_path: np.ndarray,
-        dP: np.ndarray,
+        mo: play.Motion,
     ) -> tuple[float, float, float]:
         """End each of motor ``col``'s crossings ``mine`` where its part really
         stands, followed from ``before`` (the part [mm], the command [mm, mm/s]
         before the chunk) through the commands as made, and take up the part's
-        offset after each (:meth:`_catch_up`), an offset carried into the next
-        crossing reckoned again (:meth:`_reckon_again`). ``dP`` (n,) [mm] the
-        motor's wanted move into each point. Returns the part, the command's
-        position and velocity at the last contact."""
-        n = len(pc)
+        offset after each, an offset carried into the next crossing reckoned again
+        (:func:`.kernel.play.settle_crossings`); ``mo`` the motor's columns. Returns
+        the part, the command's position and velocity at the last contact."""
         cubic = self.limits.segment == "cubic"
         table = self.tables[MOTORS[col]]
-        y0, P0, V0 = before
         e, b = mine[:, 0], mine[:, 1]
-        self._across(pc, e, b, col, P0, P_cmd, V_cmd)
-        # followed up to the last contact only (the part's path is causal);
-        # from there the corrected commands carry it, below
-        upto = slice(0, int(e.max()) + 1)
-        y_pt, lo, hi = reversals.follow(
-            table, y0, P0, V0, P_cmd[upto, col], V_cmd[upto, col], pc.dt[upto], cubic
-        )
-        # where the part stands when the crossing begins: the extreme it
-        # reached on the old side, over the window (its start included)
-        at_beg = np.where(b >= 0, y_pt[np.maximum(b, 0)], y0)
-        first = np.maximum(b + 1, 0)
-        cuts = np.column_stack([first, e + 1]).ravel()
-        u = side[e, col] > 0  # the new side: up, so it was going down
-        y_s = self._extreme(lo, hi, cuts, at_beg, u)
+        self._across(pc, e, b, col, before[1], P_cmd, V_cmd)
         # a written digit short of the contact: rounded past it, the motor
         # would push its part within the window's last servo cycles
         short = self._crossing_short(pc.q_target[e], pc.tool_length[e], col)
-        stops = np.append(b[1:], n)
-        made_e = P_cmd[e, col].copy()
-        P_cmd[e, col] = self._contact_command(table, y_s, u, short)
-        x = reversals.Crossings(
-            e, b, u, short, stops, made_e, P_cmd[:, col].copy(), V_cmd[:, col].copy()
-        )
-        left = self._catch_up(
-            pc, side, col, y_s - pc.P_ideal[e, col], e, stops, P_cmd, V_cmd, s_path, dP
-        )
-        # a part still off where the next crossing begins takes that offset
-        # into it: the crossing is reckoned again from where the part is, the
-        # part followed from the crossing before through the commands as now
-        # written, and taken up again; until no crossing leaves the next
-        # another offset (a chain of them takes a round each)
-        carry = np.concatenate([[0.0], left[:-1]])
-        todo = np.flatnonzero(carry)
-        while todo.size:
-            todo = self._reckon_again(pc, side, col, x, todo, y_s, left, P_cmd, V_cmd, s_path, dP)
-            carry[todo] = left[todo - 1]
-        self._across(pc, e, b, col, P0, P_cmd, V_cmd)
-        # at the last contact the part meets the motor where it stands; from
-        # there on, the corrected commands carry it
-        last = int(e.max())
-        k = int(np.argmax(e))
-        return float(y_s[k]), float(P_cmd[last, col]), float(V_cmd[last, col])
-
-    def _reckon_again(
-        self,
-        pc: PointChunk,
-        side: np.ndarray,
-        col: int,
-        x: reversals.Crossings,
-        todo: np.ndarray,
-        y_s: np.ndarray,
-        left: np.ndarray,
-        P_cmd: np.ndarray,
-        V_cmd: np.ndarray,
-        s_path: np.ndarray,
-        dP: np.ndarray,
-    ) -> np.ndarray:
-        """One round of :meth:`_settle_crossings`: the crossings ``todo`` (indices
-        into ``x``), each taking in an offset the crossing before left, ended where
-        the part then stands (followed from the crossing before through the
-        commands as now written, its end as made) and their take-up made again.
-        Updates ``y_s`` (where each part stands, c,) and ``left`` (the offset each
-        leaves, c,) [mm] and the commands in place; returns the crossings the next
-        round reckons again (after one whose offset left changed)."""
-        n = len(pc)
-        cubic = self.limits.segment == "cubic"
-        table = self.tables[MOTORS[col]]
-        e, b, u, short, stops = x.end, x.beg, x.up, x.short, x.stops
-        ep, ej, bj = e[todo - 1], e[todo], b[todo]
-        span = ej - ep
-        pts = reversals.ranges(ep + 1, span)
-        P_w = P_cmd[pts, col]
-        P_w[np.cumsum(span) - 1] = x.made_end[todo]  # the crossings' ends as made
-        y_w, lo_w, hi_w = reversals.follow_stretches(
-            table,
-            y_s[todo - 1],
-            P_cmd[ep, col],
-            V_cmd[ep, col],
-            P_w,
-            V_cmd[pts, col],
-            pc.dt[pts],
-            span,
+        r = kernel.settle_crossings(
+            table.flat,
+            mo,
+            before,
+            e,
+            b,
+            short,
+            P_cmd[:, col],
+            V_cmd[:, col],
             cubic,
+            reversals.CATCH_UP_SHARE,
+            reversals.CATCH_UP_HURRY,
         )
-        base = np.cumsum(span) - span
-        into = np.maximum(bj - ep, 0)  # the window's first step in its stretch
-        beg = np.where(into > 0, y_w[base + into - 1], y_s[todo - 1])
-        cuts = np.column_stack([base + into, base + span]).ravel()
-        y_s[todo] = self._extreme(lo_w, hi_w, cuts, beg, u[todo])
-        P_cmd[ej, col] = self._contact_command(table, y_s[todo], u[todo], short[todo])
-        # their own take-up again, from the commands as made
-        redo = reversals.ranges(ej + 1, np.minimum(stops[todo] + 1, n) - ej - 1)
-        P_cmd[redo, col], V_cmd[redo, col] = x.P_made[redo], x.V_made[redo]
-        new_left = self._catch_up(
-            pc,
-            side,
-            col,
-            y_s[todo] - pc.P_ideal[ej, col],
-            ej,
-            stops[todo],
-            P_cmd,
-            V_cmd,
-            s_path,
-            dP,
-        )
-        moved = todo[new_left != left[todo]]
-        left[todo] = new_left
-        return moved[moved + 1 < len(e)] + 1
-
-    @staticmethod
-    def _extreme(
-        lo: np.ndarray, hi: np.ndarray, cuts: np.ndarray, beg: np.ndarray, up: np.ndarray
-    ) -> np.ndarray:
-        """Where each part stands when its motor's crossing ends [mm], (c,): the
-        extreme it reached on the old side over the crossing's steps (``cuts``
-        (2c,): each crossing's first and past-last step into the followed part's
-        least and greatest positions ``lo``, ``hi``) and where it stood at the
-        crossing's start ``beg`` (c,); the least where the crossing is ``up``."""
-        lo_x = np.minimum.reduceat(np.append(lo, np.inf), cuts)[::2]
-        hi_x = np.maximum.reduceat(np.append(hi, -np.inf), cuts)[::2]
-        return np.where(up, np.minimum(lo_x, beg), np.maximum(hi_x, beg))
-
-    @staticmethod
-    def _contact_command(
-        table: axiscomp.MotorTable, y: np.ndarray, up: np.ndarray, short: np.ndarray
-    ) -> np.ndarray:
-        """The motor's command [mm] that meets its part at ``y`` (c,) [mm] on its
-        new side (lo⁻¹ where ``up``, else hi⁻¹), ``short`` (c,) [mm] of it."""
-        return np.where(up, table.lo_inv(y) - short, table.hi_inv(y) + short)
+        P_cmd[:, col], V_cmd[:, col] = r.P, r.V
+        if not np.isnan(r.carry):
+            self.catch[col] = r.carry
+        self._across(pc, e, b, col, before[1], P_cmd, V_cmd)
+        return r.y, r.P_last, r.V_last
 
     def _straight_through(self, pc: PointChunk, contacts: np.ndarray, P_cmd: np.ndarray) -> None:
         """Straight lines between the points (corrected G-code): a planned point
@@ -1238,7 +1152,7 @@ class Pipeline:
         if self.limits.segment == "cubic" or not np.any(inner > 0):
             return
         w = np.flatnonzero(inner > 0)
-        idx = reversals.ranges(b[w] + 1, inner[w])
+        idx = play.ranges(b[w] + 1, inner[w])
         bb, ee = np.repeat(b[w], inner[w]), np.repeat(e[w], inner[w])
         t = np.cumsum(pc.dt)  # since the point before the chunk
         t_b = np.where(bb >= 0, t[np.maximum(bb, 0)], 0.0)
@@ -1266,42 +1180,6 @@ class Pipeline:
             return np.full(len(q), digit)
         jac = ik_jacobian(self.geo, q, tool, DIR_STEP_MM)
         return digit * np.abs(jac[:, col, :]).sum(axis=1)
-
-    def _catch_up(
-        self,
-        pc: PointChunk,
-        side: np.ndarray,
-        col: int,
-        off0: ArrayLike,
-        start: ArrayLike,
-        stop: ArrayLike,
-        P_cmd: np.ndarray,
-        V_cmd: np.ndarray,
-        s_path: np.ndarray,
-        dP: np.ndarray,
-    ) -> np.ndarray:
-        """Command motor ``col`` to bring its part back onto its wanted position
-        after crossings that end at ``start`` with the part off by ``off0``
-        (:func:`.reversals.catch_up`), ``dP`` (n,) the motor's wanted move into each
-        point [mm]. Returns the offset each leaves where the next crossing begins;
-        what the last leaves at the chunk's end is kept for the next chunk."""
-        off0 = np.asarray(off0, dtype=float)
-        start = np.asarray(start, dtype=int)
-        stop = np.asarray(stop, dtype=int)
-        way = side[np.maximum(start, 0), col]
-        idx, off, slope, left = reversals.catch_up(
-            off0, way, start, stop, s_path, motion=(dP, pc.V_ideal[:, col], pc.speed)
-        )
-        if len(left) and stop[-1] >= len(pc) and left[-1] != 0.0:
-            self.catch[col] = float(left[-1])
-        if len(idx):
-            table = self.tables[MOTORS[col]]
-            sd = side[idx, col]
-            P_cmd[idx, col] = axiscomp.compensate_sided(table, pc.P_ideal[idx, col] + off, sd)
-            V_cmd[idx, col] = (pc.V_ideal[idx, col] + slope * pc.speed[idx]) / table.slope(
-                P_cmd[idx, col], sd
-            )
-        return np.where(stop < len(pc), left, 0.0)
 
     def _new_points(
         self,

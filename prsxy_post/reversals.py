@@ -37,11 +37,15 @@ chord stands all along it.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
+
+from . import kernel
+from .kernel.play import PlayTable
+from .kernel.play import hermite as _hermite
+from .kernel.play import velocity_quadratic as _velocity_quadratic
 
 #: ``edge_speed(k, s, col, accel)``: the fastest [mm/s] motor ``col`` may move
 #: while its part stands before and after (two arrays) its reversal in step ``k``
@@ -117,12 +121,6 @@ CORNER_TURN_MM = 1e-6
 CROSSING_SPEED_SHARE = 5e-4
 
 
-def ranges(first: np.ndarray, length: np.ndarray) -> np.ndarray:
-    """The indices first[i], first[i] + 1, … (length[i] of them) of every range, one
-    after another: one array for all the ranges, without a loop."""
-    return np.repeat(first - np.cumsum(length) + length, length) + np.arange(int(length.sum()))
-
-
 def signs(V: np.ndarray) -> np.ndarray:
     """Direction of each planned velocity: +1, −1, or 0 (standing)."""
     return np.where(V > V_EPS, 1, np.where(V < -V_EPS, -1, 0))
@@ -131,11 +129,9 @@ def signs(V: np.ndarray) -> np.ndarray:
 def carried(sg: np.ndarray, side: np.ndarray | float) -> np.ndarray:
     """The last nonzero direction at or before each row of ``sg`` (along axis 0),
     ``side`` before any: the side a motor is on, carried through the rows where it
-    has no direction. ``sg`` (m,) or (m, k); ``side`` a scalar or (k,)."""
-    n = len(sg)
-    rows = np.arange(n).reshape((n,) + (1,) * (sg.ndim - 1))
-    last = np.maximum.accumulate(np.where(sg != 0, rows, -1), axis=0)
-    return np.where(last >= 0, np.take_along_axis(sg, np.maximum(last, 0), 0), side)
+    has no direction. ``sg`` (m,) or (m, k); ``side`` a scalar or (k,):
+    :func:`.kernel.play.carried`."""
+    return kernel.carried(sg, side)
 
 
 def _creeps(
@@ -153,46 +149,7 @@ def _creeps(
     then creeping back (a table axis following the other's squareness while it
     moves alone) was seen to stay 17 µm "ahead" of it and left its part 0.61 µm
     behind (test_controller_truth's found programs)."""
-    out = np.zeros(len(sg), dtype=int)
-    start = 0
-    cur_side, cur_ref = side, ref
-    while start < len(sg):
-        seg, p = sg[start:], P[start:]
-        came, far = _farthest(seg, p, cur_side, cur_ref)
-        hits = np.flatnonzero((seg == 0) & (came * p - far < -drift))
-        if not hits.size:
-            # the rows from here on keep their signs: the last one's reach holds
-            return out, float(came[-1] * far[-1]) if np.isfinite(far[-1]) else math.nan
-        r = start + int(hits[0])
-        out[r] = -int(came[hits[0]])
-        cur_side, cur_ref = out[r], float(P[r])
-        start = r + 1
-    return out, cur_ref  # no rows, or the last row a reversal: it reaches there
-
-
-def _farthest(
-    sg: np.ndarray, P: np.ndarray, side: int, ref: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """The direction each row comes from (the last row's with one, else ``side``)
-    and how far that way the motor has got by then, as ``direction · position``
-    (−inf before any row with a direction when ``ref`` is NaN: nothing to measure
-    from). A running maximum that starts afresh at each row with a direction, made
-    in one pass by lifting each stretch above the one before (rounding: below a
-    picometre)."""
-    n = len(sg)
-    idx = np.where(sg != 0, np.arange(n), -1)
-    last = np.maximum.accumulate(idx)
-    came = np.where(last >= 0, sg[np.maximum(last, 0)], side)
-    v = came * P
-    if n == 0:
-        return came, v
-    stretch = np.cumsum(np.concatenate([[0], np.diff(last) != 0]))
-    lift = stretch * (float(np.max(v) - np.min(v)) + 1.0)
-    far = np.maximum.accumulate(v + lift) - lift
-    first = last < 0  # before any row with a direction: from where it came in
-    if np.any(first):
-        far[first] = -np.inf if np.isnan(ref) else np.maximum(far[first], side * ref)
-    return came, far
+    return kernel.creeps(sg, P, side, ref, drift)
 
 
 class Insertions:
@@ -235,28 +192,6 @@ class Insertions:
 
     def __bool__(self) -> bool:
         return bool(self.stand) or len(self.mid_k) > 0
-
-
-def _velocity_quadratic(
-    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(a, b, c) of the Hermite cubic's velocity a s² + b s + c in s = t / h:
-    c = V0, a = 6 (P0 − P1)/h + 3 (V0 + V1), b = −6 (P0 − P1)/h − 4 V0 − 2 V1.
-    """
-    d = (P0 - P1) / h
-    return 6.0 * d + 3.0 * (V0 + V1), -6.0 * d - 4.0 * V0 - 2.0 * V1, V0
-
-
-def _hermite(
-    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray, s: np.ndarray
-) -> np.ndarray:
-    """The cubic through (P0, V0) and (P1, V1) over time h (n,) at fractions s (n, k)
-    of each step: (n, k) positions."""
-    h00 = 2 * s**3 - 3 * s**2 + 1
-    h10 = s**3 - 2 * s**2 + s
-    h01 = -2 * s**3 + 3 * s**2
-    h11 = s**3 - s**2
-    return h00 * P0[:, None] + h10 * (h * V0)[:, None] + h01 * P1[:, None] + h11 * (h * V1)[:, None]
 
 
 def velocity_roots(
@@ -1387,25 +1322,25 @@ def sides(
     s_col = np.array([c for _, c, _ in ins.stands], dtype=int)
     s_new = np.array([n for _, _, n in ins.stands], dtype=int)
     for col in cols:
-        sg = np.where(resting, 0, signs(V[:, col]))
         mine = np.flatnonzero(ins.w_col == col)
         mine = mine[np.argsort(e_all[mine], kind="stable")]
-        f, e, new = f_all[mine], e_all[mine], ins.w_new[mine]
-        # the points after a window's end inside its step (another motor's window,
-        # a blend's point before a corner) are on the new side: where the path turns a corner
-        # the cubic's root is before the corner, the plan's velocity turns at it
-        after = np.maximum(last_row[mine] - e - 1, 0)
-        sg[ranges(e + 1, after)] = np.repeat(new, after)
-        # two crossings in one step (a dip): the second's old side starts after the
-        # first's end
-        f = np.maximum(f, np.concatenate([[0], e[:-1] + 1]))
-        length = np.maximum(e - f, 0)
-        idx = ranges(f, length)
-        sg[idx] = np.repeat(-new, length)
-        sg[e] = new
         here = s_col == col
-        sg[rows.first(s_k[here])] = s_new[here]
-        out[:, col] = carried(sg, side[col])
+        # the points after a window's end inside its step (another motor's window,
+        # a blend's point before a corner) are on the new side: where the path turns
+        # a corner the cubic's root is before the corner, the plan's velocity turns
+        # at it (kernel.play.motor_sides)
+        out[:, col] = kernel.motor_sides(
+            V[:, col],
+            resting,
+            f_all[mine],
+            e_all[mine],
+            ins.w_new[mine],
+            last_row[mine],
+            rows.first(s_k[here]),
+            s_new[here],
+            int(side[col]),
+            V_EPS,
+        )
     return out
 
 
@@ -1469,173 +1404,11 @@ def catch_up(
         where ``stop`` is the chunk's length at its last point, carried into the
         next chunk [mm]
     """
-    n = len(s_path)
-    ahead_way = (off0 * way > 0) & (motion is not None)
-    off0 = np.where((off0 * way < 0) | ahead_way, off0, 0.0)
-    if n == 0:
-        none = np.zeros(0)
-        return none.astype(int), none, none, off0
-    first = start + 1
-    s0 = np.where(start >= 0, s_path[np.maximum(start, 0)], 0.0)
-    # the last point whose command carries the offset: the next crossing's start,
-    # or the chunk's last point
-    last = np.where(stop < n, stop, n - 1)
-    rate = _catch_up_rates(off0, start, stop, last, s0, s_path, share)
-    # the points up to where the offset is gone; a part ahead: where it is gone
-    # depends on the motor's moves too (below)
-    gone = np.searchsorted(s_path, s0 + np.abs(off0) / rate, "left")
-    end = np.where(ahead_way, last + 1, np.minimum(last + 1, gone))
-    length = np.maximum(end - first, 0)
-    idx = ranges(first, length)
-    run = s_path[idx] - np.repeat(s0, length)
-    mag = np.maximum(np.repeat(np.abs(off0), length) - np.repeat(rate, length) * run, 0.0)
-    steep_motor = np.full(len(idx), np.inf)
-    if motion is not None and np.any(ahead_way):
-        mag, steep_motor = _taken_up_ahead(
-            off0, way, ahead_way, rate, idx, length, mag, s_path, motion
-        )
-    off = np.copysign(mag, np.repeat(off0, length))
-    left = _left_at_last(off0, start, last, s0, rate, s_path, ahead_way, length, mag)
-    keep = mag > 0
-    slope = _catch_up_slopes(idx, off, mag, np.repeat(rate, length), steep_motor, s_path)
-    return idx[keep], off[keep], slope[keep], left
-
-
-def _catch_up_rates(
-    off0: np.ndarray,
-    start: np.ndarray,
-    stop: np.ndarray,
-    last: np.ndarray,
-    s0: np.ndarray,
-    s_path: np.ndarray,
-    share: float,
-) -> np.ndarray:
-    """The rate (m,) [mm of offset per mm of path] at which each offset ``off0``
-    (m,) [mm] is taken up after the crossing ending at ``start`` (path length
-    ``s0`` there [mm]): ``share``, or up to CATCH_UP_HURRY times it where that has
-    it gone by the point ``last`` before the next crossing (``stop`` < n)."""
-    n = len(s_path)
-    # a little faster where that has it gone by the next crossing
-    room = np.where((stop < n) & (last > start), s_path[last] - s0, 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        need = np.where(room > 0, np.abs(off0) / room, np.inf)
-    return np.where(need <= CATCH_UP_HURRY * share, np.maximum(need, share), share)
-
-
-def _taken_up_ahead(
-    off0: np.ndarray,
-    way: np.ndarray,
-    ahead_way: np.ndarray,
-    rate: np.ndarray,
-    idx: np.ndarray,
-    length: np.ndarray,
-    mag: np.ndarray,
-    s_path: np.ndarray,
-    motion: tuple[np.ndarray, np.ndarray, np.ndarray],
-) -> tuple[np.ndarray, np.ndarray]:
-    """The offsets' magnitudes (k,) [mm] at the points ``idx`` (k,) of the
-    crossings (``length`` (m,) points each), those of parts ahead of their motor's
-    way (``ahead_way`` (m,)) taken up at ``rate`` (m,) but over no step by more
-    than half the motor's own move its way; and for those points the steepest
-    d off / d s that keeps (half the motor's velocity its way over the path
-    speed), inf elsewhere. ``motion`` as :func:`catch_up`'s."""
-    dP, V, speed = motion
-    which = np.repeat(np.arange(len(off0)), length)
-    mine = ahead_way[which]
-    # the step into each point takes the share of its path, or half the
-    # motor's move its way, whichever is less
-    ds = s_path[idx] - np.where(idx >= 1, s_path[np.maximum(idx - 1, 0)], 0.0)
-    w = way[which]
-    take = np.where(mine, np.minimum(rate[which] * ds, np.maximum(0.5 * w * dP[idx], 0.0)), 0.0)
-    # the cumulative take within each range: less what the ranges before took
-    cum = np.concatenate([[0.0], np.cumsum(take)])
-    before = np.repeat(cum[np.cumsum(length) - length], length)
-    mag = np.where(mine, np.maximum(np.abs(off0)[which] - (cum[1:] - before), 0.0), mag)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        steep_motor = np.where(
-            mine & (speed[idx] > 0),
-            np.maximum(0.5 * w * V[idx], 0.0) / speed[idx],
-            np.inf,
-        )
-    return mag, steep_motor
-
-
-def _left_at_last(
-    off0: np.ndarray,
-    start: np.ndarray,
-    last: np.ndarray,
-    s0: np.ndarray,
-    rate: np.ndarray,
-    s_path: np.ndarray,
-    ahead_way: np.ndarray,
-    length: np.ndarray,
-    mag: np.ndarray,
-) -> np.ndarray:
-    """The offset (m,) [mm] each crossing leaves at its ``last`` point: of
-    ``off0`` (m,), taken up at ``rate`` (m,) from the path length ``s0`` (m,) at
-    its ``start``; for a part ahead of its motor's way, the magnitude its range's
-    last point keeps (``mag``, ``length`` points a crossing)."""
-    # left at the last point: a part behind by the closed form (all of it where
-    # there is no point to take it), a part ahead what its range's last point keeps
-    s_last = np.where(last > start, s_path[np.maximum(last, 0)], s0)
-    left_mag = np.maximum(np.abs(off0) - rate * (s_last - s0), 0.0)
-    if np.any(ahead_way):
-        last_of = np.maximum(np.cumsum(length) - 1, 0)
-        kept = mag[last_of] if len(mag) else np.zeros(len(off0))
-        left_mag = np.where(ahead_way, np.where(length > 0, kept, np.abs(off0)), left_mag)
-    return np.copysign(left_mag, off0)
-
-
-def _catch_up_slopes(
-    idx: np.ndarray,
-    off: np.ndarray,
-    mag: np.ndarray,
-    rate: np.ndarray,
-    steep_motor: np.ndarray,
-    s_path: np.ndarray,
-) -> np.ndarray:
-    """d off / d s (k,) at the points ``idx`` (k,) with offsets ``off`` (k,) [mm]
-    (magnitudes ``mag``), taken up at ``rate`` (k,) [mm/mm] and no steeper than
-    ``steep_motor`` (k,)."""
-    n = len(s_path)
-    # its slope at each point: over the step after it (a last bit of offset gone
-    # early in that step gives the point a velocity to match, not the whole rate),
-    # and for a part ahead no more than half its motor's velocity its way
-    nxt = np.minimum(idx + 1, n - 1)
-    ahead = np.where(idx + 1 < n, s_path[nxt] - s_path[idx], np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        steep = np.minimum(rate, np.where(ahead > 0, mag / ahead, np.inf))
-    steep = np.minimum(steep, steep_motor)
-    return -np.sign(off) * steep
-
-
-class Crossings(NamedTuple):
-    """One motor's c crossings in a chunk as the chain ends them where its part
-    stands and takes up the part's offset after them (chain.Pipeline._settle).
-
-    end, beg : (c,) int, the point where each crossing ends (the motor meets its
-        part) and where it began (−1: the point before the chunk)
-    up : (c,) bool, the motor crosses up (it was going down)
-    short : (c,) how far short of the contact the command at its end stays [mm]
-    stops : (c,) int, the point where the motor's next crossing begins, or the
-        chunk's length
-    made_end : (c,) the commands at the crossings' ends as first made [mm]
-    P_made, V_made : (n,) the motor's commands [mm, mm/s] with the crossings'
-        ends set, before any offset is taken up
-    """
-
-    end: np.ndarray
-    beg: np.ndarray
-    up: np.ndarray
-    short: np.ndarray
-    stops: np.ndarray
-    made_end: np.ndarray
-    P_made: np.ndarray
-    V_made: np.ndarray
+    return kernel.catch_up(off0, way, start, stop, s_path, share, CATCH_UP_HURRY, motion)
 
 
 def follow(
-    table: object,
+    table: PlayTable,
     y0: float,
     P0: float,
     V0: float,
@@ -1655,6 +1428,10 @@ def follow(
     step is taken at its turning points (the roots of its velocity, a quadratic)
     and its end, and the result is exact, with one or three samples a step.
 
+    Parameters
+    ----------
+    table : the motor's table as the kernel takes it (``MotorTable.flat``)
+
     Returns
     -------
     y_end : (n,) the part at each point
@@ -1668,7 +1445,7 @@ def follow(
 
 
 def follow_stretches(
-    table: object,
+    table: PlayTable,
     y0: np.ndarray,
     P0: np.ndarray,
     V0: np.ndarray,
@@ -1679,7 +1456,8 @@ def follow_stretches(
     cubic: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`follow` over several stretches of commands at once, each from where
-    its part stands at its start (the play model's scan starts again at each).
+    its part stands at its start (the play model's scan starts again at each):
+    :func:`.kernel.play.follow_stretches`.
 
     Parameters
     ----------
@@ -1693,54 +1471,4 @@ def follow_stretches(
     -------
     y_end, y_min, y_max : (k,) as :func:`follow`'s, step by step
     """
-    from .axiscomp import _clamp_scan
-
-    n = len(P)
-    first = (np.cumsum(steps) - steps)[steps > 0]
-    opening = np.zeros(n, dtype=np.int64)
-    opening[first] = 1
-    Pa = np.concatenate([[0.0], P[:-1]])
-    Va = np.concatenate([[0.0], V[:-1]])
-    Pa[first], Va[first] = P0[steps > 0], V0[steps > 0]
-    h = dt
-    # a step of no time (a standing point's twin) has no cubic: h = ∞ makes it flat
-    a, b, c = _velocity_quadratic(Pa, Va, P, V, np.where(h > 0, h, np.inf))
-    disc = b * b - 4.0 * a * c
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sq = np.sqrt(np.maximum(disc, 0.0))
-        r1 = np.where(np.abs(a) > 1e-300, (-b - sq) / (2 * a), np.where(b != 0, -c / b, -1.0))
-        r2 = np.where(np.abs(a) > 1e-300, (-b + sq) / (2 * a), -1.0)
-    ok1 = (disc >= 0) & (r1 > 0) & (r1 < 1) & (h > 0) & cubic
-    ok2 = (disc >= 0) & (r2 > 0) & (r2 < 1) & (h > 0) & (np.abs(r2 - r1) > 0) & cubic
-    # samples of each step in time order: its turning points, then its end. Most
-    # steps have none, so the cubic is evaluated only where it turns (the end of a
-    # step is its point, P). Each stretch opens with one more: where its part
-    # stands (lo = hi = y0: the scan is clamped to it, whatever came before).
-    count = 1 + opening + ok1 + ok2
-    last_of = np.cumsum(count) - 1
-    flat = np.empty(int(last_of[-1]) + 1 if n else 0)
-    flat[last_of] = P
-    turns = np.flatnonzero(ok1 | ok2)
-    if turns.size:
-        a1, a2 = ok1[turns], ok2[turns]
-        q1, q2 = r1[turns], r2[turns]
-        early = np.where(a1 & a2, np.minimum(q1, q2), np.where(a1, q1, q2))
-        late = np.where(a1 & a2, np.maximum(q1, q2), np.nan)
-        cmd = _hermite(
-            Pa[turns], Va[turns], P[turns], V[turns], h[turns], np.column_stack([early, late])
-        )
-        at = (last_of - count + 1 + opening)[turns]
-        flat[at] = cmd[:, 0]
-        two = a1 & a2
-        flat[at[two] + 1] = cmd[two, 1]
-    lo = table.lo(flat)  # type: ignore[attr-defined]
-    hi = table.hi(flat)  # type: ignore[attr-defined]
-    opens = (last_of - count + 1)[first]
-    lo[opens] = hi[opens] = y0[steps > 0]
-    y = _clamp_scan(lo, hi)
-    # each step's samples, a stretch's opening one counted as its first step's
-    # next (so that it is no extreme of that step)
-    bounds = last_of - count + 1
-    inside = y.copy()
-    inside[opens] = y[opens + 1]
-    return y[last_of], np.minimum.reduceat(inside, bounds), np.maximum.reduceat(inside, bounds)
+    return kernel.follow_stretches(table, y0, P0, V0, P, V, dt, steps, cubic)

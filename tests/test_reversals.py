@@ -271,7 +271,7 @@ def test_follow_is_the_play_model_on_the_dense_cubics() -> None:
     lo(p_k), hi(p_k)), stepped over 2000 samples of every segment's cubic."""
     table, P, V, dt, P0, V0, y0 = _random_commands(5)
     n = len(P)
-    y_end, y_min, y_max = reversals.follow(table, y0, P0, V0, P, V, dt)
+    y_end, y_min, y_max = reversals.follow(table.flat, y0, P0, V0, P, V, dt)
     y = y_start = y0
     Pa, Va = np.concatenate([[P0], P[:-1]]), np.concatenate([[V0], V[:-1]])
     for k in range(n):
@@ -298,7 +298,7 @@ def test_follow_along_chords_is_the_play_model_on_the_straight_lines() -> None:
     velocities here swing each step's cubic well past its points."""
     table, P, V, dt, P0, V0, y0 = _random_commands(6)
     n = len(P)
-    y_end, y_min, y_max = reversals.follow(table, y0, P0, V0, P, V, dt, cubic=False)
+    y_end, y_min, y_max = reversals.follow(table.flat, y0, P0, V0, P, V, dt, cubic=False)
     Pa = np.concatenate([[P0], P[:-1]])
     y = y_start = y0
     for k in range(n):
@@ -311,7 +311,7 @@ def test_follow_along_chords_is_the_play_model_on_the_straight_lines() -> None:
         assert abs(min(y_min[k], y_start) - min([y_start, *ys])) < 1e-12
         assert abs(max(y_max[k], y_start) - max([y_start, *ys])) < 1e-12
         y_start = ys[-1]
-    cubics = reversals.follow(table, y0, P0, V0, P, V, dt)[0]
+    cubics = reversals.follow(table.flat, y0, P0, V0, P, V, dt)[0]
     assert np.max(np.abs(cubics - y_end)) > 1e-3
 
 
@@ -721,7 +721,7 @@ def test_following_stretches_at_once_is_following_each(
     # anywhere in the play at the stretch's first command
     low, high = table.lo(P0), table.hi(P0)
     y0 = low + np.array(within[: len(starts)]) * (high - low)
-    y, lo, hi = reversals.follow_stretches(table, y0, P0, V0, P, V, dt, steps, cubic)
+    y, lo, hi = reversals.follow_stretches(table.flat, y0, P0, V0, P, V, dt, steps, cubic)
     u = np.linspace(0.0, 1.0, 2001)[1:]
     for i, s in enumerate(starts):
         yk, pa, va = y0[i], P0[i], V0[i]

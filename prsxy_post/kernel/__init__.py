@@ -1,9 +1,10 @@
 """The kernel: per-point numerical work as functions over arrays.
 
 Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``, ``fk.py``,
-the planner's ``timelaw.py`` and ``path.py``, ...: :data:`TWINS`) and a compiled twin
-in Cython (``_ik.pyx``, ...; built when the package is installed) that gives the same
-bits. This module picks one set for the whole program, once, at import:
+the planner's ``timelaw.py`` and ``path.py``, the play model's ``play.py``:
+:data:`TWINS`) and a compiled twin in Cython (``_ik.pyx``, ...; built when the package
+is installed) that gives the same bits. This module picks one set for the whole
+program, once, at import:
 
 - ``PRSXY_KERNEL=pure`` in the environment: the numpy reference (CI's pure leg);
 - otherwise the compiled kernels when the extension imports, else the reference.
@@ -31,7 +32,7 @@ from types import ModuleType
 
 import numpy as np
 
-from . import fk, ik, legendre, path, timelaw
+from . import fk, ik, legendre, path, play, timelaw
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
@@ -46,6 +47,7 @@ TWINS = {
     "fk": "_fk",
     "timelaw": "_timelaw",
     "path": "_path",
+    "play": "_play",
 }
 
 
@@ -86,6 +88,7 @@ _forward_pass = _RUN["timelaw"].forward_pass
 _play_stops = _RUN["timelaw"].play_stops
 _poses = _RUN["path"].poses
 _velocities = _RUN["path"].velocities
+_play_kernel = _RUN["play"]
 #: True when the compiled kernels run.
 COMPILED: bool = not WHY_PURE
 #: True when the reference runs because the extension is missing (not asked for).
@@ -264,4 +267,181 @@ def velocities(
     """The points' planned velocities, the mean of both sides at corners:
     :func:`path.velocities`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _velocities(v, dq, blk, corner, dq_out, dq_next)
+    return out
+
+
+# the play model (kernel/play.py and its twin _play.pyx), one name each so that a
+# test can watch the calls
+_play_lo = _play_kernel.lo
+_play_hi = _play_kernel.hi
+_play_lo_inv = _play_kernel.lo_inv
+_play_hi_inv = _play_kernel.hi_inv
+_play_slope = _play_kernel.slope
+_compensate_sided = _play_kernel.compensate_sided
+_clamp_scan = _play_kernel.clamp_scan
+_follow_stretches = _play_kernel.follow_stretches
+
+
+def play_lo(t: play.PlayTable, p: np.ndarray) -> np.ndarray:
+    """lo(p) (n,) [mm]: :func:`play.lo`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_lo(t, p)
+    return out
+
+
+def play_hi(t: play.PlayTable, p: np.ndarray) -> np.ndarray:
+    """hi(p) (n,) [mm]: :func:`play.hi`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_hi(t, p)
+    return out
+
+
+def play_lo_inv(t: play.PlayTable, target: np.ndarray) -> np.ndarray:
+    """lo⁻¹ (n,) [mm]: :func:`play.lo_inv`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_lo_inv(t, target)
+    return out
+
+
+def play_hi_inv(t: play.PlayTable, target: np.ndarray) -> np.ndarray:
+    """hi⁻¹ (n,) [mm]: :func:`play.hi_inv`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_hi_inv(t, target)
+    return out
+
+
+def play_slope(t: play.PlayTable, p: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """d lo/dp or d hi/dp (n,): :func:`play.slope`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _play_slope(t, p, side)
+    return out
+
+
+def compensate_sided(t: play.PlayTable, target: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """Commands (n,) [mm]: :func:`play.compensate_sided`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _compensate_sided(t, target, side)
+    return out
+
+
+def clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The play model's scan (n,): :func:`play.clamp_scan`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _clamp_scan(lo, hi)
+    return out
+
+
+def follow_stretches(
+    t: play.PlayTable,
+    y0: np.ndarray,
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    dt: np.ndarray,
+    steps: np.ndarray,
+    cubic: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The part along the commands' cubics: :func:`play.follow_stretches`, compiled
+    when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _follow_stretches(
+        t, y0, P0, V0, P, V, dt, steps, cubic
+    )
+    return out
+
+
+_catch_up = _play_kernel.catch_up
+
+
+def catch_up(
+    off0: np.ndarray,
+    way: np.ndarray,
+    start: np.ndarray,
+    stop: np.ndarray,
+    s_path: np.ndarray,
+    share: float,
+    hurry: float,
+    motion: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The offsets taken up after crossings: :func:`play.catch_up`, compiled when
+    :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _catch_up(
+        off0, way, start, stop, s_path, share, hurry, motion
+    )
+    return out
+
+
+_catch_up_commands = _play_kernel.catch_up_commands
+_settle_crossings = _play_kernel.settle_crossings
+
+
+def catch_up_commands(
+    t: play.PlayTable,
+    mo: play.Motion,
+    off0: np.ndarray,
+    start: np.ndarray,
+    stop: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    share: float,
+    hurry: float,
+) -> tuple[np.ndarray, float]:
+    """The take-up's commands into ``P``, ``V`` (contiguous, in place):
+    :func:`play.catch_up_commands`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, float] = _catch_up_commands(t, mo, off0, start, stop, P, V, share, hurry)
+    return out
+
+
+def settle_crossings(
+    t: play.PlayTable,
+    mo: play.Motion,
+    before: tuple[float, float, float],
+    e: np.ndarray,
+    b: np.ndarray,
+    short: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    cubic: bool,
+    share: float,
+    hurry: float,
+) -> play.Settled:
+    """A motor's crossings ended where its part stands: :func:`play.settle_crossings`,
+    compiled when :data:`COMPILED`."""
+    out: play.Settled = _settle_crossings(t, mo, before, e, b, short, P, V, cubic, share, hurry)
+    return out
+
+
+_carried = _play_kernel.carried
+
+
+def carried(sg: np.ndarray, side: np.ndarray | float) -> np.ndarray:
+    """The side carried through rows without a direction: :func:`play.carried`,
+    compiled when :data:`COMPILED`."""
+    out: np.ndarray = _carried(sg, side)
+    return out
+
+
+_creeps = _play_kernel.creeps
+
+
+def creeps(
+    sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float
+) -> tuple[np.ndarray, float]:
+    """Where a creeping motor drifted back: :func:`play.creeps`, compiled when
+    :data:`COMPILED`."""
+    out: tuple[np.ndarray, float] = _creeps(sg, P, side, ref, drift)
+    return out
+
+
+_motor_sides = _play_kernel.motor_sides
+
+
+def motor_sides(
+    V: np.ndarray,
+    resting: np.ndarray,
+    f: np.ndarray,
+    e: np.ndarray,
+    new: np.ndarray,
+    last_row: np.ndarray,
+    s_first: np.ndarray,
+    s_new: np.ndarray,
+    side: int,
+    eps: float,
+) -> np.ndarray:
+    """A motor's side at each point: :func:`play.motor_sides`, compiled when
+    :data:`COMPILED`."""
+    out: np.ndarray = _motor_sides(V, resting, f, e, new, last_row, s_first, s_new, side, eps)
     return out

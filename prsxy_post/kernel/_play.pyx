@@ -1,0 +1,1098 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
+# cython: initializedcheck=False
+"""The play model compiled: :mod:`prsxy_post.kernel.play` point by point, the same
+operations in the same order (see that module), so the two agree to the bit.
+
+numpy's ``interp`` is written out as numpy does it (the slope of the interval,
+times the distance from its left end, plus its left value); numpy's ``maximum`` and
+``minimum`` as numpy's (a NaN wins); the clamp scan runs as the sequential loop its
+doubling steps compose to (every value is one of the inputs). The cubic's ``s**3``
+at a turning point is numpy's power on the array the reference makes (it is not the
+C library's pow on every processor); the periodic terms call the C library's sin
+and cos, as the reference does through :mod:`math`. Compiled with -O2
+-ffp-contract=off (no fused multiply-adds)."""
+
+import numpy as np
+
+from . import play as _pure
+
+from libc.math cimport sin, cos, sqrt, fabs, copysign, INFINITY, NAN, M_PI
+
+cdef double TWO_PI = 2 * M_PI
+
+
+cdef struct Tab:
+    const double* breaks
+    const double* lo_err
+    const double* hi_err
+    const double* lo_vals
+    const double* hi_vals
+    const double* s_lo
+    const double* s_hi
+    const double* amp
+    const double* period
+    const double* phase
+    Py_ssize_t nb
+    Py_ssize_t nc
+
+
+cdef inline double _max(double a, double b) noexcept nogil:
+    # numpy's maximum: the first when it is not less, or NaN
+    return a if (a >= b or a != a) else b
+
+
+cdef inline double _min(double a, double b) noexcept nogil:
+    return a if (a <= b or a != a) else b
+
+
+cdef inline Py_ssize_t _find(double x, const double* xp, Py_ssize_t n, Py_ssize_t g) noexcept nogil:
+    """numpy's binary_search_with_guess for x (not NaN) in xp (n >= 2, strictly
+    increasing): −1 below, n above, n − 1 at its last value, else the j with
+    xp[j] <= x < xp[j + 1] (unique, however found: the guess g first)."""
+    cdef Py_ssize_t lo, hi, mid
+    if x < xp[0]:
+        return -1
+    if x > xp[n - 1]:
+        return n
+    if x == xp[n - 1]:
+        return n - 1
+    if 0 <= g < n - 1 and xp[g] <= x:
+        if x < xp[g + 1]:
+            return g
+        if g + 2 < n and x < xp[g + 2]:
+            return g + 1
+    elif 1 <= g < n and xp[g - 1] <= x:
+        return g - 1  # x < xp[g] here
+    lo = 0
+    hi = n - 1  # xp[lo] <= x < xp[hi]
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if xp[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+cdef inline double _at(double x, Py_ssize_t j, const double* xp, const double* fp,
+                       Py_ssize_t n) noexcept nogil:
+    """numpy's interp (compiled_base.c, arr_interp) at x (not NaN) in the interval
+    j of :func:`_find`, end values held."""
+    cdef double slope, r
+    if j == -1:
+        return fp[0]
+    if j >= n - 1:
+        return fp[n - 1]
+    if xp[j] == x:
+        return fp[j]
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    r = slope * (x - xp[j]) + fp[j]
+    if r != r:
+        r = slope * (x - xp[j + 1]) + fp[j + 1]
+        if r != r and fp[j] == fp[j + 1]:
+            r = fp[j]
+    return r
+
+
+cdef inline double _at_s(double x, Py_ssize_t j, const double* xp, const double* fp,
+                         const double* slopes, Py_ssize_t n) noexcept nogil:
+    """:func:`_at` with the intervals' slopes made beforehand (numpy makes them so
+    when there are fewer table points than points asked for: the same division)."""
+    cdef double r
+    if j == -1:
+        return fp[0]
+    if j >= n - 1:
+        return fp[n - 1]
+    if xp[j] == x:
+        return fp[j]
+    r = slopes[j] * (x - xp[j]) + fp[j]
+    if r != r:
+        r = slopes[j] * (x - xp[j + 1]) + fp[j + 1]
+        if r != r and fp[j] == fp[j + 1]:
+            r = fp[j]
+    return r
+
+
+cdef inline double _interp(double x, const double* xp, const double* fp, Py_ssize_t n) noexcept nogil:
+    """numpy's interp at one x."""
+    if n == 1:
+        return fp[0]
+    if x != x:
+        return x
+    return _at(x, _find(x, xp, n, -1), xp, fp, n)
+
+
+cdef inline double _cyc(const Tab* t, double p) noexcept nogil:
+    cdef double out = 0.0
+    cdef Py_ssize_t k
+    for k in range(t.nc):
+        out = out + t.amp[k] * sin(TWO_PI * p / t.period[k] + t.phase[k])
+    return out
+
+
+cdef inline double _lo(const Tab* t, double p) noexcept nogil:
+    return p + _interp(p, t.breaks, t.lo_err, t.nb) + _cyc(t, p)
+
+
+cdef inline double _hi(const Tab* t, double p) noexcept nogil:
+    return p + _interp(p, t.breaks, t.hi_err, t.nb) + _cyc(t, p)
+
+
+cdef inline Py_ssize_t _lo_hi(const Tab* t, double p, double* lo, double* hi,
+                             Py_ssize_t g) noexcept nogil:
+    """lo(p) and hi(p) (as :func:`_lo`, :func:`_hi`) on one search of the breaks,
+    from the guess g; returns the interval found."""
+    cdef double c = _cyc(t, p)
+    cdef Py_ssize_t j = g
+    if t.nb == 1:
+        lo[0] = p + t.lo_err[0] + c
+        hi[0] = p + t.hi_err[0] + c
+    elif p != p:
+        lo[0] = p + p + c
+        hi[0] = lo[0]
+    else:
+        j = _find(p, t.breaks, t.nb, g)
+        lo[0] = p + _at_s(p, j, t.breaks, t.lo_err, t.s_lo, t.nb) + c
+        hi[0] = p + _at_s(p, j, t.breaks, t.hi_err, t.s_hi, t.nb) + c
+    return j
+
+
+cdef inline double _invert(double x, const double* vals, const double* breaks,
+                           const double* err, Py_ssize_t n) noexcept nogil:
+    cdef double out = _interp(x, vals, breaks, n)
+    if x < vals[0]:
+        out = x - err[0]
+    elif x > vals[n - 1]:
+        out = x - err[n - 1]
+    return out
+
+
+cdef void _solve(const Tab* t, const double* target, double* out, Py_ssize_t n,
+                 bint up, double* scratch) noexcept nogil:
+    """lo⁻¹ (``up``) or hi⁻¹ of ``target`` (n,) into ``out``; ``scratch`` (n,)."""
+    cdef const double* vals = t.lo_vals if up else t.hi_vals
+    cdef const double* err = t.lo_err if up else t.hi_err
+    cdef Py_ssize_t i, it
+    cdef double big, d
+    cdef bint nan
+    for i in range(n):
+        out[i] = _invert(target[i], vals, t.breaks, err, t.nb)
+    if t.nc == 0:
+        return
+    for it in range(30):
+        big = 0.0
+        nan = False
+        for i in range(n):
+            scratch[i] = _invert(target[i] - _cyc(t, out[i]), vals, t.breaks, err, t.nb)
+            d = fabs(scratch[i] - out[i])
+            if d != d:
+                nan = True
+            elif d > big:
+                big = d
+        for i in range(n):
+            out[i] = scratch[i]
+        if not nan and big < 1e-13:
+            break
+
+
+cdef class _Table:
+    """A PlayTable's arrays held as contiguous doubles, and the struct on them."""
+    cdef Tab tab
+    cdef object keep
+
+    def __init__(self, t):
+        cdef const double[::1] v
+        cdef const double* ptr[10]
+        cdef Py_ssize_t size[10]
+        cdef int k
+        self.keep = [np.ascontiguousarray(a, dtype=np.float64) for a in t]
+        for k in range(10):
+            v = self.keep[k]
+            size[k] = v.shape[0]
+            ptr[k] = &v[0] if v.shape[0] else NULL
+        self.tab.breaks, self.tab.lo_err, self.tab.hi_err = ptr[0], ptr[1], ptr[2]
+        self.tab.lo_vals, self.tab.hi_vals = ptr[3], ptr[4]
+        self.tab.s_lo, self.tab.s_hi = ptr[5], ptr[6]
+        self.tab.amp, self.tab.period, self.tab.phase = ptr[7], ptr[8], ptr[9]
+        self.tab.nb = size[0]
+        self.tab.nc = size[7]
+
+
+cdef _Table _table(t):
+    # the settle hands its pieces the table it made once
+    if type(t) is _Table:
+        return <_Table>t
+    return _Table(t)
+
+
+def _vec(p):
+    return np.ascontiguousarray(p, dtype=np.float64)
+
+
+def lo(t, p):
+    """lo(p) [mm]: :func:`play.lo`."""
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(p)
+    out = np.empty(x.shape[0])
+    cdef double[::1] o = out
+    cdef Py_ssize_t i
+    for i in range(x.shape[0]):
+        o[i] = _lo(&tb.tab, x[i])
+    return out
+
+
+def hi(t, p):
+    """hi(p) [mm]: :func:`play.hi`."""
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(p)
+    out = np.empty(x.shape[0])
+    cdef double[::1] o = out
+    cdef Py_ssize_t i
+    for i in range(x.shape[0]):
+        o[i] = _hi(&tb.tab, x[i])
+    return out
+
+
+def _inv(t, target, bint up):
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(target)
+    cdef Py_ssize_t n = x.shape[0]
+    out = np.empty(n)
+    scratch = np.empty(n)
+    cdef double[::1] o = out
+    cdef double[::1] s = scratch
+    if n:
+        _solve(&tb.tab, &x[0], &o[0], n, up, &s[0])
+    return out
+
+
+def lo_inv(t, target):
+    """p [mm] with lo(p) = target: :func:`play.lo_inv`."""
+    return _inv(t, target, True)
+
+
+def hi_inv(t, target):
+    """p [mm] with hi(p) = target: :func:`play.hi_inv`."""
+    return _inv(t, target, False)
+
+
+def slope(t, p, side):
+    """d lo/dp or d hi/dp: :func:`play.slope`."""
+    cdef _Table tb = _table(t)
+    cdef const Tab* T = &tb.tab
+    cdef const double[::1] x = _vec(p)
+    cdef const double[::1] sd = _vec(side)
+    cdef Py_ssize_t n = x.shape[0], i, k, lo_i, hi_i, mid
+    out = np.empty(n)
+    cdef double[::1] o = out
+    cdef double v, pi_, w
+    for i in range(n):
+        v = 1.0
+        pi_ = x[i]
+        if T.nb > 1:
+            if pi_ >= T.breaks[0] and pi_ < T.breaks[T.nb - 1]:
+                lo_i = 0
+                hi_i = T.nb - 1  # breaks[lo_i] <= p < breaks[hi_i]
+                while hi_i - lo_i > 1:
+                    mid = (lo_i + hi_i) >> 1
+                    if T.breaks[mid] <= pi_:
+                        lo_i = mid
+                    else:
+                        hi_i = mid
+                v = v + (T.s_lo[lo_i] if sd[i] > 0 else T.s_hi[lo_i])
+            else:
+                v = v + 0.0
+        for k in range(T.nc):
+            w = TWO_PI / T.period[k]
+            v = v + T.amp[k] * w * cos(w * pi_ + T.phase[k])
+        o[i] = v
+    return out
+
+
+def compensate_sided(t, target, side):
+    """Commands pushed from ``side``: :func:`play.compensate_sided`."""
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(target)
+    cdef const double[::1] sd = _vec(side)
+    cdef Py_ssize_t n = x.shape[0], i, nu = 0, nd = 0
+    out = np.empty(n)
+    cdef double[::1] o = out
+    if n == 0:
+        return out
+    gather = np.empty(n)
+    res = np.empty(n)
+    scratch = np.empty(n)
+    cdef double[::1] g = gather
+    cdef double[::1] r = res
+    cdef double[::1] s = scratch
+    # each side solved as one array (the periodic terms' iteration runs until the
+    # whole array has settled, as the reference's)
+    for i in range(n):
+        if sd[i] > 0:
+            g[nu] = x[i]
+            nu += 1
+    if nu:
+        _solve(&tb.tab, &g[0], &r[0], nu, True, &s[0])
+        nu = 0
+        for i in range(n):
+            if sd[i] > 0:
+                o[i] = r[nu]
+                nu += 1
+    for i in range(n):
+        if not sd[i] > 0:
+            g[nd] = x[i]
+            nd += 1
+    if nd:
+        _solve(&tb.tab, &g[0], &r[0], nd, False, &s[0])
+        nd = 0
+        for i in range(n):
+            if not sd[i] > 0:
+                o[i] = r[nd]
+                nd += 1
+    return out
+
+
+def clamp_scan(lo, hi):
+    """The play model's scan: :func:`play.clamp_scan`."""
+    cdef const double[::1] a = _vec(lo)
+    cdef const double[::1] b = _vec(hi)
+    cdef Py_ssize_t n = a.shape[0], i
+    out = np.empty(n)
+    cdef double[::1] o = out
+    cdef double y
+    if n == 0:
+        return out
+    y = a[0]
+    o[0] = y
+    for i in range(1, n):
+        y = _min(_max(y, a[i]), b[i])
+        o[i] = y
+    return out
+
+
+cdef Py_ssize_t _roots(const double* Pa, const double* Va, const double* P, const double* V,
+                       const double* hv, Py_ssize_t n, bint cubic, signed char* kind,
+                       double* S) noexcept nogil:
+    """Each step's turning points inside it (0, 1 or 2 into ``kind``; their
+    fractions into the rows of S (n, 2), NaN for a missing second), as
+    :func:`play.follow_stretches` finds them; returns how many steps turn."""
+    cdef Py_ssize_t i, nt = 0
+    cdef double h, hh, d, a, b, c, disc, sq, r1, r2
+    cdef bint ok1, ok2
+    for i in range(n):
+        h = hv[i]
+        hh = h if h > 0 else INFINITY
+        d = (Pa[i] - P[i]) / hh
+        a = 6.0 * d + 3.0 * (Va[i] + V[i])
+        b = -6.0 * d - 4.0 * Va[i] - 2.0 * V[i]
+        c = Va[i]
+        disc = b * b - 4.0 * a * c
+        sq = sqrt(_max(disc, 0.0))
+        if fabs(a) > 1e-300:
+            r1 = (-b - sq) / (2 * a)
+            r2 = (-b + sq) / (2 * a)
+        else:
+            r1 = -c / b if b != 0 else -1.0
+            r2 = -1.0
+        ok1 = disc >= 0 and r1 > 0 and r1 < 1 and h > 0 and cubic
+        ok2 = disc >= 0 and r2 > 0 and r2 < 1 and h > 0 and fabs(r2 - r1) > 0 and cubic
+        kind[i] = 0
+        if ok1 and ok2:
+            S[2 * nt] = _min(r1, r2)
+            S[2 * nt + 1] = _max(r1, r2)
+            kind[i] = 2
+            nt += 1
+        elif ok1 or ok2:
+            S[2 * nt] = r1 if ok1 else r2
+            S[2 * nt + 1] = NAN
+            kind[i] = 1
+            nt += 1
+    return nt
+
+
+cdef inline double _hermite(double s, double s3, double P0, double V0, double P1,
+                            double V1, double h) noexcept nogil:
+    """:func:`play.hermite` at one fraction s (its cube ``s3`` as numpy made it)."""
+    cdef double s2 = s * s
+    cdef double h00 = 2 * s3 - 3 * s2 + 1
+    cdef double h10 = s3 - 2 * s2 + s
+    cdef double h01 = -2 * s3 + 3 * s2
+    cdef double h11 = s3 - s2
+    return h00 * P0 + h10 * (h * V0) + h01 * P1 + h11 * (h * V1)
+
+
+def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
+    """The part along the commands' cubics: :func:`play.follow_stretches`."""
+    cdef _Table tb = _table(t)
+    cdef const Tab* T = &tb.tab
+    cdef const double[::1] y0v = _vec(y0)
+    cdef const double[::1] P0v = _vec(P0)
+    cdef const double[::1] V0v = _vec(V0)
+    cdef const double[::1] Pv = _vec(P)
+    cdef const double[::1] Vv = _vec(V)
+    cdef const double[::1] hv = _vec(dt)
+    cdef const long[::1] st = np.ascontiguousarray(steps, dtype=np.int_)
+    cdef Py_ssize_t n = Pv.shape[0], w = st.shape[0]
+    cdef Py_ssize_t i, j, k, m, nt = 0, ti
+    if int(np.sum(st)) != n or y0v.shape[0] != w or P0v.shape[0] != w or V0v.shape[0] != w:
+        raise ValueError("steps must sum to len(P), and y0, P0, V0 have one value a stretch")
+    if Vv.shape[0] != n or hv.shape[0] != n:
+        raise ValueError("P, V and dt must have one value a step")
+    y_end = np.empty(n)
+    y_min = np.empty(n)
+    y_max = np.empty(n)
+    if n == 0:
+        return y_end, y_min, y_max
+    cdef double[::1] ye = y_end
+    cdef double[::1] ymn = y_min
+    cdef double[::1] ymx = y_max
+    # per step: the command before it and its turning points (0, 1 or 2)
+    Pa_a = np.empty(n)
+    Va_a = np.empty(n)
+    kind_a = np.zeros(n, dtype=np.int8)  # 0: none, 1: one turn, 2: two
+    cdef double[::1] Pa = Pa_a
+    cdef double[::1] Va = Va_a
+    cdef signed char[::1] kind = kind_a
+    S_a = np.empty((n, 2))
+    cdef double[:, ::1] S = S_a
+    i = 0
+    for j in range(w):
+        for k in range(st[j]):
+            Pa[i] = P0v[j] if k == 0 else Pv[i - 1]
+            Va[i] = V0v[j] if k == 0 else Vv[i - 1]
+            i += 1
+    nt = _roots(&Pa[0], &Va[0], &Pv[0], &Vv[0], &hv[0], n, cubic, &kind[0], &S[0, 0])
+    # s**3 as the reference takes it: numpy's power over the (turns, 2) array
+    cdef double[:, ::1] S3
+    if nt:
+        S3 = np.ascontiguousarray(S_a[:nt]) ** 3
+    cdef double x, y = 0.0, lo_x, hi_x, mn, mx
+    cdef bint started = False
+    cdef Py_ssize_t g = -1
+    i = 0
+    ti = 0
+    for j in range(w):
+        for k in range(st[j]):
+            if k == 0:
+                # the stretch opens where its part stands
+                y = y0v[j] if not started else _min(_max(y, y0v[j]), y0v[j])
+                started = True
+            mn = INFINITY
+            mx = -INFINITY
+            for m in range(kind[i] + 1):
+                if m < kind[i]:
+                    x = _hermite(S[ti, m], S3[ti, m], Pa[i], Va[i], Pv[i], Vv[i], hv[i])
+                else:
+                    x = Pv[i]
+                g = _lo_hi(T, x, &lo_x, &hi_x, g)
+                y = _min(_max(y, lo_x), hi_x)
+                mn = _min(mn, y)  # numpy's reduce: a NaN wins
+                mx = _max(mx, y)
+            if kind[i]:
+                ti += 1
+            ye[i] = y
+            ymn[i] = mn
+            ymx[i] = mx
+            i += 1
+    return y_end, y_min, y_max
+
+
+cdef inline bint _lt(double a, double b) noexcept nogil:
+    # numpy's sort order (NaN last), as searchsorted compares
+    return a < b or (b != b and a == a)
+
+
+cdef inline double _sign(double x) noexcept nogil:
+    if x > 0:
+        return 1.0
+    if x < 0:
+        return -1.0
+    if x == 0:
+        return 0.0
+    return x
+
+
+cdef void _taken_up_ahead(const double* off, const double* wy, const signed char* ahead,
+                          const double* rate, const long* length, Py_ssize_t m,
+                          const long* idx, const double* s, const double* dP,
+                          const double* Vm, const double* speed, double* mag,
+                          double* steep_motor) noexcept nogil:
+    """:func:`play._taken_up_ahead`: the take summed over every crossing's points in
+    one running sum, each range's sum less the sum before it (as the reference)."""
+    cdef Py_ssize_t i, j, k = 0
+    cdef double cum = 0.0, before, ds, take, w, sv
+    for i in range(m):
+        before = cum
+        w = wy[i]
+        for j in range(length[i]):
+            if ahead[i]:
+                ds = s[idx[k]] - (s[idx[k] - 1] if idx[k] >= 1 else 0.0)
+                take = _min(rate[i] * ds, _max(0.5 * w * dP[idx[k]], 0.0))
+            else:
+                take = 0.0
+            cum = cum + take
+            if ahead[i]:
+                mag[k] = _max(fabs(off[i]) - (cum - before), 0.0)
+                sv = speed[idx[k]]
+                if sv > 0:
+                    steep_motor[k] = _max(0.5 * w * Vm[idx[k]], 0.0) / sv
+            k += 1
+
+
+cdef void _left_at_last(const double* off, const long* st, const long* last,
+                        const double* s0, const double* rate, const long* length,
+                        const signed char* ahead, bint any_ahead, Py_ssize_t m,
+                        const double* s, const double* mag, double* left) noexcept nogil:
+    """:func:`play._left_at_last`."""
+    cdef Py_ssize_t i, k = 0
+    cdef double s_last, lm
+    for i in range(m):
+        s_last = s[last[i] if last[i] > 0 else 0] if last[i] > st[i] else s0[i]
+        lm = _max(fabs(off[i]) - rate[i] * (s_last - s0[i]), 0.0)
+        k += length[i]
+        if any_ahead and ahead[i]:
+            lm = mag[k - 1] if length[i] > 0 else fabs(off[i])
+        left[i] = copysign(lm, off[i])
+
+
+cdef Py_ssize_t _rates(const double* off, const signed char* ahead, const long* st,
+                       const long* sp, Py_ssize_t m, const double* s, Py_ssize_t n,
+                       double share, double hurry, double* s0, double* rate, long* last,
+                       long* length) noexcept nogil:
+    """Each crossing's path length at its start, the last point carrying its offset,
+    its rate (:func:`play._catch_up_rates`) and how many points take it up (to
+    where the path has run the offset off: numpy's searchsorted, left); returns
+    the points of all."""
+    cdef Py_ssize_t i, lo_, hi_, mid, K = 0
+    cdef double room, need, key
+    cdef long gone, end, first
+    for i in range(m):
+        s0[i] = s[st[i] if st[i] > 0 else 0] if st[i] >= 0 else 0.0
+        last[i] = sp[i] if sp[i] < n else n - 1
+        room = s[last[i]] - s0[i] if (sp[i] < n and last[i] > st[i]) else 0.0
+        need = fabs(off[i]) / room if room > 0 else INFINITY
+        rate[i] = _max(need, share) if need <= hurry * share else share
+        key = s0[i] + fabs(off[i]) / rate[i]
+        lo_ = 0
+        hi_ = n
+        while lo_ < hi_:
+            mid = (lo_ + hi_) >> 1
+            if _lt(s[mid], key):
+                lo_ = mid + 1
+            else:
+                hi_ = mid
+        gone = lo_
+        end = last[i] + 1 if ahead[i] else (last[i] + 1 if last[i] + 1 < gone else gone)
+        first = st[i] + 1
+        length[i] = end - first if end - first > 0 else 0
+        K += length[i]
+    return K
+
+
+cdef void _slopes(const double* off, const double* rate, const long* length, Py_ssize_t m,
+                  const long* idx, const double* mag, const double* steep_motor,
+                  const double* s, Py_ssize_t n, long* oidx, double* ooff,
+                  double* oslope) noexcept nogil:
+    """:func:`play._catch_up_slopes` at the points with an offset left, which go
+    out with their offsets."""
+    cdef Py_ssize_t i, jj, j = 0, k = 0
+    cdef double ah, stp, offk
+    for i in range(m):
+        for jj in range(length[i]):
+            if mag[k] > 0:
+                offk = copysign(mag[k], off[i])
+                ah = s[idx[k] + 1] - s[idx[k]] if idx[k] + 1 < n else INFINITY
+                stp = _min(rate[i], mag[k] / ah if ah > 0 else INFINITY)
+                stp = _min(stp, steep_motor[k])
+                oidx[j] = idx[k]
+                ooff[j] = offk
+                oslope[j] = -_sign(offk) * stp
+                j += 1
+            k += 1
+
+
+def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=None):
+    """The offsets taken up after crossings: :func:`play.catch_up`."""
+    cdef const double[::1] o0 = _vec(off0)
+    cdef const double[::1] wy = _vec(way)
+    cdef const long[::1] st = np.ascontiguousarray(start, dtype=np.int_)
+    cdef const long[::1] sp = np.ascontiguousarray(stop, dtype=np.int_)
+    cdef const double[::1] s = _vec(s_path)
+    cdef Py_ssize_t m = o0.shape[0], n = s.shape[0], i, j, k, K
+    cdef bint has_motion = motion is not None
+    cdef const double[::1] dP
+    cdef const double[::1] Vm
+    cdef const double[::1] speed
+    if has_motion:
+        dP = _vec(motion[0])
+        Vm = _vec(motion[1])
+        speed = _vec(motion[2])
+    off_a = np.empty(m)
+    ahead_a = np.zeros(m, dtype=np.int8)
+    cdef double[::1] off = off_a
+    cdef signed char[::1] ahead = ahead_a
+    cdef bint any_ahead = False
+    cdef double x
+    for i in range(m):
+        x = o0[i] * wy[i]
+        ahead[i] = x > 0 and has_motion
+        any_ahead = any_ahead or ahead[i]
+        off[i] = o0[i] if (x < 0 or ahead[i]) else 0.0
+    if n == 0:
+        none = np.zeros(0)
+        return none.astype(int), none, none, off_a
+    s0_a = np.empty(m)
+    rate_a = np.empty(m)
+    last_a = np.empty(m, dtype=np.int_)
+    len_a = np.empty(m, dtype=np.int_)
+    cdef double[::1] s0 = s0_a
+    cdef double[::1] rate = rate_a
+    cdef long[::1] last = last_a
+    cdef long[::1] length = len_a
+    cdef double mag0
+    K = _rates(&off[0], &ahead[0], &st[0], &sp[0], m, &s[0], n, share, hurry, &s0[0],
+               &rate[0], &last[0], &length[0])
+    idx_a = np.empty(K, dtype=np.int_)
+    mag_a = np.empty(K)
+    steep_a = np.full(K, INFINITY)
+    cdef long[::1] idx = idx_a
+    cdef double[::1] mag = mag_a
+    cdef double[::1] steep_motor = steep_a
+    k = 0
+    for i in range(m):
+        mag0 = fabs(off[i])
+        for j in range(length[i]):
+            idx[k] = st[i] + 1 + j
+            mag[k] = _max(mag0 - rate[i] * (s[idx[k]] - s0[i]), 0.0)
+            k += 1
+    if has_motion and any_ahead:
+        _taken_up_ahead(&off[0], &wy[0], &ahead[0], &rate[0], &length[0], m, &idx[0] if K else NULL,
+                        &s[0], &dP[0], &Vm[0], &speed[0], &mag[0] if K else NULL,
+                        &steep_motor[0] if K else NULL)
+    left_a = np.empty(m)
+    cdef double[::1] left = left_a
+    _left_at_last(&off[0], &st[0], &last[0], &s0[0], &rate[0], &length[0], &ahead[0],
+                  any_ahead, m, &s[0], &mag[0] if K else NULL, &left[0])
+    # _catch_up_slopes, and only the points with an offset left
+    cdef Py_ssize_t nk = 0
+    for k in range(K):
+        if mag[k] > 0:
+            nk += 1
+    oidx_a = np.empty(nk, dtype=np.int_)
+    ooff_a = np.empty(nk)
+    oslope_a = np.empty(nk)
+    cdef long[::1] oidx = oidx_a
+    cdef double[::1] ooff = ooff_a
+    cdef double[::1] oslope = oslope_a
+    if nk:
+        _slopes(&off[0], &rate[0], &length[0], m, &idx[0], &mag[0], &steep_motor[0], &s[0], n,
+                &oidx[0], &ooff[0], &oslope[0])
+    return oidx_a, ooff_a, oslope_a, left_a
+
+
+def catch_up_commands(t, mo, off0, start, stop, P, V, double share, double hurry):
+    """The take-up's commands: :func:`play.catch_up_commands` (``P``, ``V``
+    contiguous float arrays, updated in place)."""
+    cdef const double[::1] s_path = mo.s_path
+    cdef const double[::1] side = mo.side
+    cdef const double[::1] Pi = mo.P_ideal
+    cdef const double[::1] Vi = mo.V_ideal
+    cdef const double[::1] speed = mo.speed
+    cdef const long[::1] st = np.ascontiguousarray(start, dtype=np.int_)
+    cdef const long[::1] sp = np.ascontiguousarray(stop, dtype=np.int_)
+    cdef double[::1] Pv = P
+    cdef double[::1] Vv = V
+    cdef Py_ssize_t n = s_path.shape[0], m = st.shape[0], i, k, K
+    way_a = np.empty(m)
+    cdef double[::1] way = way_a
+    for i in range(m):
+        way[i] = side[st[i] if st[i] > 0 else 0]
+    idx_a, off_a, slope_a, left_a = catch_up(
+        off0, way_a, st.base, sp.base, mo.s_path, share, hurry, (mo.dP, mo.V_ideal, mo.speed)
+    )
+    cdef const long[::1] idx = idx_a
+    cdef const double[::1] off = off_a
+    cdef const double[::1] slp = slope_a
+    cdef double[::1] left = left_a
+    carry = NAN
+    if m and sp[m - 1] >= n and left[m - 1] != 0.0:
+        carry = left[m - 1]
+    K = idx.shape[0]
+    cdef double[::1] tg
+    cdef double[::1] sd
+    cdef double[::1] pk
+    cdef const double[::1] sl
+    if K:
+        tg_a = np.empty(K)
+        sd_a = np.empty(K)
+        tg = tg_a
+        sd = sd_a
+        for k in range(K):
+            tg[k] = Pi[idx[k]] + off[k]
+            sd[k] = side[idx[k]]
+        pk_a = compensate_sided(t, tg_a, sd_a)
+        pk = pk_a
+        sl_a = slope(t, pk_a, sd_a)
+        sl = sl_a
+        for k in range(K):
+            Pv[idx[k]] = pk[k]
+            Vv[idx[k]] = (Vi[idx[k]] + slp[k] * speed[idx[k]]) / sl[k]
+    for i in range(m):
+        if not sp[i] < n:
+            left[i] = 0.0
+    return left_a, carry
+
+
+cdef void _extreme(const double* lo, const double* hi, Py_ssize_t n, const long* cuts,
+                   const double* beg, const signed char* up, double* out,
+                   Py_ssize_t c) noexcept nogil:
+    """:func:`play._extreme`: numpy's reduceat over [cuts[2i], cuts[2i + 1]) (the
+    value at cuts[2i] where that is empty; ±inf past the end)."""
+    cdef Py_ssize_t i, j, a, z
+    cdef double x
+    for i in range(c):
+        a = cuts[2 * i]
+        z = cuts[2 * i + 1]
+        if up[i]:
+            x = lo[a] if a < n else INFINITY
+            for j in range(a + 1, z):
+                x = _min(x, lo[j] if j < n else INFINITY)
+            out[i] = _min(x, beg[i])
+        else:
+            x = hi[a] if a < n else -INFINITY
+            for j in range(a + 1, z):
+                x = _max(x, hi[j] if j < n else -INFINITY)
+            out[i] = _max(x, beg[i])
+
+
+def _contact(t, y, up, shortfall):
+    """:func:`play._contact` (lo⁻¹ and hi⁻¹ each over the whole array, as the
+    reference's np.where takes them)."""
+    cdef const double[::1] a = lo_inv(t, y)
+    cdef const double[::1] b = hi_inv(t, y)
+    cdef const signed char[::1] u = up
+    cdef const double[::1] s = shortfall
+    cdef Py_ssize_t i, c = a.shape[0]
+    out = np.empty(c)
+    cdef double[::1] o = out
+    for i in range(c):
+        o[i] = a[i] - s[i] if u[i] else b[i] + s[i]
+    return out
+
+
+def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double share,
+                     double hurry):
+    """The crossings ended where the parts stand: :func:`play.settle_crossings`."""
+    mo = type(mo)(*[np.ascontiguousarray(a, dtype=np.float64) for a in mo])
+    shortfall = np.ascontiguousarray(shortfall, dtype=np.float64)
+    t = _table(t)
+    P_a = np.array(P, dtype=np.float64)
+    V_a = np.array(V, dtype=np.float64)
+    cdef double[::1] Pv = P_a
+    cdef double[::1] Vv = V_a
+    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
+    cdef const long[::1] bv = np.ascontiguousarray(b, dtype=np.int_)
+    cdef const double[::1] side = mo.side
+    cdef const double[::1] Pi = mo.P_ideal
+    cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0], i, upto = 0
+    cdef double y0 = before[0], P0 = before[1], V0 = before[2]
+    for i in range(c):
+        if ev[i] + 1 > upto:
+            upto = ev[i] + 1
+    one = np.ones(1)
+    y_pt_a, lo_a, hi_a = follow_stretches(
+        t, y0 * one, P0 * one, V0 * one, P_a[:upto], V_a[:upto], mo.dt[:upto],
+        np.array([upto]), cubic
+    )
+    cdef const double[::1] y_pt = y_pt_a
+    cdef const double[::1] lo_ = lo_a
+    cdef const double[::1] hi_ = hi_a
+    at_beg_a = np.empty(c)
+    cuts_a = np.empty(2 * c, dtype=np.int_)
+    u_a = np.empty(c, dtype=np.int8)
+    stops_a = np.empty(c, dtype=np.int_)
+    made_a = np.empty(c)
+    y_s_a = np.empty(c)
+    off_a = np.empty(c)
+    cdef double[::1] at_beg = at_beg_a
+    cdef long[::1] cuts = cuts_a
+    cdef signed char[::1] u = u_a
+    cdef long[::1] stops = stops_a
+    cdef double[::1] made = made_a
+    cdef double[::1] y_s = y_s_a
+    cdef double[::1] off = off_a
+    for i in range(c):
+        at_beg[i] = y_pt[bv[i] if bv[i] > 0 else 0] if bv[i] >= 0 else y0
+        cuts[2 * i] = bv[i] + 1 if bv[i] + 1 > 0 else 0
+        cuts[2 * i + 1] = ev[i] + 1
+        u[i] = side[ev[i]] > 0
+        stops[i] = bv[i + 1] if i + 1 < c else n
+        made[i] = Pv[ev[i]]
+    _extreme(&lo_[0], &hi_[0], upto, &cuts[0], &at_beg[0], &u[0], &y_s[0], c)
+    cdef const double[::1] ct = _contact(t, y_s_a, u_a, shortfall)
+    for i in range(c):
+        Pv[ev[i]] = ct[i]
+        off[i] = y_s[i] - Pi[ev[i]]
+    P_made = P_a.copy()
+    V_made = V_a.copy()
+    left_a, carry = catch_up_commands(t, mo, off_a, ev.base, stops_a, P_a, V_a, share, hurry)
+    cdef double[::1] left = left_a
+    todo_l = [i for i in range(1, c) if left[i - 1] != 0.0]
+    x = (ev, bv, u, shortfall, stops, made, P_made, V_made)
+    while todo_l:
+        todo_l, cr = _reckon_again(t, mo, x, todo_l, y_s, left, P_a, V_a, cubic, share, hurry)
+        if cr == cr:
+            carry = cr
+    cdef Py_ssize_t k = 0
+    for i in range(c):
+        if ev[i] > ev[k]:
+            k = i
+    return _pure.Settled(P_a, V_a, y_s[k], Pv[upto - 1], Vv[upto - 1], carry)
+
+
+def _stretches(const long[::1] e, const long[::1] todo, const double[::1] y_s,
+               const double[::1] Pv, const double[::1] Vv, const double[::1] dt,
+               const double[::1] made):
+    """The stretches a round follows (:func:`play._reckon_again`): from each
+    crossing before to each crossing's end, its end as made; returns follow's
+    y0, P0, V0, P, V, dt and steps."""
+    cdef Py_ssize_t w = todo.shape[0], i, j, k = 0, K = 0, ti, ep
+    span_a = np.empty(w, dtype=np.int_)
+    cdef long[::1] span = span_a
+    for i in range(w):
+        span[i] = e[todo[i]] - e[todo[i] - 1]
+        K += span[i]
+    y0_a, P0_a, V0_a = np.empty(w), np.empty(w), np.empty(w)
+    Pw_a, Vw_a, dtw_a = np.empty(K), np.empty(K), np.empty(K)
+    cdef double[::1] y0 = y0_a
+    cdef double[::1] P0 = P0_a
+    cdef double[::1] V0 = V0_a
+    cdef double[::1] Pw = Pw_a
+    cdef double[::1] Vw = Vw_a
+    cdef double[::1] dtw = dtw_a
+    for i in range(w):
+        ti = todo[i]
+        ep = e[ti - 1]
+        y0[i] = y_s[ti - 1]
+        P0[i] = Pv[ep]
+        V0[i] = Vv[ep]
+        for j in range(span[i]):
+            Pw[k] = Pv[ep + 1 + j]
+            Vw[k] = Vv[ep + 1 + j]
+            dtw[k] = dt[ep + 1 + j]
+            k += 1
+    # the crossings' ends as made (numpy's order: the last write wins, index −1
+    # the last element)
+    k = 0
+    for i in range(w):
+        k += span[i]
+        if K:
+            Pw[k - 1 if k >= 1 else K - 1] = made[todo[i]]
+    return y0_a, P0_a, V0_a, Pw_a, Vw_a, dtw_a, span_a
+
+
+def _taken_again(const long[::1] e, const long[::1] stops, const long[::1] todo,
+                 double[::1] y_s, const double[::1] ys, const double[::1] ct,
+                 double[::1] Pv, double[::1] Vv, const double[::1] P_made,
+                 const double[::1] V_made, const double[::1] Pi):
+    """A round's crossings ended where their parts stand (``ys``, commands ``ct``),
+    the take-up after each back to the commands as made; returns the offsets,
+    starts and stops of the take-ups to make again."""
+    cdef Py_ssize_t w = todo.shape[0], n = Pv.shape[0], i, j, ti, ej, hi_end
+    off_a = np.empty(w)
+    ej_a = np.empty(w, dtype=np.int_)
+    st_a = np.empty(w, dtype=np.int_)
+    cdef double[::1] off = off_a
+    cdef long[::1] ejv = ej_a
+    cdef long[::1] stv = st_a
+    for i in range(w):
+        y_s[todo[i]] = ys[i]
+    for i in range(w):
+        Pv[e[todo[i]]] = ct[i]
+    for i in range(w):
+        ti = todo[i]
+        ej = e[ti]
+        hi_end = stops[ti] + 1 if stops[ti] + 1 < n else n
+        for j in range(ej + 1, hi_end):
+            Pv[j] = P_made[j]
+            Vv[j] = V_made[j]
+        off[i] = y_s[ti] - Pi[ej]
+        ejv[i] = ej
+        stv[i] = stops[ti]
+    return off_a, ej_a, st_a
+
+
+def _reckon_again(t, mo, x, list todo_l, double[::1] y_s, double[::1] left, P_a, V_a,
+                  bint cubic, double share, double hurry):
+    """One round: :func:`play._reckon_again`."""
+    cdef const long[::1] e
+    cdef const long[::1] b
+    cdef const signed char[::1] u
+    cdef long[::1] stops
+    cdef double[::1] made
+    e, b, u, short_a, stops, made, P_made_a, V_made_a = x
+    cdef const double[::1] shortfall = short_a
+    cdef Py_ssize_t c = e.shape[0], w = len(todo_l), i, K, ti, ep, into, base = 0
+    todo_a = np.array(todo_l, dtype=np.int_)
+    cdef const long[::1] todo = todo_a
+    args = _stretches(e, todo, y_s, P_a, V_a, mo.dt, made)
+    cdef const long[::1] span = args[6]
+    K = args[3].shape[0]
+    y_w_a, lo_w_a, hi_w_a = follow_stretches(t, *args, cubic)
+    cdef const double[::1] y_w = y_w_a
+    cdef const double[::1] lo_w = lo_w_a
+    cdef const double[::1] hi_w = hi_w_a
+    beg_a, ys_a, sh_a = np.empty(w), np.empty(w), np.empty(w)
+    cuts_a = np.empty(2 * w, dtype=np.int_)
+    uu_a = np.empty(w, dtype=np.int8)
+    cdef double[::1] beg = beg_a
+    cdef long[::1] cuts = cuts_a
+    cdef signed char[::1] uu = uu_a
+    cdef double[::1] ys = ys_a
+    cdef double[::1] sh = sh_a
+    for i in range(w):
+        ti = todo[i]
+        ep = e[ti - 1]
+        into = b[ti] - ep if b[ti] - ep > 0 else 0
+        beg[i] = y_w[base + into - 1] if into > 0 else y_s[ti - 1]
+        cuts[2 * i] = base + into
+        cuts[2 * i + 1] = base + span[i]
+        uu[i] = u[ti]
+        sh[i] = shortfall[ti]
+        base += span[i]
+    _extreme(&lo_w[0], &hi_w[0], K, &cuts[0], &beg[0], &uu[0], &ys[0], w)
+    ct = _contact(t, ys_a, uu_a, sh_a)
+    off_a, ej_a, st_a = _taken_again(
+        e, stops, todo, y_s, ys_a, ct, P_a, V_a, P_made_a, V_made_a, mo.P_ideal
+    )
+    new_left_a, carry = catch_up_commands(t, mo, off_a, ej_a, st_a, P_a, V_a, share, hurry)
+    cdef const double[::1] new_left = new_left_a
+    moved = []
+    for i in range(w):
+        ti = todo[i]
+        if new_left[i] != left[ti] and ti + 1 < c:
+            moved.append(ti + 1)
+        left[ti] = new_left[i]
+    return moved, carry
+
+
+def carried(sg, side):
+    """The side carried through the rows without a direction: :func:`play.carried`
+    (the result's type as numpy's where gives it)."""
+    a = np.asarray(sg)
+    dtype = np.result_type(a, side)
+    cdef Py_ssize_t n = a.shape[0], k, i, j
+    if n == 0:
+        return np.empty(np.broadcast_shapes(a.shape, np.shape(side)), dtype=dtype)
+    a2 = np.ascontiguousarray(a, dtype=np.float64).reshape(n, -1)
+    k = a2.shape[1]
+    cdef const double[:, ::1] x = a2
+    cdef const double[::1] s0 = np.ascontiguousarray(
+        np.broadcast_to(np.asarray(side, dtype=np.float64), (k,)))
+    out = np.empty((n, k))
+    cdef double[:, ::1] o = out
+    cdef double cur
+    for j in range(k):
+        cur = s0[j]
+        for i in range(n):
+            if x[i, j] != 0:
+                cur = x[i, j]
+            o[i, j] = cur
+    return out.reshape(a.shape).astype(dtype, copy=False)
+
+
+cdef Py_ssize_t _first_creep(const long* sg, const double* P, Py_ssize_t n, long side,
+                             double ref, double drift, long* came_out,
+                             double* far_out) noexcept nogil:
+    """:func:`play._farthest` over rows 0..n−1, then the first row that has drifted
+    back (``play.creeps``' hit), or −1; the last row's came and far go out."""
+    cdef Py_ssize_t i, last = -1, stretch = 0
+    cdef long came = side
+    cdef double v, vmax = -INFINITY, vmin = INFINITY, span, lift, acc = -INFINITY, far
+    cdef bint nan = False
+    # the lift needs the slice's span of came·P first (numpy's max, min: a NaN wins)
+    for i in range(n):
+        if sg[i] != 0:
+            came = sg[i]
+        v = came * P[i]
+        if v != v:
+            nan = True
+        else:
+            if v > vmax:
+                vmax = v
+            if v < vmin:
+                vmin = v
+    span = (NAN if nan else vmax - vmin) + 1.0
+    came = side
+    for i in range(n):
+        if sg[i] != 0:
+            if i >= 1 and last != i:
+                stretch += 1
+            last = i
+            came = sg[i]
+        v = came * P[i]
+        lift = stretch * span
+        acc = _max(acc, v + lift) if i else v + lift
+        far = acc - lift
+        if last < 0:
+            far = -INFINITY if ref != ref else _max(far, side * ref)
+        came_out[0] = came
+        far_out[0] = far
+        if sg[i] == 0 and came * P[i] - far < -drift:
+            return i
+    return -1
+
+
+def creeps(sg, P, side, double ref, double drift):
+    """Rows where a creeping motor drifted back: :func:`play.creeps`."""
+    cdef const long[::1] s = np.ascontiguousarray(sg, dtype=np.int_)
+    cdef const double[::1] p = _vec(P)
+    cdef Py_ssize_t n = s.shape[0], start = 0, r
+    out_a = np.zeros(n, dtype=int)
+    cdef long[::1] out = out_a
+    cdef long cur_side = int(side), came = 0
+    cdef double cur_ref = ref, far = 0.0
+    while start < n:
+        r = _first_creep(&s[start], &p[start], n - start, cur_side, cur_ref, drift, &came, &far)
+        if r < 0:
+            return out_a, (came * far if (far == far and far != INFINITY and far != -INFINITY) else NAN)
+        r += start
+        out[r] = -came
+        cur_side = out[r]
+        cur_ref = p[r]
+        start = r + 1
+    return out_a, cur_ref
+
+
+def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, double eps):
+    """A motor's side at each point: :func:`play.motor_sides` (a window ending at
+    −1 sets the last point, as numpy's index −1 does)."""
+    cdef const double[::1] v = _vec(V)
+    cdef const unsigned char[::1] rest = np.ascontiguousarray(resting, dtype=np.uint8)
+    cdef const long[::1] fv = np.ascontiguousarray(f, dtype=np.int_)
+    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
+    cdef const long[::1] nv = np.ascontiguousarray(new, dtype=np.int_)
+    cdef const long[::1] lv = np.ascontiguousarray(last_row, dtype=np.int_)
+    cdef const long[::1] sf = np.ascontiguousarray(s_first, dtype=np.int_)
+    cdef const long[::1] sn = np.ascontiguousarray(s_new, dtype=np.int_)
+    cdef Py_ssize_t m = v.shape[0], w = ev.shape[0], i, j, k
+    cdef long lo_f
+    out = np.empty(m, dtype=int)
+    cdef long[::1] sg = out
+    for i in range(m):
+        sg[i] = 0 if rest[i] else (1 if v[i] > eps else (-1 if v[i] < -eps else 0))
+    for i in range(w):
+        for j in range(lv[i] - ev[i] - 1):
+            sg[ev[i] + 1 + j] = nv[i]
+    for i in range(w):
+        lo_f = 0 if i == 0 else ev[i - 1] + 1
+        lo_f = fv[i] if fv[i] > lo_f else lo_f
+        for j in range(ev[i] - lo_f):
+            sg[lo_f + j] = -nv[i]
+    for i in range(w):
+        k = ev[i] if ev[i] >= 0 else ev[i] + m
+        sg[k] = nv[i]
+    for i in range(sf.shape[0]):
+        k = sf[i] if sf[i] >= 0 else sf[i] + m
+        sg[k] = sn[i]
+    return carried(out, side)

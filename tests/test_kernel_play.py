@@ -1,0 +1,430 @@
+"""The compiled play model against its numpy reference: the same bits.
+
+Recorded inputs (every call of the play kernel the sample programs make, as the
+golden files are converted: the envelopes, their inverses and slopes, the sided
+compensation, the part followed along the commands' cubics and chords) and
+generated ones (hypothesis: tables with crossing forward and reverse errors, one
+break, periodic terms; commands with reversals, standing points of no time, empty
+stretches). The reference calls the C library's sin and cos through :mod:`math`
+(kernel/libm.py), as the compiled twin does.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from prsxy_post import axiscomp
+from prsxy_post.kernel import libm, play
+from prsxy_post.profile import AxisComp
+
+from .kernel_cases import compiled, record, same_bits
+
+#: the kernel's entry points (prsxy_post.kernel's names) and their reference
+ENTRIES: dict[str, Any] = {
+    "_play_lo": play.lo,
+    "_play_slope": play.slope,
+    "_compensate_sided": play.compensate_sided,
+    "_settle_crossings": play.settle_crossings,
+    "_carried": play.carried,
+    "_creeps": play.creeps,
+    "_motor_sides": play.motor_sides,
+}
+
+
+def _same(got: Any, want: Any) -> bool:
+    if isinstance(want, tuple):
+        return len(got) == len(want) and all(_same(g, w) for g, w in zip(got, want, strict=True))
+    return same_bits(got, want)
+
+
+#: what the chain calls through the kernel's names, and how often at least while
+#: the samples convert (the envelopes alone at the start)
+RECORDED = {
+    "_play_lo": 1,
+    "_play_slope": 10,
+    "_compensate_sided": 10,
+    "_settle_crossings": 3,
+    "_carried": 10,
+    "_creeps": 10,
+    "_motor_sides": 10,
+}
+#: what the settle calls inside the kernel (recorded from the reference settle on
+#: the recorded settles' inputs), and how often at least
+INNER = {
+    "follow_stretches": 3,
+    "catch_up": 3,
+    "lo_inv": 3,
+    "hi_inv": 3,
+    "compensate_sided": 1,
+    "slope": 1,
+}
+
+
+@pytest.mark.parametrize("attr", sorted(RECORDED))
+def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) -> None:
+    _play = compiled("_play")
+    calls = record(attr, tmp_path)
+    assert len(calls) >= RECORDED[attr]
+    for args in calls:
+        want = ENTRIES[attr](*args)
+        got = getattr(_play, attr.removeprefix("_play_").removeprefix("_"))(*args)
+        assert _same(tuple(got) if attr == "_settle_crossings" else got, want), attr
+        if attr in ("_carried", "_motor_sides"):
+            assert got.dtype == want.dtype
+
+
+@pytest.fixture(scope="module")
+def inner_calls(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[Any, ...]]]:
+    """The calls the reference settle makes of the pieces, on the settles the
+    sample programs make."""
+    settles = record("_settle_crossings", tmp_path_factory.mktemp("settle"))
+    calls: dict[str, list[tuple[Any, ...]]] = {k: [] for k in INNER}
+    mp = pytest.MonkeyPatch()
+    for name in INNER:
+        inner = getattr(play, name)
+
+        def spy(*args: Any, _inner: Any = inner, _name: str = name) -> Any:
+            calls[_name].append(tuple(copy.deepcopy(a) for a in args))
+            return _inner(*args)
+
+        mp.setattr(play, name, spy)
+    try:
+        for args in settles:
+            play.settle_crossings(*args)
+    finally:
+        mp.undo()
+    return calls
+
+
+@pytest.mark.parametrize("name", sorted(INNER))
+def test_sample_programs_settle_pieces_are_bit_identical(
+    name: str, inner_calls: dict[str, list[tuple[Any, ...]]]
+) -> None:
+    _play = compiled("_play")
+    calls = inner_calls[name]
+    assert len(calls) >= INNER[name]
+    for args in calls:
+        want = getattr(play, name)(*copy.deepcopy(args))
+        got = getattr(_play, name)(*copy.deepcopy(args))
+        assert _same(got, want), name
+
+
+def test_sample_programs_follow_their_parts_through_turning_points(
+    inner_calls: dict[str, list[tuple[Any, ...]]],
+) -> None:
+    """The recorded follows are not all straight: in some steps the command's cubic
+    turns back (the turning points, evaluated with numpy's power in both)."""
+    calls = inner_calls["follow_stretches"]
+    assert sum(len(c[4]) for c in calls) > 1000
+    turns = 0
+    for _t, _y0, P0, V0, P, V, dt, steps, cubic in calls:
+        first = (np.cumsum(steps) - steps)[steps > 0]
+        Pa, Va = np.concatenate([[0.0], P[:-1]]), np.concatenate([[0.0], V[:-1]])
+        Pa[first], Va[first] = P0[steps > 0], V0[steps > 0]
+        # the velocity changes sign inside the step where it does between its ends
+        turns += int(np.count_nonzero((Va * V < 0) & (dt > 0))) if cubic else 0
+    assert turns > 0
+
+
+# -- generated tables and commands
+
+ERR = st.floats(-0.01, 0.01)
+CYCLIC = st.lists(
+    st.tuples(st.floats(1e-5, 3e-3), st.floats(0.5, 50.0), st.floats(-180.0, 180.0)),
+    max_size=2,
+)
+
+
+@st.composite
+def tables(draw: st.DrawFn) -> axiscomp.MotorTable:
+    """A motor's table: 1 to 8 positions, forward and reverse errors that may cross
+    (slopes kept above −0.5, as the profile requires), perhaps periodic terms."""
+    n = draw(st.integers(1, 8))
+    start = draw(st.floats(-300.0, 0.0))
+    gaps = draw(st.lists(st.floats(1.0, 80.0), min_size=n - 1, max_size=n - 1))
+    pos = start + np.concatenate([[0.0], np.cumsum(gaps)])
+    fwd = np.array(draw(st.lists(ERR, min_size=n, max_size=n)))
+    rev = np.array(draw(st.lists(ERR, min_size=n, max_size=n)))
+    t = axiscomp.MotorTable.from_comp(AxisComp(1, pos, fwd, rev))
+    return t.with_cyclic(tuple(draw(CYCLIC)))
+
+
+@settings(max_examples=150, deadline=None)
+@given(tables(), st.integers(0, 2**32 - 1))
+def test_generated_envelopes_inverses_and_slopes_are_bit_identical(
+    table: axiscomp.MotorTable, seed: int
+) -> None:
+    _play = compiled("_play")
+    t = table.flat
+    rng = np.random.default_rng(seed)
+    # inside and outside the table, at its breaks and the inverses' ends exactly
+    p = np.concatenate(
+        [
+            rng.uniform(t.breaks[0] - 30, t.breaks[-1] + 30, 200),
+            t.breaks,
+            t.lo_vals,
+            t.hi_vals,
+            [np.nan, np.inf, -np.inf, 0.0, -0.0],
+        ]
+    )
+    side = rng.integers(-1, 2, len(p))
+    for name in ("lo", "hi", "lo_inv", "hi_inv"):
+        assert same_bits(getattr(_play, name)(t, p), getattr(play, name)(t, p)), name
+    assert same_bits(_play.slope(t, p, side), play.slope(t, p, side))
+    assert same_bits(_play.compensate_sided(t, p, side), play.compensate_sided(t, p, side))
+    lo, hi = play.lo(t, p[:-5]), play.hi(t, p[:-5])
+    assert same_bits(_play.clamp_scan(lo, hi), play.clamp_scan(lo, hi))
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    tables(),
+    st.integers(0, 2**32 - 1),
+    st.lists(st.integers(0, 40), min_size=1, max_size=5),
+    st.booleans(),
+)
+def test_generated_follows_are_bit_identical(
+    table: axiscomp.MotorTable, seed: int, steps: list[int], cubic: bool
+) -> None:
+    """Commands with reversals inside steps (velocities that swing the cubics past
+    their points), steps of no time, and empty stretches."""
+    _play = compiled("_play")
+    t = table.flat
+    rng = np.random.default_rng(seed)
+    k = sum(steps)
+    w = len(steps)
+    mid = 0.5 * (t.breaks[0] + t.breaks[-1])
+    P = mid + np.cumsum(rng.normal(0, 0.05, k))
+    V = rng.normal(0, 20, k)
+    dt = np.where(rng.random(k) < 0.1, 0.0, rng.uniform(0.001, 0.02, k))
+    y0 = mid + rng.normal(0, 0.01, w)
+    P0 = mid + rng.normal(0, 0.01, w)
+    V0 = rng.normal(0, 20, w)
+    st_ = np.array(steps, dtype=int)
+    got = _play.follow_stretches(t, y0, P0, V0, P, V, dt, st_, cubic)
+    want = play.follow_stretches(t, y0, P0, V0, P, V, dt, st_, cubic)
+    assert _same(got, want)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.integers(0, 60),
+    st.lists(st.integers(-1, 59), max_size=6, unique=True),
+    st.integers(0, 2**32 - 1),
+    st.booleans(),
+    st.sampled_from([5e-5, 1e-3, 0.5]),
+)
+def test_generated_catch_ups_are_bit_identical(
+    n: int, starts: list[int], seed: int, with_motion: bool, share: float
+) -> None:
+    """Crossings ending anywhere in a chunk (at the point before it too), offsets
+    behind and ahead of their motor's way, paths that stand (equal lengths) and
+    run, with and without the motor's motion, slow and fast rates."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    start = np.array(sorted(x for x in starts if x < n), dtype=int)
+    m = len(start)
+    stop = np.append(start[1:], n).astype(int)
+    stop = np.where(rng.random(m) < 0.3, n, stop)  # some go on into the next chunk
+    s_path = np.cumsum(np.where(rng.random(n) < 0.2, 0.0, rng.uniform(0, 0.5, n)))
+    off0 = rng.normal(0, 1e-4, m) * np.where(rng.random(m) < 0.2, 0.0, 1.0)
+    way = rng.choice([-1, 1], m)
+    motion = (
+        (
+            rng.normal(0, 0.01, n),
+            rng.normal(0, 5, n),
+            np.abs(rng.normal(0, 5, n)) * (rng.random(n) > 0.1),
+        )
+        if with_motion
+        else None
+    )
+    got = _play.catch_up(off0, way, start, stop, s_path, share, 2.0, motion)
+    want = play.catch_up(off0, way, start, stop, s_path, share, 2.0, motion)
+    assert _same(got, want)
+    assert got[0].dtype == want[0].dtype
+
+
+def _motion(rng: np.random.Generator, n: int) -> play.Motion:
+    P_ideal = np.cumsum(rng.normal(0, 0.02, n))
+    s_path = np.cumsum(np.where(rng.random(n) < 0.1, 0.0, rng.uniform(0, 0.3, n)))
+    return play.Motion(
+        P_ideal,
+        rng.normal(0, 5, n),
+        np.diff(P_ideal, prepend=0.0),
+        np.abs(rng.normal(0, 10, n)),
+        np.where(rng.random(n) < 0.05, 0.0, rng.uniform(0.001, 0.01, n)),
+        s_path,
+        rng.choice([-1.0, 1.0], n),
+    )
+
+
+@settings(max_examples=150, deadline=None)
+@given(tables(), st.integers(0, 2**32 - 1), st.integers(4, 80), st.booleans())
+def test_generated_settles_are_bit_identical(
+    table: axiscomp.MotorTable, seed: int, n: int, cubic: bool
+) -> None:
+    """Chains of crossings (each window inside the gap the one before leaves),
+    parts off by up to a few µm, behind and ahead, with and without periodic
+    terms: the commands, the part and the carried offset, to the bit."""
+    _play = compiled("_play")
+    args = _settle_case(table.flat, seed, n, cubic)
+    if args is not None:
+        assert _same(tuple(_play.settle_crossings(*args)), tuple(play.settle_crossings(*args)))
+
+
+def _settle_case(t: play.PlayTable, seed: int, n: int, cubic: bool) -> tuple[Any, ...] | None:
+    """settle_crossings' arguments: up to four crossings in n points, commands off
+    their wanted positions by up to mm (None: no crossing drawn)."""
+    rng = np.random.default_rng(seed)
+    mo = _motion(rng, n)
+    mid = 0.5 * (t.breaks[0] + t.breaks[-1])
+    mo = mo._replace(P_ideal=mo.P_ideal + mid)
+    k = min(n + 1, 2 * int(rng.integers(1, 5)))
+    cuts = np.sort(rng.choice(np.arange(-1, n), size=k, replace=False))
+    e = cuts[1::2]
+    b = cuts[0::2][: len(e)]
+    if not len(e):
+        return None
+    short = np.abs(rng.normal(0, 1e-7, len(e)))
+    P = mo.P_ideal + rng.normal(0, 2e-3, n)
+    V = mo.V_ideal + rng.normal(0, 0.1, n)
+    before = (mid + rng.normal(0, 1e-3), mid + rng.normal(0, 1e-3), float(rng.normal(0, 5)))
+    return (t, mo, before, e, b, short, P, V, cubic, float(rng.choice([5e-5, 5e-3])), 2.0)
+
+
+def test_generated_settles_reckon_crossings_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The generated settles take offsets into later crossings (the rounds of
+    _reckon_again run), and agree to the bit there too."""
+    _play = compiled("_play")
+    rounds = 0
+    inner = play._reckon_again
+
+    def count(*args: Any) -> Any:
+        nonlocal rounds
+        rounds += 1
+        return inner(*args)
+
+    monkeypatch.setattr(play, "_reckon_again", count)
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-50.0, 0.0, 50.0]), np.zeros(3), np.array([0.004, 0.002, 0.004]))
+    ).flat
+    for seed in range(40):
+        args = _settle_case(t, seed, 60, seed % 2 == 0)
+        if args is not None:
+            assert _same(tuple(_play.settle_crossings(*args)), tuple(play.settle_crossings(*args)))
+    assert rounds > 10
+
+
+@settings(max_examples=100, deadline=None)
+@given(tables(), st.integers(0, 2**32 - 1), st.integers(1, 60))
+def test_generated_catch_up_commands_are_bit_identical(
+    table: axiscomp.MotorTable, seed: int, n: int
+) -> None:
+    _play = compiled("_play")
+    t = table.flat
+    rng = np.random.default_rng(seed)
+    mo = _motion(rng, n)
+    start = np.array(sorted(set(rng.integers(-1, n, 3).tolist())), dtype=int)
+    stop = np.append(start[1:], n)
+    off0 = rng.normal(0, 1e-3, len(start))
+    P, V = mo.P_ideal.copy(), mo.V_ideal.copy()
+    P2, V2 = P.copy(), V.copy()
+    want = play.catch_up_commands(t, mo, off0, start, stop, P, V, 5e-3, 2.0)
+    got = _play.catch_up_commands(t, mo, off0, start, stop, P2, V2, 5e-3, 2.0)
+    assert same_bits(got[0], want[0]) and same_bits(np.array(got[1]), np.array(want[1]))
+    assert same_bits(P2, P) and same_bits(V2, V)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 40), st.integers(0, 2**32 - 1), st.booleans())
+def test_generated_carried_sides_are_identical(n: int, seed: int, columns: bool) -> None:
+    """Directions carried through standing rows: one motor (ints, the side an int)
+    or several (floats, a side each), the same values and types in both."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    if columns:
+        sg = np.where(rng.random((n, 3)) < 0.5, 0.0, np.sign(rng.normal(size=(n, 3))))
+        side: Any = rng.choice([-1.0, 1.0], 3)
+    else:
+        sg = rng.integers(-1, 2, n) * (rng.random(n) < 0.5)
+        side = int(rng.choice([-1, 1]))
+    got, want = _play.carried(sg, side), play.carried(sg, side)
+    assert got.dtype == want.dtype and got.shape == want.shape
+    assert np.array_equal(got, want)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.integers(0, 60),
+    st.integers(0, 2**32 - 1),
+    st.sampled_from([-1, 1]),
+    st.one_of(st.just(math.nan), st.floats(-50, 50)),
+    st.sampled_from([1e-4, 1e-3, 5e-3]),
+)
+def test_generated_creeps_are_bit_identical(
+    n: int, seed: int, side: int, ref: float, drift: float
+) -> None:
+    """Motors creeping (no direction) between rows with one, drifting back by more
+    and less than the allowance: the same reversals and the same reach, to the bit."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    sg = rng.choice([-1, 0, 0, 0, 1], n)
+    P = np.cumsum(rng.normal(0, 1e-3, n)) + rng.normal(0, 10)
+    got, want = _play.creeps(sg, P, side, ref, drift), play.creeps(sg, P, side, ref, drift)
+    assert np.array_equal(got[0], want[0]) and got[0].dtype == want[0].dtype
+    assert same_bits(np.array(got[1]), np.array(want[1]))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(1, 50), st.integers(0, 2**32 - 1), st.integers(0, 4), st.integers(0, 3))
+def test_generated_motor_sides_are_identical(n: int, seed: int, w: int, s: int) -> None:
+    """Windows anywhere in a chunk (one ending before it, at −1; two in one step;
+    points after a window in its step), crossings at standing points, creeping
+    and resting rows: the same sides, the same type."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    V = rng.normal(0, 1e-3, n) * np.where(rng.random(n) < 0.5, 1.0, 1e4)
+    resting = rng.random(n) < 0.2
+    e = np.sort(rng.integers(-1, n, w))
+    f = np.maximum(e - rng.integers(0, 4, w), 0)
+    last_row = np.minimum(e + rng.integers(0, 4, w), n - 1)
+    new = rng.choice([-1, 1], w)
+    s_first = rng.integers(0, n, s)
+    s_new = rng.choice([-1, 1], s)
+    side = int(rng.choice([-1, 1]))
+    args = (V, resting, f, e, new, last_row, s_first, s_new, side, 5e-4)
+    got, want = _play.motor_sides(*args), play.motor_sides(*args)
+    assert got.dtype == want.dtype and np.array_equal(got, want)
+
+
+def test_the_twin_turns_where_the_reference_does() -> None:
+    """A step whose cubic turns twice (leaves, turns back, turns on again): both
+    kernels sample both turning points and find the same extremes of the part."""
+    _play = compiled("_play")
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-100.0, 100.0]), np.array([0.0, 0.0]), np.array([0.004, 0.004]))
+    ).flat
+    args = (np.array([0.0]), np.array([0.0]), np.array([30.0]))
+    P, V, dt = np.array([0.01]), np.array([30.0]), np.array([0.01])
+    got = _play.follow_stretches(t, *args, P, V, dt, np.array([1]))
+    want = play.follow_stretches(t, *args, P, V, dt, np.array([1]))
+    assert _same(got, want)
+    # the cubic goes past 0.01 and back: the part's greatest is above its end
+    assert want[2][0] > want[0][0]
+
+
+@pytest.mark.parametrize("name", ["sin", "cos"])
+def test_the_references_trig_is_the_c_librarys(name: str) -> None:
+    """libm.sin and libm.cos are math's (the C library's), NaN where C gives NaN."""
+    x = np.random.default_rng(3).uniform(-1e3, 1e3, 10_000)
+    want = np.fromiter(map(getattr(math, name), x.tolist()), float, x.size)
+    assert same_bits(getattr(libm, name)(x), want)
+    assert np.isnan(getattr(libm, name)(np.array([np.inf, -np.inf, np.nan]))).all()
