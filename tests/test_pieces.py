@@ -117,7 +117,8 @@ def programs(draw: st.DrawFn) -> str:
     for _ in range(draw(st.integers(40, 160))):
         kind = draw(st.sampled_from(["x", "xy", "tilt", "arc", "feed"]))
         dx = draw(st.floats(-3.0, 3.0, allow_nan=False))
-        x = float(np.clip(x + dx, -40, 40))
+        x0, x = x, float(np.clip(x + dx, -40, 40))
+        dx = x - x0  # as clipped: an arc needs a chord
         if kind == "xy":
             y = float(np.clip(y + draw(st.floats(-2.0, 2.0)), -40, 40))
             out.append(f"G1 X{x:.4f} Y{y:.4f}")
