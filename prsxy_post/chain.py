@@ -1413,9 +1413,10 @@ def servo_lead(P: np.ndarray, V: np.ndarray, lag: np.ndarray) -> np.ndarray:
 
     A motor that follows its command with a lag τ (τ ṁ + m = c, profile
     ``effects.servo_lag_ms``) is at m = P when commanded c = P + τ P'. The one
-    servo-lead formula: :meth:`Pipeline._release` leads converted programs with it
-    (and their velocities, with the accelerations), the simulator's commands of a
-    recorded path (``simulate.motion_commands``) too.
+    servo-lead formula: :meth:`Pipeline._release` leads the points with it (and their
+    velocities, with the accelerations), for ``convert`` and the simulator's
+    programs alike; the commands modelled from a recorded path
+    (``simulate.motion_commands``) too.
     """
     return P + lag[None, :] * V
 
@@ -1432,7 +1433,7 @@ def path_sides(P: np.ndarray, V: np.ndarray, rest: np.ndarray, profile: Profile)
     """
     drift = REVERSAL_SHARE * profile.interpolation.path_tolerance_mm
     out = np.ones(P.shape, dtype=int)
-    for col in range(P.shape[1]):
+    for col in range(P.shape[1] if len(P) else 0):
         sg = np.where(rest, 0, reversals.signs(V[:, col]))
         # measured from where the path starts, as the chain's first chunk does
         crept = reversals._creeps(sg, P[:, col], 1, float(P[0, col]), drift)[0]
