@@ -1297,12 +1297,46 @@ class Pipeline:
                 )
             acc[ready.speed == 0.0] = 0.0
             self.prev_out = h.take(slice(k - 1, k))
-            ready.P_cmd = ready.P_cmd + self.lag[None, :] * ready.V_cmd
-            ready.V_cmd = ready.V_cmd + self.lag[None, :] * acc
+            ready.P_cmd = servo_lead(ready.P_cmd, ready.V_cmd, self.lag)
+            ready.V_cmd = servo_lead(ready.V_cmd, acc, self.lag)
         self.held = None if k == len(h) else h.take(slice(k, len(h)))
         travel = checks.travel_problems(self.profile, ready.P_cmd, ready.line)
         self._problem([p.error(self.profile) for p in travel])
         return ready
+
+
+def servo_lead(P: np.ndarray, V: np.ndarray, lag: np.ndarray) -> np.ndarray:
+    """Commands (N, 5) that make motors lagging by ``lag`` (5,) [s] reach ``P``:
+    c = P + τ V, with V (N, 5) the planned velocity of P.
+
+    A motor that follows its command with a lag τ (τ ṁ + m = c, profile
+    ``effects.servo_lag_ms``) is at m = P when commanded c = P + τ P'. The one
+    servo-lead formula: :meth:`Pipeline._release` leads the points with it (and their
+    velocities, with the accelerations), for ``convert`` and the simulator's
+    programs alike; the commands modelled from a recorded path
+    (``simulate.motion_commands``) too.
+    """
+    return P + lag[None, :] * V
+
+
+def path_sides(P: np.ndarray, V: np.ndarray, rest: np.ndarray, profile: Profile) -> np.ndarray:
+    """The side (+1, −1) of its play each motor is on along points of a path, (N, 5),
+    as :meth:`Pipeline._reversals` decides it outside its crossing windows: the
+    direction of the planned velocity V (:func:`reversals.signs`; none where the
+    path rests), a creeping motor's drift back by more than the chain's reversal
+    tolerance a reversal, and the last direction carried through the rows without
+    one (+1 before the first: the contract's approach from below).
+
+    P, V : (N, 5) wanted motor positions [mm] and velocities [mm/s]; rest : (N,)
+    """
+    drift = REVERSAL_SHARE * profile.interpolation.path_tolerance_mm
+    out = np.ones(P.shape, dtype=int)
+    for col in range(P.shape[1] if len(P) else 0):
+        sg = np.where(rest, 0, reversals.signs(V[:, col]))
+        # measured from where the path starts, as the chain's first chunk does
+        crept = reversals._creeps(sg, P[:, col], 1, float(P[0, col]), drift)[0]
+        out[:, col] = reversals.carried(np.where(crept != 0, crept, sg), 1)
+    return out
 
 
 def run_chain(

@@ -578,17 +578,10 @@ class ServoLag(MotorFamily):
             v[1:-1] = (P[2:] - P[:-2]) / span[:, None]
         return v
 
-    def lead(self, profile: Profile, M: np.ndarray, t: np.ndarray | None) -> np.ndarray:
-        """Commands that make lagging motors reach M: c = M + τ · v(M), the exact
-        inverse of :meth:`follow` (the conversion's servo lead)."""
-        lag = self.lags_s(profile)
-        if t is None or not np.any(lag):
-            return M
-        return M + lag[None, :] * self.velocity(M, t)
-
     def follow(self, profile: Profile, c: np.ndarray, t: np.ndarray | None) -> np.ndarray:
         """Where lagging motors are for commands c (the simulator): m = c − τ · v(m),
-        v as central differences (zero at the ends), solved as a banded system."""
+        v as central differences (zero at the ends), solved as a banded system.
+        The commanding side leads by the chain's formula, :func:`chain.servo_lead`."""
         from scipy.linalg import solve_banded
 
         lag = self.lags_s(profile)
@@ -708,13 +701,13 @@ FAMILIES: tuple[Family, ...] = (
         1.0,
         "effects.servo_lag_ms (per motor 1, 2, 3, 5, 6)",
         "effects.SERVO_LAG.follow",
-        "effects.SERVO_LAG.lead",
+        "chain.servo_lead",
     ),
 )
 
 _BY_NAME: dict[str, Family] = {n: f for f in FAMILIES for n in f.members()}
 
-#: The servo-lag family (its physics is used by the simulator and the chain).
+#: The servo-lag family (its lags are used by the simulator and the chain).
 SERVO_LAG: ServoLag = next(f for f in FAMILIES if isinstance(f, ServoLag))
 
 

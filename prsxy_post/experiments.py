@@ -1,8 +1,9 @@
 """Measurement campaigns on a simulated machine: ballbar runs, pose grids, laser runs.
 
 Each run is a real program: the ballbar circles are G-code (``simulate.ballbar_gcode``)
-interpreted and interpolated by the same chain ``convert`` uses, commanded with the
-commanding profile and executed by the truth machine. The results are the
+interpreted, interpolated and commanded by the same chain ``convert`` uses, every
+stage of the commanding profile on (``simulate.program_commands``), and executed by
+the truth machine. The results are the
 contract's measurement files, ready for ``calibrate``, ``diagnose`` and ``ballbar``.
 """
 
@@ -13,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import chain, gcode, measure, program, simulate
+from . import gcode, measure, program, simulate
 from .profile import MOTORS, Profile
 
 
@@ -39,13 +40,12 @@ def ballbar_run(
     first_cut = next(i for i, m in enumerate(motions) if m.kind not in ("rapid", "function"))
     circle = [m for m in motions[first_cut:] if m.kind != "function"]
     start = np.array(circle[0].start, dtype=float)
-    res = chain.run_chain(
-        circle, commanded, chain.Stages(error_map=False, axis_comp=False), start=start.tolist()
-    )
+    # commanded as convert commands it: every stage of the commanding profile on
+    res = simulate.program_commands(commanded, circle, start=start.tolist())
     q = res.points.q
     t = res.points.t
     piv = np.asarray(pivot, dtype=float)
-    dev = simulate.measure_ballbar(truth, commanded, q, t, piv, radius, rng, noise_um)
+    dev = simulate.ballbar_reading(truth, res.points.P_cmd, t, piv, radius, rng, noise_um)
     direction = "ccw" if ccw else "cw"
     label = name or (
         f"{plane.lower()} r{radius:g} {direction}"

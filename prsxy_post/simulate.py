@@ -12,12 +12,16 @@ core of the ``simulate`` command.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import axiscomp, kinematics
+from . import axiscomp, chain, errormap, kinematics, writers
 from . import effects as registry
 from .profile import MOTORS, Profile
+
+if TYPE_CHECKING:
+    from .gcode import Motion
 
 
 def truth_geometry(truth: Profile) -> kinematics.Geometry:
@@ -192,47 +196,120 @@ def random_effects(
 
 
 def commanded_geometry(commanded: Profile) -> kinematics.Geometry:
-    return kinematics.Geometry.from_params(
-        commanded.kinematics, commanded.origin, commanded.table, commanded.effects
-    )
+    return chain.ik_geometry(commanded, chain.Stages())
 
 
-def _wanted_motors(commanded: Profile, q: np.ndarray, tool_length: float) -> np.ndarray:
-    """The commanding profile's virtual-axis map and IK: where the motors must be."""
-    from . import chain, errormap
-
+def _wanted_motors(
+    commanded: Profile, q: np.ndarray, tool_length: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The chain's virtual-axis map and IK: the corrected poses Q' and where the
+    motors must be, P (N, 5)."""
     emap = errormap.from_profile(commanded)
     qt = chain.correct_virtual(q, emap) if emap is not None else q
-    ik = kinematics.inverse(commanded_geometry(commanded), qt, tool_length)
+    tool = np.full(len(q), float(tool_length))
+    ik = kinematics.inverse(commanded_geometry(commanded), qt, tool)
     if not np.all(ik.reachable):
         raise ValueError(f"{int(np.sum(~ik.reachable))} poses out of reach")
-    return ik.P.copy()
+    return qt, ik.P.copy()
 
 
 def pose_commands(commanded: Profile, q: np.ndarray, tool_length: float = 0.0) -> np.ndarray:
     """Motor commands for static poses, each approached with every motor moving +.
 
     The commanding profile's chain: Q' = Q − e(Q), its IK, then for each motor the
-    command p with lo(p) = wanted (the part ends at lo when approached from below).
+    command p with lo(p) = wanted (the part ends at lo when approached from below,
+    :func:`axiscomp.compensate_sided` with side +1). At rest: no servo lead.
     """
-    P = _wanted_motors(commanded, q, tool_length)
+    P = _wanted_motors(commanded, q, tool_length)[1]
     tables = axiscomp.profile_tables(commanded)
     for col, m in enumerate(MOTORS):
-        if m in tables:
-            P[:, col] = tables[m].lo_inv(P[:, col])
+        table = tables.get(m)
+        if table is not None:
+            P[:, col] = axiscomp.compensate_sided(table, P[:, col], np.ones(len(P), dtype=int))
     return P
+
+
+def program_commands(
+    commanded: Profile,
+    motions: Sequence[Motion],
+    *,
+    start: Sequence[float] | None = None,
+    fmt: str = "pmac",
+) -> chain.ChainResult:
+    """The motor commands the machine is given for a program: ``convert``'s chain.
+
+    Every stage on (the commanding profile's error map, calibrated IK, real-axis
+    tables with the crossings of their play, servo lead), planned and written as
+    the ``fmt`` dialect's controller runs it (its segments between points, parts,
+    rounding): the points and ``P_cmd`` are those ``convert --format fmt`` writes.
+    """
+    d = writers.dialect(fmt)
+    settings = writers.settings_of(commanded, fmt)
+    return chain.run_chain(
+        motions,
+        commanded,
+        chain.Stages(),
+        errormap.from_profile(commanded),
+        start=start,
+        segment=d.segment,
+        max_part_points=d.parts(settings),
+        written=d.written(settings),
+    )
+
+
+def path_velocity(q: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The velocity (N, 5) of a recorded path at its points: the derivative of the
+    parabola through each point and its two neighbours (second order on uneven
+    steps), one-sided beside a step that takes no time; zero at both ends (runs
+    start and end at rest) and at a point standing where the one before it is
+    (the chain's standing points)."""
+    v = np.zeros_like(q)
+    if len(q) > 2:
+        h0 = (t[1:-1] - t[:-2])[:, None]
+        h1 = (t[2:] - t[1:-1])[:, None]
+        d0 = q[1:-1] - q[:-2]
+        d1 = q[2:] - q[1:-1]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            both = (h1 * d0 / h0 + h0 * d1 / h1) / (h0 + h1)
+            v[1:-1] = np.where(
+                (h0 > 0) & (h1 > 0), both, np.where(h1 > 0, d1 / h1, np.where(h0 > 0, d0 / h0, 0.0))
+            )
+        v[1:][np.all(q[1:] == q[:-1], axis=1)] = 0.0
+    return v
 
 
 def motion_commands(
     commanded: Profile, q: np.ndarray, tool_length: float = 0.0, t: np.ndarray | None = None
 ) -> np.ndarray:
-    """Motor commands for a continuous motion through poses q at times t (time order)."""
-    P = _wanted_motors(commanded, q, tool_length)
+    """The chain's motor commands along a recorded path: poses q (N, 5) at times t.
+
+    What :func:`program_commands` gives at its points, from the poses and times a
+    measurement file records (the program itself is not in the file): the virtual-
+    axis map, the IK, the IK's velocity along the path (:func:`chain.ik_derivative`
+    of :func:`path_velocity`), each motor's table on the side the chain puts it
+    (:func:`chain.path_sides`, :func:`axiscomp.compensate_sided`) with the command
+    velocity V / slope,
+    and the chain's servo lead :func:`chain.servo_lead`. Not modelled: the windows in
+    which the chain crosses a motor's play (they move a command near a reversal
+    for a few ms).
+    """
+    qt, P = _wanted_motors(commanded, q, tool_length)
+    lag = registry.SERVO_LAG.lags_s(commanded)
     tables = axiscomp.profile_tables(commanded)
+    if t is None or (not tables and not np.any(lag)):
+        return P
+    tool = np.full(len(q), float(tool_length))
+    geo = commanded_geometry(commanded)
+    qdot = path_velocity(q, t)
+    V = chain.ik_derivative(geo, qt, qdot, tool, P, chain.VEL_STEP_S)
+    sides = chain.path_sides(P, V, ~np.any(qdot != 0.0, axis=1), commanded)
     for col, m in enumerate(MOTORS):
-        if m in tables:
-            P[:, col] = axiscomp.compensate(tables[m], P[:, col])
-    return registry.SERVO_LAG.lead(commanded, P, t)
+        table = tables.get(m)
+        if table is None:
+            continue
+        P[:, col] = axiscomp.compensate_sided(table, P[:, col], sides[:, col])
+        V[:, col] = V[:, col] / table.slope(P[:, col], sides[:, col])
+    return chain.servo_lead(P, V, lag)
 
 
 def measure_poses(
@@ -261,9 +338,24 @@ def measure_ballbar(
     rng: np.random.Generator,
     noise_um: float = 0.5,
 ) -> np.ndarray:
-    """Ballbar reading dev_um (N,) along a commanded motion q (N, 5) at times t."""
+    """Ballbar reading dev_um (N,) along a commanded path q (N, 5) at times t (a
+    path, not a program: commanded by :func:`motion_commands`)."""
     P = motion_commands(commanded, q, t=t)
-    tip = execute(truth, P, t=t)[:, :3]
+    return ballbar_reading(truth, P, t, pivot, length, rng, noise_um)
+
+
+def ballbar_reading(
+    truth: Profile,
+    P_cmd: np.ndarray,
+    t: np.ndarray,
+    pivot: np.ndarray,
+    length: float,
+    rng: np.random.Generator,
+    noise_um: float = 0.5,
+) -> np.ndarray:
+    """Ballbar reading dev_um (N,) while the truth machine follows motor commands
+    P_cmd (N, 5) given at times t (N,) [s]."""
+    tip = execute(truth, P_cmd, t=t)[:, :3]
     dev = (np.linalg.norm(tip - pivot, axis=1) - length) * 1000.0
     return dev + rng.normal(0, noise_um, len(dev))
 
