@@ -10,7 +10,6 @@ removed here.
 
 from __future__ import annotations
 
-import multiprocessing
 import signal
 import time
 import traceback
@@ -190,6 +189,8 @@ def _run_in_processes(
     """Each job in a forked process of its own, ``workers`` at a time; on Ctrl-C,
     SIGTERM to every one running, whose answers (written whole, or stopped) are
     then collected."""
+    # here, not at the top: a single conversion (most commands) never forks
+    import multiprocessing
     from multiprocessing.connection import wait
 
     ctx = multiprocessing.get_context("fork")

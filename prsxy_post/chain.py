@@ -26,7 +26,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import axiscomp, kernel, kinematics, reversals
-from . import effects as registry
 from . import rules as checks
 from .errors import LimitError, PrsxyError
 from .interpolate import (
@@ -498,7 +497,11 @@ class Pipeline:
         self.side = np.ones(5, dtype=int)
         # where each motor with play last moved with a direction (NaN: not yet)
         self.ref = np.full(5, np.nan)
-        self.lag = registry.SERVO_LAG.lags_s(profile) if stages.axis_comp else np.zeros(5)
+        # each motor's lag τ (5,) [s] (effects.servo_lag_ms, as effects.SERVO_LAG
+        # reads it; read here from the profile's section, so that converting does
+        # not load the physics registry, 13 frozen dataclasses of start-up)
+        lag_s = np.asarray(profile.effects.servo_lag_ms, dtype=float) / 1000.0
+        self.lag = lag_s if stages.axis_comp else np.zeros(5)
         self.reversal_s = profile.interpolation.reversal_ms / 1000.0
         self.reversal_tol = REVERSAL_SHARE * self.limits.tolerance_mm
         # where each motor's driven part is, and the last commands (for _settle)

@@ -170,15 +170,12 @@ def _planned_chunks(
     that runs ahead, at most :data:`AHEAD` chunks (a bounded queue, then the pipe,
     hold it back), so memory stays bounded. Errors arrive in program order: every
     chunk before a G-code error is delivered first, as when run here."""
-    import multiprocessing
-
-    if (
-        not job.parallel
-        or job.program == "-"
-        or ("fork" not in multiprocessing.get_all_start_methods())
-    ):
+    if not job.parallel or job.program == "-" or not sinks.can_fork():
         yield _planned_here(job, prof, counts, bar)
         return
+    # here, not at the top: a small program (most commands) never forks
+    import multiprocessing
+
     ctx = multiprocessing.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
     proc = sinks.forked(_planning_child, send, job, prof)
