@@ -200,6 +200,42 @@ cdef inline Py_ssize_t _text(char* out, Py_ssize_t pos, const char* t, Py_ssize_
     return pos + n
 
 
+cdef inline Py_ssize_t _signed(char* out, Py_ssize_t pos, int64_t v, uint64_t* a) noexcept:
+    """A minus sign where v < 0; |v| into ``a`` (exact for INT64_MIN too)."""
+    if v < 0:
+        out[pos] = 45
+        pos += 1
+        a[0] = (<uint64_t> 0) - (<uint64_t> v)
+    else:
+        a[0] = <uint64_t> v
+    return pos
+
+
+cdef Py_ssize_t _pvt_time(char* out, Py_ssize_t pos, int64_t v) noexcept:
+    """A PVT time of ``v`` quanta of 1/4096 ms, exactly: the whole milliseconds,
+    then the twelve decimals of the fraction written to the last non-zero one, at
+    least four, and a newline."""
+    cdef uint64_t a, r
+    cdef int nd, p
+    pos = _signed(out, pos, v, &a)
+    pos = _uint(out, pos, a >> 12)
+    out[pos] = 46  # '.'
+    pos += 1
+    r = (a & 4095) * 244140625  # 1/4096 = 0.000244140625
+    nd = 12
+    while nd > 4 and r % 10 == 0:
+        r = r // 10
+        nd -= 1
+    p = nd
+    while p > 0:
+        out[pos + p - 1] = <char> (48 + r % 10)
+        r = r // 10
+        p -= 1
+    pos += nd
+    out[pos] = 10
+    return pos + 1
+
+
 def pvt_segment_text(columns, line, new_line, quanta, new_time, other_rows, other_text):
     """A PVT program's points as one text (``text.pvt_segment_text``)."""
     cdef Py_ssize_t m = len(line)
@@ -249,50 +285,19 @@ def pvt_segment_text(columns, line, new_line, quanta, new_time, other_rows, othe
     buf = PyBytes_FromStringAndSize(NULL, size)
     cdef char* out = PyBytes_AS_STRING(buf)
     cdef const char* pb = s.allpre
-    cdef Py_ssize_t i, pos = 0, j
-    cdef int64_t v
-    cdef uint64_t a, r, p
-    cdef int nd
+    cdef Py_ssize_t i, pos = 0
+    cdef uint64_t a
     cdef bytes ot
     for i in range(m):
         if nl[i]:
             pos = _text(out, pos, "; line ", 7)
-            v = ln[i]
-            if v < 0:
-                out[pos] = 45
-                pos += 1
-                a = (<uint64_t> 0) - (<uint64_t> v)
-            else:
-                a = <uint64_t> v
+            pos = _signed(out, pos, ln[i], &a)
             pos = _uint(out, pos, a)
             out[pos] = 10
             pos += 1
         if nt[i]:
             pos = _text(out, pos, "PVT", 3)
-            v = qt[i]
-            if v < 0:
-                out[pos] = 45
-                pos += 1
-                a = (<uint64_t> 0) - (<uint64_t> v)
-            else:
-                a = <uint64_t> v
-            pos = _uint(out, pos, a >> 12)
-            out[pos] = 46  # '.'
-            pos += 1
-            # twelve decimals, written to the last non-zero one, at least four
-            r = (a & 4095) * 244140625
-            nd = 12
-            while nd > 4 and r % 10 == 0:
-                r = r // 10
-                nd -= 1
-            p = nd
-            while p > 0:
-                out[pos + p - 1] = <char> (48 + r % 10)
-                r = r // 10
-                p -= 1
-            pos += nd
-            out[pos] = 10
-            pos += 1
+            pos = _pvt_time(out, pos, qt[i])
         if oth[i] >= 0:
             ot = <bytes> olist[oth[i]]
             pos = _text(out, pos, ot, len(ot))
