@@ -537,60 +537,10 @@ def windows(
     path (:func:`catch_up`).
     """
     n = len(t_root)
-    with np.errstate(divide="ignore"):
-        half = np.where(accel == 0, 0.5 * longest, np.sqrt(2.0 * tol / np.abs(accel)))
     rb, ra = (np.full(n, np.inf), np.full(n, np.inf)) if reach is None else reach
-    db, da = np.minimum(half, rb), np.minimum(half, ra)
-    if chords:
-        db = np.minimum(db, da)
-    # at most the longest: each side to half of it, or to what the other leaves
-    db = np.minimum(db, longest - np.minimum(da, 0.5 * longest))
-    da = np.minimum(da, longest - db)
-    # at least a servo cycle: evenly where both sides have reach to spare alike,
-    # else the missing time to the side with more reach to spare first, the rest
-    # to the other; with chords after the root first, then before it no longer
-    # than after, then evenly
-    extra = np.maximum(MIN_WINDOW_S - (db + da), 0.0)
-    spare_b, spare_a = rb - db, ra - da
-    with np.errstate(invalid="ignore"):
-        even = (spare_b == spare_a) | (np.isinf(spare_b) & np.isinf(spare_a))
-    if chords:
-        add_a = np.where(even, 0.5 * extra, np.minimum(extra, spare_a))
-        rest = extra - add_a
-        add_b = np.where(even, 0.5 * extra, np.minimum(rest, da + add_a - db))
-        rest = np.where(even, 0.0, rest - add_b)
-        db, da = db + add_b + 0.5 * rest, da + add_a + 0.5 * rest
-    else:
-        more_b = spare_b > spare_a
-        add_b = np.where(
-            even,
-            0.5 * extra,
-            np.where(more_b, np.minimum(extra, spare_b), extra - np.minimum(extra, spare_a)),
-        )
-        db, da = db + add_b, da + (extra - add_b)
-    width = db + da
-    whole = width >= t1 - t0
-    a = np.maximum(t_root - db, t0)
-    b = np.minimum(t_root + da, t1)
-    # never shorter than a servo cycle: grown into the step where it was cut
-    short = b - a < MIN_WINDOW_S
-    b = np.where(short & (a <= t0), np.minimum(a + MIN_WINDOW_S, t1), b)
-    a = np.where(short & (a > t0), np.maximum(b - MIN_WINDOW_S, t0), a)
-    # no sliver shorter than half the window beside it: grown over it where the
-    # reach allows (and, with chords, before the root where the window stays no
-    # longer there than after), or where the sliver is shorter than a servo cycle.
-    # Not merely because the window stood longer before its root than after it
-    # (the part is left ahead of the path): the commands after it take that up
-    # (catch_up), and grown over, the part stood past the root on the side where
-    # it pushes the tip on (0.24 % over F, test_controller_truth's found programs)
-    grow_b = (t1 - b < 0.5 * width) & ((t1 - t_root <= ra) | (t1 - b < MIN_WINDOW_S))
-    b = np.where(grow_b, t1, b)
-    before_ok = t_root - t0 <= rb
-    if chords:
-        before_ok &= t_root - t0 <= b - t_root
-    grow_a = (a - t0 < 0.5 * width) & (before_ok | (a - t0 < MIN_WINDOW_S))
-    a = np.where(grow_a, t0, a)
-    return np.where(whole, t0, a), np.where(whole, t1, b)
+    return kernel.crossing_windows(
+        t0, t1, t_root, accel, rb, ra, tol, longest, chords, MIN_WINDOW_S
+    )
 
 
 def chord_windows(

@@ -1,7 +1,8 @@
 """The kernel: per-point numerical work as functions over arrays.
 
 Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``, ``fk.py``,
-the planner's ``timelaw.py`` and ``path.py``, the play model's ``play.py``:
+the planner's ``timelaw.py`` and ``path.py``, the play model's ``play.py``, the
+crossing windows' ``windows.py``:
 :data:`TWINS`) and a compiled twin in Cython (``_ik.pyx``, ...; built when the package
 is installed) that gives the same bits. This module picks one set for the whole
 program, once, at import:
@@ -48,6 +49,7 @@ TWINS = {
     "timelaw": "_timelaw",
     "path": "_path",
     "play": "_play",
+    "windows": "_windows",
 }
 
 
@@ -444,4 +446,28 @@ def motor_sides(
     """A motor's side at each point: :func:`play.motor_sides`, compiled when
     :data:`COMPILED`."""
     out: np.ndarray = _motor_sides(V, resting, f, e, new, last_row, s_first, s_new, side, eps)
+    return out
+
+
+# the crossing windows (kernel/windows.py and its twin _windows.pyx)
+_crossing_windows = _RUN["windows"].crossing_windows
+
+
+def crossing_windows(
+    t0: np.ndarray,
+    t1: np.ndarray,
+    t_root: np.ndarray,
+    accel: np.ndarray,
+    rb: np.ndarray,
+    ra: np.ndarray,
+    tol: float,
+    longest: float,
+    chords: bool,
+    min_w: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The windows' starts and ends (n,) [s]: :func:`windows.crossing_windows`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _crossing_windows(
+        t0, t1, t_root, accel, rb, ra, tol, longest, chords, min_w
+    )
     return out
