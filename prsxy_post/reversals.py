@@ -227,30 +227,9 @@ def velocity_roots(
         or turns to ``new``)
     accel : (n,) the cubic's acceleration there [mm/s²]
     """
-    a, b, c = _velocity_quadratic(P0, V0, P1, V1, h)
-    disc = b * b - 4.0 * a * c
-    lin = np.abs(a) < 1e-12 * (np.abs(b) + np.abs(c) + 1e-300)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        qq = -0.5 * (b + np.copysign(np.sqrt(np.maximum(disc, 0.0)), b))
-        r1 = np.where(lin, np.where(b != 0, -c / b, np.nan), qq / a)
-        r2 = np.where(lin, np.nan, np.where(qq != 0, c / qq, -b / (2 * a)))
-        r1 = np.where(disc >= 0, r1, np.nan)
-        r2 = np.where(disc >= 0, r2, np.nan)
-        ok1 = (r1 >= -1e-9) & (r1 <= 1 + 1e-9)
-        ok2 = (r2 >= -1e-9) & (r2 <= 1 + 1e-9)
-        if new is not None:
-            # a root where the velocity turns the other way is not this reversal
-            # (where one of them does)
-            turn1 = ok1 & (new * (2.0 * a * r1 + b) >= 0)
-            turn2 = ok2 & (new * (2.0 * a * r2 + b) >= 0)
-            either = turn1 | turn2
-            ok1, ok2 = np.where(either, turn1, ok1), np.where(either, turn2, ok2)
-        best = np.where(ok1 & ok2, np.minimum(r1, r2), np.where(ok1, r1, np.where(ok2, r2, np.nan)))
-        # the velocities at the ends have opposite signs, so a root exists; only
-        # rounding can hide it: take the linear estimate
-        linear = np.where(V0 != V1, V0 / (V0 - V1), 0.5)
-    s = np.clip(np.where(np.isnan(best), linear, best), 0.0, 1.0)
-    return s, (2.0 * a * s + b) / h
+    if new is None:
+        return kernel.velocity_roots(P0, V0, P1, V1, h, np.zeros(0), False)
+    return kernel.velocity_roots(P0, V0, P1, V1, h, new, True)
 
 
 class _Bracket(NamedTuple):
@@ -612,15 +591,7 @@ def turning_points(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Both roots of the cubic's velocity (:func:`velocity_roots`) where both lie
     strictly inside the step, in time order; NaN elsewhere."""
-    a, b, c = _velocity_quadratic(P0, V0, P1, V1, h)
-    disc = b * b - 4.0 * a * c
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        sq = np.sqrt(np.maximum(disc, 0.0))
-        qq = -0.5 * (b + np.copysign(sq, b))
-        r1, r2 = qq / a, c / qq
-    lo, hi = np.minimum(r1, r2), np.maximum(r1, r2)
-    ok = (disc > 0) & (np.abs(a) > 0) & (lo > 0) & (hi < 1) & (hi > lo)
-    return np.where(ok, lo, np.nan), np.where(ok, hi, np.nan)
+    return kernel.turning_points(P0, V0, P1, V1, h)
 
 
 class _Dip(NamedTuple):

@@ -449,8 +449,34 @@ def motor_sides(
     return out
 
 
-# the crossing windows (kernel/windows.py and its twin _windows.pyx)
+# the crossings (kernel/windows.py and its twin _windows.pyx)
 _crossing_windows = _RUN["windows"].crossing_windows
+_velocity_roots = _RUN["windows"].velocity_roots
+_turning_points = _RUN["windows"].turning_points
+
+
+def velocity_roots(
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    new: np.ndarray,
+    has_new: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The first roots of steps' cubics' velocity and the accelerations there (n,):
+    :func:`windows.velocity_roots`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _velocity_roots(P0, V0, P1, V1, h, new, has_new)
+    return out
+
+
+def turning_points(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Both turning points inside steps (n,), NaN elsewhere:
+    :func:`windows.turning_points`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _turning_points(P0, V0, P1, V1, h)
+    return out
 
 
 def crossing_windows(

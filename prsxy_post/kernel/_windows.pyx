@@ -7,20 +7,128 @@ bit. numpy's ``maximum`` and ``minimum`` as numpy's (a NaN wins). Compiled with 
 
 import numpy as np
 
-from libc.math cimport sqrt, fabs, INFINITY
+from libc.math cimport sqrt, fabs, copysign, INFINITY, NAN
 
 
 cdef inline double _max(double a, double b) noexcept nogil:
-    # numpy's maximum: the first when it is not less, or NaN
-    return a if (a >= b or a != a) else b
+    # numpy's maximum: the first when it is greater or NaN, else the second (so
+    # maximum(-0.0, 0.0) is 0.0 and maximum(0.0, -0.0) is -0.0, as numpy's)
+    return a if (a > b or a != a) else b
 
 
 cdef inline double _min(double a, double b) noexcept nogil:
-    return a if (a <= b or a != a) else b
+    return a if (a < b or a != a) else b
+
+
+cdef inline double _clip01(double x) noexcept nogil:
+    # numpy's clip to [0, 1]: NaN stays, −0.0 stays
+    if x != x:
+        return x
+    if x < 0.0:
+        return 0.0
+    if x > 1.0:
+        return 1.0
+    return x
 
 
 cdef inline bint _isinf(double x) noexcept nogil:
     return x == INFINITY or x == -INFINITY
+
+
+cdef inline double _vq(double P0, double V0, double P1, double V1, double h,
+                       double* b) noexcept nogil:
+    # play.velocity_quadratic: a returned, b set (c is V0)
+    cdef double d = (P0 - P1) / h
+    b[0] = -6.0 * d - 4.0 * V0 - 2.0 * V1
+    return 6.0 * d + 3.0 * (V0 + V1)
+
+
+def velocity_roots(P0, V0, P1, V1, h, new, bint has_new):
+    """:func:`prsxy_post.kernel.windows.velocity_roots`, compiled."""
+    cdef const double[::1] p0 = np.ascontiguousarray(P0, dtype=np.float64)
+    cdef const double[::1] v0 = np.ascontiguousarray(V0, dtype=np.float64)
+    cdef const double[::1] p1 = np.ascontiguousarray(P1, dtype=np.float64)
+    cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef const double[::1] nw = np.ascontiguousarray(
+        new if has_new else np.zeros(p0.shape[0]), dtype=np.float64
+    )
+    cdef Py_ssize_t n = p0.shape[0], i
+    out_s = np.empty(n)
+    out_a = np.empty(n)
+    cdef double[::1] S = out_s
+    cdef double[::1] AC = out_a
+    cdef double a, b, c, disc, qq, r1, r2, best, linear, s
+    cdef bint lin, ok1, ok2, turn1, turn2
+    with nogil:
+        for i in range(n):
+            a = _vq(p0[i], v0[i], p1[i], v1[i], hh[i], &b)
+            c = v0[i]
+            disc = b * b - 4.0 * a * c
+            lin = fabs(a) < 1e-12 * (fabs(b) + fabs(c) + 1e-300)
+            qq = -0.5 * (b + copysign(sqrt(_max(disc, 0.0)), b))
+            if lin:
+                r1 = -c / b if b != 0 else NAN
+                r2 = NAN
+            else:
+                r1 = qq / a
+                r2 = c / qq if qq != 0 else -b / (2 * a)
+            if not disc >= 0:
+                r1 = NAN
+                r2 = NAN
+            ok1 = (r1 >= -1e-9) and (r1 <= 1 + 1e-9)
+            ok2 = (r2 >= -1e-9) and (r2 <= 1 + 1e-9)
+            if has_new:
+                turn1 = ok1 and (nw[i] * (2.0 * a * r1 + b) >= 0)
+                turn2 = ok2 and (nw[i] * (2.0 * a * r2 + b) >= 0)
+                if turn1 or turn2:
+                    ok1, ok2 = turn1, turn2
+            if ok1 and ok2:
+                best = _min(r1, r2)
+            elif ok1:
+                best = r1
+            elif ok2:
+                best = r2
+            else:
+                best = NAN
+            linear = v0[i] / (v0[i] - v1[i]) if v0[i] != v1[i] else 0.5
+            s = linear if best != best else best
+            s = _clip01(s)
+            S[i] = s
+            AC[i] = (2.0 * a * s + b) / hh[i]
+    return out_s, out_a
+
+
+def turning_points(P0, V0, P1, V1, h):
+    """:func:`prsxy_post.kernel.windows.turning_points`, compiled."""
+    cdef const double[::1] p0 = np.ascontiguousarray(P0, dtype=np.float64)
+    cdef const double[::1] v0 = np.ascontiguousarray(V0, dtype=np.float64)
+    cdef const double[::1] p1 = np.ascontiguousarray(P1, dtype=np.float64)
+    cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef Py_ssize_t n = p0.shape[0], i
+    out_lo = np.empty(n)
+    out_hi = np.empty(n)
+    cdef double[::1] LO = out_lo
+    cdef double[::1] HI = out_hi
+    cdef double a, b, c, disc, qq, r1, r2, lo, hi
+    with nogil:
+        for i in range(n):
+            a = _vq(p0[i], v0[i], p1[i], v1[i], hh[i], &b)
+            c = v0[i]
+            disc = b * b - 4.0 * a * c
+            qq = -0.5 * (b + copysign(sqrt(_max(disc, 0.0)), b))
+            r1 = qq / a
+            r2 = c / qq
+            lo = _min(r1, r2)
+            hi = _max(r1, r2)
+            if (disc > 0) and (fabs(a) > 0) and (lo > 0) and (hi < 1) and (hi > lo):
+                LO[i] = lo
+                HI[i] = hi
+            else:
+                LO[i] = NAN
+                HI[i] = NAN
+    return out_lo, out_hi
 
 
 def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,

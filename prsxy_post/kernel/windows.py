@@ -1,5 +1,7 @@
-"""The crossing windows about motors' reversals: a window's edges from the root,
-the acceleration there, the tolerance and the reach on each side, elementwise.
+"""The crossings about motors' reversals, elementwise: where a step's cubic turns
+(:func:`velocity_roots`, :func:`turning_points`), and a window's edges from the
+root, the acceleration there, the tolerance and the reach on each side
+(:func:`crossing_windows`).
 
 The numpy reference; ``_windows.pyx`` is its compiled twin, the same operations in
 the same order (the same bits). The rules (why each) are
@@ -9,6 +11,67 @@ the same order (the same bits). The rules (why each) are
 from __future__ import annotations
 
 import numpy as np
+
+from .play import velocity_quadratic
+
+
+def velocity_roots(
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    new: np.ndarray,
+    has_new: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where the cubic through (P0, V0) and (P1, V1) over time h (n,) has zero
+    velocity: the first root in [0, 1] of its velocity's quadratic (with
+    ``has_new``, the first where it turns the way ``new`` (n,), where one does),
+    the linear estimate V0 / (V0 − V1) where rounding hides the root; and the
+    cubic's acceleration there [mm/s²]. The rules are
+    :func:`prsxy_post.reversals.velocity_roots`'.
+
+    Returns
+    -------
+    s, accel : (n,)
+    """
+    a, b, c = velocity_quadratic(P0, V0, P1, V1, h)
+    disc = b * b - 4.0 * a * c
+    lin = np.abs(a) < 1e-12 * (np.abs(b) + np.abs(c) + 1e-300)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        qq = -0.5 * (b + np.copysign(np.sqrt(np.maximum(disc, 0.0)), b))
+        r1 = np.where(lin, np.where(b != 0, -c / b, np.nan), qq / a)
+        r2 = np.where(lin, np.nan, np.where(qq != 0, c / qq, -b / (2 * a)))
+        r1 = np.where(disc >= 0, r1, np.nan)
+        r2 = np.where(disc >= 0, r2, np.nan)
+        ok1 = (r1 >= -1e-9) & (r1 <= 1 + 1e-9)
+        ok2 = (r2 >= -1e-9) & (r2 <= 1 + 1e-9)
+        if has_new:
+            turn1 = ok1 & (new * (2.0 * a * r1 + b) >= 0)
+            turn2 = ok2 & (new * (2.0 * a * r2 + b) >= 0)
+            either = turn1 | turn2
+            ok1, ok2 = np.where(either, turn1, ok1), np.where(either, turn2, ok2)
+        best = np.where(ok1 & ok2, np.minimum(r1, r2), np.where(ok1, r1, np.where(ok2, r2, np.nan)))
+        linear = np.where(V0 != V1, V0 / (V0 - V1), 0.5)
+    s = np.clip(np.where(np.isnan(best), linear, best), 0.0, 1.0)
+    acc: np.ndarray = (2.0 * a * s + b) / h
+    return s, acc
+
+
+def turning_points(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Both roots of the cubic's velocity (:func:`velocity_roots`) where both lie
+    strictly inside the step, in time order; NaN elsewhere."""
+    a, b, c = velocity_quadratic(P0, V0, P1, V1, h)
+    disc = b * b - 4.0 * a * c
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        sq = np.sqrt(np.maximum(disc, 0.0))
+        qq = -0.5 * (b + np.copysign(sq, b))
+        r1, r2 = qq / a, c / qq
+    lo, hi = np.minimum(r1, r2), np.maximum(r1, r2)
+    ok = (disc > 0) & (np.abs(a) > 0) & (lo > 0) & (hi < 1) & (hi > lo)
+    return np.where(ok, lo, np.nan), np.where(ok, hi, np.nan)
 
 
 def crossing_windows(
