@@ -1334,7 +1334,7 @@ def _blend_points(
     ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
     if near_first:
         early, tau_e = np.concatenate([[0], early]), np.concatenate([[near_first], tau_e])
-    keep = (early < n) & ~np.isin(early, list(ins.stand))
+    keep = (early < n) & ~np.isin(early, np.fromiter(ins.stand, dtype=int, count=len(ins.stand)))
     early, tau_e = early[keep], tau_e[keep]
     t_early = t_end[early] - dt[early] + tau_e
     edges, starts, stops = np.sort(et), np.sort(ins.w_ta), np.sort(ins.w_tb)
