@@ -1035,6 +1035,8 @@ def place_insertions(
     ins = Insertions()
     ch = found.ch
     rules = _Rules(tol, longest, chords)
+    # sorted once for every motor's look-ups (:func:`_chord_room`)
+    bent = None if corners_at is None else np.unique(corners_at)
     w = _Windows([], [], [], [], [])
     at = 0
     for t, dips in zip(found.seen, found.dips, strict=True):
@@ -1049,7 +1051,7 @@ def place_insertions(
             m = len(k)
             reaches.append(reach((allowed[0][at : at + m], allowed[1][at : at + m]), acc))
             at += m
-        ks, tas, tbs, news = _motor_windows(t, dips, ch, rules, corners_at, reaches)
+        ks, tas, tbs, news = _motor_windows(t, dips, ch, rules, bent, reaches)
         w.k.extend(ks)
         w.ta.extend(tas)
         w.tb.extend(tbs)
@@ -1253,8 +1255,8 @@ def _chord_room(
     """How far [s] a straight lines' window in step ``km`` (m,) [t0, t1] may reach
     before and after its step (:func:`chord_windows`' ``t_before``, ``t_after``):
     into the step beside where the path moves through both without a corner
-    (``corners_at``) between and the motor has no other window there (``busy``,
-    steps), leaving it a servo cycle."""
+    (``corners_at``, rows, sorted and unique) between and the motor has no other
+    window there (``busy``, steps), leaving it a servo cycle."""
     n, dt, resting = len(ch.dt), ch.dt, ch.resting
     # straight lines: a window may reach into the step beside (of this
     # chunk) where the path moves through both without a corner between
@@ -1267,7 +1269,7 @@ def _chord_room(
         & ~resting[np.maximum(km - 2, 0)]
         & (dt[prv] > 0)
         & ~np.isin(km - 1, busy)
-        & ~np.isin(km - 1, bent)
+        & ~_in_sorted(km - 1, bent)
     )
     free_next = (
         (km + 1 < n)
@@ -1275,11 +1277,22 @@ def _chord_room(
         & ~resting[nxt]
         & (dt[nxt] > 0)
         & ~np.isin(km + 1, busy)
-        & ~np.isin(km, bent)
+        & ~_in_sorted(km, bent)
     )
     t_before = t0 - np.where(free_prev, np.clip(dt[prv] - MIN_WINDOW_S, 0.0, None), 0.0)
     t_after = t1 + np.where(free_next, np.clip(dt[nxt] - MIN_WINDOW_S, 0.0, None), 0.0)
     return t_before, t_after
+
+
+def _in_sorted(x: np.ndarray, pool: np.ndarray) -> np.ndarray:
+    """(m,) bool, each of ``x`` (m,) ints is in ``pool`` (sorted ints): np.isin's
+    answer by binary search (np.isin builds a table as long as the pool's range,
+    every motor's every chunk again)."""
+    if not len(pool):
+        return np.zeros(len(x), dtype=bool)
+    i = np.minimum(np.searchsorted(pool, x), len(pool) - 1)
+    found: np.ndarray = pool[i] == x
+    return found
 
 
 def _place_windows(
