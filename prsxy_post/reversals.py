@@ -1036,7 +1036,7 @@ def place_insertions(
     ch = found.ch
     rules = _Rules(tol, longest, chords)
     # sorted once for every motor's look-ups (:func:`_chord_room`)
-    bent = None if corners_at is None else np.unique(corners_at)
+    bent = None if corners_at is None else np.sort(corners_at)
     w = _Windows([], [], [], [], [])
     at = 0
     for t, dips in zip(found.seen, found.dips, strict=True):
@@ -1255,7 +1255,7 @@ def _chord_room(
     """How far [s] a straight lines' window in step ``km`` (m,) [t0, t1] may reach
     before and after its step (:func:`chord_windows`' ``t_before``, ``t_after``):
     into the step beside where the path moves through both without a corner
-    (``corners_at``, rows, sorted and unique) between and the motor has no other
+    (``corners_at``, rows, sorted) between and the motor has no other
     window there (``busy``, steps), leaving it a servo cycle."""
     n, dt, resting = len(ch.dt), ch.dt, ch.resting
     # straight lines: a window may reach into the step beside (of this
@@ -1263,12 +1263,13 @@ def _chord_room(
     # and the motor has no other window there, leaving it a servo cycle
     prv, nxt = np.maximum(km - 1, 0), np.minimum(km + 1, n - 1)
     bent = np.zeros(0, dtype=int) if corners_at is None else corners_at
+    busy = np.sort(busy)
     free_prev = (
         (km >= 2)
         & ~resting[prv]
         & ~resting[np.maximum(km - 2, 0)]
         & (dt[prv] > 0)
-        & ~np.isin(km - 1, busy)
+        & ~_in_sorted(km - 1, busy)
         & ~_in_sorted(km - 1, bent)
     )
     free_next = (
@@ -1276,7 +1277,7 @@ def _chord_room(
         & ~resting[km]
         & ~resting[nxt]
         & (dt[nxt] > 0)
-        & ~np.isin(km + 1, busy)
+        & ~_in_sorted(km + 1, busy)
         & ~_in_sorted(km, bent)
     )
     t_before = t0 - np.where(free_prev, np.clip(dt[prv] - MIN_WINDOW_S, 0.0, None), 0.0)
