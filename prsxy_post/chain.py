@@ -863,7 +863,12 @@ class Pipeline:
         ) -> tuple[np.ndarray, np.ndarray]:
             if not len(k):
                 return np.zeros(0), np.zeros(0)
-            lever = forward_jacobian(k)[np.arange(len(k)), :3, cols]  # J = ∂x_tip / ∂P_col
+            # J = ∂x_tip / ∂P_col, each row's motor's column, laid out as a column
+            # of a (q, 5, 5) array: einsum's sums below take their order from the
+            # strides (a contiguous (q, 3) sums otherwise in the last bit)
+            buf = np.empty((len(k), 5, 5))
+            buf[:, :3, 0] = forward_jacobian(k)[np.arange(len(k)), :3, cols]
+            lever = buf[:, :3, 0]
             j2 = np.einsum("ij,ij->i", lever, lever)
             v0 = np.where(k >= 1, pc.speed[np.maximum(k - 1, 0)], v_before)
             v = v0 + frac * (pc.speed[k] - v0)
