@@ -52,8 +52,6 @@ import numpy as np
 
 from . import kernel
 from .kernel.play import PlayTable
-from .kernel.play import hermite as _hermite
-from .kernel.play import velocity_quadratic as _velocity_quadratic
 
 #: ``edge_speed(k, s, cols, accel)``: the fastest [mm/s] motors ``cols`` (q,) may
 #: move while their parts stand before and after (two arrays) their reversals in
@@ -216,7 +214,7 @@ def velocity_roots(
     """Where the cubic through (P0, V0) and (P1, V1) over time h has zero velocity,
     for arrays of steps.
 
-    The Hermite cubic's velocity is a quadratic (:func:`_velocity_quadratic`).
+    The Hermite cubic's velocity is a quadratic (``kernel.play.velocity_quadratic``).
     With ``new`` (n,) the direction the motor turns to, the first root where the
     velocity turns that way: a motor standing at the step's start (V0 = 0) that
     sets off the old way first turns at the later root, not at s = 0.
@@ -639,24 +637,12 @@ def _dip_roots(
     root where its cubic turns to ``sg``; left alone where it goes back no
     further than ``tol``.
     """
+    keep, s1, s2, A1, A2 = kernel.dip_roots(P0, V0, P1, V1, dt[k], sg, tol, sets_off)
+    k, sg = k[keep], sg[keep]
     h = dt[k]
-    if sets_off:
-        s2, _ = velocity_roots(P0, V0, P1, V1, h, sg)
-        s1 = np.zeros(len(k))
-        deep = (np.abs(_hermite(P0, V0, P1, V1, h, s2[:, None])[:, 0] - P0) > tol) & (s2 > 0)
-    else:
-        s1, s2 = turning_points(P0, V0, P1, V1, h)
-        turns = np.isfinite(s1)
-        k, sg, h, s1, s2 = k[turns], sg[turns], h[turns], s1[turns], s2[turns]
-        P0, V0, P1, V1 = P0[turns], V0[turns], P1[turns], V1[turns]
-        p = _hermite(P0, V0, P1, V1, h, np.column_stack([s1, s2]))
-        deep = np.abs(p[:, 1] - p[:, 0]) > tol
-    k, sg, h, s1, s2 = k[deep], sg[deep], h[deep], s1[deep], s2[deep]
-    a, b, _ = _velocity_quadratic(P0[deep], V0[deep], P1[deep], V1[deep], h)
     t1 = t_end[k]
     t0 = t1 - h
     tm = t0 + 0.5 * (s1 + s2) * h
-    A1, A2 = (2 * a * s1 + b) / h, (2 * a * s2 + b) / h
     return _Dip(k, sg, s1, s2, A1, A2, h, t0, tm, t1)
 
 

@@ -30,9 +30,10 @@ def _same_pair(got: tuple[np.ndarray, np.ndarray], want: tuple[np.ndarray, np.nd
 
 
 #: how often at least the samples' conversions call them, and on how many steps
-#: in all (turning points: every step where a motor keeps its way, once a motor
-#: with play and chunk; roots: its reversals in motion and settings-off, few)
-ROOT_CALLS = {"_velocity_roots": (20, 3), "_turning_points": (5, 100)}
+#: in all (dips: every step where a motor keeps its way and every setting-off,
+#: twice a motor with play and chunk, the turning points inside; roots: the
+#: reversals in motion, once a motor with play and chunk, few steps)
+ROOT_CALLS = {"_velocity_roots": (5, 3), "_dip_roots": (10, 100)}
 
 
 @pytest.mark.parametrize("attr", sorted(ROOT_CALLS))
@@ -43,7 +44,10 @@ def test_sample_programs_roots_are_bit_identical(attr: str, tmp_path: Path) -> N
     assert sum(len(args[0]) for args in calls) >= ROOT_CALLS[attr][1]
     name = attr.removeprefix("_")
     for args in calls:
-        assert _same_pair(getattr(_windows, name)(*args), getattr(windows, name)(*args))
+        got, want = getattr(_windows, name)(*args), getattr(windows, name)(*args)
+        assert len(got) == len(want) and all(
+            same_bits(g, w) for g, w in zip(got, want, strict=True)
+        )
 
 
 _vel = st.one_of(
@@ -88,6 +92,14 @@ def test_generated_roots_are_bit_identical(case: tuple[np.ndarray, ...], has_new
     assert _same_pair(_windows.turning_points(P0, V0, P1, V1, h), tp)
     both = np.isfinite(tp[0])
     assert np.all((tp[0][both] > 0) & (tp[0][both] < tp[1][both]) & (tp[1][both] < 1))
+    sg = new.astype(int)
+    for tol in (0.0, 1e-6, 5e-5):
+        for sets_off in (False, True):
+            d_args = (P0, V0, P1, V1, h, sg, tol, sets_off)
+            want_d = windows.dip_roots(*d_args)
+            got_d = _windows.dip_roots(*d_args)
+            assert all(same_bits(g, w) for g, w in zip(got_d, want_d, strict=True))
+            assert got_d[0].dtype == bool and int(want_d[0].sum()) == len(want_d[1])
 
 
 def test_a_cubic_from_rest_turns_at_its_second_root_the_way_it_ends() -> None:

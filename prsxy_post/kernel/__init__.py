@@ -453,6 +453,25 @@ def motor_sides(
 _crossing_windows = _RUN["windows"].crossing_windows
 _velocity_roots = _RUN["windows"].velocity_roots
 _turning_points = _RUN["windows"].turning_points
+_dip_roots = _RUN["windows"].dip_roots
+
+
+def dip_roots(
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    sg: np.ndarray,
+    tol: float,
+    sets_off: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The steps that dip (n,) bool, and their turning points and accelerations
+    there (m,): :func:`windows.dip_roots`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _dip_roots(
+        P0, V0, P1, V1, h, sg, tol, sets_off
+    )
+    return out
 
 
 def velocity_roots(

@@ -131,6 +131,74 @@ def turning_points(P0, V0, P1, V1, h):
     return out_lo, out_hi
 
 
+cdef inline double _hermite(double s, double s3, double P0, double V0, double P1,
+                            double V1, double h) noexcept nogil:
+    # play.hermite at one fraction s (its cube s3 as numpy made it)
+    cdef double s2 = s * s
+    cdef double h00 = 2 * s3 - 3 * s2 + 1
+    cdef double h10 = s3 - 2 * s2 + s
+    cdef double h01 = -2 * s3 + 3 * s2
+    cdef double h11 = s3 - s2
+    return h00 * P0 + h10 * (h * V0) + h01 * P1 + h11 * (h * V1)
+
+
+def dip_roots(P0, V0, P1, V1, h, sg, double tol, bint sets_off):
+    """:func:`prsxy_post.kernel.windows.dip_roots`, compiled; the cubes of the
+    turning points are numpy's power over the array the reference makes."""
+    cdef const double[::1] p0 = np.ascontiguousarray(P0, dtype=np.float64)
+    cdef const double[::1] v0 = np.ascontiguousarray(V0, dtype=np.float64)
+    cdef const double[::1] p1 = np.ascontiguousarray(P1, dtype=np.float64)
+    cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef Py_ssize_t n = p0.shape[0], i, j, m = 0
+    keep_a = np.zeros(n, dtype=bool)
+    cdef unsigned char[::1] keep = keep_a.view(np.uint8)
+    cdef const double[::1] r1
+    cdef const double[::1] r2
+    cdef const double[:, ::1] S3
+    cdef const Py_ssize_t[::1] rows
+    cdef double x1, x2
+    if sets_off:
+        s2_a, _ = velocity_roots(P0, V0, P1, V1, h, sg, True)
+        r2 = s2_a
+        S3 = np.ascontiguousarray(s2_a[:, None] ** 3)
+        for i in range(n):
+            x2 = _hermite(r2[i], S3[i, 0], p0[i], v0[i], p1[i], v1[i], hh[i])
+            keep[i] = (fabs(x2 - p0[i]) > tol) and (r2[i] > 0)
+        s1_k = np.zeros(n)[keep_a]
+        s2_k = s2_a[keep_a]
+    else:
+        lo_a, hi_a = turning_points(P0, V0, P1, V1, h)
+        turns = np.isfinite(lo_a)
+        rows_a = np.flatnonzero(turns).astype(np.intp)
+        rows = rows_a
+        lo_t, hi_t = lo_a[turns], hi_a[turns]
+        both = np.column_stack([lo_t, hi_t])
+        r1, r2 = lo_t, hi_t
+        S3 = np.ascontiguousarray(both ** 3)
+        for j in range(rows.shape[0]):
+            i = rows[j]
+            x1 = _hermite(r1[j], S3[j, 0], p0[i], v0[i], p1[i], v1[i], hh[i])
+            x2 = _hermite(r2[j], S3[j, 1], p0[i], v0[i], p1[i], v1[i], hh[i])
+            keep[i] = fabs(x2 - x1) > tol
+        deep = keep_a[rows_a]
+        s1_k, s2_k = lo_t[deep], hi_t[deep]
+    cdef const double[::1] k1 = s1_k
+    cdef const double[::1] k2 = s2_k
+    out_1 = np.empty(k1.shape[0])
+    out_2 = np.empty(k1.shape[0])
+    cdef double[::1] A1 = out_1
+    cdef double[::1] A2 = out_2
+    cdef double a, b
+    for i in range(n):
+        if keep[i]:
+            a = _vq(p0[i], v0[i], p1[i], v1[i], hh[i], &b)
+            A1[m] = (2 * a * k1[m] + b) / hh[i]
+            A2[m] = (2 * a * k2[m] + b) / hh[i]
+            m += 1
+    return keep_a, s1_k, s2_k, out_1, out_2
+
+
 def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,
                      bint chords, double min_w):
     """:func:`prsxy_post.kernel.windows.crossing_windows`, compiled."""

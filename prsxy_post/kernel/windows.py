@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .play import velocity_quadratic
+from .play import hermite, velocity_quadratic
 
 
 def velocity_roots(
@@ -72,6 +72,45 @@ def turning_points(
     lo, hi = np.minimum(r1, r2), np.maximum(r1, r2)
     ok = (disc > 0) & (np.abs(a) > 0) & (lo > 0) & (hi < 1) & (hi > lo)
     return np.where(ok, lo, np.nan), np.where(ok, hi, np.nan)
+
+
+def dip_roots(
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    sg: np.ndarray,
+    tol: float,
+    sets_off: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The steps (n,) whose cubic turns back and on again deeper than ``tol``
+    [mm] while the motor moves the way ``sg`` at both ends, or (``sets_off``)
+    that the motor leaves going back first further than ``tol``, and where they
+    turn; the rules are :func:`prsxy_post.reversals._dip_roots`'.
+
+    Returns
+    -------
+    keep : (n,) bool, the steps that dip
+    s1, s2 : (m,) their turning points [fraction of the step] (s1 = 0 setting off)
+    A1, A2 : (m,) the cubic's accelerations there [mm/s²]
+    """
+    if sets_off:
+        s2, _ = velocity_roots(P0, V0, P1, V1, h, sg, True)
+        s1 = np.zeros(len(h))
+        keep = (np.abs(hermite(P0, V0, P1, V1, h, s2[:, None])[:, 0] - P0) > tol) & (s2 > 0)
+        s1, s2 = s1[keep], s2[keep]
+    else:
+        s1, s2 = turning_points(P0, V0, P1, V1, h)
+        keep = np.isfinite(s1)
+        s1, s2 = s1[keep], s2[keep]
+        p = hermite(P0[keep], V0[keep], P1[keep], V1[keep], h[keep], np.column_stack([s1, s2]))
+        deep = np.abs(p[:, 1] - p[:, 0]) > tol
+        keep[keep] = deep
+        s1, s2 = s1[deep], s2[deep]
+    hk = h[keep]
+    a, b, _ = velocity_quadratic(P0[keep], V0[keep], P1[keep], V1[keep], hk)
+    return keep, s1, s2, (2 * a * s1 + b) / hk, (2 * a * s2 + b) / hk
 
 
 def crossing_windows(
