@@ -1,5 +1,6 @@
 """The crossings about motors' reversals, elementwise: where a step's cubic turns
-(:func:`velocity_roots`, :func:`turning_points`), and a window's edges from the
+(:func:`velocity_roots`, :func:`turning_points`), which steps dip and where
+(:func:`dip_roots`), and a window's edges from the
 root, the acceleration there, the tolerance and the reach on each side
 (:func:`crossing_windows`).
 
