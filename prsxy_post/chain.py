@@ -701,7 +701,7 @@ class Pipeline:
         blends, shift = self._corners(plan, s, pc)
         t_end = np.cumsum(pc.dt)
         resting = pc.speed == 0.0
-        ins = reversals.plan_insertions(
+        found = reversals.find_reversals(
             t_end,
             pc.dt,
             pc.P_ideal,
@@ -712,15 +712,26 @@ class Pipeline:
             self.side,
             self.ref,
             self.reversal_tol,
+        )
+        velocity = self._path_velocity(plan, s, pc)
+        if velocity is not None and found.seen:
+            # the roots in motion onto the path: the search asks where to look,
+            # the plan and the IK answer (reversals.roots_search)
+            st = reversals.roots_search(found)
+            while st.phase != reversals.DONE:
+                st = reversals.root_answer(st, velocity(*reversals.root_queries(st)))
+            found = reversals.with_roots(found, st)
+        ins = reversals.place_insertions(
+            found,
+            self.reversal_tol,
             self.reversal_s,
-            blends,
-            self.near_next,
+            self.limits.segment != "cubic",
             # straight lines (corrected G-code) too: a window is one line, symmetric
             # about its root, and within the reach on both sides the tip's speed
             # strays less across it (reversals.chord_windows)
-            self._edge_speed(plan, s, pc),
-            self.limits.segment != "cubic",
-            self._path_velocity(plan, s, pc),
+            self._edge_speed(plan, s, pc)(*reversals.edge_queries(found)),
+            blends,
+            self.near_next,
             # a window reaching over a corner stood on one side of it while the
             # path turned (0.27 µm off a G41.1 corner, test_controller_truth's
             # found programs); only windows of straight lines reach over (PVT's
@@ -851,11 +862,16 @@ class Pipeline:
             return fwd[k]
 
         def edge_speed(
-            k: np.ndarray, frac: np.ndarray, col: int, accel: np.ndarray
+            k: np.ndarray, frac: np.ndarray, cols: np.ndarray, accel: np.ndarray
         ) -> tuple[np.ndarray, np.ndarray]:
             if not len(k):
                 return np.zeros(0), np.zeros(0)
-            lever = forward_jacobian(k)[:, :3, col]  # J = ∂x_tip / ∂P_col
+            # J = ∂x_tip / ∂P_col, each row's motor's column, laid out as a column
+            # of a (q, 5, 5) array: einsum's sums below take their order from the
+            # strides (a contiguous (q, 3) sums otherwise in the last bit)
+            buf = np.empty((len(k), 5, 5))
+            buf[:, :3, 0] = forward_jacobian(k)[np.arange(len(k)), :3, cols]
+            lever = buf[:, :3, 0]
             j2 = np.einsum("ij,ij->i", lever, lever)
             v0 = np.where(k >= 1, pc.speed[np.maximum(k - 1, 0)], v_before)
             v = v0 + frac * (pc.speed[k] - v0)

@@ -14,8 +14,8 @@ of it while the path goes on. So the jump gets a window of its own:
   motor's acceleration A at the reversal, so δ = sqrt(8 tol / |A|), at most the
   profile's ``reversal_ms``; on each side of the root no longer than keeps the
   tip's speed within CROSSING_SPEED_SHARE of F (the motor's lever on the tip,
-  ``edge_speed``), so shorter on the side where the standing part pushes the tip
-  on;
+  ``allowed`` of :func:`place_insertions`), so shorter on the side where the
+  standing part pushes the tip on;
 - a reversal at rest (the path stood still at the previous point, the motor
   leaves the other way): one more point at the same pose, δ later, at which the
   motor has crossed; the path waits for it;
@@ -23,7 +23,15 @@ of it while the path goes on. So the jump gets a window of its own:
   cubic turns back and on again inside it: a tight curve's extreme between two
   points): two windows, one at each turning point, when the dip is deeper than
   the tolerance; and the same where a motor sets off from rest or standing the
-  other way first (:func:`_dips`).
+  other way first (:func:`_dip_roots`).
+
+A chunk's reversals are planned in stages with no callback into the chain:
+:func:`find_reversals` (the reversals, their kinds, the roots on the steps'
+cubics, the dips), :func:`roots_search` (the roots moved onto the path: the
+chain answers each look, :func:`root_queries`, with the path's velocity,
+:func:`root_answer`), :func:`edge_queries` (where the chain gives the fastest a
+motor may move while its part stands) and :func:`place_insertions` (the windows
+and the points they put in).
 
 After a crossing the part is brought back onto its wanted position along the path
 (:func:`catch_up`), and what is left of its offset when the motor's next crossing
@@ -44,19 +52,20 @@ import numpy as np
 
 from . import kernel
 from .kernel.play import PlayTable
-from .kernel.play import hermite as _hermite
-from .kernel.play import velocity_quadratic as _velocity_quadratic
 
-#: ``edge_speed(k, s, col, accel)``: the fastest [mm/s] motor ``col`` may move
-#: while its part stands before and after (two arrays) its reversal in step ``k``
-#: at the fraction ``s`` of it, at acceleration ``accel`` there
-#: (:func:`plan_insertions`)
-EdgeSpeed = Callable[[np.ndarray, np.ndarray, int, np.ndarray], tuple[np.ndarray, np.ndarray]]
+#: ``edge_speed(k, s, cols, accel)``: the fastest [mm/s] motors ``cols`` (q,) may
+#: move while their parts stand before and after (two arrays) their reversals in
+#: steps ``k`` at the fractions ``s`` of them, at accelerations ``accel`` there:
+#: what the chain answers to :func:`edge_queries` (:func:`place_insertions`'
+#: ``allowed``)
+EdgeSpeed = Callable[
+    [np.ndarray, np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]
+]
 
 #: ``velocity(k, frac, cols)``: the path's own velocity [mm/s] of motors ``cols``
 #: (m,) at fractions ``frac`` (m,) of steps ``k`` (m,) of the chunk: what the
 #: points sample, not the step's cubic between them; NaN where it is not known
-#: (:func:`path_roots`).
+#: (:func:`path_roots`; the chain answers :func:`root_queries` with it).
 Velocity = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 #: False-position steps that move a reversal's root from the step's cubic onto the
@@ -205,7 +214,7 @@ def velocity_roots(
     """Where the cubic through (P0, V0) and (P1, V1) over time h has zero velocity,
     for arrays of steps.
 
-    The Hermite cubic's velocity is a quadratic (:func:`_velocity_quadratic`).
+    The Hermite cubic's velocity is a quadratic (``kernel.play.velocity_quadratic``).
     With ``new`` (n,) the direction the motor turns to, the first root where the
     velocity turns that way: a motor standing at the step's start (V0 = 0) that
     sets off the old way first turns at the later root, not at s = 0.
@@ -216,30 +225,22 @@ def velocity_roots(
         or turns to ``new``)
     accel : (n,) the cubic's acceleration there [mm/s²]
     """
-    a, b, c = _velocity_quadratic(P0, V0, P1, V1, h)
-    disc = b * b - 4.0 * a * c
-    lin = np.abs(a) < 1e-12 * (np.abs(b) + np.abs(c) + 1e-300)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        qq = -0.5 * (b + np.copysign(np.sqrt(np.maximum(disc, 0.0)), b))
-        r1 = np.where(lin, np.where(b != 0, -c / b, np.nan), qq / a)
-        r2 = np.where(lin, np.nan, np.where(qq != 0, c / qq, -b / (2 * a)))
-        r1 = np.where(disc >= 0, r1, np.nan)
-        r2 = np.where(disc >= 0, r2, np.nan)
-        ok1 = (r1 >= -1e-9) & (r1 <= 1 + 1e-9)
-        ok2 = (r2 >= -1e-9) & (r2 <= 1 + 1e-9)
-        if new is not None:
-            # a root where the velocity turns the other way is not this reversal
-            # (where one of them does)
-            turn1 = ok1 & (new * (2.0 * a * r1 + b) >= 0)
-            turn2 = ok2 & (new * (2.0 * a * r2 + b) >= 0)
-            either = turn1 | turn2
-            ok1, ok2 = np.where(either, turn1, ok1), np.where(either, turn2, ok2)
-        best = np.where(ok1 & ok2, np.minimum(r1, r2), np.where(ok1, r1, np.where(ok2, r2, np.nan)))
-        # the velocities at the ends have opposite signs, so a root exists; only
-        # rounding can hide it: take the linear estimate
-        linear = np.where(V0 != V1, V0 / (V0 - V1), 0.5)
-    s = np.clip(np.where(np.isnan(best), linear, best), 0.0, 1.0)
-    return s, (2.0 * a * s + b) / h
+    if new is None:
+        return kernel.velocity_roots(P0, V0, P1, V1, h, np.zeros(0), False)
+    return kernel.velocity_roots(P0, V0, P1, V1, h, new, True)
+
+
+class _Bracket(NamedTuple):
+    """False position's bracket about each of m roots: the fractions of the step
+    ``s_a`` where the path's velocity ``v_a`` [mm/s] is still the old way and
+    ``s_b`` where ``v_b`` is the new way, and ``last`` the end moved last (−1 a,
+    +1 b, 0 neither)."""
+
+    s_a: np.ndarray
+    v_a: np.ndarray
+    s_b: np.ndarray
+    v_b: np.ndarray
+    last: np.ndarray
 
 
 def path_roots(
@@ -255,7 +256,78 @@ def path_roots(
     steps: int = ROOT_STEPS,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The roots ``s`` of steps' cubics (:func:`velocity_roots`) moved onto the
-    path's own velocity, and its acceleration there.
+    path's own velocity, and its acceleration there: the search
+    (:func:`root_search`) run to its end, each of its questions answered by
+    ``velocity`` (:data:`Velocity`). The chain runs the same stages itself
+    (``chain.Pipeline._reversals``), answering between them.
+
+    Parameters
+    ----------
+    s, accel, V0, V1, h, new, k, cols, steps : as :func:`root_search`
+    velocity : the path's velocity inside steps (:data:`Velocity`)
+
+    Returns
+    -------
+    s, accel : (m,)
+    """
+    st = root_search(s, accel, V0, V1, h, new, k, cols, steps)
+    while st.phase != DONE:
+        st = root_answer(st, velocity(*root_queries(st)))
+    return root_result(st)
+
+
+#: The phases of a root search (:class:`RootSearch`): false position's steps,
+#: the slopes' look about the roots moved, done.
+SEEK, SLOPE, DONE = 0, 1, 2
+
+
+class RootSearch(NamedTuple):
+    """A search that moves reversals' roots from the steps' cubics onto the
+    path's own velocity (:func:`root_search`), between two looks at the path.
+
+    s, accel : (m,) the cubic's roots [fraction of the step] and accelerations
+        there [mm/s²]
+    h, new, k, cols : (m,) the steps' durations [s], the way each motor turns to,
+        the steps (rows of the chunk) and the motors
+    ok : (m,) bool, roots bracketed and the path known so far
+    going : (m,) bool, roots still sought
+    moved : (m,) bool, moved off the cubic's root
+    x : (m,) the roots so far [fraction of the step]
+    br : false position's bracket
+    left : false-position steps left
+    phase : SEEK, SLOPE or DONE
+    slope : (m,) the path's acceleration at the moved roots (SLOPE's answer)
+    """
+
+    s: np.ndarray
+    accel: np.ndarray
+    h: np.ndarray
+    new: np.ndarray
+    k: np.ndarray
+    cols: np.ndarray
+    ok: np.ndarray
+    going: np.ndarray
+    moved: np.ndarray
+    x: np.ndarray
+    br: _Bracket
+    left: int
+    phase: int
+    slope: np.ndarray
+
+
+def root_search(
+    s: np.ndarray,
+    accel: np.ndarray,
+    V0: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    new: np.ndarray,
+    k: np.ndarray,
+    cols: np.ndarray,
+    steps: int = ROOT_STEPS,
+) -> RootSearch:
+    """Start moving the roots ``s`` of steps' cubics (:func:`velocity_roots`)
+    onto the path's own velocity, and finding its acceleration there.
 
     The cubic through a step's ends puts the root where the Hermite's velocity
     turns, which for a motor turning slowly is not where the path's does: a
@@ -275,6 +347,10 @@ def path_roots(
     Elsewhere (a motor setting off from a stand, a velocity not known
     there) the cubic's root and acceleration are kept.
 
+    The search asks for the path's velocity (:func:`root_queries`), and goes on
+    with the answer (:func:`root_answer`) until its phase is DONE; then
+    :func:`root_result`. No callback: the caller looks at the path in between.
+
     Parameters
     ----------
     s, accel : (m,) the cubic's roots [fraction of the step] and accelerations
@@ -284,96 +360,86 @@ def path_roots(
     new : (m,) the way each motor turns to (+1, −1)
     k : (m,) the steps (rows of the chunk)
     cols : (m,) the motors
-    velocity : the path's velocity inside steps (:data:`Velocity`)
     steps : false-position steps
-
-    Returns
-    -------
-    s, accel : (m,)
     """
     ok = (new * V0 < 0) & (new * V1 > 0)
-    if not np.any(ok):
-        return s, accel
-    where = _Looks(k, cols, h, velocity)
-    x, moved = _false_position(s, accel, V0, V1, new, ok, where, steps)
-    if not np.any(moved):
-        return s, accel
-    slope = _path_slopes(x, moved, where)
-    moved &= np.isfinite(slope)
-    return np.where(moved, x, s), np.where(moved, slope, accel)
-
-
-class _Looks(NamedTuple):
-    """Where :func:`path_roots` looks at the path: the steps ``k`` (m,) (rows of
-    the chunk), the motors ``cols`` (m,), the steps' durations ``h`` (m,) [s], and
-    the path's velocity inside steps (:data:`Velocity`)."""
-
-    k: np.ndarray
-    cols: np.ndarray
-    h: np.ndarray
-    velocity: Velocity
-
-
-class _Bracket(NamedTuple):
-    """False position's bracket about each of m roots: the fractions of the step
-    ``s_a`` where the path's velocity ``v_a`` [mm/s] is still the old way and
-    ``s_b`` where ``v_b`` is the new way, and ``last`` the end moved last (−1 a,
-    +1 b, 0 neither)."""
-
-    s_a: np.ndarray
-    v_a: np.ndarray
-    s_b: np.ndarray
-    v_b: np.ndarray
-    last: np.ndarray
-
-
-def _false_position(
-    s: np.ndarray,
-    accel: np.ndarray,
-    V0: np.ndarray,
-    V1: np.ndarray,
-    new: np.ndarray,
-    ok: np.ndarray,
-    where: _Looks,
-    steps: int,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Up to ``steps`` steps of false position with the Illinois rule from the
-    cubic's roots ``s`` (m,) of the steps ``ok`` (m,) bool, bracketed by the
-    step's ends (velocities V0, V1 [mm/s]), until the path's velocity at each is
-    what the acceleration makes in ROOT_TIME_S (:func:`path_roots`).
-
-    Returns
-    -------
-    x : (m,) the roots [fraction of the step]
-    moved : (m,) bool, moved off the cubic's root (where the path was known)
-    """
     # the bracket starts at the step's ends; the end moved last: −1 a, +1 b
-    s_a, v_a = np.zeros(len(s)), V0.astype(float)
-    s_b, v_b = np.ones(len(s)), V1.astype(float)
-    br = _Bracket(s_a, v_a, s_b, v_b, np.zeros(len(s), dtype=int))
-    x = s.copy()
-    # the roots still sought, and those moved off the cubic's
-    going = ok.copy()
-    moved = np.zeros(len(s), dtype=bool)
-    for _ in range(steps):
-        v = where.velocity(where.k[going], x[going], where.cols[going])
-        known = np.zeros(len(s), dtype=bool)
-        known[going] = np.isfinite(v)
-        vm = np.zeros(len(s))
-        vm[going] = np.where(np.isfinite(v), v, 0.0)
-        ok &= known | ~going
-        new_way = new * vm > 0
-        found = going & known & _root_found(x, vm, new_way, br, accel, where.h)
-        going &= known & ~found
-        if not np.any(going):
-            break
+    br = _Bracket(
+        np.zeros(len(s)), V0.astype(float), np.ones(len(s)), V1.astype(float),
+        np.zeros(len(s), dtype=int),
+    )  # fmt: skip
+    phase = SEEK if np.any(ok) and steps > 0 else DONE
+    no = np.zeros(len(s), dtype=bool)
+    return RootSearch(
+        s, accel, h, new, k, cols, ok, ok.copy(), no, s.copy(), br, steps, phase, np.zeros(0)
+    )
+
+
+def root_queries(st: RootSearch) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the search looks at the path next: steps ``k``, fractions of them and
+    motors (q,) (:data:`Velocity`'s arguments); none when DONE."""
+    if st.phase == SEEK:
+        return st.k[st.going], st.x[st.going], st.cols[st.going]
+    if st.phase == SLOPE:
+        # the acceleration at a moved root: a central difference over
+        # ±ROOT_SLOPE_STEP of the step (false position closes in from one side,
+        # and the bracket's other end may stay at the step's end, too far for a
+        # slope at the root)
+        lo, hi = _slope_fractions(st)
+        return (
+            np.tile(st.k[st.moved], 2), np.concatenate([lo, hi]), np.tile(st.cols[st.moved], 2),
+        )  # fmt: skip
+    return np.zeros(0, dtype=int), np.zeros(0), np.zeros(0, dtype=int)
+
+
+def _slope_fractions(st: RootSearch) -> tuple[np.ndarray, np.ndarray]:
+    d = ROOT_SLOPE_STEP
+    x = st.x[st.moved]
+    return np.clip(x - d, 0.0, 1.0), np.clip(x + d, 0.0, 1.0)
+
+
+def root_answer(st: RootSearch, v: np.ndarray) -> RootSearch:
+    """The search gone on with the path's velocity ``v`` (q,) [mm/s] at its
+    questions (:func:`root_queries`; NaN where not known)."""
+    if st.phase == SLOPE:
+        lo, hi = _slope_fractions(st)
+        slope = np.full(len(st.x), np.nan)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope[st.moved] = (v[len(lo) :] - v[: len(lo)]) / ((hi - lo) * st.h[st.moved])
+        return st._replace(phase=DONE, slope=slope)
+    if st.phase != SEEK:
+        return st
+    n = len(st.s)
+    going, ok, br, x, moved = st.going.copy(), st.ok.copy(), st.br, st.x, st.moved.copy()
+    known = np.zeros(n, dtype=bool)
+    known[going] = np.isfinite(v)
+    vm = np.zeros(n)
+    vm[going] = np.where(np.isfinite(v), v, 0.0)
+    ok &= known | ~going
+    new_way = st.new * vm > 0
+    found = going & known & _root_found(x, vm, new_way, br, st.accel, st.h)
+    going &= known & ~found
+    left = st.left - 1
+    if np.any(going):
         moved |= going
         br = _illinois(br, x, vm, going & new_way, going & ~new_way)
         with np.errstate(divide="ignore", invalid="ignore"):
             x_new = br.s_a - br.v_a * (br.s_b - br.s_a) / (br.v_b - br.v_a)
         x = np.where(going & np.isfinite(x_new), np.clip(x_new, br.s_a, br.s_b), x)
+    if np.any(going) and left > 0:
+        return st._replace(ok=ok, going=going, moved=moved, x=x, br=br, left=left)
     moved &= ok
-    return x, moved
+    phase = SLOPE if np.any(moved) else DONE
+    return st._replace(ok=ok, going=going, moved=moved, x=x, br=br, left=left, phase=phase)
+
+
+def root_result(st: RootSearch) -> tuple[np.ndarray, np.ndarray]:
+    """The roots [fraction of the step] and the accelerations there [mm/s²] (m,)
+    of a search that is DONE: moved onto the path where it was found there."""
+    if not len(st.slope):
+        return st.s, st.accel
+    moved = st.moved & np.isfinite(st.slope)
+    return np.where(moved, st.x, st.s), np.where(moved, st.slope, st.accel)
 
 
 def _root_found(
@@ -412,23 +478,6 @@ def _illinois(
     return _Bracket(s_a, v_a, s_b, v_b, last)
 
 
-def _path_slopes(x: np.ndarray, moved: np.ndarray, where: _Looks) -> np.ndarray:
-    """The path's acceleration [mm/s²] at the roots ``x`` (m,) that ``moved``
-    (NaN elsewhere, and where the path is not known)."""
-    # the acceleration at a moved root: a central difference over ±ROOT_SLOPE_STEP
-    # of the step (false position closes in from one side, and the bracket's other
-    # end may stay at the step's end, too far for a slope at the root)
-    d = ROOT_SLOPE_STEP
-    lo, hi = np.clip(x[moved] - d, 0.0, 1.0), np.clip(x[moved] + d, 0.0, 1.0)
-    both = where.velocity(
-        np.tile(where.k[moved], 2), np.concatenate([lo, hi]), np.tile(where.cols[moved], 2)
-    )
-    slope = np.full(len(x), np.nan)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        slope[moved] = (both[len(lo) :] - both[: len(lo)]) / ((hi - lo) * where.h[moved])
-    return slope
-
-
 def windows(
     t0: np.ndarray,
     t1: np.ndarray,
@@ -465,60 +514,10 @@ def windows(
     path (:func:`catch_up`).
     """
     n = len(t_root)
-    with np.errstate(divide="ignore"):
-        half = np.where(accel == 0, 0.5 * longest, np.sqrt(2.0 * tol / np.abs(accel)))
     rb, ra = (np.full(n, np.inf), np.full(n, np.inf)) if reach is None else reach
-    db, da = np.minimum(half, rb), np.minimum(half, ra)
-    if chords:
-        db = np.minimum(db, da)
-    # at most the longest: each side to half of it, or to what the other leaves
-    db = np.minimum(db, longest - np.minimum(da, 0.5 * longest))
-    da = np.minimum(da, longest - db)
-    # at least a servo cycle: evenly where both sides have reach to spare alike,
-    # else the missing time to the side with more reach to spare first, the rest
-    # to the other; with chords after the root first, then before it no longer
-    # than after, then evenly
-    extra = np.maximum(MIN_WINDOW_S - (db + da), 0.0)
-    spare_b, spare_a = rb - db, ra - da
-    with np.errstate(invalid="ignore"):
-        even = (spare_b == spare_a) | (np.isinf(spare_b) & np.isinf(spare_a))
-    if chords:
-        add_a = np.where(even, 0.5 * extra, np.minimum(extra, spare_a))
-        rest = extra - add_a
-        add_b = np.where(even, 0.5 * extra, np.minimum(rest, da + add_a - db))
-        rest = np.where(even, 0.0, rest - add_b)
-        db, da = db + add_b + 0.5 * rest, da + add_a + 0.5 * rest
-    else:
-        more_b = spare_b > spare_a
-        add_b = np.where(
-            even,
-            0.5 * extra,
-            np.where(more_b, np.minimum(extra, spare_b), extra - np.minimum(extra, spare_a)),
-        )
-        db, da = db + add_b, da + (extra - add_b)
-    width = db + da
-    whole = width >= t1 - t0
-    a = np.maximum(t_root - db, t0)
-    b = np.minimum(t_root + da, t1)
-    # never shorter than a servo cycle: grown into the step where it was cut
-    short = b - a < MIN_WINDOW_S
-    b = np.where(short & (a <= t0), np.minimum(a + MIN_WINDOW_S, t1), b)
-    a = np.where(short & (a > t0), np.maximum(b - MIN_WINDOW_S, t0), a)
-    # no sliver shorter than half the window beside it: grown over it where the
-    # reach allows (and, with chords, before the root where the window stays no
-    # longer there than after), or where the sliver is shorter than a servo cycle.
-    # Not merely because the window stood longer before its root than after it
-    # (the part is left ahead of the path): the commands after it take that up
-    # (catch_up), and grown over, the part stood past the root on the side where
-    # it pushes the tip on (0.24 % over F, test_controller_truth's found programs)
-    grow_b = (t1 - b < 0.5 * width) & ((t1 - t_root <= ra) | (t1 - b < MIN_WINDOW_S))
-    b = np.where(grow_b, t1, b)
-    before_ok = t_root - t0 <= rb
-    if chords:
-        before_ok &= t_root - t0 <= b - t_root
-    grow_a = (a - t0 < 0.5 * width) & (before_ok | (a - t0 < MIN_WINDOW_S))
-    a = np.where(grow_a, t0, a)
-    return np.where(whole, t0, a), np.where(whole, t1, b)
+    return kernel.crossing_windows(
+        t0, t1, t_root, accel, rb, ra, tol, longest, chords, MIN_WINDOW_S
+    )
 
 
 def chord_windows(
@@ -590,18 +589,29 @@ def turning_points(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Both roots of the cubic's velocity (:func:`velocity_roots`) where both lie
     strictly inside the step, in time order; NaN elsewhere."""
-    a, b, c = _velocity_quadratic(P0, V0, P1, V1, h)
-    disc = b * b - 4.0 * a * c
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        sq = np.sqrt(np.maximum(disc, 0.0))
-        qq = -0.5 * (b + np.copysign(sq, b))
-        r1, r2 = qq / a, c / qq
-    lo, hi = np.minimum(r1, r2), np.maximum(r1, r2)
-    ok = (disc > 0) & (np.abs(a) > 0) & (lo > 0) & (hi < 1) & (hi > lo)
-    return np.where(ok, lo, np.nan), np.where(ok, hi, np.nan)
+    return kernel.turning_points(P0, V0, P1, V1, h)
 
 
-def _dips(
+class _Dip(NamedTuple):
+    """A motor's dips (or settings-off back) in a chunk (:func:`_dip_roots`): the
+    steps ``k`` (m,), the way ``sg`` the motor moves at the step's end, the
+    fractions ``s1``, ``s2`` of the step where it turns and its accelerations
+    ``A1``, ``A2`` there [mm/s²], the steps' durations ``h``, their starts ``t0``,
+    middles ``tm`` (between the turning points) and ends ``t1`` [s]."""
+
+    k: np.ndarray
+    sg: np.ndarray
+    s1: np.ndarray
+    s2: np.ndarray
+    A1: np.ndarray
+    A2: np.ndarray
+    h: np.ndarray
+    t0: np.ndarray
+    tm: np.ndarray
+    t1: np.ndarray
+
+
+def _dip_roots(
     k: np.ndarray,
     sg: np.ndarray,
     P0: np.ndarray,
@@ -611,55 +621,51 @@ def _dips(
     t_end: np.ndarray,
     dt: np.ndarray,
     tol: float,
-    longest: float,
-    edge_speed: EdgeSpeed | None = None,
-    col: int = 0,
-    chords: bool = False,
     sets_off: bool = False,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The two crossings of every step ``k`` whose cubic turns back and on again
-    while the motor moves the same way (``sg``) at both of its ends.
+) -> _Dip:
+    """The two turning points of every step ``k`` whose cubic turns back and on
+    again while the motor moves the same way (``sg``) at both of its ends
+    (:func:`_dip_windows` gives their windows).
 
     A dip shallower than ``tol`` is left alone: the part stands at the first
     turning point while the motor goes back and forth within its play, and misses
-    the path by the dip's depth at most. Each of the two windows keeps to its own
-    half of the step (cut between the two turning points), so that they never
-    overlap.
-
-    Returns (step, new side, window start, window end) for 2 m windows, the first
-    crossing of every dip before the second.
+    the path by the dip's depth at most.
 
     With ``sets_off``, the steps that a motor leaves from rest, or standing, the
     way against ``sg``, the way it ends the step moving and its part is on: it
-    crosses to −sg as it sets off (a window about the step's start) and back at
-    the root where its cubic turns to ``sg`` (a window there), each in its own part
-    of the step; left alone where it goes back no further than ``tol``.
+    crosses to −sg as it sets off (at the step's start, s1 = 0) and back at the
+    root where its cubic turns to ``sg``; left alone where it goes back no
+    further than ``tol``.
     """
+    keep, s1, s2, A1, A2 = kernel.dip_roots(P0, V0, P1, V1, dt[k], sg, tol, sets_off)
+    k, sg = k[keep], sg[keep]
     h = dt[k]
-    if sets_off:
-        s2, _ = velocity_roots(P0, V0, P1, V1, h, sg)
-        s1 = np.zeros(len(k))
-        deep = (np.abs(_hermite(P0, V0, P1, V1, h, s2[:, None])[:, 0] - P0) > tol) & (s2 > 0)
-    else:
-        s1, s2 = turning_points(P0, V0, P1, V1, h)
-        turns = np.isfinite(s1)
-        k, sg, h, s1, s2 = k[turns], sg[turns], h[turns], s1[turns], s2[turns]
-        P0, V0, P1, V1 = P0[turns], V0[turns], P1[turns], V1[turns]
-        p = _hermite(P0, V0, P1, V1, h, np.column_stack([s1, s2]))
-        deep = np.abs(p[:, 1] - p[:, 0]) > tol
-    k, sg, h, s1, s2 = k[deep], sg[deep], h[deep], s1[deep], s2[deep]
-    a, b, _ = _velocity_quadratic(P0[deep], V0[deep], P1[deep], V1[deep], h)
     t1 = t_end[k]
     t0 = t1 - h
     tm = t0 + 0.5 * (s1 + s2) * h
-    A1, A2 = (2 * a * s1 + b) / h, (2 * a * s2 + b) / h
-    w1 = None if edge_speed is None else reach(edge_speed(k, s1, col, A1), A1)
-    w2 = None if edge_speed is None else reach(edge_speed(k, s2, col, A2), A2)
-    ta1, tb1 = windows(t0, tm, t0 + s1 * h, A1, tol, longest, w1, chords)
-    ta2, tb2 = windows(tm, t1, t0 + s2 * h, A2, tol, longest, w2, chords)
+    return _Dip(k, sg, s1, s2, A1, A2, h, t0, tm, t1)
+
+
+def _dip_windows(
+    d: _Dip,
+    rules: _Rules,
+    w1: tuple[np.ndarray, np.ndarray] | None,
+    w2: tuple[np.ndarray, np.ndarray] | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The two crossings of every dip ``d`` (:func:`_dip_roots`), within the
+    ``reach`` w1, w2 (:func:`reach`; None: the tolerance alone decides) about its
+    first and second turning point. Each of the two windows keeps to its own half
+    of the step (cut between the two turning points), so that they never overlap.
+
+    Returns (step, new side, window start, window end) for 2 m windows, the first
+    crossing of every dip before the second.
+    """
+    tol, longest, chords = rules.tol, rules.longest, rules.chords
+    ta1, tb1 = windows(d.t0, d.tm, d.t0 + d.s1 * d.h, d.A1, tol, longest, w1, chords)
+    ta2, tb2 = windows(d.tm, d.t1, d.t0 + d.s2 * d.h, d.A2, tol, longest, w2, chords)
     return (
-        np.concatenate([k, k]),
-        np.concatenate([-sg, sg]),
+        np.concatenate([d.k, d.k]),
+        np.concatenate([-d.sg, d.sg]),
         np.concatenate([ta1, ta2]),
         np.concatenate([tb1, tb2]),
     )
@@ -823,16 +829,23 @@ class _Chunk(NamedTuple):
 
 
 class _Rules(NamedTuple):
-    """What sizes a crossing window (:func:`plan_insertions`'s parameters): the
+    """What sizes a crossing window (:func:`place_insertions`' parameters): the
     path error allowed to a crossing ``tol`` [mm], the longest window ``longest``
-    [s], straight lines between the points (``chords``) or cubics, and how fast a
-    motor may move while its part stands (``edge_speed``, None: the tolerance
-    alone decides)."""
+    [s], and straight lines between the points (``chords``) or cubics."""
 
     tol: float
     longest: float
     chords: bool
-    edge_speed: EdgeSpeed | None
+
+
+class Found(NamedTuple):
+    """A chunk's reversals before their windows (:func:`find_reversals`): the
+    chunk ``ch``, every motor's reversals ``seen`` (in the order of ``cols``) and
+    its dips and settings-off back ``dips`` (two :class:`_Dip` a motor)."""
+
+    ch: _Chunk
+    seen: list[_Turns]
+    dips: list[list[_Dip]]
 
 
 def plan_insertions(
@@ -849,12 +862,32 @@ def plan_insertions(
     longest: float,
     blends: tuple[np.ndarray, np.ndarray] | None = None,
     near_first: float = 0.0,
-    edge_speed: EdgeSpeed | None = None,
     chords: bool = False,
-    velocity: Velocity | None = None,
     corners_at: np.ndarray | None = None,
 ) -> Insertions:
-    """Find every reversal of the motors ``cols`` in a chunk of points and its window.
+    """Find every reversal of the motors ``cols`` in a chunk of points and its
+    window, the roots in motion on the steps' cubics and the windows sized by the
+    tolerance alone: :func:`find_reversals` then :func:`place_insertions` (the
+    chain moves the roots onto the path and sizes the windows by the tip's speed
+    in between: ``chain.Pipeline._reversals``)."""
+    found = find_reversals(t_end, dt, P, V, resting, prev, cols, side, ref, tol)
+    return place_insertions(found, tol, longest, chords, None, blends, near_first, corners_at)
+
+
+def find_reversals(
+    t_end: np.ndarray,
+    dt: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+    resting: np.ndarray,
+    prev: tuple[np.ndarray, np.ndarray, bool] | None,
+    cols: list[int],
+    side: np.ndarray,
+    ref: np.ndarray,
+    tol: float,
+) -> Found:
+    """Every reversal of the motors ``cols`` in a chunk of points and its kind,
+    the roots of those in motion on the steps' cubics, and the dips.
 
     Parameters
     ----------
@@ -868,25 +901,7 @@ def plan_insertions(
     ref : (5,) the wanted position where each motor last moved with a direction;
         updated in place (a creeping motor's drift is measured from it)
     tol : path error allowed to a crossing [mm]
-    longest : the longest crossing window [s]
-    blends : (rows, tau) of the corners blended (:func:`corners`): row k's step
-        gets a point tau before its end, and row k + 1's tau after its start (k =
-        n − 1: the next chunk's first step, ``near_next``)
-    near_first : the chunk before ended at a blended corner (its ``near_next``):
-        this chunk's first step gets a point that long [s] after its start
-    edge_speed : how fast a motor may move while its part stands, before and after
-        a reversal in motion (:data:`EdgeSpeed`): its window stands no longer than
-        :func:`reach` of that on each side. None: the tolerance alone decides
-    chords : the controller runs straight lines between the points (corrected
-        G-code), not cubics: windows in motion are :func:`chord_windows`, a dip's
-        :func:`windows` with ``chords``
-    velocity : the path's own velocity inside steps (:data:`Velocity`): a reversal
-        in motion is put at its root (:func:`path_roots`). None: at the root of the
-        step's cubic
-    corners_at : rows whose point is a corner of the path (its direction turns
-        there): with ``chords``, no window reaches over one into the step beside
     """
-    ins = Insertions()
     if prev is None:
         ch = _Chunk(t_end, dt, resting, P, V, resting, 0)
     else:
@@ -894,23 +909,135 @@ def plan_insertions(
         V_all = np.vstack([prev[1][None, :], V])
         rest_all = np.concatenate([[prev[2]], resting])
         ch = _Chunk(t_end, dt, resting, P_all, V_all, rest_all, 1)
-    rules = _Rules(tol, longest, chords, edge_speed)
     drift = DRIFT_SHARE * tol
-    w = _Windows([], [], [], [], [])
-    # first every motor's reversals and their kinds, then the roots of those in
-    # motion moved onto the path in one search for all the motors (each look at
-    # the path is an IK call), then the windows
     seen: list[_Turns] = []
     for col in cols:
         turns, ref[col] = _turns(ch, col, side, float(ref[col]), drift)
         seen.append(turns)
-    if velocity is not None and seen:
-        seen = _onto_path(seen, ch, velocity)
-    for t in seen:
+    return Found(ch, seen, [_motor_dips(t, ch, tol) for t in seen])
+
+
+def roots_search(found: Found, steps: int = ROOT_STEPS) -> RootSearch:
+    """The search (:func:`root_search`) that moves every motor's roots in motion
+    onto the path's own velocity, one for all the motors (each look at the path
+    is an IK call); needs a motor in ``found``."""
+    seen, ch = found.seen, found.ch
+    off = ch.off
+    km_all = np.concatenate([x.k[x.mid] for x in seen])
+    col_all = np.concatenate([np.full(len(x.sr), x.col) for x in seen])
+    return root_search(
+        np.concatenate([x.sr for x in seen]),
+        np.concatenate([x.acc for x in seen]),
+        ch.V[km_all + off - 1, col_all],
+        ch.V[km_all + off, col_all],
+        ch.dt[km_all],
+        np.concatenate([x.new[x.mid] for x in seen]),
+        km_all,
+        col_all,
+        steps,
+    )
+
+
+def with_roots(found: Found, st: RootSearch) -> Found:
+    """``found`` with its roots in motion and accelerations there those of the
+    finished search ``st`` (:func:`roots_search`)."""
+    sr_all, acc_all = root_result(st)
+    cut = np.cumsum([len(x.sr) for x in found.seen])[:-1]
+    seen = [
+        x._replace(sr=a, acc=b)
+        for x, a, b in zip(found.seen, np.split(sr_all, cut), np.split(acc_all, cut), strict=True)
+    ]
+    return found._replace(seen=seen)
+
+
+def _edge_parts(t: _Turns, dips: list[_Dip]) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """One motor's turning points whose reach is asked, in :func:`edge_queries`'
+    order: (steps, fractions, accelerations) of its dips' first and second, its
+    settings-off's first and second, its reversals in motion."""
+    d, o = dips
+    return [
+        (d.k, d.s1, d.A1),
+        (d.k, d.s2, d.A2),
+        (o.k, o.s1, o.A1),
+        (o.k, o.s2, o.A2),
+        (t.k[t.mid], t.sr, t.acc),
+    ]
+
+
+def edge_queries(found: Found) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Where a window's reach by the tip's speed is asked (:func:`place_insertions`'
+    ``allowed``): the steps ``k``, fractions of them, motors and accelerations
+    there [mm/s²] (q,) of every motor's turning points (:func:`_edge_parts`),
+    motor after motor."""
+    ks, fr, cs, acc = (
+        [np.zeros(0, dtype=int)],
+        [np.zeros(0)],
+        [np.zeros(0, dtype=int)],
+        [np.zeros(0)],
+    )
+    for t, dips in zip(found.seen, found.dips, strict=True):
+        for k, f, a in _edge_parts(t, dips):
+            ks.append(k)
+            fr.append(f)
+            cs.append(np.full(len(k), t.col))
+            acc.append(a)
+    return np.concatenate(ks), np.concatenate(fr), np.concatenate(cs), np.concatenate(acc)
+
+
+def place_insertions(
+    found: Found,
+    tol: float,
+    longest: float,
+    chords: bool = False,
+    allowed: tuple[np.ndarray, np.ndarray] | None = None,
+    blends: tuple[np.ndarray, np.ndarray] | None = None,
+    near_first: float = 0.0,
+    corners_at: np.ndarray | None = None,
+) -> Insertions:
+    """The windows of every reversal ``found`` (:func:`find_reversals`) and the
+    points they put in.
+
+    Parameters
+    ----------
+    found : the chunk's reversals (roots in motion moved onto the path or not:
+        :func:`roots_search`)
+    tol : path error allowed to a crossing [mm]
+    longest : the longest crossing window [s]
+    chords : the controller runs straight lines between the points (corrected
+        G-code), not cubics: windows in motion are :func:`chord_windows`, a dip's
+        :func:`windows` with ``chords``
+    allowed : (before, after) (q,) how fast [mm/s] a motor may move while its
+        part stands before and after each turning point of :func:`edge_queries`
+        (in its order): its window stands no longer than :func:`reach` of that on
+        each side. None: the tolerance alone decides
+    blends : (rows, tau) of the corners blended (:func:`corners`): row k's step
+        gets a point tau before its end, and row k + 1's tau after its start (k =
+        n − 1: the next chunk's first step, ``near_next``)
+    near_first : the chunk before ended at a blended corner (its ``near_next``):
+        this chunk's first step gets a point that long [s] after its start
+    corners_at : rows whose point is a corner of the path (its direction turns
+        there): with ``chords``, no window reaches over one into the step beside
+    """
+    ins = Insertions()
+    ch = found.ch
+    rules = _Rules(tol, longest, chords)
+    # sorted once for every motor's look-ups (:func:`_chord_room`)
+    bent = None if corners_at is None else np.sort(corners_at)
+    w = _Windows([], [], [], [], [])
+    at = 0
+    for t, dips in zip(found.seen, found.dips, strict=True):
         for kk, nn in zip(t.k[t.at_rest].tolist(), t.new[t.at_rest].tolist(), strict=True):
             ins.stand[kk] = longest
             ins.stands.append((kk, t.col, nn))
-        ks, tas, tbs, news = _motor_windows(t, ch, rules, corners_at)
+        reaches: list[tuple[np.ndarray, np.ndarray] | None] = []
+        for k, _, acc in _edge_parts(t, dips):
+            if allowed is None:
+                reaches.append(None)
+                continue
+            m = len(k)
+            reaches.append(reach((allowed[0][at : at + m], allowed[1][at : at + m]), acc))
+            at += m
+        ks, tas, tbs, news = _motor_windows(t, dips, ch, rules, bent, reaches)
         w.k.extend(ks)
         w.ta.extend(tas)
         w.tb.extend(tbs)
@@ -1004,37 +1131,19 @@ def _turns(
     return turns, reach_ref
 
 
-def _onto_path(seen: list[_Turns], ch: _Chunk, velocity: Velocity) -> list[_Turns]:
-    """Every motor's reversals in motion with their roots moved onto the path's
-    own velocity (:func:`path_roots`), in one search for all the motors."""
-    off = ch.off
-    km_all = np.concatenate([x.k[x.mid] for x in seen])
-    col_all = np.concatenate([np.full(len(x.sr), x.col) for x in seen])
-    sr_all, acc_all = path_roots(
-        np.concatenate([x.sr for x in seen]),
-        np.concatenate([x.acc for x in seen]),
-        ch.V[km_all + off - 1, col_all],
-        ch.V[km_all + off, col_all],
-        ch.dt[km_all],
-        np.concatenate([x.new[x.mid] for x in seen]),
-        km_all,
-        col_all,
-        velocity,
-    )
-    cut = np.cumsum([len(x.sr) for x in seen])[:-1]
-    return [
-        x._replace(sr=a, acc=b)
-        for x, a, b in zip(seen, np.split(sr_all, cut), np.split(acc_all, cut), strict=True)
-    ]
-
-
 def _motor_windows(
-    t: _Turns, ch: _Chunk, rules: _Rules, corners_at: np.ndarray | None
+    t: _Turns,
+    dips: list[_Dip],
+    ch: _Chunk,
+    rules: _Rules,
+    corners_at: np.ndarray | None,
+    reaches: list[tuple[np.ndarray, np.ndarray] | None],
 ) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
     """One motor's crossing windows inside steps: for its reversals creeping,
     standing, in motion, and its dips and settings-off back (two windows each),
     in that order, the windows' steps, starts and ends [s] and new sides (four
-    lists of five arrays)."""
+    lists of five arrays). ``reaches``: the :func:`reach` about its turning
+    points in :func:`_edge_parts`' order (None: the tolerance alone decides)."""
     # a creeping motor has drifted back past the allowance: it crosses over the
     # end of this step (its speed makes the crossing's error tiny)
     kc = t.k[t.crept_f]
@@ -1046,21 +1155,22 @@ def _motor_windows(
     t1 = ch.t_end[ks]
     t0 = t1 - ch.dt[ks]
     ta_s, tb_s = np.where(t1 - t0 <= 1.5 * rules.longest, t0, t1 - rules.longest), t1
-    dips = _motor_dips(t, ch, rules)
-    km, ta_m, tb_m = _motion_windows(t, ch, rules, dips, corners_at)
+    dw = [
+        _dip_windows(dips[0], rules, reaches[0], reaches[1]),
+        _dip_windows(dips[1], rules, reaches[2], reaches[3]),
+    ]
+    km, ta_m, tb_m = _motion_windows(t, ch, rules, dw, corners_at, reaches[4])
     return (
-        [kc, ks, km, dips[0][0], dips[1][0]],
-        [ta_c, ta_s, ta_m, dips[0][2], dips[1][2]],
-        [tb_c, tb_s, tb_m, dips[0][3], dips[1][3]],
-        [t.new[t.crept_f], t.new[t.stood], t.new[t.mid], dips[0][1], dips[1][1]],
+        [kc, ks, km, dw[0][0], dw[1][0]],
+        [ta_c, ta_s, ta_m, dw[0][2], dw[1][2]],
+        [tb_c, tb_s, tb_m, dw[0][3], dw[1][3]],
+        [t.new[t.crept_f], t.new[t.stood], t.new[t.mid], dw[0][1], dw[1][1]],
     )
 
 
-def _motor_dips(
-    t: _Turns, ch: _Chunk, rules: _Rules
-) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
-    """One motor's dips and settings-off back (:func:`_dips`), in that order: for
-    each, (step, new side, window start, window end) of its windows."""
+def _motor_dips(t: _Turns, ch: _Chunk, tol: float) -> list[_Dip]:
+    """One motor's dips and settings-off back (:func:`_dip_roots`), in that
+    order."""
     sg, came, p, off, n = t.sg, t.came, t.p, ch.off, len(ch.dt)
     # a dip: the motor moves the same way at both ends of a step, but the step's
     # cubic turns twice inside it (the extreme of a tight curve between two
@@ -1075,7 +1185,7 @@ def _motor_dips(
     j_off = j_off[(j_off - off >= 0) & (j_off - off < n) & (came[j_off] == sg[j_off])]
     j_off = j_off[sg[j_off] * (p[j_off] - p[j_off - 1]) < 0.0]
     return [
-        _dips(
+        _dip_roots(
             j - off,
             sg[j],
             p[j - 1],
@@ -1084,11 +1194,7 @@ def _motor_dips(
             ch.V[j, t.col],
             ch.t_end,
             ch.dt,
-            rules.tol,
-            rules.longest,
-            rules.edge_speed,
-            t.col,
-            rules.chords,
+            tol,
             sets_off,
         )
         for j, sets_off in ((j_dip, False), (j_off, True))
@@ -1101,18 +1207,18 @@ def _motion_windows(
     rules: _Rules,
     dips: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
     corners_at: np.ndarray | None,
+    wide: tuple[np.ndarray, np.ndarray] | None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One motor's windows about its reversals in motion: their steps, starts and
-    ends [s] (:func:`windows`, or :func:`chord_windows` with ``chords``, which may
-    reach into a step beside that has no other window of the motor's: ``dips``)."""
+    """One motor's windows about its reversals in motion, within the reach
+    ``wide`` (:func:`reach`): their steps, starts and ends [s] (:func:`windows`,
+    or :func:`chord_windows` with ``chords``, which may reach into a step beside
+    that has no other window of the motor's: ``dips``' windows)."""
     # a reversal in motion: the window about the root of the step's cubic
-    col, sr, acc = t.col, t.sr, t.acc
+    sr, acc = t.sr, t.acc
     km = t.k[t.mid]
     h = ch.dt[km]
     t1 = ch.t_end[km]
     t0 = t1 - h
-    edge_speed = rules.edge_speed
-    wide = None if edge_speed is None else reach(edge_speed(km, sr, col, acc), acc)
     if rules.chords:
         busy = np.concatenate([t.k, t.k[t.stood] - 1, dips[0][0], dips[1][0]])
         t_before, t_after = _chord_room(km, t0, t1, ch, busy, corners_at)
@@ -1135,33 +1241,45 @@ def _chord_room(
     """How far [s] a straight lines' window in step ``km`` (m,) [t0, t1] may reach
     before and after its step (:func:`chord_windows`' ``t_before``, ``t_after``):
     into the step beside where the path moves through both without a corner
-    (``corners_at``) between and the motor has no other window there (``busy``,
-    steps), leaving it a servo cycle."""
+    (``corners_at``, rows, sorted) between and the motor has no other
+    window there (``busy``, steps), leaving it a servo cycle."""
     n, dt, resting = len(ch.dt), ch.dt, ch.resting
     # straight lines: a window may reach into the step beside (of this
     # chunk) where the path moves through both without a corner between
     # and the motor has no other window there, leaving it a servo cycle
     prv, nxt = np.maximum(km - 1, 0), np.minimum(km + 1, n - 1)
     bent = np.zeros(0, dtype=int) if corners_at is None else corners_at
+    busy = np.sort(busy)
     free_prev = (
         (km >= 2)
         & ~resting[prv]
         & ~resting[np.maximum(km - 2, 0)]
         & (dt[prv] > 0)
-        & ~np.isin(km - 1, busy)
-        & ~np.isin(km - 1, bent)
+        & ~_in_sorted(km - 1, busy)
+        & ~_in_sorted(km - 1, bent)
     )
     free_next = (
         (km + 1 < n)
         & ~resting[km]
         & ~resting[nxt]
         & (dt[nxt] > 0)
-        & ~np.isin(km + 1, busy)
-        & ~np.isin(km, bent)
+        & ~_in_sorted(km + 1, busy)
+        & ~_in_sorted(km, bent)
     )
     t_before = t0 - np.where(free_prev, np.clip(dt[prv] - MIN_WINDOW_S, 0.0, None), 0.0)
     t_after = t1 + np.where(free_next, np.clip(dt[nxt] - MIN_WINDOW_S, 0.0, None), 0.0)
     return t_before, t_after
+
+
+def _in_sorted(x: np.ndarray, pool: np.ndarray) -> np.ndarray:
+    """(m,) bool, each of ``x`` (m,) ints is in ``pool`` (sorted ints): np.isin's
+    answer by binary search (np.isin builds a table as long as the pool's range,
+    every motor's every chunk again)."""
+    if not len(pool):
+        return np.zeros(len(x), dtype=bool)
+    i = np.minimum(np.searchsorted(pool, x), len(pool) - 1)
+    found: np.ndarray = pool[i] == x
+    return found
 
 
 def _place_windows(
@@ -1216,7 +1334,7 @@ def _blend_points(
     ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
     if near_first:
         early, tau_e = np.concatenate([[0], early]), np.concatenate([[near_first], tau_e])
-    keep = (early < n) & ~np.isin(early, list(ins.stand))
+    keep = (early < n) & ~np.isin(early, np.fromiter(ins.stand, dtype=int, count=len(ins.stand)))
     early, tau_e = early[keep], tau_e[keep]
     t_early = t_end[early] - dt[early] + tau_e
     edges, starts, stops = np.sort(et), np.sort(ins.w_ta), np.sort(ins.w_tb)

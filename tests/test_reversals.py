@@ -899,3 +899,36 @@ def test_a_blended_corner_is_one_parabola_through_its_three_points(
         lo = np.minimum(V_in[0], V_out[0])[:, None]
         hi = np.maximum(V_in[0], V_out[0])[:, None]
         assert np.all(v >= lo - 1e-9) and np.all(v <= hi + 1e-9)
+
+
+def test_each_reach_answered_sizes_the_window_it_was_asked_for() -> None:
+    """The chain answers the reach questions (reversals.edge_queries: steps,
+    fractions, motors, accelerations) in their order, and place_insertions gives
+    each answer to the window it was asked for: no reach (inf) is the tolerance
+    alone, as without answers; a reach near zero for one motor's reversal makes
+    that window a servo cycle and leaves the other motor's alone."""
+    dt = np.full(4, 0.01)
+    t_end = np.cumsum(dt)
+    V, P = np.zeros((4, 5)), np.zeros((4, 5))
+    V[:, 0], P[:, 0] = [1.0, 1.0, -1.0, -1.0], [0.0, 0.01, 0.01, 0.0]
+    V[:, 1], P[:, 1] = [-1.0, -1.0, -1.0, 1.0], [0.0, -0.01, -0.02, -0.02]
+    side = np.array([1, -1, 1, 1, 1])
+    found = reversals.find_reversals(
+        t_end, dt, P, V, np.zeros(4, dtype=bool), None, [0, 1], side, np.full(5, np.nan), 5e-5
+    )
+    k, frac, cols, accel = reversals.edge_queries(found)
+    assert sorted(zip(k.tolist(), cols.tolist(), strict=True)) == [(2, 0), (3, 1)]
+    assert np.all((0 < frac) & (frac < 1)) and np.all(accel[cols == 0] < 0)
+    plain = reversals.place_insertions(found, 5e-5, 1e-3)
+    free = reversals.place_insertions(found, 5e-5, 1e-3, False, (np.full(2, np.inf),) * 2)
+    tight_b = np.where(cols == 1, 1e-9, np.inf)
+    tight = reversals.place_insertions(found, 5e-5, 1e-3, False, (tight_b, tight_b))
+    for ins in (free, tight):
+        assert ins.w_col.tolist() == plain.w_col.tolist() == [0, 1]
+    np.testing.assert_array_equal(free.w_ta, plain.w_ta)
+    np.testing.assert_array_equal(free.w_tb, plain.w_tb)
+    assert tight.w_ta[0] == plain.w_ta[0] and tight.w_tb[0] == plain.w_tb[0]
+    assert plain.w_tb[1] - plain.w_ta[1] > 2 * reversals.MIN_WINDOW_S
+    assert tight.w_tb[1] - tight.w_ta[1] == pytest.approx(reversals.MIN_WINDOW_S)
+    root = t_end[2] + frac[cols == 1][0] * dt[3]
+    assert tight.w_ta[1] < root < tight.w_tb[1]

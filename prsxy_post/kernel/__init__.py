@@ -1,7 +1,8 @@
 """The kernel: per-point numerical work as functions over arrays.
 
 Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``, ``fk.py``,
-the planner's ``timelaw.py`` and ``path.py``, the play model's ``play.py``:
+the planner's ``timelaw.py`` and ``path.py``, the play model's ``play.py``, the
+crossing windows' ``windows.py``:
 :data:`TWINS`) and a compiled twin in Cython (``_ik.pyx``, ...; built when the package
 is installed) that gives the same bits. This module picks one set for the whole
 program, once, at import:
@@ -48,6 +49,7 @@ TWINS = {
     "timelaw": "_timelaw",
     "path": "_path",
     "play": "_play",
+    "windows": "_windows",
 }
 
 
@@ -444,4 +446,73 @@ def motor_sides(
     """A motor's side at each point: :func:`play.motor_sides`, compiled when
     :data:`COMPILED`."""
     out: np.ndarray = _motor_sides(V, resting, f, e, new, last_row, s_first, s_new, side, eps)
+    return out
+
+
+# the crossings (kernel/windows.py and its twin _windows.pyx)
+_crossing_windows = _RUN["windows"].crossing_windows
+_velocity_roots = _RUN["windows"].velocity_roots
+_turning_points = _RUN["windows"].turning_points
+_dip_roots = _RUN["windows"].dip_roots
+
+
+def dip_roots(
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    sg: np.ndarray,
+    tol: float,
+    sets_off: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The steps that dip (n,) bool, and their turning points and accelerations
+    there (m,): :func:`windows.dip_roots`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _dip_roots(
+        P0, V0, P1, V1, h, sg, tol, sets_off
+    )
+    return out
+
+
+def velocity_roots(
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    new: np.ndarray,
+    has_new: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The first roots of steps' cubics' velocity and the accelerations there (n,):
+    :func:`windows.velocity_roots`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _velocity_roots(P0, V0, P1, V1, h, new, has_new)
+    return out
+
+
+def turning_points(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Both turning points inside steps (n,), NaN elsewhere:
+    :func:`windows.turning_points`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _turning_points(P0, V0, P1, V1, h)
+    return out
+
+
+def crossing_windows(
+    t0: np.ndarray,
+    t1: np.ndarray,
+    t_root: np.ndarray,
+    accel: np.ndarray,
+    rb: np.ndarray,
+    ra: np.ndarray,
+    tol: float,
+    longest: float,
+    chords: bool,
+    min_w: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The windows' starts and ends (n,) [s]: :func:`windows.crossing_windows`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _crossing_windows(
+        t0, t1, t_root, accel, rb, ra, tol, longest, chords, min_w
+    )
     return out

@@ -1,0 +1,269 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
+# cython: initializedcheck=False
+"""The crossing windows compiled: :mod:`prsxy_post.kernel.windows` point by point,
+the same operations in the same order (see that module), so the two agree to the
+bit. numpy's ``maximum`` and ``minimum`` as numpy's (a NaN wins). Compiled with -O2
+-ffp-contract=off (no fused multiply-adds)."""
+
+import numpy as np
+
+from libc.math cimport sqrt, fabs, copysign, INFINITY, NAN
+
+
+cdef inline double _max(double a, double b) noexcept nogil:
+    # numpy's maximum: the first when it is greater or NaN, else the second (so
+    # maximum(-0.0, 0.0) is 0.0 and maximum(0.0, -0.0) is -0.0, as numpy's)
+    return a if (a > b or a != a) else b
+
+
+cdef inline double _min(double a, double b) noexcept nogil:
+    return a if (a < b or a != a) else b
+
+
+cdef inline double _clip01(double x) noexcept nogil:
+    # numpy's clip to [0, 1]: NaN stays, −0.0 stays
+    if x != x:
+        return x
+    if x < 0.0:
+        return 0.0
+    if x > 1.0:
+        return 1.0
+    return x
+
+
+cdef inline bint _isinf(double x) noexcept nogil:
+    return x == INFINITY or x == -INFINITY
+
+
+cdef inline double _vq(double P0, double V0, double P1, double V1, double h,
+                       double* b) noexcept nogil:
+    # play.velocity_quadratic: a returned, b set (c is V0)
+    cdef double d = (P0 - P1) / h
+    b[0] = -6.0 * d - 4.0 * V0 - 2.0 * V1
+    return 6.0 * d + 3.0 * (V0 + V1)
+
+
+def velocity_roots(P0, V0, P1, V1, h, new, bint has_new):
+    """:func:`prsxy_post.kernel.windows.velocity_roots`, compiled."""
+    cdef const double[::1] p0 = np.ascontiguousarray(P0, dtype=np.float64)
+    cdef const double[::1] v0 = np.ascontiguousarray(V0, dtype=np.float64)
+    cdef const double[::1] p1 = np.ascontiguousarray(P1, dtype=np.float64)
+    cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef const double[::1] nw = np.ascontiguousarray(
+        new if has_new else np.zeros(p0.shape[0]), dtype=np.float64
+    )
+    cdef Py_ssize_t n = p0.shape[0], i
+    out_s = np.empty(n)
+    out_a = np.empty(n)
+    cdef double[::1] S = out_s
+    cdef double[::1] AC = out_a
+    cdef double a, b, c, disc, qq, r1, r2, best, linear, s
+    cdef bint lin, ok1, ok2, turn1, turn2
+    with nogil:
+        for i in range(n):
+            a = _vq(p0[i], v0[i], p1[i], v1[i], hh[i], &b)
+            c = v0[i]
+            disc = b * b - 4.0 * a * c
+            lin = fabs(a) < 1e-12 * (fabs(b) + fabs(c) + 1e-300)
+            qq = -0.5 * (b + copysign(sqrt(_max(disc, 0.0)), b))
+            if lin:
+                r1 = -c / b if b != 0 else NAN
+                r2 = NAN
+            else:
+                r1 = qq / a
+                r2 = c / qq if qq != 0 else -b / (2 * a)
+            if not disc >= 0:
+                r1 = NAN
+                r2 = NAN
+            ok1 = (r1 >= -1e-9) and (r1 <= 1 + 1e-9)
+            ok2 = (r2 >= -1e-9) and (r2 <= 1 + 1e-9)
+            if has_new:
+                turn1 = ok1 and (nw[i] * (2.0 * a * r1 + b) >= 0)
+                turn2 = ok2 and (nw[i] * (2.0 * a * r2 + b) >= 0)
+                if turn1 or turn2:
+                    ok1, ok2 = turn1, turn2
+            if ok1 and ok2:
+                best = _min(r1, r2)
+            elif ok1:
+                best = r1
+            elif ok2:
+                best = r2
+            else:
+                best = NAN
+            linear = v0[i] / (v0[i] - v1[i]) if v0[i] != v1[i] else 0.5
+            s = linear if best != best else best
+            s = _clip01(s)
+            S[i] = s
+            AC[i] = (2.0 * a * s + b) / hh[i]
+    return out_s, out_a
+
+
+def turning_points(P0, V0, P1, V1, h):
+    """:func:`prsxy_post.kernel.windows.turning_points`, compiled."""
+    cdef const double[::1] p0 = np.ascontiguousarray(P0, dtype=np.float64)
+    cdef const double[::1] v0 = np.ascontiguousarray(V0, dtype=np.float64)
+    cdef const double[::1] p1 = np.ascontiguousarray(P1, dtype=np.float64)
+    cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef Py_ssize_t n = p0.shape[0], i
+    out_lo = np.empty(n)
+    out_hi = np.empty(n)
+    cdef double[::1] LO = out_lo
+    cdef double[::1] HI = out_hi
+    cdef double a, b, c, disc, qq, r1, r2, lo, hi
+    with nogil:
+        for i in range(n):
+            a = _vq(p0[i], v0[i], p1[i], v1[i], hh[i], &b)
+            c = v0[i]
+            disc = b * b - 4.0 * a * c
+            qq = -0.5 * (b + copysign(sqrt(_max(disc, 0.0)), b))
+            r1 = qq / a
+            r2 = c / qq
+            lo = _min(r1, r2)
+            hi = _max(r1, r2)
+            if (disc > 0) and (fabs(a) > 0) and (lo > 0) and (hi < 1) and (hi > lo):
+                LO[i] = lo
+                HI[i] = hi
+            else:
+                LO[i] = NAN
+                HI[i] = NAN
+    return out_lo, out_hi
+
+
+cdef inline double _hermite(double s, double s3, double P0, double V0, double P1,
+                            double V1, double h) noexcept nogil:
+    # play.hermite at one fraction s (its cube s3 as numpy made it)
+    cdef double s2 = s * s
+    cdef double h00 = 2 * s3 - 3 * s2 + 1
+    cdef double h10 = s3 - 2 * s2 + s
+    cdef double h01 = -2 * s3 + 3 * s2
+    cdef double h11 = s3 - s2
+    return h00 * P0 + h10 * (h * V0) + h01 * P1 + h11 * (h * V1)
+
+
+def dip_roots(P0, V0, P1, V1, h, sg, double tol, bint sets_off):
+    """:func:`prsxy_post.kernel.windows.dip_roots`, compiled; the cubes of the
+    turning points are numpy's power over the array the reference makes."""
+    cdef const double[::1] p0 = np.ascontiguousarray(P0, dtype=np.float64)
+    cdef const double[::1] v0 = np.ascontiguousarray(V0, dtype=np.float64)
+    cdef const double[::1] p1 = np.ascontiguousarray(P1, dtype=np.float64)
+    cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef Py_ssize_t n = p0.shape[0], i, j, m = 0
+    keep_a = np.zeros(n, dtype=bool)
+    cdef unsigned char[::1] keep = keep_a.view(np.uint8)
+    cdef const double[::1] r1
+    cdef const double[::1] r2
+    cdef const double[:, ::1] S3
+    cdef const Py_ssize_t[::1] rows
+    cdef double x1, x2
+    if sets_off:
+        s2_a, _ = velocity_roots(P0, V0, P1, V1, h, sg, True)
+        r2 = s2_a
+        S3 = np.ascontiguousarray(s2_a[:, None] ** 3)
+        for i in range(n):
+            x2 = _hermite(r2[i], S3[i, 0], p0[i], v0[i], p1[i], v1[i], hh[i])
+            keep[i] = (fabs(x2 - p0[i]) > tol) and (r2[i] > 0)
+        s1_k = np.zeros(n)[keep_a]
+        s2_k = s2_a[keep_a]
+    else:
+        lo_a, hi_a = turning_points(P0, V0, P1, V1, h)
+        turns = np.isfinite(lo_a)
+        rows_a = np.flatnonzero(turns).astype(np.intp)
+        rows = rows_a
+        lo_t, hi_t = lo_a[turns], hi_a[turns]
+        both = np.column_stack([lo_t, hi_t])
+        r1, r2 = lo_t, hi_t
+        S3 = np.ascontiguousarray(both ** 3)
+        for j in range(rows.shape[0]):
+            i = rows[j]
+            x1 = _hermite(r1[j], S3[j, 0], p0[i], v0[i], p1[i], v1[i], hh[i])
+            x2 = _hermite(r2[j], S3[j, 1], p0[i], v0[i], p1[i], v1[i], hh[i])
+            keep[i] = fabs(x2 - x1) > tol
+        deep = keep_a[rows_a]
+        s1_k, s2_k = lo_t[deep], hi_t[deep]
+    cdef const double[::1] k1 = s1_k
+    cdef const double[::1] k2 = s2_k
+    out_1 = np.empty(k1.shape[0])
+    out_2 = np.empty(k1.shape[0])
+    cdef double[::1] A1 = out_1
+    cdef double[::1] A2 = out_2
+    cdef double a, b
+    for i in range(n):
+        if keep[i]:
+            a = _vq(p0[i], v0[i], p1[i], v1[i], hh[i], &b)
+            A1[m] = (2 * a * k1[m] + b) / hh[i]
+            A2[m] = (2 * a * k2[m] + b) / hh[i]
+            m += 1
+    return keep_a, s1_k, s2_k, out_1, out_2
+
+
+def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,
+                     bint chords, double min_w):
+    """:func:`prsxy_post.kernel.windows.crossing_windows`, compiled."""
+    cdef const double[::1] T0 = np.ascontiguousarray(t0, dtype=np.float64)
+    cdef const double[::1] T1 = np.ascontiguousarray(t1, dtype=np.float64)
+    cdef const double[::1] TR = np.ascontiguousarray(t_root, dtype=np.float64)
+    cdef const double[::1] AC = np.ascontiguousarray(accel, dtype=np.float64)
+    cdef const double[::1] RB = np.ascontiguousarray(rb, dtype=np.float64)
+    cdef const double[::1] RA = np.ascontiguousarray(ra, dtype=np.float64)
+    cdef Py_ssize_t n = T0.shape[0], i
+    out_a = np.empty(n)
+    out_b = np.empty(n)
+    cdef double[::1] A = out_a
+    cdef double[::1] B = out_b
+    cdef double half, db, da, extra, spare_b, spare_a, add_a, add_b, rest
+    cdef double width, a, b, x0, x1, xr, r_b, r_a, acc
+    cdef double half_longest = 0.5 * longest
+    cdef double two_tol = 2.0 * tol
+    cdef bint even, whole, short, grow_b, grow_a, before_ok
+    with nogil:
+        for i in range(n):
+            x0, x1, xr, acc, r_b, r_a = T0[i], T1[i], TR[i], AC[i], RB[i], RA[i]
+            half = half_longest if acc == 0 else sqrt(two_tol / fabs(acc))
+            db = _min(half, r_b)
+            da = _min(half, r_a)
+            if chords:
+                db = _min(db, da)
+            db = _min(db, longest - _min(da, half_longest))
+            da = _min(da, longest - db)
+            extra = _max(min_w - (db + da), 0.0)
+            spare_b = r_b - db
+            spare_a = r_a - da
+            even = (spare_b == spare_a) or (_isinf(spare_b) and _isinf(spare_a))
+            if chords:
+                add_a = 0.5 * extra if even else _min(extra, spare_a)
+                rest = extra - add_a
+                add_b = 0.5 * extra if even else _min(rest, da + add_a - db)
+                rest = 0.0 if even else rest - add_b
+                db, da = db + add_b + 0.5 * rest, da + add_a + 0.5 * rest
+            else:
+                if even:
+                    add_b = 0.5 * extra
+                elif spare_b > spare_a:
+                    add_b = _min(extra, spare_b)
+                else:
+                    add_b = extra - _min(extra, spare_a)
+                db, da = db + add_b, da + (extra - add_b)
+            width = db + da
+            whole = width >= x1 - x0
+            a = _max(xr - db, x0)
+            b = _min(xr + da, x1)
+            short = b - a < min_w
+            if short and a <= x0:
+                b = _min(a + min_w, x1)
+            if short and a > x0:
+                a = _max(b - min_w, x0)
+            grow_b = (x1 - b < 0.5 * width) and ((x1 - xr <= r_a) or (x1 - b < min_w))
+            if grow_b:
+                b = x1
+            before_ok = xr - x0 <= r_b
+            if chords:
+                before_ok = before_ok and (xr - x0 <= b - xr)
+            grow_a = (a - x0 < 0.5 * width) and (before_ok or (a - x0 < min_w))
+            if grow_a:
+                a = x0
+            A[i] = x0 if whole else a
+            B[i] = x1 if whole else b
+    return out_a, out_b

@@ -1,0 +1,193 @@
+"""The crossings about motors' reversals, elementwise: where a step's cubic turns
+(:func:`velocity_roots`, :func:`turning_points`), which steps dip and where
+(:func:`dip_roots`), and a window's edges from the
+root, the acceleration there, the tolerance and the reach on each side
+(:func:`crossing_windows`).
+
+The numpy reference; ``_windows.pyx`` is its compiled twin, the same operations in
+the same order (the same bits). The rules (why each) are
+:func:`prsxy_post.reversals.windows`'; this module only computes them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .play import hermite, velocity_quadratic
+
+
+def velocity_roots(
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    new: np.ndarray,
+    has_new: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where the cubic through (P0, V0) and (P1, V1) over time h (n,) has zero
+    velocity: the first root in [0, 1] of its velocity's quadratic (with
+    ``has_new``, the first where it turns the way ``new`` (n,), where one does),
+    the linear estimate V0 / (V0 − V1) where rounding hides the root; and the
+    cubic's acceleration there [mm/s²]. The rules are
+    :func:`prsxy_post.reversals.velocity_roots`'.
+
+    Returns
+    -------
+    s, accel : (n,)
+    """
+    a, b, c = velocity_quadratic(P0, V0, P1, V1, h)
+    disc = b * b - 4.0 * a * c
+    lin = np.abs(a) < 1e-12 * (np.abs(b) + np.abs(c) + 1e-300)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        qq = -0.5 * (b + np.copysign(np.sqrt(np.maximum(disc, 0.0)), b))
+        r1 = np.where(lin, np.where(b != 0, -c / b, np.nan), qq / a)
+        r2 = np.where(lin, np.nan, np.where(qq != 0, c / qq, -b / (2 * a)))
+        r1 = np.where(disc >= 0, r1, np.nan)
+        r2 = np.where(disc >= 0, r2, np.nan)
+        ok1 = (r1 >= -1e-9) & (r1 <= 1 + 1e-9)
+        ok2 = (r2 >= -1e-9) & (r2 <= 1 + 1e-9)
+        if has_new:
+            turn1 = ok1 & (new * (2.0 * a * r1 + b) >= 0)
+            turn2 = ok2 & (new * (2.0 * a * r2 + b) >= 0)
+            either = turn1 | turn2
+            ok1, ok2 = np.where(either, turn1, ok1), np.where(either, turn2, ok2)
+        best = np.where(ok1 & ok2, np.minimum(r1, r2), np.where(ok1, r1, np.where(ok2, r2, np.nan)))
+        linear = np.where(V0 != V1, V0 / (V0 - V1), 0.5)
+    s = np.clip(np.where(np.isnan(best), linear, best), 0.0, 1.0)
+    acc: np.ndarray = (2.0 * a * s + b) / h
+    return s, acc
+
+
+def turning_points(
+    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Both roots of the cubic's velocity (:func:`velocity_roots`) where both lie
+    strictly inside the step, in time order; NaN elsewhere."""
+    a, b, c = velocity_quadratic(P0, V0, P1, V1, h)
+    disc = b * b - 4.0 * a * c
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        sq = np.sqrt(np.maximum(disc, 0.0))
+        qq = -0.5 * (b + np.copysign(sq, b))
+        r1, r2 = qq / a, c / qq
+    lo, hi = np.minimum(r1, r2), np.maximum(r1, r2)
+    ok = (disc > 0) & (np.abs(a) > 0) & (lo > 0) & (hi < 1) & (hi > lo)
+    return np.where(ok, lo, np.nan), np.where(ok, hi, np.nan)
+
+
+def dip_roots(
+    P0: np.ndarray,
+    V0: np.ndarray,
+    P1: np.ndarray,
+    V1: np.ndarray,
+    h: np.ndarray,
+    sg: np.ndarray,
+    tol: float,
+    sets_off: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The steps (n,) whose cubic turns back and on again deeper than ``tol``
+    [mm] while the motor moves the way ``sg`` at both ends, or (``sets_off``)
+    that the motor leaves going back first further than ``tol``, and where they
+    turn; the rules are :func:`prsxy_post.reversals._dip_roots`'.
+
+    Returns
+    -------
+    keep : (n,) bool, the steps that dip
+    s1, s2 : (m,) their turning points [fraction of the step] (s1 = 0 setting off)
+    A1, A2 : (m,) the cubic's accelerations there [mm/s²]
+    """
+    if sets_off:
+        s2, _ = velocity_roots(P0, V0, P1, V1, h, sg, True)
+        s1 = np.zeros(len(h))
+        keep = (np.abs(hermite(P0, V0, P1, V1, h, s2[:, None])[:, 0] - P0) > tol) & (s2 > 0)
+        s1, s2 = s1[keep], s2[keep]
+    else:
+        s1, s2 = turning_points(P0, V0, P1, V1, h)
+        keep = np.isfinite(s1)
+        s1, s2 = s1[keep], s2[keep]
+        p = hermite(P0[keep], V0[keep], P1[keep], V1[keep], h[keep], np.column_stack([s1, s2]))
+        deep = np.abs(p[:, 1] - p[:, 0]) > tol
+        keep[keep] = deep
+        s1, s2 = s1[deep], s2[deep]
+    hk = h[keep]
+    a, b, _ = velocity_quadratic(P0[keep], V0[keep], P1[keep], V1[keep], hk)
+    return keep, s1, s2, (2 * a * s1 + b) / hk, (2 * a * s2 + b) / hk
+
+
+def crossing_windows(
+    t0: np.ndarray,
+    t1: np.ndarray,
+    t_root: np.ndarray,
+    accel: np.ndarray,
+    rb: np.ndarray,
+    ra: np.ndarray,
+    tol: float,
+    longest: float,
+    chords: bool,
+    min_w: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The windows [a, b] about reversals at ``t_root`` inside steps [t0, t1].
+
+    Each side d of the root is sqrt(2 tol / |A|) (the part standing misses the
+    path by |A| d² / 2 there), at most the reach ``rb`` before and ``ra`` after,
+    the width at most ``longest`` and at least ``min_w`` (the missing time to the
+    side with more reach to spare; with ``chords`` after the root first, then
+    before it no longer than after); cut at the step's ends, grown to a servo
+    cycle where cut, and over a sliver of the step shorter than half the window
+    where the reach allows (or shorter than ``min_w``); a window as wide as its
+    step is the step.
+
+    Parameters
+    ----------
+    t0, t1, t_root : (n,) the steps' starts, ends and the roots [s]
+    accel : (n,) the motors' accelerations at the roots [mm/s²]
+    rb, ra : (n,) the reach before and after the roots [s] (inf: none)
+    tol : the path error allowed [mm]
+    longest, min_w : the longest and shortest windows [s]
+    chords : straight lines between the points (a window stands no longer before
+        its root than after it)
+
+    Returns
+    -------
+    a, b : (n,) the windows' starts and ends [s]
+    """
+    with np.errstate(divide="ignore", over="ignore"):
+        half = np.where(accel == 0, 0.5 * longest, np.sqrt(2.0 * tol / np.abs(accel)))
+    db, da = np.minimum(half, rb), np.minimum(half, ra)
+    if chords:
+        db = np.minimum(db, da)
+    db = np.minimum(db, longest - np.minimum(da, 0.5 * longest))
+    da = np.minimum(da, longest - db)
+    extra = np.maximum(min_w - (db + da), 0.0)
+    spare_b, spare_a = rb - db, ra - da
+    with np.errstate(invalid="ignore"):
+        even = (spare_b == spare_a) | (np.isinf(spare_b) & np.isinf(spare_a))
+    if chords:
+        add_a = np.where(even, 0.5 * extra, np.minimum(extra, spare_a))
+        rest = extra - add_a
+        add_b = np.where(even, 0.5 * extra, np.minimum(rest, da + add_a - db))
+        rest = np.where(even, 0.0, rest - add_b)
+        db, da = db + add_b + 0.5 * rest, da + add_a + 0.5 * rest
+    else:
+        more_b = spare_b > spare_a
+        add_b = np.where(
+            even,
+            0.5 * extra,
+            np.where(more_b, np.minimum(extra, spare_b), extra - np.minimum(extra, spare_a)),
+        )
+        db, da = db + add_b, da + (extra - add_b)
+    width = db + da
+    whole = width >= t1 - t0
+    a = np.maximum(t_root - db, t0)
+    b = np.minimum(t_root + da, t1)
+    short = b - a < min_w
+    b = np.where(short & (a <= t0), np.minimum(a + min_w, t1), b)
+    a = np.where(short & (a > t0), np.maximum(b - min_w, t0), a)
+    grow_b = (t1 - b < 0.5 * width) & ((t1 - t_root <= ra) | (t1 - b < min_w))
+    b = np.where(grow_b, t1, b)
+    before_ok = t_root - t0 <= rb
+    if chords:
+        before_ok &= t_root - t0 <= b - t_root
+    grow_a = (a - t0 < 0.5 * width) & (before_ok | (a - t0 < min_w))
+    a = np.where(grow_a, t0, a)
+    return np.where(whole, t0, a), np.where(whole, t1, b)

@@ -1,0 +1,182 @@
+"""The compiled crossings (windows, steps' roots and turning points) against
+their numpy reference: the same bits.
+
+Recorded inputs (every call the sample programs make while the golden files are
+converted: windows about reversals in motion, dips and settings-off, with the
+reach the tip's speed allows; the roots of the steps where motors turn) and
+generated ones (hypothesis: roots anywhere in their steps, accelerations of any
+size, none or −0.0, reach none (inf), tiny or wide on either side, steps shorter
+than a servo cycle, cubics and chords; steps' cubics from rest, with equal end
+velocities, straight, nearly straight, turning twice, either way or none).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from prsxy_post import reversals
+from prsxy_post.kernel import windows
+
+from .kernel_cases import compiled, record, same_bits
+
+
+def _same_pair(got: tuple[np.ndarray, np.ndarray], want: tuple[np.ndarray, np.ndarray]) -> bool:
+    return same_bits(got[0], want[0]) and same_bits(got[1], want[1])
+
+
+#: how often at least the samples' conversions call them, and on how many steps
+#: in all (dips: every step where a motor keeps its way and every setting-off,
+#: twice a motor with play and chunk, the turning points inside; roots: the
+#: reversals in motion, once a motor with play and chunk, few steps)
+ROOT_CALLS = {"_velocity_roots": (5, 3), "_dip_roots": (10, 100)}
+
+
+@pytest.mark.parametrize("attr", sorted(ROOT_CALLS))
+def test_sample_programs_roots_are_bit_identical(attr: str, tmp_path: Path) -> None:
+    _windows = compiled("_windows")
+    calls = record(attr, tmp_path)
+    assert len(calls) >= ROOT_CALLS[attr][0]
+    assert sum(len(args[0]) for args in calls) >= ROOT_CALLS[attr][1]
+    name = attr.removeprefix("_")
+    for args in calls:
+        got, want = getattr(_windows, name)(*args), getattr(windows, name)(*args)
+        assert len(got) == len(want) and all(
+            same_bits(g, w) for g, w in zip(got, want, strict=True)
+        )
+
+
+_vel = st.one_of(
+    st.floats(-50.0, 50.0), st.sampled_from([0.0, -0.0, 1e-9, -2.5]), st.floats(-1e-6, 1e-6)
+)
+
+
+@st.composite
+def _steps(draw: st.DrawFn) -> tuple[np.ndarray, ...]:
+    n = draw(st.integers(0, 10))
+    rows = []
+    for _ in range(n):
+        h = draw(st.sampled_from([0.01, 0.00977, 2.5e-4]) | st.floats(1e-4, 0.05))
+        V0 = draw(_vel)
+        V1 = draw(st.one_of(_vel, st.just(V0)))
+        P0 = draw(st.floats(-300.0, 300.0))
+        # a chord of the cubic's own (straight: (V0 + V1) h / 2), or any
+        dP = draw(
+            st.one_of(
+                st.just(0.5 * (V0 + V1) * h),
+                st.floats(-1e-3, 1e-3),
+                st.floats(-1.0, 1.0),
+                st.just(0.0),
+            )
+        )
+        rows.append((P0, V0, P0 + dP, V1, h, draw(st.sampled_from([1.0, -1.0]))))
+    arr = np.array(rows, dtype=float).reshape(n, 6)
+    return tuple(np.ascontiguousarray(arr[:, j]) for j in range(6))
+
+
+@settings(max_examples=400, deadline=None)
+@given(case=_steps(), has_new=st.booleans())
+def test_generated_roots_are_bit_identical(case: tuple[np.ndarray, ...], has_new: bool) -> None:
+    _windows = compiled("_windows")
+    P0, V0, P1, V1, h, new = case
+    new_i = new.astype(int) if has_new else np.zeros(0, dtype=int)
+    args = (P0, V0, P1, V1, h, new_i, has_new)
+    want = windows.velocity_roots(*args)
+    assert _same_pair(_windows.velocity_roots(*args), want)
+    assert np.all((want[0] >= 0) & (want[0] <= 1))
+    tp = windows.turning_points(P0, V0, P1, V1, h)
+    assert _same_pair(_windows.turning_points(P0, V0, P1, V1, h), tp)
+    both = np.isfinite(tp[0])
+    assert np.all((tp[0][both] > 0) & (tp[0][both] < tp[1][both]) & (tp[1][both] < 1))
+    sg = new.astype(int)
+    for tol in (0.0, 1e-6, 5e-5):
+        for sets_off in (False, True):
+            d_args = (P0, V0, P1, V1, h, sg, tol, sets_off)
+            want_d = windows.dip_roots(*d_args)
+            got_d = _windows.dip_roots(*d_args)
+            assert all(same_bits(g, w) for g, w in zip(got_d, want_d, strict=True))
+            assert got_d[0].dtype == bool and int(want_d[0].sum()) == len(want_d[1])
+
+
+def test_a_cubic_from_rest_turns_at_its_second_root_the_way_it_ends() -> None:
+    """A motor at rest (V0 = 0) leaving with its chord against the way it ends the
+    step goes back first: its root where it turns to that way is inside the step,
+    not s = 0 (compiled and reference alike)."""
+    args = (
+        np.array([0.0]), np.array([0.0]), np.array([0.47e-3]), np.array([-0.0226]),
+        np.array([0.00977]), np.array([-1]), True,
+    )  # fmt: skip
+    for mod in (windows, compiled("_windows")):
+        s, acc = mod.velocity_roots(*args)
+        assert 0 < s[0] < 1 and acc[0] < 0
+
+
+def test_sample_programs_windows_are_bit_identical(tmp_path: Path) -> None:
+    _windows = compiled("_windows")
+    calls = record("_crossing_windows", tmp_path)
+    # every motor's reversals in motion, dips and settings-off a chunk: mostly
+    # none, some windows in the five-axis samples
+    assert len(calls) >= 20
+    assert sum(len(args[0]) for args in calls) >= 3
+    for args in calls:
+        want = windows.crossing_windows(*args)
+        got = _windows.crossing_windows(*args)
+        assert same_bits(got[0], want[0]) and same_bits(got[1], want[1])
+
+
+_reach = st.one_of(st.just(np.inf), st.floats(0.0, 2e-3), st.floats(0.0, 1.0), st.just(0.0))
+
+
+@st.composite
+def _cases(draw: st.DrawFn) -> tuple[np.ndarray, ...]:
+    n = draw(st.integers(0, 12))
+    rows = []
+    for _ in range(n):
+        t0 = draw(st.floats(0.0, 10.0))
+        h = draw(st.one_of(st.floats(1e-5, 5e-4), st.floats(5e-4, 0.05)))
+        s = draw(st.one_of(st.floats(0.0, 1.0), st.sampled_from([0.0, 1.0, 0.5])))
+        acc = draw(
+            st.one_of(
+                st.floats(-1e5, 1e5, allow_nan=False),
+                st.sampled_from([0.0, -0.0, 1e-12, -3.0]),
+            )
+        )
+        rows.append((t0, t0 + h, t0 + s * h, acc, draw(_reach), draw(_reach)))
+    arr = np.array(rows, dtype=float).reshape(n, 6)
+    return tuple(np.ascontiguousarray(arr[:, j]) for j in range(6))
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    case=_cases(),
+    tol=st.sampled_from([5e-5, 1e-6, 1e-3]),
+    longest=st.sampled_from([1e-3, 2e-3, 0.25e-3]),
+    chords=st.booleans(),
+)
+def test_generated_windows_are_bit_identical(
+    case: tuple[np.ndarray, ...], tol: float, longest: float, chords: bool
+) -> None:
+    _windows = compiled("_windows")
+    args = (*case, tol, longest, chords, reversals.MIN_WINDOW_S)
+    want = windows.crossing_windows(*args)
+    got = _windows.crossing_windows(*args)
+    assert same_bits(got[0], want[0]) and same_bits(got[1], want[1])
+    # inside the step, or the step itself
+    t0, t1 = case[0], case[1]
+    assert np.all((t0 <= want[0]) & (want[0] <= want[1]) & (want[1] <= t1))
+
+
+def test_a_window_with_no_acceleration_is_half_the_longest_each_side() -> None:
+    """At A = 0 the tolerance allows any stand: the window is the longest, evenly
+    about its root (compiled and reference alike)."""
+    args = (
+        np.array([0.0]), np.array([0.01]), np.array([0.005]), np.array([0.0]),
+        np.array([np.inf]), np.array([np.inf]), 5e-5, 1e-3, False, reversals.MIN_WINDOW_S,
+    )  # fmt: skip
+    for mod in (windows, compiled("_windows")):
+        a, b = mod.crossing_windows(*args)
+        assert a[0] == pytest.approx(0.0045) and b[0] == pytest.approx(0.0055)
