@@ -428,3 +428,14 @@ def test_the_references_trig_is_the_c_librarys(name: str) -> None:
     want = np.fromiter(map(getattr(math, name), x.tolist()), float, x.size)
     assert same_bits(getattr(libm, name)(x), want)
     assert np.isnan(getattr(libm, name)(np.array([np.inf, -np.inf, np.nan]))).all()
+
+
+def test_signed_zeros_clamp_as_numpy_does() -> None:
+    """Of −0.0 and 0.0, numpy's maximum and minimum give the second; the twin's
+    clamps must too (a first-when-equal clamp gave the other zero)."""
+    _play = compiled("_play")
+    zeros = np.array([-0.0, 0.0])
+    lo = np.tile(zeros, 8)
+    hi = np.roll(lo, 1)
+    for a, b in ((lo, hi), (hi, lo), (lo, lo), (-np.abs(lo), np.abs(hi))):
+        assert same_bits(_play.clamp_scan(a, b), play.clamp_scan(a, b))

@@ -37,12 +37,14 @@ cdef struct Tab:
 
 
 cdef inline double _max(double a, double b) noexcept nogil:
-    # numpy's maximum: the first when it is not less, or NaN
-    return a if (a >= b or a != a) else b
+    # numpy's maximum: the first when it is greater, or NaN; else the second (so
+    # of −0.0 and 0.0 the second, as numpy gives: np.maximum(-0.0, 0.0) is 0.0)
+    return a if (a > b or a != a) else b
 
 
 cdef inline double _min(double a, double b) noexcept nogil:
-    return a if (a <= b or a != a) else b
+    # numpy's minimum, the same way (np.minimum(0.0, -0.0) is -0.0)
+    return a if (a < b or a != a) else b
 
 
 cdef inline Py_ssize_t _find(double x, const double* xp, Py_ssize_t n, Py_ssize_t g) noexcept nogil:
