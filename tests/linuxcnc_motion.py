@@ -100,16 +100,36 @@ program = os.environ["PRSXY_PROGRAM"]
 samples = os.environ["PRSXY_SAMPLES"]
 errors = os.environ["PRSXY_ERRORS"]
 timeout = float(os.environ["PRSXY_TIMEOUT"])
-s = linuxcnc.stat()
 c = linuxcnc.command()
 e = linuxcnc.error_channel()
+s = None
+#: status reads that failed (a new status channel was opened after each)
+failed_polls = 0
+
+
+def poll():
+    # stat.poll() checks the channel's last read before it reads again
+    # (emcmodule.cc, poll: check_stat before peek), so once a read of the status
+    # buffer failed on a loaded machine ("emcStatusBuffer invalid err=5",
+    # NML_INTERNAL_CMS_ERROR) that channel fails every poll: open a new one
+    global s, failed_polls
+    for attempt in range(50):
+        try:
+            if s is None:
+                s = linuxcnc.stat()
+            s.poll()
+            return True
+        except linuxcnc.error:
+            s = None
+            failed_polls += 1
+            time.sleep(0.02 * (attempt + 1))
+    return False
 
 
 def wait(cond, seconds):
     t0 = time.time()
     while time.time() - t0 < seconds:
-        s.poll()
-        if cond():
+        if poll() and cond():
             return True
         time.sleep(0.002)
     return False
@@ -124,22 +144,31 @@ def finish(code):
             f.write(str(m[1]).replace("\n", " ") + "\n")
         if code:
             f.write(code + "\n")
+    with open(errors + ".polls", "w") as f:
+        f.write(str(failed_polls) + "\n")
     sys.exit(0)
 
 
+# what a loaded machine may take to answer a command [s]; the waits below end as
+# soon as the state is reached
+SLOW = 60.0
 c.state(linuxcnc.STATE_ESTOP_RESET)
+c.wait_complete(SLOW)
 c.state(linuxcnc.STATE_ON)
-if not wait(lambda: s.task_state == linuxcnc.STATE_ON, 20):
+if not wait(lambda: s.task_state == linuxcnc.STATE_ON, SLOW):
     finish("the machine did not switch on")
 c.home(-1)
-if not wait(lambda: all(s.homed[:5]), 20):
+if not wait(lambda: all(s.homed[:5]), SLOW):
     finish("the joints did not home")
 c.mode(linuxcnc.MODE_AUTO)
-c.wait_complete()
+c.wait_complete(SLOW)
+if not wait(lambda: s.task_mode == linuxcnc.MODE_AUTO, SLOW):
+    finish("the machine did not switch to AUTO")
 sampler = subprocess.Popen(["halsampler", "-t"], stdout=open(samples, "w"))
 c.program_open(program)
+c.wait_complete(SLOW)
 c.auto(linuxcnc.AUTO_RUN, 0)
-started = wait(lambda: s.interp_state != linuxcnc.INTERP_IDLE, 10)
+started = wait(lambda: s.interp_state != linuxcnc.INTERP_IDLE, SLOW)
 done = started and wait(
     lambda: s.interp_state == linuxcnc.INTERP_IDLE and s.queue == 0 and s.inpos, timeout)
 time.sleep(0.05)

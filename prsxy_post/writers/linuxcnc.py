@@ -85,6 +85,12 @@ if TYPE_CHECKING:
     from ..profile import Profile
 
 SETTINGS = OUTPUT_SETTINGS["gcode"]
+#: the share of the tool-axis tolerance a written tilt may stay from the compensated one
+TILT_HOLD_SHARE = 0.4
+#: the share of it a chord's A and B may stray from the points it replaces
+TILT_CHORD_SHARE = 0.2
+#: how much a chord's pieces may slow down and speed up again (a share of their rate)
+DIP_SHARE = 1e-3
 
 
 def corner_cut(
@@ -138,6 +144,13 @@ class GcodeWriter:
         self.blend = CORNER_SHARE * profile.interpolation.path_tolerance_mm
         #: how far LinuxCNC may cut a tilt corner [deg] (module docstring)
         self.tilt_cut = CORNER_SHARE * profile.interpolation.path_tolerance_arcsec / 3600.0
+        #: how far a written A or B may stay from the compensated one [deg]: within
+        #: it the last written tilt is written again (module docstring)
+        self.tilt_hold = TILT_HOLD_SHARE * profile.interpolation.path_tolerance_arcsec / 3600.0
+        #: how far a chord's A and B may stray from the points it replaces [deg]
+        self.tilt_chord = TILT_CHORD_SHARE * profile.interpolation.path_tolerance_arcsec / 3600.0
+        #: the A and B written last [deg], and their words
+        self.held: tuple[list[float], str] | None = None
         #: the path acceleration LinuxCNC's axes are set to [mm/s²]
         self.accel = profile.limits.max_accel_mm_s2
         self.n = 0
@@ -146,6 +159,11 @@ class GcodeWriter:
         self.last_q: list[float] | None = None
         #: points held back: (point, its dt, its words)
         self.run: list[tuple[list[float], float, str]] = []
+        #: the held-back pieces' rates [mm/s, a degree as a mm]: (each piece's length,
+        #: its dt), the fastest, and the slowest since the fastest
+        self.pieces: list[tuple[float, float]] = []
+        self.peak = 0.0
+        self.trough = 0.0
         self.ended_by: str | None = None
         #: G61 (exact path) is active, for a line ending where the motion stands
         self.exact = False
@@ -239,16 +257,15 @@ class GcodeWriter:
             if self.tol > 0 and not block_end[k] and speed[k] > 0:
                 # a point that may be dropped: keep it back while the chord from the
                 # last written point to it passes all the held-back ones
-                if not self._within(qk):
+                if not self._within(qk) or self._dips(qk, dtk):
                     self._write_held(lines)
-                self.run.append((qk, dtk, texts[k]))
+                self._hold(qk, dtk, texts[k])
                 continue
-            if self.run and not self._within(qk):
+            if self.run and (not self._within(qk) or self._dips(qk, dtk)):
                 self._write_held(lines)
-            t = dtk
-            if self.run:
-                t += sum(d for _, d, _ in self.run)
-                self.run = []
+            self._hold(qk, dtk, texts[k])
+            t = self._chord_time()
+            self.run = []
             if speed[k] > 0.0 and block_end[k]:
                 self.corner = (qk, t, texts[k])  # written once the next point is known
                 continue
@@ -274,7 +291,7 @@ class GcodeWriter:
         if not self.run:
             return
         qh, _, text = self.run[-1]
-        t = sum(d for _, d, _ in self.run)
+        t = self._chord_time()
         self.run = []
         self._g1(lines, qh, text, t, exact=False)  # only points in motion are held back
 
@@ -289,7 +306,7 @@ class GcodeWriter:
         if mode != self.exact:
             lines.append("G61" if mode else f"G64 P{self.blend:g}")
             self.exact = mode
-        lines.append(f"G1 {text} F{60.0 / t:.3f}")
+        lines.append(f"G1 {self._tilt_held(q, text)} F{60.0 / t:.3f}")
         self.after_settle = exact
         if exact:
             # LinuxCNC ends a line mid servo cycle and starts the next in the same
@@ -298,8 +315,63 @@ class GcodeWriter:
         self.last_q = q
         self.n += 1
 
+    def _piece(self, qk: list[float], dtk: float) -> tuple[float, float]:
+        """The piece from the last held-back (or written) point to qk: (length, rate)."""
+        prev = self.run[-1][0] if self.run else self.last_q
+        assert prev is not None
+        step = math.dist(prev, qk)
+        return step, (step / dtk if dtk > 0.0 else 0.0)
+
+    def _dips(self, qk: list[float], dtk: float) -> bool:
+        """Would the piece to qk speed up again after the held-back pieces slowed
+        down? A chord is timed at its fastest piece (``_chord_time``), so it may hold a
+        rise and a fall of the planned speed but not a dip."""
+        if not self.run:
+            return False
+        _, rate = self._piece(qk, dtk)
+        return self.trough < self.peak * (1.0 - DIP_SHARE) and rate > self.trough * (
+            1.0 + DIP_SHARE
+        )
+
+    def _hold(self, qk: list[float], dtk: float, text: str) -> None:
+        """Hold back the point qk (its piece's time dtk, its words)."""
+        if not self.run:
+            self.pieces, self.peak, self.trough = [], 0.0, 0.0
+        step, rate = self._piece(qk, dtk)
+        self.pieces.append((step, dtk))
+        if rate >= self.peak:
+            self.peak = self.trough = rate
+        else:
+            self.trough = min(self.trough, rate)
+        self.run.append((qk, dtk, text))
+
+    def _chord_time(self) -> float:
+        """The time of the chord through the held-back points: its length at the rate
+        of its fastest piece. LinuxCNC speeds up and slows down along a line by its
+        own acceleration limit (the profile's, as the plan's), so a line between
+        stops timed at its mean speed ran slower than planned: its cruise was the
+        mean speed, not the plan's."""
+        length = sum(s for s, _ in self.pieces)
+        total = sum(d for _, d in self.pieces)
+        if len(self.pieces) == 1 or self.peak <= 0.0 or length <= 0.0:
+            return total
+        return min(total, length / self.peak)
+
+    def _tilt_held(self, q: list[float], text: str) -> str:
+        """The words of the point ``q`` with A and B as last written while they are
+        within ``tilt_hold`` of q's (a line that moves A or B by any amount LinuxCNC
+        blends parabolically: module docstring)."""
+        cut = text.index(" A")
+        if self.held is not None:
+            ab, words = self.held
+            if abs(q[3] - ab[0]) <= self.tilt_hold and abs(q[4] - ab[1]) <= self.tilt_hold:
+                return text[:cut] + words
+        self.held = (q[3:5], text[cut:])
+        return text
+
     def _within(self, qk: list[float]) -> bool:
-        """Would the chord from the last written point to qk pass the held-back points?"""
+        """Would the chord from the last written point to qk pass the held-back points,
+        within ``tol`` in X Y Z and ``tilt_chord`` in A and B?"""
         if not self.run or self.last_q is None:
             return True
         a = np.asarray(self.last_q)
@@ -308,8 +380,13 @@ class GcodeWriter:
         if dd == 0:
             return False
         pts = np.array([p for p, _, _ in self.run])
+        # where along the chord each point is (A and B read as mm at 1 mm per degree)
         t = np.clip((pts - a) @ d / dd, 0, 1)
-        return float(np.linalg.norm(pts - (a + t[:, None] * d), axis=1).max()) <= self.tol
+        off = np.abs(pts - (a + t[:, None] * d))
+        return bool(
+            np.linalg.norm(off[:, :3], axis=1).max() <= self.tol
+            and off[:, 3:].max() <= self.tilt_chord
+        )
 
     def finish(self) -> list[Piece]:
         lines: list[str] = []
