@@ -91,6 +91,17 @@ class MotionRun:
     line: np.ndarray
     errors: list[str]
 
+    @property
+    def waiting_s(self) -> float:
+        """How long the motion stood with its queue empty between its first and last
+        motion [s]: cycles at rest executing no line (``motion.program-line`` 0).
+        LinuxCNC's task feeds the queue at the host's pace, outside the servo thread;
+        on a loaded machine it falls behind a program of short lines, and the planner
+        waits (tp.c, tpHandleEmptyQueue). The planner's own time is ``t[-1]`` less
+        this."""
+        at_rest = np.r_[True, np.all(self.q[1:] == self.q[:-1], axis=1)]
+        return float(np.count_nonzero(at_rest & (self.line == 0)) * SERVO_PERIOD_S)
+
 
 _DISPLAY = r"""#!/usr/bin/python3
 import os, subprocess, sys, time

@@ -32,6 +32,8 @@ the blends' speed over F stays open (OPEN below).
 from __future__ import annotations
 
 import os
+import re
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -254,3 +256,102 @@ def test_g61_every_line_holds_f_on_linuxcnc(seed: int, text: str) -> None:
     motions, res, texts = convert(truth, text, "gcode")
     tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
     assert_within(tr, None, TOL_MM)
+
+
+# ------------------------------------------ the planner's speed (issue 33)
+
+HEAD = "G21 G90 G17 G40 G49 G94\n"
+
+
+def _lines(f: float) -> str:
+    return HEAD + (
+        f"G0 X-20 Y-20 Z2\nG1 Z0 F{f}\nG1 X20 Y-18\nG1 X22 Y15\nG1 X-15 Y20\n"
+        "G1 X-20 Y-20\nG0 Z2\nM2\n"
+    )
+
+
+def _arcs(f: float) -> str:
+    return HEAD + (
+        f"G0 X20 Y0 Z2\nG1 Z0 F{f}\nG3 X0 Y20 R20\nG3 X-20 Y0 R20\nG2 X-40 Y0 R10\n"
+        "G2 X-20 Y0 R10\nG3 X20 Y0 I20 J0\nG0 Z2\nM2\n"
+    )
+
+
+def _helix(f: float) -> str:
+    return HEAD + (f"G0 X10 Y0 Z2\nG1 Z0 F{f}\nG2 X10 Y0 Z-3 I-10 J0 P2\nG0 Z2\nM2\n")
+
+
+def _five_axis(f: float) -> str:
+    return HEAD + (
+        f"G0 X-20 Y-20 Z2 A0 B0\nG1 Z0 F{f}\nG1 X20 Y-20 A5 B-3\nG1 X20 Y20 A-5 B3\n"
+        "G1 X-20 Y20 A-8 B8\nG1 X-20 Y-20 A0 B0\nG0 Z2\nM2\n"
+    )
+
+
+#: the generated programs, by name: G-code text at a feed [mm/min]
+PROGRAMS: dict[str, Callable[[float], str]] = {
+    "lines": _lines,
+    "arcs": _arcs,
+    "helix": _helix,
+    "five-axis": _five_axis,
+}
+
+
+def uncorrected(text: str, blend_mm: float) -> str:
+    """The program under the corrected program's ``G64 P`` (LinuxCNC's G64 without P
+    may cut corners by any amount)."""
+    return f"G64 P{blend_mm:g}\n" + text
+
+
+def measure(truth, text: str) -> dict[str, float]:
+    """Run the corrected and the uncorrected program on LinuxCNC: times, speed, path."""
+    motions, res, texts = convert(truth, text, "gcode")
+    written = ctl.run_gcode(texts[0])
+    tr, run, _ = run_on_linuxcnc(truth, motions, res, texts[0])
+    plain = lm.run(
+        uncorrected(text, written.blend or 0.0),
+        truth.limits,
+        written.q[0],
+        timeout_s=3.0 * written.t[-1] + 30.0,
+    )
+    assert not plain.errors, plain.errors
+    # the plan's own time, which the writer records at the end (a chord's G93 time
+    # is its length at its fastest piece's rate, shorter than the plan's)
+    planned = float(re.findall(r"\(end: \d+ points, ([0-9.]+) s\)", texts[0])[-1])
+    return {
+        "planned": planned,
+        "lcnc": float(run.t[-1]),
+        "lcnc_waiting": run.waiting_s,
+        "plain": float(plain.t[-1]),
+        "plain_waiting": plain.waiting_s,
+        "speed": tr.speed_ratio,
+        "path_um": tr.path_mm * 1e3,
+        "axis_arcsec": tr.ab_deg * 3600.0,
+        "lines": float(texts[0].count("\nG1 ")),
+    }
+
+
+@pytest.mark.parametrize(
+    ("seed", "program", "feed"),
+    [(12, "lines", 3000.0), (11, "helix", 3000.0), (13, "arcs", 10000.0), (11, "five-axis", 600.0)],
+)
+def test_linuxcnc_runs_corrected_gcode_at_the_planned_speed(
+    seed: int, program: str, feed: float
+) -> None:
+    """On a machine with errors the compensated tilt changes a little everywhere, and
+    LinuxCNC gives a line that moves A or B by any amount neither a tangent join nor a
+    blend arc (tp.c: tpSetupTangent and tpCheckBlendArcType, both on
+    tcRotaryMotionCheck). The writer holds A and B while they are within the
+    tolerance and writes a chord where a period's points lie within it, timed at its
+    fastest piece: LinuxCNC's planner then takes at most 1.05 x the plan's time and the
+    uncorrected program's, never over F, on the path (measured with
+    ``python bench/linuxcnc_speed.py``). Its time is the servo cycles it ran, less those
+    it waited with an empty queue for LinuxCNC's task on a loaded host
+    (``MotionRun.waiting_s``)."""
+    truth = truth_machine("random", seed, play=False)
+    m = measure(truth, PROGRAMS[program](feed))
+    own, plain = m["lcnc"] - m["lcnc_waiting"], m["plain"] - m["plain_waiting"]
+    assert own <= 1.05 * m["planned"], m
+    assert own <= 1.05 * plain, m
+    assert m["speed"] <= 1.001, m
+    assert m["path_um"] <= TOL_MM * 1e3 and m["axis_arcsec"] <= 0.5, m

@@ -86,7 +86,7 @@ if TYPE_CHECKING:
 
 SETTINGS = OUTPUT_SETTINGS["gcode"]
 #: the share of the tool-axis tolerance a written tilt may stay from the compensated one
-TILT_HOLD_SHARE = 0.4
+TILT_HOLD_SHARE = 0.6
 #: the share of it a chord's A and B may stray from the points it replaces
 TILT_CHORD_SHARE = 0.2
 #: how much a chord's pieces may slow down and speed up again (a share of their rate)
