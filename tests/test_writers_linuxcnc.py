@@ -60,7 +60,7 @@ def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str
     ``EMC_TASK_EXEC_WAITING_FOR_MOTION_AND_IO``), so the next line starts from a servo
     sample at the corner, which ``tpHandleSplitCycle`` would otherwise skip; and that
     next line is read under G61 too (writers/linuxcnc.py's docstring)."""
-    truth = truth_machine("random", 12)
+    truth = with_output_setting(truth_machine("random", 12), "gcode", "tolerance_mm", 0.0)
     _, res, texts = convert(truth, text, "gcode")
     moves, exact, settled = _moves_and_modes(texts[0])
     pts = res.points
@@ -119,8 +119,8 @@ def test_the_program_s_first_g1_runs_in_exact_path_mode() -> None:
 def test_a_sharp_tilt_corner_in_motion_runs_in_exact_path_mode() -> None:
     """tball-with-a-tilt-F1016's last line turns B by 0.5° over 0.47 mm at F1016,
     from lines that hold it: the line into that corner is read under G61, and the
-    lines inside the blocks are not."""
-    truth = truth_machine("random", 21)
+    lines inside the blocks are not (a line to every point: no tolerance)."""
+    truth = with_output_setting(truth_machine("random", 21), "gcode", "tolerance_mm", 0.0)
     _, res, texts = convert(truth, TBALL_WITH_A_TILT, "gcode")
     _, exact, settled = _moves_and_modes(texts[0])
     pts = res.points
