@@ -102,8 +102,11 @@ def test_the_program_s_first_g1_runs_in_exact_path_mode() -> None:
     """LinuxCNC's queue starts empty, as after a ``G4 P0``: the program's first G1 is
     read under G61 even where it ends in motion, and the line after it is not. On a
     machine without play the first G1 is the first step of the program's rapid (with
-    play it is the crossing that sets each part at the start, which stands anyway)."""
-    truth = truth_machine("random", 12, play=False)
+    play it is the crossing that sets each part at the start, which stands anyway).
+    A line to every point (no tolerance), so that lines and points pair up."""
+    truth = with_output_setting(
+        truth_machine("random", 12, play=False), "gcode", "tolerance_mm", 0.0
+    )
     text = "G21 G90 G17 G94\nG0 X-20 Y-10 Z0\nG1 X20 F1200\nG1 Y10\nG0 Z5\nM2\n"
     _, res, texts = convert(truth, text, "gcode")
     moves, exact, settled = _moves_and_modes(texts[0])

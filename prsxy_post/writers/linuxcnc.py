@@ -89,8 +89,8 @@ SETTINGS = OUTPUT_SETTINGS["gcode"]
 TILT_HOLD_SHARE = 0.6
 #: the share of it a chord's A and B may stray from the points it replaces
 TILT_CHORD_SHARE = 0.2
-#: how far the rates of a chord's pieces may differ (a share of the slowest)
-RATE_SHARE = 0.01
+#: how much a chord's pieces may slow down and speed up again (a share of their rate)
+DIP_SHARE = 1e-3
 
 
 def corner_cut(
@@ -165,7 +165,7 @@ class GcodeWriter:
         #: points held back: (point, its dt, its words)
         self.run: list[tuple[list[float], float, str]] = []
         #: the held-back pieces' rates [mm/s, a degree as a mm]: (each piece's length,
-        #: its dt), the fastest and the slowest rate
+        #: its dt), the fastest, and the slowest since the fastest
         self.pieces: list[tuple[float, float]] = []
         self.peak = 0.0
         self.trough = 0.0
@@ -333,32 +333,40 @@ class GcodeWriter:
         return step, (step / dtk if dtk > 0.0 else 0.0)
 
     def _dips(self, qk: list[float], dtk: float, lead: list[float]) -> bool:
-        """Would the piece to qk change the held-back pieces' rate by more than
-        RATE_SHARE, or what the real-axis tables add to a motor by more than ``tol``
-        (a motor crossing its play, whose timing its points carry)? A chord is run at
-        one speed, its mean (G93); one across a change
-        of the planned speed (a ramp from or to rest) made LinuxCNC cruise at the
-        mean and ramp by its own acceleration on top: a stop-to-stop line ran slower
-        than planned. Where the plan ramps, its points stay lines of their own."""
+        """Would the piece to qk speed up again after the held-back pieces slowed
+        down, or move what the real-axis tables add to a motor by more than ``tol``
+        (a motor crossing its play, whose timing its points carry)? A chord is timed
+        at its fastest piece (``_chord_time``): it may hold a rise and a fall of the
+        planned speed, not a dip."""
         if not self.run:
             return False
         _, rate = self._piece(qk, dtk)
-        lo, hi = min(self.trough, rate), max(self.peak, rate)
         moved = max(abs(a - b) for a, b in zip(lead, self.lead0, strict=True))
-        return hi > lo * (1.0 + RATE_SHARE) or moved > self.tol
+        dip = self.trough < self.peak * (1.0 - DIP_SHARE) and rate > self.trough * (1.0 + DIP_SHARE)
+        return dip or moved > self.tol
 
     def _hold(self, qk: list[float], dtk: float, text: str, lead: list[float]) -> None:
         """Hold back the point qk (its piece's time dtk, its words, the tables' lead)."""
         step, rate = self._piece(qk, dtk)
         if not self.run:
-            self.pieces, self.peak, self.trough, self.lead0 = [], rate, rate, lead
+            self.pieces, self.peak, self.trough, self.lead0 = [], 0.0, 0.0, lead
         self.pieces.append((step, dtk))
-        self.peak, self.trough = max(self.peak, rate), min(self.trough, rate)
+        if rate >= self.peak:
+            self.peak = self.trough = rate
+        else:
+            self.trough = min(self.trough, rate)
         self.run.append((qk, dtk, text))
 
     def _chord_time(self) -> float:
-        """The time of the chord through the held-back points: theirs (G93)."""
-        return sum(d for _, d in self.pieces)
+        """The time of the chord through the held-back points: its length at the rate
+        of its fastest piece. LinuxCNC speeds up and slows down along a line by its
+        own acceleration limit (the profile's, as the plan's); a line between stops
+        timed at its mean speed cruised at the mean, below the plan's speed."""
+        length = sum(s for s, _ in self.pieces)
+        total = sum(d for _, d in self.pieces)
+        if len(self.pieces) == 1 or self.peak <= 0.0 or length <= 0.0:
+            return total
+        return min(total, length / self.peak)
 
     def _tilt_held(self, q: list[float], text: str) -> str:
         """The words of the point ``q`` with A and B as last written while they are
