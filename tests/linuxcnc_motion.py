@@ -251,12 +251,39 @@ def _hal() -> str:
 _TOOLS = "".join(f"T{n} P{n} Z0 D0\n" for n in range(1, 100))
 
 
+class HostError(RuntimeError):
+    """LinuxCNC did not come up to run the program (the host, not the program)."""
+
+
+#: the display's own messages when LinuxCNC did not come up (not the program's)
+_HOST_MESSAGES = (
+    "the machine did not switch on",
+    "the joints did not home",
+    "the machine did not switch to AUTO",
+)
+#: how often a run is tried when LinuxCNC did not come up on a loaded host
+ATTEMPTS = 3
+
+
 def run(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: float) -> MotionRun:
     """Run ``text`` on LinuxCNC, homed at the pose ``start``; what it commanded.
 
-    ``timeout_s`` bounds the program's own run (it runs in real time)."""
+    ``timeout_s`` bounds the program's own run (it runs in real time). Where
+    LinuxCNC did not come up (on a loaded host its processes may miss their
+    start-up waits), the run is tried again, up to ``ATTEMPTS`` times; the samples
+    are the servo cycles of the run that ran, so a retry changes no figure."""
     if not available():
         raise RuntimeError("LinuxCNC's motion controller is not installed")
+    for attempt in range(ATTEMPTS):
+        try:
+            return _run_once(text, limits, start, timeout_s)
+        except HostError:
+            if attempt == ATTEMPTS - 1:
+                raise
+    raise AssertionError("unreachable")
+
+
+def _run_once(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: float) -> MotionRun:
     start = np.asarray(start, dtype=float)
     lock = Path(tempfile.gettempdir()) / "prsxy-linuxcnc.lock"
     with open(lock, "w") as held, tempfile.TemporaryDirectory(prefix="prsxy-lcnc-") as tmp:
@@ -300,8 +327,10 @@ def run(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: float) -
         if not errors_file.exists() or not (d / "samples.txt").exists():
             log = d / "linuxcnc_debug.txt"
             tail = log.read_text(errors="replace").splitlines()[-15:] if log.exists() else []
-            raise RuntimeError("LinuxCNC did not run the program:\n" + "\n".join(tail))
+            raise HostError("LinuxCNC did not run the program:\n" + "\n".join(tail))
         errors = [e for e in errors_file.read_text().splitlines() if e]
+        if any(e in _HOST_MESSAGES for e in errors):
+            raise HostError(f"LinuxCNC did not come up: {errors}")
         raw = np.loadtxt(d / "samples.txt", ndmin=2)
     q = raw[:, 1:6] / SCALE
     line = raw[:, 6].astype(int)

@@ -57,6 +57,34 @@ refills its queue after the dwell (or at the start) while the line already runs,
 and a blend added to a running line left steep-helix's path 0.49 µm to one side
 for the lines after it (0.71 µm off; 0.12 µm with the line in G61).
 
+What LinuxCNC 2.9 joins at speed (its source at Debian's 2.9.0~pre1 commit
+f1270d6ed7) sets three rules for the lines written. (1) A line whose A and B move
+by any amount gets neither a tangent join nor a blend arc: ``tpSetupTangent``
+(tp.c:1846) and ``tpCheckBlendArcType`` (tp.c:1645) both return on
+``tcRotaryMotionCheck`` (tp.c:131), which is false only where ``abc.tmag_zero``
+is set, that is where the largest of |ΔA|, |ΔB| is below ``CART_FUZZ`` = 1e-8
+(``pmCartLineInit``, _posemath.c:1695-1704, ``IS_FUZZ`` _posemath.c:92,
+posemath.h:717); and the look-ahead stops at such a join (``tpRunOptimization``,
+tp.c:1761). Corrected G-code for a machine with errors turned A and B by about
+1e-7° a line, so every join was parabolic and LinuxCNC ran slow (2.45 x the plan on
+a five-axis program). On a machine without play the writer writes A and B again as
+last written while the compensated tilt stays within ``TILT_HOLD_SHARE`` of the
+tool-axis tolerance (only the tool axis moves, by less than that: the tip is X Y Z
+of the controller's kinematics). With play it does not: a held tilt moves motors
+by a step and back, and a motor that turns back crosses its play. (2) LinuxCNC runs
+a line in no less than 1.02 servo cycles (``tpComputeOptimalVelocity``,
+tp.c:1707-1708, ``TP_MIN_SEGMENT_CYCLES`` in tp_types.h), and its task feeds the
+queue at the host's pace: a line every 10 ms period and shorter on curves ran below
+the plan's speed, and its queue ran dry on a loaded host. ``tolerance_mm`` (0.1 µm
+in the shop profile) writes a chord where the points lie within it, A and B within
+``TILT_CHORD_SHARE`` of the tolerance. (3) LinuxCNC ramps a line's speed up and
+down by its own acceleration limit (the profile's, as the plan's), so a chord is
+timed at its fastest piece, not its mean speed (timed at the mean a stop-to-stop
+line cruised below the plan); a chord never spans a dip of the plan's speed, nor a
+play crossing (what the real-axis tables add to a motor moving by more than the
+chord tolerance), whose points carry its timing. Measured:
+``bench/linuxcnc_speed.py``, docs/measurements.md.
+
 Parabolic blends also run over F: LinuxCNC sets the next line's target speed from
 the speed the line before has lost, scaled by their blend speeds (``tpUpdateBlend``),
 and the two need not add up to F (1.20 x F on a plunge of 10 ms lines at F300 whose
