@@ -290,7 +290,10 @@ PROGRAMS: dict[str, Callable[[float], str]] = {
 
 def uncorrected(text: str, blend_mm: float) -> str:
     """The program under the corrected program's ``G64 P`` (LinuxCNC's G64 without P
-    may cut corners by any amount)."""
+    may cut corners by any amount), after a leading ``%`` line if it has one."""
+    head, sep, rest = text.partition("\n")
+    if head.strip() == "%":
+        return f"{head}{sep}G64 P{blend_mm:g}\n{rest}"
     return f"G64 P{blend_mm:g}\n" + text
 
 
