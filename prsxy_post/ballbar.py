@@ -3,6 +3,14 @@
 A run is read as the radial deviation Δr(θ) = dev_um along the angle θ of the
 commanded tip about the pivot in the run's plane (X-Y: θ = atan2(y, x); X-Z:
 atan2(z, x); Y-Z: atan2(z, y); cones are X-Y circles with a tilted spindle).
+
+**Names** (``docs/data-formats.md``): the direction is RS274/NGC's, ``ccw`` the
+way G3 turns and ``cw`` the way G2 turns in that plane, seen from the positive
+end of the plane's normal (+Z, +Y, +X for G17, G18, G19). In X-Z that is the
+opposite of θ's sense (X × Z = −Y): a G18 G3 run has θ falling. A run whose tool
+axis is tilted from Z is a cone test, named with its tilt; the feed is the
+commanded one, the speed the commanded samples hold for most of the run.
+
 The small-error model fitted by linear least squares, for a circle of radius r:
 
     Δr(θ) = c0                                     mean radius error
@@ -20,8 +28,9 @@ hence **squareness** σ = 2 s2 / r (reported ×1000 in mm/m, sign as the profile
 ``table.squareness``: positive when the Y motion leans towards +X) and **scale
 mismatch** (s_x − s_y)·r = 2 c2 (reported in mm at the test radius, as a ballbar
 report gives it). A servo lag τ_1 on the first axis adds (τ_1 r ω / 2) sin 2θ with
-the sign of the direction; the pair (ccw, cw) separates it from squareness:
-**servo mismatch** Δτ = (s2_ccw − s2_cw) / (r ω) with ω = v / r, in ms.
+the sign of θ's sense; the pair (ccw, cw) separates it from squareness:
+**servo mismatch** Δτ = o (s2_ccw − s2_cw) / (r ω) with ω = v / r, in ms, o the
+plane's :data:`ORIENTATION` (−1 in X-Z, where the ccw run has θ falling).
 
 **Circular deviation** G (ISO 230-4): the radial range of the path about its
 least-squares centre, max Δr − min Δr after removing c1, s1. **Circular
@@ -52,6 +61,17 @@ from .errors import MeasurementError
 from .measure import BallbarRun
 
 PLANES = {"XY": (0, 1), "XZ": (0, 2), "YZ": (1, 2)}
+#: RS274/NGC (LinuxCNC's G2/G3): "the direction (CW, CCW) is as viewed from the
+#: positive end of the axis about which the circular motion occurs", the axis
+#: normal to the plane G17, G18 or G19 selects.
+VIEWED_FROM = {"XY": "+Z", "XZ": "+Y", "YZ": "+X"}
+PLANE_CODE = {"XY": "G17", "XZ": "G18", "YZ": "G19"}
+GCODE = {"ccw": "G3", "cw": "G2"}
+#: (e_first × e_second) · n of each plane's axes in :data:`PLANES` order: +1 when θ
+#: growing is counter-clockwise seen from :data:`VIEWED_FROM` (X-Z: X × Z = −Y).
+ORIENTATION = {"XY": 1, "XZ": -1, "YZ": 1}
+#: A run whose tool axis is tilted more than this from Z [deg] is a cone test.
+CONE_MIN_TILT = 0.01
 TERMS = ("c0", "c1", "s1", "c2", "s2", "backlash_1", "backlash_2", "straight_1", "straight_2")
 #: Significance level of a reported figure (Bonferroni over the figures of a run).
 ALPHA = 1e-3
@@ -122,10 +142,37 @@ class BallbarResult:
     terms: dict[str, float]
     noise_um: float = 0.0
     figures: dict[str, Figure] = field(default_factory=dict)
+    #: the tool axis' tilt from Z [deg]; a cone test when above CONE_MIN_TILT
+    tilt_deg: float = 0.0
+    #: the G-code that runs this direction in this plane (G3 ccw, G2 cw)
+    gcode: str = ""
+    #: where the direction is seen from (:data:`VIEWED_FROM`)
+    viewed_from: str = ""
 
     def reported(self) -> dict[str, Figure]:
         """The figures that stand above the noise."""
         return {k: f for k, f in self.figures.items() if f.significant}
+
+    @property
+    def circle(self) -> str:
+        """The circle by what it is: ``XZ r50``, or ``cone 15° r100`` for a tilted XY run."""
+        return circle_label(self.plane, self.radius, self.tilt_deg)
+
+    @property
+    def label(self) -> str:
+        """Circle, direction as RS274 names it, and the commanded feed:
+        ``XZ r50 ccw (G18 G3, seen from +Y) F1000``."""
+        return (
+            f"{self.circle} {self.direction} ({PLANE_CODE[self.plane]} {self.gcode}, seen from "
+            f"{self.viewed_from}) F{self.feed_mm_min:.0f}"
+        )
+
+
+def circle_label(plane: str, radius: float, tilt: float) -> str:
+    """``XY r50``, ``XZ r50``, or ``cone 15° r100`` (an XY circle with the tool tilted)."""
+    if plane == "XY" and tilt > CONE_MIN_TILT:
+        return f"cone {tilt:.3g}° r{radius:g}"
+    return f"{plane} r{radius:g}"
 
 
 @dataclass(frozen=True)
@@ -139,19 +186,35 @@ class BallbarPair:
     servo_mismatch_ms: float
     backlash_um: tuple[float, float]
     figures: dict[str, Figure] = field(default_factory=dict)
+    tilt_deg: float = 0.0
+    feed_mm_min: float = 0.0
 
     def reported(self) -> dict[str, Figure]:
         """The figures that stand above the noise."""
         return {k: f for k, f in self.figures.items() if f.significant}
 
+    @property
+    def circle(self) -> str:
+        return circle_label(self.plane, self.radius, self.tilt_deg)
+
+
+def plane_of(rel: np.ndarray) -> str:
+    """The plane of a run: the two axes the commanded path about the pivot spans most."""
+    ext = np.ptp(rel, axis=0)
+    i, j = sorted(int(i) for i in np.argsort(ext)[::-1][:2])
+    return {v: k for k, v in PLANES.items()}[(i, j)]
+
 
 def angles(run: BallbarRun) -> tuple[str, np.ndarray, str]:
-    """Plane (the two axes the commanded path spans most), angles, direction."""
+    """Plane, angles θ [rad] about the pivot in :data:`PLANES` order (X-Z: atan2(z, x)),
+    and the direction as RS274/NGC names it (``"ccw"`` = G3, ``"cw"`` = G2).
+
+    The direction is the sign of the angular momentum of the commanded path about
+    the pivot, seen from the positive end of the axis normal to the plane
+    (:data:`VIEWED_FROM`): Σ (p_k × p_(k+1)) · n > 0 is counter-clockwise.
+    """
     rel = run.commanded[:, :3] - run.pivot
-    ext = np.ptp(rel, axis=0)
-    i0, i1 = sorted(int(i) for i in np.argsort(ext)[::-1][:2])
-    two = (i0, i1)
-    plane = {v: k for k, v in PLANES.items()}[two]
+    plane = plane_of(rel)
     i, j = PLANES[plane]
     th = np.arctan2(rel[:, j], rel[:, i])
     un = np.unwrap(th)
@@ -161,14 +224,35 @@ def angles(run: BallbarRun) -> tuple[str, np.ndarray, str]:
             source=run.source,
             expected="a circle about the pivot",
         )
-    return plane, th, "ccw" if un[-1] > un[0] else "cw"
+    turn = 1 if un[-1] > un[0] else -1  # the sense of θ
+    return plane, th, "ccw" if turn * ORIENTATION[plane] > 0 else "cw"
 
 
-def design(th: np.ndarray, direction: str, r: float) -> np.ndarray:
-    """Columns of the model (module docstring), in :data:`TERMS` order, µm per unit."""
-    sgn = 1.0 if direction == "ccw" else -1.0
-    v1 = -sgn * np.sin(th)  # direction of motion of the first axis
-    v2 = sgn * np.cos(th)
+def sense(plane: str, direction: str) -> int:
+    """+1 when θ of :func:`angles` grows along a run of this RS274 direction, else −1."""
+    return ORIENTATION[plane] * (1 if direction == "ccw" else -1)
+
+
+def tilt_deg(run: BallbarRun) -> float:
+    """The tool axis' tilt from Z [deg], its median over the run: arccos(cos a · cos b),
+    which holds for A and B applied in either order (the Z component of the axis)."""
+    a, b = np.radians(run.commanded[:, 3]), np.radians(run.commanded[:, 4])
+    return float(np.degrees(np.median(np.arccos(np.clip(np.cos(a) * np.cos(b), -1.0, 1.0)))))
+
+
+def commanded_feed(run: BallbarRun) -> float:
+    """The commanded feed [mm/min]: the tip speed the commanded samples hold for most
+    of the run (the median over consecutive samples), not the mean over the run,
+    which the start and the stop pull below the F word."""
+    dist = np.linalg.norm(np.diff(run.commanded[:, :3], axis=0), axis=1)
+    return float(np.median(dist / np.diff(run.t)) * 60.0)
+
+
+def design(th: np.ndarray, turn: int, r: float) -> np.ndarray:
+    """Columns of the model (module docstring), in :data:`TERMS` order, µm per unit;
+    ``turn`` is +1 when θ grows along the run (:func:`sense`)."""
+    v1 = -turn * np.sin(th)  # direction of motion of the first axis
+    v2 = turn * np.cos(th)
     c, s = np.cos(th), np.sin(th)
     return np.column_stack(
         [
@@ -190,7 +274,7 @@ def analyse_run(run: BallbarRun) -> BallbarResult:
     plane, th, direction = angles(run)
     r = run.length
     dev = run.dev_um
-    X = design(th, direction, r)
+    X = design(th, sense(plane, direction), r)
     coef, *_ = np.linalg.lstsq(X, dev, rcond=None)
     resid = dev - X @ coef
     # ISO 230-4: about the least-squares centre
@@ -244,8 +328,7 @@ def analyse_run(run: BallbarRun) -> BallbarResult:
     near = np.minimum(deg, 90.0 - deg) < 3.0
     scatter = float(np.std(resid))
     spike = float(np.max(np.abs(resid[near])) - 2 * scatter) if near.any() else 0.0
-    dist = np.sum(np.linalg.norm(np.diff(run.commanded[:, :3], axis=0), axis=1))
-    feed = float(dist / (run.t[-1] - run.t[0]) * 60.0)
+    feed = commanded_feed(run)
     return BallbarResult(
         name=run.name,
         source=run.source,
@@ -267,19 +350,22 @@ def analyse_run(run: BallbarRun) -> BallbarResult:
         terms=terms,
         noise_um=math.sqrt(sigma2),
         figures=figs,
+        tilt_deg=tilt_deg(run),
+        gcode=GCODE[direction],
+        viewed_from=VIEWED_FROM[plane],
     )
 
 
-def _pair_key(r: BallbarResult) -> tuple[str, float, str]:
+def _pair_key(r: BallbarResult) -> tuple[str, float, str, float]:
     base = r.name.replace("ccw", "").replace("cw", "").strip(" -_")
-    return base, round(r.radius, 6), r.plane
+    return base, round(r.radius, 6), r.plane, round(r.tilt_deg, 1)
 
 
 def analyse_runs(runs: Sequence[BallbarRun]) -> tuple[list[BallbarResult], list[BallbarPair]]:
     """Every run, and every (ccw, cw) pair of the same circle."""
     results = [analyse_run(r) for r in runs]
     pairs = []
-    groups: dict[tuple[str, float, str], dict[str, tuple[BallbarResult, BallbarRun]]] = {}
+    groups: dict[tuple[str, float, str, float], dict[str, tuple[BallbarResult, BallbarRun]]] = {}
     for res, run in zip(results, runs, strict=True):
         groups.setdefault(_pair_key(res), {})[res.direction] = (res, run)
     for key, g in groups.items():
@@ -292,8 +378,13 @@ def analyse_runs(runs: Sequence[BallbarRun]) -> tuple[list[BallbarResult], list[
         fa = np.interp(grid, np.sort(tha), ra.dev_um[np.argsort(tha)], period=2 * np.pi)
         fb = np.interp(grid, np.sort(thb), rb.dev_um[np.argsort(thb)], period=2 * np.pi)
         omega = (a.feed_mm_min / 60.0) / a.radius  # rad/s
+        # the lag's sin 2θ term takes the sign of θ's sense, which the plane's
+        # orientation gives for the ccw run
         servo = (
-            (a.terms["s2"] - b.terms["s2"]) / (a.radius * 1000.0 * omega) * 1000.0
+            ORIENTATION[a.plane]
+            * (a.terms["s2"] - b.terms["s2"])
+            / (a.radius * 1000.0 * omega)
+            * 1000.0
             if omega > 0
             else math.nan
         )
@@ -331,20 +422,20 @@ def analyse_runs(runs: Sequence[BallbarRun]) -> tuple[list[BallbarResult], list[
                     (a.backlash_um[1] + b.backlash_um[1]) / 2,
                 ),
                 figures=pair_figs,
+                tilt_deg=a.tilt_deg,
+                feed_mm_min=a.feed_mm_min,
             )
         )
     return results, pairs
 
 
-def model_deviation(
-    th: np.ndarray, terms: Mapping[str, float], direction: str, radius: float
-) -> np.ndarray:
-    """Δr [µm] of the fitted model at angles th."""
-    coef = np.array([terms[k] for k in TERMS])
-    return design(th, direction, radius) @ coef
+def model_deviation(th: np.ndarray, res: BallbarResult) -> np.ndarray:
+    """Δr [µm] of a run's fitted model at angles th."""
+    coef = np.array([res.terms[k] for k in TERMS])
+    return design(th, sense(res.plane, res.direction), res.radius) @ coef
 
 
-def _centred(th: np.ndarray, y: np.ndarray) -> np.ndarray:
+def centred(th: np.ndarray, y: np.ndarray) -> np.ndarray:
     """y less its least-squares mean and first harmonic (radius and centre offset)."""
     X = np.column_stack([np.ones_like(th), np.cos(th), np.sin(th)])
     coef, *_ = np.linalg.lstsq(X, y, rcond=None)
@@ -352,7 +443,8 @@ def _centred(th: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def result_to_json(x: BallbarResult | BallbarPair) -> dict[str, Any]:
-    return asdict(x)
+    """The fields, and the circle's name (``XZ r50``, ``cone 15° r100``)."""
+    return {**asdict(x), "circle": x.circle}
 
 
 def circles(
@@ -360,7 +452,7 @@ def circles(
 ) -> list[list[tuple[BallbarResult, BallbarRun]]]:
     """The runs grouped by circle: a ccw and a cw run of the same circle together
     (ccw first), every other run on its own, in the order they came."""
-    groups: dict[tuple[str, float, str], list[tuple[BallbarResult, BallbarRun]]] = {}
+    groups: dict[tuple[str, float, str, float], list[tuple[BallbarResult, BallbarRun]]] = {}
     for res, run in zip(results, runs, strict=True):
         groups.setdefault(_pair_key(res), []).append((res, run))
     out = []
@@ -371,107 +463,6 @@ def circles(
         else:
             out += [[x] for x in g]
     return out
-
-
-def nice_division(span_um: float, divisions: float = 5.0) -> float:
-    """A scale of 1, 2 or 5 × 10ⁿ µm per division so that ``span_um`` takes about
-    ``divisions`` divisions (ballbar software's choice of plot scale)."""
-    target = max(span_um, 1e-3) / divisions
-    k = math.floor(math.log10(target))
-    for m in (1.0, 2.0, 5.0, 10.0):
-        if m * 10**k >= target:
-            return float(m * 10**k)
-    return float(10 ** (k + 1))
-
-
-_DIRECTION_COLOUR = {"ccw": "tab:blue", "cw": "tab:red"}
-
-
-def polar_panel(
-    ax: Any,
-    traces: Sequence[tuple[np.ndarray, np.ndarray, dict[str, Any]]],
-    um_per_div: float | None = None,
-) -> float:
-    """Draw deviation traces (θ [rad], Δr [µm], line style) on a polar axes the way
-    ballbar software does: the reference circle at 5 divisions, a grid circle every
-    division (4 inside, 4 outside), the deviation magnified to the scale. Returns
-    the scale [µm/div]."""
-    span = max((float(np.ptp(d)) for _, d, _ in traces if len(d)), default=1.0)
-    div = um_per_div or nice_division(span)
-    base = 5 * div
-    ring = np.linspace(0, 2 * np.pi, 361)
-    for k in range(-4, 5):
-        ax.plot(
-            ring,
-            np.full_like(ring, base + k * div),
-            color="0.45" if k == 0 else "0.85",
-            lw=0.9 if k == 0 else 0.5,
-            zorder=1,
-        )
-    for th, d, style in traces:
-        order = np.argsort(th)
-        ax.plot(th[order], base + np.clip(d[order], -4.8 * div, 4.8 * div), zorder=3, **style)
-    ax.set_ylim(0, base + 5 * div)
-    ax.set_yticks([])
-    ax.grid(False)
-    ax.set_xticks(np.radians(np.arange(0, 360, 45)))
-    ax.tick_params(labelsize=7)
-    return div
-
-
-def plot_runs(
-    results: Sequence[BallbarResult],
-    runs: Sequence[BallbarRun],
-    predicted: Mapping[str, np.ndarray] | None = None,
-    um_per_div: float | None = None,
-) -> bytes:
-    """Polar plots as ballbar software draws them: one per circle, its ccw and cw
-    runs overlaid on one scale (µm per division in the title), the mean radius and
-    the set-up centre offset removed so what is left is the machine's shape; the
-    fitted terms dashed and a simulated prediction dotted. PNG bytes."""
-    from .report import png, pyplot
-
-    plt = pyplot()
-    groups = circles(results, runs)
-    n = len(groups)
-    cols = min(3, n)
-    rows = (n + cols - 1) // cols
-    fig = plt.figure(figsize=(4.4 * cols, 4.8 * rows))
-    for k, group in enumerate(groups):
-        ax = fig.add_subplot(rows, cols, k + 1, projection="polar")
-        traces: list[tuple[np.ndarray, np.ndarray, dict[str, Any]]] = []
-        for res, run in group:
-            _, th, _ = angles(run)
-            colour = _DIRECTION_COLOUR[res.direction]
-            traces.append(
-                (th, _centred(th, run.dev_um), {"color": colour, "lw": 1.0, "label": res.direction})
-            )
-            model = model_deviation(th, res.terms, res.direction, res.radius)
-            traces.append(
-                (th, _centred(th, model), {"color": colour, "lw": 0.8, "ls": "--", "alpha": 0.7})
-            )
-            if predicted and run.source in predicted:
-                traces.append(
-                    (
-                        th,
-                        _centred(th, predicted[run.source]),
-                        {"color": "black", "lw": 0.9, "ls": ":"},
-                    )
-                )
-        div = polar_panel(ax, traces, um_per_div)
-        first = group[0][0]
-        gs = ", ".join(f"{r.direction} {r.circular_deviation_um:.1f}" for r, _ in group)
-        ax.set_title(
-            f"{first.name.replace('ccw', '').replace('cw', '').strip(' -_')} "
-            f"({' + '.join(r.direction for r, _ in group)})\n"
-            f"{div:g} µm/div; G [µm]: {gs}",
-            fontsize=9,
-        )
-        ax.legend(loc="lower left", fontsize=7, bbox_to_anchor=(-0.2, -0.2))
-    note = "dashed: fitted terms" + ("; dotted: simulated" if predicted else "")
-    fig.text(0.99, 0.005, note, fontsize=7, ha="right")
-    fig.tight_layout(rect=(0, 0.02, 1, 0.97))
-    return png(fig, dpi=100)
 
 
 #: How each figure is printed: label, unit, format.
@@ -487,15 +478,29 @@ LABELS = {
 }
 
 
-def describe(fig: Mapping[str, Figure], cyclic_order: int = 0) -> str:
-    """The figures standing above the noise, each with its significance."""
+def figure_label(key: str, plane: str = "") -> str:
+    """A figure's name, with the plane's axes for "first axis" and "second axis"."""
+    label = LABELS[key][0]
+    if plane in PLANES:
+        label = label.replace(", first axis", f" {plane[0]}").replace(
+            ", second axis", f" {plane[1]}"
+        )
+    return label
+
+
+def findings(fig: Mapping[str, Figure]) -> list[tuple[str, Figure]]:
+    """The figures standing above the noise, the most significant first."""
+    return sorted(((k, f) for k, f in fig.items() if f.significant), key=lambda kf: -kf[1].z)
+
+
+def describe(fig: Mapping[str, Figure], cyclic_order: int = 0, plane: str = "") -> str:
+    """The figures standing above the noise, the most significant first, each with
+    its significance."""
     parts = []
-    for k, f in fig.items():
-        if not f.significant:
-            continue
-        label, unit, fmt = LABELS[k]
+    for k, f in findings(fig):
+        _, unit, fmt = LABELS[k]
         extra = f" (order {cyclic_order})" if k == "cyclic" and cyclic_order else ""
-        parts.append(f"{label} {f.value:{fmt}} {unit}{extra} ({f.z:.0f} σ)")
+        parts.append(f"{figure_label(k, plane)} {f.value:{fmt}} {unit}{extra} ({f.z:.0f} σ)")
     return "; ".join(parts) if parts else "nothing above the noise"
 
 
@@ -520,15 +525,14 @@ class Analysis:
         out = []
         for r in self.results:
             out.append(
-                f"{r.source}: {r.plane} r{r.radius:g} {r.direction} F{r.feed_mm_min:.0f}: "
+                f"{r.source}: {r.label}: "
                 f"circular deviation {r.circular_deviation_um:.2f} um, noise "
-                f"{r.noise_um:.2f} um; {describe(r.figures, r.cyclic_order)}"
+                f"{r.noise_um:.2f} um; {describe(r.figures, r.cyclic_order, r.plane)}"
             )
         for p in self.pairs:
-            rad = "" if f"r{p.radius:g}" in p.name else f" r{p.radius:g}"
             out.append(
-                f"pair {p.name}{rad}: hysteresis {p.circular_hysteresis_um:.2f} um; "
-                f"{describe(p.figures)}"
+                f"pair {p.circle} ccw + cw: hysteresis {p.circular_hysteresis_um:.2f} um; "
+                f"{describe(p.figures, plane=p.plane)}"
             )
         return out
 

@@ -1,13 +1,18 @@
 """Calibration from measurements: real-axis tables, kinematic parameters, error map.
 
-Three stages, as in the paper (section 4):
+The stages, as in the paper (section 4), real axes first:
 
 1. real-axis tables per motor from laser (axis) runs, with ISO 230-2 figures
    (the E_i(P_i) of Eq. 3);
 2. the kinematic and table parameters of the contract (the g'_i of Eq. 3) from
    pose and ballbar measurements, by nonlinear least squares with an
    identifiability analysis;
-3. the virtual-axis error map (Eq. 4–5) from what the calibrated model leaves.
+3. the library's physical effects beyond the contract (:func:`stage_effects`):
+   diagnose's selection over the whole library, the contract refitted with them;
+   a member is written only when the data tell it from zero, from the contract's
+   terms, from the laser tables' values within their standard errors and from a
+   servo lag common to every motor (which position data cannot see);
+4. the virtual-axis error map (Eq. 4–5) from what the calibrated model leaves.
 
 Stage 2 in detail
 -----------------
@@ -40,17 +45,26 @@ identified subspace) and reported as groups of parameters.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from . import axiscomp, errormap, kinematics, simulate
+from . import axiscomp, diagnose, errormap, kinematics, provenance, simulate
 from . import effects as registry
 from .errors import FitError
 from .measure import AxisData, BallbarRun, PoseData
-from .profile import MOTORS, AxisComp, Effects, KinematicParams, Profile, TableParams
+from .measurement_model import fk_with_jacobian
+from .profile import (
+    MOTORS,
+    AxisComp,
+    Effects,
+    KinematicParams,
+    Profile,
+    TableParams,
+    profile_from_dict,
+)
 
 LEG_KEYS = registry.LEG_KEYS
 
@@ -185,88 +199,6 @@ def observations(
 
 
 # ---------------------------------------------------------------- the model
-
-
-def _out(geo: kinematics.Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
-    """Tip [mm] and A, B [deg] for platform poses xv = (c, A, B, γ) [mm, rad]."""
-    R = kinematics.platform_rotation(xv[:, 3], xv[:, 4], xv[:, 5])
-    T = xv[:, :3] + np.einsum("nij,j->ni", R, geo.tool)
-    w = T - geo.origin + kinematics.table_displacement(geo, P[:, 3], P[:, 4])
-    return np.column_stack([w, np.degrees(xv[:, 3]), np.degrees(xv[:, 4])])
-
-
-def default_steps(names: Sequence[str], theta: np.ndarray) -> np.ndarray:
-    """Central-difference steps (the registry's, per member)."""
-    return registry.fd_steps(names, theta)
-
-
-def fk_with_jacobian(
-    make_geo: Any,
-    theta: np.ndarray,
-    P: np.ndarray,
-    guess: np.ndarray | None = None,
-    want_jac: bool = True,
-    steps: np.ndarray | None = None,
-    motors: bool = False,
-) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray | None]:
-    """Tip and axis y (N, 5) for motor positions P under geometry θ, with derivatives.
-
-    Implicit differentiation of the FK constraints F(x, θ, P) = 0 (x: platform pose):
-    ∂x/∂θ = −F_x⁻¹ F_θ, ∂y/∂θ = G_x ∂x/∂θ + G_θ, and likewise for P.
-
-    Returns
-    -------
-    y : (N, 5) [mm, deg]; J : (N, 5, m) ∂y/∂θ or None; xv : (N, 6) platform poses;
-    JP : (N, 5, 5) ∂y/∂P (motor sensitivities) when ``motors``, else None
-    """
-    geo = make_geo(theta)
-    xv, ok = kinematics.forward_platform(geo, P, guess)
-    if not np.all(ok):
-        raise FitError(
-            f"forward kinematics failed at {int(np.sum(~ok))} measured points",
-            expected="measurements of poses this geometry can reach",
-        )
-    y = _out(geo, P, xv)
-    if not want_jac:
-        return y, None, xv, None
-    n, m = len(P), len(theta)
-    hx = np.array([1e-6, 1e-6, 1e-6, 1e-8, 1e-8, 1e-8])
-    Fx = kinematics._fk_system(geo, P, xv)[1]
-    Gx = np.empty((n, 5, 6))
-    for j in range(6):
-        xp, xm = xv.copy(), xv.copy()
-        xp[:, j] += hx[j]
-        xm[:, j] -= hx[j]
-        Gx[:, :, j] = (_out(geo, P, xp) - _out(geo, P, xm)) / (2 * hx[j])
-    h_all = steps if steps is not None else default_steps(PARAMS, theta)
-    Ft = np.empty((n, 6, m))
-    Gt = np.empty((n, 5, m))
-    for j in range(m):
-        h = h_all[j]
-        tp, tm = theta.copy(), theta.copy()
-        tp[j] += h
-        tm[j] -= h
-        gp, gm = make_geo(tp), make_geo(tm)
-        Ft[:, :, j] = (kinematics._fk_residual(gp, P, xv) - kinematics._fk_residual(gm, P, xv)) / (
-            2 * h
-        )
-        Gt[:, :, j] = (_out(gp, P, xv) - _out(gm, P, xv)) / (2 * h)
-    lu = np.linalg.inv(Fx)
-    J = np.einsum("nij,njm->nim", Gx, -lu @ Ft) + Gt
-    JP = None
-    if motors:
-        FP = np.empty((n, 6, 5))
-        GP = np.empty((n, 5, 5))
-        for j in range(5):
-            Pp, Pm = P.copy(), P.copy()
-            Pp[:, j] += 1e-6
-            Pm[:, j] -= 1e-6
-            FP[:, :, j] = (
-                kinematics._fk_residual(geo, Pp, xv) - kinematics._fk_residual(geo, Pm, xv)
-            ) / 2e-6
-            GP[:, :, j] = (_out(geo, Pp, xv) - _out(geo, Pm, xv)) / 2e-6
-        JP = np.einsum("nij,njm->nim", Gx, -lu @ FP) + GP
-    return y, J, xv, JP
 
 
 @dataclass
@@ -602,8 +534,6 @@ def stage_error_map(
     provenance: dict[str, Any],
 ) -> tuple[Any, StageReport]:
     """Stage 3: the Eq. 5 error map from the pose residuals the calibrated model leaves."""
-    from . import errormap
-
     if not len(obs.P_pose):
         raise FitError(
             "the error map needs pose measurements", expected="a pose file (kind: poses)"
@@ -685,6 +615,7 @@ def stage_effects(
     alpha: float = 1e-3,
     max_rel_stderr: float = 0.25,
     tables_measured: Collection[int] = (),
+    axis: Sequence[AxisData] = (),
 ) -> tuple[dict[str, Any], list[Any], StageReport]:
     """The physical stage: the library's effects outside the contract (bowed guides,
     curved table axes, backlash, cyclic error, servo lag), named, sized and written
@@ -700,8 +631,6 @@ def stage_effects(
     runs less the effect would. Returns the profile document, the effects and
     the report.
     """
-    from . import diagnose
-
     data = diagnose.Data.build(commanded, list(poses), list(runs), [])
     candidates = [n for n in registry.members() if n not in set(registry.CONTRACT)]
     measured, segs = data.measured()
@@ -714,6 +643,7 @@ def stage_effects(
         alpha=alpha,
         max_rel_stderr=max_rel_stderr,
         tables_measured=tables_measured,
+        nuisance=diagnose.table_nuisance(now, axis, tables_measured, common_lag=True),
     )
     doc = registry.apply(now.raw, now, fit.changes(), fit.tables_measured)
     after = measured - diagnose.predict(fit.profile, data, []).pred
@@ -729,7 +659,8 @@ def stage_effects(
         }
         for e in found
     ]
-    notes = [e.sentence() for e in found] or ["no effect beyond the contract's terms found"]
+    notes = effect_sentences(found) or ["no effect beyond the contract's terms found"]
+    notes.append(tested_note(candidates, found, alpha, bool(tables_measured and axis)))
     notes.append(
         "contract parameters refitted with them: "
         + ", ".join(
@@ -751,6 +682,71 @@ def stage_effects(
         {"noise": noise},
     )
     return doc, found, rep
+
+
+#: How each family is named in the report of what was tested.
+_FAMILY_WORDS = {
+    "guide_bow": "bowed guides",
+    "table_straightness": "curved table axes",
+    "backlash": "backlash beyond the tables",
+    "cyclic": "cyclic errors",
+    "servo_lag": "servo lag of one motor against the others",
+}
+
+
+def effect_sentences(found: Sequence[Any]) -> list[str]:
+    """One sentence per effect, the servo lags in one: a lag common to every motor
+    moves the tip along its own path, which position data cannot see (to first
+    order), so only lags relative to the motors with none named are found and
+    written; several motors "lagging more than the others" would contradict each
+    other."""
+    lags = [e for e in found if isinstance(registry.family(e.name), registry.ServoLag)]
+    out = [e.sentence() for e in found if e not in lags]
+    if lags:
+        fam = registry.family(lags[0].name)
+        assert isinstance(fam, registry.ServoLag)
+        named = {fam.motor(e.name) for e in lags}
+        ref = ", ".join(str(m) for m in MOTORS if m not in named)
+        each = ", ".join(
+            f"motor {fam.motor(e.name)} {e.estimate:+.3f} ms (± {e.stderr:.2g})"
+            for e in sorted(lags, key=lambda e: fam.motor(e.name))
+        )
+        out.append(
+            f"Servo lag against motors {ref} (position data cannot see a lag common to "
+            f"every motor; none is written): {each}."
+        )
+    return out
+
+
+def tested_note(candidates: Sequence[str], found: Sequence[Any], alpha: float, laser: bool) -> str:
+    """What the physical stage tested and did not find, and the test."""
+    named = {e.name for e in found}
+    groups: dict[str, list[str]] = {}
+    for n in candidates:
+        groups.setdefault(registry.family(n).key, []).append(n)
+    parts = []
+    for key, names in groups.items():
+        fam = registry.family(names[0])
+        missing = [n for n in names if n not in named]
+        if not missing:
+            continue
+        if isinstance(fam, registry.MotorFamily):
+            which = "motors " + ", ".join(str(fam.motor(n)) for n in missing)
+        else:
+            which = ", ".join(str(fam.index(n) + 1) for n in missing)
+        if isinstance(fam, registry.CyclicError):
+            which += f" at pitches {min(fam.variants):g}-{max(fam.variants):g} mm"
+        parts.append(f"{_FAMILY_WORDS.get(key, key)} ({which})")
+    allowed = (
+        "the laser tables' values within their standard error and a servo lag common to every motor"
+        if laser
+        else "a servo lag common to every motor"
+    )
+    return (
+        f"tested {len(candidates)} library members, each by an F-test Bonferroni-corrected "
+        f"for all of them at α = {alpha:g} and the BIC, with the contract's terms, "
+        f"{allowed} free beside it; not found: " + ("; ".join(parts) or "none")
+    )
 
 
 def aliased_cyclic(
@@ -811,8 +807,6 @@ def aliased_cyclic(
 def fit_error_map(profile: Profile, data: Any, seed: int, sources: Sequence[str]) -> Any:
     """Stage 3 on diagnose's model: the Eq. 5 map fitted on the pose residual
     [mm, deg] that ``profile`` (every effect it holds, no map) leaves."""
-    from . import diagnose, errormap
-
     measured, segs = data.measured()
     resid = measured - diagnose.predict(profile, data, []).pred
     q, e = [], []
@@ -856,6 +850,29 @@ class Calibration:
         return {"stages": [r.to_dict() for r in self.reports]}
 
 
+def stage_map(
+    doc: dict[str, Any],
+    source: str,
+    commanded: Profile,
+    poses: Sequence[PoseData],
+    seed: int,
+) -> tuple[dict[str, Any], StageReport]:
+    """The virtual-axis error map (Eq. 4-5) fitted on what the profile ``doc`` leaves
+    of the poses, written into it; the report holds the residuals before and after."""
+    now = profile_from_dict(doc, source)
+    data = diagnose.Data.build(commanded, list(poses), [], [])
+    emap = fit_error_map(now, data, seed, [p.source for p in poses])
+    measured, segs = data.measured()
+    before = measured - diagnose.predict(now, data, []).pred
+    doc = dict(doc, error_map=emap.to_dict())
+    after = (
+        measured - diagnose.predict(profile_from_dict(doc, source), data, [], with_map=True).pred
+    )
+    rb, mb = _kind_stats(before, segs)
+    ra, ma = _kind_stats(after, segs)
+    return doc, _map_report(emap, rb, ra, mb, ma)
+
+
 def calibrate(
     start: Profile,
     commanded: Profile,
@@ -869,11 +886,14 @@ def calibrate(
     seed: int = 0,
     commanded_with: Any = None,
     sources: Sequence[str] | None = None,
+    progress: Callable[[str, float], None] | None = None,
 ) -> Calibration:
     """Calibrate ``start`` from measurements taken while ``commanded`` commanded the
     machine: real-axis tables from laser runs, the contract's kinematic parameters,
     the library's physical effects (with the contract refitted jointly), then the
     virtual-axis error map on what remains.
+
+    ``progress(stage, fraction of the stages done)`` hears of each as it begins.
 
     Example
     -------
@@ -885,9 +905,7 @@ def calibrate(
     FitError
         When no stage had data to work on, or a fit cannot identify anything.
     """
-    from . import diagnose, provenance
     from .errors import UsageError
-    from .profile import profile_from_dict
 
     want = list(dict.fromkeys(stages))
     unknown = [s for s in want if s not in STAGES]
@@ -897,17 +915,21 @@ def calibrate(
     real_axis = list(start.axis_comp)
     reports: list[StageReport] = []
     found: list[Any] = []
+    said = _stage_teller(want, poses, runs, axis, progress)
     if "tables" in want and axis:
+        said("tables")
         real_axis, rep = stage_tables(start, axis)
         reports.append(rep)
         doc["axis_comp"] = _axis_doc(real_axis)
     if "kinematics" in want and (poses or runs):
+        said("kinematics")
         theta, _, _, rep = stage_kinematics(
             start, commanded, real_axis, poses, runs, max_rel_stderr=max_rel_stderr
         )
         reports.append(rep)
         doc = apply_theta(doc, theta)
     if "effects" in want and (poses or runs):
+        said("effects")
         now = profile_from_dict(doc, start.source)
         # the tables the laser runs just made hold the cyclic errors at their targets
         laser = {int(m) for a in axis for m in np.unique(a.motor)} if "tables" in want else set()
@@ -919,24 +941,15 @@ def calibrate(
             alpha=alpha,
             max_rel_stderr=max_rel_stderr,
             tables_measured=laser,
+            axis=axis,
         )
         tol = start.interpolation.path_tolerance_mm
         rep.warnings.extend(aliased_cyclic(found, axis, min_amplitude_mm=tol / 2))
         reports.append(rep)
     if "map" in want and poses:
-        now = profile_from_dict(doc, start.source)
-        data = diagnose.Data.build(commanded, list(poses), [], [])
-        emap = fit_error_map(now, data, seed, [p.source for p in poses])
-        measured, segs = data.measured()
-        before = measured - diagnose.predict(now, data, []).pred
-        doc["error_map"] = emap.to_dict()
-        after = (
-            measured
-            - diagnose.predict(profile_from_dict(doc, start.source), data, [], with_map=True).pred
-        )
-        rb, mb = _kind_stats(before, segs)
-        ra, ma = _kind_stats(after, segs)
-        reports.append(_map_report(emap, rb, ra, mb, ma))
+        said("map")
+        doc, rep = stage_map(doc, start.source, commanded, poses, seed)
+        reports.append(rep)
     if not reports:
         raise FitError(
             "no stage had data to work on",
@@ -951,3 +964,30 @@ def calibrate(
     }
     doc = provenance.record(doc, "calibrate", note, commanded_with=commanded_with)
     return Calibration(doc, reports, found)
+
+
+def _stage_teller(
+    want: Sequence[str],
+    poses: Sequence[PoseData],
+    runs: Sequence[BallbarRun],
+    axis: Sequence[AxisData],
+    progress: Callable[[str, float], None] | None,
+) -> Callable[[str], None]:
+    """``said(stage)`` tells ``progress`` that a stage of :func:`calibrate` begins."""
+    n_poses = sum(len(p.commanded) for p in poses)
+    motors = ", ".join(str(int(m)) for m in np.unique([m for a in axis for m in a.motor]))
+    text = {
+        "tables": f"real-axis tables from the laser runs of motors {motors}",
+        "kinematics": f"kinematic parameters from {n_poses} poses and {len(runs)} ballbar runs",
+        "effects": "physical effects beyond the kinematic parameters",
+        "map": f"virtual-axis error map from {n_poses} poses",
+    }
+    has = {"tables": bool(axis), "kinematics": bool(poses or runs)}
+    has.update(effects=has["kinematics"], map=bool(poses))
+    runs_now = [s for s in STAGES if s in want and has[s]]
+
+    def said(stage: str) -> None:
+        if progress is not None:
+            progress(text[stage], runs_now.index(stage) / len(runs_now))
+
+    return said

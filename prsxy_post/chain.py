@@ -939,137 +939,231 @@ class Pipeline:
         commands as written, :func:`.reversals.follow_stretches`), and what is left
         at the chunk's end goes on in the next.
         """
-        prev_P = self.last_cmd[0] if self.last_cmd is not None else None
-        prev_V = self.last_cmd[1] if self.last_cmd is not None else None
+        s_path = self._path_run(pc)
+        for col in self.play_cols:
+            mine = contacts[contacts[:, 2] == col]
+            self._settle_motor(pc, side, mine, col, P_cmd, V_cmd, s_path)
+        if self.limits.segment != "cubic":
+            self._straight_through(pc, contacts, P_cmd)
+        self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
+
+    def _path_run(self, pc: PointChunk) -> np.ndarray:
+        """The path length run by each point since the point before the chunk,
+        s_path: (n,) [mm], each step at the slower of its ends' speeds."""
         # path length run by each point since the point before the chunk: the
         # slower end of each step, so that a catch-up never outruns the path
         sp_prev = float(self.last.speed[0]) if self.last is not None else 0.0
         sp = np.minimum(np.concatenate([[sp_prev], pc.speed[:-1]]), pc.speed)
-        s_path = np.cumsum(np.where(pc.dwell, 0.0, sp * pc.dt))
+        return np.cumsum(np.where(pc.dwell, 0.0, sp * pc.dt))
+
+    def _settle_motor(
+        self,
+        pc: PointChunk,
+        side: np.ndarray,
+        mine: np.ndarray,
+        col: int,
+        P_cmd: np.ndarray,
+        V_cmd: np.ndarray,
+        s_path: np.ndarray,
+    ) -> None:
+        """:meth:`_settle` for motor ``col`` through its crossings ``mine`` (c, 3)
+        (rows of the contacts: end, beginning, column): its commands in ``P_cmd``,
+        ``V_cmd`` (n, 5) [mm, mm/s] updated in place, an offset left from the
+        chunk before taken up first; where its part is after the chunk kept in
+        ``play_y`` [mm]. ``s_path`` (n,) [mm] as :meth:`_path_run`."""
         n = len(pc)
         cubic = self.limits.segment == "cubic"
-        for col in self.play_cols:
+        table = self.tables[MOTORS[col]]
+        y0, P0, V0 = self._part_before(col, P_cmd)
+        # the motor's wanted moves into each point (the first from the last point
+        # made): a part left ahead of its way is taken up no faster than they go
+        P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
+        dP = np.diff(pc.P_ideal[:, col], prepend=P_before)
+        carried = self.catch.pop(col, 0.0)
+        if carried:
+            # what it leaves where the first crossing begins, the follow below sees
+            stop = int(mine[0, 1]) if len(mine) else n
+            self._catch_up(pc, side, col, [carried], [-1], [stop], P_cmd, V_cmd, s_path, dP)
+        if len(mine):
+            y0, P0, V0 = self._settle_crossings(
+                pc, side, mine, col, (y0, P0, V0), P_cmd, V_cmd, s_path, dP
+            )
+            # from the last contact on, the corrected commands carry the part
+            rest = slice(int(mine[:, 0].max()) + 1, len(pc))
+        else:
+            rest = slice(0, len(pc))
+        if rest.start < len(pc):
+            y0 = float(
+                reversals.follow(
+                    table, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest], cubic
+                )[0][-1]
+            )
+        self.play_y[col] = y0
+
+    def _part_before(self, col: int, P_cmd: np.ndarray) -> tuple[float, float, float]:
+        """Where motor ``col``'s part stands before the chunk [mm], and the
+        command's position [mm] and velocity [mm/s] there."""
+        if self.last_cmd is None:
             table = self.tables[MOTORS[col]]
-            if prev_P is None:
-                # the contract: the first point is approached from below
-                y0 = float(table.lo(P_cmd[:1, col])[0])
-                P0, V0 = float(P_cmd[0, col]), 0.0
-            else:
-                y0 = self.play_y[col]
-                P0, V0 = float(prev_P[col]), float(prev_V[col])  # type: ignore[index]
-            mine = contacts[contacts[:, 2] == col]
-            # the motor's wanted moves into each point (the first from the last point
-            # made): a part left ahead of its way is taken up no faster than they go
-            P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
-            dP = np.diff(pc.P_ideal[:, col], prepend=P_before)
-            carried = self.catch.pop(col, 0.0)
-            if carried:
-                # what it leaves where the first crossing begins, the follow below sees
-                stop = int(mine[0, 1]) if len(mine) else n
-                self._catch_up(pc, side, col, [carried], [-1], [stop], P_cmd, V_cmd, s_path, dP)
-            if len(mine):
-                e, b = mine[:, 0], mine[:, 1]
-                self._across(pc, e, b, col, P0, P_cmd, V_cmd)
-                # followed up to the last contact only (the part's path is causal);
-                # from there the corrected commands carry it, below
-                upto = slice(0, int(e.max()) + 1)
-                y_pt, lo, hi = reversals.follow(
-                    table, y0, P0, V0, P_cmd[upto, col], V_cmd[upto, col], pc.dt[upto], cubic
-                )
-                # where the part stands when the crossing begins: the extreme it
-                # reached on the old side, over the window (its start included)
-                at_beg = np.where(b >= 0, y_pt[np.maximum(b, 0)], y0)
-                first = np.maximum(b + 1, 0)
-                cuts = np.column_stack([first, e + 1]).ravel()
-                lo_x = np.minimum.reduceat(np.append(lo, np.inf), cuts)[::2]
-                hi_x = np.maximum.reduceat(np.append(hi, -np.inf), cuts)[::2]
-                u = side[e, col] > 0  # the new side: up, so it was going down
-                y_s = np.where(u, np.minimum(lo_x, at_beg), np.maximum(hi_x, at_beg))
-                # a written digit short of the contact: rounded past it, the motor
-                # would push its part within the window's last servo cycles
-                short = self._crossing_short(pc.q_target[e], pc.tool_length[e], col)
-                stops = np.append(b[1:], n)
-                made_e = P_cmd[e, col].copy()
-                P_cmd[e, col] = np.where(u, table.lo_inv(y_s) - short, table.hi_inv(y_s) + short)
-                P_made, V_made = P_cmd[:, col].copy(), V_cmd[:, col].copy()
-                left = self._catch_up(
-                    pc, side, col, y_s - pc.P_ideal[e, col], e, stops, P_cmd, V_cmd, s_path, dP
-                )
-                # a part still off where the next crossing begins takes that offset
-                # into it: the crossing is reckoned again from where the part is, the
-                # part followed from the crossing before through the commands as now
-                # written, and taken up again; until no crossing leaves the next
-                # another offset (a chain of them takes a round each)
-                carry = np.concatenate([[0.0], left[:-1]])
-                todo = np.flatnonzero(carry)
-                while todo.size:
-                    ep, ej, bj = e[todo - 1], e[todo], b[todo]
-                    span = ej - ep
-                    pts = reversals.ranges(ep + 1, span)
-                    P_w = P_cmd[pts, col]
-                    P_w[np.cumsum(span) - 1] = made_e[todo]  # the crossings' ends as made
-                    y_w, lo_w, hi_w = reversals.follow_stretches(
-                        table,
-                        y_s[todo - 1],
-                        P_cmd[ep, col],
-                        V_cmd[ep, col],
-                        P_w,
-                        V_cmd[pts, col],
-                        pc.dt[pts],
-                        span,
-                        cubic,
-                    )
-                    base = np.cumsum(span) - span
-                    into = np.maximum(bj - ep, 0)  # the window's first step in its stretch
-                    beg = np.where(into > 0, y_w[base + into - 1], y_s[todo - 1])
-                    cuts = np.column_stack([base + into, base + span]).ravel()
-                    lo_j = np.minimum.reduceat(np.append(lo_w, np.inf), cuts)[::2]
-                    hi_j = np.maximum.reduceat(np.append(hi_w, -np.inf), cuts)[::2]
-                    uj = u[todo]
-                    y_s[todo] = np.where(uj, np.minimum(lo_j, beg), np.maximum(hi_j, beg))
-                    P_cmd[ej, col] = np.where(
-                        uj,
-                        table.lo_inv(y_s[todo]) - short[todo],
-                        table.hi_inv(y_s[todo]) + short[todo],
-                    )
-                    # their own take-up again, from the commands as made
-                    redo = reversals.ranges(ej + 1, np.minimum(stops[todo] + 1, n) - ej - 1)
-                    P_cmd[redo, col], V_cmd[redo, col] = P_made[redo], V_made[redo]
-                    new_left = self._catch_up(
-                        pc,
-                        side,
-                        col,
-                        y_s[todo] - pc.P_ideal[ej, col],
-                        ej,
-                        stops[todo],
-                        P_cmd,
-                        V_cmd,
-                        s_path,
-                        dP,
-                    )
-                    moved = todo[new_left != left[todo]]
-                    left[todo] = new_left
-                    todo = moved[moved + 1 < len(e)] + 1
-                    carry[todo] = left[todo - 1]
-                self._across(pc, e, b, col, P0, P_cmd, V_cmd)
-                # at the last contact the part meets the motor where it stands; from
-                # there on, the corrected commands carry it
-                last = int(e.max())
-                k = int(np.argmax(e))
-                y0, P0, V0 = float(y_s[k]), float(P_cmd[last, col]), float(V_cmd[last, col])
-                rest = slice(last + 1, len(pc))
-            else:
-                rest = slice(0, len(pc))
-            if rest.start < len(pc):
-                y0 = float(
-                    reversals.follow(
-                        table, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest], cubic
-                    )[0][-1]
-                )
-            self.play_y[col] = y0
-        if not cubic:
-            self._straight_through(pc, contacts, P_cmd)
-        self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
+            # the contract: the first point is approached from below
+            y0 = float(table.lo(P_cmd[:1, col])[0])
+            return y0, float(P_cmd[0, col]), 0.0
+        prev_P, prev_V = self.last_cmd
+        return self.play_y[col], float(prev_P[col]), float(prev_V[col])
+
+    def _settle_crossings(
+        self,
+        pc: PointChunk,
+        side: np.ndarray,
+        mine: np.ndarray,
+        col: int,
+        before: tuple[float, float, float],
+        P_cmd: np.ndarray,
+        V_cmd: np.ndarray,
+        s_path: np.ndarray,
+        dP: np.ndarray,
+    ) -> tuple[float, float, float]:
+        """End each of motor ``col``'s crossings ``mine`` where its part really
+        stands, followed from ``before`` (the part [mm], the command [mm, mm/s]
+        before the chunk) through the commands as made, and take up the part's
+        offset after each (:meth:`_catch_up`), an offset carried into the next
+        crossing reckoned again (:meth:`_reckon_again`). ``dP`` (n,) [mm] the
+        motor's wanted move into each point. Returns the part, the command's
+        position and velocity at the last contact."""
+        n = len(pc)
+        cubic = self.limits.segment == "cubic"
+        table = self.tables[MOTORS[col]]
+        y0, P0, V0 = before
+        e, b = mine[:, 0], mine[:, 1]
+        self._across(pc, e, b, col, P0, P_cmd, V_cmd)
+        # followed up to the last contact only (the part's path is causal);
+        # from there the corrected commands carry it, below
+        upto = slice(0, int(e.max()) + 1)
+        y_pt, lo, hi = reversals.follow(
+            table, y0, P0, V0, P_cmd[upto, col], V_cmd[upto, col], pc.dt[upto], cubic
+        )
+        # where the part stands when the crossing begins: the extreme it
+        # reached on the old side, over the window (its start included)
+        at_beg = np.where(b >= 0, y_pt[np.maximum(b, 0)], y0)
+        first = np.maximum(b + 1, 0)
+        cuts = np.column_stack([first, e + 1]).ravel()
+        u = side[e, col] > 0  # the new side: up, so it was going down
+        y_s = self._extreme(lo, hi, cuts, at_beg, u)
+        # a written digit short of the contact: rounded past it, the motor
+        # would push its part within the window's last servo cycles
+        short = self._crossing_short(pc.q_target[e], pc.tool_length[e], col)
+        stops = np.append(b[1:], n)
+        made_e = P_cmd[e, col].copy()
+        P_cmd[e, col] = self._contact_command(table, y_s, u, short)
+        x = reversals.Crossings(
+            e, b, u, short, stops, made_e, P_cmd[:, col].copy(), V_cmd[:, col].copy()
+        )
+        left = self._catch_up(
+            pc, side, col, y_s - pc.P_ideal[e, col], e, stops, P_cmd, V_cmd, s_path, dP
+        )
+        # a part still off where the next crossing begins takes that offset
+        # into it: the crossing is reckoned again from where the part is, the
+        # part followed from the crossing before through the commands as now
+        # written, and taken up again; until no crossing leaves the next
+        # another offset (a chain of them takes a round each)
+        carry = np.concatenate([[0.0], left[:-1]])
+        todo = np.flatnonzero(carry)
+        while todo.size:
+            todo = self._reckon_again(pc, side, col, x, todo, y_s, left, P_cmd, V_cmd, s_path, dP)
+            carry[todo] = left[todo - 1]
+        self._across(pc, e, b, col, P0, P_cmd, V_cmd)
+        # at the last contact the part meets the motor where it stands; from
+        # there on, the corrected commands carry it
+        last = int(e.max())
+        k = int(np.argmax(e))
+        return float(y_s[k]), float(P_cmd[last, col]), float(V_cmd[last, col])
+
+    def _reckon_again(
+        self,
+        pc: PointChunk,
+        side: np.ndarray,
+        col: int,
+        x: reversals.Crossings,
+        todo: np.ndarray,
+        y_s: np.ndarray,
+        left: np.ndarray,
+        P_cmd: np.ndarray,
+        V_cmd: np.ndarray,
+        s_path: np.ndarray,
+        dP: np.ndarray,
+    ) -> np.ndarray:
+        """One round of :meth:`_settle_crossings`: the crossings ``todo`` (indices
+        into ``x``), each taking in an offset the crossing before left, ended where
+        the part then stands (followed from the crossing before through the
+        commands as now written, its end as made) and their take-up made again.
+        Updates ``y_s`` (where each part stands, c,) and ``left`` (the offset each
+        leaves, c,) [mm] and the commands in place; returns the crossings the next
+        round reckons again (after one whose offset left changed)."""
+        n = len(pc)
+        cubic = self.limits.segment == "cubic"
+        table = self.tables[MOTORS[col]]
+        e, b, u, short, stops = x.end, x.beg, x.up, x.short, x.stops
+        ep, ej, bj = e[todo - 1], e[todo], b[todo]
+        span = ej - ep
+        pts = reversals.ranges(ep + 1, span)
+        P_w = P_cmd[pts, col]
+        P_w[np.cumsum(span) - 1] = x.made_end[todo]  # the crossings' ends as made
+        y_w, lo_w, hi_w = reversals.follow_stretches(
+            table,
+            y_s[todo - 1],
+            P_cmd[ep, col],
+            V_cmd[ep, col],
+            P_w,
+            V_cmd[pts, col],
+            pc.dt[pts],
+            span,
+            cubic,
+        )
+        base = np.cumsum(span) - span
+        into = np.maximum(bj - ep, 0)  # the window's first step in its stretch
+        beg = np.where(into > 0, y_w[base + into - 1], y_s[todo - 1])
+        cuts = np.column_stack([base + into, base + span]).ravel()
+        y_s[todo] = self._extreme(lo_w, hi_w, cuts, beg, u[todo])
+        P_cmd[ej, col] = self._contact_command(table, y_s[todo], u[todo], short[todo])
+        # their own take-up again, from the commands as made
+        redo = reversals.ranges(ej + 1, np.minimum(stops[todo] + 1, n) - ej - 1)
+        P_cmd[redo, col], V_cmd[redo, col] = x.P_made[redo], x.V_made[redo]
+        new_left = self._catch_up(
+            pc,
+            side,
+            col,
+            y_s[todo] - pc.P_ideal[ej, col],
+            ej,
+            stops[todo],
+            P_cmd,
+            V_cmd,
+            s_path,
+            dP,
+        )
+        moved = todo[new_left != left[todo]]
+        left[todo] = new_left
+        return moved[moved + 1 < len(e)] + 1
+
+    @staticmethod
+    def _extreme(
+        lo: np.ndarray, hi: np.ndarray, cuts: np.ndarray, beg: np.ndarray, up: np.ndarray
+    ) -> np.ndarray:
+        """Where each part stands when its motor's crossing ends [mm], (c,): the
+        extreme it reached on the old side over the crossing's steps (``cuts``
+        (2c,): each crossing's first and past-last step into the followed part's
+        least and greatest positions ``lo``, ``hi``) and where it stood at the
+        crossing's start ``beg`` (c,); the least where the crossing is ``up``."""
+        lo_x = np.minimum.reduceat(np.append(lo, np.inf), cuts)[::2]
+        hi_x = np.maximum.reduceat(np.append(hi, -np.inf), cuts)[::2]
+        return np.where(up, np.minimum(lo_x, beg), np.maximum(hi_x, beg))
+
+    @staticmethod
+    def _contact_command(
+        table: axiscomp.MotorTable, y: np.ndarray, up: np.ndarray, short: np.ndarray
+    ) -> np.ndarray:
+        """The motor's command [mm] that meets its part at ``y`` (c,) [mm] on its
+        new side (lo⁻¹ where ``up``, else hi⁻¹), ``short`` (c,) [mm] of it."""
+        return np.where(up, table.lo_inv(y) - short, table.hi_inv(y) + short)
 
     def _straight_through(self, pc: PointChunk, contacts: np.ndarray, P_cmd: np.ndarray) -> None:
         """Straight lines between the points (corrected G-code): a planned point

@@ -10,24 +10,31 @@ import functools
 import json
 import os
 import sys
+import threading
+import time
 import traceback
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
 import numpy as np
 
-from . import __version__
+from . import __version__, kernel
 from .errors import EXIT_INTERNAL, PrsxyError, UsageError
-from .files import clash, read_text, sha256_of, write_atomic
+from .files import clash, read_text, sha256_of
 from .files import load_profile as _load_profile
-from .profile import Profile
+from .files import write_atomic as _write_atomic
+from .profile import MOTORS, Profile
 from .writers import DIALECTS
 
 if TYPE_CHECKING:
     from .measure import AxisData, BallbarRun, PoseData
+
+
+#: the exit code after Ctrl-C (128 + SIGINT, as shells report it)
+EXIT_INTERRUPTED = 130
 
 
 def load_profile(path: str) -> Profile:
@@ -60,6 +67,17 @@ def parse_pose(text: str, option: str) -> tuple[float, ...]:
 class Ctx:
     debug: bool = False
     quiet: bool = False
+    #: the files the command has written (whole), for what Ctrl-C says
+    written: list[str] = field(default_factory=list)
+
+
+def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:
+    """:func:`files.write_atomic`, remembering what the command wrote."""
+    _write_atomic(files)
+    ctx = click.get_current_context(silent=True)
+    obj = ctx.find_object(Ctx) if ctx is not None else None
+    if obj is not None:
+        obj.written += [str(p) for p in files]
 
 
 def fail(err: PrsxyError) -> NoReturn:
@@ -89,8 +107,11 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
         except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException):
             raise
         except KeyboardInterrupt:
-            click.echo("interrupted; no output written", err=True)
-            sys.exit(130)
+            if ctx.written:  # Ctrl-C after the writing, while it printed
+                click.echo(f"interrupted; written whole: {', '.join(ctx.written)}", err=True)
+            else:
+                click.echo("interrupted; no output written", err=True)
+            sys.exit(EXIT_INTERRUPTED)
         except BrokenPipeError:
             # the reader went away (prsxy-post inspect big.ngc | head): stop quietly,
             # and keep Python from complaining when it flushes stdout at exit
@@ -150,6 +171,11 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
     "ballbar": (
         "prsxy-post ballbar xy-r50-ccw.csv xy-r50-cw.csv",
         "prsxy-post ballbar run*.csv --plot ballbar.png --profile shop.toml",
+        "prsxy-post ballbar ballbar-*.csv --report bb-report/",
+    ),
+    "kinematics": (
+        "prsxy-post kinematics --profile shop.toml -o kinematics.pmc",
+        "prsxy-post kinematics --profile shop.toml -o kinematics.pmc --program part.ngc",
     ),
     "tables": (
         "prsxy-post tables export --profile shop.toml --format linuxcnc1 --out-dir comp/",
@@ -162,7 +188,7 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
     ),
     "tables import": (
         "prsxy-post tables import comp/motor5.comp --profile a.toml --format linuxcnc1 -o b.toml",
-        "prsxy-post tables import pmac/motor5.pmc --profile shop.toml --format pmac -o new.toml",
+        "prsxy-post tables import pmac/axis-tables.pmc --profile shop.toml --format pmac -o b.toml",
     ),
 }
 
@@ -189,7 +215,9 @@ class _Group(_Examples, click.Group):
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="prsxy-post")
+@click.version_option(
+    __version__, prog_name="prsxy-post", message=f"%(prog)s %(version)s\nkernel: {kernel.NAME}"
+)
 @click.option("--debug", is_flag=True, help="Show a traceback with errors.")
 @click.pass_context
 def main(ctx: click.Context, debug: bool) -> None:
@@ -198,6 +226,12 @@ def main(ctx: click.Context, debug: bool) -> None:
     Exit codes: 0 success, 1 bad input, 2 bad usage, 3 internal error.
     """
     ctx.obj = Ctx(debug=debug)
+    if kernel.MISSING:
+        click.echo(
+            f"prsxy-post: warning: {kernel.WHY_PURE}; running the pure numpy kernel "
+            "(the same output, several times slower)",
+            err=True,
+        )
 
 
 profile_option = click.option(
@@ -262,19 +296,79 @@ def inspect(program: str, profile_path: str | None, start: str | None, as_json: 
 # ------------------------------------------------------------------ convert
 
 
+def _stderr_is_terminal() -> bool:
+    """Whether standard error is a terminal (progress bars go only there)."""
+    return sys.stderr.isatty()
+
+
+def _size_of(path: str) -> int:
+    try:
+        return os.path.getsize(path)
+    except OSError:
+        return 0
+
+
+def _clock(seconds: float) -> str:
+    """A duration as m:ss, or h:mm:ss from an hour on."""
+    s = max(0, round(seconds))
+    if s >= 3600:
+        return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+    return f"{s // 60}:{s % 60:02d}"
+
+
 class _Progress:
-    """A one-line progress display on a terminal's stderr."""
+    """A one-line progress display on a terminal's stderr: the program, how much
+    of it is read, and the time left at the rate so far (ETA). The line is
+    erased when the program is done, before the next one's."""
 
-    def __init__(self, name: str) -> None:
-        self.name = name
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self.clock = clock
+        self.job: Any = None
+        self.started = 0.0
 
-    def __call__(self, done: int, total: int) -> None:
-        pct = min(100.0, 100.0 * done / max(total, 1))
-        sys.stderr.write(f"\r{self.name}: {pct:5.1f}%")
-        sys.stderr.flush()
+    def __call__(self, job: Any, done: int, total: int) -> None:
+        now = self.clock()
+        if job is not self.job:
+            self.close()
+            self.job, self.started = job, now
+        frac = min(1.0, done / max(total, 1))
+        elapsed = now - self.started
+        eta = ""
+        if frac > 0 and elapsed >= 1.0:  # the rate so far, once there is one
+            eta = f"  ETA {_clock(elapsed * (1.0 - frac) / frac)}"
+        self._show(f"{job.program}: {100.0 * frac:5.1f}%{eta}")
 
     def close(self) -> None:
-        sys.stderr.write(f"\r{self.name}: done  \n")
+        if self.job is not None:
+            self._show("")
+            self.job = None
+
+    def batch(self, jobs: Sequence[Any]) -> Callable[[Any], None]:
+        """``finished(outcome)`` for programs converted in parallel: the line
+        shows how many are done and, by their sizes, the time left."""
+        size = {id(j): _size_of(j.program) for j in jobs}
+        total = sum(size.values())
+        state = {"done": 0, "failed": 0, "bytes": 0}
+        started = self.clock()
+
+        def finished(outcome: Any) -> None:
+            state["done" if outcome.state == "done" else "failed"] += 1
+            state["bytes"] += size[id(outcome.job)]
+            frac = state["bytes"] / total if total else 1.0
+            elapsed = self.clock() - started
+            eta = f"  ETA {_clock(elapsed * (1.0 - frac) / frac)}" if frac > 0 else ""
+            failed = f", {state['failed']} failed" if state["failed"] else ""
+            self._show(f"{len(jobs)} programs: {state['done']} done{failed}{eta}")
+
+        self.job = jobs  # so that close() erases the line
+        self._show(f"{len(jobs)} programs: 0 done")
+        return finished
+
+    @staticmethod
+    def _show(text: str) -> None:
+        # written as is: click.echo would strip the erase-line code off a non-tty
+        sys.stderr.write(f"\r\x1b[K{text}")
+        sys.stderr.flush()
 
 
 @main.command()
@@ -409,30 +503,71 @@ def convert(
                 on_message=say,
             )
         )
-    if pooled:
-        results = conv.convert_many(jobs_list, workers=jobs)
-    else:
-        results = []
-        for job in jobs_list:
-            show = not quiet and sys.stderr.isatty() and job.program != "-"
-            bar = _Progress(job.program) if show else None
-            try:
-                results.append((conv.convert_file(job, bar).written, None))
-            except PrsxyError as err:
-                results.append((None, err))
-            finally:
-                if bar is not None:
-                    bar.close()
-    worst = 0
-    for job, (files, problem) in zip(jobs_list, results, strict=True):
-        if problem is not None:
-            click.echo(str(problem), err=True)
-            worst = max(worst, problem.exit_code)
-            continue
-        if not quiet and files != ["-"]:
-            click.echo(f"{job.program} -> {', '.join(files or [])}", err=True)
+    _run_conversions(jobs_list, jobs if pooled else 1, quiet)
+
+
+def _run_conversions(jobs: Sequence[Any], workers: int, quiet: bool) -> None:
+    """Convert, with a progress line on a terminal (the program being read, or
+    with --jobs the programs done), and say what was written; after Ctrl-C, what
+    was written whole and what not."""
+    from . import batch
+
+    bar = _Progress() if not quiet and _stderr_is_terminal() else None
+    try:
+        outcomes = batch.convert_many(
+            jobs,
+            workers=workers,
+            progress=bar if workers == 1 else None,
+            finished=bar.batch(jobs) if bar is not None and workers > 1 else None,
+        )
+    except batch.Interrupted as stop:
+        if bar is not None:
+            bar.close()
+        _say_outcomes(stop.outcomes, quiet=True)
+        click.echo(_interrupted(stop.outcomes), err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    try:
+        if bar is not None:
+            bar.close()
+        worst = _say_outcomes(outcomes, quiet)
+    except KeyboardInterrupt:  # the outputs are written: say so, not "no output"
+        click.echo("\n" + _interrupted(outcomes), err=True)
+        sys.exit(EXIT_INTERRUPTED)
     if worst:
         sys.exit(worst)
+
+
+def _say_outcomes(outcomes: Sequence[Any], quiet: bool) -> int:
+    """Each program's error (always) and its outputs (unless quiet); the worst
+    exit code."""
+    worst = 0
+    for o in outcomes:
+        if o.error is not None:
+            click.echo(str(o.error), err=True)
+            worst = max(worst, o.error.exit_code)
+        elif o.state == "done" and not quiet and o.written != ["-"]:
+            click.echo(f"{o.job.program} -> {', '.join(o.written)}", err=True)
+    return worst
+
+
+def _interrupted(outcomes: Sequence[Any]) -> str:
+    """What a Ctrl-C left: every output written whole, and every one not written
+    (an existing file of that name is as it was)."""
+    lines = ["interrupted: every conversion stopped"]
+    why = {
+        "stopped": "stopped while being converted",
+        "waiting": "not started",
+        "failed": "failed, see above",
+        "running": "stopped while being converted",
+    }
+    for o in outcomes:
+        if o.state == "done":
+            lines += [f"  written whole: {w} (from {o.job.program})" for w in o.written]
+    for o in outcomes:
+        if o.state != "done":
+            out = "standard output" if o.job.output == "-" else o.job.output
+            lines.append(f"  not written: {out} ({o.job.program}: {why[o.state]})")
+    return "\n".join(lines)
 
 
 def _output_of(program: str, ext: str, output: str | None, out_dir: str | None) -> str:
@@ -591,6 +726,78 @@ ignore_provenance_option = click.option(
     help="Use measurement files even when their '# commanded_with:' names another "
     "profile than --commanded-with (or --profile).",
 )
+
+
+class _Stages:
+    """The stages of a long command on stderr, as the library reports them
+    (``progress(stage, fraction done)``): on a terminal one line, a bar with the
+    stage and the time so far, redrawn every second; otherwise a line per stage
+    with the time it began (for logs). Nothing with ``quiet``."""
+
+    WIDTH = 20
+
+    def __init__(
+        self,
+        command: str,
+        quiet: bool = False,
+        terminal: bool | None = None,
+        clock: Callable[[], float] = time.monotonic,
+        tick: float = 1.0,
+    ) -> None:
+        self.command, self.quiet, self.clock, self.tick = command, quiet, clock, tick
+        self.terminal = _stderr_is_terminal() if terminal is None else terminal
+        self.started = clock()
+        self.stage: str | None = None
+        self.fraction = 0.0
+        self.lock = threading.Lock()
+        self.stopped = threading.Event()
+        self.ticker: threading.Thread | None = None
+
+    def __enter__(self) -> _Stages:
+        return self
+
+    def __exit__(self, kind: object, *exc: object) -> None:
+        self.close(finished=kind is None)
+
+    def __call__(self, stage: str, fraction: float) -> None:
+        if self.quiet:
+            return
+        with self.lock:
+            self.stage, self.fraction = stage, min(max(fraction, 0.0), 1.0)
+            if not self.terminal:
+                elapsed = _clock(self.clock() - self.started)
+                click.echo(f"{self.command} [{elapsed}]: {stage}", err=True)
+                return
+            self._draw()
+        if self.ticker is None:
+            self.ticker = threading.Thread(target=self._tick, daemon=True)
+            self.ticker.start()
+
+    def _draw(self) -> None:
+        done = round(self.fraction * self.WIDTH)
+        bar = "#" * done + "-" * (self.WIDTH - done)
+        elapsed = _clock(self.clock() - self.started)
+        sys.stderr.write(f"\r\x1b[K{self.command} [{bar}] {elapsed} {self.stage}")
+        sys.stderr.flush()
+
+    def _tick(self) -> None:
+        while not self.stopped.wait(self.tick):
+            with self.lock:
+                self._draw()
+
+    def close(self, finished: bool = True) -> None:
+        """Stop redrawing and erase the bar (the results follow); in the plain
+        lines, say how long it took."""
+        self.stopped.set()
+        if self.stage is not None and not self.terminal and finished:
+            elapsed = _clock(self.clock() - self.started)
+            click.echo(f"{self.command} [{elapsed}]: done", err=True)
+            self.stage = None
+        if self.ticker is not None:
+            self.ticker.join()
+            self.ticker = None
+            sys.stderr.write("\r\x1b[K")
+            sys.stderr.flush()
 
 
 def _out_dir_files(out_dir: str, files: dict[str, str]) -> None:
@@ -819,6 +1026,7 @@ def _check_output(out: str, inputs: Sequence[str], in_place: bool) -> None:
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
 @ignore_provenance_option
 @click.option("--json", "as_json", is_flag=True, help="Print the stage reports as JSON.")
+@click.option("--quiet", "-q", is_flag=True, help="Print no progress (the results still).")
 @guarded
 def calibrate(
     data: Sequence[str],
@@ -831,6 +1039,7 @@ def calibrate(
     in_place: bool,
     ignore_provenance: bool,
     as_json: bool,
+    quiet: bool,
 ) -> None:
     """Calibrate PROFILE from measurement files DATA (axis, poses, ballbar).
 
@@ -840,9 +1049,6 @@ def calibrate(
     backlash, cyclic error, servo lag; named, sized and compensated), then the
     virtual-axis error map from what remains. Each stage prints what it changed
     and the residuals before and after.
-
-    Example: prsxy-post calibrate poses.csv axis.csv ballbar-*.csv --profile
-    nominal.toml -o calibrated.toml
     """
     from . import calibrate as cal
 
@@ -851,18 +1057,20 @@ def calibrate(
     commanded = load_profile(commanded_with) if commanded_with else start
     want = [s.strip() for s in stages.split(",") if s.strip()]
     poses, runs, axis = read_measurements(data, profile_path, commanded_with, ignore_provenance)
-    result = cal.calibrate(
-        start,
-        commanded,
-        poses,
-        runs,
-        axis,
-        stages=want,
-        max_rel_stderr=max_rel_stderr,
-        seed=seed,
-        commanded_with=fingerprint(commanded_with or profile_path),
-        sources=list(data),
-    )
+    with _Stages("calibrate", quiet) as progress:
+        result = cal.calibrate(
+            start,
+            commanded,
+            poses,
+            runs,
+            axis,
+            stages=want,
+            max_rel_stderr=max_rel_stderr,
+            seed=seed,
+            commanded_with=fingerprint(commanded_with or profile_path),
+            sources=list(data),
+            progress=progress,
+        )
     write_atomic(profile_files(result.doc, output, profile_path, in_place))
     if as_json:
         click.echo(
@@ -912,6 +1120,7 @@ def _json_default(x: Any) -> Any:
 )
 @click.option("--in-place", is_flag=True, help="Allow -o to be the input profile (a .bak is kept).")
 @ignore_provenance_option
+@click.option("--quiet", "-q", is_flag=True, help="Print no progress (the results still).")
 @guarded
 def diagnose(
     data: Sequence[str],
@@ -923,6 +1132,7 @@ def diagnose(
     alpha: float,
     in_place: bool,
     ignore_provenance: bool,
+    quiet: bool,
 ) -> None:
     """Find where PROFILE's simulation and the measurements DATA disagree and why."""
     from . import diagnose as dg
@@ -932,25 +1142,30 @@ def diagnose(
     current = load_profile(profile_path)
     commanded = load_profile(commanded_with) if commanded_with else current
     poses, runs, axis = read_measurements(data, profile_path, commanded_with, ignore_provenance)
-    d = dg.Data.build(commanded, poses, runs, axis)
-    result = dg.diagnose(
-        current, d, alpha=alpha, commanded_with=fingerprint(commanded_with or profile_path)
-    )
+    with _Stages("diagnose", quiet) as progress:
+        d = dg.Data.build(commanded, poses, runs, axis)
+        result = dg.diagnose(
+            current,
+            d,
+            alpha=alpha,
+            commanded_with=fingerprint(commanded_with or profile_path),
+            progress=progress,
+        )
     files: dict[Path, str | bytes] = {}
     if output:
         files.update(profile_files(result.updated, output, profile_path, in_place))
     if report_dir:
         from . import report
 
-        files.update(
-            {Path(report_dir) / k: v for k, v in report.diagnose_report(result, d).items()}
-        )
+        pages = report.diagnose_report(result, d, report_dir)
+        files.update({Path(report_dir) / k: v for k, v in pages.items()})
     if files:
         write_atomic(files)
     if as_json:
         click.echo(json.dumps(result.to_json(), default=_json_default, indent=1))
         for u in result.unexplained:
             click.echo(f"warning: {u['sentence']}", err=True)
+        _wrote_report(report_dir, err=True)
         return
     click.echo(f"noise: {', '.join(f'{k} {v:.3f}' for k, v in result.to_json()['noise'].items())}")
     for r in result.regions[:5]:
@@ -983,6 +1198,13 @@ def diagnose(
         click.echo(f"warning: {u['sentence']}", err=True)
     if output:
         click.echo(f"wrote {output}")
+    _wrote_report(report_dir)
+
+
+def _wrote_report(report_dir: str | None, err: bool = False) -> None:
+    """Where a report was written (stderr beside --json, which owns stdout)."""
+    if report_dir:
+        click.echo(f"wrote the report: {(Path(report_dir) / 'report.html').resolve()}", err=err)
 
 
 @main.command()
@@ -1023,13 +1245,12 @@ def ballbar(
     """ISO 230-4 circular deviation and ballbar diagnostics of ballbar RUNS.
 
     Each figure is printed only when it stands above the noise, with its
-    significance; --json has them all. Polar plots overlay a circle's ccw and cw
-    runs on one µm/div scale.
-
-    Example: prsxy-post ballbar ballbar-*.csv --report bb-report
+    significance; --json has them all. Directions are RS274/NGC's: ccw is G3, cw
+    is G2, seen from +Z (XY), +Y (XZ) or +X (YZ). Polar plots overlay a circle's
+    ccw and cw runs on one µm/div scale, seen from that side.
     """
     from . import ballbar as bb
-    from . import measure
+    from . import measure, plots
 
     data = [measure.read_ballbar(read_text(p, "ballbar file"), p) for p in runs]
     model = commanded = None
@@ -1040,18 +1261,58 @@ def ballbar(
     analysis = bb.analyse(data, model, commanded)
     files: dict[Path, str | bytes] = {}
     if plot_path:
-        files[Path(plot_path)] = bb.plot_runs(analysis.results, data, analysis.predicted)
+        files[Path(plot_path)] = plots.ballbar_plot(analysis.results, data, analysis.predicted)
     if report_dir:
         from . import report
 
-        files.update({Path(report_dir) / k: v for k, v in report.ballbar_report(analysis).items()})
+        pages = report.ballbar_report(analysis, report_dir)
+        files.update({Path(report_dir) / k: v for k, v in pages.items()})
     if files:
         write_atomic(files)
     if as_json:
         click.echo(json.dumps(analysis.to_json(), indent=1, default=_json_default))
+        _wrote_report(report_dir, err=True)
         return
     for line in analysis.lines():
         click.echo(line)
+    _wrote_report(report_dir)
+
+
+@main.command("kinematics")
+@profile_option
+@click.option("-o", "--output", required=True, help="Turbo PMAC download file to write (.pmc).")
+@click.option(
+    "--program",
+    type=click.Path(dir_okay=False),
+    help="Also write this G-code program as a Cartesian Turbo PMAC motion program "
+    "(LINEAR/CIRCLE moves) that runs through these kinematics.",
+)
+@click.option("--program-output", help="Where to write it (default: PROGRAM.cart.pmc).")
+@guarded
+def kinematics_export(
+    profile_path: str, output: str, program: str | None, program_output: str | None
+) -> None:
+    """Write the profile's calibrated kinematics as Turbo PMAC OPEN FORWARD / OPEN
+    INVERSE programs for coordinate system 1 (the embedded route)."""
+    from . import embedded
+    from .files import inspect_source
+    from .writers import Provenance, pmac_kinematics
+
+    prof = load_profile(profile_path)
+    kf = pmac_kinematics.export(prof, profile_path)
+    files = {Path(output): kf.text}
+    if program:
+        sha = inspect_source(program)
+        prov = Provenance(program, sha, prof.name, profile_path, sha256_of(profile_path), "")
+        out = program_output or str(Path(program).with_suffix(".cart.pmc"))
+        text = read_text(program, "program")
+        files[Path(out)] = embedded.program_text(text, program, prof, prov)
+    write_atomic(files)
+    click.echo(
+        f"wrote {', '.join(str(f) for f in files)}: download after `tables export --format "
+        f"pmac`; work variables Q20-Q{kf.last_q}",
+        err=True,
+    )
 
 
 @main.group()
@@ -1060,6 +1321,33 @@ def tables() -> None:
 
 
 TABLE_FORMATS = click.Choice(["linuxcnc0", "linuxcnc1", "pmac"])
+
+
+class _Motor(click.ParamType):
+    """A motor number of the contract (docs/machine-model.md): 1, 2, 3 (the guides'
+    sliders P1, P2, P3) and 5, 6 (the table's P5, P6); there is no motor 4."""
+
+    name = "motor"
+
+    def get_metavar(self, param: click.Parameter, ctx: click.Context | None = None) -> str:
+        return "[" + "|".join(str(m) for m in MOTORS) + "]"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> int:
+        if isinstance(value, int) and value in MOTORS:
+            return value
+        try:
+            motor = int(str(value).strip())
+        except ValueError:
+            motor = None
+        if motor in MOTORS:
+            return motor
+        names = ", ".join(f"{m} (P{m})" for m in MOTORS)
+        self.fail(
+            f"{value!r} is not a motor of the PRS-XY machine (expected one of {names}; "
+            "there is no motor 4)",
+            param,
+            ctx,
+        )
 
 
 @tables.command("export")
@@ -1161,7 +1449,7 @@ def _linuxcnc_motor(
 @click.option("--format", "fmt", type=TABLE_FORMATS, required=True)
 @click.option(
     "--motor",
-    type=click.IntRange(1, 6),
+    type=_Motor(),
     default=None,
     help="Motor of a LinuxCNC file (default: from --ini or the file's prsxy-post notes).",
 )

@@ -26,13 +26,13 @@ import sys
 import threading
 import time
 import traceback
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
 from . import sinks
 from .chain import Stages
-from .errors import PrsxyError, write_failed
+from .errors import ProcessFailed, PrsxyError, write_failed
 from .files import (
     inspect_source,
     load_profile,
@@ -139,7 +139,8 @@ def _planned_here(
 
 def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
     """Runs in the interpreter process: sends ("chunk", planned, chars read),
-    then ("done", counts, peak MB), or ("error", PrsxyError) / ("crash", text)."""
+    then ("done", counts, peak MB, chars read), or ("error", PrsxyError) / ("crash", text).
+    Stopped (SIGTERM, :func:`sinks.stop`), it just ends: nobody reads any more."""
     chars = [0]
 
     def progress(n: int) -> None:
@@ -149,9 +150,11 @@ def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
     try:
         for planned in _planned_here(job, prof, counts, progress):
             conn.send(("chunk", planned, chars[0]))
-        conn.send(("done", counts, peak_rss_mb()))
+        conn.send(("done", counts, peak_rss_mb(), chars[0]))
     except PrsxyError as err:
         conn.send(("error", err, counts))
+    except SystemExit:
+        raise
     except BaseException:
         conn.send(("crash", traceback.format_exc(), counts))
     finally:
@@ -178,10 +181,7 @@ def _planned_chunks(
         return
     ctx = multiprocessing.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    proc = ctx.Process(target=_planning_child, args=(send, job, prof), daemon=True)
-    proc.start()
+    proc = sinks.forked(_planning_child, send, job, prof)
     send.close()
 
     # a thread takes chunks off the pipe as they come, so the interpreter runs up
@@ -196,6 +196,8 @@ def _planned_chunks(
                 msg = recv.recv()
             except (EOFError, OSError):
                 msg = ("eof",)
+            except BaseException as exc:  # what came cannot be read (it does not unpickle)
+                msg = ("unreadable", f"{type(exc).__name__}: {exc}")
             while not stop.is_set():
                 try:
                     ahead.put(msg, timeout=0.1)
@@ -205,14 +207,30 @@ def _planned_chunks(
             if msg[0] != "chunk":
                 return
 
+    # started with the stop signals held, which it keeps: they are the main
+    # thread's to handle (sinks.signals_held)
     pumping = threading.Thread(target=pump, daemon=True)
-    pumping.start()
+    with sinks.signals_held():
+        pumping.start()
+
+    def died(what: str) -> ProcessFailed:
+        return ProcessFailed(f"the interpreter process {what}; no output written")
+
+    def next_message() -> tuple[Any, ...]:
+        while True:
+            try:
+                return ahead.get(timeout=0.5)
+            except queue.Empty:
+                if not pumping.is_alive() and ahead.empty():
+                    raise died("could not be read any more") from None
 
     def receive() -> Iterator[Any]:
         while True:
-            msg = ahead.get()
+            msg = next_message()
             if msg[0] == "eof":
-                raise RuntimeError("the interpreter process ended without a result")
+                raise died(f"ended without a result ({sinks.how_it_ended(proc)})")
+            if msg[0] == "unreadable":
+                raise died(f"sent what cannot be read ({msg[1]})")
             if msg[0] == "chunk":
                 if bar is not None:
                     bar(msg[2])
@@ -221,6 +239,8 @@ def _planned_chunks(
             counts.update(msg[2] if msg[0] != "done" else msg[1])
             if msg[0] == "done":
                 counts["helper_peak_rss_mb"] = msg[2] or 0.0
+                if bar is not None:
+                    bar(msg[3])
                 return
             if msg[0] == "error":
                 raise msg[1]
@@ -230,9 +250,7 @@ def _planned_chunks(
         yield receive()
     finally:
         stop.set()
-        if proc.is_alive():
-            proc.terminate()
-        proc.join()
+        sinks.stop(proc)
         pumping.join(timeout=5.0)
         recv.close()
 
@@ -244,23 +262,25 @@ AHEAD = 8
 PARALLEL_FROM_BYTES = 256 * 1024
 
 
-def _convert_one(job: ConvertJob) -> list[str]:
-    return convert_file(job).written
-
-
 def convert_file(
-    job: ConvertJob, progress: Callable[[int, int], None] | None = None
+    job: ConvertJob,
+    progress: Callable[[int, int], None] | None = None,
+    published: Callable[[list[str]], None] | None = None,
 ) -> ConvertStats:
     """Convert one program, streaming, into its output file(s).
 
     Outputs go to temp files beside the targets and are renamed only when the
-    whole conversion succeeded; on any error the temp files are removed. With
-    ``output="-"`` the text is written to standard output at the end.
+    whole conversion succeeded; on any error, or a stop (KeyboardInterrupt,
+    SystemExit), the temp files are removed. With ``output="-"`` the text is
+    written to standard output at the end.
 
     Parameters
     ----------
     job : ConvertJob
     progress : called with (characters read, file size) as the program is read
+    published : called with the files written, right after they are renamed into
+        place and before a stop (SIGINT, SIGTERM) held meanwhile can arrive: what
+        it is told is exactly what is on disk
 
     Raises
     ------
@@ -268,10 +288,14 @@ def convert_file(
         Located at the program's line (and column) that cannot be converted.
     """
     with few_gc_passes():
-        return _convert_file(job, progress)
+        return _convert_file(job, progress, published)
 
 
-def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) -> ConvertStats:
+def _convert_file(
+    job: ConvertJob,
+    progress: Callable[[int, int], None] | None,
+    published: Callable[[list[str]], None] | None,
+) -> ConvertStats:
     inputs = {"G-code program": job.program, "profile": job.profile_path}
     refuse_to_overwrite(job.output, inputs)
     prof = load_profile(job.profile_path)
@@ -322,7 +346,7 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
             # while this one runs the chain (the interpreter has the second)
             out = (
                 sinks.WriterProcess(writer, parts)
-                if job.parallel and job.output != "-" and _can_fork()
+                if job.parallel and job.output != "-" and sinks.can_fork()
                 else sinks.WriterHere(writer, parts)
             )
             out.begin()
@@ -331,14 +355,7 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                     n_points += len(pc)
                     out.feed(pc)
         written_parts = out.finish()
-        temps = written_parts.temps
-        targets = [sinks.part_path(job.output, part, split) for part in sorted(temps)]
-        for target in targets:  # a part's name (x.part1.pmc) too, before any is published
-            refuse_to_overwrite(target, inputs)
-        written = []
-        for part, target in zip(sorted(temps), targets, strict=True):
-            publish(temps[part], target)
-            written.append(target)
+        written = _publish_parts(job, written_parts.temps, split, published)
         if job.output == "-":
             memory = written_parts.memory
             sys.stdout.write("".join("".join(memory[k]) for k in sorted(memory)))
@@ -369,33 +386,26 @@ def _convert_file(job: ConvertJob, progress: Callable[[int, int], None] | None) 
                     os.unlink(tmp)
 
 
-def _can_fork() -> bool:
-    import multiprocessing
-
-    return "fork" in multiprocessing.get_all_start_methods()
-
-
-def _run_job(job: ConvertJob) -> tuple[list[str] | None, PrsxyError | None]:
-    try:
-        return _convert_one(job), None
-    except PrsxyError as err:
-        return None, err
-
-
-def convert_many(
-    jobs: Sequence[ConvertJob], workers: int = 1
-) -> list[tuple[list[str] | None, PrsxyError | None]]:
-    """Convert several programs, in ``workers`` processes when more than one.
-
-    Returns, per job in order, the files written or the error that stopped it
-    (one program's error does not stop the others).
-    """
-    if workers > 1 and len(jobs) > 1:
-        from concurrent.futures import ProcessPoolExecutor  # here: it takes 10 ms to import
-
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            return list(pool.map(_run_job, jobs))
-    return [_run_job(j) for j in jobs]
+def _publish_parts(
+    job: ConvertJob,
+    temps: dict[int, str],
+    split: bool,
+    published: Callable[[list[str]], None] | None,
+) -> list[str]:
+    """Rename the finished parts onto their targets, and say so (``published``)
+    before a stop held meanwhile arrives: all of it happens, or none."""
+    inputs = {"G-code program": job.program, "profile": job.profile_path}
+    targets = [sinks.part_path(job.output, part, split) for part in sorted(temps)]
+    for target in targets:  # a part's name (x.part1.pmc) too, before any is published
+        refuse_to_overwrite(target, inputs)
+    written = []
+    with sinks.signals_held():
+        for part, target in zip(sorted(temps), targets, strict=True):
+            publish(temps[part], target)
+            written.append(target)
+        if published is not None and job.output != "-":
+            published(written)
+    return written
 
 
 def worth_a_second_process(program: str) -> bool:

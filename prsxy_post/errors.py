@@ -112,6 +112,13 @@ class FitError(PrsxyError):
     """A calibration or fit failed or cannot identify what it was asked for."""
 
 
+class ProcessFailed(PrsxyError):
+    """A process the work was handed to (the interpreter, the writer, a ``--jobs``
+    worker) died or sent what cannot be read: not the user's input, so exit 3."""
+
+    exit_code = EXIT_INTERNAL
+
+
 class UsageError(PrsxyError):
     """The command line asks for something inconsistent."""
 

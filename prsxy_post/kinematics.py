@@ -33,11 +33,13 @@ from functools import cached_property
 
 import numpy as np
 
+from . import kernel
 from .errors import ProfileError
+from .kernel import ik as kik
 from .profile import Effects, KinematicParams, Profile, TableParams, nominal_kinematics
 
 #: Travel at which ``effects.guide_bow`` is given [mm].
-BOW_REF_MM = 100.0
+BOW_REF_MM = kik.BOW_REF_MM
 
 
 def rot_x(a: np.ndarray) -> np.ndarray:
@@ -212,12 +214,38 @@ class Geometry:
             straight,
         )
 
-    # Precomputed linear algebra of the closed-form IK.
-    @property
+    # Precomputed linear algebra of the closed-form IK, once per geometry (an SVD
+    # and a pseudo-inverse cost 0.2 ms; the arrays are not changed after
+    # construction, as a frozen geometry's are not).
+    @cached_property
     def _m(self) -> tuple[np.ndarray, np.ndarray]:
         M = np.vstack([self.u, [0.0, 0.0, 1.0]])
         U, _, _ = np.linalg.svd(M)
         return U[:, 3], np.linalg.pinv(M)
+
+    @cached_property
+    def ik_arrays(self) -> kik.IKArrays:
+        """The geometry as the kernel's IK takes it (made once)."""
+        nul, Mp = self._m
+        bow = self.guide_bow
+        return kik.IKArrays(
+            u=self.u,
+            b=self.b,
+            g=self.g,
+            d=self.d,
+            L2=self.L**2,
+            gu=np.sum(self.g * self.u, axis=1),
+            nul=nul,
+            Mp=Mp,
+            origin=self.origin,
+            tool=self.tool,
+            scale_x=self.scale_x,
+            scale_y=self.scale_y,
+            squareness=self.squareness,
+            straightness=self.table_straightness,
+            bow=bow if bow is not None and np.any(bow) else None,
+            radial=self.radial,
+        )
 
 
 @dataclass(frozen=True)
@@ -256,94 +284,20 @@ def solve_platform(
     PlatformPose; rows with no solution hold NaN.
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    return _solve(geo, q, tool_length_offset).pose()
+    return _pose(_solve(geo, q, tool_length_offset))
 
 
-@dataclass(frozen=True)
-class _Solved:
-    """The platform solution in components (N,) each, as :func:`inverse` uses it:
-    sines and cosines of A, B and γ, the centre c and the tool vector t."""
-
-    ca: np.ndarray
-    sa: np.ndarray
-    cb: np.ndarray
-    sb: np.ndarray
-    cg: np.ndarray
-    sg: np.ndarray
-    gamma: np.ndarray
-    c: np.ndarray  # (N, 3)
-    t: np.ndarray  # (N, 3)
-
-    def rotate(self, w0: np.ndarray, w1: np.ndarray, w2: np.ndarray) -> tuple[np.ndarray, ...]:
-        """R w = Ry(B) Rx(A) Rz(γ) w for w in components, each (N,) or (N, k)."""
-        cg, sg, ca, sa, cb, sb = self.cg, self.sg, self.ca, self.sa, self.cb, self.sb
-        if w0.ndim == 2:
-            cg, sg, ca, sa, cb, sb = (v[:, None] for v in (cg, sg, ca, sa, cb, sb))
-        x = cg * w0 - sg * w1
-        y = sg * w0 + cg * w1
-        # then Rx(A), then Ry(B)
-        y2 = ca * y - sa * w2
-        z2 = sa * y + ca * w2
-        return cb * x + sb * z2, y2, -sb * x + cb * z2
-
-    def pose(self) -> PlatformPose:
-        R = _rotation_cs(self.ca, self.sa, self.cb, self.sb, self.cg, self.sg)
-        return PlatformPose(self.c, self.gamma, R)
+def _solve(
+    geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float | None
+) -> kik.PlatformCols:
+    """The closed-form platform solution (module docstring), in components: the
+    kernel's reference (:func:`prsxy_post.kernel.ik.platform_cols`)."""
+    m = geo.ik_arrays
+    return kik.platform_cols(m, q, kik.tool_z(m, q.shape[0], tool_length_offset))
 
 
-def _solve(geo: Geometry, q: np.ndarray, tool_length_offset: np.ndarray | float | None) -> _Solved:
-    """The closed-form platform solution (module docstring), written in components:
-    the same equations as matrices, without (N, 3, 3) products (the chain solves
-    every interpolated point twice)."""
-    n = q.shape[0]
-    t = _tool_vectors(geo, n, tool_length_offset)
-    a_rad, b_rad = np.radians(q[:, 3]), np.radians(q[:, 4])
-    ca, sa, cb, sb = np.cos(a_rad), np.sin(a_rad), np.cos(b_rad), np.sin(b_rad)
-    nul, Mp = geo._m
-    # u_i · (Rab w) = (Rab^T u_i) · w, Rab = Ry(B) Rx(A) with columns
-    # (cb, 0, −sb), (sb sa, ca, cb sa), (sb ca, −sa, cb ca)
-    ux, uy, uz = geo.u[:, 0], geo.u[:, 1], geo.u[:, 2]
-    cA, sA, cB, sB = ca[:, None], sa[:, None], cb[:, None], sb[:, None]
-    uR0 = cB * ux - sB * uz  # (N, 3 legs)
-    uR1 = sB * sA * ux + cA * uy + cB * sA * uz
-    uR2 = sB * cA * ux - sA * uy + cB * cA * uz
-    bx, by, bz = geo.b[:, 0], geo.b[:, 1], geo.b[:, 2]
-    gu = np.sum(geo.g * geo.u, axis=1)  # (3,)
-    # R b = cos γ · Rab (bx, by, 0) + sin γ · Rab (−by, bx, 0) + Rab (0, 0, bz)
-    const_legs = gu - uR2 * bz
-    cos_legs = -(uR0 * bx + uR1 * by)
-    sin_legs = -(uR1 * bx - uR0 * by)
-    # the row of Rab giving the z component: (−sb, cb sa, cb ca)
-    rz0, rz1, rz2 = -sb, cb * sa, cb * ca
-    tx, ty, tz = t[:, 0], t[:, 1], t[:, 2]
-    const_z = geo.origin[2] + q[:, 2] - rz2 * tz
-    cos_z = -(rz0 * tx + rz1 * ty)
-    sin_z = -(rz1 * tx - rz0 * ty)
-    # n · r(γ) = K0 + Kc cos γ + Ks sin γ, written out (no BLAS call: a threaded
-    # BLAS would spin on the core the interpreter process runs on)
-
-    def dot_n(legs: np.ndarray, z: np.ndarray) -> np.ndarray:
-        return legs[:, 0] * nul[0] + legs[:, 1] * nul[1] + legs[:, 2] * nul[2] + z * nul[3]
-
-    K0, Kc, Ks = dot_n(const_legs, const_z), dot_n(cos_legs, cos_z), dot_n(sin_legs, sin_z)
-    rho = np.hypot(Kc, Ks)
-    phi = np.arctan2(Ks, Kc)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        delta = np.arccos(-K0 / rho)  # NaN when out of [-1, 1]: no spin satisfies all legs
-    g1 = _wrap(phi + delta)
-    g2 = _wrap(phi - delta)
-    gamma = np.where(np.abs(g1) <= np.abs(g2), g1, g2)
-    cg, sg = np.cos(gamma), np.sin(gamma)
-    r_legs = const_legs + cos_legs * cg[:, None] + sin_legs * sg[:, None]
-    r_z = const_z + cos_z * cg + sin_z * sg
-    c = np.column_stack(
-        [r_legs[:, 0] * m[0] + r_legs[:, 1] * m[1] + r_legs[:, 2] * m[2] + r_z * m[3] for m in Mp]
-    )  # c = M⁺ r
-    return _Solved(ca, sa, cb, sb, cg, sg, gamma, c, t)
-
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    return (a + np.pi) % (2 * np.pi) - np.pi
+def _pose(p: kik.PlatformCols) -> PlatformPose:
+    return PlatformPose(p.c, p.gamma, _rotation_cs(p.ca, p.sa, p.cb, p.sb, p.cg, p.sg))
 
 
 def strut_discriminant(geo: Geometry, pose: PlatformPose) -> np.ndarray:
@@ -359,17 +313,19 @@ class IKResult:
     """Motor positions and what the solution went through.
 
     P : (N, 5) [P1, P2, P3, P5, P6] mm; NaN where unreachable
-    pose : PlatformPose (made when asked for: the chain needs only P)
+    pose : PlatformPose (solved again when asked for: the chain needs only P)
     reachable : (N,) bool
     """
 
     P: np.ndarray
-    _solved: _Solved
     reachable: np.ndarray
+    _q: np.ndarray
+    _tool_z: np.ndarray
+    _geo: Geometry
 
     @cached_property
     def pose(self) -> PlatformPose:
-        return self._solved.pose()
+        return _pose(kik.platform_cols(self._geo.ik_arrays, self._q, self._tool_z))
 
 
 def inverse(
@@ -382,6 +338,9 @@ def inverse(
 
         D = o + (x, y, ·) − T,  P6 = D_y / (1 + s_y),  P5 = (D_x − σ P6) / (1 + s_x)
 
+    Computed by the kernel (:func:`prsxy_post.kernel.inverse_rows`: compiled, or its
+    numpy reference).
+
     Parameters
     ----------
     geo : Geometry
@@ -393,45 +352,12 @@ def inverse(
     IKResult
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    sol = _solve(geo, q, tool_length_offset)
-    # s_i = c + R b_i, v_i = s_i − g_i, all legs at once: (N, 3 legs) per component
-    n = q.shape[0]
-    b = geo.b
-    Rb = sol.rotate(
-        np.broadcast_to(b[:, 0], (n, 3)),
-        np.broadcast_to(b[:, 1], (n, 3)),
-        np.broadcast_to(b[:, 2], (n, 3)),
-    )
-    v = [sol.c[:, j : j + 1] + Rb[j] - geo.g[:, j] for j in range(3)]
-    dv = v[0] * geo.d[:, 0] + v[1] * geo.d[:, 1] + v[2] * geo.d[:, 2]
-    disc = dv**2 - (v[0] ** 2 + v[1] ** 2 + v[2] ** 2) + geo.L**2
-    with np.errstate(invalid="ignore"):
-        p_head = dv + np.sqrt(disc)
-    if geo.guide_bow is not None and np.any(geo.guide_bow):
-        p_head = _bowed_guides(geo, np.stack(v, -1), p_head)
-    Rt = sol.rotate(sol.t[:, 0], sol.t[:, 1], sol.t[:, 2])
-    Dx = geo.origin[0] + q[:, 0] - (sol.c[:, 0] + Rt[0])
-    Dy = geo.origin[1] + q[:, 1] - (sol.c[:, 1] + Rt[1])
-    p5, p6 = table_motors(geo, Dx, Dy)
-    P = np.column_stack([p_head, p5, p6])
+    m = geo.ik_arrays
+    tz = kik.tool_z(m, q.shape[0], tool_length_offset)
+    P = kernel.inverse_rows(m, q, tz)
     reachable = np.all(np.isfinite(P), axis=1)
-    return IKResult(P, sol, reachable)
-
-
-def _bowed_guides(geo: Geometry, v: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Newton on |v_i − a_i(P_i) + g_i|² = L_i² from the straight-guide solution."""
-    assert geo.guide_bow is not None
-    bow = geo.guide_bow
-    for _ in range(6):
-        w = v - geo.hinge_offset(p)
-        da = geo.d[None] + (
-            2 * bow[None, :, None] * p[:, :, None] / BOW_REF_MM**2 * geo.radial[None]
-        )
-        f = np.einsum("nki,nki->nk", w, w) - geo.L[None] ** 2
-        fp = -2 * np.einsum("nki,nki->nk", w, da)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            p = p - f / fp
-    return p
+    # q is kept (a copy: callers reuse their arrays) to solve the pose when asked
+    return IKResult(P, reachable, q.copy(), tz, geo)
 
 
 def table_displacement(geo: Geometry, p5: np.ndarray, p6: np.ndarray) -> np.ndarray:
@@ -453,15 +379,7 @@ def table_displacement(geo: Geometry, p5: np.ndarray, p6: np.ndarray) -> np.ndar
 
 def table_motors(geo: Geometry, dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Solve the table equation D(P5, P6) = (dx, dy) for the motors."""
-    p6 = dy / (1.0 + geo.scale_y)
-    p5 = (dx - geo.squareness * p6) / (1.0 + geo.scale_x)
-    if geo.table_straightness is not None:
-        kx, ky = geo.table_straightness
-        # the bends are µm over hundreds of mm: a few fixed-point steps converge
-        for _ in range(4):
-            p6 = (dy - kx * (p5 / 1000.0) ** 2) / (1.0 + geo.scale_y)
-            p5 = (dx - geo.squareness * p6 - ky * (p6 / 1000.0) ** 2) / (1.0 + geo.scale_x)
-    return p5, p6
+    return kik.table_motors(geo.ik_arrays, dx, dy)
 
 
 def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -53,9 +53,9 @@ def iter_program_batches(
             chars = 0
             while piece := fh.read(1 << 17):
                 chars += len(piece)
-                yield piece
                 if progress is not None:
                     progress(chars)
+                yield piece
 
         yield from gcode.iter_line_batches(pieces())
 

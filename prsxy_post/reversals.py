@@ -359,59 +359,139 @@ def path_roots(
     ok = (new * V0 < 0) & (new * V1 > 0)
     if not np.any(ok):
         return s, accel
+    where = _Looks(k, cols, h, velocity)
+    x, moved = _false_position(s, accel, V0, V1, new, ok, where, steps)
+    if not np.any(moved):
+        return s, accel
+    slope = _path_slopes(x, moved, where)
+    moved &= np.isfinite(slope)
+    return np.where(moved, x, s), np.where(moved, slope, accel)
+
+
+class _Looks(NamedTuple):
+    """Where :func:`path_roots` looks at the path: the steps ``k`` (m,) (rows of
+    the chunk), the motors ``cols`` (m,), the steps' durations ``h`` (m,) [s], and
+    the path's velocity inside steps (:data:`Velocity`)."""
+
+    k: np.ndarray
+    cols: np.ndarray
+    h: np.ndarray
+    velocity: Velocity
+
+
+class _Bracket(NamedTuple):
+    """False position's bracket about each of m roots: the fractions of the step
+    ``s_a`` where the path's velocity ``v_a`` [mm/s] is still the old way and
+    ``s_b`` where ``v_b`` is the new way, and ``last`` the end moved last (−1 a,
+    +1 b, 0 neither)."""
+
+    s_a: np.ndarray
+    v_a: np.ndarray
+    s_b: np.ndarray
+    v_b: np.ndarray
+    last: np.ndarray
+
+
+def _false_position(
+    s: np.ndarray,
+    accel: np.ndarray,
+    V0: np.ndarray,
+    V1: np.ndarray,
+    new: np.ndarray,
+    ok: np.ndarray,
+    where: _Looks,
+    steps: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Up to ``steps`` steps of false position with the Illinois rule from the
+    cubic's roots ``s`` (m,) of the steps ``ok`` (m,) bool, bracketed by the
+    step's ends (velocities V0, V1 [mm/s]), until the path's velocity at each is
+    what the acceleration makes in ROOT_TIME_S (:func:`path_roots`).
+
+    Returns
+    -------
+    x : (m,) the roots [fraction of the step]
+    moved : (m,) bool, moved off the cubic's root (where the path was known)
+    """
+    # the bracket starts at the step's ends; the end moved last: −1 a, +1 b
     s_a, v_a = np.zeros(len(s)), V0.astype(float)
     s_b, v_b = np.ones(len(s)), V1.astype(float)
+    br = _Bracket(s_a, v_a, s_b, v_b, np.zeros(len(s), dtype=int))
     x = s.copy()
-    last = np.zeros(len(s), dtype=int)  # the end moved last: −1 a, +1 b
     # the roots still sought, and those moved off the cubic's
     going = ok.copy()
     moved = np.zeros(len(s), dtype=bool)
     for _ in range(steps):
-        v = velocity(k[going], x[going], cols[going])
+        v = where.velocity(where.k[going], x[going], where.cols[going])
         known = np.zeros(len(s), dtype=bool)
         known[going] = np.isfinite(v)
         vm = np.zeros(len(s))
         vm[going] = np.where(np.isfinite(v), v, 0.0)
         ok &= known | ~going
-        # found: the path's velocity there is what the acceleration makes in
-        # ROOT_TIME_S (on fast turns the cubic's root already is), the acceleration
-        # the cubic's or the secant to the bracket's other end, whichever is less
         new_way = new * vm > 0
-        s_o, v_o = np.where(new_way, s_a, s_b), np.where(new_way, v_a, v_b)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            secant = np.abs(vm - v_o) / (np.abs(x - s_o) * h)
-        slow = np.fmin(np.abs(accel), secant)
-        found = going & known & (np.abs(vm) * ROOT_SLOPE_MARGIN <= slow * ROOT_TIME_S)
+        found = going & known & _root_found(x, vm, new_way, br, accel, where.h)
         going &= known & ~found
         if not np.any(going):
             break
         moved |= going
-        turned = going & new_way
-        old = going & ~new_way
-        # Illinois: an end kept twice running has its velocity halved, so that
-        # false position closes in from both sides
-        v_a = np.where(turned & (last == 1), 0.5 * v_a, v_a)
-        v_b = np.where(old & (last == -1), 0.5 * v_b, v_b)
-        last = np.where(turned, 1, np.where(old, -1, last))
-        s_b, v_b = np.where(turned, x, s_b), np.where(turned, vm, v_b)
-        s_a, v_a = np.where(old, x, s_a), np.where(old, vm, v_a)
+        br = _illinois(br, x, vm, going & new_way, going & ~new_way)
         with np.errstate(divide="ignore", invalid="ignore"):
-            x_new = s_a - v_a * (s_b - s_a) / (v_b - v_a)
-        x = np.where(going & np.isfinite(x_new), np.clip(x_new, s_a, s_b), x)
+            x_new = br.s_a - br.v_a * (br.s_b - br.s_a) / (br.v_b - br.v_a)
+        x = np.where(going & np.isfinite(x_new), np.clip(x_new, br.s_a, br.s_b), x)
     moved &= ok
-    if not np.any(moved):
-        return s, accel
+    return x, moved
+
+
+def _root_found(
+    x: np.ndarray,
+    vm: np.ndarray,
+    new_way: np.ndarray,
+    br: _Bracket,
+    accel: np.ndarray,
+    h: np.ndarray,
+) -> np.ndarray:
+    """(m,) bool, the path's velocity ``vm`` [mm/s] at the fractions ``x`` is what
+    the acceleration makes in ROOT_TIME_S: the root is found."""
+    # found: the path's velocity there is what the acceleration makes in
+    # ROOT_TIME_S (on fast turns the cubic's root already is), the acceleration
+    # the cubic's or the secant to the bracket's other end, whichever is less
+    s_o, v_o = np.where(new_way, br.s_a, br.s_b), np.where(new_way, br.v_a, br.v_b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        secant = np.abs(vm - v_o) / (np.abs(x - s_o) * h)
+    slow = np.fmin(np.abs(accel), secant)
+    return np.abs(vm) * ROOT_SLOPE_MARGIN <= slow * ROOT_TIME_S
+
+
+def _illinois(
+    br: _Bracket, x: np.ndarray, vm: np.ndarray, turned: np.ndarray, old: np.ndarray
+) -> _Bracket:
+    """The bracket with its new-way end moved to ``x`` where the path's velocity
+    ``vm`` there has ``turned``, its old-way end where it is still ``old``."""
+    s_a, v_a, s_b, v_b, last = br
+    # Illinois: an end kept twice running has its velocity halved, so that
+    # false position closes in from both sides
+    v_a = np.where(turned & (last == 1), 0.5 * v_a, v_a)
+    v_b = np.where(old & (last == -1), 0.5 * v_b, v_b)
+    last = np.where(turned, 1, np.where(old, -1, last))
+    s_b, v_b = np.where(turned, x, s_b), np.where(turned, vm, v_b)
+    s_a, v_a = np.where(old, x, s_a), np.where(old, vm, v_a)
+    return _Bracket(s_a, v_a, s_b, v_b, last)
+
+
+def _path_slopes(x: np.ndarray, moved: np.ndarray, where: _Looks) -> np.ndarray:
+    """The path's acceleration [mm/s²] at the roots ``x`` (m,) that ``moved``
+    (NaN elsewhere, and where the path is not known)."""
     # the acceleration at a moved root: a central difference over ±ROOT_SLOPE_STEP
     # of the step (false position closes in from one side, and the bracket's other
     # end may stay at the step's end, too far for a slope at the root)
     d = ROOT_SLOPE_STEP
     lo, hi = np.clip(x[moved] - d, 0.0, 1.0), np.clip(x[moved] + d, 0.0, 1.0)
-    both = velocity(np.tile(k[moved], 2), np.concatenate([lo, hi]), np.tile(cols[moved], 2))
-    slope = np.full(len(s), np.nan)
+    both = where.velocity(
+        np.tile(where.k[moved], 2), np.concatenate([lo, hi]), np.tile(where.cols[moved], 2)
+    )
+    slope = np.full(len(x), np.nan)
     with np.errstate(divide="ignore", invalid="ignore"):
-        slope[moved] = (both[len(lo) :] - both[: len(lo)]) / ((hi - lo) * h[moved])
-    moved &= np.isfinite(slope)
-    return np.where(moved, x, s), np.where(moved, slope, accel)
+        slope[moved] = (both[len(lo) :] - both[: len(lo)]) / ((hi - lo) * where.h[moved])
+    return slope
 
 
 def windows(
@@ -786,6 +866,40 @@ class _Turns(NamedTuple):
     acc: np.ndarray
 
 
+class _Chunk(NamedTuple):
+    """A chunk's n points as :func:`plan_insertions` looks at them.
+
+    t_end : (n,) time of each point since the point before the chunk [s]
+    dt : (n,) time of the step that ends at each point [s]
+    resting : (n,) bool, the path stands at the point
+    P, V : (off + n, 5) wanted motor positions and velocities [mm, mm/s], the
+        point before the chunk first where there is one
+    rest : (off + n,) bool, ``resting`` likewise
+    off : 1 where the point before the chunk leads P, V and rest, else 0
+    """
+
+    t_end: np.ndarray
+    dt: np.ndarray
+    resting: np.ndarray
+    P: np.ndarray
+    V: np.ndarray
+    rest: np.ndarray
+    off: int
+
+
+class _Rules(NamedTuple):
+    """What sizes a crossing window (:func:`plan_insertions`'s parameters): the
+    path error allowed to a crossing ``tol`` [mm], the longest window ``longest``
+    [s], straight lines between the points (``chords``) or cubics, and how fast a
+    motor may move while its part stands (``edge_speed``, None: the tolerance
+    alone decides)."""
+
+    tol: float
+    longest: float
+    chords: bool
+    edge_speed: EdgeSpeed | None
+
+
 def plan_insertions(
     t_end: np.ndarray,
     dt: np.ndarray,
@@ -838,235 +952,372 @@ def plan_insertions(
         there): with ``chords``, no window reaches over one into the step beside
     """
     ins = Insertions()
-    n = len(dt)
     if prev is None:
-        P_all, V_all, rest_all, off = P, V, resting, 0
+        ch = _Chunk(t_end, dt, resting, P, V, resting, 0)
     else:
         P_all = np.vstack([prev[0][None, :], P])
         V_all = np.vstack([prev[1][None, :], V])
         rest_all = np.concatenate([[prev[2]], resting])
-        off = 1
+        ch = _Chunk(t_end, dt, resting, P_all, V_all, rest_all, 1)
+    rules = _Rules(tol, longest, chords, edge_speed)
     drift = DRIFT_SHARE * tol
-    w_k: list[np.ndarray] = []
-    w_col: list[np.ndarray] = []
-    w_ta: list[np.ndarray] = []
-    w_tb: list[np.ndarray] = []
-    w_new: list[np.ndarray] = []
+    w = _Windows([], [], [], [], [])
     # first every motor's reversals and their kinds, then the roots of those in
     # motion moved onto the path in one search for all the motors (each look at
     # the path is an IK call), then the windows
     seen: list[_Turns] = []
     for col in cols:
-        sg = np.where(rest_all, 0, signs(V_all[:, col]))
-        # creeps back become reversals; the reach is carried to the next chunk
-        crept, ref[col] = _creeps(sg, P_all[:, col], int(side[col]), float(ref[col]), drift)
-        sg = np.where(crept != 0, crept, sg)
-        # the side a row comes from: the last direction before it, or the carried one
-        came = np.concatenate([[side[col]], carried(sg, side[col])[:-1]])
-        r = np.flatnonzero((sg != 0) & (sg != came))
-        r = r[(r - off >= 0) & (r - off < n)]
-        k = r - off
-        new = sg[r]
-        p = P_all[:, col]
-        # a step whose chord goes the old way sets off that way first and turns
-        # inside it: a reversal in motion, at the cubic's root, also where the step
-        # leaves from rest or from a motor standing (a head motor through the extreme
-        # of a tilt: 0.22 % over F, and 0.5 µm off the path from rest,
-        # test_controller_truth's found programs)
-        old_way = new * (p[r] - p[np.maximum(r - 1, 0)]) < 0.0
-        at_rest = (r == 0) | (rest_all[np.maximum(r - 1, 0)] & ~old_way)
-        crept_f = (crept[r] != 0) & ~at_rest
-        # drifted back within a step that began moving the old way (it ends at rest,
-        # or creeping): the step's cubic turns inside it, and the window goes there
-        crept_f &= sg[np.maximum(r - 1, 0)] != -new
-        stood = (
-            ~at_rest
-            & ~crept_f
-            & (k >= 1)
-            & (r >= 2)
-            & (sg[np.maximum(r - 1, 0)] == 0)
-            & (sg[np.maximum(r - 2, 0)] == 0)
-            & (np.abs(p[np.maximum(r - 1, 0)] - p[np.maximum(r - 2, 0)]) < 1e-9)
-            & ~old_way
-        )
-        mid = ~(at_rest | crept_f | stood)
-        km, rm = k[mid], r[mid]
-        sr, acc = velocity_roots(
-            p[rm - 1], V_all[rm - 1, col], p[rm], V_all[rm, col], dt[km], new[mid]
-        )
-        seen.append(_Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc))
+        turns, ref[col] = _turns(ch, col, side, float(ref[col]), drift)
+        seen.append(turns)
     if velocity is not None and seen:
-        km_all = np.concatenate([x.k[x.mid] for x in seen])
-        col_all = np.concatenate([np.full(len(x.sr), x.col) for x in seen])
-        sr_all, acc_all = path_roots(
-            np.concatenate([x.sr for x in seen]),
-            np.concatenate([x.acc for x in seen]),
-            V_all[km_all + off - 1, col_all],
-            V_all[km_all + off, col_all],
-            dt[km_all],
-            np.concatenate([x.new[x.mid] for x in seen]),
-            km_all,
-            col_all,
-            velocity,
-        )
-        cut = np.cumsum([len(x.sr) for x in seen])[:-1]
-        seen = [
-            x._replace(sr=a, acc=b)
-            for x, a, b in zip(seen, np.split(sr_all, cut), np.split(acc_all, cut), strict=True)
-        ]
-    for col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc in seen:
-        for kk, nn in zip(k[at_rest].tolist(), new[at_rest].tolist(), strict=True):
+        seen = _onto_path(seen, ch, velocity)
+    for t in seen:
+        for kk, nn in zip(t.k[t.at_rest].tolist(), t.new[t.at_rest].tolist(), strict=True):
             ins.stand[kk] = longest
-            ins.stands.append((kk, col, nn))
-        # a creeping motor has drifted back past the allowance: it crosses over the
-        # end of this step (its speed makes the crossing's error tiny)
-        kc = k[crept_f]
-        t1 = t_end[kc]
-        w_k.append(kc)
-        w_ta.append(np.maximum(t1 - dt[kc], t1 - longest))
-        w_tb.append(t1)
-        # the motor stood through the step before while the path moved on: it crosses
-        # at that step's end, standing, and leaves from contact
-        ks = k[stood] - 1
-        t1 = t_end[ks]
-        t0 = t1 - dt[ks]
-        w_k.append(ks)
-        w_ta.append(np.where(t1 - t0 <= 1.5 * longest, t0, t1 - longest))
-        w_tb.append(t1)
-        # a dip: the motor moves the same way at both ends of a step, but the step's
-        # cubic turns twice inside it (the extreme of a tight curve between two
-        # points, or a corner whose point carries the mean of its sides' velocities)
-        j_dip = np.flatnonzero((sg[1:] == sg[:-1]) & (sg[1:] != 0)) + 1
-        j_dip = j_dip[(j_dip - off >= 0) & (j_dip - off < n)]
-        # setting off back: a motor at rest or standing leaves with its chord against
-        # the way it ends the step and its part is on: it goes the other way first
-        # and turns inside the step (from rest through the extreme of a tilt: 0.5
-        # µm off the path, test_controller_truth's found programs)
-        j_off = np.flatnonzero((sg[1:] != 0) & (sg[:-1] == 0)) + 1
-        j_off = j_off[(j_off - off >= 0) & (j_off - off < n) & (came[j_off] == sg[j_off])]
-        j_off = j_off[sg[j_off] * (p[j_off] - p[j_off - 1]) < 0.0]
-        dips = [
-            _dips(
-                j - off,
-                sg[j],
-                p[j - 1],
-                V_all[j - 1, col],
-                p[j],
-                V_all[j, col],
-                t_end,
-                dt,
-                tol,
-                longest,
-                edge_speed,
-                col,
-                chords,
-                sets_off,
-            )
-            for j, sets_off in ((j_dip, False), (j_off, True))
-        ]
-        # a reversal in motion: the window about the root of the step's cubic
-        km = k[mid]
-        h = dt[km]
-        t1 = t_end[km]
-        t0 = t1 - h
-        wide = None if edge_speed is None else reach(edge_speed(km, sr, col, acc), acc)
-        if chords:
-            # straight lines: a window may reach into the step beside (of this
-            # chunk) where the path moves through both without a corner between
-            # and the motor has no other window there, leaving it a servo cycle
-            prv, nxt = np.maximum(km - 1, 0), np.minimum(km + 1, n - 1)
-            busy = np.concatenate([k, k[stood] - 1, dips[0][0], dips[1][0]])
-            bent = np.zeros(0, dtype=int) if corners_at is None else corners_at
-            free_prev = (
-                (km >= 2)
-                & ~resting[prv]
-                & ~resting[np.maximum(km - 2, 0)]
-                & (dt[prv] > 0)
-                & ~np.isin(km - 1, busy)
-                & ~np.isin(km - 1, bent)
-            )
-            free_next = (
-                (km + 1 < n)
-                & ~resting[km]
-                & ~resting[nxt]
-                & (dt[nxt] > 0)
-                & ~np.isin(km + 1, busy)
-                & ~np.isin(km, bent)
-            )
-            t_before = t0 - np.where(free_prev, np.clip(dt[prv] - MIN_WINDOW_S, 0.0, None), 0.0)
-            t_after = t1 + np.where(free_next, np.clip(dt[nxt] - MIN_WINDOW_S, 0.0, None), 0.0)
-            ta, tb = chord_windows(t0, t1, t0 + sr * h, acc, tol, longest, wide, t_before, t_after)
-        else:
-            ta, tb = windows(t0, t1, t0 + sr * h, acc, tol, longest, wide)
-        w_k.append(km)
-        w_ta.append(ta)
-        w_tb.append(tb)
-        news = [new[crept_f], new[stood], new[mid]]
-        for kd, new_d, ta_d, tb_d in dips:
-            w_k.append(kd)
-            w_ta.append(ta_d)
-            w_tb.append(tb_d)
-            news.append(new_d)
+            ins.stands.append((kk, t.col, nn))
+        ks, tas, tbs, news = _motor_windows(t, ch, rules, corners_at)
+        w.k.extend(ks)
+        w.ta.extend(tas)
+        w.tb.extend(tbs)
         new_all = np.concatenate(news)
-        w_col.append(np.full(len(new_all), col))
-        w_new.append(new_all)
-    if w_col:
-        wk = np.concatenate(w_k)
-        ta, tb = np.concatenate(w_ta), np.concatenate(w_tb)
-        t1 = t_end[wk]
-        t0 = t1 - dt[wk]
-        # a window that reaches over an end of its step begins in the step before
-        # or ends in the next
-        wka = np.where(ta < t0, wk - 1, wk)
-        wkb = np.where(tb > t1, wk + 1, wk)
-        t1a, t1b = t_end[wka], t_end[np.minimum(wkb, n - 1)]
-        t0a, t0b = t1a - dt[wka], t1b - dt[np.minimum(wkb, n - 1)]
-        ek = np.concatenate([wka, wkb])
-        e_t0, e_t1 = np.concatenate([t0a, t0b]), np.concatenate([t1a, t1b])
-        both = _snap(ek, np.concatenate([ta, tb]), e_t0, e_t1)
-        ta, tb = both[: len(wk)], both[len(wk) :]
-        ins.w_k, ins.w_col, ins.w_ta, ins.w_tb = wka, np.concatenate(w_col), ta, tb
-        ins.w_new = np.concatenate(w_new)
-        ins.w_t0, ins.w_kb, ins.w_t0b = t0a, wkb, t0b
-        # the points inside steps: each distinct window edge strictly inside its step
-        et = both
-        inside = (et > e_t0) & (et < e_t1)
-        ek, et = ek[inside], et[inside]
-        # the points τ each side of a blended corner (corners); none where a
-        # window's edge is that near already, inside a window (another motor's
-        # crossing), or after a standing point at the corner
-        if blends is None:
-            blends = (np.zeros(0, dtype=int), np.zeros(0))
-        rows, tau = blends
-        late, tau_l = rows, tau
-        t_late = t_end[late] - tau_l
-        early, tau_e = rows + 1, tau
-        ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
-        if near_first:
-            early, tau_e = np.concatenate([[0], early]), np.concatenate([[near_first], tau_e])
-        keep = (early < n) & ~np.isin(early, list(ins.stand))
-        early, tau_e = early[keep], tau_e[keep]
-        t_early = t_end[early] - dt[early] + tau_e
-        edges, starts, stops = np.sort(et), np.sort(ta), np.sort(tb)
-
-        def free(t_new: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-            no_edge = np.searchsorted(edges, lo, "left") == np.searchsorted(edges, hi, "right")
-            within = np.searchsorted(starts, t_new, "left") - np.searchsorted(stops, t_new, "right")
-            return no_edge & (within <= 0)
-
-        ok_l = (dt[late] >= 2 * tau_l) & free(t_late, t_late - tau_l, t_end[late])
-        ok_e = (dt[early] >= 2 * tau_e) & free(t_early, t_early - tau_e, t_early + tau_e)
-        ins.blended = late[ok_l]
-        ek = np.concatenate([ek, late[ok_l], early[ok_e]])
-        et = np.concatenate([et, t_late[ok_l], t_early[ok_e]])
-        # each distinct (step, time) once, sorted by step, then time
-        order = np.lexsort((et, ek))
-        ek, et = ek[order], et[order]
-        new = np.ones(len(ek), dtype=bool)
-        new[1:] = (ek[1:] != ek[:-1]) | (et[1:] != et[:-1])
-        ins.mid_k = ek[new].astype(int)
-        ins.mid_t = et[new]
+        w.col.append(np.full(len(new_all), t.col))
+        w.new.append(new_all)
+    if w.col:
+        _place_points(ins, ch, w, blends, near_first)
     return ins
+
+
+class _Windows(NamedTuple):
+    """The crossing windows inside steps gathered motor by motor, each a list of
+    arrays to be joined in order: steps ``k``, motors ``col``, starts ``ta`` and
+    ends ``tb`` [s], new sides ``new`` (:class:`Insertions`' w_*)."""
+
+    k: list[np.ndarray]
+    col: list[np.ndarray]
+    ta: list[np.ndarray]
+    tb: list[np.ndarray]
+    new: list[np.ndarray]
+
+
+def _place_points(
+    ins: Insertions,
+    ch: _Chunk,
+    w: _Windows,
+    blends: tuple[np.ndarray, np.ndarray] | None,
+    near_first: float,
+) -> None:
+    """Set in ``ins`` every window (its edges snapped, :func:`_place_windows`) and
+    the points inside steps: the windows' edges and the blends' points
+    (:func:`_blend_points`), each distinct (step, time) once."""
+    ek, et = _place_windows(
+        ins, ch, np.concatenate(w.k), np.concatenate(w.ta), np.concatenate(w.tb)
+    )
+    ins.w_col = np.concatenate(w.col)
+    ins.w_new = np.concatenate(w.new)
+    late, t_late, early, t_early = _blend_points(ins, ch, blends, near_first, et)
+    ins.blended = late
+    ek = np.concatenate([ek, late, early])
+    et = np.concatenate([et, t_late, t_early])
+    ins.mid_k, ins.mid_t = _distinct_points(ek, et)
+
+
+def _turns(
+    ch: _Chunk, col: int, side: np.ndarray, ref: float, drift: float
+) -> tuple[_Turns, float]:
+    """Motor ``col``'s reversals in the chunk and their kinds (:class:`_Turns`),
+    the roots and accelerations of those in motion on the steps' cubics; and where
+    it got farthest its last way (the ``ref`` [mm] carried to the next chunk,
+    :func:`_creeps`). ``side`` (5,) the side each motor is on before the chunk;
+    ``drift`` [mm] the drift back that makes a creeping motor cross."""
+    n, off, dt = len(ch.dt), ch.off, ch.dt
+    sg = np.where(ch.rest, 0, signs(ch.V[:, col]))
+    # creeps back become reversals; the reach is carried to the next chunk
+    crept, reach_ref = _creeps(sg, ch.P[:, col], int(side[col]), ref, drift)
+    sg = np.where(crept != 0, crept, sg)
+    # the side a row comes from: the last direction before it, or the carried one
+    came = np.concatenate([[side[col]], carried(sg, side[col])[:-1]])
+    r = np.flatnonzero((sg != 0) & (sg != came))
+    r = r[(r - off >= 0) & (r - off < n)]
+    k = r - off
+    new = sg[r]
+    p = ch.P[:, col]
+    # a step whose chord goes the old way sets off that way first and turns
+    # inside it: a reversal in motion, at the cubic's root, also where the step
+    # leaves from rest or from a motor standing (a head motor through the extreme
+    # of a tilt: 0.22 % over F, and 0.5 µm off the path from rest,
+    # test_controller_truth's found programs)
+    old_way = new * (p[r] - p[np.maximum(r - 1, 0)]) < 0.0
+    at_rest = (r == 0) | (ch.rest[np.maximum(r - 1, 0)] & ~old_way)
+    crept_f = (crept[r] != 0) & ~at_rest
+    # drifted back within a step that began moving the old way (it ends at rest,
+    # or creeping): the step's cubic turns inside it, and the window goes there
+    crept_f &= sg[np.maximum(r - 1, 0)] != -new
+    stood = (
+        ~at_rest
+        & ~crept_f
+        & (k >= 1)
+        & (r >= 2)
+        & (sg[np.maximum(r - 1, 0)] == 0)
+        & (sg[np.maximum(r - 2, 0)] == 0)
+        & (np.abs(p[np.maximum(r - 1, 0)] - p[np.maximum(r - 2, 0)]) < 1e-9)
+        & ~old_way
+    )
+    mid = ~(at_rest | crept_f | stood)
+    km, rm = k[mid], r[mid]
+    sr, acc = velocity_roots(p[rm - 1], ch.V[rm - 1, col], p[rm], ch.V[rm, col], dt[km], new[mid])
+    turns = _Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc)
+    return turns, reach_ref
+
+
+def _onto_path(seen: list[_Turns], ch: _Chunk, velocity: Velocity) -> list[_Turns]:
+    """Every motor's reversals in motion with their roots moved onto the path's
+    own velocity (:func:`path_roots`), in one search for all the motors."""
+    off = ch.off
+    km_all = np.concatenate([x.k[x.mid] for x in seen])
+    col_all = np.concatenate([np.full(len(x.sr), x.col) for x in seen])
+    sr_all, acc_all = path_roots(
+        np.concatenate([x.sr for x in seen]),
+        np.concatenate([x.acc for x in seen]),
+        ch.V[km_all + off - 1, col_all],
+        ch.V[km_all + off, col_all],
+        ch.dt[km_all],
+        np.concatenate([x.new[x.mid] for x in seen]),
+        km_all,
+        col_all,
+        velocity,
+    )
+    cut = np.cumsum([len(x.sr) for x in seen])[:-1]
+    return [
+        x._replace(sr=a, acc=b)
+        for x, a, b in zip(seen, np.split(sr_all, cut), np.split(acc_all, cut), strict=True)
+    ]
+
+
+def _motor_windows(
+    t: _Turns, ch: _Chunk, rules: _Rules, corners_at: np.ndarray | None
+) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """One motor's crossing windows inside steps: for its reversals creeping,
+    standing, in motion, and its dips and settings-off back (two windows each),
+    in that order, the windows' steps, starts and ends [s] and new sides (four
+    lists of five arrays)."""
+    # a creeping motor has drifted back past the allowance: it crosses over the
+    # end of this step (its speed makes the crossing's error tiny)
+    kc = t.k[t.crept_f]
+    t1 = ch.t_end[kc]
+    ta_c, tb_c = np.maximum(t1 - ch.dt[kc], t1 - rules.longest), t1
+    # the motor stood through the step before while the path moved on: it crosses
+    # at that step's end, standing, and leaves from contact
+    ks = t.k[t.stood] - 1
+    t1 = ch.t_end[ks]
+    t0 = t1 - ch.dt[ks]
+    ta_s, tb_s = np.where(t1 - t0 <= 1.5 * rules.longest, t0, t1 - rules.longest), t1
+    dips = _motor_dips(t, ch, rules)
+    km, ta_m, tb_m = _motion_windows(t, ch, rules, dips, corners_at)
+    return (
+        [kc, ks, km, dips[0][0], dips[1][0]],
+        [ta_c, ta_s, ta_m, dips[0][2], dips[1][2]],
+        [tb_c, tb_s, tb_m, dips[0][3], dips[1][3]],
+        [t.new[t.crept_f], t.new[t.stood], t.new[t.mid], dips[0][1], dips[1][1]],
+    )
+
+
+def _motor_dips(
+    t: _Turns, ch: _Chunk, rules: _Rules
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """One motor's dips and settings-off back (:func:`_dips`), in that order: for
+    each, (step, new side, window start, window end) of its windows."""
+    sg, came, p, off, n = t.sg, t.came, t.p, ch.off, len(ch.dt)
+    # a dip: the motor moves the same way at both ends of a step, but the step's
+    # cubic turns twice inside it (the extreme of a tight curve between two
+    # points, or a corner whose point carries the mean of its sides' velocities)
+    j_dip = np.flatnonzero((sg[1:] == sg[:-1]) & (sg[1:] != 0)) + 1
+    j_dip = j_dip[(j_dip - off >= 0) & (j_dip - off < n)]
+    # setting off back: a motor at rest or standing leaves with its chord against
+    # the way it ends the step and its part is on: it goes the other way first
+    # and turns inside the step (from rest through the extreme of a tilt: 0.5
+    # µm off the path, test_controller_truth's found programs)
+    j_off = np.flatnonzero((sg[1:] != 0) & (sg[:-1] == 0)) + 1
+    j_off = j_off[(j_off - off >= 0) & (j_off - off < n) & (came[j_off] == sg[j_off])]
+    j_off = j_off[sg[j_off] * (p[j_off] - p[j_off - 1]) < 0.0]
+    return [
+        _dips(
+            j - off,
+            sg[j],
+            p[j - 1],
+            ch.V[j - 1, t.col],
+            p[j],
+            ch.V[j, t.col],
+            ch.t_end,
+            ch.dt,
+            rules.tol,
+            rules.longest,
+            rules.edge_speed,
+            t.col,
+            rules.chords,
+            sets_off,
+        )
+        for j, sets_off in ((j_dip, False), (j_off, True))
+    ]
+
+
+def _motion_windows(
+    t: _Turns,
+    ch: _Chunk,
+    rules: _Rules,
+    dips: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+    corners_at: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One motor's windows about its reversals in motion: their steps, starts and
+    ends [s] (:func:`windows`, or :func:`chord_windows` with ``chords``, which may
+    reach into a step beside that has no other window of the motor's: ``dips``)."""
+    # a reversal in motion: the window about the root of the step's cubic
+    col, sr, acc = t.col, t.sr, t.acc
+    km = t.k[t.mid]
+    h = ch.dt[km]
+    t1 = ch.t_end[km]
+    t0 = t1 - h
+    edge_speed = rules.edge_speed
+    wide = None if edge_speed is None else reach(edge_speed(km, sr, col, acc), acc)
+    if rules.chords:
+        busy = np.concatenate([t.k, t.k[t.stood] - 1, dips[0][0], dips[1][0]])
+        t_before, t_after = _chord_room(km, t0, t1, ch, busy, corners_at)
+        ta, tb = chord_windows(
+            t0, t1, t0 + sr * h, acc, rules.tol, rules.longest, wide, t_before, t_after
+        )
+    else:
+        ta, tb = windows(t0, t1, t0 + sr * h, acc, rules.tol, rules.longest, wide)
+    return km, ta, tb
+
+
+def _chord_room(
+    km: np.ndarray,
+    t0: np.ndarray,
+    t1: np.ndarray,
+    ch: _Chunk,
+    busy: np.ndarray,
+    corners_at: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """How far [s] a straight lines' window in step ``km`` (m,) [t0, t1] may reach
+    before and after its step (:func:`chord_windows`' ``t_before``, ``t_after``):
+    into the step beside where the path moves through both without a corner
+    (``corners_at``) between and the motor has no other window there (``busy``,
+    steps), leaving it a servo cycle."""
+    n, dt, resting = len(ch.dt), ch.dt, ch.resting
+    # straight lines: a window may reach into the step beside (of this
+    # chunk) where the path moves through both without a corner between
+    # and the motor has no other window there, leaving it a servo cycle
+    prv, nxt = np.maximum(km - 1, 0), np.minimum(km + 1, n - 1)
+    bent = np.zeros(0, dtype=int) if corners_at is None else corners_at
+    free_prev = (
+        (km >= 2)
+        & ~resting[prv]
+        & ~resting[np.maximum(km - 2, 0)]
+        & (dt[prv] > 0)
+        & ~np.isin(km - 1, busy)
+        & ~np.isin(km - 1, bent)
+    )
+    free_next = (
+        (km + 1 < n)
+        & ~resting[km]
+        & ~resting[nxt]
+        & (dt[nxt] > 0)
+        & ~np.isin(km + 1, busy)
+        & ~np.isin(km, bent)
+    )
+    t_before = t0 - np.where(free_prev, np.clip(dt[prv] - MIN_WINDOW_S, 0.0, None), 0.0)
+    t_after = t1 + np.where(free_next, np.clip(dt[nxt] - MIN_WINDOW_S, 0.0, None), 0.0)
+    return t_before, t_after
+
+
+def _place_windows(
+    ins: Insertions, ch: _Chunk, wk: np.ndarray, ta: np.ndarray, tb: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Set the windows' steps and snapped edges in ``ins`` (w_k, w_ta, w_tb, w_t0,
+    w_kb, w_t0b) from every window's step ``wk`` (w,) and edges ``ta``, ``tb`` (w,)
+    [s]; returns the edges strictly inside their steps: (steps, times)."""
+    n, t_end, dt = len(ch.dt), ch.t_end, ch.dt
+    t1 = t_end[wk]
+    t0 = t1 - dt[wk]
+    # a window that reaches over an end of its step begins in the step before
+    # or ends in the next
+    wka = np.where(ta < t0, wk - 1, wk)
+    wkb = np.where(tb > t1, wk + 1, wk)
+    t1a, t1b = t_end[wka], t_end[np.minimum(wkb, n - 1)]
+    t0a, t0b = t1a - dt[wka], t1b - dt[np.minimum(wkb, n - 1)]
+    ek = np.concatenate([wka, wkb])
+    e_t0, e_t1 = np.concatenate([t0a, t0b]), np.concatenate([t1a, t1b])
+    both = _snap(ek, np.concatenate([ta, tb]), e_t0, e_t1)
+    ta, tb = both[: len(wk)], both[len(wk) :]
+    ins.w_k, ins.w_ta, ins.w_tb = wka, ta, tb
+    ins.w_t0, ins.w_kb, ins.w_t0b = t0a, wkb, t0b
+    # the points inside steps: each distinct window edge strictly inside its step
+    et = both
+    inside = (et > e_t0) & (et < e_t1)
+    return ek[inside], et[inside]
+
+
+def _blend_points(
+    ins: Insertions,
+    ch: _Chunk,
+    blends: tuple[np.ndarray, np.ndarray] | None,
+    near_first: float,
+    et: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The points τ each side of the blended corners (:func:`corners`) that are
+    put in: (rows, times) before the corners, then (rows, times) after them; none
+    where a window's edge (``et`` [s], and ``ins``' windows) is that near
+    already, inside a window (another motor's crossing), or after a standing point
+    at the corner. Sets ``ins.near_next``."""
+    n, t_end, dt = len(ch.dt), ch.t_end, ch.dt
+    # the points τ each side of a blended corner (corners); none where a
+    # window's edge is that near already, inside a window (another motor's
+    # crossing), or after a standing point at the corner
+    if blends is None:
+        blends = (np.zeros(0, dtype=int), np.zeros(0))
+    rows, tau = blends
+    late, tau_l = rows, tau
+    t_late = t_end[late] - tau_l
+    early, tau_e = rows + 1, tau
+    ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
+    if near_first:
+        early, tau_e = np.concatenate([[0], early]), np.concatenate([[near_first], tau_e])
+    keep = (early < n) & ~np.isin(early, list(ins.stand))
+    early, tau_e = early[keep], tau_e[keep]
+    t_early = t_end[early] - dt[early] + tau_e
+    edges, starts, stops = np.sort(et), np.sort(ins.w_ta), np.sort(ins.w_tb)
+    ok_l = (dt[late] >= 2 * tau_l) & _free(
+        t_late, t_late - tau_l, t_end[late], edges, starts, stops
+    )
+    ok_e = (dt[early] >= 2 * tau_e) & _free(
+        t_early, t_early - tau_e, t_early + tau_e, edges, starts, stops
+    )
+    return late[ok_l], t_late[ok_l], early[ok_e], t_early[ok_e]
+
+
+def _free(
+    t_new: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    edges: np.ndarray,
+    starts: np.ndarray,
+    stops: np.ndarray,
+) -> np.ndarray:
+    """(m,) bool, no window edge (sorted ``edges`` [s]) lies in [lo, hi] and the
+    time ``t_new`` is inside no window (sorted ``starts`` and ``stops`` [s])."""
+    no_edge = np.searchsorted(edges, lo, "left") == np.searchsorted(edges, hi, "right")
+    within = np.searchsorted(starts, t_new, "left") - np.searchsorted(stops, t_new, "right")
+    return no_edge & (within <= 0)
+
+
+def _distinct_points(ek: np.ndarray, et: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each distinct (step, time) of the points ``ek``, ``et`` (m,) once, sorted by
+    step, then time."""
+    # each distinct (step, time) once, sorted by step, then time
+    order = np.lexsort((et, ek))
+    ek, et = ek[order], et[order]
+    new = np.ones(len(ek), dtype=bool)
+    new[1:] = (ek[1:] != ek[:-1]) | (et[1:] != et[:-1])
+    return ek[new].astype(int), et[new]
 
 
 class Rows:
@@ -1229,11 +1480,7 @@ def catch_up(
     # the last point whose command carries the offset: the next crossing's start,
     # or the chunk's last point
     last = np.where(stop < n, stop, n - 1)
-    # a little faster where that has it gone by the next crossing
-    room = np.where((stop < n) & (last > start), s_path[last] - s0, 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        need = np.where(room > 0, np.abs(off0) / room, np.inf)
-    rate = np.where(need <= CATCH_UP_HURRY * share, np.maximum(need, share), share)
+    rate = _catch_up_rates(off0, start, stop, last, s0, s_path, share)
     # the points up to where the offset is gone; a part ahead: where it is gone
     # depends on the motor's moves too (below)
     gone = np.searchsorted(s_path, s0 + np.abs(off0) / rate, "left")
@@ -1244,25 +1491,90 @@ def catch_up(
     mag = np.maximum(np.repeat(np.abs(off0), length) - np.repeat(rate, length) * run, 0.0)
     steep_motor = np.full(len(idx), np.inf)
     if motion is not None and np.any(ahead_way):
-        dP, V, speed = motion
-        which = np.repeat(np.arange(len(off0)), length)
-        mine = ahead_way[which]
-        # the step into each point takes the share of its path, or half the
-        # motor's move its way, whichever is less
-        ds = s_path[idx] - np.where(idx >= 1, s_path[np.maximum(idx - 1, 0)], 0.0)
-        w = way[which]
-        take = np.where(mine, np.minimum(rate[which] * ds, np.maximum(0.5 * w * dP[idx], 0.0)), 0.0)
-        # the cumulative take within each range: less what the ranges before took
-        cum = np.concatenate([[0.0], np.cumsum(take)])
-        before = np.repeat(cum[np.cumsum(length) - length], length)
-        mag = np.where(mine, np.maximum(np.abs(off0)[which] - (cum[1:] - before), 0.0), mag)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            steep_motor = np.where(
-                mine & (speed[idx] > 0),
-                np.maximum(0.5 * w * V[idx], 0.0) / speed[idx],
-                np.inf,
-            )
+        mag, steep_motor = _taken_up_ahead(
+            off0, way, ahead_way, rate, idx, length, mag, s_path, motion
+        )
     off = np.copysign(mag, np.repeat(off0, length))
+    left = _left_at_last(off0, start, last, s0, rate, s_path, ahead_way, length, mag)
+    keep = mag > 0
+    slope = _catch_up_slopes(idx, off, mag, np.repeat(rate, length), steep_motor, s_path)
+    return idx[keep], off[keep], slope[keep], left
+
+
+def _catch_up_rates(
+    off0: np.ndarray,
+    start: np.ndarray,
+    stop: np.ndarray,
+    last: np.ndarray,
+    s0: np.ndarray,
+    s_path: np.ndarray,
+    share: float,
+) -> np.ndarray:
+    """The rate (m,) [mm of offset per mm of path] at which each offset ``off0``
+    (m,) [mm] is taken up after the crossing ending at ``start`` (path length
+    ``s0`` there [mm]): ``share``, or up to CATCH_UP_HURRY times it where that has
+    it gone by the point ``last`` before the next crossing (``stop`` < n)."""
+    n = len(s_path)
+    # a little faster where that has it gone by the next crossing
+    room = np.where((stop < n) & (last > start), s_path[last] - s0, 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        need = np.where(room > 0, np.abs(off0) / room, np.inf)
+    return np.where(need <= CATCH_UP_HURRY * share, np.maximum(need, share), share)
+
+
+def _taken_up_ahead(
+    off0: np.ndarray,
+    way: np.ndarray,
+    ahead_way: np.ndarray,
+    rate: np.ndarray,
+    idx: np.ndarray,
+    length: np.ndarray,
+    mag: np.ndarray,
+    s_path: np.ndarray,
+    motion: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
+    """The offsets' magnitudes (k,) [mm] at the points ``idx`` (k,) of the
+    crossings (``length`` (m,) points each), those of parts ahead of their motor's
+    way (``ahead_way`` (m,)) taken up at ``rate`` (m,) but over no step by more
+    than half the motor's own move its way; and for those points the steepest
+    d off / d s that keeps (half the motor's velocity its way over the path
+    speed), inf elsewhere. ``motion`` as :func:`catch_up`'s."""
+    dP, V, speed = motion
+    which = np.repeat(np.arange(len(off0)), length)
+    mine = ahead_way[which]
+    # the step into each point takes the share of its path, or half the
+    # motor's move its way, whichever is less
+    ds = s_path[idx] - np.where(idx >= 1, s_path[np.maximum(idx - 1, 0)], 0.0)
+    w = way[which]
+    take = np.where(mine, np.minimum(rate[which] * ds, np.maximum(0.5 * w * dP[idx], 0.0)), 0.0)
+    # the cumulative take within each range: less what the ranges before took
+    cum = np.concatenate([[0.0], np.cumsum(take)])
+    before = np.repeat(cum[np.cumsum(length) - length], length)
+    mag = np.where(mine, np.maximum(np.abs(off0)[which] - (cum[1:] - before), 0.0), mag)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        steep_motor = np.where(
+            mine & (speed[idx] > 0),
+            np.maximum(0.5 * w * V[idx], 0.0) / speed[idx],
+            np.inf,
+        )
+    return mag, steep_motor
+
+
+def _left_at_last(
+    off0: np.ndarray,
+    start: np.ndarray,
+    last: np.ndarray,
+    s0: np.ndarray,
+    rate: np.ndarray,
+    s_path: np.ndarray,
+    ahead_way: np.ndarray,
+    length: np.ndarray,
+    mag: np.ndarray,
+) -> np.ndarray:
+    """The offset (m,) [mm] each crossing leaves at its ``last`` point: of
+    ``off0`` (m,), taken up at ``rate`` (m,) from the path length ``s0`` (m,) at
+    its ``start``; for a part ahead of its motor's way, the magnitude its range's
+    last point keeps (``mag``, ``length`` points a crossing)."""
     # left at the last point: a part behind by the closed form (all of it where
     # there is no point to take it), a part ahead what its range's last point keeps
     s_last = np.where(last > start, s_path[np.maximum(last, 0)], s0)
@@ -1271,18 +1583,55 @@ def catch_up(
         last_of = np.maximum(np.cumsum(length) - 1, 0)
         kept = mag[last_of] if len(mag) else np.zeros(len(off0))
         left_mag = np.where(ahead_way, np.where(length > 0, kept, np.abs(off0)), left_mag)
-    left = np.copysign(left_mag, off0)
-    keep = mag > 0
+    return np.copysign(left_mag, off0)
+
+
+def _catch_up_slopes(
+    idx: np.ndarray,
+    off: np.ndarray,
+    mag: np.ndarray,
+    rate: np.ndarray,
+    steep_motor: np.ndarray,
+    s_path: np.ndarray,
+) -> np.ndarray:
+    """d off / d s (k,) at the points ``idx`` (k,) with offsets ``off`` (k,) [mm]
+    (magnitudes ``mag``), taken up at ``rate`` (k,) [mm/mm] and no steeper than
+    ``steep_motor`` (k,)."""
+    n = len(s_path)
     # its slope at each point: over the step after it (a last bit of offset gone
     # early in that step gives the point a velocity to match, not the whole rate),
     # and for a part ahead no more than half its motor's velocity its way
     nxt = np.minimum(idx + 1, n - 1)
     ahead = np.where(idx + 1 < n, s_path[nxt] - s_path[idx], np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
-        steep = np.minimum(np.repeat(rate, length), np.where(ahead > 0, mag / ahead, np.inf))
+        steep = np.minimum(rate, np.where(ahead > 0, mag / ahead, np.inf))
     steep = np.minimum(steep, steep_motor)
-    slope = -np.sign(off) * steep
-    return idx[keep], off[keep], slope[keep], left
+    return -np.sign(off) * steep
+
+
+class Crossings(NamedTuple):
+    """One motor's c crossings in a chunk as the chain ends them where its part
+    stands and takes up the part's offset after them (chain.Pipeline._settle).
+
+    end, beg : (c,) int, the point where each crossing ends (the motor meets its
+        part) and where it began (−1: the point before the chunk)
+    up : (c,) bool, the motor crosses up (it was going down)
+    short : (c,) how far short of the contact the command at its end stays [mm]
+    stops : (c,) int, the point where the motor's next crossing begins, or the
+        chunk's length
+    made_end : (c,) the commands at the crossings' ends as first made [mm]
+    P_made, V_made : (n,) the motor's commands [mm, mm/s] with the crossings'
+        ends set, before any offset is taken up
+    """
+
+    end: np.ndarray
+    beg: np.ndarray
+    up: np.ndarray
+    short: np.ndarray
+    stops: np.ndarray
+    made_end: np.ndarray
+    P_made: np.ndarray
+    V_made: np.ndarray
 
 
 def follow(

@@ -307,6 +307,10 @@ def ballbar_gcode(
 ) -> str:
     """A ballbar test program: a full circle about the pivot, from and back to rest.
 
+    ``ccw`` runs the way G3 turns in the plane (G17, G18 or G19), counter-clockwise
+    seen from the positive end of the plane's normal (+Z, +Y, +X) as RS274/NGC
+    defines it; ``ccw=False`` the way G2 turns (``docs/data-formats.md``).
+
     XY circles without tilt are one G2/G3; tilted ("cone") circles keep the tool
     axis tilted by ``tilt_deg`` away from the pivot all round, which needs A/B to
     follow the angle, so they are written as short G1 moves whose chords stay

@@ -10,23 +10,125 @@ The writing runs in this process (:class:`WriterHere`) or, for large programs
 where processes can fork, in a process of its own (:class:`WriterProcess`),
 so formatting and writing the text overlap with the chain. The bytes are the
 same either way, and so is the error a user sees: the earliest in the program.
+
+Signals: Ctrl-C reaches every process of the terminal's process group, but only
+the process that started the conversion acts on it. A process forked for the
+work (:func:`forked`) ignores SIGINT and ends on SIGTERM, removing what it wrote
+(its parent sends SIGTERM when it stops); so no child prints a traceback, and a
+stop leaves no temp file.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import re
+import signal
 import sys
 import tempfile
+import threading
 import time
 import traceback
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import PrsxyError, write_failed
+from .errors import ProcessFailed, PrsxyError, write_failed
 from .runtime import peak_rss_mb
 
 Piece = tuple[int, str]
+
+
+#: the signals a stop arrives by: Ctrl-C (to the whole process group) and the
+#: SIGTERM a parent sends its children
+STOP_SIGNALS = frozenset({signal.SIGINT, signal.SIGTERM})
+
+
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """SIGINT and SIGTERM held back in this thread, and delivered when the block
+    ends: a stop cannot fall between renaming an output into place and saying so,
+    and a process or thread started inside begins with them held (so it can set
+    its own handling before any arrives). Does nothing off the main thread, where
+    Python runs no signal handler anyway."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def _exit_on_term(signum: int, frame: Any) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # once: the cleanup is not cut short
+    raise SystemExit(128 + signum)
+
+
+def forked(target: Callable[..., None], *args: Any) -> Any:
+    """Start ``target(*args)`` in a forked process that ignores Ctrl-C (its parent
+    handles it) and, on SIGTERM, raises SystemExit, so its ``finally`` and
+    ``except`` blocks clean up and it ends without a traceback. The process
+    starts with the stop signals held (:func:`signals_held`) until its handling
+    is set."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")
+    sys.stdout.flush()
+    sys.stderr.flush()
+    with signals_held():
+        proc = ctx.Process(target=_child, args=(target, *args), daemon=True)
+        proc.start()
+    return proc
+
+
+def _child(target: Callable[..., None], *args: Any) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _exit_on_term)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOP_SIGNALS)
+    target(*args)
+
+
+def how_it_ended(proc: Any) -> str:
+    """What became of a child process, for a message: "killed by SIGKILL", "exit
+    status 1"."""
+    proc.join(timeout=1.0)
+    code = proc.exitcode
+    if code is None:
+        return "still running"
+    if code < 0:
+        try:
+            return f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit status {code}"
+
+
+def stop(proc: Any, timeout: float = 10.0) -> None:
+    """End a child process started by :func:`forked`: SIGTERM (it cleans up and
+    exits), then SIGKILL if it has not ended within ``timeout`` seconds."""
+    if proc.is_alive():
+        proc.terminate()
+        proc.join(timeout)
+    if proc.is_alive():
+        proc.kill()
+    proc.join()
+
+
+def remove_leftovers(out: str) -> None:
+    """Remove the temp files :class:`Parts` makes for the output ``out`` (or its
+    parts) that are still on disk: a process killed before it could remove its
+    own left them."""
+    if out == "-":
+        return
+    target = Path(out)
+    base, ext = (re.escape(x) for x in os.path.splitext(target.name))
+    ours = re.compile(rf"\.{base}(\.part\d+)?{ext}\.[^.]+\.tmp")
+    for tmp in target.parent.glob(".*.tmp"):
+        if ours.fullmatch(tmp.name):
+            tmp.unlink(missing_ok=True)
 
 
 def part_path(out: str, part: int, split: bool) -> str:
@@ -131,7 +233,8 @@ def _serve(conn: Any, here: WriterHere) -> None:
     with ("done", Written) or ("error", PrsxyError) / ("crash", text); or
     ("check",), answered with the first error so far or ("ok",); or
     ("discard",). After an error the chunks still coming are read and dropped,
-    so the chain never writes into a closed pipe."""
+    so the chain never writes into a closed pipe. On SIGTERM (:func:`stop`) or
+    anything else that ends it early, it removes its temp files first."""
     failed: tuple[str, Any] | None = None
     try:
         while True:
@@ -166,9 +269,13 @@ def _serve(conn: Any, here: WriterHere) -> None:
                 here.discard()
                 conn.send(failed)
                 return
-    except BaseException:
+    except SystemExit:
         here.discard()
         raise
+    except BaseException:
+        here.discard()
+        with contextlib.suppress(Exception):
+            conn.send(("crash", traceback.format_exc()))
     finally:
         conn.close()
 
@@ -184,15 +291,27 @@ class WriterProcess:
 
         ctx = multiprocessing.get_context("fork")
         self.conn, child = ctx.Pipe(duplex=True)
-        sys.stdout.flush()
-        sys.stderr.flush()
-        self.proc = ctx.Process(target=_serve, args=(child, WriterHere(writer, parts)), daemon=True)
-        self.proc.start()
+        self.proc = forked(_serve, child, WriterHere(writer, parts))
         child.close()
+        self.output = parts.output
         self.done = False
+        self.result: Written | None = None
+
+    def _died(self) -> ProcessFailed:
+        return ProcessFailed(
+            f"the writer process ended without a result ({how_it_ended(self.proc)}); "
+            f"{self.output} not written"
+        )
 
     def _send(self, *msg: Any) -> None:
-        self.conn.send(msg)
+        try:
+            self.conn.send(msg)
+        except OSError:
+            # only the writer reads this pipe, and it closes it only as it ends
+            self.proc.join(timeout=1.0)
+            if self.proc.is_alive():
+                raise
+            raise self._died() from None
 
     def begin(self) -> None:
         self._send("begin")
@@ -204,11 +323,13 @@ class WriterProcess:
         try:
             return self.conn.recv()
         except (EOFError, OSError):
-            return ("crash", "the writer process ended without a result")
+            raise self._died() from None
 
     def finish(self) -> Written:
         self._send("finish")
         msg = self._answer()
+        if msg[0] == "done":
+            self.result = msg[1]
         self.done = True
         self.proc.join()
         if msg[0] == "done":
@@ -234,15 +355,20 @@ class WriterProcess:
         return None
 
     def discard(self) -> None:
-        """Stop the writer and remove its temp files (after ``finish`` the temp
-        files are this process's to remove)."""
-        if not self.done and self.proc.is_alive():
-            try:
-                self._send("discard")
-            except OSError:
-                pass
-            self.proc.join(timeout=10.0)
-        if self.proc.is_alive():
-            self.proc.terminate()
-            self.proc.join()
+        """Stop the writer and remove its temp files: it removes them itself when
+        stopped (:func:`stop`); after ``finish`` they are this process's to remove."""
+        stop(self.proc)
+        if self.result is not None:
+            for tmp in self.result.temps.values():
+                if os.path.exists(tmp):
+                    os.unlink(tmp)
+        elif self.proc.exitcode is None or self.proc.exitcode < 0:
+            # killed before it could remove its own (SIGKILL, the OOM killer)
+            remove_leftovers(self.output)
         self.conn.close()
+
+
+def can_fork() -> bool:
+    import multiprocessing
+
+    return "fork" in multiprocessing.get_all_start_methods()

@@ -90,6 +90,8 @@ class MotionRun:
     t: np.ndarray
     line: np.ndarray
     errors: list[str]
+    #: status reads that failed and were recovered from (a new status channel each)
+    failed_polls: int = 0
 
     @property
     def waiting_s(self) -> float:
@@ -116,6 +118,10 @@ e = linuxcnc.error_channel()
 s = None
 #: status reads that failed (a new status channel was opened after each)
 failed_polls = 0
+#: status reads to fail on purpose first, as a loaded machine's do (the tests'
+#: check of the recovery below; 0 in every measuring run)
+inject = int(os.environ.get("PRSXY_FAIL_POLLS", "0"))
+broken = None
 
 
 def poll():
@@ -123,11 +129,16 @@ def poll():
     # (emcmodule.cc, poll: check_stat before peek), so once a read of the status
     # buffer failed on a loaded machine ("emcStatusBuffer invalid err=5",
     # NML_INTERNAL_CMS_ERROR) that channel fails every poll: open a new one
-    global s, failed_polls
+    global s, failed_polls, inject, broken
     for attempt in range(50):
         try:
             if s is None:
                 s = linuxcnc.stat()
+            if inject > 0 and s is not broken:
+                inject -= 1
+                broken = s  # as a real failed read leaves it: failing from now on
+            if s is broken:
+                raise linuxcnc.error("emcStatusBuffer invalid err=5 (injected)")
             s.poll()
             return True
         except linuxcnc.error:
@@ -265,7 +276,9 @@ _HOST_MESSAGES = (
 ATTEMPTS = 3
 
 
-def run(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: float) -> MotionRun:
+def run(
+    text: str, limits: MachineLimits, start: np.ndarray, timeout_s: float, fail_polls: int = 0
+) -> MotionRun:
     """Run ``text`` on LinuxCNC, homed at the pose ``start``; what it commanded.
 
     ``timeout_s`` bounds the program's own run (it runs in real time). Where
@@ -276,14 +289,16 @@ def run(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: float) -
         raise RuntimeError("LinuxCNC's motion controller is not installed")
     for attempt in range(ATTEMPTS):
         try:
-            return _run_once(text, limits, start, timeout_s)
+            return _run_once(text, limits, start, timeout_s, fail_polls)
         except HostError:
             if attempt == ATTEMPTS - 1:
                 raise
     raise AssertionError("unreachable")
 
 
-def _run_once(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: float) -> MotionRun:
+def _run_once(
+    text: str, limits: MachineLimits, start: np.ndarray, timeout_s: float, fail_polls: int
+) -> MotionRun:
     start = np.asarray(start, dtype=float)
     lock = Path(tempfile.gettempdir()) / "prsxy-linuxcnc.lock"
     with open(lock, "w") as held, tempfile.TemporaryDirectory(prefix="prsxy-lcnc-") as tmp:
@@ -307,6 +322,7 @@ def _run_once(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: fl
             PRSXY_SAMPLES=str(d / "samples.txt"),
             PRSXY_ERRORS=str(d / "errors.txt"),
             PRSXY_TIMEOUT=repr(float(timeout_s)),
+            PRSXY_FAIL_POLLS=str(int(fail_polls)),
             # LinuxCNC writes its logs (linuxcnc_print.txt, linuxcnc_debug.txt) there
             HOME=str(d),
         )
@@ -329,6 +345,8 @@ def _run_once(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: fl
             tail = log.read_text(errors="replace").splitlines()[-15:] if log.exists() else []
             raise HostError("LinuxCNC did not run the program:\n" + "\n".join(tail))
         errors = [e for e in errors_file.read_text().splitlines() if e]
+        polls_file = d / "errors.txt.polls"
+        failed = int(polls_file.read_text()) if polls_file.exists() else 0
         if any(e in _HOST_MESSAGES for e in errors):
             raise HostError(f"LinuxCNC did not come up: {errors}")
         raw = np.loadtxt(d / "samples.txt", ndmin=2)
@@ -346,7 +364,7 @@ def _run_once(text: str, limits: MachineLimits, start: np.ndarray, timeout_s: fl
     moved = np.flatnonzero(np.any(q[1:] != q[:-1], axis=1))
     a, b = (0, 1) if len(moved) == 0 else (int(moved[0]), int(moved[-1]) + 2)
     q, line = q[a:b], line[a:b]
-    return MotionRun(q, np.arange(len(q)) * SERVO_PERIOD_S, line, errors)
+    return MotionRun(q, np.arange(len(q)) * SERVO_PERIOD_S, line, errors, failed)
 
 
 def motion_lines(text: str) -> dict[int, int]:

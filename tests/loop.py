@@ -22,6 +22,7 @@ from prsxy_post import (
     experiments,
     gcode,
     measure,
+    program,
     simulate,
     writers,
 )
@@ -85,13 +86,13 @@ def diagnosed(
     return profile_mod.profile_from_dict(d.updated, "diagnosed"), d
 
 
-def trace_error(truth: profile_mod.Profile, prof: profile_mod.Profile, program: str) -> float:
+def trace_error(truth: profile_mod.Profile, prof: profile_mod.Profile, sample: str) -> float:
     """Largest distance [mm] of an executed point of the written PMAC program from
     the G-code path of its line (its block's line, arc or helix; a point of a line
     that does not move, from the point the chain meant there)."""
-    text = (ROOT / "samples" / program).read_text()
+    text = (ROOT / "samples" / sample).read_text()
     cfg = program.interpreter_config(prof)
-    motions = list(gcode.iter_motions(gcode.split_lines(text), cfg, program))
+    motions = list(gcode.iter_motions(gcode.split_lines(text), cfg, sample))
     d = writers.dialect("pmac")
     settings = writers.settings_of(prof, "pmac")
     res = chain.run_chain(

@@ -1,10 +1,12 @@
 """LinuxCNC's ``rs274 -g`` as a test oracle: run it, read its canonical calls back as motions.
 
-rs274 prints positions in program coordinates (the work offset and the G92
-offset are printed apart, by SET_G5X_OFFSET and SET_G92_OFFSET) and in the
-length units in effect (USE_LENGTH_UNITS); this turns them into the workpiece
-frame in mm, the frame of ``inspect --json``. Its standalone tool table and
-parameter file are in inches.
+rs274 prints positions in program coordinates (the work offset, the G92
+offset and the rotation about Z are printed apart, by SET_G5X_OFFSET,
+SET_G92_OFFSET and SET_XY_ROTATION) and in the length units in effect
+(USE_LENGTH_UNITS); this turns them into the workpiece frame in mm, the frame of
+``inspect --json``, as LinuxCNC's canon does (emccanon.cc, rotate_and_offset_pos:
+the G92 offset is added, the sum turned by the rotation, the work offset added).
+Its standalone tool table and parameter file are in inches.
 """
 
 from __future__ import annotations
@@ -39,6 +41,10 @@ class OracleMotion:
     control_points: int = 0  # curves (NURBS_FEED): how many
     tool_length: float = 0.0  # Z of the tool length offset in effect (USE_TOOL_LENGTH_OFFSET) [mm]
     tool_scale: float = 1.0  # 25.4 when that offset was printed in inches
+    xy_rotation: float = 0.0  # SET_XY_ROTATION in effect [deg]
+    #: 25.4 when an offset added to the point (G5x, or a G92 offset not 0) was
+    #: printed in inches: its last decimal is then 2.54e-3 mm
+    offset_scale: float = 1.0
 
 
 @dataclass
@@ -49,6 +55,10 @@ class OracleResult:
     calls: list[tuple[str, str]] = field(default_factory=list)
     #: what (PRINT,...) wrote (rs274 prints it among the calls)
     prints: list[str] = field(default_factory=list)
+    #: rs274 lost the tool's position at a tool change (see :func:`_stale`): how
+    #: many motions it made before, and why; None when it did not
+    lost_after: int | None = None
+    lost_why: str = ""
 
 
 def run(
@@ -142,7 +152,19 @@ def parse(out: str, err: str = "") -> OracleResult:
     scale = 1.0
     g5x = [0.0] * 6
     g92 = [0.0] * 6
-    offset = [0.0] * 6  # G5x + G92: printed positions are program coordinates
+    g5x_scale = g92_scale = 1.0  # the scale each was printed at
+    xy_rot = 0.0  # SET_XY_ROTATION [deg]
+
+    def place(p: list[float]) -> tuple[float, ...]:
+        """A printed point (x y z in the units in effect, then a b) in the
+        workpiece frame, mm."""
+        x, y, z = ((p[k] * scale + g92[k]) for k in range(3))
+        if xy_rot:
+            t = xy_rot * math.pi / 180.0
+            x, y = x * math.cos(t) - y * math.sin(t), x * math.sin(t) + y * math.cos(t)
+        xyz = (x + g5x[0], y + g5x[1], z + g5x[2])
+        return (*xyz, *(p[3 + k] + g92[3 + k] + g5x[3 + k] for k in range(len(p) - 3)))
+
     feed = 0.0
     plane = 17
     tool_length = 0.0
@@ -157,6 +179,10 @@ def parse(out: str, err: str = "") -> OracleResult:
     calls: list[tuple[str, str]] = []
     prints: list[str] = []
     lines = out.splitlines()
+    #: what placed the last point the stand-in canon was given (see _stale)
+    at_motion = (0.0, 0.0, (0.0,) * 6, False)
+    lost_after: int | None = None
+    lost_why = ""
     for i, ln in enumerate(lines):
         m = re.match(r"\s*\d+ N[\d.]+\s+(\w+)\((.*)\)\s*$", ln)
         if not m:
@@ -166,15 +192,27 @@ def parse(out: str, err: str = "") -> OracleResult:
         name, args = m.group(1), m.group(2)
         calls.append((name, args))
         vals = [float(v) for v in re.findall(r"-?\d+\.\d+|-?\d+", args)] if args else []
+        if name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "ARC_FEED"):
+            at_motion = (tool_length, xy_rot, tuple(g5x), False)
+        elif name == "NURBS_FEED":
+            at_motion = (tool_length, xy_rot, tuple(g5x), True)
+        elif (
+            name in ("CHANGE_TOOL", "CHANGE_TOOL_NUMBER", "RELOAD_TOOLDATA") and lost_after is None
+        ):
+            why = _stale(at_motion, (tool_length, xy_rot, tuple(g5x)))
+            if why:
+                lost_after, lost_why = len(motions), why
         if name == "USE_LENGTH_UNITS":
             scale = 25.4 if "INCHES" in args else 1.0
         elif name == "SET_G5X_OFFSET":
             # printed in the length units in effect when it is set
             g5x = [v * scale for v in vals[1:4]] + list(vals[4:7])
-            offset = [a + b for a, b in zip(g5x, g92, strict=True)]
+            g5x_scale = scale
         elif name == "SET_G92_OFFSET":
             g92 = [v * scale for v in vals[0:3]] + list(vals[3:6])
-            offset = [a + b for a, b in zip(g5x, g92, strict=True)]
+            g92_scale = scale
+        elif name == "SET_XY_ROTATION":
+            xy_rot = vals[0]
         elif name == "USE_TOOL_LENGTH_OFFSET":
             tool_length = vals[2] * scale  # printed in the length units in effect
             tool_scale = scale
@@ -183,14 +221,7 @@ def parse(out: str, err: str = "") -> OracleResult:
         elif name == "SET_FEED_RATE":
             feed = vals[0]
         elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
-            x, y, z, a, b = vals[:5]
-            end = (
-                x * scale + offset[0],
-                y * scale + offset[1],
-                z * scale + offset[2],
-                a + offset[3],
-                b + offset[4],
-            )
+            end = place(vals[:5])
             kind = "rapid" if name == "STRAIGHT_TRAVERSE" else "feed"
             # the feed is in length units per minute when X, Y or Z move, else deg/min
             moved = math.dist(end[:3], last[:3]) > 1e-9 or end[3:] == last[3:]
@@ -204,6 +235,8 @@ def parse(out: str, err: str = "") -> OracleResult:
                     scale=scale,
                     tool_length=tool_length,
                     tool_scale=tool_scale,
+                    xy_rotation=xy_rot,
+                    offset_scale=max(g5x_scale, g92_scale if any(g92) else 1.0),
                 )
             )
             last = end
@@ -215,8 +248,8 @@ def parse(out: str, err: str = "") -> OracleResult:
             cen = [0.0] * 3
             end[idx[0]], end[idx[1]], end[idx[2]] = e1, e2, ax
             cen[idx[0]], cen[idx[1]], cen[idx[2]] = c1, c2, ax
-            end5 = (*(end[k] * scale + offset[k] for k in range(3)), a + offset[3], b + offset[4])
-            center = tuple(cen[k] * scale + offset[k] for k in range(3))
+            end5 = place([*end, a, b])
+            center = place(cen)
             motions.append(
                 OracleMotion(
                     i,
@@ -229,6 +262,8 @@ def parse(out: str, err: str = "") -> OracleResult:
                     scale=scale,
                     tool_length=tool_length,
                     tool_scale=tool_scale,
+                    xy_rotation=xy_rot,
+                    offset_scale=max(g5x_scale, g92_scale if any(g92) else 1.0),
                 )
             )
             last = end5
@@ -244,6 +279,8 @@ def parse(out: str, err: str = "") -> OracleResult:
                     control_points=int(vals[0]),
                     tool_length=tool_length,
                     tool_scale=tool_scale,
+                    xy_rotation=xy_rot,
+                    offset_scale=max(g5x_scale, g92_scale if any(g92) else 1.0),
                 )
             )
         elif name == "DWELL":
@@ -257,9 +294,54 @@ def parse(out: str, err: str = "") -> OracleResult:
                     duration=vals[0],
                     tool_length=tool_length,
                     tool_scale=tool_scale,
+                    xy_rotation=xy_rot,
+                    offset_scale=max(g5x_scale, g92_scale if any(g92) else 1.0),
                 )
             )
-    return OracleResult(motions, error, calls, prints)
+    return OracleResult(motions, error, calls, prints, lost_after, lost_why)
+
+
+#: the canonical calls of the blocks after which LinuxCNC reads the position back
+_REREAD = ("CHANGE_TOOL", "CHANGE_TOOL_NUMBER", "RELOAD_TOOLDATA")
+
+
+def _stale(
+    at_motion: tuple[float, float, tuple[float, ...], bool],
+    now: tuple[float, float, tuple[float, ...]],
+) -> str:
+    """Why standalone rs274 takes a wrong position after a tool change, or "".
+
+    After a block with M6 or M61, LinuxCNC reads the position back from the
+    canon before the next line (LinuxCNC 2.9.0~pre1, f1270d6ed7, the rs274
+    installed here: Interp::_read calls read_inputs, rs274ngc_pre.cc:1599, which
+    on toolchange_flag calls refresh_actual_position, :1447-1452; that sets
+    current_x.. from GET_EXTERNAL_POSITION_X.., interp_internal.cc:410-422; the
+    flag is set by M6 at interp_convert.cc:5613, M61 at :3397 and G10 L0 at
+    :3703). A running LinuxCNC's canon answers with the machine's position
+    taken back through the tool offset, the work offset, the rotation and the
+    G92 offset in effect (task/emccanon.cc:2658-2690, GET_EXTERNAL_POSITION →
+    unoffset_and_unrotate_pos): the interpreter's own point, nothing changes.
+    The stand-in canon of standalone rs274 answers with the last point it was
+    given (sai/saicanon.cc:829, GET_EXTERNAL_POSITION_Z returns
+    _sai._program_position_z), moved along by later G5x and G92 offsets
+    (:122-162) but not by a new tool length offset (USE_TOOL_LENGTH_OFFSET,
+    :539-544, keeps it apart) nor a rotation (SET_XY_ROTATION, :118-120, only
+    prints), and after NURBS_FEED it is read from past the end of the control
+    points (:325). So when, since the last move, the tool length offset or the
+    rotation changed, or the work offset changed while the system was rotated,
+    or the last move was a NURBS, rs274 goes on from a point where the tool is
+    not; a running LinuxCNC does not.
+    """
+    tool, rot, g5x, nurbs = at_motion
+    if nurbs:
+        return "the last move before the tool change was a NURBS"
+    if now[0] != tool:
+        return f"tool length offset {tool:g} at the last move, {now[0]:g} at the tool change"
+    if now[1] != rot:
+        return f"rotation {rot:g} deg at the last move, {now[1]:g} at the tool change"
+    if rot and now[2] != g5x:
+        return "the work offset of a rotated system changed since the last move"
+    return ""
 
 
 #: canonical calls of one machine function each: call → our words as text

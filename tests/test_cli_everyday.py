@@ -79,6 +79,89 @@ def test_help_ends_with_examples_that_parse(runner: CliRunner, path: tuple[str, 
         assert not ctx.args, ex
 
 
+def test_help_shows_each_example_once(runner: CliRunner) -> None:
+    """calibrate and ballbar once printed an example in their text as well as
+    the Examples section; every example is shown once, under Examples only."""
+    for path in COMMANDS:
+        r = run(runner, *path, "--help")
+        assert "Example:" not in r.output, path
+        lines = [x.strip() for x in r.output.splitlines()]
+        for ex in EXAMPLES[" ".join(path)]:
+            assert lines.count(ex) == 1, (path, ex)
+
+
+def test_inspect_json_is_an_optional_flag(runner: CliRunner) -> None:
+    r = runner.invoke(main, ["inspect", "--help"], prog_name="prsxy-post")
+    assert r.output.startswith("Usage: prsxy-post inspect [OPTIONS] PROGRAM\n")
+    line = next(x for x in r.output.splitlines() if x.strip().startswith("--json"))
+    assert "required" not in line
+
+
+def test_tables_import_examples_read_what_export_writes(
+    runner: CliRunner, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Run the `tables export` examples, then every `tables import` example on
+    what they wrote: each file an import example names is one export writes."""
+    monkeypatch.chdir(tmp_path)
+    for name in ("shop.toml", "a.toml"):
+        (tmp_path / name).write_text(
+            (ROOT / "tests" / "data" / "vectors" / "perturbed.toml").read_text()
+        )
+    for ex in EXAMPLES["tables export"]:
+        r = run(runner, *shlex.split(ex)[1:])
+        assert r.exit_code == 0, (ex, r.output)
+    imports = [ex for ex in {*EXAMPLES["tables"], *EXAMPLES["tables import"]} if " import " in ex]
+    assert len(imports) >= 2
+    for ex in imports:
+        words = shlex.split(ex)[1:]
+        assert Path(words[2]).is_file(), f"{ex}: tables export writes no {words[2]}"
+        r = run(runner, *words)
+        assert r.exit_code == 0, (ex, r.output)
+        assert Path(words[-1]).is_file()
+
+
+@pytest.mark.parametrize("motor", ["4", "0", "7", "P1"])
+def test_tables_import_refuses_a_motor_the_machine_has_not(
+    runner: CliRunner, tmp_path: Path, motor: str
+) -> None:
+    """The contract's motors are P1, P2, P3, P5, P6 (docs/machine-model.md)."""
+    comp = tmp_path / "motor4.comp"
+    comp.write_text("0 0 0\n10 0 0\n")
+    args = ["tables", "import", str(comp), "--profile", str(SHOP), "--format", "linuxcnc1"]
+    r = runner.invoke(main, [*args, "--motor", motor, "-o", str(tmp_path / "b.toml")])
+    assert r.exit_code == 2
+    assert (
+        f"Error: Invalid value for '--motor': '{motor}' is not a motor of the PRS-XY machine "
+        "(expected one of 1 (P1), 2 (P2), 3 (P3), 5 (P5), 6 (P6); there is no motor 4)"
+    ) in r.stderr
+    assert not (tmp_path / "b.toml").exists()
+
+
+@pytest.mark.parametrize("motor", ["1", "2", "3", "5", "6"])
+def test_tables_import_takes_each_motor_of_the_machine(
+    runner: CliRunner, tmp_path: Path, motor: str
+) -> None:
+    comp = tmp_path / "t.comp"
+    comp.write_text("0 0 0\n10 0.001 -0.001\n")
+    out = tmp_path / "b.toml"
+    r = run(
+        runner,
+        "tables",
+        "import",
+        str(comp),
+        "--profile",
+        str(SHOP),
+        "--format",
+        "linuxcnc1",
+        "--motor",
+        motor,
+        "-o",
+        str(out),
+    )
+    assert r.exit_code == 0, r.output
+    assert f"wrote {out} with tables for motors {motor}" in r.stderr
+
+
 # ---------------------------------------------------------------- convert outputs
 
 

@@ -162,7 +162,7 @@ def test_what_no_library_effect_explains_is_said_on_stderr_and_in_the_json(
 
 def test_a_clean_diagnosis_warns_of_nothing(runner: CliRunner, tmp_path: Path) -> None:
     files = _simulate(runner, tmp_path / "m", NOMINAL, NOMINAL)
-    r = invoke(runner, "diagnose", *files, "--profile", NOMINAL, "--json")
+    r = invoke(runner, "diagnose", *files, "--profile", NOMINAL, "--json", "--quiet")
     assert r.exit_code == 0 and r.stderr == "", r.stderr
     assert json.loads(r.stdout)["unexplained"] == []
 
@@ -205,9 +205,10 @@ def _screenshot(page: Path, out: Path, profile_dir: Path) -> np.ndarray:
     return matplotlib.image.imread(str(out))[:, :, :3]
 
 
-def _renders_every_plot(page: Path, tmp: Path) -> None:
+def _renders_every_plot(page: Path, tmp: Path) -> np.ndarray:
     """Every embedded plot is drawn: the page with that image blanked out differs
-    from the page as written over a large area (a broken or empty image would not)."""
+    from the page as written over a large area (a broken or empty image would not).
+    Returns the page's screenshot."""
     text = page.read_text()
     assert "http://" not in text and "https://" not in text  # nothing fetched
     images = re.findall(r'<img id="([^"]+)"[^>]*src="data:image/png;base64,([^"]+)"', text)
@@ -226,6 +227,32 @@ def _renders_every_plot(page: Path, tmp: Path) -> None:
         h = min(len(full), len(shot))
         changed = np.mean(np.any(np.abs(full[:h] - shot[:h]) > 0.1, axis=2))
         assert changed > 0.01, f"{name}: the plot does not show in the page ({changed:.4f})"
+    return full
+
+
+#: the backgrounds of the conclusion (blue) and the what-to-do-next (green) boxes
+LEAD_RGB, NEXT_RGB = (0xE8, 0xF1, 0xFB), (0xE9, 0xF7, 0xEC)
+
+
+def _leads_with_the_summary(shot: np.ndarray, page: Path, output: str) -> None:
+    """What a reader sees first, on the first screen (the top 900 pixels as
+    Chromium draws the page): the conclusion box above the what-to-do-next box,
+    both of them there; and the page names where it was written, as the command
+    printed it."""
+    top = shot[:900]
+
+    def rows_of(rgb: tuple[int, int, int]) -> np.ndarray:
+        hit = np.all(np.abs(top - np.array(rgb) / 255) < 0.02, axis=2)
+        return np.flatnonzero(hit.sum(axis=1) > 300)  # a box across the page
+
+    lead, nxt = rows_of(LEAD_RGB), rows_of(NEXT_RGB)
+    assert lead.size > 20 and nxt.size > 20, (lead.size, nxt.size)
+    assert lead.max() < nxt.min()
+    text = page.read_text()
+    assert text.index("<h2>Conclusion</h2>") < text.index("<table")
+    assert "What to do next: " in text
+    path = str(page.resolve())
+    assert f"wrote the report: {path}" in output and path in text
 
 
 needs_chromium = pytest.mark.skipif(
@@ -246,7 +273,10 @@ def test_diagnose_report_renders_in_a_browser(
     }
     page = (out / "report.html").read_text()
     assert "table.squareness" in page and "out of square" in page
-    _renders_every_plot(out / "report.html", tmp_path)
+    assert "What to do next: Calibrate" in page
+    shot = _renders_every_plot(out / "report.html", tmp_path)
+    _leads_with_the_summary(shot, out / "report.html", r.output)
+    assert {"residuals.png", "ballbar-residual.png"} <= {p.name for p in out.iterdir()}
     # the model after the effect was added is drawn over the measured trace, not
     # hidden under it: tab:blue (31, 119, 180) runs round every panel, a line of
     # at least 250 pixels each (a circle of 5 divisions is about 600 pixels round)
@@ -269,4 +299,11 @@ def test_ballbar_report_renders_in_a_browser(
     assert r.exit_code == 0, r.output
     page = (out / "report.html").read_text()
     assert "squareness" in page and "µm/div" in (out / "report.md").read_text() + page
-    _renders_every_plot(out / "report.html", tmp_path)
+    shot = _renders_every_plot(out / "report.html", tmp_path)
+    _leads_with_the_summary(shot, out / "report.html", r.output)
+    # a table of the runs, one row each, named as RS274 names them
+    rows = re.findall(r"<tr><td>(ballbar-[^<]+)</td><td>([^<]+)</td><td>([^<]+)</td>", page)
+    assert sorted(rows) == [
+        ("ballbar-xy-r50-ccw.csv", "XY r50", "ccw (G17 G3, from +Z)"),
+        ("ballbar-xy-r50-cw.csv", "XY r50", "cw (G17 G2, from +Z)"),
+    ], rows

@@ -37,6 +37,7 @@ from hypothesis import strategies as st
 
 from prsxy_post import chain, kinematics, points
 from prsxy_post.errors import PrsxyError
+from prsxy_post.interpolate import pieces
 
 from . import controllers as ctl
 from .conftest import ROOT
@@ -1003,10 +1004,11 @@ def test_a_crossing_ends_short_of_its_part_however_the_written_pose_rounds() -> 
 
 def test_a_corner_at_a_chunks_end_gives_the_same_program(monkeypatch: pytest.MonkeyPatch) -> None:
     """A head that stops at a corner taken at speed gets a point of the path near
-    the corner past it (reversals.corners); where that corner is a chunk's last
-    point, the point goes into the next chunk's first step. A polyline whose head
-    stands and sets off at every other corner, cut after every motion and every
-    other one: the same bytes as in one chunk, and it still holds to the path."""
+    the corner past it (reversals.corners); where that corner is a piece's last
+    point (interpolate.pieces), the point goes into the next piece's first step. A
+    polyline whose head stands and sets off at every other corner, cut into pieces
+    of one block and of three (fed a motion at a time): the same bytes as in one
+    piece, and it still holds to the path."""
     text = "G21 G90 G17 G94 F1000\nG1 X-30 Y-30 Z0\n" + "".join(
         f"G1 X{-25 + 10 * i}\nG1 X{-20 + 10 * i} Z{-0.1 * (i + 1):.1f}\n" for i in range(8)
     )
@@ -1021,9 +1023,10 @@ def test_a_corner_at_a_chunks_end_gives_the_same_program(monkeypatch: pytest.Mon
 
     monkeypatch.setattr(chain.Pipeline, "_reversals", spy)
     motions, res, whole = convert(truth, text + "M2\n")
-    for chunk in (1, 3):
+    for piece in (1, 3):
         carried.clear()
-        assert convert(truth, text + "M2\n", chunk=chunk)[2] == whole
+        monkeypatch.setattr(pieces, "PIECE_BLOCKS", piece)
+        assert convert(truth, text + "M2\n", chunk=1)[2] == whole
         assert any(carried), "no chunk ended at a corner where the head stops"
     assert_within(judge_pmac(truth, motions, res, whole), None)
 

@@ -134,6 +134,22 @@ def _peak_speed(run: lm.MotionRun) -> float:
     )
 
 
+def test_the_harness_recovers_from_failed_status_reads() -> None:
+    """On a loaded machine a read of LinuxCNC's status buffer fails ("emcStatusBuffer
+    invalid err=5"), and the channel then fails every later poll (emcmodule.cc: poll
+    checks the last read before it reads again); the harness opens a new channel and
+    goes on. Three failed reads injected into the display's polls: the program still
+    runs whole, at F, and the run says what it recovered from."""
+    limits = truth_machine("nominal", None).limits
+    start = np.array([0.0, 0.0, 2.0, 0.0, 0.0])
+    plain = lm.run(_plunge(0.0), limits, start, timeout_s=10.0)
+    recovered = lm.run(_plunge(0.0), limits, start, timeout_s=10.0, fail_polls=3)
+    assert plain.failed_polls == 0 and recovered.failed_polls == 3
+    assert recovered.errors == []
+    assert np.array_equal(recovered.q, plain.q)  # the same servo cycles, commanded alike
+    assert _peak_speed(recovered) <= 300.0 * (1 + 1e-6)
+
+
 def test_linuxcnc_blends_lines_that_turn_a_over_f() -> None:
     """The controller rule behind the open programs below, measured: a straight
     plunge at F300 as 10 ms lines runs at F; with A turning 2e-7 degrees a line, LinuxCNC

@@ -4,6 +4,7 @@ left on disk by a conversion that fails."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -125,3 +126,21 @@ def test_a_full_disk_reads_the_same_from_the_writer_process(
     assert here == f"{out / 'a.pmc'}: {full}"
     assert apart == here.replace("a.pmc", "b.pmc")
     assert list(out.iterdir()) == []
+
+
+def test_leftovers_of_a_killed_writer_are_its_own_temp_files_only(tmp_path: Path) -> None:
+    """What Parts names its temp files (one output, or a split one's parts) is
+    removed; the output itself, another output's temp files and other files stay."""
+    import tempfile
+
+    mine = []
+    for target in ("x.pmc", "x.part1.pmc", "x.part12.pmc"):
+        fd, tmp = tempfile.mkstemp(prefix=f".{target}.", suffix=".tmp", dir=tmp_path)
+        os.close(fd)
+        mine.append(Path(tmp).name)
+    others = ["x.pmc", ".y.pmc.abc.tmp", ".x.pmc.bak", ".x.partial.pmc.abc.tmp", ".xx.pmc.a.tmp"]
+    for name in others:
+        (tmp_path / name).write_text("keep")
+    sinks.remove_leftovers(str(tmp_path / "x.pmc"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(others)
+    sinks.remove_leftovers("-")  # standard output has no files

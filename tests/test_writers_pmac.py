@@ -11,9 +11,11 @@ import re
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 from hypothesis import given
 from hypothesis import strategies as st
 
+from prsxy_post.cli import main
 from prsxy_post.writers.pmac import PVT_QUANTA_PER_MS, pvt_ms_text
 
 from .conftest import ROOT
@@ -66,10 +68,6 @@ def test_the_header_says_which_tables_compensate_the_real_axes(tmp_path, with_ta
     converted without it (``--no-axis-comp``), they must be on (I51=1) with the
     file ``tables export --format pmac`` writes (Software Reference, I51, DEFINE
     COMP, DEFINE BLCOMP)."""
-    from click.testing import CliRunner
-
-    from prsxy_post.cli import main
-
     out = tmp_path / "p.pmc"
     args = ["convert", str(ROOT / "samples" / "drill.ngc"), "--profile"]
     args += [str(ROOT / "profiles" / "prsxy-shop.toml"), "-o", str(out)]

@@ -20,8 +20,10 @@ The loop an engineer runs with a ballbar plot, made a procedure
    from the joint fit at the end; an estimate that moves by more than two
    standard errors (and 2 %) when another named effect is left out says so
    (:attr:`Effect.depends_on`).
-5. **Say what is left** (:mod:`.leftover`): every data kind still above its
-   noise, where, by how much, and how much of it any library member could take.
+5. **Say what is left** (:mod:`.leftover`): every data kind whose residual a
+   statistical test tells from its noise at 99.9 % confidence (the laser tables'
+   own errors allowed for when laser runs are given), where, by how much, and how
+   much of it any library member could take.
 6. **Close the loop.** A profile with a virtual-axis error map: the map is part
    of the model, but when pose data are given the physical effects are judged
    on what the map took (real axes first, as in the paper) and the map is then
@@ -29,14 +31,17 @@ The loop an engineer runs with a ballbar plot, made a procedure
 
 The library of effects is the registry in :mod:`prsxy_post.effects`; the
 calibration's physical stage (:func:`prsxy_post.calibrate.calibrate`) runs the
-same selection with the contract parameters free (``free=``).
+same selection with the contract parameters free (``free=``) and, beside them,
+what the data cannot tell a member from (``nuisance=``, :mod:`.nuisance`): the
+laser tables' values within their standard errors and a servo lag common to
+every motor.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,19 +55,24 @@ from ..measure import CommandedWith
 from ..profile import Profile, profile_from_dict
 from . import leftover, selection
 from .model import Data, Linearised, Segment, column_keys, predict, split_key
+from .nuisance import COMMON_LAG, Nuisance, table_nuisance
 
 __all__ = [
+    "COMMON_LAG",
     "Data",
     "Diagnosis",
     "Effect",
     "Linearised",
+    "Nuisance",
     "Segment",
     "apply_effects",
     "diagnose",
     "estimate_noise",
     "predict",
     "regions",
+    "table_nuisance",
 ]
+
 
 #: Signatures more alike than this (|partial correlation|) cannot be told apart.
 ALIAS_CORR = 0.98
@@ -404,16 +414,20 @@ def _select(
     alpha: float,
     max_rel_stderr: float = selection.UNDETERMINED,
     lower: dict[str, float] | None = None,
+    nuisance: Nuisance | None = None,
+    columns: Mapping[str, np.ndarray] | None = None,
 ) -> tuple[selection.Gram, selection.Test, list[int]]:
     priors = {k: registry.prior(split_key(k)[0]) for k in candidates}
+    extra = nuisance.keys(columns or {}) if nuisance is not None else []
     g = selection.Gram.build(
         normal,
         noise,
         candidates,
-        free,
+        [*free, *extra],
         priors=priors,
         max_rel_stderr=max_rel_stderr,
         lower=lower,
+        known=nuisance.table_sd if nuisance is not None else None,
     )
     # the noise scale of the whole library's fit: 1 when the whitening is right
     sse, used, _ = normal.full_fit(noise)
@@ -677,6 +691,7 @@ def find_effects(
     with_map: bool = False,
     max_rel_stderr: float = 0.25,
     tables_measured: Collection[int] = (),
+    nuisance: Nuisance | None = None,
 ) -> tuple[list[Effect], _Fit, dict[str, float], np.ndarray]:
     """Steps 2-4 of the module docstring: (effects, fit, noise, whitening weights).
 
@@ -691,7 +706,11 @@ def find_effects(
         on the machine as it is, its effects present (calibration's physical
         stage): a member is judged by what it adds beyond what such a table holds,
         and taken out of the table as it is added (:func:`refine`)
+    nuisance : what else may explain the data (:class:`Nuisance`): free in the
+        selection (the table errors within their prior), never named or written;
+        a member is named only if the data tell it apart from them
     """
+    nuis = nuisance or Nuisance()
     measured, segs = data.measured()
     if not segs:
         raise FitError("no measurements to diagnose", expected="pose, ballbar or axis files")
@@ -703,7 +722,15 @@ def find_effects(
         k: registry.lower_bound(split_key(k)[0], current) for k in keys if split_key(k)[1] is None
     }
     lower = {k: v for k, v in lower.items() if np.isfinite(v)}
-    lin0 = predict(current, data, free + keys, with_map=with_map, tables_measured=tables_measured)
+    lin0 = predict(
+        current,
+        data,
+        free + keys,
+        with_map=with_map,
+        tables_measured=tables_measured,
+        table_knots=nuis.table_knots,
+    )
+    nuis.add_columns(lin0.columns)
     resid0 = measured - lin0.pred
     rows = _kind_rows(segs, len(resid0))
     normal = selection.Normal.of(lin0.columns, resid0, rows)
@@ -721,7 +748,9 @@ def find_effects(
             # only roughly (the play after a reversal) no longer inflate it
             noise = estimate_noise(data, z, segs, normal)
             w = _whiten(segs, noise, len(resid0))
-        g, test, sel = _select(normal, noise, free, keys, alpha, max_rel_stderr, lower)
+        g, test, sel = _select(
+            normal, noise, free, keys, alpha, max_rel_stderr, lower, nuis, lin0.columns
+        )
         same = chosen is not None and {g.keys[i] for i in sel} == set(chosen)
         while True:
             picked = [g.keys[i] for i in sel]
@@ -761,18 +790,62 @@ def find_effects(
         # the working response at the new model: the data as its linearisation sees
         # them, relative to ``current`` (the sizes found are added back)
         lin = predict(
-            fit.profile, data, free + keys, with_map=with_map, tables_measured=tables_measured
+            fit.profile,
+            data,
+            free + keys,
+            with_map=with_map,
+            tables_measured=tables_measured,
+            table_knots=nuis.table_knots,
         )
+        nuis.add_columns(lin.columns)
         z = measured - lin.pred
         j = 0
         for k, d in zip(free + fit.keys, [1] * len(free) + fit.dims, strict=True):
             z = z + lin.columns[k] @ fit.x[j : j + d]
             j += d
         normal = selection.Normal.of(lin.columns, z, rows)
-    assert test is not None
+    assert test is not None and g is not None
     found = _effects_of(fit, g, sel, test)
+    if nuisance is not None:
+        _widen_by_nuisance(found, g, sel, test)
     _intervals(found, fit, current, data, measured, w, with_map)
     return found, fit, noise, w
+
+
+def _widen_by_nuisance(
+    found: list[Effect], g: selection.Gram, sel: Sequence[int], test: selection.Test
+) -> None:
+    """Standard errors, χ² and p-values that allow for the nuisance (:class:`Nuisance`).
+
+    The Gauss–Newton fit (:func:`refine`) holds the tables as the laser made them;
+    the selection's Gram matrix has their errors in it (Henderson's equations), so
+    its covariance of the chosen terms is the honest one where it is wider."""
+    if not sel:
+        return
+    beta, C, _ = g.fit(list(sel))
+    _, C_u = g.unscaled(list(sel), beta, C)
+    C_u = C_u * test.sigma2
+    pos = np.concatenate([[0], np.cumsum([g.dims[k] for k in sel])]).astype(int)
+    by_key = {e.key: e for e in found}
+    for t, k in enumerate(sel):
+        e = by_key.get(g.keys[k])
+        if e is None:
+            continue
+        a, b = int(pos[t]), int(pos[t + 1])
+        Ck = C_u[a:b, a:b]
+        if b - a == 1:
+            se = math.sqrt(max(float(Ck[0, 0]), 0.0))
+            v = np.array([e.estimate])
+        else:
+            phase = math.radians(e.phase_deg or 0.0)
+            u = np.array([math.cos(phase), math.sin(phase)])
+            se = math.sqrt(max(float(u @ Ck @ u), 0.0))
+            v = e.estimate * u
+        if se <= e.stderr:
+            continue
+        e.stderr = se
+        e.chi2 = float(v @ np.linalg.solve(Ck, v))
+        e.p_value = float(stats.chi2.sf(e.chi2, b - a))
 
 
 def _weakest(g: selection.Gram, sel: Sequence[int]) -> int:
@@ -786,6 +859,36 @@ def _weakest(g: selection.Gram, sel: Sequence[int]) -> int:
     return int(np.argmin(ev))
 
 
+def _left_unexplained(
+    updated: Profile,
+    data: Data,
+    after: np.ndarray,
+    segs: list[Any],
+    noise: dict[str, float],
+    w: np.ndarray,
+    has_map: bool,
+) -> list[dict[str, Any]]:
+    """What the updated model leaves above the noise (:func:`leftover.unexplained`),
+    the whole library's signatures and, with laser runs, the tables' values within
+    their standard errors allowed for."""
+    all_keys = column_keys()
+
+    def library() -> Linearised:
+        return predict(updated, data, all_keys, with_map=has_map)
+
+    laser = {int(m) for a in data.axis for m in np.unique(a.motor)}
+    nuis = table_nuisance(updated, data.axis, laser) if laser else None
+
+    def table_errors() -> tuple[dict[str, np.ndarray], dict[str, float]]:
+        assert nuis is not None
+        lin = predict(updated, data, [], with_map=has_map, table_knots=nuis.table_knots)
+        return lin.columns, dict(nuis.table_sd)
+
+    return leftover.unexplained(
+        data, after, segs, noise, w, library, table_errors if nuis is not None else None
+    )
+
+
 def diagnose(
     current: Profile,
     data: Data,
@@ -794,14 +897,25 @@ def diagnose(
     rounds: int = 3,
     commanded_with: CommandedWith | None = None,
     rng_seed: int = 0,
+    progress: Callable[[str, float], None] | None = None,
 ) -> Diagnosis:
-    """The whole loop (module docstring); ``data`` was commanded by ``data.commanded``."""
+    """The whole loop (module docstring); ``data`` was commanded by ``data.commanded``.
+
+    ``progress(stage, fraction)`` is told each stage as it begins: what it does,
+    and the fraction of the stages that are done."""
     measured, segs = data.measured()
     if not segs:
         raise FitError("no measurements to diagnose", expected="pose, ballbar or axis files")
     has_map = errormap.from_profile(current) is not None
     refit_map = has_map and bool(data.poses)
     sel_map = has_map and not refit_map
+    stages = ["effects", *(["map"] if refit_map else []), "left"]
+
+    def said(stage: str, text: str) -> None:
+        if progress is not None:
+            progress(text, stages.index(stage) / len(stages))
+
+    said("effects", f"looking for the effects the model misses (up to {max(rounds, 1)} rounds)")
     before = measured - predict(current, data, [], with_map=has_map).pred
     effects, _, noise, w = find_effects(current, data, alpha=alpha, rounds=rounds, with_map=sel_map)
     updated_doc = apply_effects(current.raw, effects, current) if effects else dict(current.raw)
@@ -812,6 +926,7 @@ def diagnose(
             "reason": "no effect was added" if not effects else "no pose data to refit it",
         }
         if refit_map and effects:
+            said("map", "fitting the virtual-axis error map again on what the effects leave")
             prof_new = profile_from_dict(updated_doc, current.source)
             resid = measured - predict(prof_new, data, [], with_map=False).pred
             emap = _refit_map(data, resid, segs, rng_seed, [p.source for p in data.poses])
@@ -829,12 +944,8 @@ def diagnose(
     updated = profile_from_dict(updated_doc, current.source)
     after = measured - predict(updated, data, [], with_map=has_map).pred
     rms_b, rms_a = _rms_um(before, segs), _rms_um(after, segs)
-    all_keys = column_keys()
-
-    def library() -> Linearised:
-        return predict(updated, data, all_keys, with_map=has_map)
-
-    left = leftover.unexplained(data, after, segs, noise, w, library)
+    said("left", "testing what is left against the noise")
+    left = _left_unexplained(updated, data, after, segs, noise, w, has_map)
     note: dict[str, Any] = {
         "data": sorted({s.source for s in segs}),
         "effects": [f"{e.name} {e.estimate:+.6g} {e.unit} ± {e.stderr:.2g}" for e in effects],

@@ -15,7 +15,7 @@ targets are approached on their own from one side).
 A member's signature is the change of every prediction per unit of its size:
 
 - a geometry member θ_j: ∂y/∂θ_j, by the implicit-function theorem on the FK
-  constraints (:func:`prsxy_post.calibrate.fk_with_jacobian`);
+  constraints (:func:`prsxy_post.measurement_model.fk_with_jacobian`);
 - a motor member of motor m: ∂y/∂P_m × its motor term (the registry's
   :meth:`~prsxy_post.effects.MotorFamily.motor_term`), and the motor term itself
   on that motor's laser rows.
@@ -29,14 +29,15 @@ sample.
 
 from __future__ import annotations
 
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import axiscomp, calibrate, errormap, kinematics, simulate
+from .. import axiscomp, errormap, kinematics, simulate
 from .. import effects as registry
 from ..measure import AxisData, BallbarRun, PoseData
+from ..measurement_model import fk_with_jacobian
 from ..profile import MOTORS, Profile
 
 #: FK sensitivities are computed on about this many samples of each ballbar run.
@@ -159,6 +160,50 @@ class Linearised:
     segments: list[Segment]
 
 
+def table_error_keys(knots: Mapping[int, np.ndarray]) -> list[str]:
+    """Column keys of table-value errors: ``table[m]+j`` (forward value at the j-th
+    position of motor m's table) and ``table[m]-j`` (reverse)."""
+    return [
+        f"table[{m}]{side}{j}" for m, at in knots.items() for side in "+-" for j in range(len(at))
+    ]
+
+
+def _hats(p: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """(N, K) weights of the K table positions ``at`` in the linear interpolation at
+    p (constant beyond the ends, as the table is)."""
+    out = np.zeros((len(p), len(at)))
+    if len(at) == 1:
+        out[:, 0] = 1.0
+        return out
+    x = np.clip(p, at[0], at[-1])
+    j = np.clip(np.searchsorted(at, x, side="right") - 1, 0, len(at) - 2)
+    f = (x - at[j]) / (at[j + 1] - at[j])
+    rows = np.arange(len(p))
+    out[rows, j] = 1.0 - f
+    out[rows, j + 1] += f
+    return out
+
+
+def _held_side(
+    commands: np.ndarray,
+    direction: np.ndarray,
+    table: axiscomp.MotorTable | None,
+    approach: int | None,
+) -> np.ndarray:
+    """(N,) ±1: the table side (forward +1, reverse −1) a part's position is held by.
+
+    Moving, the side of the last move; after a reversal the part stands where it
+    left its side until the motor has crossed the play, and is still held by that
+    side: the sign of the play model's derivative with respect to the play
+    (:meth:`prsxy_post.effects.Backlash.motor_term`: −1/2 forward, +1/2 reverse)."""
+    if approach is not None or table is None or not table.max_play:
+        return np.where(direction >= 0, 1.0, -1.0)
+    fam = next(f for f in registry.FAMILIES if isinstance(f, registry.Backlash))
+    ctx = registry.MotorContext(commands, table, None)
+    d = fam.motor_term(commands, direction, np.zeros_like(commands), None, ctx)[:, 0]
+    return np.where(d < 0, 1.0, np.where(d > 0, -1.0, np.where(direction >= 0, 1.0, -1.0)))
+
+
 def _interp_rows(idx: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
     """Values (k, m) at sample indices ``idx``, linearly interpolated to 0..n-1."""
     if len(idx) == n:
@@ -180,6 +225,7 @@ def predict(
     *,
     with_map: bool = False,
     tables_measured: Collection[int] = (),
+    table_knots: Mapping[int, np.ndarray] | None = None,
 ) -> Linearised:
     """Every measurement as ``model`` predicts it, and the signatures of ``keys``.
 
@@ -188,12 +234,18 @@ def predict(
     tables_measured : motors whose tables in ``model`` were measured on the machine
         as it is (calibration's laser runs): a member's signature is what it adds
         beyond what such a table already holds (:class:`prsxy_post.effects.MotorContext`)
+    table_knots : motor -> the positions of its table (mm): the signatures of an
+        error of each table value, per approach side (:func:`table_error_keys`):
+        hat functions of the table's linear interpolation, forward values where the
+        part last moved up (poses: approached from +), reverse where it moved down
     """
     keys = column_keys() if keys is None else list(keys)
+    knots = dict(table_knots or {})
     geo_names = [k for k in keys if registry.family(split_key(k)[0]).stage == "geometry"]
     motor_keys = [k for k in keys if k not in set(geo_names)]
     motor_fams = {k: registry.family(split_key(k)[0]) for k in motor_keys}
-    want = bool(keys)
+    basis_keys = table_error_keys(knots)
+    want = bool(keys) or bool(basis_keys)
     theta = registry.theta_of(model, geo_names)
     steps = registry.fd_steps(geo_names, theta)
 
@@ -208,7 +260,7 @@ def predict(
         if c.motor in tables_measured
     }
     preds: list[np.ndarray] = []
-    cols: dict[str, list[np.ndarray]] = {k: [] for k in keys}
+    cols: dict[str, list[np.ndarray]] = {k: [] for k in [*keys, *basis_keys]}
 
     def motor_columns(
         sens: np.ndarray,
@@ -230,13 +282,23 @@ def predict(
             )
             term = fam.motor_term(P[:, i], direction[:, i], velocity[:, i], period, ctx)
             out[k] = sens[:, :, i, None] * term[:, None, :]
+        for m, at in knots.items():
+            i = MOTORS.index(m)
+            hats = _hats(P[:, i], at)
+            held = _held_side(P_cmd[:, i], direction[:, i], tables.get(m), approach)
+            for side, sign in (("+", 1.0), ("-", -1.0)):
+                on = (held == sign)[:, None]
+                for j in range(len(at)):
+                    out[f"table[{m}]{side}{j}"] = (
+                        sens[:, :, i, None] * (hats[:, j : j + 1] * on)[:, None, :]
+                    )
         return out
 
     for n_pose, P_cmd in enumerate(data.P_pose):
         Pm = simulate.actual_motors(model, P_cmd, approach=+1)
-        y, J, xv, JP = calibrate.fk_with_jacobian(
+        y, J, xv, JP = fk_with_jacobian(
             make_geo, theta, Pm, data.guess.get(("pose", n_pose)), want, steps,
-            motors=bool(motor_keys),
+            motors=bool(motor_keys) or bool(knots),
         )  # fmt: skip
         data.guess[("pose", n_pose)] = xv
         if emap is not None:
@@ -252,7 +314,7 @@ def predict(
         assert J is not None
         for j, nm in enumerate(geo_names):
             cols[nm].append(red(J[:, :, j : j + 1]))
-        if motor_keys:
+        if motor_keys or knots:
             assert JP is not None
             ones = np.ones_like(Pm)
             for k, c in motor_columns(JP, Pm, P_cmd, ones, np.zeros_like(Pm), +1).items():
@@ -262,7 +324,7 @@ def predict(
     ):
         Pm = simulate.actual_motors(model, P_cmd, t=r.t)
         followed = registry.SERVO_LAG.follow(model, P_cmd, r.t)  # what the play model sees
-        y, _, xv, _ = calibrate.fk_with_jacobian(
+        y, _, xv, _ = fk_with_jacobian(
             make_geo, theta, Pm, data.guess.get(("run", n_run)), False, steps
         )
         data.guess[("run", n_run)] = xv
@@ -273,8 +335,8 @@ def predict(
         if not want:
             continue
         idx = _thin(len(Pm))
-        _, J, _, JP = calibrate.fk_with_jacobian(
-            make_geo, theta, Pm[idx], xv[idx], True, steps, motors=bool(motor_keys)
+        _, J, _, JP = fk_with_jacobian(
+            make_geo, theta, Pm[idx], xv[idx], True, steps, motors=bool(motor_keys) or bool(knots)
         )
         unit = vec[idx] / dist[idx, None]
         assert J is not None
@@ -282,7 +344,7 @@ def predict(
             Jr = _interp_rows(idx, np.einsum("ni,nim->nm", unit, J[:, :3, :]), len(Pm))
             for j, nm in enumerate(geo_names):
                 cols[nm].append(Jr[:, j : j + 1])
-        if motor_keys:
+        if motor_keys or knots:
             assert JP is not None
             JPr = _interp_rows(idx, np.einsum("ni,nim->nm", unit, JP[:, :3, :]), len(Pm))
             sens = JPr[:, None, :]
@@ -297,7 +359,7 @@ def predict(
         preds.append(pa)
         if not want:
             continue
-        for nm in geo_names:
+        for nm in [*geo_names, *basis_keys]:
             cols[nm].append(np.zeros((len(pa), 1)))
         for k in motor_keys:
             name, period = split_key(k)

@@ -167,13 +167,22 @@ class Gram:
         invisible: float = 1e-9,
         max_rel_stderr: float = UNDETERMINED,
         lower: Mapping[str, float] | None = None,
+        known: Mapping[str, float] | None = None,
     ) -> Gram:
         """Whitened normal equations of ``candidates`` with the ``free`` columns
         projected out (Schur complement). A candidate whose whitened columns are all
         shorter than ``invisible`` (a unit size moves the data by a billionth of
         their noise), or lie in the span of the free columns, is left out: the data
         do not see it. ``lower``: the least size of single-column members (none
-        where not given)."""
+        where not given).
+
+        ``known``: free single-column members known beforehand to ± the given
+        standard deviation (their own units; a table value the laser measured):
+        a prior N(0, s²) on each, i.e. the pseudo-observation 0 = c / s added to the
+        normal equations (1/s² on its diagonal). The Schur complement is then
+        Henderson's mixed-model equations: a candidate's estimate and covariance are
+        the generalised least squares ones under the noise plus what those errors
+        can do, so nothing they could explain is credited to a candidate."""
         Mw = normal.whitened(noise)
         p = Mw.shape[0] - 1
         cand = [k for k in candidates if k in set(normal.keys)]
@@ -184,7 +193,12 @@ class Gram:
         rr = float(Mw[p, p])
         n_free = 0
         if iF.size:
-            GFF = Mw[np.ix_(iF, iF)]
+            GFF = Mw[np.ix_(iF, iF)].copy()
+            for key, sd in (known or {}).items():
+                if key in set(free):
+                    j = int(normal.columns([key])[0])
+                    pos = int(np.nonzero(iF == j)[0][0])
+                    GFF[pos, pos] += 1.0 / max(sd, 1e-300) ** 2
             GFA = Mw[np.ix_(iF, ia)]
             bF = Mw[iF, p]
             d = np.sqrt(np.maximum(np.diag(GFF), 1e-300))

@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
-from . import moves
+from .moves import arc_center, arc_length, feed_rate, sweep_of, target
 from .read import Word
 
 if TYPE_CHECKING:
@@ -104,9 +104,7 @@ class Queue:
                 r1 = math.hypot(kw["end"][iu] - cu, kw["end"][iv] - cv)
                 r2 = math.hypot(x - cu, y - cv)
                 l1 = kw["_sweep"]
-                l2 = moves.sweep_of(
-                    self.endpoint[0], self.endpoint[1], cu, cv, kw["rotation"], x, y
-                )
+                l2 = sweep_of(self.endpoint[0], self.endpoint[1], cu, cv, kw["rotation"], x, y)
                 if abs(r1 - r2) > 0.01 * it.scale():
                     raise it.err(
                         "cutter compensation made an arc with mismatched radii", line, None
@@ -213,7 +211,7 @@ def straight(
     st = it.st
     it._seen = seen
     base = None if st.comp_first else _programmed_base(it)
-    p = moves.target(it, axis_words, seen=seen, base=base)
+    p = target(it, axis_words, seen=seen, base=base)
     w = next(iter(axis_words.values()), None)
     iu, iv, iw = _AXES[st.plane]
     px, py = p[iu], p[iv]
@@ -361,7 +359,7 @@ def arc(
     sc = it.scale()
     first = st.comp_first
     base = None if first else _programmed_base(it)
-    p = moves.target(it, axis_words, seen=seen, base=base)
+    p = target(it, axis_words, seen=seen, base=base)
     ex, ey = p[iu], p[iv]
     cx, cy = st.pos[iu], st.pos[iv]
     side = st.comp_side
@@ -378,15 +376,15 @@ def arc(
                 gw,
                 "a larger entry arc",
             )
-        cu, cv = moves.arc_center(it, motion, cx / sc, cy / sc, ex / sc, ey / sc, seen, line, gw)
+        cu, cv = arc_center(it, motion, cx / sc, cy / sc, ex / sc, ey / sc, seen, line, gw)
         center_x, center_y = cu * sc, cv * sc
         _check_arc_radius(it, motion, side, radius, center_x, center_y, cx, cy, seen, line, gw)
-        length = moves.arc_length(
+        length = arc_length(
             math.hypot(cx - center_x, cy - center_y),
-            moves.sweep_of(cx, cy, center_x, center_y, turn, ex, ey),
+            sweep_of(cx, cy, center_x, center_y, turn, ex, ey),
             p[iw] - st.pos[iw],
         )
-        feed = moves.feed_rate(it, st.pos, p, length, line, gw)
+        feed = feed_rate(it, st.pos, p, length, line, gw)
         if _inside(side, turn):
             gamma = math.atan2(center_y - ey, center_x - ex)
         else:
@@ -410,20 +408,20 @@ def arc(
         center_y = end_y + c_len * math.sin(ab_ang)
         end = list(p)
         end[iu], end[iv] = end_x, end_y
-        sweep = moves.sweep_of(cx, cy, center_x, center_y, turn, end_x, end_y)
+        sweep = sweep_of(cx, cy, center_x, center_y, turn, end_x, end_y)
         _hold_arc(it, line, end, (center_x, center_y), turn, feed, sweep)
         st.pos = end
         return
     op = st.program
     opx, opy = op[iu], op[iv]
-    cu, cv = moves.arc_center(it, motion, opx / sc, opy / sc, ex / sc, ey / sc, seen, line, gw)
+    cu, cv = arc_center(it, motion, opx / sc, opy / sc, ex / sc, ey / sc, seen, line, gw)
     centerx, centery = cu * sc, cv * sc
-    length = moves.arc_length(
+    length = arc_length(
         math.hypot(opx - centerx, opy - centery),
-        moves.sweep_of(opx, opy, centerx, centery, turn, ex, ey),
+        sweep_of(opx, opy, centerx, centery, turn, ex, ey),
         p[iw] - op[iw],
     )
-    feed = moves.feed_rate(it, op, p, length, line, gw)
+    feed = feed_rate(it, op, p, length, line, gw)
     arc_radius = math.hypot(centerx - ex, centery - ey)
     theta = math.atan2(cy - opy, cx - opx)
     theta = theta - _HALF_PI if side == LEFT else theta + _HALF_PI
@@ -452,7 +450,7 @@ def arc(
     front = q.items[0] if q.items else None
     end = list(p)
     end[iu], end[iv] = new_end_x, new_end_y
-    sweep = moves.sweep_of(opx, opy, centerx, centery, turn, ex, ey)
+    sweep = sweep_of(opx, opy, centerx, centery, turn, ex, ey)
     if (
         beta < -small
         or beta > math.pi + small
@@ -550,7 +548,7 @@ def _straight_feed(
 ) -> float:
     if motion == 0:
         return math.nan
-    return moves.feed_rate(it, start, end, None, line, w)
+    return feed_rate(it, start, end, None, line, w)
 
 
 def _hold_straight(

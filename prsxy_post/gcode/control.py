@@ -35,6 +35,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..errors import GCodeError
+from .execute import Interpreter
 from .expr import ExprError
 from .read import OWord, fail
 
@@ -83,8 +84,6 @@ class Control:
     """
 
     def __init__(self, interp: object, max_loop_passes: int) -> None:
-        from .execute import Interpreter
-
         assert isinstance(interp, Interpreter)
         self.it = interp
         self.params = interp.params

@@ -7,6 +7,8 @@ about within the cycle; those functions are events among the cycle's moves
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from .codes import CYCLE_SHAPE
@@ -29,8 +31,55 @@ def cycle(
     line: int,
     new: bool,
 ) -> None:
+    """One block of canned cycle ``motion`` (G73, G74, G81-G86, G89): its words
+    checked and read as LinuxCNC does (convert_cycle), then its holes, each the
+    cycle's own moves (interp_cycles.cc has a function per cycle, and so has this
+    module)."""
     st = it.st
     gw = next(iter(axis_words.values()), None)
+    first = st.motion != motion
+    repeats = _words(it, motion, axis_words, seen, line, gw, first)
+    lv = _levels(it, axis_words, seen, line)
+    moves = _Moves(it, line, lv.iu, lv.iv, lv.iw, lv.sc, lv.off)
+    # LinuxCNC (interp_internal.hh, CYCLE_MACRO): below the R plane (judged by the
+    # level the cycles started at), rise straight up to it first; the first hole is
+    # gone to across at the tool's height where that is above R, every other one at
+    # the clearance level. The level the cycles started at is kept as a number, so
+    # after G20/G21 it is read in the new units while the tool's height is not: the
+    # first hole then goes across at the tool's height, not at that level
+    cur, off, sc, r = lv.cur, lv.off, lv.sc, lv.r
+    current_cc = lv.cur_w
+    old_cc = lv.old_cc
+    if old_cc < r:
+        moves.traverse((cur[lv.iu] - off[lv.iu]) / sc, (cur[lv.iv] - off[lv.iv]) / sc, r)
+        old_cc = r
+        current_cc = r
+    clear = r if st.retract_r else old_cc
+    aa, bb = lv.aa, lv.bb
+    first = True
+    for _ in range(repeats):
+        aa, bb = _next_hole(it, lv, aa, bb, seen, line)
+        first_w = current_cc if (first and current_cc > r) else clear
+        first = False
+        moves.traverse(aa, bb, first_w)
+        if first_w != r:
+            moves.traverse(aa, bb, r)
+        HOLES[motion](moves, motion, aa, bb, r, lv.cc, clear)
+        current_cc = clear
+
+
+def _words(
+    it: Interpreter,
+    motion: int,
+    axis_words: dict[str, Word],
+    seen: dict[str, Word],
+    line: int,
+    gw: Word | None,
+    first: bool,
+) -> int:
+    """The block's words checked in LinuxCNC's order, the sticky Q and P kept;
+    the number of repeats (L)."""
+    st = it.st
     if st.inverse_time:
         raise it.err("canned cycle in inverse time mode (G93)", line, gw, "G94")
     if st.feed <= 0:
@@ -48,11 +97,8 @@ def cycle(
                 axis_words[a],
                 "X Y Z R only: rotary axes may not move in a cycle",
             )
-    first = st.motion != motion
     sc = it.scale()
-    iu, iv, iw = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[st.plane]
-    ax = "XYZ"
-    name_w = ax[iw]
+    name_w = "XYZ"[{17: 2, 18: 1, 19: 0}[st.plane]]
     if first and name_w not in axis_words:
         raise it.err(
             f"{name_w} missing in the first block of a canned cycle",
@@ -99,6 +145,45 @@ def cycle(
             gw,
             f"G{motion} in G17",
         )
+    return repeats
+
+
+@dataclass(frozen=True)
+class _Levels:
+    """Where a cycle works, in program units of its plane's axes (u, v the plane,
+    w the drilling axis): the retract plane r, the bottom cc, the first hole's
+    aa, bb and what each repeat adds (inc_a, inc_b; polar inc_r, inc_t), the tool's
+    height cur_w and the level the cycles started at old_cc; cur, off, sc: the
+    position [mm], the offset and the units' scale to turn them back."""
+
+    iu: int
+    iv: int
+    iw: int
+    sc: float
+    off: Sequence[float]
+    cur: list[float]
+    cur_w: float
+    old_cc: float
+    r: float
+    cc: float
+    aa: float
+    bb: float
+    inc_a: float
+    inc_b: float
+    inc_r: float
+    inc_t: float
+
+
+def _levels(
+    it: Interpreter, axis_words: dict[str, Word], seen: dict[str, Word], line: int
+) -> _Levels:
+    """The cycle's levels and first hole as LinuxCNC's convert_cycle reads them
+    (absolute and incremental, polar words in G17); R below the bottom is an error."""
+    st = it.st
+    sc = it.scale()
+    iu, iv, iw = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[st.plane]
+    ax = "XYZ"
+    name_w = ax[iw]
     off = it.offset()
     cur = list(st.pos)
     # work in program coordinates of the cycle axes, then add the offset back
@@ -149,118 +234,158 @@ def cycle(
             seen.get("R") or axis_words.get(name_w),
             f"R >= {name_w} (the retract plane above the bottom)",
         )
+    return _Levels(
+        iu, iv, iw, sc, off, cur, cur_w, old_cc, r, cc, aa, bb, inc_a, inc_b, inc_r, inc_t
+    )
 
-    def pt(a: float, b: float, w: float) -> list[float]:
-        p = list(st.pos)
-        p[iu], p[iv], p[iw] = a * sc + off[iu], b * sc + off[iv], w * sc + off[iw]
+
+def _next_hole(
+    it: Interpreter, lv: _Levels, aa: float, bb: float, seen: dict[str, Word], line: int
+) -> tuple[float, float]:
+    """The next repeat's hole: the increments added (in G91), and the polar ones
+    about the program origin (LinuxCNC's CYCLE_MACRO)."""
+    aa += lv.inc_a
+    bb += lv.inc_b
+    inc_r, inc_t = lv.inc_r, lv.inc_t
+    if inc_r or inc_t:
+        if aa == 0 and bb == 0:
+            raise it.err(
+                "incremental polar motion at the origin",
+                line,
+                seen.get("@") or seen.get("^"),
+                "G90 or a start off the origin",
+            )
+        if inc_r:
+            theta = math.atan2(bb, aa)
+            radius = math.hypot(bb, aa) + inc_r
+            aa, bb = radius * math.cos(theta), radius * math.sin(theta)
+        if inc_t:
+            theta = math.atan2(bb, aa) + inc_t
+            radius = math.hypot(bb, aa)
+            aa, bb = radius * math.cos(theta), radius * math.sin(theta)
+    return aa, bb
+
+
+class _Moves:
+    """A cycle's moves in its plane's program units, emitted as motions at the
+    block's line."""
+
+    def __init__(
+        self, it: Interpreter, line: int, iu: int, iv: int, iw: int, sc: float, off: Sequence[float]
+    ) -> None:
+        self.it, self.st, self.line = it, it.st, line
+        self.iu, self.iv, self.iw, self.sc, self.off = iu, iv, iw, sc, off
+
+    def pt(self, a: float, b: float, w: float) -> list[float]:
+        p = list(self.st.pos)
+        sc, off = self.sc, self.off
+        p[self.iu], p[self.iv], p[self.iw] = (
+            a * sc + off[self.iu],
+            b * sc + off[self.iv],
+            w * sc + off[self.iw],
+        )
         return p
 
-    def traverse(a: float, b: float, w: float) -> None:
-        end = pt(a, b, w)
-        it.emit(line=line, kind="rapid", start=tuple(st.pos), end=tuple(end))
-        st.pos = end
+    def traverse(self, a: float, b: float, w: float) -> None:
+        end = self.pt(a, b, w)
+        self.it.emit(line=self.line, kind="rapid", start=tuple(self.st.pos), end=tuple(end))
+        self.st.pos = end
 
-    def feed(a: float, b: float, w: float) -> None:
-        end = pt(a, b, w)
+    def feed(self, a: float, b: float, w: float) -> None:
+        st = self.st
+        end = self.pt(a, b, w)
         f = st.feed * (MM_PER_INCH if st.units == "inch" else 1.0)
-        it.emit(line=line, kind="feed", start=tuple(st.pos), end=tuple(end), feed=f)
+        self.it.emit(line=self.line, kind="feed", start=tuple(st.pos), end=tuple(end), feed=f)
         st.pos = end
 
-    def dwell(t: float) -> None:
-        p = tuple(st.pos)
-        it.emit(line=line, kind="dwell", start=p, end=p, duration=t)
+    def dwell(self, t: float) -> None:
+        p = tuple(self.st.pos)
+        self.it.emit(line=self.line, kind="dwell", start=p, end=p, duration=t)
 
-    def function(*words: tuple[str, float]) -> None:
-        p = tuple(st.pos)
-        it.emit(line=line, kind="function", start=p, end=p, words=words)
+    def function(self, *words: tuple[str, float]) -> None:
+        p = tuple(self.st.pos)
+        self.it.emit(line=self.line, kind="function", start=p, end=p, words=words)
 
-    # LinuxCNC (interp_internal.hh, CYCLE_MACRO): below the R plane (judged by the
-    # level the cycles started at), rise straight up to it first; the first hole is
-    # gone to across at the tool's height where that is above R, every other one at
-    # the clearance level. The level the cycles started at is kept as a number, so
-    # after G20/G21 it is read in the new units while the tool's height is not: the
-    # first hole then goes across at the tool's height, not at that level
-    current_cc = cur_w
-    if old_cc < r:
-        traverse((cur[iu] - off[iu]) / sc, (cur[iv] - off[iv]) / sc, r)
-        old_cc = r
-        current_cc = r
-    clear = r if st.retract_r else old_cc
+
+def _peck(mv: _Moves, motion: int, aa: float, bb: float, r: float, cc: float, clear: float) -> None:
+    """G73 (chip break) and G83 (peck out to R): pecks of Q, each backed off by
+    G83_RAPID_DELTA before the next (convert_cycle_g73, convert_cycle_g83)."""
+    st = mv.st
     delta = G83_RAPID_DELTA_INCH * (1.0 if st.units == "inch" else MM_PER_INCH)
-    first = True
-    for _ in range(repeats):
-        aa += inc_a
-        bb += inc_b
-        if inc_r or inc_t:
-            if aa == 0 and bb == 0:
-                raise it.err(
-                    "incremental polar motion at the origin",
-                    line,
-                    seen.get("@") or seen.get("^"),
-                    "G90 or a start off the origin",
-                )
-            if inc_r:
-                theta = math.atan2(bb, aa)
-                radius = math.hypot(bb, aa) + inc_r
-                aa, bb = radius * math.cos(theta), radius * math.sin(theta)
-            if inc_t:
-                theta = math.atan2(bb, aa) + inc_t
-                radius = math.hypot(bb, aa)
-                aa, bb = radius * math.cos(theta), radius * math.sin(theta)
-        first_w = current_cc if (first and current_cc > r) else clear
-        first = False
-        traverse(aa, bb, first_w)
-        if first_w != r:
-            traverse(aa, bb, r)
-        if motion in (73, 83):
-            q = st.cycle_q / sc
-            depth = r - q
-            while depth > cc:
-                feed(aa, bb, depth)
-                if motion == 83:
-                    traverse(aa, bb, r)
-                traverse(aa, bb, depth + delta)
-                depth -= q
-            feed(aa, bb, cc)
-            traverse(aa, bb, clear)
-        elif motion == 85:
-            feed(aa, bb, cc)
-            feed(aa, bb, r)
-            traverse(aa, bb, clear)
-        elif motion in (74, 84):
-            # tapping (convert_cycle_g74_g84): overrides off, in, reverse the
-            # spindle, dwell, out, turn it back, overrides back on
-            forward = 1 if motion == 84 else -1
-            f_on, s_on = st.feed_override, st.speed_override
-            function(("M", 49.0))
-            feed(aa, bb, cc)
-            st.spindle_dir = -forward
-            function(("M", 5.0), ("M", 4.0 if motion == 84 else 3.0))
-            dwell(st.cycle_p)
-            feed(aa, bb, clear)
-            st.spindle_dir = forward
-            function(("M", 5.0), ("M", 3.0 if motion == 84 else 4.0))
-            st.feed_override, st.speed_override = f_on, s_on
-            if f_on and s_on:
-                function(("M", 48.0))
-            elif f_on or s_on:
-                function(("M", 50.0 if f_on else 51.0), ("P", 1.0))
-        elif motion == 86:
-            # boring, spindle stopped for the way out (convert_cycle_g86)
-            turning = st.spindle_dir
-            feed(aa, bb, cc)
-            dwell(st.cycle_p)
-            st.spindle_dir = 0
-            function(("M", 5.0))
-            traverse(aa, bb, clear)
-            st.spindle_dir = turning
-            function(("M", 3.0 if turning > 0 else 4.0))
-        else:
-            # feed to the bottom, dwell or not, retract at rapid or at feed
-            # (G89 bores out)
-            dwells, feed_out = CYCLE_SHAPE[motion]
-            feed(aa, bb, cc)
-            if dwells:
-                dwell(st.cycle_p)
-            (feed if feed_out else traverse)(aa, bb, clear)
-        current_cc = clear
+    q = st.cycle_q / mv.sc
+    depth = r - q
+    while depth > cc:
+        mv.feed(aa, bb, depth)
+        if motion == 83:
+            mv.traverse(aa, bb, r)
+        mv.traverse(aa, bb, depth + delta)
+        depth -= q
+    mv.feed(aa, bb, cc)
+    mv.traverse(aa, bb, clear)
+
+
+def _g85(mv: _Moves, motion: int, aa: float, bb: float, r: float, cc: float, clear: float) -> None:
+    """G85: feed in, feed out to R, then to the clearance level (convert_cycle_g85)."""
+    mv.feed(aa, bb, cc)
+    mv.feed(aa, bb, r)
+    mv.traverse(aa, bb, clear)
+
+
+def _tap(mv: _Moves, motion: int, aa: float, bb: float, r: float, cc: float, clear: float) -> None:
+    """G74 and G84, tapping (convert_cycle_g74_g84): overrides off, in, reverse the
+    spindle, dwell, out, turn it back, overrides back on."""
+    st = mv.st
+    forward = 1 if motion == 84 else -1
+    f_on, s_on = st.feed_override, st.speed_override
+    mv.function(("M", 49.0))
+    mv.feed(aa, bb, cc)
+    st.spindle_dir = -forward
+    mv.function(("M", 5.0), ("M", 4.0 if motion == 84 else 3.0))
+    mv.dwell(st.cycle_p)
+    mv.feed(aa, bb, clear)
+    st.spindle_dir = forward
+    mv.function(("M", 5.0), ("M", 3.0 if motion == 84 else 4.0))
+    st.feed_override, st.speed_override = f_on, s_on
+    if f_on and s_on:
+        mv.function(("M", 48.0))
+    elif f_on or s_on:
+        mv.function(("M", 50.0 if f_on else 51.0), ("P", 1.0))
+
+
+def _g86(mv: _Moves, motion: int, aa: float, bb: float, r: float, cc: float, clear: float) -> None:
+    """G86, boring, the spindle stopped for the way out (convert_cycle_g86)."""
+    st = mv.st
+    turning = st.spindle_dir
+    mv.feed(aa, bb, cc)
+    mv.dwell(st.cycle_p)
+    st.spindle_dir = 0
+    mv.function(("M", 5.0))
+    mv.traverse(aa, bb, clear)
+    st.spindle_dir = turning
+    mv.function(("M", 3.0 if turning > 0 else 4.0))
+
+
+def _drill(
+    mv: _Moves, motion: int, aa: float, bb: float, r: float, cc: float, clear: float
+) -> None:
+    """G81, G82, G89: feed to the bottom, dwell or not, retract at rapid or at feed
+    (G89 bores out) (convert_cycle_g81, _g82, _g89)."""
+    dwells, feed_out = CYCLE_SHAPE[motion]
+    mv.feed(aa, bb, cc)
+    if dwells:
+        mv.dwell(mv.st.cycle_p)
+    (mv.feed if feed_out else mv.traverse)(aa, bb, clear)
+
+
+#: each cycle's hole, by its G number
+HOLES = {
+    73: _peck,
+    83: _peck,
+    85: _g85,
+    74: _tap,
+    84: _tap,
+    86: _g86,
+    81: _drill,
+    82: _drill,
+    89: _drill,
+}

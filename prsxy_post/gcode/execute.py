@@ -6,14 +6,25 @@ import os
 from typing import TYPE_CHECKING
 
 from ..errors import GCodeError
-from . import comp, cycles, functions, messages, moves, offsets, splines
 from .check import classify
 from .codes import CYCLES
+from .comp import Queue as CompQueue
+from .comp import active as comp_active
+from .comp import arc as comp_arc
+from .comp import straight as comp_straight
+from .comp import turn_off as comp_off
+from .comp import turn_on as comp_on
 from .config import InterpreterConfig, ToolEntry
+from .cycles import cycle
 from .expr import ExprError
+from .functions import io, overrides, restore_blocks, snapshot, spindle_mode, tool_number
+from .messages import expand, kind_of
 from .motion import EXACT_STOP, MM_PER_INCH, Motion
+from .moves import arc, home, linear
+from .offsets import axis_offsets, change_frame, curve_to_work, g10, save_home, to_work
 from .params import Parameters
-from .read import Block, Word, fail
+from .read import Block, Word, evaluate, fail, parse
+from .splines import bezier, nurbs_end, nurbs_point
 from .state import State
 
 if TYPE_CHECKING:
@@ -31,7 +42,7 @@ class Interpreter:
         self.percent_seen = False
         self.started = False  # a non-blank line was read (a later '%' is an error)
         self.params = Parameters(self._system, self._position, lambda: bool(self.st.comp_side))
-        self.queue = comp.Queue(self)
+        self.queue = CompQueue(self)
         #: after G40 the tool is where compensation left it, not at st.pos
         self.detached: tuple[float, ...] | None = None
         #: the feed rate the last inverse-time move set (LinuxCNC's feed_rate
@@ -99,7 +110,7 @@ class Interpreter:
             return 0.0
         if name in ("_abs_x", "_abs_y", "_abs_z", "_abs_a", "_abs_b"):
             i = "xyzab".index(name[-1])
-            v = st.pos[i] + (st.tool_length if i == 2 else 0.0)
+            v = to_work(st, st.pos)[i] + (st.tool_length if i == 2 else 0.0)
             return v / sc if i < 3 else v
         if name == "_line":
             return float(self.line)
@@ -193,7 +204,7 @@ class Interpreter:
                 except ExprError:
                     return None
 
-            text = messages.expand(text, number, named)
+            text = expand(text, number, named)
         if kind == "ABORT":
             raise fail(f"the program aborts: {text}", self.source, line, None)
         if self.cfg.on_message is not None:
@@ -239,7 +250,23 @@ class Interpreter:
             else:
                 kw["start"] = self.detached
                 self.detached = None
+        if self.st.rotation:
+            self._rotate_out(kw)
         self.out.append(Motion(**kw))  # type: ignore[arg-type]
+
+    def _rotate_out(self, kw: dict[str, object]) -> None:
+        """A motion's points from the unrotated frame into the workpiece frame
+        (offsets.to_work): what LinuxCNC's canon does to every point it gets
+        (emccanon.cc rotate_and_offset_pos)."""
+        st = self.st
+        for key in ("start", "end"):
+            kw[key] = tuple(to_work(st, kw[key]))  # type: ignore[arg-type]
+        center = kw.get("center")
+        if center is not None:
+            kw["center"] = tuple(to_work(st, (*center, 0.0, 0.0))[:3])  # type: ignore[misc]
+        curve = kw.get("curve")
+        if curve is not None:
+            kw["curve"] = curve_to_work(st, curve)  # type: ignore[arg-type]
 
     def context(self, code: int, w: Word, line: int, pre: list[tuple[str, float]]) -> None:
         """M70 (save the modal state), M71 (forget it), M72 (restore it), M73
@@ -248,7 +275,7 @@ class Interpreter:
         assert ctl is not None
         frame = ctl.frames[-1]
         if code in (70, 73):
-            frame.context = functions.snapshot(self)
+            frame.context = snapshot(self)
             frame.restore_on_return = code == 73 and ctl.call_level > 0
         elif code == 71:
             frame.context = None
@@ -267,9 +294,7 @@ class Interpreter:
     def restore(self, saved: dict[str, object], line: int) -> None:
         """Back to a saved modal state: the G and M codes LinuxCNC generates for
         it, run as blocks of this line."""
-        from .read import evaluate, parse
-
-        for text in functions.restore_blocks(functions.snapshot(self), saved):
+        for text in restore_blocks(snapshot(self), saved):
             blk = evaluate(parse(text), line, self.params, self.source, self.params.add_named)
             self.run(blk)
 
@@ -324,7 +349,7 @@ class Interpreter:
         line = blk.line
         self.line = line
         if blk.comment is not None:
-            spoken = messages.kind_of(blk.comment)
+            spoken = kind_of(blk.comment)
             if spoken is not None:
                 self.message(spoken[0], spoken[1], line)
         if not blk.words:
@@ -348,7 +373,7 @@ class Interpreter:
         # (functions.py): an S or T that changes nothing is no function
         pre: list[tuple[str, float]] = []
         if 14 in groups:
-            functions.spindle_mode(self, groups[14][0], seen, pre)
+            spindle_mode(self, groups[14][0], seen, pre)
         if "S" in seen:
             if seen["S"].value != st.spindle:
                 pre.append(("S", seen["S"].value))
@@ -361,9 +386,9 @@ class Interpreter:
                 pre.append(("T", float(t)))
             st.next_tool = t
         if 5 in mgroups:
-            functions.io(self, mgroups[5][0], mgroups[5][1], seen, pre, line)
+            io(self, mgroups[5][0], mgroups[5][1], seen, pre, line)
         if 6 in mgroups and mgroups[6][0] == 61:
-            functions.tool_number(self, mgroups[6][1], seen, pre, line)
+            tool_number(self, mgroups[6][1], seen, pre, line)
         elif 6 in mgroups:
             self.no_comp("a tool change", line, mgroups[6][1])
             st.tool = st.next_tool
@@ -381,7 +406,7 @@ class Interpreter:
             st.flood = code == 8 or (st.flood and code != 9)
             pre.append(("M", float(code)))
         if 9 in mgroups:
-            functions.overrides(self, mgroups[9][0], mgroups[9][1], seen, pre, line)
+            overrides(self, mgroups[9][0], mgroups[9][1], seen, pre, line)
         if 10 in mgroups:  # a user M code, with its P and Q (LinuxCNC passes both)
             pre.append(("M", float(mgroups[10][0])))
             for letter in ("P", "Q"):
@@ -404,25 +429,21 @@ class Interpreter:
         if 7 in groups:
             comp_code, comp_word = groups[7]
             if comp_code == 40:
-                comp.turn_off(self, line)
+                comp_off(self, line)
             else:
-                comp.turn_on(self, comp_code, seen, comp_word, line)
+                comp_on(self, comp_code, seen, comp_word, line)
         if 8 in groups:
             self.no_comp("a change of tool length offset", line, groups[8][1])
             self._tool_length(groups[8], seen, line)
         if 12 in groups:
             self.no_comp("a change of coordinate system", line, groups[12][1])
             index = _coord_index(groups[12][0])
-            if self.params.values[5210 + 20 * index] != 0.0:
-                raise self.err(
-                    "rotated coordinate systems are not supported (its parameter R is not 0)",
-                    line,
-                    groups[12][1],
-                    "coordinate systems without rotation on this machine",
-                )
-            st.coord = index
-            st.origin = self.stored_origin(index)
-            self.params.values[5220] = float(index)
+            # the system in use again changes nothing, even when its parameters
+            # did (convert_coordinate_system, interp_convert.cc:1792-1798)
+            if index != st.coord:
+                change_frame(self, self.stored_origin(index), self.params.values[5210 + 20 * index])
+                st.coord = index
+                self.params.values[5220] = float(index)
         if 13 in groups:
             self.no_comp("a change of path control mode", line, groups[13][1])
             self._path_control(groups[13], seen, line)
@@ -435,27 +456,30 @@ class Interpreter:
             st.retract_r = groups[10][0] == 99
         axis_words = w.axis
         if mode0 == 10:
-            offsets.g10(self, seen, groups[0][1], line)
+            g10(self, seen, groups[0][1], line)
         elif mode0 in (28, 30):
             self.no_comp(f"G{mode0:g}", line, groups[0][1])
-            moves.home(self, mode0, axis_words, line)
+            home(self, mode0, axis_words, line)
         elif mode0 in (28.1, 30.1):
             self.no_comp(f"G{mode0:g}", line, groups[0][1])
-            offsets.save_home(self, mode0)
+            save_home(self, mode0)
         elif mode0 in (52, 92):
             self.no_comp(f"G{mode0:g}", line, groups[0][1])
-            offsets.axis_offsets(self, mode0, seen)
+            axis_offsets(self, mode0, seen)
         elif mode0 == 5.3:
-            splines.nurbs_end(self, groups[0][1], line)
+            nurbs_end(self, groups[0][1], line)
         if 16 in groups:
             self.no_comp(f"G{groups[16][0]:g}", line, groups[16][1])
-            offsets.axis_offsets(self, groups[16][0], seen)
+            axis_offsets(self, groups[16][0], seen)
         motion = w.motion
         if motion is not None:
             if mode0 == 53:
                 self.no_comp("G53", line, groups[0][1])
                 st.motion = motion
-                moves.linear(self, int(motion), axis_words, seen, line, machine=True)
+                # a move that is no cycle forgets the cycles' first level
+                # (convert_motion, interp_convert.cc:3778-3779), G53's too
+                st.cycle_il = None
+                linear(self, int(motion), axis_words, seen, line, machine=True)
             elif motion == 80:
                 st.motion = None
                 st.cycle_il = None
@@ -572,24 +596,24 @@ class Interpreter:
         self._seen = seen
         if motion in CYCLES:
             self.no_comp("a canned cycle", line, next(iter(axis_words.values()), None))
-            cycles.cycle(self, int(motion), axis_words, seen, line, new)
+            cycle(self, int(motion), axis_words, seen, line, new)
             st.motion = motion
             return
         if motion in (5, 5.1):
             st.motion = motion
-            splines.bezier(self, motion, axis_words, seen, line)
+            bezier(self, motion, axis_words, seen, line)
             return
         if motion == 5.2:
-            splines.nurbs_point(self, axis_words, seen, line)
+            nurbs_point(self, axis_words, seen, line)
             st.motion = motion
             return
         st.motion = motion
         if motion in (0, 1):
             st.arc_not_allowed = False
-            if comp.active(self):
-                comp.straight(self, int(motion), axis_words, seen, line)
+            if comp_active(self):
+                comp_straight(self, int(motion), axis_words, seen, line)
             else:
-                moves.linear(self, int(motion), axis_words, seen, line)
+                linear(self, int(motion), axis_words, seen, line)
         else:
             if st.arc_not_allowed:
                 raise self.err(
@@ -598,10 +622,17 @@ class Interpreter:
                     next(iter(axis_words.values()), None),
                     "a straight move to leave cutter compensation",
                 )
-            if comp.active(self) and st.plane in (17, 18):
-                comp.arc(self, int(motion), axis_words, seen, line)
+            if st.rotation and st.plane != 17:
+                raise self.err(
+                    f"arcs in G{st.plane} in a rotated coordinate system are not supported",
+                    line,
+                    next(iter(axis_words.values()), None),
+                    "G17 arcs, or a system without rotation (G10 L2 R0)",
+                )
+            if comp_active(self) and st.plane in (17, 18):
+                comp_arc(self, int(motion), axis_words, seen, line)
             else:
-                moves.arc(self, int(motion), axis_words, seen, line)
+                arc(self, int(motion), axis_words, seen, line)
 
 
 def _coord_index(code: float) -> int:

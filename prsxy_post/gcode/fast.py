@@ -7,10 +7,10 @@ import math
 import re
 
 from ..errors import GCodeError
-from . import moves
 from .codes import AXES
 from .execute import Interpreter
 from .motion import MM_PER_INCH, Motion
+from .moves import arc
 from .read import Word
 
 #: The common CAM block: an optional N, an optional G0/G1/G2/G3, axis words in the
@@ -53,6 +53,7 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
         st.ended
         or st.inverse_time
         or st.comp_side
+        or st.rotation  # points go out through Interpreter.emit_now's rotation
         or st.arc_not_allowed  # the full path clears it at the next straight move
         or it.detached is not None
         or it.queue
@@ -164,7 +165,7 @@ def _fast_arc(it: Interpreter, motion: int, words: tuple[str, ...], n: int) -> b
         st.feed = seen["F"].value
     it._seen = seen
     try:
-        moves.arc(it, motion, axis_words, seen, n)
+        arc(it, motion, axis_words, seen, n)
     except GCodeError:
         st.feed, st.motion, st.cycle_il = saved
         return False

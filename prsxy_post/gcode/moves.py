@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 from .codes import AXES
 from .motion import MM_PER_INCH
+from .offsets import from_work, to_work
 from .read import Word
 
 if TYPE_CHECKING:
@@ -35,13 +36,25 @@ def target(
     (``@`` radius, ``^`` angle in degrees, about the program origin, G17)."""
     st = it.st
     here = st.pos if base is None else base
-    off = (0.0, 0.0, -st.tool_length, 0.0, 0.0) if machine else it.offset()
-    out = list(here)
     sc = it.scale()
+    if machine:
+        # G53 is in the workpiece frame, unrotated: an axis not given stays
+        # where the tool is on the machine (find_ends, interp_find.cc:170-197)
+        if seen is not None and ("@" in seen or "^" in seen):
+            w = seen.get("@") or seen["^"]
+            raise it.err("polar coordinates with G53", it.line, w, "X Y Z machine coordinates")
+        tip = to_work(st, here)
+        for i, a in enumerate(AXES):
+            if a in axis_words:
+                v = axis_words[a].value * (sc if i < 3 else 1.0)
+                tip[i] = v - st.tool_length if i == 2 else v
+        return from_work(st, tip)
+    off = it.offset()
+    out = list(here)
     for i, a in enumerate(AXES):
         if a in axis_words:
             v = axis_words[a].value * (sc if i < 3 else 1.0)
-            out[i] = (v + off[i]) if (st.absolute or machine) else here[i] + v
+            out[i] = (v + off[i]) if st.absolute else here[i] + v
     if seen is not None and ("@" in seen or "^" in seen):
         _polar(it, seen, out, here, off, sc)
     return out
@@ -337,6 +350,9 @@ def home(it: Interpreter, code: float, axis_words: dict[str, Word], line: int) -
     base = 5161 if code == 28 else 5181
     home = it.params.values[base : base + 5]
     home[2] -= st.tool_length  # a stored machine position is of the gauge point
+    # in the unrotated frame: an axis not given keeps its program coordinate
+    # (convert_home's find_relative, interp_find.cc:427-431)
+    home = from_work(st, home)
     end = list(st.pos)
     for i, a in enumerate(AXES):
         if not axis_words or a in axis_words:

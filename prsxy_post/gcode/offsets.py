@@ -6,25 +6,44 @@ them: in the numbered parameters (#5161.., #5181.., #5211.., #5221.., machine
 units: mm and degrees here).
 
 The frames (all mm and degrees, x y z a b): the tool tip in the workpiece frame
-``tip`` (the interpreter's position), the work offset ``origin`` of the active
-system, the G92 offset ``g92``; program coordinates are
-``(tip - origin - g92) / units``. The spindle's gauge point is the tip plus the
-tool length in z. Changing an offset never moves the machine: the program
-coordinates of the same tip change.
+``tip``; the work offset ``origin`` of the active system and its rotation ``r``
+about Z (G10 L2 R, parameter #5210 + 20 n); the G92 offset ``g92``; program
+coordinates ``p``. As LinuxCNC's canon places a point (emccanon.cc
+rotate_and_offset_pos: G92 offset, then the rotation, then the work offset)::
 
-Not on this machine: rotated coordinate systems (G10 L2 R not 0), and tool
-offsets other than the length (X, Y, A, B in G10 L1/L10/L11).
+    tip_xy = R(r) (p_xy + g92_xy) + origin_xy,    tip_zab = p_zab + g92_zab + origin_zab
+
+The interpreter's position ``st.pos`` is the point ``q = p + g92 + origin`` of the
+*unrotated* frame (``q = R(-r) (tip - origin) + origin`` in XY): there the program
+is a translation, so moves, arcs, cycles and compensation are computed as
+without rotation, and :func:`to_work` turns each motion's points into the
+workpiece frame when it goes out (``Interpreter.emit_now``). With ``r = 0`` the
+two frames are one. The spindle's gauge point is the tip plus the tool length in
+z. Changing an offset never moves the machine: the program coordinates of the
+same tip change (:func:`change_frame`), except where LinuxCNC itself computes
+them otherwise (G10 L2/L20 of the active system with G92 on and a rotation,
+:func:`_carry_setup`).
+
+Not on this machine: tool offsets other than the length (X, Y, A, B in G10
+L1/L10/L11), and arcs in G18/G19 while the system is rotated (they would lie in
+a plane that is not XZ or YZ of the workpiece).
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from .config import ToolEntry
 from .read import Word
 
 if TYPE_CHECKING:
+    from ..curves import Nurbs
     from .execute import Interpreter
+    from .state import State
 
 _AXES = ("X", "Y", "Z", "A", "B")
 
@@ -51,9 +70,61 @@ def g10(it: Interpreter, seen: dict[str, Word], w: Word, line: int) -> None:
         _setup_system(it, lv, seen, w, line)
 
 
+def rotate(x: float, y: float, degrees: float) -> tuple[float, float]:
+    """(x, y) turned by ``degrees`` about the origin, counter-clockwise seen from
+    +Z (LinuxCNC's Interp::rotate, interp_convert.cc:1743-1750)."""
+    t = degrees * math.pi / 180.0
+    c, s = math.cos(t), math.sin(t)
+    return x * c - y * s, x * s + y * c
+
+
+def to_work(st: State, q: list[float] | tuple[float, ...]) -> list[float]:
+    """A point of the interpreter's unrotated frame in the workpiece frame:
+    ``R(r) (q - origin) + origin`` in XY (see the module's docstring)."""
+    out = list(q)
+    if st.rotation:
+        ox, oy = st.origin[0], st.origin[1]
+        x, y = rotate(q[0] - ox, q[1] - oy, st.rotation)
+        out[0], out[1] = x + ox, y + oy
+    return out
+
+
+def from_work(st: State, tip: list[float] | tuple[float, ...]) -> list[float]:
+    """The inverse of :func:`to_work`."""
+    out = list(tip)
+    if st.rotation:
+        ox, oy = st.origin[0], st.origin[1]
+        x, y = rotate(tip[0] - ox, tip[1] - oy, -st.rotation)
+        out[0], out[1] = x + ox, y + oy
+    return out
+
+
+def curve_to_work(st: State, curve: Nurbs) -> Nurbs:
+    """A curve's control points into the workpiece frame (a rotation about Z
+    maps a rational curve onto the one of its rotated control points)."""
+    ctrl = np.array([to_work(st, tuple(c)) for c in curve.control])
+    return replace(curve, control=ctrl)
+
+
+def change_frame(it: Interpreter, origin: list[float], rotation: float) -> None:
+    """The active system's offsets and rotation become these; the tool stays
+    where it is, its program coordinates change (convert_coordinate_system
+    through find_current_in_system, interp_convert.cc:1801-1820). G10 L2/L20 of
+    the active system carry the point otherwise (:func:`_carry_setup`)."""
+    st = it.st
+    tip = to_work(st, st.pos)
+    held = to_work(st, it.detached) if it.detached is not None else None
+    st.origin = list(origin)
+    st.rotation = rotation
+    st.pos = from_work(st, tip)
+    if held is not None:
+        it.detached = tuple(from_work(st, held))
+
+
 def _setup_system(it: Interpreter, lv: int, seen: dict[str, Word], w: Word, line: int) -> None:
-    """G10 L2 P… sets a system's offsets; L20 so that the current position
-    becomes the given one in that system."""
+    """G10 L2 P… sets a system's offsets and rotation; L20 so that the current
+    position becomes the given one in that system (LinuxCNC's convert_setup,
+    interp_convert.cc:4180-4374 at 2.9.0~pre1)."""
     st = it.st
     for bad in ("I", "J"):
         if bad in seen:
@@ -67,26 +138,65 @@ def _setup_system(it: Interpreter, lv: int, seen: dict[str, Word], w: Word, line
     if "R" in seen:
         if lv == 20:
             raise it.err("R word with G10 L20", line, seen["R"], "R with G10 L2 only")
-        if seen["R"].value != 0.0:
-            raise it.err(
-                "rotated coordinate systems (G10 L2 R) are not supported",
-                line,
-                seen["R"],
-                "R0: rotated coordinate systems are not supported",
-            )
-        pars[base + 9] = 0.0
+        pars[base + 9] = seen["R"].value
+    r = pars[base + 9]
     sc = it.scale()
-    for i, a in enumerate(_AXES):
-        if a not in seen:
-            continue
-        v = seen[a].value * (sc if i < 3 else 1.0)
-        if lv == 20:
-            # the offset that puts the tip at v in that system, the G92 offset
-            # still applied when it is (LinuxCNC's find_current_in_system)
-            v = st.pos[i] - (pars[5211 + i] if pars[5210] else 0.0) - v
-        pars[base + i] = v
+    given = [
+        seen[a].value * (sc if i < 3 else 1.0) if a in seen else None for i, a in enumerate(_AXES)
+    ]
+    if lv == 20:
+        cur = _current_in_system(it, index)
+        # the desired point, the current one on axes not given, in system
+        # ``index``; the offset moves by their difference, turned by its rotation
+        want = [cur[i] if v is None else v for i, v in enumerate(given)]
+        dx, dy = rotate(cur[0] - want[0], cur[1] - want[1], r)
+        pars[base] += dx
+        pars[base + 1] += dy
+        for i in range(2, 5):
+            if given[i] is not None:
+                pars[base + i] += cur[i] - want[i]
+    else:
+        for i, v in enumerate(given):
+            if v is not None:
+                pars[base + i] = v
     if index == st.coord:
-        st.origin = it.stored_origin(index)
+        _carry_setup(it, it.stored_origin(index), r)
+
+
+def _carry_setup(it: Interpreter, origin: list[float], rotation: float) -> None:
+    """The active system's offsets and rotation become these, the program point
+    carried as LinuxCNC's convert_setup carries it (interp_convert.cc:4328-4366):
+    turned out by the old rotation, moved by the change of offset, turned back
+    by the new one, the G92 offset left out of the turns. With G92 on and a
+    rotation, the interpreter's point then is not where the tool is (the tip
+    stays; the next move starts from it and goes where LinuxCNC sends it)."""
+    st = it.st
+    held = to_work(st, it.detached) if it.detached is not None else None
+    old, g = st.origin, st.g92
+    p = [st.pos[i] - old[i] - g[i] for i in range(5)]
+    p[0], p[1] = rotate(p[0], p[1], st.rotation)
+    p = [p[i] + old[i] - origin[i] for i in range(5)]
+    p[0], p[1] = rotate(p[0], p[1], -rotation)
+    st.origin = list(origin)
+    st.rotation = rotation
+    st.pos = [p[i] + g[i] + origin[i] for i in range(5)]
+    if held is not None:
+        it.detached = tuple(from_work(st, held))
+
+
+def _current_in_system(it: Interpreter, index: int) -> list[float]:
+    """The tool's program coordinates in system ``index`` (mm, deg), the G92
+    offset applied when it is (LinuxCNC's find_current_in_system,
+    interp_find.cc:467-526)."""
+    st = it.st
+    pars = it.params.values
+    base = system_base(index)
+    tip = to_work(st, st.pos)
+    cur = [tip[i] - pars[base + i] for i in range(5)]
+    cur[0], cur[1] = rotate(cur[0], cur[1], -pars[base + 9])
+    if pars[5210]:
+        cur = [c - pars[5211 + i] for i, c in enumerate(cur)]
+    return cur
 
 
 def _setup_tool(it: Interpreter, lv: int, seen: dict[str, Word], w: Word, line: int) -> None:
@@ -164,6 +274,6 @@ def save_home(it: Interpreter, code: float) -> None:
     """G28.1 / G30.1: the gauge point's position, stored for G28 / G30."""
     st = it.st
     base = 5161 if code == 28.1 else 5181
-    gauge = list(st.pos)
+    gauge = to_work(st, st.pos)
     gauge[2] += st.tool_length
     it.params.values[base : base + 5] = gauge

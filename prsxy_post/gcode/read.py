@@ -29,8 +29,19 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from ..errors import GCodeError
-from . import expr
-from .expr import ExprError, Params, Value
+from .expr import (
+    FUNCTIONS,
+    PRECEDENCE,
+    ExprError,
+    Params,
+    Value,
+    atan,
+    binary,
+    constant,
+    finite,
+    negate,
+    unary,
+)
 
 
 class Word(NamedTuple):
@@ -241,7 +252,7 @@ class _Reader:
             raise self.bad("a value is missing", "a number, a parameter or an expression")
         c1 = s[self.i + 1]
         if c == "[":
-            return expr.finite(self.expression(), self.col(start))
+            return finite(self.expression(), self.col(start))
         if c == "#":
             return self.parameter()
         if c in "+-" and c1 != "\0" and c1 not in _NUMBER_CHARS:
@@ -251,9 +262,9 @@ class _Reader:
                 return v
             if isinstance(v, float):
                 return -v
-            return expr.negate(v)
+            return negate(v)
         if "a" <= c <= "z":
-            return expr.finite(self.function(), self.col(start))
+            return finite(self.function(), self.col(start))
         return self.number()
 
     def number(self) -> float:
@@ -316,7 +327,7 @@ class _Reader:
             if op == "]":
                 break
             # reduce while the operator on the stack binds at least as tightly
-            while operators and expr.PRECEDENCE[operators[-1][0]] >= expr.PRECEDENCE[op]:
+            while operators and PRECEDENCE[operators[-1][0]] >= PRECEDENCE[op]:
                 _reduce(operands, operators)
             operators.append((op, op_col))
             operands.append(_as_value(self.real_value()))
@@ -351,7 +362,7 @@ class _Reader:
         """read_unary: NAME[expression], ATAN[y]/[x], EXISTS[#<name>]."""
         s = self.s
         start = self.i
-        for name in expr.FUNCTIONS:
+        for name in FUNCTIONS:
             if s.startswith(name, self.i):
                 break
         else:
@@ -366,16 +377,16 @@ class _Reader:
         column = self.col(start)
         if name == "exists":
             return self.exists()
-        arg = expr.finite(self.expression(), column)
+        arg = finite(self.expression(), column)
         if name == "atan":
             if s[self.i] != "/":
                 raise self.bad("'/' missing after the first ATAN argument", "ATAN[y]/[x]")
             self.i += 1
             if s[self.i] != "[":
                 raise self.bad("'[' missing after ATAN[y]/", "ATAN[y]/[x]")
-            x = expr.finite(self.expression(), column)
-            return expr.atan(arg, x)
-        return expr.unary(name, arg, column)
+            x = finite(self.expression(), column)
+            return atan(arg, x)
+        return unary(name, arg, column)
 
     def exists(self) -> Value:
         """EXISTS[#<name>] (1 if the parameter exists), EXISTS[#n] (1 if n is a
@@ -392,7 +403,7 @@ class _Reader:
             n = self.integer("a parameter number")
             if isinstance(n, int):
                 ok = 1.0 if 1 <= n < 5602 else 0.0
-                result = expr.constant(ok)
+                result = constant(ok)
             else:
                 nf = n
                 result = lambda p: 1.0 if 1 <= nf(p) < 5602 else 0.0  # noqa: E731
@@ -431,14 +442,14 @@ class _Reader:
 
 
 def _as_value(v: float | Value) -> Value:
-    return expr.constant(v) if isinstance(v, float) else v
+    return constant(v) if isinstance(v, float) else v
 
 
 def _reduce(operands: list[Value], operators: list[tuple[str, int]]) -> None:
     right = operands.pop()
     left = operands.pop()
     op, column = operators.pop()
-    operands.append(expr.binary(op, left, right, column))
+    operands.append(binary(op, left, right, column))
 
 
 def _to_integer(v: float, what: str, column: int) -> int:
@@ -618,7 +629,7 @@ def _read_items(r: _Reader) -> tuple[list[WordItem | SetItem], Problem | None, s
                 j += 1
             if s[j] == "o":
                 raise _letter_o(r, start)
-            if "a" <= s[r.i] <= "z" and not any(s.startswith(f, r.i) for f in expr.FUNCTIONS):
+            if "a" <= s[r.i] <= "z" and not any(s.startswith(f, r.i) for f in FUNCTIONS):
                 raise r.bad(
                     f"word '{c.upper()}' has no number",
                     f"a number after {c.upper()}, e.g. {c.upper()}10.5",
@@ -698,7 +709,7 @@ def _parse_oword(r: _Reader, delete: bool, m: int | None) -> Parsed:
             name = r.name()
         else:
             n = r.integer("an O-word number")
-            number = expr.constant(float(n)) if isinstance(n, int) else n
+            number = constant(float(n)) if isinstance(n, int) else n
     except _Bad as exc:
         return Parsed(BLOCK, always=exc.problem, has_text=True, block_delete=delete)
     kind = ""
@@ -740,15 +751,15 @@ def _parse_oword(r: _Reader, delete: bool, m: int | None) -> Parsed:
                 if len(values) >= 30:
                     raise r.bad("too many subroutine arguments", "at most 30")
                 value_columns.append(r.col())
-                values.append(expr.finite(r.expression(), r.col()))
+                values.append(finite(r.expression(), r.col()))
         elif kind in ("while", "repeat", "if", "elseif"):
             if s[r.i] != "[":
                 raise r.bad(f"'[' missing after '{kind}'", f"o... {kind} [condition]")
             value_columns.append(r.col())
-            values.append(expr.finite(r.expression(), r.col()))
+            values.append(finite(r.expression(), r.col()))
         elif kind in ("endsub", "return") and s[r.i] == "[":
             value_columns.append(r.col())
-            values.append(expr.finite(r.expression(), r.col()))
+            values.append(finite(r.expression(), r.col()))
         while s[r.i] != "\0":
             if s[r.i] == ";":
                 break

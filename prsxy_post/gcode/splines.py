@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..curves import Nurbs
-from . import moves
+from .moves import target
 from .read import Word
 
 if TYPE_CHECKING:
@@ -59,7 +59,7 @@ def bezier(
             raise it.err("a spline moving Z, A or B", line, axis_words[a], "X and Y only")
     sc = it.scale()
     start = list(st.pos)
-    end = moves.target(it, axis_words, seen=seen)
+    end = target(it, axis_words, seen=seen)
     x0, y0 = start[0], start[1]
     if code == 5.1:
         if "I" not in seen or "J" not in seen:
@@ -116,7 +116,7 @@ def nurbs_point(
     if "L" in seen and seen["L"].value > 3:
         st.nurbs_order = int(seen["L"].value)
     if has_x:
-        end = moves.target(it, axis_words, seen=seen)
+        end = target(it, axis_words, seen=seen)
         st.nurbs.append((end[0], end[1], p))
 
 

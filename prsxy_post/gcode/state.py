@@ -7,9 +7,12 @@ from dataclasses import dataclass, field
 
 @dataclass
 class State:
-    pos: list[float]  # workpiece frame, mm / deg (the tool tip)
+    pos: list[float]  # the tool tip, mm / deg: workpiece frame when rotation is 0
     origin: list[float] = field(default_factory=lambda: [0.0] * 5)  # active work offset
     g92: list[float] = field(default_factory=lambda: [0.0] * 5)  # G92 / G52 offset
+    #: the active system's rotation about Z [deg] (G10 L2 R); when it is not 0,
+    #: pos is in the unrotated frame (offsets.py)
+    rotation: float = 0.0
     units: str = "mm"
     plane: int = 17
     absolute: bool = True

@@ -24,6 +24,7 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import numpy as np
 
@@ -224,17 +225,86 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
     :data:`ARC_TANGENTIAL_SHARE` of the limit and the speed keeps the centripetal
     acceleration v²/r within the rest.
     """
+    m = _motion_columns(motions)
+    n = len(m.kind)
+    e = _extents(m)
+    length, angular, keep, vmax, accel = _speed_limits(m, e, limits)
+    tol, tol_deg = _tolerances(m.path_tol, limits)
+    b = Blocks(
+        kind=m.kind,
+        start=m.start,
+        end=m.end,
+        line=m.line,
+        tool_length=m.tool_length,
+        length=length,
+        angular=angular,
+        vmax=vmax,
+        accel=accel,
+        duration=np.where(m.kind == KIND_DWELL, m.duration, 0.0),
+        plane=m.plane,
+        center=m.center,
+        sweep=e.sweep,
+        r0=e.r0,
+        r1=e.r1,
+        theta0=e.theta0,
+        dq_in=np.zeros((n, 5)),
+        dq_out=np.zeros((n, 5)),
+        dP_in=np.zeros((n, 5)),
+        dP_out=np.zeros((n, 5)),
+        cross_in=np.zeros(n, dtype=bool),
+        tol=tol,
+        tol_deg=tol_deg,
+        curv_r=e.curv_r,
+        fn=m.fn,
+        curve=m.curve,
+        split_after=np.zeros(n, dtype=np.int8),
+    )
+    if not keep.all():
+        b = b.take(keep)
+    moving = ~b.stops
+    if np.any(moving):
+        k = np.flatnonzero(moving)
+        _, b.dq_in[k] = pose_at(b, k, np.zeros(len(k)))
+        _, b.dq_out[k] = pose_at(b, k, b.length[k])
+    return b
+
+
+class _MotionColumns(NamedTuple):
+    """The interpreted motions' fields as arrays, one row per motion (n of them).
+
+    kind : (n,) int, KIND_*
+    start, end : (n, 5) [mm, mm, mm, deg, deg]
+    line : (n,) source line
+    tool_length : (n,) active G43 offset [mm]
+    feed : (n,) F [mm/min, or deg/min]
+    duration : (n,) dwell time [s]
+    path_tol : (n,) the program's G64 P tolerance [mm], NaN where it sets none
+    fn, curve : (n,) object, machine-function words and curves (None elsewhere)
+    plane, center, rotation : (n,), (n, 3), (n,) arc data (zero elsewhere)
+    """
+
+    kind: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    line: np.ndarray
+    tool_length: np.ndarray
+    feed: np.ndarray
+    duration: np.ndarray
+    path_tol: np.ndarray
+    fn: np.ndarray
+    curve: np.ndarray
+    plane: np.ndarray
+    center: np.ndarray
+    rotation: np.ndarray
+
+
+def _motion_columns(motions: Sequence[Motion]) -> _MotionColumns:
+    """The motions' fields as columns (:class:`_MotionColumns`)."""
     n = len(motions)
     # one pass over the motions (Motion is a tuple): a column per field
     cols = list(zip(*motions, strict=True)) if n else [()] * len(Motion._fields)
     f = Motion._fields.index
     kind = np.array([_KIND[k] for k in cols[f("kind")]], dtype=int).reshape(n)
-    start = np.array(cols[f("start")], dtype=float).reshape(n, 5)
-    end = np.array(cols[f("end")], dtype=float).reshape(n, 5)
-    line = np.array(cols[f("line")], dtype=int).reshape(n)
-    tool_length = np.array(cols[f("tool_length")], dtype=float).reshape(n)
-    feed = np.array(cols[f("feed")], dtype=float).reshape(n)
-    duration = np.array(cols[f("duration")], dtype=float).reshape(n)
     path_tol = np.array(
         [math.nan if t is None else t for t in cols[f("path_tol")]], dtype=float
     ).reshape(n)
@@ -245,8 +315,7 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
         for i in np.flatnonzero(is_fn).tolist():
             fn[i] = words[i]
     curve = np.empty(n, dtype=object)
-    is_curve = kind == KIND_CURVE
-    curves = np.flatnonzero(is_curve).tolist()
+    curves = np.flatnonzero(kind == KIND_CURVE).tolist()
     if curves:
         col = cols[f("curve")]
         for i in curves:
@@ -260,8 +329,49 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
         plane[is_arc] = [cols[f("plane")][i] for i in arcs]
         center[is_arc] = np.array([cols[f("center")][i] for i in arcs], dtype=float)
         rotation[is_arc] = [cols[f("rotation")][i] for i in arcs]
+    return _MotionColumns(
+        kind=kind,
+        start=np.array(cols[f("start")], dtype=float).reshape(n, 5),
+        end=np.array(cols[f("end")], dtype=float).reshape(n, 5),
+        line=np.array(cols[f("line")], dtype=int).reshape(n),
+        tool_length=np.array(cols[f("tool_length")], dtype=float).reshape(n),
+        feed=np.array(cols[f("feed")], dtype=float).reshape(n),
+        duration=np.array(cols[f("duration")], dtype=float).reshape(n),
+        path_tol=path_tol,
+        fn=fn,
+        curve=curve,
+        plane=plane,
+        center=center,
+        rotation=rotation,
+    )
 
-    delta = end - start
+
+class _Extents(NamedTuple):
+    """How far each motion goes, and how tightly it bends (n rows).
+
+    length : (n,) path length [mm]: XYZ for lines, along the helix for arcs,
+        along the curve for curves
+    ang : (n,) the A/B angle turned, hypot(ΔA, ΔB) [deg]
+    sweep, r0, r1, theta0 : (n,) arc data (:func:`_arc_geometry`; zero elsewhere)
+    curv_r : (n,) the tightest radius of curvature [mm] (inf on lines)
+    """
+
+    length: np.ndarray
+    ang: np.ndarray
+    sweep: np.ndarray
+    r0: np.ndarray
+    r1: np.ndarray
+    theta0: np.ndarray
+    curv_r: np.ndarray
+
+
+def _extents(m: _MotionColumns) -> _Extents:
+    """The motions' lengths, turns and radii of curvature (:class:`_Extents`)."""
+    n = len(m.kind)
+    is_arc = m.kind == KIND_ARC
+    arcs = np.flatnonzero(is_arc).tolist()
+    curves = np.flatnonzero(m.kind == KIND_CURVE).tolist()
+    delta = m.end - m.start
     lin_len = np.sqrt(np.einsum("ij,ij->i", delta[:, :3], delta[:, :3]))
     ang = np.hypot(delta[:, 3], delta[:, 4])
     length = lin_len.copy()
@@ -272,7 +382,7 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
     curv_r = np.full(n, np.inf)
     if arcs:
         g = _arc_geometry(
-            start[is_arc], end[is_arc], center[is_arc], plane[is_arc], rotation[is_arc]
+            m.start[is_arc], m.end[is_arc], m.center[is_arc], m.plane[is_arc], m.rotation[is_arc]
         )
         sweep[is_arc], r0[is_arc], r1[is_arc] = g["sweep"], g["r0"], g["r1"]
         theta0[is_arc], length[is_arc] = g["theta0"], g["length"]
@@ -280,14 +390,33 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
         curv_r[is_arc] = np.minimum(r0[is_arc], r1[is_arc])
 
     for i in curves:
-        length[i] = curve[i].length
-        curv_r[i] = _least_radius(curve[i])
-    bends = is_arc | is_curve  # paths with a centripetal acceleration
+        length[i] = m.curve[i].length
+        curv_r[i] = _least_radius(m.curve[i])
+    return _Extents(length, ang, sweep, r0, r1, theta0, curv_r)
+
+
+def _speed_limits(
+    m: _MotionColumns, e: _Extents, limits: PlanLimits
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """How each motion is timed and how fast it may go.
+
+    Returns
+    -------
+    length : (n,) path length L [mm, or deg for rotary-only moves; 0 for stops]
+    angular : (n,) bool, a rotary-only move (timed in degrees)
+    keep : (n,) bool, the motion moves (or is a stop): the others are dropped
+    vmax : (n,) speed limit [mm/s or deg/s]
+    accel : (n,) acceleration limit along the path [mm/s² or deg/s²]
+    """
+    kind, feed, ang = m.kind, m.feed, e.ang
+    is_arc = kind == KIND_ARC
+    r0, r1 = e.r0, e.r1
+    bends = is_arc | (kind == KIND_CURVE)  # paths with a centripetal acceleration
     stop = (kind == KIND_DWELL) | (kind == KIND_FUNCTION)
     rapid = kind == KIND_RAPID
-    angular = ~stop & (length <= LINEAR_EPS_MM)
+    angular = ~stop & (e.length <= LINEAR_EPS_MM)
     keep = stop | ~angular | (ang > ANGULAR_EPS_DEG)
-    length = np.where(stop, 0.0, np.where(angular, ang, length))
+    length = np.where(stop, 0.0, np.where(angular, ang, e.length))
     rate_deg = limits.rapid_deg_min / 60.0
     with np.errstate(invalid="ignore", divide="ignore"):
         v_lin = np.where(rapid, limits.rapid_mm_min / 60.0, feed / 60.0)
@@ -300,58 +429,30 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
         # a spiral's speed along its XYZ path exceeds ds/dt by up to r_max / r_mean
         spiral = np.where(is_arc, np.maximum(r0, r1) / np.maximum(0.5 * (r0 + r1), 1e-300), 1.0)
         v_lin = np.where(
-            bends, np.minimum(v_lin, np.sqrt(a_normal * curv_r)) / np.maximum(spiral, 1.0), v_lin
+            bends, np.minimum(v_lin, np.sqrt(a_normal * e.curv_r)) / np.maximum(spiral, 1.0), v_lin
         )
         a_lin = np.where(bends, a_lin * ARC_TANGENTIAL_SHARE, a_lin)
     vmax = np.where(stop, 1.0, np.where(angular, v_ang, v_lin))
     accel = np.where(stop, 1.0, np.where(angular, limits.accel_deg_s2, a_lin))
+    return length, angular, keep, vmax, accel
 
-    b = Blocks(
-        kind=kind,
-        start=start,
-        end=end,
-        line=line,
-        tool_length=tool_length,
-        length=length,
-        angular=angular,
-        vmax=vmax,
-        accel=accel,
-        duration=np.where(kind == KIND_DWELL, duration, 0.0),
-        plane=plane,
-        center=center,
-        sweep=sweep,
-        r0=r0,
-        r1=r1,
-        theta0=theta0,
-        dq_in=np.zeros((n, 5)),
-        dq_out=np.zeros((n, 5)),
-        dP_in=np.zeros((n, 5)),
-        dP_out=np.zeros((n, 5)),
-        cross_in=np.zeros(n, dtype=bool),
-        tol=np.where(np.isnan(path_tol), limits.tolerance_mm, path_tol),
-        tol_deg=np.where(
-            np.isnan(path_tol),
-            limits.tolerance_deg,
-            np.where(
-                path_tol == EXACT_STOP,
-                EXACT_STOP,
-                # a program's G64 P scales the angular tolerance with it
-                path_tol * limits.tolerance_deg / limits.tolerance_mm,
-            ),
+
+def _tolerances(path_tol: np.ndarray, limits: PlanLimits) -> tuple[np.ndarray, np.ndarray]:
+    """Each block's corner tolerance at its end, tol [mm] and tol_deg [deg], (n,)
+    each: the program's G64 P where it sets one (``path_tol``, NaN where not), else
+    the profile's."""
+    tol = np.where(np.isnan(path_tol), limits.tolerance_mm, path_tol)
+    tol_deg = np.where(
+        np.isnan(path_tol),
+        limits.tolerance_deg,
+        np.where(
+            path_tol == EXACT_STOP,
+            EXACT_STOP,
+            # a program's G64 P scales the angular tolerance with it
+            path_tol * limits.tolerance_deg / limits.tolerance_mm,
         ),
-        curv_r=curv_r,
-        fn=fn,
-        curve=curve,
-        split_after=np.zeros(n, dtype=np.int8),
     )
-    if not keep.all():
-        b = b.take(keep)
-    moving = ~b.stops
-    if np.any(moving):
-        k = np.flatnonzero(moving)
-        _, b.dq_in[k] = pose_at(b, k, np.zeros(len(k)))
-        _, b.dq_out[k] = pose_at(b, k, b.length[k])
-    return b
+    return tol, tol_deg
 
 
 def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

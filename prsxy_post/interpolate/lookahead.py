@@ -91,14 +91,37 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
         return vj, corner
     d_xyz = np.linalg.norm(b.dq_in[1:, :3] - b.dq_out[:-1, :3], axis=1)
     d_ab = np.linalg.norm(b.dq_in[1:, 3:] - b.dq_out[:-1, 3:], axis=1)
-    period = limits.period_s
-    # the shortest step next to the junction: a phase lasts at least min_phase
-    # (or is the whole block, at least L / vmax), and curves cut steps shorter
+    v = _blend_speeds(b, limits, d_xyz, d_ab)
+    stop = _plain_stops(b, d_xyz) | _play_stops(b)
+    v = np.where(stop, 0.0, v)
+    vj[:-1] = v
+    corner[1:-1] = ~stop & ((d_xyz > TANGENT_EPS) | (d_ab > TANGENT_EPS))
+    return vj, corner
+
+
+def _shortest_steps(b: Blocks, limits: PlanLimits) -> np.ndarray:
+    """The shortest step next to each junction, h_lo: (n − 1,) [s].
+
+    A phase lasts at least ``min_phase_s`` (or is the whole block, at least
+    L / vmax), and curves cut steps shorter (:func:`.geometry.segment_limit`).
+    """
     with np.errstate(divide="ignore", invalid="ignore"):
         dur = np.where(b.stops, 0.0, b.length / b.vmax)
         h_curve = 0.5 * segment_limit(b, limits) / b.vmax
     h_blk = np.minimum(np.minimum(dur, h_curve), limits.min_phase_s)
-    h_lo = np.minimum(h_blk[:-1], h_blk[1:])
+    return np.minimum(h_blk[:-1], h_blk[1:])
+
+
+def _blend_speeds(b: Blocks, limits: PlanLimits, d_xyz: np.ndarray, d_ab: np.ndarray) -> np.ndarray:
+    """The fastest each junction's corner may be taken with the mean velocity:
+    (n − 1,) [mm/s or deg/s], within both blocks' speed limits, the path tolerance
+    and κ of the acceleration (the module docstring's two bounds, XYZ and A/B).
+
+    d_xyz, d_ab : (n − 1,) |t_out − t_in| of the tangents' XYZ [mm/mm] and A/B
+        [deg/deg] parts at each junction
+    """
+    period = limits.period_s
+    h_lo = _shortest_steps(b, limits)
     tol = b.tol[:-1]
     tol_deg = b.tol_deg[:-1]
     a_xyz = KAPPA * limits.accel_mm_s2
@@ -127,21 +150,32 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
         r = r_min[c]
         # v² / r + p v − an = 0
         v_acc[c] = np.minimum(v_acc[c], 0.5 * r * (-p + np.sqrt(p * p + 4.0 * an / r)))
-    v = np.minimum(np.minimum(b.vmax[:-1], b.vmax[1:]), np.minimum(v_tol, v_acc))
+    return np.minimum(np.minimum(b.vmax[:-1], b.vmax[1:]), np.minimum(v_tol, v_acc))
+
+
+def _plain_stops(b: Blocks, d_xyz: np.ndarray) -> np.ndarray:
+    """(n − 1,) bool, the junctions that are stops whatever the motors do: sharp
+    corners, dwells and machine functions, rotary-only moves, a change of tool
+    length, G61.1. ``d_xyz`` as :func:`_blend_speeds`."""
     # a corner of 90° or more is a stop: taking it at the speed the tolerance allows
     # (tenths of a mm/s) gains nothing, and a motor reversing there is best turned
     # at rest
     sharp = np.einsum("ij,ij->i", b.dq_in[1:, :3], b.dq_out[:-1, :3]) <= 0.0
     sharp &= (d_xyz > TANGENT_EPS) & ~b.angular[:-1] & ~b.angular[1:]
-    stop = (
+    return (
         sharp
         | b.stops[:-1]
         | b.stops[1:]
         | b.angular[:-1]
         | b.angular[1:]
         | (b.tool_length[:-1] != b.tool_length[1:])
-        | (tol == EXACT_STOP)
+        | (b.tol[:-1] == EXACT_STOP)
     )
+
+
+def _play_stops(b: Blocks) -> np.ndarray:
+    """(n − 1,) bool, the junctions where a motor with play must cross its play at
+    rest (``Blocks.dP_in``/``dP_out`` [mm/mm], ``cross_in``: the module docstring)."""
     # a head motor with play that reverses at a junction crosses its play at rest:
     # its part stands while it crosses, and at speed the other motors tilt the head
     # meanwhile (test_controller_truth's found programs: 13 % over F60). A table
@@ -154,13 +188,13 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
     hi = np.maximum(np.abs(b.dP_out[:-1]), np.abs(b.dP_in[1:]))
     reverses = (b.dP_out[:-1] * b.dP_in[1:] < 0.0) & (hi > REVERSAL_SLOPE) & (lo > STAND_SLOPE)
     head_sets_off = (hi > REVERSAL_SLOPE) & (lo <= STAND_SLOPE)
-    stop |= np.any(reverses[:, :HEAD_MOTORS], axis=1)
+    stop = np.any(reverses[:, :HEAD_MOTORS], axis=1)
     stop |= np.any(reverses[:, HEAD_MOTORS:], axis=1) & np.any(
         head_sets_off[:, :HEAD_MOTORS], axis=1
     )
     # the table motors X, Y move the tip along x, y one for one (the contract's
     # table equation, to its scale and squareness errors)
-    faster = np.zeros(n - 1, dtype=bool)
+    faster = np.zeros(len(b) - 1, dtype=bool)
     for t, p in ((b.dq_out[:-1], b.dP_out[:-1]), (b.dq_in[1:], b.dP_in[1:])):
         tt, pp = t[:, 0:2], p[:, HEAD_MOTORS:]
         gain = 1.0 - 2.0 * tt * pp + pp * pp
@@ -174,10 +208,7 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
     # blend's mean cubics swing the head's motors back where their parts cannot
     # follow (a tilt starting after a straight at F300: 4.6 % over F60)
     stop |= b.cross_in[1:] & np.any(head_sets_off[:, :HEAD_MOTORS], axis=1)
-    v = np.where(stop, 0.0, v)
-    vj[:-1] = v
-    corner[1:-1] = ~stop & ((d_xyz > TANGENT_EPS) | (d_ab > TANGENT_EPS))
-    return vj, corner
+    return stop
 
 
 def corner_bend(b: Blocks) -> np.ndarray:

@@ -1,0 +1,157 @@
+"""The compiled inverse kinematics against its numpy reference: the same bits.
+
+Recorded inputs (every IK call the sample programs make, as the golden files are
+converted) and generated ones (hypothesis: poses inside and outside the workspace,
+tool lengths, the table's scale, squareness and straightness errors of issue 30's
+``Machine``). The reference calls the C library's acos and atan2 (kernel/libm.py) and
+numpy's sin and cos; the compiled kernel calls the C library's for all four, so numpy's
+must be the C library's on the machine the tests run on: checked here too.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from prsxy_post import kinematics, profile
+from prsxy_post.kernel import ik
+
+from .conftest import ROOT, VECTORS
+from .kernel_cases import compiled, record, same_bits
+
+PROFILES = [ROOT / "profiles" / "prsxy-shop.toml", VECTORS / "perturbed.toml"]
+
+
+def _arrays(path: Path) -> ik.IKArrays:
+    prof = profile.loads(path.read_text(), path.name)
+    geo = kinematics.Geometry.from_params(prof.kinematics, prof.origin, prof.table, prof.effects)
+    return geo.ik_arrays
+
+
+def test_sample_programs_ik_is_bit_identical(tmp_path: Path) -> None:
+    _ik = compiled("_ik")
+    calls = record("_inverse_rows", tmp_path)
+    assert len(calls) > 20
+    rows = 0
+    for m, q, tz in calls:
+        want = ik.inverse_rows(m, q, tz)
+        got = _ik.inverse_rows(m, q, tz)
+        assert same_bits(got, want), f"{len(q)} rows: compiled and reference differ"
+        rows += len(q)
+    assert rows > 10_000  # the samples' points, each solved several times
+
+
+#: tilts to ±180°: beyond about 50° some poses have no solution (NaN rows)
+POSE = st.tuples(
+    st.floats(-150, 150),
+    st.floats(-150, 150),
+    st.floats(-80, 40),
+    st.one_of(st.floats(-45, 45), st.floats(-180, 180)),
+    st.one_of(st.floats(-45, 45), st.floats(-180, 180)),
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(POSE, min_size=1, max_size=40),
+    st.sampled_from(PROFILES),
+    st.one_of(st.none(), st.floats(-30, 120)),
+    st.floats(-1e-3, 1e-3),
+    st.floats(-1e-3, 1e-3),
+    st.one_of(st.none(), hnp.arrays(np.float64, 2, elements=st.floats(-0.05, 0.05))),
+)
+def test_generated_poses_are_bit_identical(
+    poses: list[tuple[float, ...]],
+    path: Path,
+    tool: float | None,
+    scale: float,
+    square: float,
+    straight: np.ndarray | None,
+) -> None:
+    _ik = compiled("_ik")
+    m = dataclasses.replace(
+        _arrays(path), scale_x=scale, scale_y=-scale, squareness=square, straightness=straight
+    )
+    q = np.array(poses, dtype=float)
+    tz = ik.tool_z(m, len(q), tool)
+    assert same_bits(_ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz))
+
+
+def test_unreachable_rows_are_nan_in_both() -> None:
+    _ik = compiled("_ik")
+    m = _arrays(PROFILES[0])
+    q = np.array(
+        [
+            [0.0, 0.0, 0.0, 0.0, 0.0],
+            [-49.2, -104.9, 31.4, -133.3, 52.7],
+            [0, -22.4, -47.1, -56.4, -139.3],
+        ]
+    )
+    tz = ik.tool_z(m, 3, None)
+    got, want = _ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz)
+    assert same_bits(got, want)
+    assert np.isfinite(got[0]).all() and np.isnan(got[1:, :3]).any(axis=1).all()
+
+
+def test_bowed_guides_run_the_reference() -> None:
+    """The compiled IK hands a geometry with bowed guides to the reference (kernel
+    module docstring): the same numbers, by construction."""
+    _ik = compiled("_ik")
+    m = dataclasses.replace(_arrays(PROFILES[0]), bow=np.array([0.01, -0.02, 0.005]))
+    q = np.array([[10.0, -5.0, -20.0, 12.0, -7.0]])
+    tz = ik.tool_z(m, 1, None)
+    assert same_bits(_ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz))
+
+
+@pytest.mark.parametrize(("name", "lo", "hi"), [("sin", -1.6, 1.6), ("cos", -1.6, 1.6)])
+def test_numpy_trig_is_the_c_librarys_here(name: str, lo: float, hi: float) -> None:
+    """The reference's np.sin and np.cos give what the C library's give on this
+    machine (the compiled kernel calls those): were it not so, the two kernels
+    would differ here, and the reference would have to call them through math."""
+    x = np.random.default_rng(7).uniform(lo, hi, 200_000)
+    want = np.fromiter(map(getattr(math, name), x.tolist()), float, x.size)
+    assert same_bits(getattr(np, name)(x), want)
+
+
+def test_geometry_solves_its_linear_algebra_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 30: the SVD and pseudo-inverse of M were made on every IK call
+    (0.2 ms each); now once per geometry."""
+    prof = profile.loads(PROFILES[0].read_text(), "shop")
+    geo = kinematics.Geometry.from_params(prof.kinematics, prof.origin)
+    n_svd = 0
+    svd = np.linalg.svd
+
+    def counting(*a: object, **k: object) -> object:
+        nonlocal n_svd
+        n_svd += 1
+        return svd(*a, **k)  # type: ignore[call-overload]
+
+    monkeypatch.setattr(np.linalg, "svd", counting)
+    q = np.array([[1.0, 2.0, -10.0, 5.0, -3.0]])
+    first = kinematics.inverse(geo, q).P
+    for _ in range(5):
+        assert same_bits(kinematics.inverse(geo, q).P, first)
+    kinematics.solve_platform(geo, q)
+    assert n_svd == 1
+    # a new geometry (another profile's, or the same rebuilt) solves its own
+    geo2 = kinematics.Geometry.from_params(prof.kinematics, prof.origin + 1.0)
+    kinematics.inverse(geo2, q)
+    assert n_svd == 2
+
+
+def test_read_only_poses_are_taken_as_the_reference_takes_them() -> None:
+    """Poses in a read-only array (a broadcast row, a memory-mapped file) solve as
+    the reference solves them, instead of failing in the compiled kernel only."""
+    _ik = compiled("_ik")
+    m = _arrays(PROFILES[0])
+    q = np.broadcast_to(np.array([1.0, 2.0, -3.0, 4.0, 5.0]), (4, 5))
+    tz = np.broadcast_to(np.array(m.tool[2]), (4,))
+    assert not q.flags.writeable
+    assert same_bits(_ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz))
