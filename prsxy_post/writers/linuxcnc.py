@@ -58,7 +58,7 @@ and a blend added to a running line left steep-helix's path 0.49 µm to one side
 for the lines after it (0.71 µm off; 0.12 µm with the line in G61).
 
 What LinuxCNC 2.9 joins at speed (its source at Debian's 2.9.0~pre1 commit
-f1270d6ed7) sets three rules for the lines written. (1) A line whose A and B move
+f1270d6ed7) sets four rules for the lines written. (1) A line whose A and B move
 by any amount gets neither a tangent join nor a blend arc: ``tpSetupTangent``
 (tp.c:1846) and ``tpCheckBlendArcType`` (tp.c:1645) both return on
 ``tcRotaryMotionCheck`` (tp.c:131), which is false only where ``abc.tmag_zero``
@@ -85,12 +85,41 @@ play crossing (what the real-axis tables add to a motor moving by more than the
 chord tolerance), whose points carry its timing. Measured:
 ``bench/linuxcnc_speed.py``, docs/measurements.md.
 
-Parabolic blends also run over F: LinuxCNC sets the next line's target speed from
-the speed the line before has lost, scaled by their blend speeds (``tpUpdateBlend``),
-and the two need not add up to F (1.20 x F on a plunge of 10 ms lines at F300 whose
-A turns 2e-7 degrees a line). With ``g61_every_line = 1`` every line runs in G61,
-which LinuxCNC never blends: F holds, and the program takes longer
-(``bench/linuxcnc_truth.py --g61-everywhere``).
+(4) A parabolic blend runs over F where written naively, and the writer keeps it
+within F (``_blend_within_f``). Where LinuxCNC blends a line ``tc`` parabolically
+into ``nexttc`` (a join where either moves A or B, both in G64 P), it starts the
+blend once ``tc`` is on its final deceleration below its blend speed (``tcIsBlending``,
+tc.c:529-540) and from then on updates both each cycle (``tpHandleRegularCycle``,
+tp.c:3370-3384; ``tpDoParabolicBlending``, tp.c:3044-3048). ``tpUpdateBlend``
+(tp.c:2642-2662) sets ``nexttc->target_vel`` from the speed ``tc`` has lost, scaled
+by their blend speeds, but ``nexttc`` never reads it: ``tpCalculateTrapezoidalAccel``
+takes the target from ``tpGetRealTargetVel`` (tp.c:2391), which is ``tc->reqvel``, the
+programmed speed, for any motion not synchronized with the spindle (tp.c:254-265).
+So ``nexttc`` speeds up towards its own F at its own tangential acceleration while
+``tc`` slows down, and the sum is what the tool does. ``tc`` slows down at half its
+limit (term condition parabolic: ``tcGetOverallMaxAccel``, tc.c:55-68); ``nexttc``
+speeds up at half its limit only if its own end is a parabolic join too, or if
+``blend_prev`` is set, which only ``tpChooseBestBlend`` does (tp.c:928), never
+reached for lines that move A or B (``tpHandleBlendArc`` returns on
+``tpSetupTangent``'s failure, tp.c:2008-2013, tp.c:1846-1849, and a new line starts
+zeroed, tp.c:2057). A line in G61 (term condition exact, set from the mode by
+``tcSetupState``, tc.c:674-676) or one whose end joins tangentially speeds up at its
+whole limit: measured, 1.52 x F on two 10 mm lines at F600 turning A, the second in
+G61 (1.50 x on the five-axis program). With both at half the limit the sum still
+rises by one servo cycle's worth of acceleration, ``nexttc`` leading (1.09 x F at
+F600, 1.02 x at F3000, 1.16 x at F300: about a / 2 x 1 ms = 1 mm/s). The bound the
+writer keeps: with ``tc`` slowing from v0 ≤ v_p at a_t = a / 2 and ``nexttc``
+speeding up towards v_n at a_n, their sum peaks at v0 + v_n (1 − a_t / a_n) + a_t T
+(T the servo period, 1 ms). So the line into such a join runs at
+v_p ≤ max(v_p, v_n) − v_n (1 − a_t / a_n) − a_t T (its F lowered), or, where that
+costs more time than a stop, or where either line is shorter than the blend (v /
+a_t: then blends overlap, which the bound does not cover; 1.026 x F on a helix of
+9 ms chords at F600), it stops there: G4 P0 after it (still in G64 P: its end has
+no next line to blend with, as the task waits), the next line in G61. An exact
+line into which the line before is blended parabolically is written in G64 P with
+its G4 P0, so that it too speeds up at half its limit. With ``g61_every_line = 1``
+every line runs in G61, which LinuxCNC never blends: F holds, and the program takes
+longer (``bench/linuxcnc_truth.py --g61-everywhere``).
 """
 
 from __future__ import annotations
@@ -117,6 +146,9 @@ SETTINGS = OUTPUT_SETTINGS["gcode"]
 TILT_HOLD_SHARE = 0.6
 #: the share of it a chord's A and B may stray from the points it replaces
 TILT_CHORD_SHARE = 0.2
+#: LinuxCNC's servo period [s] (its sample configurations' SERVO_PERIOD, as the
+#: tests' harness runs it): a parabolic blend's next line leads by one
+SERVO_PERIOD_S = 1e-3
 #: how much a chord's pieces may slow down and speed up again (a share of their rate)
 DIP_SHARE = 1e-3
 
@@ -205,6 +237,15 @@ class GcodeWriter:
         #: the last line written was followed by G4 P0, or none was written yet
         #: (LinuxCNC's queue starts empty): the next runs in G61 too
         self.after_settle = True
+        #: the lines written but not yet handed out: the last line that turns A or B
+        #: in G64 P waits for the next, which may lower its F (``_blend_safe``)
+        self.buf: list[str] = []
+        #: the last G1 written: its index in ``buf`` (None once handed out), its X Y Z
+        #: length [mm] and time [s], whether it turned A or B, and whether LinuxCNC
+        #: may blend it into the next line (written in G64 P, no G4 P0 after it)
+        self.prev: tuple[int | None, float, float, bool, bool] | None = None
+        #: the A and B words of the last G1 written
+        self.last_ab = ""
         #: a block's last point in motion, held until the next point shows how
         #: far LinuxCNC would cut the corner there: (point, its segment's time,
         #: its words)
@@ -264,12 +305,13 @@ class GcodeWriter:
         # what the real-axis tables add to each motor [mm]: it ramps where a motor
         # crosses its play
         lead = (chunk.P_cmd - chunk.P_ideal).tolist()
-        lines: list[str] = []
+        lines = self.buf
         for k in range(len(q)):
             qk = q[k]
             if self.n == 0:
                 lines.append("G0 " + texts[k])
                 lines.append("G93")
+                self.last_ab = texts[k][texts[k].index(" A") :]
                 self.last_q = qk
                 self.n = 1
                 continue
@@ -283,6 +325,7 @@ class GcodeWriter:
             words = chunk.fn[k]
             if words is not None:
                 self._write_held(lines)
+                self._at_rest()
                 if any(w in (("M", 2.0), ("M", 30.0)) for w in words):
                     lines.append("G94")  # back to units per minute before the end
                     self.ended_by = words_text(words)
@@ -290,6 +333,7 @@ class GcodeWriter:
                 continue
             if dwell[k] and qk == self.last_q:  # the pose stands: a dwell
                 self._write_held(lines)
+                self._at_rest()
                 lines.append(f"G4 P{dtk:.4f}")
                 continue
             if self.tol > 0 and not block_end[k] and speed[k] > 0:
@@ -308,7 +352,26 @@ class GcodeWriter:
                 self.corner = (qk, t, texts[k])  # written once the next point is known
                 continue
             self._g1(lines, qk, texts[k], t, exact=speed[k] == 0.0)
-        return [(0, "\n".join(lines) + "\n")] if lines else []
+        return self._hand_out()
+
+    def _hand_out(self) -> list[Piece]:
+        """The lines written so far, but for a last G1 that LinuxCNC may blend into
+        the next line, whose F or stop that line decides (it and the lines after it
+        stay in ``buf``)."""
+        keep = self.prev[0] if self.prev is not None and self.prev[0] is not None else None
+        if keep is None or not (self.prev is not None and self.prev[4]):
+            out, self.buf = self.buf, []
+            if self.prev is not None:
+                self.prev = (None, *self.prev[1:])
+        else:
+            out, self.buf = self.buf[:keep], self.buf[keep:]
+            self.prev = (0, *self.prev[1:])
+        return [(0, "\n".join(out) + "\n")] if out else []
+
+    def _at_rest(self) -> None:
+        """A machine function or a dwell follows: LinuxCNC blends nothing across it."""
+        if self.prev is not None:
+            self.prev = (*self.prev[:4], False)
 
     def _resolve_corner(self, lines: list[str], q_next: list[float] | None, dt_next: float) -> None:
         """Write the held block end, in G61 where LinuxCNC's parabolic blend would
@@ -336,15 +399,33 @@ class GcodeWriter:
     def _g1(self, lines: list[str], q: list[float], text: str, t: float, *, exact: bool) -> None:
         """Write the line to ``q`` (its words ``text``) taking ``t`` seconds, in G61
         where ``exact`` (a line ending where the motion stands, or at a corner
-        LinuxCNC's blend would cut too far), else in G64 P (module docstring)."""
+        LinuxCNC's blend would cut too far), else in G64 P. Where LinuxCNC would
+        blend the line before into this one parabolically, that line is slowed down
+        or stopped (``_blend_within_f``), and an exact line goes in G64 P, its G4 P0
+        stopping it all the same (module docstring, rule 4)."""
         exact = exact or self.all_exact
+        words = self._tilt_held(q, text)
+        ab = words[words.index(" A") :]
+        turns = ab != self.last_ab
+        self.last_ab = ab
+        assert self.last_q is not None
+        length = math.dist(self.last_q[:3], q[:3])
+        prev = self.prev
+        # LinuxCNC blends the line before into this one parabolically where it was
+        # written in G64 P (no G4 P0 after it) and one of the two turns A or B
+        if prev is not None and prev[4] and (prev[3] or turns):
+            # this line's own acceleration is halved where its end is a parabolic
+            # join too: it turns A or B, or it is exact (G64 P and G4 P0, below)
+            self._blend_within_f(lines, prev, length, t, turns or exact)
+        parabolic = self.prev is not None and self.prev[4] and (self.prev[3] or turns)
         # the first line after a dwell runs in G61 too: LinuxCNC refills its queue
         # while it runs (module docstring)
-        mode = exact or self.after_settle
+        mode = (exact or self.after_settle) and not (exact and parabolic and not self.all_exact)
         if mode != self.exact:
             lines.append("G61" if mode else f"G64 P{self.blend:g}")
             self.exact = mode
-        lines.append(f"G1 {self._tilt_held(q, text)} F{60.0 / t:.3f}")
+        lines.append(f"G1 {words} F{60.0 / t:.3f}")
+        self.prev = (len(lines) - 1, length, t, turns, not mode and not exact)
         self.after_settle = exact
         if exact:
             # LinuxCNC ends a line mid servo cycle and starts the next in the same
@@ -352,6 +433,54 @@ class GcodeWriter:
             lines.append("G4 P0")
         self.last_q = q
         self.n += 1
+
+    def _blend_within_f(
+        self,
+        lines: list[str],
+        prev: tuple[int | None, float, float, bool, bool],
+        length_n: float,
+        t_n: float,
+        halved: bool,
+    ) -> None:
+        """Keep LinuxCNC's parabolic blend of the previous line into the next one
+        (``length_n`` [mm] in ``t_n`` [s], its acceleration ``halved`` or not)
+        within the larger of the two lines' written speeds: lower the previous
+        line's F, or, where that costs more time than a stop or where either line
+        is shorter than the blend, stop it there (G4 P0 after it, the next line in
+        G61).
+
+        The previous line slows down at a_t = a / 2 from v0 (at most its own
+        speed v_p), the next speeds up towards v_n at a_n (a / 2 or a) from a
+        servo cycle T earlier: their sum peaks at v0 + v_n (1 − a_t / a_n) + a_t T
+        (module docstring, rule 4). So v_p ≤ max(v_p, v_n) − v_n (1 − a_t / a_n)
+        − a_t T.
+        """
+        idx, length, t, _, _ = prev
+        if idx is None or t <= 0.0 or length <= 0.0:
+            return
+        v_p = length / t
+        v_n = length_n / t_n if t_n > 0.0 else 0.0
+        a_t = self.accel / 2.0
+        a_n = a_t if halved else self.accel
+        v_safe = max(v_p, v_n) - v_n * (1.0 - a_t / a_n) - a_t * SERVO_PERIOD_S
+        if v_safe >= v_p:
+            return
+        # the time a stop costs: the previous line slows down at a_t, the next
+        # (G61) speeds up from rest at a and stops at its end, the one after it
+        # speeds up again
+        v = max(v_p, v_n)
+        stop_s = v / (2.0 * a_t) + 3.0 * v / (2.0 * self.accel)
+        slow_s = t * (v_p / v_safe - 1.0) if v_safe > 0.0 else math.inf
+        # a blend lasts v / a_t: a line shorter than that is blended into the next
+        # before the blend into it has ended, which the bound does not cover (helix
+        # F600 on random 11: 1.026 x F with 9 ms lines, measured)
+        if slow_s <= stop_s and min(t, t_n) >= v / a_t:
+            row = lines[idx]
+            lines[idx] = f"{row[: row.rindex(' F')]} F{60.0 * v_safe / length:.3f}"
+        else:
+            lines.insert(idx + 1, "G4 P0")
+            self.after_settle = True
+            self.prev = (None, length, t, prev[3], False)
 
     def _piece(self, qk: list[float], dtk: float) -> tuple[float, float]:
         """The piece from the last held-back (or written) point to qk: (length, rate)."""
@@ -428,7 +557,8 @@ class GcodeWriter:
         )
 
     def finish(self) -> list[Piece]:
-        lines: list[str] = []
+        lines = self.buf
+        self.buf = []
         self._resolve_corner(lines, None, 0.0)
         self._write_held(lines)
         if self.ended_by is None:
