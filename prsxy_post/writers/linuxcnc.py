@@ -218,6 +218,12 @@ class GcodeWriter:
         self.held: tuple[list[float], str] | None = None
         #: the path acceleration LinuxCNC's axes are set to [mm/s²]
         self.accel = profile.limits.max_accel_mm_s2
+        #: A's and B's acceleration limit [deg/s²]
+        self.accel_deg = profile.limits.max_accel_deg_s2
+        #: the A and B written last [deg], and the acceleration limit LinuxCNC gives
+        #: the last line written [mm/s²] (``_line_accel``)
+        self.last_ab_deg: list[float] = [0.0, 0.0]
+        self.prev_accel = self.accel
         self.n = 0
         self.t_total = 0.0
         self.last_line: int | None = None
@@ -229,6 +235,11 @@ class GcodeWriter:
         self.pieces: list[tuple[float, float]] = []
         self.peak = 0.0
         self.trough = 0.0
+        #: the plan's fastest speed over the held-back pieces that move X Y Z [mm/s],
+        #: their least stretch (X Y Z rate per planned speed), the last point's speed
+        self.plan_peak = 0.0
+        self.stretch = math.inf
+        self.last_speed = 0.0
         #: what the tables added to the motors at the run's first point [mm]
         self.lead0: list[float] = [0.0] * 5
         self.ended_by: str | None = None
@@ -306,12 +317,16 @@ class GcodeWriter:
         # crosses its play
         lead = (chunk.P_cmd - chunk.P_ideal).tolist()
         lines = self.buf
+        # the plan's mean speed over each piece (it ramps linearly over a period)
+        plan = [0.5 * (a + b) for a, b in zip([self.last_speed, *speed[:-1]], speed, strict=True)]
+        self.last_speed = speed[-1]
         for k in range(len(q)):
             qk = q[k]
             if self.n == 0:
                 lines.append("G0 " + texts[k])
                 lines.append("G93")
                 self.last_ab = texts[k][texts[k].index(" A") :]
+                self.last_ab_deg = qk[3:5]
                 self.last_q = qk
                 self.n = 1
                 continue
@@ -341,11 +356,11 @@ class GcodeWriter:
                 # last written point to it passes all the held-back ones
                 if not self._within(qk) or self._dips(qk, dtk, lead[k]):
                     self._write_held(lines)
-                self._hold(qk, dtk, texts[k], lead[k])
+                self._hold(qk, dtk, texts[k], lead[k], plan[k])
                 continue
             if self.run and (not self._within(qk) or self._dips(qk, dtk, lead[k])):
                 self._write_held(lines)
-            self._hold(qk, dtk, texts[k], lead[k])
+            self._hold(qk, dtk, texts[k], lead[k], plan[k])
             t = self._chord_time()
             self.run = []
             if speed[k] > 0.0 and block_end[k]:
@@ -408,15 +423,23 @@ class GcodeWriter:
         ab = words[words.index(" A") :]
         turns = ab != self.last_ab
         self.last_ab = ab
-        assert self.last_q is not None
+        assert self.last_q is not None and self.held is not None
         length = math.dist(self.last_q[:3], q[:3])
+        # the written A and B (held or not) and this line's acceleration limit
+        ab_now = list(self.held[0])
+        accel = self._line_accel(
+            [b - a for a, b in zip(self.last_q[:3], q[:3], strict=True)],
+            [b - a for a, b in zip(self.last_ab_deg, ab_now, strict=True)],
+        )
+        self.last_ab_deg = ab_now
         prev = self.prev
         # LinuxCNC blends the line before into this one parabolically where it was
         # written in G64 P (no G4 P0 after it) and one of the two turns A or B
         if prev is not None and prev[4] and (prev[3] or turns):
             # this line's own acceleration is halved where its end is a parabolic
             # join too: it turns A or B, or it is exact (G64 P and G4 P0, below)
-            self._blend_within_f(lines, prev, length, t, turns or exact)
+            a_n = accel / 2.0 if turns or exact else accel
+            self._blend_within_f(lines, prev, length, t, a_n)
         parabolic = self.prev is not None and self.prev[4] and (self.prev[3] or turns)
         # the first line after a dwell runs in G61 too: LinuxCNC refills its queue
         # while it runs (module docstring)
@@ -426,6 +449,7 @@ class GcodeWriter:
             self.exact = mode
         lines.append(f"G1 {words} F{60.0 / t:.3f}")
         self.prev = (len(lines) - 1, length, t, turns, not mode and not exact)
+        self.prev_accel = accel
         self.after_settle = exact
         if exact:
             # LinuxCNC ends a line mid servo cycle and starts the next in the same
@@ -440,10 +464,10 @@ class GcodeWriter:
         prev: tuple[int | None, float, float, bool, bool],
         length_n: float,
         t_n: float,
-        halved: bool,
+        a_n: float,
     ) -> None:
         """Keep LinuxCNC's parabolic blend of the previous line into the next one
-        (``length_n`` [mm] in ``t_n`` [s], its acceleration ``halved`` or not)
+        (``length_n`` [mm] in ``t_n`` [s], speeding up at ``a_n`` [mm/s²])
         within the larger of the two lines' written speeds: lower the previous
         line's F, or, where that costs more time than a stop or where either line
         is shorter than the blend, stop it there (G4 P0 after it, the next line in
@@ -460,16 +484,18 @@ class GcodeWriter:
             return
         v_p = length / t
         v_n = length_n / t_n if t_n > 0.0 else 0.0
-        a_t = self.accel / 2.0
-        a_n = a_t if halved else self.accel
-        v_safe = max(v_p, v_n) - v_n * (1.0 - a_t / a_n) - a_t * SERVO_PERIOD_S
+        a_t = self.prev_accel / 2.0
+        if a_n >= a_t:
+            v_safe = max(v_p, v_n) - v_n * (1.0 - a_t / a_n) - a_t * SERVO_PERIOD_S
+        else:
+            v_safe = max(v_p, v_n) - a_n * SERVO_PERIOD_S
         if v_safe >= v_p:
             return
         # the time a stop costs: the previous line slows down at a_t, the next
         # (G61) speeds up from rest at a and stops at its end, the one after it
         # speeds up again
         v = max(v_p, v_n)
-        stop_s = v / (2.0 * a_t) + 3.0 * v / (2.0 * self.accel)
+        stop_s = v / (2.0 * a_t) + 3.0 * v / (2.0 * 2.0 * a_t)
         slow_s = t * (v_p / v_safe - 1.0) if v_safe > 0.0 else math.inf
         # a blend lasts v / a_t: a line shorter than that is blended into the next
         # before the blend into it has ended, which the bound does not cover (helix
@@ -481,6 +507,19 @@ class GcodeWriter:
             lines.insert(idx + 1, "G4 P0")
             self.after_settle = True
             self.prev = (None, length, t, prev[3], False)
+
+    def _line_accel(self, d_xyz: list[float], d_ab: list[float]) -> float:
+        """A line's acceleration limit along its X Y Z path [mm/s²], as LinuxCNC's
+        canon sets it: the path length over the longest time an axis takes at its
+        own limit (``getStraightAcceleration``, emccanon.cc), up to √3 times the
+        axes' limit on a diagonal (random 11's five-axis.ngc: 2175 mm/s², its blend
+        1.0031 x F at the 2000 mm/s² bound, measured)."""
+        dtot = math.hypot(*d_xyz)
+        tmax = max(
+            max(abs(d) for d in d_xyz) / self.accel,
+            max(abs(d) for d in d_ab) / self.accel_deg,
+        )
+        return dtot / tmax if dtot > 0.0 and tmax > 0.0 else self.accel
 
     def _piece(self, qk: list[float], dtk: float) -> tuple[float, float]:
         """The piece from the last held-back (or written) point to qk: (length, rate)."""
@@ -502,12 +541,22 @@ class GcodeWriter:
         dip = self.trough < self.peak * (1.0 - DIP_SHARE) and rate > self.trough * (1.0 + DIP_SHARE)
         return dip or moved > self.tol
 
-    def _hold(self, qk: list[float], dtk: float, text: str, lead: list[float]) -> None:
-        """Hold back the point qk (its piece's time dtk, its words, the tables' lead)."""
+    def _hold(self, qk: list[float], dtk: float, text: str, lead: list[float], plan: float) -> None:
+        """Hold back the point qk (its piece's time dtk, its words, the tables' lead,
+        the plan's mean speed over the piece)."""
+        prev = self.run[-1][0] if self.run else self.last_q
+        assert prev is not None
         step, rate = self._piece(qk, dtk)
         if not self.run:
             self.pieces, self.peak, self.trough, self.lead0 = [], 0.0, 0.0, lead
+            self.plan_peak, self.stretch = 0.0, math.inf
         self.pieces.append((step, dtk))
+        xyz_rate = math.dist(prev[:3], qk[:3]) / dtk if dtk > 0.0 else 0.0
+        if plan > 0.0 and xyz_rate > 0.5 * plan:
+            # a piece that moves X Y Z about as planned (not a turn of A or B alone,
+            # planned in degrees per second): how far it stretches the planned path
+            self.plan_peak = max(self.plan_peak, plan)
+            self.stretch = min(self.stretch, xyz_rate / plan)
         if rate >= self.peak:
             self.peak = self.trough = rate
         else:
@@ -516,14 +565,23 @@ class GcodeWriter:
 
     def _chord_time(self) -> float:
         """The time of the chord through the held-back points: its length at the rate
-        of its fastest piece. LinuxCNC speeds up and slows down along a line by its
+        of its fastest piece, and its X Y Z no faster than the plan's fastest speed
+        times the least stretch of its pieces. LinuxCNC speeds up and slows down along a line by its
         own acceleration limit (the profile's, as the plan's); a line between stops
         timed at its mean speed cruised at the mean, below the plan's speed."""
         length = sum(s for s, _ in self.pieces)
         total = sum(d for _, d in self.pieces)
         if len(self.pieces) == 1 or self.peak <= 0.0 or length <= 0.0:
             return total
-        return min(total, length / self.peak)
+        t = min(total, length / self.peak)
+        if self.plan_peak > 0.0 and self.run and self.last_q is not None:
+            # LinuxCNC runs the chord's X Y Z at one speed; where a piece stretches
+            # the planned path less than another, the tool ran faster than planned
+            # there: no faster than the plan's fastest speed on the piece that
+            # stretches least
+            xyz = math.dist(self.last_q[:3], self.run[-1][0][:3])
+            t = max(t, xyz / (self.plan_peak * self.stretch))
+        return t
 
     def _tilt_held(self, q: list[float], text: str) -> str:
         """The words of the point ``q`` with A and B as last written while they are
