@@ -14,7 +14,8 @@ import re
 import numpy as np
 import pytest
 
-from prsxy_post.writers.linuxcnc import corner_cut
+from prsxy_post import writers
+from prsxy_post.writers.linuxcnc import GcodeWriter, corner_cut
 
 from .conftest import ROOT
 from .test_controller_truth import TBALL_WITH_A_TILT, XY_CORNER_AT_F60
@@ -204,3 +205,17 @@ def test_g61_every_line_writes_the_same_moves_all_in_exact_path(name: str, text:
             assert float(d.split(" F")[1]) <= float(m.split(" F")[1])
     assert all(modes)
     assert not any(line.startswith("G64") for line in exact[0].splitlines())
+
+
+def test_a_line_s_acceleration_limit_is_linuxcnc_s() -> None:
+    """LinuxCNC's canon gives a line the path length over the longest time an axis
+    takes at its own limit (emccanon.cc getStraightAcceleration: each axis's
+    distance over its limit, A and B at theirs): √2 times the axes' limit on an X Y
+    diagonal, the limit along an axis, less where B's turn takes longer."""
+    truth = truth_machine("random", 11, play=False)
+    w = GcodeWriter(truth, writers.settings_of(truth, "gcode"), None)
+    a, a_deg = truth.limits.max_accel_mm_s2, truth.limits.max_accel_deg_s2
+    assert w._line_accel([1.0, 1.0, 0.0], [0.0, 0.0]) == pytest.approx(np.sqrt(2) * a)
+    assert w._line_accel([3.0, 0.0, 0.0], [0.0, 0.0]) == pytest.approx(a)
+    # B turning 10 degrees over 1 mm: B's time rules
+    assert w._line_accel([1.0, 0.0, 0.0], [0.0, 10.0]) == pytest.approx(a_deg / 10.0)

@@ -80,9 +80,10 @@ in the shop profile) writes a chord where the points lie within it, A and B with
 ``TILT_CHORD_SHARE`` of the tolerance. (3) LinuxCNC ramps a line's speed up and
 down by its own acceleration limit (the profile's, as the plan's), so a chord is
 timed at its fastest piece, not its mean speed (timed at the mean a stop-to-stop
-line cruised below the plan); a chord never spans a dip of the plan's speed, nor a
-play crossing (what the real-axis tables add to a motor moving by more than the
-chord tolerance), whose points carry its timing. Measured:
+line cruised below the plan), and its X Y Z no faster than the plan's fastest speed
+on the piece that stretches the planned path least; a chord never spans a dip of
+the plan's speed, nor a play crossing (what the real-axis tables add to a motor
+moving by more than the chord tolerance), whose points carry its timing. Measured:
 ``bench/linuxcnc_speed.py``, docs/measurements.md.
 
 (4) A parabolic blend runs over F where written naively, and the writer keeps it
@@ -107,11 +108,17 @@ zeroed, tp.c:2057). A line in G61 (term condition exact, set from the mode by
 whole limit: measured, 1.52 x F on two 10 mm lines at F600 turning A, the second in
 G61 (1.50 x on the five-axis program). With both at half the limit the sum still
 rises by one servo cycle's worth of acceleration, ``nexttc`` leading (1.09 x F at
-F600, 1.02 x at F3000, 1.16 x at F300: about a / 2 x 1 ms = 1 mm/s). The bound the
-writer keeps: with ``tc`` slowing from v0 ≤ v_p at a_t = a / 2 and ``nexttc``
-speeding up towards v_n at a_n, their sum peaks at v0 + v_n (1 − a_t / a_n) + a_t T
-(T the servo period, 1 ms). So the line into such a join runs at
-v_p ≤ max(v_p, v_n) − v_n (1 − a_t / a_n) − a_t T (its F lowered), or, where that
+F600, 1.02 x at F3000, 1.16 x at F300: about a / 2 x 1 ms = 1 mm/s). A line's limit
+a is its own: LinuxCNC's canon gives it the path length over the longest time an
+axis takes at its own limit (``getStraightAcceleration``, emccanon.cc:612-721, the
+distance over the limit of each axis, A and B at theirs: 688-717), more than
+the axes' limit on a diagonal (2175 mm/s² for 2000 on five-axis.ngc's diagonal on
+random 11: 1.0031 x F with a bound that took 2000). The bound the writer keeps:
+with ``tc`` slowing from v0 ≤ v_p at a_t (half its limit) and ``nexttc`` speeding
+up towards v_n at a_n (half its limit or all of it), a servo cycle T (1 ms) ahead,
+their sum peaks at v0 + v_n (1 − a_t / a_n) + a_t T where a_n ≥ a_t, at v0 + a_n T
+where not. So the line into such a join runs at v_p ≤ max(v_p, v_n) − v_n (1 −
+a_t / a_n) − a_t T (or − a_n T; its F lowered), or, where that
 costs more time than a stop, or where either line is shorter than the blend (v /
 a_t: then blends overlap, which the bound does not cover; 1.026 x F on a helix of
 9 ms chords at F600), it stops there: G4 P0 after it (still in G64 P: its end has
@@ -511,7 +518,7 @@ class GcodeWriter:
     def _line_accel(self, d_xyz: list[float], d_ab: list[float]) -> float:
         """A line's acceleration limit along its X Y Z path [mm/s²], as LinuxCNC's
         canon sets it: the path length over the longest time an axis takes at its
-        own limit (``getStraightAcceleration``, emccanon.cc), up to √3 times the
+        own limit (``getStraightAcceleration``, emccanon.cc:612-721), up to √3 times the
         axes' limit on a diagonal (random 11's five-axis.ngc: 2175 mm/s², its blend
         1.0031 x F at the 2000 mm/s² bound, measured)."""
         dtot = math.hypot(*d_xyz)
