@@ -118,10 +118,10 @@ with ``tc`` slowing from v0 ≤ v_p at a_t (half its limit) and ``nexttc`` speed
 up towards v_n at a_n (half its limit or all of it), a servo cycle T (1 ms) ahead,
 their sum peaks at v0 + v_n (1 − a_t / a_n) + a_t T where a_n ≥ a_t, at v0 + a_n T
 where not. So the line into such a join runs at v_p ≤ max(v_p, v_n) − v_n (1 −
-a_t / a_n) − a_t T (or − a_n T; its F lowered), or, where that
-costs more time than a stop, or where either line is shorter than the blend (v /
-a_t: then blends overlap, which the bound does not cover; 1.026 x F on a helix of
-9 ms chords at F600), it stops there: G4 P0 after it (still in G64 P: its end has
+a_t / a_n) − a_t T (or − a_n T; its F lowered), T doubled where either line is
+shorter than the blend (v / a_t: then blends overlap; 1.026 x F on a helix of 9 ms
+chords at F600 with one cycle), or, where that costs more time than a stop, it
+stops there: G4 P0 after it (still in G64 P: its end has
 no next line to blend with, as the task waits), the next line in G61. An exact
 line into which the line before is blended parabolically is written in G64 P with
 its G4 P0, so that it too speeds up at half its limit. With ``g61_every_line = 1``
@@ -492,22 +492,23 @@ class GcodeWriter:
         v_p = length / t
         v_n = length_n / t_n if t_n > 0.0 else 0.0
         a_t = self.prev_accel / 2.0
+        v = max(v_p, v_n)
+        # a blend lasts v / a_t: a line shorter than that is blended into the next
+        # before the blend into it has ended, and the next leads by up to a cycle
+        # more (1.026 x F on a helix of 9 ms chords at F600 with one cycle's lead)
+        lead = SERVO_PERIOD_S * (2.0 if min(t, t_n) < v / a_t else 1.0)
         if a_n >= a_t:
-            v_safe = max(v_p, v_n) - v_n * (1.0 - a_t / a_n) - a_t * SERVO_PERIOD_S
+            v_safe = v - v_n * (1.0 - a_t / a_n) - a_t * lead
         else:
-            v_safe = max(v_p, v_n) - a_n * SERVO_PERIOD_S
+            v_safe = v - a_n * lead
         if v_safe >= v_p:
             return
         # the time a stop costs: the previous line slows down at a_t, the next
         # (G61) speeds up from rest at a and stops at its end, the one after it
         # speeds up again
-        v = max(v_p, v_n)
         stop_s = v / (2.0 * a_t) + 3.0 * v / (2.0 * 2.0 * a_t)
         slow_s = t * (v_p / v_safe - 1.0) if v_safe > 0.0 else math.inf
-        # a blend lasts v / a_t: a line shorter than that is blended into the next
-        # before the blend into it has ended, which the bound does not cover (helix
-        # F600 on random 11: 1.026 x F with 9 ms lines, measured)
-        if slow_s <= stop_s and min(t, t_n) >= v / a_t:
+        if slow_s <= stop_s:
             row = lines[idx]
             lines[idx] = f"{row[: row.rindex(' F')]} F{60.0 * v_safe / length:.3f}"
         else:
