@@ -393,11 +393,15 @@ def measure(truth, text: str) -> dict[str, float]:
             10000.0,
             marks=pytest.mark.xfail(
                 strict=True,
-                reason="open: 2.41 s against 1.79 s planned. LinuxCNC runs a line in no "
-                "less than 1.02 servo cycles (tp.c tpComputeOptimalVelocity: sample_maxvel "
-                "= target / (cycleTime * TP_MIN_SEGMENT_CYCLES), tp_types.h 1.02), and "
-                "the chords of an R10 arc within 0.1 um are 0.09 mm: at most 88 mm/s, "
-                "F10000 is 167 mm/s. Needs arcs written as arcs",
+                reason="open: 2.4-2.5 s against 1.79 s planned (1.89 s uncorrected). "
+                "The chords of an R10 arc within 0.1 um are 0.09 mm: LinuxCNC runs a line "
+                "in no less than 1.02 servo cycles (tp.c:1708-1709 "
+                "tpComputeOptimalVelocity, tp_types.h TP_MIN_SEGMENT_CYCLES), at most "
+                "88 mm/s where F10000 is 167 mm/s, and its joins of the chords slow it "
+                "further (0.25 um chords, fewer and longer, ran 2.73 s). Needs arcs "
+                "written as G2/G3; even so LinuxCNC takes an arc at no more than "
+                "sqrt(0.866 a R) (blendmath.c:1640-1676 pmCircleActualMaxVel): the "
+                "uncorrected program takes 1.053 x the plan",
             ),
         ),
         # 1.50 x F before the writer kept LinuxCNC's parabolic blends within F
