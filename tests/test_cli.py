@@ -540,12 +540,14 @@ def test_gcode_tolerance_reduction_stays_within_it(runner: CliRunner, tmp_path: 
     from .test_tracking import read_gcode_points
 
     tol = 0.002
-    prof = tmp_path / "tol.toml"
-    prof.write_text(
-        (ROOT / SHOP).read_text().replace("\ntolerance_mm = 0.0 ", f"\ntolerance_mm = {tol} ")
-    )
+    shop = (ROOT / SHOP).read_text()
+    assert "\ntolerance_mm = 0.0001 " in shop
+    prof, every = tmp_path / "tol.toml", tmp_path / "every.toml"
+    prof.write_text(shop.replace("\ntolerance_mm = 0.0001 ", f"\ntolerance_mm = {tol} "))
+    # a line to every point, the dense reference
+    every.write_text(shop.replace("\ntolerance_mm = 0.0001 ", "\ntolerance_mm = 0.0 "))
     dense, sparse = tmp_path / "d.ngc", tmp_path / "s.ngc"
-    for p, out in ((SHOP, dense), (str(prof), sparse)):
+    for p, out in ((str(every), dense), (str(prof), sparse)):
         r = invoke(
             runner,
             "convert",

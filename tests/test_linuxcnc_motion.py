@@ -26,13 +26,18 @@ Corrected G-code for a machine with errors turns A and B by a few 1e-7 degrees
 on every line (the compensated tilt), so LinuxCNC blends all of it parabolically.
 The writer runs in G61 (exact path) the lines that end where the motion stands
 and those into a corner such a blend would cut too far (writers/linuxcnc.py);
-the blends' speed over F stays open (OPEN below).
+the blends' speed over F held on the programs of ONCE_OPEN once the writer wrote
+chords and held the tilt, and where a tilt change is written in motion or every
+line turns A and B once the writer slowed or stopped the line into each parabolic
+blend (``test_linuxcnc_s_parabolic_blend_adds_up_both_lines``; what stays open is
+the strict xfail of the planner-speed test below, docs/measurements.md).
 """
 
 from __future__ import annotations
 
 import os
-from typing import Any
+import re
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -162,6 +167,42 @@ def test_linuxcnc_blends_lines_that_turn_a_over_f() -> None:
     assert _peak_speed(turning) > 1.15 * 300.0
 
 
+def _two_lines(feed: float, turn_a_deg: float, second_mode: str) -> str:
+    """Two 10 mm lines along X at ``feed`` [mm/min], A turning by ``turn_a_deg`` on
+    each, the second read under ``second_mode``, ending at rest (G4 P0)."""
+    return (
+        "G21 G90 G17 G40 G49 G94\nG64 P0.00025\nG0 X0 Y0 Z0 A0 B0\n"
+        f"G1 X0.001 F{feed:g}\nG1 X10 A{turn_a_deg:g}\n{second_mode}\n"
+        f"G1 X20 A{2 * turn_a_deg:g}\nG4 P0\nM2\n"
+    )
+
+
+def test_linuxcnc_s_parabolic_blend_adds_up_both_lines() -> None:
+    """The controller rule behind the writer's rule 4, measured: LinuxCNC's
+    parabolic blend runs the line before down at half its acceleration limit and
+    the next one up towards its own F (tp.c tpGetRealTargetVel takes reqvel, not the
+    target_vel tpUpdateBlend sets), at its whole limit where it is read under G61
+    (tc.c tcGetOverallMaxAccel halves it only for a parabolic end or blend_prev):
+    1.52 x F at F600. Both under G64 P, the next leads by a servo cycle: 1.09 x F
+    (about 1 mm/s over, a / 2 x 1 ms). Without A turning LinuxCNC joins the lines
+    tangentially: F holds. The writer's bound, v_p ≤ F − a / 2 x 1 ms for the line
+    before, holds it (F540 there)."""
+    limits = truth_machine("nominal", None).limits
+    start = np.zeros(5)
+
+    def peak(text: str) -> float:
+        return _peak_speed(lm.run(text, limits, start, timeout_s=30.0)) / 600.0
+
+    assert peak(_two_lines(600.0, 0.0, "G64 P0.00025")) <= 1.0 + 1e-6
+    assert peak(_two_lines(600.0, 1.0, "G61")) > 1.4
+    over = peak(_two_lines(600.0, 1.0, "G64 P0.00025"))
+    assert 1.03 < over < 1.0 + 1.0 / 10.0 + 0.01  # at most a / 2 x 1 ms over 10 mm/s
+    bounded = _two_lines(600.0, 1.0, "G64 P0.00025").replace(
+        "G1 X10 A1\n", "G1 X10 A1 F540\nF600\n"
+    )
+    assert peak(bounded) <= 1.0 + 1e-3
+
+
 def test_a_play_window_at_a_corner_runs_where_it_is_written() -> None:
     """xy-corner-F60 on machine 12: motor X crosses its play at the corner, where the
     program stops. Under G64 P LinuxCNC blended into the crossing and out of it, the
@@ -181,7 +222,7 @@ def test_a_sharp_tilt_corner_keeps_to_the_path() -> None:
     free of G64 P: 7.3 µm and 24 arcsec off. The line into the corner now runs in
     G61: 0.47 µm and 0.46 arcsec, and with a G4 P0 after it 0.04 µm and 0.01 arcsec
     (measured). Its speed is still open (1.027 x F,
-    the parabolic blends of the lines before: OPEN below)."""
+    the parabolic blends of the lines before, at the time)."""
     truth = truth_machine("random", 21)
     motions, res, texts = convert(truth, TBALL_WITH_A_TILT, "gcode")
     tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
@@ -224,35 +265,27 @@ def test_the_line_after_a_dwell_runs_in_exact_path_mode() -> None:
     assert_on_the_path(tr)
 
 
-def _open(seed: int, text: str, name: str, why: str) -> Any:
-    """A program LinuxCNC runs out of bounds: a strict xfail saying what was measured."""
-    return pytest.param(
-        seed, text, id=name, marks=pytest.mark.xfail(strict=True, reason=f"open: {why}")
-    )
-
-
-#: Programs whose corrected G-code LinuxCNC runs out of bounds (strict xfails; each
-#: with what was measured, `bench/linuxcnc_truth.py` gives the whole table)
-OPEN = [
-    _open(
+#: Programs whose corrected G-code LinuxCNC ran out of bounds while every line was a
+#: point and turned A or B (each with what was measured then); since the writer
+#: writes chords of 0.1 µm they hold (the two passed as strict xfails)
+ONCE_OPEN = [
+    pytest.param(
         21,
         ARC_INTO_A_STOP,
-        "stop",
-        "LinuxCNC blends the compensated lines parabolically (A and B turn on every "
-        "line): 1.19 x F on the F300 plunge",
+        id="stop",
+        # was: LinuxCNC blended the compensated lines parabolically (A and B turned on
+        # every line): 1.19 x F on the F300 plunge
     ),
-    _open(
+    pytest.param(
         12,
         COMPASS_WITH_A_TILT,
-        "compass-with-a-tilt-F400",
-        "1.02 x F, LinuxCNC's parabolic blends of the lines that turn B (the path is "
-        "within bounds since tilt corners run in G61: 2.1 µm, 2.3 arcsec before, "
-        "0.28 µm after)",
+        id="compass-with-a-tilt-F400",
+        # was: 1.02 x F, LinuxCNC's parabolic blends of the lines that turn B
     ),
 ]
 
 
-@pytest.mark.parametrize(("seed", "text"), OPEN)
+@pytest.mark.parametrize(("seed", "text"), ONCE_OPEN)
 def test_corrected_gcode_on_linuxcnc(seed: int, text: str) -> None:
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text, "gcode")
@@ -260,9 +293,9 @@ def test_corrected_gcode_on_linuxcnc(seed: int, text: str) -> None:
     assert_within(tr, None, TOL_MM)
 
 
-@pytest.mark.parametrize(("seed", "text"), [p.values for p in OPEN], ids=[p.id for p in OPEN])
+@pytest.mark.parametrize(("seed", "text"), ONCE_OPEN)
 def test_g61_every_line_holds_f_on_linuxcnc(seed: int, text: str) -> None:
-    """The open programs above with ``[output.gcode] g61_every_line = 1``: LinuxCNC
+    """The programs above with ``[output.gcode] g61_every_line = 1``: LinuxCNC
     blends nothing, so F holds and the path and tool axis stay within the tolerance.
     The price is time: "stop" takes 10.9 s on LinuxCNC instead of 2.3 s with the
     blends (1.64 s as written; `python bench/linuxcnc_truth.py --g61-everywhere`)."""
@@ -270,3 +303,132 @@ def test_g61_every_line_holds_f_on_linuxcnc(seed: int, text: str) -> None:
     motions, res, texts = convert(truth, text, "gcode")
     tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
     assert_within(tr, None, TOL_MM)
+
+
+# ------------------------------------------ the planner's speed (issue 33)
+
+HEAD = "G21 G90 G17 G40 G49 G94\n"
+
+
+def _lines(f: float) -> str:
+    return HEAD + (
+        f"G0 X-20 Y-20 Z2\nG1 Z0 F{f}\nG1 X20 Y-18\nG1 X22 Y15\nG1 X-15 Y20\n"
+        "G1 X-20 Y-20\nG0 Z2\nM2\n"
+    )
+
+
+def _arcs(f: float) -> str:
+    return HEAD + (
+        f"G0 X20 Y0 Z2\nG1 Z0 F{f}\nG3 X0 Y20 R20\nG3 X-20 Y0 R20\nG2 X-40 Y0 R10\n"
+        "G2 X-20 Y0 R10\nG3 X20 Y0 I20 J0\nG0 Z2\nM2\n"
+    )
+
+
+def _helix(f: float) -> str:
+    return HEAD + (f"G0 X10 Y0 Z2\nG1 Z0 F{f}\nG2 X10 Y0 Z-3 I-10 J0 P2\nG0 Z2\nM2\n")
+
+
+def _five_axis(f: float) -> str:
+    return HEAD + (
+        f"G0 X-20 Y-20 Z2 A0 B0\nG1 Z0 F{f}\nG1 X20 Y-20 A5 B-3\nG1 X20 Y20 A-5 B3\n"
+        "G1 X-20 Y20 A-8 B8\nG1 X-20 Y-20 A0 B0\nG0 Z2\nM2\n"
+    )
+
+
+#: the generated programs, by name: G-code text at a feed [mm/min]
+PROGRAMS: dict[str, Callable[[float], str]] = {
+    "lines": _lines,
+    "arcs": _arcs,
+    "helix": _helix,
+    "five-axis": _five_axis,
+}
+
+
+def uncorrected(text: str, blend_mm: float) -> str:
+    """The program under the corrected program's ``G64 P`` (LinuxCNC's G64 without P
+    may cut corners by any amount), after a leading ``%`` line if it has one."""
+    head, sep, rest = text.partition("\n")
+    if head.strip() == "%":
+        return f"{head}{sep}G64 P{blend_mm:g}\n{rest}"
+    return f"G64 P{blend_mm:g}\n" + text
+
+
+def measure(truth, text: str) -> dict[str, float]:
+    """Run the corrected and the uncorrected program on LinuxCNC: times, speed, path."""
+    motions, res, texts = convert(truth, text, "gcode")
+    written = ctl.run_gcode(texts[0])
+    tr, run, _ = run_on_linuxcnc(truth, motions, res, texts[0])
+    plain = lm.run(
+        uncorrected(text, written.blend or 0.0),
+        truth.limits,
+        written.q[0],
+        timeout_s=3.0 * written.t[-1] + 30.0,
+    )
+    assert not plain.errors, plain.errors
+    # the plan's own time, which the writer records at the end (a chord's G93 time
+    # is its length at its fastest piece's rate, shorter than the plan's)
+    planned = float(re.findall(r"\(end: \d+ points, ([0-9.]+) s\)", texts[0])[-1])
+    return {
+        "planned": planned,
+        "lcnc": float(run.t[-1]),
+        "lcnc_waiting": run.waiting_s,
+        "plain": float(plain.t[-1]),
+        "plain_waiting": plain.waiting_s,
+        "speed": tr.speed_ratio,
+        "path_um": tr.path_mm * 1e3,
+        "axis_arcsec": tr.ab_deg * 3600.0,
+        "lines": float(texts[0].count("\nG1 ")),
+    }
+
+
+@pytest.mark.parametrize(
+    ("seed", "program", "feed"),
+    [
+        (12, "lines", 3000.0),
+        (11, "helix", 3000.0),
+        (11, "arcs", 3000.0),
+        pytest.param(
+            13,
+            "arcs",
+            10000.0,
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="open: 2.4-2.5 s against 1.79 s planned (1.89 s uncorrected). "
+                "The chords of an R10 arc within 0.1 um are 0.09 mm: LinuxCNC runs a line "
+                "in no less than 1.02 servo cycles (tp.c:1708-1709 "
+                "tpComputeOptimalVelocity, tp_types.h TP_MIN_SEGMENT_CYCLES), at most "
+                "88 mm/s where F10000 is 167 mm/s, and its joins of the chords slow it "
+                "further (0.25 um chords, fewer and longer, ran 2.73 s). Needs arcs "
+                "written as G2/G3; even so LinuxCNC takes an arc at no more than "
+                "sqrt(0.866 a R) (blendmath.c:1640-1676 pmCircleActualMaxVel): the "
+                "uncorrected program takes 1.053 x the plan",
+            ),
+        ),
+        # 1.50 x F before the writer kept LinuxCNC's parabolic blends within F
+        # (writers/linuxcnc.py, rule 4): the blend into a G61 line
+        (11, "five-axis", 600.0),
+        # 1.30 x F before, the blend out of a line that turns A and B into one
+        # whose end joins tangentially
+        (13, "helix", 600.0),
+    ],
+)
+def test_linuxcnc_runs_corrected_gcode_at_the_planned_speed(
+    seed: int, program: str, feed: float
+) -> None:
+    """On a machine with errors the compensated tilt changes a little everywhere, and
+    LinuxCNC gives a line that moves A or B by any amount neither a tangent join nor a
+    blend arc (tp.c: tpSetupTangent and tpCheckBlendArcType, both on
+    tcRotaryMotionCheck). The writer holds A and B while they are within the
+    tolerance and writes a chord where a period's points lie within it, timed at its
+    fastest piece: LinuxCNC's planner then takes at most 1.05 x the plan's time and the
+    uncorrected program's, never over F, on the path (measured with
+    ``python bench/linuxcnc_speed.py``). Its time is the servo cycles it ran, less those
+    it waited with an empty queue for LinuxCNC's task on a loaded host
+    (``MotionRun.waiting_s``)."""
+    truth = truth_machine("random", seed, play=False)
+    m = measure(truth, PROGRAMS[program](feed))
+    own, plain = m["lcnc"] - m["lcnc_waiting"], m["plain"] - m["plain_waiting"]
+    assert own <= 1.05 * m["planned"], m
+    assert own <= 1.05 * plain, m
+    assert m["speed"] <= 1.001, m
+    assert m["path_um"] <= TOL_MM * 1e3 and m["axis_arcsec"] <= 0.5, m

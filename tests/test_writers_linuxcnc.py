@@ -14,7 +14,8 @@ import re
 import numpy as np
 import pytest
 
-from prsxy_post.writers.linuxcnc import corner_cut
+from prsxy_post import writers
+from prsxy_post.writers.linuxcnc import GcodeWriter, corner_cut
 
 from .conftest import ROOT
 from .test_controller_truth import TBALL_WITH_A_TILT, XY_CORNER_AT_F60
@@ -60,14 +61,16 @@ def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str
     ``EMC_TASK_EXEC_WAITING_FOR_MOTION_AND_IO``), so the next line starts from a servo
     sample at the corner, which ``tpHandleSplitCycle`` would otherwise skip; and that
     next line is read under G61 too (writers/linuxcnc.py's docstring)."""
-    truth = truth_machine("random", 12)
+    truth = with_output_setting(truth_machine("random", 12), "gcode", "tolerance_mm", 0.0)
     _, res, texts = convert(truth, text, "gcode")
     moves, exact, settled = _moves_and_modes(texts[0])
     pts = res.points
     written = [k for k in range(len(pts)) if pts.fn[k] is None]
     assert len(written) == len(moves)
     q = np.array([[float(v) for v in re.findall(r"[XYZAB](-?[\d.]+)", m)] for m in moves])
-    dt = np.array([60.0 / float(m.split("F")[1]) if " F" in m else 0.0 for m in moves])
+    # the plan's times (a line the writer slows down for LinuxCNC's blend carries a
+    # lower F: writers/linuxcnc.py, rule 4)
+    dt = np.array([pts.dt[k] if " F" in m else 0.0 for m, k in zip(moves, written, strict=True)])
     accel = truth.limits.max_accel_mm_s2
     want = []
     for i, k in enumerate(written):
@@ -76,22 +79,49 @@ def test_a_line_ending_where_the_motion_stands_runs_in_exact_path_mode(name: str
         elif pts.speed[k] == 0.0:
             want.append(True)
         else:
-            turns = pts.block_end[k] and i + 1 < len(moves) and moves[i + 1].startswith("G1 ")
-            if turns:
+            corner = pts.block_end[k] and i + 1 < len(moves) and moves[i + 1].startswith("G1 ")
+            if corner:
                 mm, deg = corner_cut(q[i - 1], q[i], q[i + 1], dt[i], dt[i + 1], accel)
                 want.append(mm > 0.25e-3 or deg > 0.25 / 3600)
             else:
                 want.append(False)
-    assert settled == want
+    # a G1 into which LinuxCNC blends the one before parabolically (read under G64 P,
+    # not settled, one of the two turning A or B) is read under G64 P if settled
+    # (under G61 it would speed up at its whole acceleration limit while the line
+    # before slows down at half of it, over F); and a line the writer stops for such
+    # a blend is settled where the plan does not stand (writers/linuxcnc.py, rule 4)
+    g1 = [m.startswith("G1 ") for m in moves]
+    ab = [m[m.index(" A") :].split(" F")[0] if " A" in m else None for m in moves]
+    turns = [k > 0 and a is not None and a != ab[k - 1] for k, a in enumerate(ab)]
+    into = [
+        k + 1 < len(moves) and g1[k] and g1[k + 1] and (turns[k] or turns[k + 1])
+        for k in range(len(moves))
+    ]
+    for i, (s, w) in enumerate(zip(settled, want, strict=True)):
+        assert s or not w, f"not settled: {moves[i]}"
+        assert w or not s or (into[i] and not exact[i]), f"settled: {moves[i]}"
     # the last G1 before each move was settled (a program's own G4 keeps the queue
     # drained, so the flag carries over dwells and functions), or there was none
-    g1 = [m.startswith("G1 ") for m in moves]
     after, last = [], True  # the program's first G1 too: LinuxCNC's queue starts empty
     for is_g1, st in zip(g1, settled, strict=True):
         after.append(last)
         last = st if is_g1 else last
-    assert [e for e, g in zip(exact, g1, strict=True) if g] == [
-        w or a for w, a, g in zip(want, after, g1, strict=True) if g
+    parabolic = [
+        k > 0
+        and g1[k]
+        and g1[k - 1]
+        and not exact[k - 1]
+        and not settled[k - 1]
+        and (turns[k - 1] or turns[k])
+        for k in range(len(moves))
+    ]
+    # (a line the writer stops for a blend stays under G64 P, as it was read before
+    # the next line showed the blend: its G4 P0 stops it all the same)
+    stopped = [s and not w for s, w in zip(settled, want, strict=True)]
+    assert [e for e, g, st in zip(exact, g1, stopped, strict=True) if g and not st] == [
+        (s or a) and not (s and p)
+        for s, a, p, g, st in zip(settled, after, parabolic, g1, stopped, strict=True)
+        if g and not st
     ]
     assert exact[g1.index(True)], "the first G1 is not read under G61"
     # and the program stands somewhere beside its end (a corner, a rapid's end)
@@ -102,8 +132,11 @@ def test_the_program_s_first_g1_runs_in_exact_path_mode() -> None:
     """LinuxCNC's queue starts empty, as after a ``G4 P0``: the program's first G1 is
     read under G61 even where it ends in motion, and the line after it is not. On a
     machine without play the first G1 is the first step of the program's rapid (with
-    play it is the crossing that sets each part at the start, which stands anyway)."""
-    truth = truth_machine("random", 12, play=False)
+    play it is the crossing that sets each part at the start, which stands anyway).
+    A line to every point (no tolerance), so that lines and points pair up."""
+    truth = with_output_setting(
+        truth_machine("random", 12, play=False), "gcode", "tolerance_mm", 0.0
+    )
     text = "G21 G90 G17 G94\nG0 X-20 Y-10 Z0\nG1 X20 F1200\nG1 Y10\nG0 Z5\nM2\n"
     _, res, texts = convert(truth, text, "gcode")
     moves, exact, settled = _moves_and_modes(texts[0])
@@ -119,8 +152,8 @@ def test_the_program_s_first_g1_runs_in_exact_path_mode() -> None:
 def test_a_sharp_tilt_corner_in_motion_runs_in_exact_path_mode() -> None:
     """tball-with-a-tilt-F1016's last line turns B by 0.5° over 0.47 mm at F1016,
     from lines that hold it: the line into that corner is read under G61, and the
-    lines inside the blocks are not."""
-    truth = truth_machine("random", 21)
+    lines inside the blocks are not (a line to every point: no tolerance)."""
+    truth = with_output_setting(truth_machine("random", 21), "gcode", "tolerance_mm", 0.0)
     _, res, texts = convert(truth, TBALL_WITH_A_TILT, "gcode")
     _, exact, settled = _moves_and_modes(texts[0])
     pts = res.points
@@ -157,12 +190,32 @@ def test_the_corner_cut_in_closed_form() -> None:
 @pytest.mark.parametrize(("name", "text"), PROGRAMS, ids=[n for n, _ in PROGRAMS])
 def test_g61_every_line_writes_the_same_moves_all_in_exact_path(name: str, text: str) -> None:
     """``[output.gcode] g61_every_line = 1``: the same moves as by default, every one
-    read under G61, and no G64 in the program (so LinuxCNC blends nothing)."""
+    read under G61, and no G64 in the program (so LinuxCNC blends nothing). By
+    default a line that turns A or B before one that holds them may run slower
+    (its F lower: writers/linuxcnc.py, rule 4); in G61 nothing is blended, so
+    nothing is slowed."""
     truth = truth_machine("random", 12)
     _, _, default = convert(truth, text, "gcode")
     _, _, exact = convert(with_output_setting(truth, "gcode", "g61_every_line", 1), text, "gcode")
     moves_default, _, _ = _moves_and_modes(default[0])
     moves, modes, _ = _moves_and_modes(exact[0])
-    assert moves == moves_default
+    assert [m.split(" F")[0] for m in moves] == [m.split(" F")[0] for m in moves_default]
+    for m, d in zip(moves, moves_default, strict=True):
+        if " F" in m:
+            assert float(d.split(" F")[1]) <= float(m.split(" F")[1])
     assert all(modes)
     assert not any(line.startswith("G64") for line in exact[0].splitlines())
+
+
+def test_a_line_s_acceleration_limit_is_linuxcnc_s() -> None:
+    """LinuxCNC's canon gives a line the path length over the longest time an axis
+    takes at its own limit (emccanon.cc getStraightAcceleration: each axis's
+    distance over its limit, A and B at theirs): √2 times the axes' limit on an X Y
+    diagonal, the limit along an axis, less where B's turn takes longer."""
+    truth = truth_machine("random", 11, play=False)
+    w = GcodeWriter(truth, writers.settings_of(truth, "gcode"), None)
+    a, a_deg = truth.limits.max_accel_mm_s2, truth.limits.max_accel_deg_s2
+    assert w._line_accel([1.0, 1.0, 0.0], [0.0, 0.0]) == pytest.approx(np.sqrt(2) * a)
+    assert w._line_accel([3.0, 0.0, 0.0], [0.0, 0.0]) == pytest.approx(a)
+    # B turning 10 degrees over 1 mm: B's time rules
+    assert w._line_accel([1.0, 0.0, 0.0], [0.0, 10.0]) == pytest.approx(a_deg / 10.0)

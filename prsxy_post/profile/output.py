@@ -73,12 +73,15 @@ GCODE_SETTINGS: Mapping[str, Setting] = {
     # alone ran a 1 ms crossing window at F60 1.0018 x F (test_controller_truth's
     # found programs). LinuxCNC reads the words as doubles.
     "decimals": Setting(7, 4, 9, "decimals of positions", "decimals"),
+    # 0.0001: a fifth of the path tolerance. LinuxCNC's planner runs a line per
+    # chord; at one point a period it ran short lines below the plan's speed and
+    # its queue ran dry (bench/linuxcnc_speed.py, docs/measurements.md)
     "tolerance_mm": Setting(
-        0.0,
+        0.0001,
         0.0,
         10.0,
         "> 0: drop points while the chord through the kept ones stays within this "
-        "(it adds to the path error)",
+        "(it adds to the path error); 0: a line to every point",
         "gcode_tolerance_mm",
     ),
     "g61_every_line": Setting(
