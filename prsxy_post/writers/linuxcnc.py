@@ -609,22 +609,30 @@ class GcodeWriter:
 
     def _within(self, qk: list[float]) -> bool:
         """Would the chord from the last written point to qk pass the held-back points,
-        within ``tol`` in X Y Z and ``tilt_chord`` in A and B?"""
+        within ``tol`` in X Y Z and ``tilt_chord`` in A and B?
+
+        Each held point p is taken at its nearest place along the chord a + t d,
+        t = clip((p − a)·d / d·d, 0, 1) (A and B read as mm at 1 mm per degree), and
+        its offset |p − (a + t d)| judged. In Python's floats, not numpy's: a run
+        holds a few points, and numpy's fixed cost per call was most of the G-code
+        writer's time."""
         if not self.run or self.last_q is None:
             return True
-        a = np.asarray(self.last_q)
-        d = np.asarray(qk) - a
-        dd = float(d @ d)
+        a = self.last_q
+        d = [x - y for x, y in zip(qk, a, strict=True)]
+        dd = math.fsum(x * x for x in d)
         if dd == 0:
             return False
-        pts = np.array([p for p, _, _ in self.run])
-        # where along the chord each point is (A and B read as mm at 1 mm per degree)
-        t = np.clip((pts - a) @ d / dd, 0, 1)
-        off = np.abs(pts - (a + t[:, None] * d))
-        return bool(
-            np.linalg.norm(off[:, :3], axis=1).max() <= self.tol
-            and off[:, 3:].max() <= self.tilt_chord
-        )
+        tol, tilt = self.tol, self.tilt_chord
+        for p, _, _ in self.run:
+            t = math.fsum((x - y) * z for x, y, z in zip(p, a, d, strict=True)) / dd
+            t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+            off = [abs(x - (y + t * z)) for x, y, z in zip(p, a, d, strict=True)]
+            if math.sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > tol:
+                return False
+            if off[3] > tilt or off[4] > tilt:
+                return False
+        return True
 
     def finish(self) -> list[Piece]:
         lines = self.buf
