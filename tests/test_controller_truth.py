@@ -786,9 +786,10 @@ LED_FLOOR_TILTED_FILLET = (
 #: window the shortest (0.25 ms, a servo cycle) and the tip still from 0.9992 to
 #: 1.0012 x F across it. As PVT 1.00042 x (a window may stand longer on the side
 #: where the tip is held back).
-#: Open for corrected G-code (GCODE_OPEN): a window of one servo cycle strays too
-#: far; it would take a shorter line, or the head's lever taken into the
-#: crossing's other motors.
+#: Was open for corrected G-code (a window of one servo cycle strayed too far);
+#: holds since issue 33's writer (merge 50688b8: the line into a parabolic blend
+#: slowed or stopped, chords timed at their slowest stretch): its strict xfail
+#: passed in CI.
 VCARVE_UNTILTS_AS_A_HEAD_MOTOR_TURNS = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\n"
     "G0 X-0.374650 Y-1.221397 Z-2.540000 A0 B0\n"
@@ -945,7 +946,7 @@ def test_programs_the_search_found_where_a_motor_with_play_reverses(seed: int, t
 
 #: Found programs still out of bounds as corrected G-code (strict xfails; each
 #: program's comment says what is known).
-GCODE_OPEN = {"vcarve-untilts-as-a-head-motor-turns-F152"}
+GCODE_OPEN: set[str] = set()
 FOUND_GCODE = _found(GCODE_OPEN, "GCODE_OPEN")
 
 
