@@ -325,7 +325,7 @@ class Planning:
         ends = np.empty((2 * n, len(cols)))
         ends[0::2], ends[1::2] = d_in, d_out
         way = np.where(np.abs(ends) > REVERSAL_SLOPE, np.sign(ends), 0.0)
-        came = reversals.carried(way, self.way)
+        came = kernel.carried(way, self.way)
         before = np.vstack([self.way[None], came[:-1]])
         self.way = came[-1].copy()
         stood = np.vstack([self.stood[None], np.abs(d_out[:-1]) <= STAND_SLOPE])
@@ -974,7 +974,7 @@ class Pipeline:
         (:func:`.reversals.catch_up`) at a share of the path speed; what is left where
         the motor's next crossing begins goes into that crossing, which is then
         reckoned again from where the part is (the part followed through the
-        commands as written, :func:`.reversals.follow_stretches`), and what is left
+        commands as written, :func:`.kernel.play.follow_stretches`), and what is left
         at the chunk's end goes on in the next. Per motor, the kernel does it over
         arrays (:func:`.kernel.play.settle_crossings`).
         """
@@ -1353,8 +1353,8 @@ def path_sides(P: np.ndarray, V: np.ndarray, rest: np.ndarray, profile: Profile)
     for col in range(P.shape[1] if len(P) else 0):
         sg = np.where(rest, 0, reversals.signs(V[:, col]))
         # measured from where the path starts, as the chain's first chunk does
-        crept = reversals._creeps(sg, P[:, col], 1, float(P[0, col]), drift)[0]
-        out[:, col] = reversals.carried(np.where(crept != 0, crept, sg), 1)
+        crept = kernel.creeps(sg, P[:, col], 1, float(P[0, col]), drift)[0]
+        out[:, col] = kernel.carried(np.where(crept != 0, crept, sg), 1)
     return out
 
 

@@ -35,7 +35,8 @@ and the points they put in).
 
 After a crossing the part is brought back onto its wanted position along the path
 (:func:`catch_up`), and what is left of its offset when the motor's next crossing
-begins goes into that crossing (:func:`follow_stretches` follows the part there).
+begins goes into that crossing (:func:`.kernel.play.follow_stretches` follows the part
+there).
 At a corner taken at speed where the motor stands on one side
 (:func:`corners`), a PVT program blends the corner as a parabola over a millisecond
 or so each side, every motor's velocity linear across it (:func:`blend_shift`). A
@@ -133,32 +134,6 @@ CROSSING_SPEED_SHARE = 5e-4
 def signs(V: np.ndarray) -> np.ndarray:
     """Direction of each planned velocity: +1, −1, or 0 (standing)."""
     return np.where(V > V_EPS, 1, np.where(V < -V_EPS, -1, 0))
-
-
-def carried(sg: np.ndarray, side: np.ndarray | float) -> np.ndarray:
-    """The last nonzero direction at or before each row of ``sg`` (along axis 0),
-    ``side`` before any: the side a motor is on, carried through the rows where it
-    has no direction. ``sg`` (m,) or (m, k); ``side`` a scalar or (k,):
-    :func:`.kernel.play.carried`."""
-    return kernel.carried(sg, side)
-
-
-def _creeps(
-    sg: np.ndarray, P: np.ndarray, side: int, ref: float, drift: float
-) -> tuple[np.ndarray, float]:
-    """Rows where a creeping motor (no direction) has drifted back by more than
-    ``drift`` from the farthest it went its last way: each becomes a reversal (the
-    new sign), and the drift is measured afresh from there. Also where the motor
-    got farthest its last way by the last row, with those reversals (the reference
-    carried to the next chunk; NaN while it has had no direction).
-
-    The farthest, not where it last had a direction: a motor stopping at a block
-    end goes on its way through the rows that stand (speed 0) or creep forward, and
-    pushes its part there; measured from the last row with a direction, a motor
-    then creeping back (a table axis following the other's squareness while it
-    moves alone) was seen to stay 17 µm "ahead" of it and left its part 0.61 µm
-    behind (test_controller_truth's found programs)."""
-    return kernel.creeps(sg, P, side, ref, drift)
 
 
 class Insertions:
@@ -582,14 +557,6 @@ def chord_windows(
     a = np.where((a > t0) & (a - t0 < MIN_WINDOW_S), t0, a)
     b = np.where((b < t1) & (t1 - b < MIN_WINDOW_S), t1, b)
     return a, b
-
-
-def turning_points(
-    P0: np.ndarray, V0: np.ndarray, P1: np.ndarray, V1: np.ndarray, h: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Both roots of the cubic's velocity (:func:`velocity_roots`) where both lie
-    strictly inside the step, in time order; NaN elsewhere."""
-    return kernel.turning_points(P0, V0, P1, V1, h)
 
 
 class _Dip(NamedTuple):
@@ -1089,15 +1056,15 @@ def _turns(
     """Motor ``col``'s reversals in the chunk and their kinds (:class:`_Turns`),
     the roots and accelerations of those in motion on the steps' cubics; and where
     it got farthest its last way (the ``ref`` [mm] carried to the next chunk,
-    :func:`_creeps`). ``side`` (5,) the side each motor is on before the chunk;
+    :func:`.kernel.play.creeps`). ``side`` (5,) the side each motor is on before the chunk;
     ``drift`` [mm] the drift back that makes a creeping motor cross."""
     n, off, dt = len(ch.dt), ch.off, ch.dt
     sg = np.where(ch.rest, 0, signs(ch.V[:, col]))
     # creeps back become reversals; the reach is carried to the next chunk
-    crept, reach_ref = _creeps(sg, ch.P[:, col], int(side[col]), ref, drift)
+    crept, reach_ref = kernel.creeps(sg, ch.P[:, col], int(side[col]), ref, drift)
     sg = np.where(crept != 0, crept, sg)
     # the side a row comes from: the last direction before it, or the carried one
-    came = np.concatenate([[side[col]], carried(sg, side[col])[:-1]])
+    came = np.concatenate([[side[col]], kernel.carried(sg, side[col])[:-1]])
     r = np.flatnonzero((sg != 0) & (sg != came))
     r = r[(r - off >= 0) & (r - off < n)]
     k = r - off
@@ -1557,36 +1524,6 @@ def follow(
         step (its end included)
     """
     one = np.ones(1)
-    return follow_stretches(
+    return kernel.follow_stretches(
         table, y0 * one, P0 * one, V0 * one, P, V, dt, np.array([len(P)]), cubic
     )
-
-
-def follow_stretches(
-    table: PlayTable,
-    y0: np.ndarray,
-    P0: np.ndarray,
-    V0: np.ndarray,
-    P: np.ndarray,
-    V: np.ndarray,
-    dt: np.ndarray,
-    steps: np.ndarray,
-    cubic: bool = True,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`follow` over several stretches of commands at once, each from where
-    its part stands at its start (the play model's scan starts again at each):
-    :func:`.kernel.play.follow_stretches`.
-
-    Parameters
-    ----------
-    y0, P0, V0 : (w,) where each stretch's part stands at its start, and the
-        command's position and velocity there [mm, mm, mm/s]
-    P, V, dt : (k,) the commands and durations of the stretches' steps, stretch
-        after stretch [mm, mm/s, s]
-    steps : (w,) how many steps each stretch has
-
-    Returns
-    -------
-    y_end, y_min, y_max : (k,) as :func:`follow`'s, step by step
-    """
-    return kernel.follow_stretches(table, y0, P0, V0, P, V, dt, steps, cubic)

@@ -256,7 +256,7 @@ CORNER_ARC_WITH_A_TILT = (
 #: Machine 21: X comes down to -30 and stops; Y then moves alone for 4.5 s and the
 #: X motor creeps back up 0.61 µm with it (the table's squareness). The creep was
 #: measured from the last step with a direction, 17 µm above the stop, so it never
-#: counted as a reversal and the part stood 0.61 µm off (reversals._creeps).
+#: counted as a reversal and the part stood 0.61 µm off (kernel.play.creeps).
 CREEP_AFTER_A_STOP = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nT1 M6\nG0 X-40 Y-40 Z0\nG1 X-30 Y-30\n"
     "G1 X-5\nG1 X-30\nG1 Y7.5\nG1 Y-30 A5\nM3 S100\nG0 X50 Y50\nM2\n"

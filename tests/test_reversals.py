@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from prsxy_post import reversals
+from prsxy_post import kernel, reversals
 from prsxy_post.axiscomp import MotorTable
 from prsxy_post.profile import AxisComp
 
@@ -365,7 +365,7 @@ def test_turning_points_are_the_cubics_both_roots_inside_the_step(
 ) -> None:
     """Both ends move up; the cubic turns back and on again inside the step exactly
     when numpy finds two roots of its derivative strictly inside (0, 1)."""
-    s1, s2 = reversals.turning_points(
+    s1, s2 = kernel.turning_points(
         np.array([p0]), np.array([v0]), np.array([p0 + dp]), np.array([v1]), np.array([h])
     )
     roots = np.roots(velocity_poly(p0, v0, p0 + dp, v1, h))
@@ -388,7 +388,7 @@ def test_a_dip_inside_a_step_gets_two_crossings() -> None:
 
     # the end position for a 2 µm dip: the cubic's depth from its two turning points
     def depth(P1: float) -> float:
-        s1, s2 = reversals.turning_points(*map(np.array, ([P0], [V0], [P1], [V1], [h])))
+        s1, s2 = kernel.turning_points(*map(np.array, ([P0], [V0], [P1], [V1], [h])))
         if np.isnan(s1[0]):
             return 0.0
         x = hermite(P0, V0, P1, V1, h, np.array([s1[0], s2[0]]))
@@ -413,7 +413,7 @@ def test_a_dip_inside_a_step_gets_two_crossings() -> None:
         1e-3,
     )
     assert ins.w_k.tolist() == [1, 1] and ins.w_new.tolist() == [-1, 1]
-    s1, s2 = reversals.turning_points(*map(np.array, ([P0], [V0], [P1], [V1], [h])))
+    s1, s2 = kernel.turning_points(*map(np.array, ([P0], [V0], [P1], [V1], [h])))
     roots = 0.01 + np.array([s1[0], s2[0]]) * h
     assert np.all(ins.w_ta <= roots) and np.all(roots <= ins.w_tb)
     assert ins.w_tb[0] <= ins.w_ta[1]
@@ -472,17 +472,15 @@ def test_a_creep_back_is_measured_from_the_farthest_the_motor_went() -> None:
     drift = 0.05e-3
     sg = np.array([-1, -1, 0, 0, 0, 0, 0, 0])
     P = np.array([-1.0, -1.010, -1.017, -1.0170, -1.01699, -1.01694, -1.01690, -1.01680])
-    out, _ = reversals._creeps(sg, P, side=-1, ref=np.nan, drift=drift)
+    out, _ = kernel.creeps(sg, P, side=-1, ref=np.nan, drift=drift)
     # back by more than 0.05 µm from -1.017 first at -1.01694 (0.06 µm back)
     assert out.tolist() == [0, 0, 0, 0, 0, 1, 0, 0]
     # carried to the next chunk: the farthest, not the last row with a direction
-    assert reversals._creeps(sg[:4], P[:4], -1, np.nan, drift)[1] == pytest.approx(
-        -1.017, abs=1e-12
-    )
-    assert np.isnan(reversals._creeps(np.zeros(3, int), P[:3], -1, np.nan, drift)[1])
+    assert kernel.creeps(sg[:4], P[:4], -1, np.nan, drift)[1] == pytest.approx(-1.017, abs=1e-12)
+    assert np.isnan(kernel.creeps(np.zeros(3, int), P[:3], -1, np.nan, drift)[1])
     # a motor creeping on its way is no reversal
     ahead = np.array([-1.0, -1.010, -1.017, -1.0171, -1.0172])
-    assert not reversals._creeps(sg[:5], ahead, -1, np.nan, drift)[0].any()
+    assert not kernel.creeps(sg[:5], ahead, -1, np.nan, drift)[0].any()
 
 
 def test_a_part_behind_its_motor_is_brought_back_at_a_share_of_the_path_speed() -> None:
@@ -721,7 +719,7 @@ def test_following_stretches_at_once_is_following_each(
     # anywhere in the play at the stretch's first command
     low, high = table.lo(P0), table.hi(P0)
     y0 = low + np.array(within[: len(starts)]) * (high - low)
-    y, lo, hi = reversals.follow_stretches(table.flat, y0, P0, V0, P, V, dt, steps, cubic)
+    y, lo, hi = kernel.follow_stretches(table.flat, y0, P0, V0, P, V, dt, steps, cubic)
     u = np.linspace(0.0, 1.0, 2001)[1:]
     for i, s in enumerate(starts):
         yk, pa, va = y0[i], P0[i], V0[i]

@@ -694,7 +694,14 @@ def creeps(
     ``P`` (n,) [mm]; ``side`` and ``ref`` [mm] its way and reach before the chunk):
     each becomes a reversal (the new sign), and the drift is measured afresh from
     there. Also where the motor got farthest its last way by the last row (NaN
-    while it has had no direction). ``reversals._creeps`` tells why.
+    while it has had no direction).
+
+    The farthest, not where it last had a direction: a motor stopping at a block
+    end goes on its way through the rows that stand (speed 0) or creep forward, and
+    pushes its part there; measured from the last row with a direction, a motor
+    then creeping back (a table axis following the other's squareness while it
+    moves alone) was seen to stay 17 µm "ahead" of it and left its part 0.61 µm
+    behind (test_controller_truth's found programs).
     """
     out = np.zeros(len(sg), dtype=int)
     start = 0
