@@ -190,10 +190,8 @@ def _run_in_processes(
     SIGTERM to every one running, whose answers (written whole, or stopped) are
     then collected."""
     # here, not at the top: a single conversion (most commands) never forks
-    import multiprocessing
     from multiprocessing.connection import wait
 
-    ctx = multiprocessing.get_context("fork")
     waiting = list(range(len(outcomes)))[::-1]
     running: dict[int, tuple[Any, Any]] = {}
     try:
@@ -201,7 +199,7 @@ def _run_in_processes(
             while waiting and len(running) < workers:
                 i = waiting.pop()
                 with sinks.signals_held():  # a Ctrl-C finds it started and listed, or neither
-                    recv, send = ctx.Pipe(duplex=False)
+                    recv, send = sinks.pipe(duplex=False)
                     outcomes[i].state = "running"
                     running[i] = (sinks.forked(_job_process, send, outcomes[i].job), recv)
                     send.close()

@@ -173,11 +173,7 @@ def _planned_chunks(
     if not job.parallel or job.program == "-" or not sinks.can_fork():
         yield _planned_here(job, prof, counts, bar)
         return
-    # here, not at the top: a small program (most commands) never forks
-    import multiprocessing
-
-    ctx = multiprocessing.get_context("fork")
-    recv, send = ctx.Pipe(duplex=False)
+    recv, send = sinks.pipe(duplex=False)
     proc = sinks.forked(_planning_child, send, job, prof)
     send.close()
 

@@ -67,15 +67,28 @@ def _exit_on_term(signum: int, frame: Any) -> None:
     raise SystemExit(128 + signum)
 
 
+def _fork_context() -> Any:
+    """multiprocessing's fork context, imported here and not at the top: a single
+    conversion of a small program (most commands) never forks, and importing
+    multiprocessing is start-up it does not need."""
+    import multiprocessing
+
+    return multiprocessing.get_context("fork")
+
+
+def pipe(duplex: bool) -> tuple[Any, Any]:
+    """A pipe between this process and one :func:`forked` from it."""
+    ends: tuple[Any, Any] = _fork_context().Pipe(duplex=duplex)
+    return ends
+
+
 def forked(target: Callable[..., None], *args: Any) -> Any:
     """Start ``target(*args)`` in a forked process that ignores Ctrl-C (its parent
     handles it) and, on SIGTERM, raises SystemExit, so its ``finally`` and
     ``except`` blocks clean up and it ends without a traceback. The process
     starts with the stop signals held (:func:`signals_held`) until its handling
     is set."""
-    import multiprocessing
-
-    ctx = multiprocessing.get_context("fork")
+    ctx = _fork_context()
     sys.stdout.flush()
     sys.stderr.flush()
     with signals_held():
@@ -287,10 +300,7 @@ class WriterProcess:
     chain, so memory stays bounded."""
 
     def __init__(self, writer: Any, parts: Parts) -> None:
-        import multiprocessing
-
-        ctx = multiprocessing.get_context("fork")
-        self.conn, child = ctx.Pipe(duplex=True)
+        self.conn, child = pipe(duplex=True)
         self.proc = forked(_serve, child, WriterHere(writer, parts))
         child.close()
         self.output = parts.output
@@ -369,6 +379,7 @@ class WriterProcess:
 
 
 def can_fork() -> bool:
+    """Whether this platform forks processes (multiprocessing's "fork" start)."""
     import multiprocessing
 
     return "fork" in multiprocessing.get_all_start_methods()
