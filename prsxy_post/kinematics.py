@@ -209,7 +209,7 @@ class Geometry:
     @cached_property
     def fk_arrays(self) -> kfk.FKArrays:
         """The geometry as the kernel's FK arithmetic takes it (made once)."""
-        return kfk.FKArrays(g=self.g, u=self.u, d=self.d, L=self.L)
+        return kfk.FKArrays(g=self.g, u=self.u, b=self.b, L=self.L)
 
     # Precomputed linear algebra of the closed-form IK, once per geometry (an SVD
     # and a pseudo-inverse cost 0.2 ms; the arrays are not changed after
@@ -379,28 +379,9 @@ def table_motors(geo: Geometry, dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndar
     return kik.table_motors(geo.ik_arrays, dx, dy)
 
 
-def _fk_parts(
-    geo: Geometry, P: np.ndarray, xv: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """R (N, 3, 3), R b_k (N, 3, 3), w_k (N, 3, 3), |w_k| (N, 3), the six FK
-    equations (N, 6) at xv = (c, A, B, γ) [mm, rad], and cos B, sin B (N,).
-
-    The sines and cosines (numpy's) and R b_k (numpy's matmul) here; the arithmetic
-    between them in the kernel (:mod:`prsxy_post.kernel.fk`, compiled when built).
-    """
-    a, b, g = xv[:, 3], xv[:, 4], xv[:, 5]
-    cb, sb = np.cos(b), np.sin(b)
-    R = kernel.rotation_cs(np.cos(a), np.sin(a), cb, sb, np.cos(g), np.sin(g))
-    rb = np.matmul(R, geo.b.T).transpose(0, 2, 1)  # R b_k, (N, leg, 3)
-    # the hinges' offsets P_k d_k in the kernel, unless the guides bow
-    off = None if geo.guide_bow is None else geo.hinge_offset(P[:, :3])
-    w, norm_w, f = kernel.fk_equations(geo.fk_arrays, xv[:, :3], rb, P[:, :3], off)
-    return R, rb, w, norm_w, f, cb, sb
-
-
 def _fk_residual(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> np.ndarray:
     """Six FK equations for unknowns xv = (c, A, B, γ) [mm, rad], shape (N, 6)."""
-    return _fk_parts(geo, P, xv)[4]
+    return kernel.fk_residual(geo.fk_arrays, geo.hinge_offset(P[:, :3]), xv)
 
 
 def _fk_system(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -408,22 +389,14 @@ def _fk_system(geo: Geometry, P: np.ndarray, xv: np.ndarray) -> tuple[np.ndarray
 
     With s_k = c + R b_k and R = R_y(B) R_x(A) R_z(γ) (contract), the equations are
     the ball's height over its hinge plane, (s_k − g_k)·u_k, and the strut length,
-    |w_k| − L_k with w_k = s_k − a_k. Their derivatives are closed forms: ∂s_k/∂c = I
-    and, for an angle turning about the unit axis e (machine frame),
-    ∂(R b_k)/∂θ = e × (R b_k), with e = R_y(B) x̂ for A, ŷ for B and R ẑ for γ
-    (each factor of R turns about its own axis, carried by the factors to its left).
+    |w_k| − L_k with w_k = s_k − a_k; their derivatives are closed forms
+    (:func:`prsxy_post.kernel.fk.fk_system`, compiled when built).
 
     Returns
     -------
     f : (N, 6) [mm]; J : (N, 6, 6) ∂f/∂xv [mm/mm, mm/rad]
     """
-    R, rb, w, norm_w, f, cb, sb = _fk_parts(geo, P, xv)
-    # n·(e × R b_k) = e·(R b_k × n): the angle columns are the triple products
-    # with the two normals, u_k for the plane and w_k / |w_k| for the length
-    J, cross_u, cross_w, axes_t = kernel.fk_jacobian_parts(geo.fk_arrays, R, rb, w, norm_w, cb, sb)
-    J[:, :3, 3:] = np.matmul(cross_u, axes_t)
-    J[:, 3:, 3:] = np.matmul(cross_w, axes_t)
-    return f, J
+    return kernel.fk_system(geo.fk_arrays, geo.hinge_offset(P[:, :3]), xv)
 
 
 def _fk_guess(geo: Geometry, P: np.ndarray) -> np.ndarray:
@@ -452,7 +425,9 @@ def forward_platform(
     tol: float = 1e-12,
     max_iter: int = 30,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Solve the six constraint equations for (c, A, B, γ) by batched Newton.
+    """Solve the six constraint equations for (c, A, B, γ) by Newton's method,
+    each row on its own: :func:`prsxy_post.kernel.fk.forward_newton` (compiled
+    when built), steps below ``tol`` · 1e3, residual below 1e-9 mm.
 
     Parameters
     ----------
@@ -466,28 +441,11 @@ def forward_platform(
     """
     P = np.atleast_2d(np.asarray(P, dtype=float))
     xv = _fk_guess(geo, P) if guess is None else np.array(guess, dtype=float)
-    n = len(P)
-    active = np.ones(n, dtype=bool)
-    converged = np.zeros(n, dtype=bool)
-    for _ in range(max_iter):
-        idx = np.nonzero(active)[0]
-        if idx.size == 0:
-            break
-        x = xv[idx]
-        f, J = _fk_system(geo, P[idx], x)
-        with np.errstate(all="ignore"):
-            try:
-                step = np.linalg.solve(J, -f[..., None])[..., 0]
-            except np.linalg.LinAlgError:
-                step = np.full_like(x, np.nan)
-        xv[idx], done, bad = kernel.newton_step(x, step, tol * 1e3)
-        # Stop when the step is at rounding level; one more Newton step after the
-        # step first gets small would not change the result.
-        converged[idx[done]] = True
-        active[idx[done | bad]] = False
-    res = np.max(np.abs(_fk_residual(geo, P, xv)), axis=1)
-    converged &= res < 1e-9
-    return xv, converged
+    # Newton stops when the step is at rounding level (one more step after the
+    # step first gets small would not change the result), then checks the residual
+    return kernel.forward_newton(
+        geo.fk_arrays, geo.hinge_offset(P[:, :3]), xv, tol * 1e3, max_iter, 1e-9
+    )
 
 
 def forward(

@@ -1,12 +1,14 @@
-"""The compiled forward kinematics' arithmetic against its numpy reference: the same
-bits.
+"""The compiled forward kinematics against its numpy reference: the same bits.
 
-The batched Newton of :func:`prsxy_post.kinematics.forward_platform` hands the
-element-wise work between numpy's sines, cosines, matmuls and solve to the kernel
-(``kernel/fk.py`` and its twin ``_fk.pyx``). Recorded inputs (every call the sample
-programs make while converting to G-code, as the golden files are made), generated
-ones (hypothesis: any angles, centres and struts, negative zero, tiny and huge
-values, NaN and infinities), and whole forward solutions with either kernel.
+:func:`prsxy_post.kinematics.forward_platform` runs the FK's whole Newton iteration
+in the kernel (``kernel/fk.py`` and its twin ``_fk.pyx``): the equations and their
+Jacobian, the 6 × 6 solve written out, the steps and the residual check. Recorded
+inputs (every FK the sample programs make while converting to G-code, as the
+golden files are made), generated ones (hypothesis: any angles, centres, struts
+and matrices, negative zero, tiny and huge values, NaN and infinities; poses of
+random machines with motors moved off their IK), and whole forward solutions with
+either kernel. The reference's solve is checked against LAPACK's (numpy's) for
+accuracy.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from prsxy_post import kernel, kinematics, profile
+from prsxy_post import kernel, kinematics, profile, simulate
 from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.kernel import fk
 
@@ -30,6 +32,9 @@ from .conftest import ROOT, VECTORS
 from .kernel_cases import RUNS, compiled, same_bits
 
 PROFILES = [ROOT / "profiles" / "prsxy-shop.toml", VECTORS / "perturbed.toml"]
+#: the kinematics' tolerances: a step below 1e-9 ends Newton, a residual below
+#: 1e-9 mm is a solution
+LIMIT, MAX_ITER, RES_TOL = 1e-9, 30, 1e-9
 
 
 def _geometry(path: Path) -> kinematics.Geometry:
@@ -43,33 +48,19 @@ def _same(got: tuple[np.ndarray, ...], want: tuple[np.ndarray, ...]) -> bool:
     )
 
 
-def _jacobian(out: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
-    """J's filled columns (the rest is the caller's), the cross products, the axes."""
-    J, cu, cw, axes_t = out
-    return J[:, :, :3], cu, cw, axes_t
-
-
-NAMES = ("rotation_cs", "fk_equations", "fk_jacobian_parts", "newton_step")
-
-
 @pytest.fixture(scope="module")
-def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[Any, ...]]]:
-    """The arguments of every call of the FK's kernel functions while the sample
-    programs convert to G-code (:data:`kernel_cases.RUNS`), in this process."""
-    calls: dict[str, list[tuple[Any, ...]]] = {n: [] for n in NAMES}
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> list[tuple[Any, ...]]:
+    """The arguments of every FK Newton iteration while the sample programs convert
+    to G-code (:data:`kernel_cases.RUNS`), in this process."""
+    calls: list[tuple[Any, ...]] = []
     mp = pytest.MonkeyPatch()
+    inner: Callable[..., Any] = kernel.forward_newton
 
-    def spy(name: str) -> Callable[..., Any]:
-        inner = getattr(kernel, name)
+    def call(*args: Any) -> Any:
+        calls.append(tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args))
+        return inner(*args)
 
-        def call(*args: Any) -> Any:
-            calls[name].append(tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args))
-            return inner(*args)
-
-        return call
-
-    for name in NAMES:
-        mp.setattr(kernel, name, spy(name))
+    mp.setattr(kernel, "forward_newton", call)
     tmp = tmp_path_factory.mktemp("fk")
     try:
         for i, (sample, fmt, prof) in enumerate(RUNS):
@@ -81,22 +72,22 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[A
     return calls
 
 
-@pytest.mark.parametrize("name", NAMES)
-def test_sample_programs_fk_is_bit_identical(
-    recorded: dict[str, list[tuple[Any, ...]]], name: str
-) -> None:
+def test_sample_programs_fk_is_bit_identical(recorded: list[tuple[Any, ...]]) -> None:
+    """Each recorded FK: the solution and its flags, and the equations, Jacobian
+    and Newton step at the start, the same with either kernel."""
     _fk = compiled("_fk")
-    calls = recorded[name]
-    assert len(calls) >= 6  # every G-code run's Newton steps
+    assert len(recorded) >= 3  # every G-code run's chunks
     rows = 0
-    for args in calls:
-        want, got = getattr(fk, name)(*args), getattr(_fk, name)(*args)
-        if name == "rotation_cs":
-            want, got = (want,), (got,)
-        if name == "fk_jacobian_parts":
-            want, got = _jacobian(want), _jacobian(got)
-        assert _same(got, want), f"{name}: compiled and reference differ"
-        rows += len(args[1])
+    for m, off, x0, limit, max_iter, res_tol in recorded:
+        assert (limit, max_iter, res_tol) == (LIMIT, MAX_ITER, RES_TOL)
+        want = fk.forward_newton(m, off, x0, limit, max_iter, res_tol)
+        assert _same(_fk.forward_newton(m, off, x0, limit, max_iter, res_tol), want)
+        assert np.all(want[1])  # every written point solved
+        f, J = fk.fk_system(m, off, x0)
+        assert _same(_fk.fk_system(m, off, x0), (f, J))
+        assert _same((_fk.fk_residual(m, off, x0),), (f,))
+        assert _same((_fk.solve6(J, -f),), (fk.solve6(J, -f),))
+        rows += len(x0)
     assert rows > 5_000
 
 
@@ -106,37 +97,95 @@ VALUES = st.one_of(
 )
 
 
-def _rows(n: int, k: int) -> st.SearchStrategy[np.ndarray]:
-    return hnp.arrays(np.float64, (n, k), elements=VALUES)
+def _rows(*shape: int) -> st.SearchStrategy[np.ndarray]:
+    return hnp.arrays(np.float64, shape, elements=VALUES)
 
 
 @settings(max_examples=200, deadline=None)
 @given(st.data())
 def test_generated_fk_arithmetic_is_bit_identical(data: st.DataObject) -> None:
+    """Any values, NaN and infinities too: the equations, the Jacobian, the solve
+    (singular and non-finite matrices included) and whole iterations."""
     _fk = compiled("_fk")
     n = data.draw(st.integers(0, 8))
-    g, u, d = data.draw(_rows(3, 3)), data.draw(_rows(3, 3)), data.draw(_rows(3, 3))
-    m = fk.FKArrays(g=g, u=u, d=d, L=data.draw(_rows(1, 3))[0])
-    angles = data.draw(_rows(6, n))
-    # R b_k as the kinematics has it: a transposed view of a matmul's result
-    rb = data.draw(_rows(n, 9)).reshape(n, 3, 3).transpose(0, 2, 1)
-    c = data.draw(_rows(n, 6))[:, :3]  # a view of x, as forward_platform passes it
-    p3 = data.draw(_rows(n, 5))[:, :3]  # a view of P, as the kinematics passes it
-    # straight guides (P_k d_k in the kernel) or the offsets of bowed ones
-    off = data.draw(st.one_of(st.none(), _rows(n, 9).map(lambda a: a.reshape(n, 3, 3))))
+    m = fk.FKArrays(
+        g=data.draw(_rows(3, 3)),
+        u=data.draw(_rows(3, 3)),
+        b=data.draw(_rows(3, 3)),
+        L=data.draw(_rows(3)),
+    )
+    # x as forward_platform may pass it: a view
+    x = data.draw(_rows(n, 7))[:, 1:]
+    off = data.draw(_rows(n, 3, 3))
     with np.errstate(all="ignore"):  # NaN and infinities: numpy warns, C does not
-        R = fk.rotation_cs(*angles)
-        assert _same((_fk.rotation_cs(*angles),), (R,))
-        want = fk.fk_equations(m, c, rb, p3, off)
-        assert _same(_fk.fk_equations(m, c, rb, p3, off), want)
-        w, norm_w, _ = want
-        args = (m, R, rb, w, norm_w, angles[2], angles[3])
-        assert _same(
-            _jacobian(_fk.fk_jacobian_parts(*args)), _jacobian(fk.fk_jacobian_parts(*args))
+        assert _same(_fk.fk_system(m, off, x), fk.fk_system(m, off, x))
+        assert _same((_fk.fk_residual(m, off, x),), (fk.fk_residual(m, off, x),))
+        J = data.draw(
+            st.one_of(
+                _rows(n, 6, 6),
+                # ties and zeros in the pivot columns, singular matrices
+                hnp.arrays(
+                    np.float64, (n, 6, 6), elements=st.sampled_from([0.0, -0.0, 1.0, -1.0, 2.0])
+                ),
+            )
         )
-        x, step = data.draw(_rows(n, 6)), data.draw(_rows(n, 6))
+        r = data.draw(_rows(n, 6))
+        assert _same((_fk.solve6(J, r),), (fk.solve6(J, r),))
         limit = data.draw(st.sampled_from([1e-9, 0.0, 1e3, np.inf]))
-        assert _same(_fk.newton_step(x, step, limit), fk.newton_step(x, step, limit))
+        it = data.draw(st.integers(0, 4))
+        assert _same(
+            _fk.forward_newton(m, off, x, limit, it, 1e-9),
+            fk.forward_newton(m, off, x, limit, it, 1e-9),
+        )
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 20),
+    st.sampled_from([0.0, 1e-6, 1e-3, 0.1, 5.0]),
+    st.booleans(),
+)
+def test_generated_machines_fk_is_bit_identical(seed: int, n: int, moved: float, bow: bool) -> None:
+    """Random machines (every contract term perturbed, bowed guides or straight),
+    poses anywhere in the work space, motors moved off their IK by up to
+    ``moved`` mm, warm-started at the IK's pose: the same solution and flags."""
+    _fk = compiled("_fk")
+    rng = np.random.default_rng(seed)
+    nominal = profile.loads((VECTORS / "nominal.toml").read_text(), "nominal")
+    truth = simulate.random_machine(nominal, rng, effects=bow)
+    geo = kinematics.Geometry.from_params(
+        truth.kinematics, truth.origin, truth.table, truth.effects
+    )
+    q = np.column_stack(
+        [rng.uniform(-150, 150, (n, 2)), rng.uniform(-60, 40, n), rng.uniform(-30, 30, (n, 2))]
+    )
+    P = kinematics.inverse(geo, q).P + rng.uniform(-moved, moved, (n, 5))
+    x0 = kinematics.platform_guess(kinematics.solve_platform(geo, q), q)
+    off = geo.hinge_offset(P[:, :3])
+    with np.errstate(all="ignore"):
+        want = fk.forward_newton(geo.fk_arrays, off, x0, LIMIT, MAX_ITER, RES_TOL)
+        got = _fk.forward_newton(geo.fk_arrays, off, x0, LIMIT, MAX_ITER, RES_TOL)
+    assert _same(got, want)
+
+
+def test_solve_matches_lapack() -> None:
+    """The written-out elimination solves as LAPACK does (numpy.linalg.solve), to
+    rounding, on well and badly conditioned matrices; a singular one gives a
+    non-finite step, which the Newton iteration treats as a failed row."""
+    rng = np.random.default_rng(3)
+    J = rng.normal(size=(2000, 6, 6))
+    J[:1000] += 6.0 * np.eye(6)  # well conditioned
+    r = rng.normal(size=(2000, 6))
+    s = fk.solve6(J, r)
+    want = np.linalg.solve(J, r[..., None])[..., 0]
+    cond = np.linalg.cond(J)
+    err = np.max(np.abs(s - want), axis=1) / np.max(np.abs(want), axis=1)
+    assert np.all(err <= 1e-14 * cond)
+    assert np.allclose(np.einsum("nij,nj->ni", J, s), r, atol=1e-9 * np.max(cond))
+    singular = J[:2].copy()
+    singular[:, 5] = singular[:, 4]
+    assert not np.all(np.isfinite(fk.solve6(singular, r[:2])))
 
 
 @pytest.mark.parametrize("bow", [False, True], ids=["straight", "bowed"])
@@ -145,7 +194,7 @@ def test_forward_kinematics_is_bit_identical_with_either_kernel(
     path: Path, bow: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Whole forward solutions (Newton from the nominal guess and warm-started, then
-    the residual check) with the compiled arithmetic and with the reference; with
+    the residual check) with the compiled kernel and with the reference; with
     straight guides and with bowed ones (``effects.guide_bow``)."""
     _fk = compiled("_fk")
     geo = _geometry(path)
@@ -163,7 +212,7 @@ def test_forward_kinematics_is_bit_identical_with_either_kernel(
         results[mod] = (
             *kinematics.forward(geo, P),
             *kinematics.forward(geo, P, guess=guess),
-            kinematics._fk_system(geo, P, guess)[1],
+            *kinematics._fk_system(geo, P, guess),
         )
     got, want = results[_fk], results[fk]
     assert np.all(want[1]) and np.all(want[3])  # every pose solved

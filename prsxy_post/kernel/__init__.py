@@ -142,38 +142,28 @@ def rotation_cs(
     return out
 
 
-def fk_equations(
-    m: fk.FKArrays, c: np.ndarray, rb: np.ndarray, p3: np.ndarray, off: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """w, |w| and the six FK equations: :func:`fk.fk_equations`, compiled when
-    :data:`COMPILED`."""
-    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _fk_mod.fk_equations(m, c, rb, p3, off)
+def fk_system(m: fk.FKArrays, off: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The six FK equations (N, 6) and their Jacobian (N, 6, 6) at x (N, 6):
+    :func:`fk.fk_system`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _fk_mod.fk_system(m, off, x)
     return out
 
 
-def fk_jacobian_parts(
-    m: fk.FKArrays,
-    R: np.ndarray,
-    rb: np.ndarray,
-    w: np.ndarray,
-    norm_w: np.ndarray,
-    cb: np.ndarray,
-    sb: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The FK Jacobian's columns of c and the factors of its angle columns:
-    :func:`fk.fk_jacobian_parts`, compiled when :data:`COMPILED`."""
-    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _fk_mod.fk_jacobian_parts(
-        m, R, rb, w, norm_w, cb, sb
+def fk_residual(m: fk.FKArrays, off: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The six FK equations (N, 6) at x (N, 6): :func:`fk.fk_residual`, compiled
+    when :data:`COMPILED`."""
+    out: np.ndarray = _fk_mod.fk_residual(m, off, x)
+    return out
+
+
+def forward_newton(
+    m: fk.FKArrays, off: np.ndarray, x0: np.ndarray, limit: float, max_iter: int, res_tol: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The FK's Newton iteration from x0 (N, 6): the solution and which rows
+    converged, :func:`fk.forward_newton`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _fk_mod.forward_newton(
+        m, off, x0, limit, max_iter, res_tol
     )
-    return out
-
-
-def newton_step(
-    x: np.ndarray, step: np.ndarray, limit: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """x + step, done, bad (N,): one batched Newton update of the FK:
-    :func:`fk.newton_step`, compiled when :data:`COMPILED`."""
-    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _fk_mod.newton_step(x, step, limit)
     return out
 
 

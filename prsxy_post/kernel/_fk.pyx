@@ -1,12 +1,12 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
 # cython: initializedcheck=False
-"""The forward kinematics' per-row arithmetic compiled: the twin of
-:mod:`prsxy_post.kernel.fk`, operation for operation (built with
+"""The forward kinematics' Newton iteration compiled: the twin of
+:mod:`prsxy_post.kernel.fk`, operation for operation, a row at a time (built with
 -ffp-contract=off: no fused multiply-add), so the same bits."""
 
 import numpy as np
 
-from libc.math cimport fabs, isfinite, sqrt
+from libc.math cimport cos, fabs, isfinite, sin, sqrt
 
 from . import fk as _pure
 
@@ -48,142 +48,242 @@ def rotation_cs(ca, sa, cb, sb, cg, sg):
     return R_a
 
 
-def fk_equations(m, c_in, rb_in, p3_in, off_in=None):
-    """w, |w|, f: the six FK equations (``fk.fk_equations``)."""
-    cdef Py_ssize_t n = c_in.shape[0], i, k
-    if (
-        c_in.shape != (n, 3)
-        or rb_in.shape != (n, 3, 3)
-        or p3_in.shape != (n, 3)
-        or (off_in is not None and off_in.shape != (n, 3, 3))
-    ):
-        raise ValueError("c and p3 must be (N, 3), rb and off (N, 3, 3)")
-    cdef const double[:, :] c = c_in
-    cdef const double[:, :, :] rb = rb_in
-    cdef const double[:, :] p3 = p3_in
-    cdef bint straight = off_in is None
-    cdef const double[:, :, :] off = np.broadcast_to(
-        np.zeros(1) if straight else off_in, (n, 3, 3)
-    )
-    cdef const double[:, :] d = np.ascontiguousarray(m.d, dtype=float)
-    cdef const double[:, :] g = np.ascontiguousarray(m.g, dtype=float)
-    cdef const double[:, :] u = np.ascontiguousarray(m.u, dtype=float)
-    cdef const double[:] L = np.ascontiguousarray(m.L, dtype=float)
-    w_a = np.empty((n, 3, 3))
-    nw_a = np.empty((n, 3))
-    f_a = np.empty((n, 6))
-    cdef double[:, :, ::1] w = w_a
-    cdef double[:, ::1] nw = nw_a
-    cdef double[:, ::1] f = f_a
-    cdef double v0, v1, v2, w0, w1, w2
-    with nogil:
-        for i in range(n):
-            for k in range(3):
-                v0 = c[i, 0] + rb[i, k, 0] - g[k, 0]
-                v1 = c[i, 1] + rb[i, k, 1] - g[k, 1]
-                v2 = c[i, 2] + rb[i, k, 2] - g[k, 2]
-                f[i, k] = v0 * u[k, 0] + v1 * u[k, 1] + v2 * u[k, 2]
-                if straight:
-                    w0 = v0 - p3[i, k] * d[k, 0]
-                    w1 = v1 - p3[i, k] * d[k, 1]
-                    w2 = v2 - p3[i, k] * d[k, 2]
-                else:
-                    w0 = v0 - off[i, k, 0]
-                    w1 = v1 - off[i, k, 1]
-                    w2 = v2 - off[i, k, 2]
-                w[i, k, 0] = w0
-                w[i, k, 1] = w1
-                w[i, k, 2] = w2
-                nw[i, k] = sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-                f[i, 3 + k] = nw[i, k] - L[k]
-    return w_a, nw_a, f_a
+cdef struct Geo:
+    double g[9]
+    double u[9]
+    double b[9]
+    double L[3]
 
 
-def fk_jacobian_parts(m, R_in, rb_in, w_in, nw_in, cb_in, sb_in):
-    """J's columns of c, R b_k × u_k, R b_k × w_k/|w_k|, the axes as columns
-    (``fk.fk_jacobian_parts``)."""
-    cdef Py_ssize_t n = R_in.shape[0], i, k, j
-    if (
-        any(a.shape != (n, 3, 3) for a in (R_in, rb_in, w_in))
-        or nw_in.shape != (n, 3)
-        or cb_in.shape != (n,)
-        or sb_in.shape != (n,)
-    ):
-        raise ValueError("R, rb and w must be (N, 3, 3), |w| (N, 3), cos B and sin B (N,)")
-    cdef const double[:, :, :] R = R_in
-    cdef const double[:, :, :] rb = rb_in
-    cdef const double[:, :, :] w = w_in
-    cdef const double[:, :] nw = nw_in
-    cdef const double[:] cb = cb_in
-    cdef const double[:] sb = sb_in
-    cdef const double[:, :] u = np.ascontiguousarray(m.u, dtype=float)
-    axes_a = np.empty((n, 3, 3))
-    J_a = np.empty((n, 6, 6))
-    cu_a = np.empty((n, 3, 3))
-    cw_a = np.empty((n, 3, 3))
-    cdef double[:, :, ::1] axes = axes_a
-    cdef double[:, :, ::1] J = J_a
-    cdef double[:, :, ::1] cu = cu_a
-    cdef double[:, :, ::1] cw = cw_a
-    cdef double e0, e1, e2, r0, r1, r2
-    with nogil:
-        for i in range(n):
-            axes[i, 0, 0] = cb[i]
-            axes[i, 0, 1] = 0.0
-            axes[i, 0, 2] = -sb[i]
-            axes[i, 1, 0] = 0.0
-            axes[i, 1, 1] = 1.0
-            axes[i, 1, 2] = 0.0
-            for j in range(3):
-                axes[i, 2, j] = R[i, j, 2]
-            for k in range(3):
-                e0 = w[i, k, 0] / nw[i, k]
-                e1 = w[i, k, 1] / nw[i, k]
-                e2 = w[i, k, 2] / nw[i, k]
-                for j in range(3):
-                    J[i, k, j] = u[k, j]
-                J[i, 3 + k, 0] = e0
-                J[i, 3 + k, 1] = e1
-                J[i, 3 + k, 2] = e2
-                r0 = rb[i, k, 0]
-                r1 = rb[i, k, 1]
-                r2 = rb[i, k, 2]
-                cu[i, k, 0] = r1 * u[k, 2] - r2 * u[k, 1]
-                cu[i, k, 1] = r2 * u[k, 0] - r0 * u[k, 2]
-                cu[i, k, 2] = r0 * u[k, 1] - r1 * u[k, 0]
-                cw[i, k, 0] = r1 * e2 - r2 * e1
-                cw[i, k, 1] = r2 * e0 - r0 * e2
-                cw[i, k, 2] = r0 * e1 - r1 * e0
-    return J_a, cu_a, cw_a, axes_a.transpose(0, 2, 1)
+cdef Geo _geo(m) except *:
+    """The FKArrays' (3, 3) and (3,) arrays copied into C (``ValueError`` on shapes)."""
+    cdef Geo G
+    cdef Py_ssize_t i, j
+    g = np.asarray(m.g, dtype=float)
+    u = np.asarray(m.u, dtype=float)
+    b = np.asarray(m.b, dtype=float)
+    L = np.asarray(m.L, dtype=float)
+    if g.shape != (3, 3) or u.shape != (3, 3) or b.shape != (3, 3) or L.shape != (3,):
+        raise ValueError("g, u and b must be (3, 3), L (3,)")
+    for i in range(3):
+        G.L[i] = L[i]
+        for j in range(3):
+            G.g[3 * i + j] = g[i, j]
+            G.u[3 * i + j] = u[i, j]
+            G.b[3 * i + j] = b[i, j]
+    return G
 
 
-def newton_step(x_in, step_in, double limit):
-    """x + step, done, bad: one batched Newton update (``fk.newton_step``)."""
-    cdef Py_ssize_t n = x_in.shape[0], k = x_in.shape[1], i, j
-    if step_in.shape != x_in.shape:
-        raise ValueError("x and step must have the same shape (N, k)")
+cdef void _pose(const Geo* m, const double* off, const double* x, double* f, double* J) noexcept nogil:
+    """f (6) at x (6), and J (6 × 6, row-major) unless NULL (``fk._pose``,
+    ``fk.fk_system``)."""
+    cdef double ca = cos(x[3]), sa = sin(x[3])
+    cdef double cb = cos(x[4]), sb = sin(x[4])
+    cdef double cg = cos(x[5]), sg = sin(x[5])
+    cdef double R[9]
+    cdef double r0, r1, r2, v0, v1, v2, w0, w1, w2, nw, e0, e1, e2, u0, u1, u2, c0, c1, c2
+    cdef int k
+    R[0] = cb * cg + sb * sa * sg
+    R[1] = sb * sa * cg - cb * sg
+    R[2] = sb * ca
+    R[3] = ca * sg
+    R[4] = ca * cg
+    R[5] = -sa
+    R[6] = cb * sa * sg - sb * cg
+    R[7] = sb * sg + cb * sa * cg
+    R[8] = cb * ca
+    for k in range(3):
+        r0 = R[0] * m.b[3 * k] + R[1] * m.b[3 * k + 1] + R[2] * m.b[3 * k + 2]
+        r1 = R[3] * m.b[3 * k] + R[4] * m.b[3 * k + 1] + R[5] * m.b[3 * k + 2]
+        r2 = R[6] * m.b[3 * k] + R[7] * m.b[3 * k + 1] + R[8] * m.b[3 * k + 2]
+        u0 = m.u[3 * k]
+        u1 = m.u[3 * k + 1]
+        u2 = m.u[3 * k + 2]
+        v0 = x[0] + r0 - m.g[3 * k]
+        v1 = x[1] + r1 - m.g[3 * k + 1]
+        v2 = x[2] + r2 - m.g[3 * k + 2]
+        f[k] = v0 * u0 + v1 * u1 + v2 * u2
+        w0 = v0 - off[3 * k]
+        w1 = v1 - off[3 * k + 1]
+        w2 = v2 - off[3 * k + 2]
+        nw = sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+        f[3 + k] = nw - m.L[k]
+        if J == NULL:
+            continue
+        e0 = w0 / nw
+        e1 = w1 / nw
+        e2 = w2 / nw
+        J[6 * k] = u0
+        J[6 * k + 1] = u1
+        J[6 * k + 2] = u2
+        J[6 * (3 + k)] = e0
+        J[6 * (3 + k) + 1] = e1
+        J[6 * (3 + k) + 2] = e2
+        c0 = r1 * u2 - r2 * u1
+        c1 = r2 * u0 - r0 * u2
+        c2 = r0 * u1 - r1 * u0
+        J[6 * k + 3] = c0 * cb - c2 * sb
+        J[6 * k + 4] = c1
+        J[6 * k + 5] = c0 * R[2] + c1 * R[5] + c2 * R[8]
+        c0 = r1 * e2 - r2 * e1
+        c1 = r2 * e0 - r0 * e2
+        c2 = r0 * e1 - r1 * e0
+        J[6 * (3 + k) + 3] = c0 * cb - c2 * sb
+        J[6 * (3 + k) + 4] = c1
+        J[6 * (3 + k) + 5] = c0 * R[2] + c1 * R[5] + c2 * R[8]
+
+
+cdef void _solve6(double* A, double* b, double* s) noexcept nogil:
+    """s with A s = b (A 6 × 6 row-major and b overwritten): ``fk.solve6``."""
+    cdef int k, i, j, p
+    cdef double big, a, t, lk
+    for k in range(6):
+        p = k
+        big = fabs(A[6 * k + k])
+        for i in range(k + 1, 6):
+            a = fabs(A[6 * i + k])
+            if a > big:  # never a NaN, nor over a NaN on the diagonal
+                big = a
+                p = i
+        if p != k:
+            for j in range(6):
+                t = A[6 * k + j]
+                A[6 * k + j] = A[6 * p + j]
+                A[6 * p + j] = t
+            t = b[k]
+            b[k] = b[p]
+            b[p] = t
+        for i in range(k + 1, 6):
+            lk = A[6 * i + k] / A[6 * k + k]
+            for j in range(k + 1, 6):
+                A[6 * i + j] = A[6 * i + j] - lk * A[6 * k + j]
+            b[i] = b[i] - lk * b[k]
+    for i in range(5, -1, -1):
+        t = b[i]
+        for j in range(i + 1, 6):
+            t = t - A[6 * i + j] * s[j]
+        s[i] = t / A[6 * i + i]
+
+
+def _rows_of(off_in, x_in):
+    cdef Py_ssize_t n = x_in.shape[0] if x_in.ndim == 2 else -1
+    if x_in.shape != (n, 6) or off_in.shape != (n, 3, 3):
+        raise ValueError("x must be (N, 6), off (N, 3, 3)")
+    return n
+
+
+def fk_residual(m, off_in, x_in):
+    """The six FK equations (N, 6) (``fk.fk_residual``)."""
+    cdef Geo G = _geo(m)
+    cdef Py_ssize_t n = _rows_of(off_in, x_in), i, j
+    cdef const double[:, :, :] off = off_in
     cdef const double[:, :] x = x_in
-    cdef const double[:, :] step = step_in
-    out_a = np.empty((n, k))
-    done_a = np.empty(n, dtype=bool)
-    bad_a = np.empty(n, dtype=bool)
-    cdef double[:, ::1] out = out_a
-    cdef char[::1] done = done_a.view(np.int8)
-    cdef char[::1] bad = bad_a.view(np.int8)
-    cdef double s, big
-    cdef bint finite
+    f_a = np.empty((n, 6))
+    cdef double[:, ::1] f = f_a
+    cdef double o[9]
+    cdef double xr[6]
     with nogil:
         for i in range(n):
-            finite = True
-            for j in range(k):
-                if not isfinite(step[i, j]):
-                    finite = False
-            big = 0.0
-            for j in range(k):
-                s = step[i, j] if finite else 0.0
-                out[i, j] = x[i, j] + s
-                if fabs(s) > big:
-                    big = fabs(s)
-            bad[i] = not finite
-            done[i] = finite and big < limit
-    return out_a, done_a, bad_a
+            for j in range(9):
+                o[j] = off[i, j // 3, j % 3]
+            for j in range(6):
+                xr[j] = x[i, j]
+            _pose(&G, o, xr, &f[i, 0], NULL)
+    return f_a
+
+
+def fk_system(m, off_in, x_in):
+    """f (N, 6) and J (N, 6, 6) (``fk.fk_system``)."""
+    cdef Geo G = _geo(m)
+    cdef Py_ssize_t n = _rows_of(off_in, x_in), i, j
+    cdef const double[:, :, :] off = off_in
+    cdef const double[:, :] x = x_in
+    f_a = np.empty((n, 6))
+    J_a = np.empty((n, 6, 6))
+    cdef double[:, ::1] f = f_a
+    cdef double[:, :, ::1] J = J_a
+    cdef double o[9]
+    cdef double xr[6]
+    with nogil:
+        for i in range(n):
+            for j in range(9):
+                o[j] = off[i, j // 3, j % 3]
+            for j in range(6):
+                xr[j] = x[i, j]
+            _pose(&G, o, xr, &f[i, 0], &J[i, 0, 0])
+    return f_a, J_a
+
+
+def solve6(J_in, r_in):
+    """s (N, 6) with J s = r (``fk.solve6``)."""
+    cdef Py_ssize_t n = J_in.shape[0] if J_in.ndim == 3 else -1, i, j
+    if J_in.shape != (n, 6, 6) or r_in.shape != (n, 6):
+        raise ValueError("J must be (N, 6, 6), r (N, 6)")
+    cdef const double[:, :, :] J = J_in
+    cdef const double[:, :] r = r_in
+    s_a = np.empty((n, 6))
+    cdef double[:, ::1] s = s_a
+    cdef double A[36]
+    cdef double b[6]
+    with nogil:
+        for i in range(n):
+            for j in range(36):
+                A[j] = J[i, j // 6, j % 6]
+            for j in range(6):
+                b[j] = r[i, j]
+            _solve6(A, b, &s[i, 0])
+    return s_a
+
+
+def forward_newton(m, off_in, x0_in, double limit, int max_iter, double res_tol):
+    """x (N, 6), converged (N,): Newton on the six FK equations (``fk.forward_newton``)."""
+    cdef Geo G = _geo(m)
+    cdef Py_ssize_t n = _rows_of(off_in, x0_in), i, j
+    cdef int it
+    cdef const double[:, :, :] off = off_in
+    cdef const double[:, :] x0 = x0_in
+    x_a = np.empty((n, 6))
+    ok_a = np.zeros(n, dtype=bool)
+    cdef double[:, ::1] x = x_a
+    cdef char[::1] ok = ok_a.view(np.int8)
+    cdef double o[9]
+    cdef double xr[6]
+    cdef double f[6]
+    cdef double J[36]
+    cdef double s[6]
+    cdef bint finite, done, conv
+    with nogil:
+        for i in range(n):
+            for j in range(9):
+                o[j] = off[i, j // 3, j % 3]
+            for j in range(6):
+                xr[j] = x0[i, j]
+            conv = False
+            for it in range(max_iter):
+                _pose(&G, o, xr, f, J)
+                for j in range(6):
+                    f[j] = -f[j]
+                _solve6(J, f, s)
+                finite = True
+                done = True
+                for j in range(6):
+                    if not isfinite(s[j]):
+                        finite = False
+                    if not fabs(s[j]) < limit:
+                        done = False
+                if not finite:
+                    for j in range(6):
+                        xr[j] = xr[j] + 0.0  # as the reference's step of 0.0
+                    break
+                for j in range(6):
+                    xr[j] = xr[j] + s[j]
+                if done:
+                    conv = True
+                    break
+            _pose(&G, o, xr, f, NULL)
+            for j in range(6):
+                if not fabs(f[j]) < res_tol:
+                    conv = False
+                x[i, j] = xr[j]
+            ok[i] = conv
+    return x_a, ok_a

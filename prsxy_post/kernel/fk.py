@@ -1,16 +1,22 @@
-"""The forward kinematics' per-row arithmetic: the numpy reference kernel.
+"""The forward kinematics' Newton iteration: the numpy reference kernel.
 
-The batched Newton of :func:`prsxy_post.kinematics.forward_platform` solves the six
-constraint equations for (c, A, B, γ) (machine-model.md, "Forward kinematics"):
+:func:`forward_newton` solves the six constraint equations for x = (c, A, B, γ)
+(machine-model.md, "Forward kinematics"), batched over rows:
 
     f_k = (s_k − g_k)·u_k,   f_{3+k} = |w_k| − L_k,   s_k = c + R b_k,  w_k = s_k − a_k
 
-and their Jacobian (:func:`prsxy_post.kinematics._fk_system`). What the kinematics
-hands to numpy stays there, on both paths: the sines and cosines (numpy's vector
-math), the 3 × 3 products (numpy's matmul, which calls BLAS) and the 6 × 6 solve
-(LAPACK). What is left, the element-wise arithmetic between them, is here, each
-operation in the order the kinematics always did it: ``_fk.pyx`` is the same
-arithmetic in C, so the two agree to the bit (``tests/test_kernel_fk.py``).
+with R = R_y(B) R_x(A) R_z(γ), Newton's step J s = −f (:func:`fk_system`) until every
+component of a step is below ``limit``, then checks the residual. Every operation is
+an element-wise IEEE operation in a fixed order: the 3 × 3 products written out as
+left-to-right sums, and the 6 × 6 solve Gaussian elimination with partial pivoting
+written out (:func:`solve6`), not BLAS and LAPACK (whose kernels, and so whose last
+bits, depend on the processor). ``_fk.pyx`` does the same arithmetic in C, a row at
+a time, so the two agree to the bit (``tests/test_kernel_fk.py``). The sines and
+cosines are numpy's, as in the IK's reference (``kernel/ik.py``): several times
+cheaper than the C library's through :mod:`math`, and the C library's on the
+machines the tests run on (``tests/test_kernel_ik.py::
+test_numpy_trig_is_the_c_librarys_here``; where that fails, they would go through
+:mod:`.libm`).
 """
 
 from __future__ import annotations
@@ -22,16 +28,16 @@ import numpy as np
 
 @dataclass(frozen=True)
 class FKArrays:
-    """A geometry as the FK's arithmetic takes it, made once per geometry.
+    """A geometry as the FK takes it, made once per geometry.
 
-    g, u, d : (3, 3) guide points [mm], hinge axes and guide directions, one leg
-        a row
+    g, u : (3, 3) guide points [mm] and hinge axes, one leg a row
+    b : (3, 3) ball joints in the platform frame [mm], one leg a row
     L : (3,) strut lengths [mm]
     """
 
     g: np.ndarray
     u: np.ndarray
-    d: np.ndarray
+    b: np.ndarray
     L: np.ndarray
 
 
@@ -66,79 +72,124 @@ def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
-def fk_equations(
-    m: FKArrays, c: np.ndarray, rb: np.ndarray, p3: np.ndarray, off: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The six FK equations at the platform centre ``c`` (N, 3), with R b_k ``rb``
-    (N, leg, 3), for the head's motors ``p3`` (N, 3) [mm]: the hinges' offsets
-    a_k − g_k are P_k d_k (straight guides), or ``off`` (N, leg, 3) where given.
-
-    Returns
-    -------
-    w : (N, leg, 3) w_k = s_k − a_k;  norm_w : (N, leg) |w_k|;  f : (N, 6) [mm]
-    """
-    v = c[:, None, :] + rb - m.g[None]
-    plane = dot3(v, m.u)
-    w = v - (p3[:, :, None] * m.d[None] if off is None else off)
+def _pose(m: FKArrays, off: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, ...]:
+    """At x (N, 6): cos B, sin B, R (N, 3, 3), R b_k (N, leg, 3), w_k (N, leg, 3),
+    |w_k| (N, leg), the six equations f (N, 6) [mm]."""
+    ca, sa = np.cos(x[:, 3]), np.sin(x[:, 3])
+    cb, sb = np.cos(x[:, 4]), np.sin(x[:, 4])
+    R = rotation_cs(ca, sa, cb, sb, np.cos(x[:, 5]), np.sin(x[:, 5]))
+    # R b_k: row i of R times b_k, summed left to right
+    b = m.b[None, :, None, :]
+    Rr = R[:, None, :, :]
+    rb = Rr[..., 0] * b[..., 0] + Rr[..., 1] * b[..., 1] + Rr[..., 2] * b[..., 2]
+    v = x[:, None, :3] + rb - m.g[None]
+    plane = dot3(v, m.u[None])
+    w = v - off
     norm_w = np.sqrt(dot3(w, w))
-    # Length residual scaled to mm: |w| − L behaves like a distance.
+    # length residual scaled to mm: |w| − L behaves like a distance
     f = np.concatenate([plane, norm_w - m.L[None]], axis=1)
-    return w, norm_w, f
+    return cb, sb, R, rb, w, norm_w, f
 
 
-def fk_jacobian_parts(
-    m: FKArrays,
-    R: np.ndarray,
-    rb: np.ndarray,
-    w: np.ndarray,
-    norm_w: np.ndarray,
-    cb: np.ndarray,
-    sb: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The Jacobian's columns of c, and the factors of its angle columns.
+def fk_residual(m: FKArrays, off: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The six FK equations (N, 6) [mm] at x = (c, A, B, γ) (N, 6) [mm, rad], for
+    the hinges' offsets a_k − g_k ``off`` (N, leg, 3) [mm]."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        return _pose(m, off, x)[-1]
 
-    The rotation axes of A, B, γ (rows) are (cos B, 0, −sin B), ŷ and R ẑ; the
-    angle columns are the triple products n·(e × R b_k) = e·(R b_k × n) with
+
+def fk_system(m: FKArrays, off: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The six FK equations f (N, 6) [mm] at x (N, 6) and their Jacobian
+    J = ∂f/∂x (N, 6, 6) [mm/mm, mm/rad].
+
+    ∂s_k/∂c = I; an angle turning about the unit axis e (machine frame) moves R b_k
+    by e × R b_k, with e = R_y(B) x̂ = (cos B, 0, −sin B) for A, ŷ for B and R ẑ for
+    γ (each factor of R turns about its own axis, carried by the factors to its
+    left). The angle columns are the triple products n·(e × R b_k) = e·(R b_k × n),
     n = u_k for the plane equations and w_k / |w_k| for the lengths.
+    """
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        cb, sb, R, rb, w, norm_w, f = _pose(m, off, x)
+        unit_w = w / norm_w[..., None]
+        J = np.empty((len(x), 6, 6))
+        J[:, :3, :3] = m.u[None]
+        J[:, 3:, :3] = unit_w
+        for rows, n in ((slice(0, 3), np.broadcast_to(m.u[None], rb.shape)), (slice(3, 6), unit_w)):
+            cr = cross3(rb, n)  # R b_k × n
+            c0, c1, c2 = cr[..., 0], cr[..., 1], cr[..., 2]
+            J[:, rows, 3] = c0 * cb[:, None] - c2 * sb[:, None]
+            J[:, rows, 4] = c1
+            J[:, rows, 5] = c0 * R[:, None, 0, 2] + c1 * R[:, None, 1, 2] + c2 * R[:, None, 2, 2]
+    return f, J
+
+
+def solve6(J: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """s (N, 6) with J s = r for each row: Gaussian elimination with partial
+    pivoting (the first row of the largest magnitude in the column; a NaN is
+    never chosen over a number, and a NaN on the diagonal stays), then back
+    substitution, each sum left to right. A singular J gives a non-finite s.
+    """
+    A = np.array(J, dtype=float)
+    b = np.array(r, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        for k in range(6):
+            col = np.abs(A[:, k:, k])
+            p = k + np.argmax(np.where(np.isnan(col), -1.0, col), axis=1)
+            p[np.isnan(col[:, 0])] = k
+            # rows swapped only where the pivot moves (the same numbers either way)
+            sw = np.flatnonzero(p != k)
+            if sw.size:
+                ps = p[sw]
+                top, top_b = A[sw, k].copy(), b[sw, k].copy()
+                A[sw, k], b[sw, k] = A[sw, ps], b[sw, ps]
+                A[sw, ps], b[sw, ps] = top, top_b
+            lk = A[:, k + 1 :, k] / A[:, k, k][:, None]
+            A[:, k + 1 :, k + 1 :] -= lk[:, :, None] * A[:, k, None, k + 1 :]
+            b[:, k + 1 :] -= lk * b[:, k, None]
+        s = np.empty_like(b)
+        for i in range(5, -1, -1):
+            t = b[:, i]
+            for j in range(i + 1, 6):
+                t = t - A[:, i, j] * s[:, j]
+            s[:, i] = t / A[:, i, i]
+    return s
+
+
+def forward_newton(
+    m: FKArrays, off: np.ndarray, x0: np.ndarray, limit: float, max_iter: int, res_tol: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Newton's iteration on the six FK equations from x0 (N, 6) [mm, rad].
+
+    Each row steps by s = J⁻¹(−f) (:func:`fk_system`, :func:`solve6`) until every
+    component of a step is below ``limit`` (converged: one more step would not
+    change it) or a step is not finite (stays where it is, not converged), at most
+    ``max_iter`` steps. Converged rows must also leave every equation below
+    ``res_tol`` [mm].
+
+    Parameters
+    ----------
+    m : FKArrays
+    off : (N, leg, 3) the hinges' offsets a_k − g_k [mm]
+    x0 : (N, 6) start (c [mm], A, B, γ [rad])
 
     Returns
     -------
-    J : (N, 6, 6) with J[:, :, :3] filled (u_k; w_k / |w_k|)
-    cross_u, cross_w : (N, leg, 3) R b_k × u_k, R b_k × w_k / |w_k|
-    axes_t : (N, 3, 3) the axes as columns: J[:, :3, 3:] = cross_u @ axes_t,
-        J[:, 3:, 3:] = cross_w @ axes_t
+    x : (N, 6); converged : (N,) bool
     """
-    n = len(R)
-    axes = np.empty((n, 3, 3))  # rotation axes of A, B, γ (rows)
-    axes[:, 0, 0] = cb
-    axes[:, 0, 1] = 0.0
-    axes[:, 0, 2] = -sb
-    axes[:, 1] = (0.0, 1.0, 0.0)
-    axes[:, 2] = R[:, :, 2]
-    unit_w = w / norm_w[..., None]
-    J = np.empty((n, 6, 6))
-    J[:, :3, :3] = m.u[None]
-    J[:, 3:, :3] = unit_w
-    return (
-        J,
-        cross3(rb, np.broadcast_to(m.u, rb.shape)),
-        cross3(rb, unit_w),
-        axes.transpose(0, 2, 1),
-    )
-
-
-def newton_step(
-    x: np.ndarray, step: np.ndarray, limit: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One batched Newton update: rows whose step is not finite stay (bad); the
-    others move by it and are done when every component of the step is below
-    ``limit``.
-
-    Returns
-    -------
-    x + step (N, 6);  done, bad : (N,) bool
-    """
-    bad = ~np.all(np.isfinite(step), axis=1)
-    step = np.where(bad[:, None], 0.0, step)
-    done = (np.max(np.abs(step), axis=1) < limit) & ~bad
-    return x + step, done, bad
+    x = np.array(x0, dtype=float)
+    converged = np.zeros(len(x), dtype=bool)
+    active = np.arange(len(x))
+    for _ in range(max_iter):
+        if active.size == 0:
+            break
+        xa = x[active]
+        f, J = fk_system(m, off[active], xa)
+        step = solve6(J, -f)
+        bad = ~np.all(np.isfinite(step), axis=1)
+        step = np.where(bad[:, None], 0.0, step)
+        done = np.all(np.abs(step) < limit, axis=1) & ~bad
+        x[active] = xa + step
+        converged[active[done]] = True
+        active = active[~(done | bad)]
+    converged &= np.all(np.abs(fk_residual(m, off, x)) < res_tol, axis=1)
+    return x, converged
