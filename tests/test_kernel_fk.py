@@ -217,3 +217,19 @@ def test_forward_kinematics_is_bit_identical_with_either_kernel(
     got, want = results[_fk], results[fk]
     assert np.all(want[1]) and np.all(want[3])  # every pose solved
     assert all(same_bits(a, b) for a, b in zip(got, want, strict=True))
+
+
+def test_compiled_fk_refuses_wrong_shapes() -> None:
+    """The twin runs without bounds checks: it checks its inputs' shapes first."""
+    _fk = compiled("_fk")
+    geo = _geometry(PROFILES[0])
+    m = geo.fk_arrays
+    x, off = np.zeros((4, 6)), np.zeros((4, 3, 3))
+    with pytest.raises(ValueError):
+        _fk.forward_newton(m, off[:3], x, LIMIT, MAX_ITER, RES_TOL)
+    with pytest.raises(ValueError):
+        _fk.fk_system(m, off, x[:, :5])
+    with pytest.raises(ValueError):
+        _fk.fk_residual(dataclasses.replace(m, L=np.ones(2)), off, x)
+    with pytest.raises(ValueError):
+        _fk.solve6(np.zeros((4, 6, 5)), x)
