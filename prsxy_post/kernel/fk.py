@@ -129,30 +129,31 @@ def solve6(J: np.ndarray, r: np.ndarray) -> np.ndarray:
     never chosen over a number, and a NaN on the diagonal stays), then back
     substitution, each sum left to right. A singular J gives a non-finite s.
     """
-    A = np.array(J, dtype=float)
-    b = np.array(r, dtype=float)
+    # one contiguous (N,) vector per entry: A[i, j], b[i]
+    A = np.ascontiguousarray(np.moveaxis(np.asarray(J, dtype=float), 0, -1))
+    b = np.ascontiguousarray(np.asarray(r, dtype=float).T)
     with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
         for k in range(6):
-            col = np.abs(A[:, k:, k])
-            p = k + np.argmax(np.where(np.isnan(col), -1.0, col), axis=1)
-            p[np.isnan(col[:, 0])] = k
+            col = np.abs(A[k:, k])
+            p = k + np.argmax(np.where(np.isnan(col), -1.0, col), axis=0)
+            p[np.isnan(col[0])] = k
             # rows swapped only where the pivot moves (the same numbers either way)
             sw = np.flatnonzero(p != k)
             if sw.size:
                 ps = p[sw]
-                top, top_b = A[sw, k].copy(), b[sw, k].copy()
-                A[sw, k], b[sw, k] = A[sw, ps], b[sw, ps]
-                A[sw, ps], b[sw, ps] = top, top_b
-            lk = A[:, k + 1 :, k] / A[:, k, k][:, None]
-            A[:, k + 1 :, k + 1 :] -= lk[:, :, None] * A[:, k, None, k + 1 :]
-            b[:, k + 1 :] -= lk * b[:, k, None]
+                top, top_b = A[k][:, sw], b[k, sw]
+                A[k][:, sw], b[k, sw] = A[ps, :, sw].T, b[ps, sw]
+                A[ps, :, sw], b[ps, sw] = top.T, top_b
+            lk = A[k + 1 :, k] / A[k, k]
+            A[k + 1 :, k + 1 :] -= lk[:, None, :] * A[k, None, k + 1 :]
+            b[k + 1 :] -= lk * b[k]
         s = np.empty_like(b)
         for i in range(5, -1, -1):
-            t = b[:, i]
+            t = b[i]
             for j in range(i + 1, 6):
-                t = t - A[:, i, j] * s[:, j]
-            s[:, i] = t / A[:, i, i]
-    return s
+                t = t - A[i, j] * s[j]
+            s[i] = t / A[i, i]
+    return np.ascontiguousarray(s.T)
 
 
 def forward_newton(
