@@ -1135,7 +1135,7 @@ class Pipeline:
             return
         k = b[alone] + 1
         # in no other window, no window's edge, no machine function there
-        within = ((b[None, :] < k[:, None]) & (k[:, None] < e[None, :])).sum(axis=1)
+        within = _windows_over(b, e, k)
         edge = np.isin(k, e) | np.isin(k, b)
         plain = np.array([f is None for f in pc.fn[k]], dtype=bool)
         ok = (within == 1) & ~edge & plain & ~pc.dwell[k]
@@ -1322,6 +1322,21 @@ class Pipeline:
         travel = checks.travel_problems(self.profile, ready.P_cmd, ready.line)
         self._problem([p.error(self.profile) for p in travel])
         return ready
+
+
+def _windows_over(b: np.ndarray, e: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """How many windows (b_j, e_j) hold each point k strictly inside, b_j < k < e_j:
+    #{b_j < k} − #{b_j < k, e_j ≤ k}, counted by sorting (the windows times the
+    points compared pairwise cost more than the rest of ``_straight_through``).
+    A window with e_j ≤ b_j holds nothing: it is in the second count wherever it
+    is in the first."""
+    proper = e > b
+    below = np.searchsorted(np.sort(b), k, side="left")
+    ended = np.searchsorted(np.sort(e[proper]), k, side="right") + np.searchsorted(
+        np.sort(b[~proper]), k, side="left"
+    )
+    out: np.ndarray = below - ended
+    return out
 
 
 def servo_lead(P: np.ndarray, V: np.ndarray, lag: np.ndarray) -> np.ndarray:
