@@ -205,11 +205,10 @@ class GcodeWriter:
             accel_deg=self.accel_deg,
             all_exact=self.all_exact,
         )
-        #: the texts of points kept from chunks before: X Y Z of the held corner and
-        #: the last held-back point; A B of the tilt written last, the corner, the
-        #: point (indexed as the kernel names them: -3, -2, -1)
-        self.kept_xyz = ["", ""]
-        self.kept_ab = ["", "", ""]
+        #: the points kept from chunks before (as written): the tilt written last,
+        #: the held corner, the last held-back point (rows -3, -2, -1, as the kernel
+        #: names them)
+        self.kept = np.zeros((3, 5))
         self.ended_by: str | None = None
         #: the lines written but not yet handed out: the last line that LinuxCNC may
         #: blend into the next waits for it, which may lower its F or stop it
@@ -254,10 +253,7 @@ class GcodeWriter:
         if len(chunk) == 0:
             return []
         q_arr = round_clean(written_points(self.cgeo, chunk), self.dec)
-        # every point's "X.. Y.. Z.." and " A.. B.." at once (the same text as % per value)
-        xyz = _rows([((" " if i else "") + a, q_arr[:, i], self.dec) for i, a in enumerate("XYZ")])
-        ab = _rows([(" " + a, q_arr[:, 3 + i], self.dec) for i, a in enumerate("AB")])
-        fn = np.array([w is not None for w in chunk.fn], dtype=bool)
+        fn = chunk.fn != None  # noqa: E711 (elementwise: the points with machine functions)
         fn_end = np.zeros(len(chunk), dtype=bool)
         for k in np.flatnonzero(fn).tolist():
             fn_end[k] = any(w in (("M", 2.0), ("M", 30.0)) for w in chunk.fn[k])
@@ -277,90 +273,92 @@ class GcodeWriter:
             lead,
             False,
         )
-        self._lines(ops, xyz, ab, chunk)
+        self._lines(ops, q_arr, chunk)
         return self._hand_out()
 
     def _lines(
         self,
         ops: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-        xyz: list[str],
-        ab: list[str],
+        q_arr: np.ndarray,
         chunk: PointChunk | None,
     ) -> None:
-        """Append the lines of the kernel's ops to ``buf`` (after what they did to the
-        line carried in it), and keep the texts the next chunk may name."""
+        """Append the lines of the kernel's ops (each with its line end) to ``buf``,
+        after what they did to the line carried in it, and keep the points the next
+        chunk may name."""
         code, arg, abi, val = ops
         st = self.state
         patch = int(st.i[_I["patch"]])
         if patch == gwrite.PATCH_F:
             row = self.buf[0]
-            self.buf[0] = f"{row[: row.rindex(' F')]} F{float(st.f[_F['patch_f']]):.3f}"
+            self.buf[0] = f"{row[: row.rindex(' F')]} F{float(st.f[_F['patch_f']]):.3f}\n"
         elif patch == gwrite.PATCH_STOP:
-            self.buf.insert(1, "G4 P0")
+            self.buf.insert(1, "G4 P0\n")
         st.i[_I["patch"]] = gwrite.PATCH_NONE
         base = len(self.buf)
-        # negative indices name the kept texts (gwrite.RUN_SRC, CORNER_SRC, HELD_SRC)
-        xyz_all = [*xyz, *self.kept_xyz]
-        ab_all = [*ab, *self.kept_ab]
-        const = self._const
-        lines = [const[c] for c in code.tolist()]
+        # negative indices name the kept points (gwrite.HELD_SRC, CORNER_SRC, RUN_SRC)
+        q_all = np.concatenate([q_arr, self.kept])
+        lines = self._const[code]
         g1 = np.flatnonzero(code == gwrite.G1)
-        fw = _rows([(" F", val[g1], 3)])
-        for i, a, b, f in zip(g1.tolist(), arg[g1].tolist(), abi[g1].tolist(), fw, strict=True):
-            lines[i] = "G1 " + xyz_all[a] + ab_all[b] + f
+        if g1.size:
+            # each G1's text in one call: X Y Z of its point, A B of the tilt it writes
+            xyz, ab = q_all[arg[g1]], q_all[abi[g1]]
+            cols = [("G1 X", xyz[:, 0]), (" Y", xyz[:, 1]), (" Z", xyz[:, 2])]
+            cols += [(" A", ab[:, 3]), (" B", ab[:, 4])]
+            lines[g1] = format_fixed_rows(
+                [(p, v, self.dec) for p, v in cols] + [(" F", val[g1], 3)]
+            )
         if chunk is not None:
-            self._point_lines(lines, code, arg, xyz, ab, chunk)
-        self.buf += lines
+            self._point_lines(lines, code, arg, q_arr, chunk)
+        self.buf += lines.tolist()
         i_of = st.i
-        # the texts the kernel may name in the next chunk, from the old ones first
-        held = int(i_of[_I["held_src"]])
-        if held != gwrite.NONE:
-            self.kept_ab[0] = ab_all[held]
-            i_of[_I["held_src"]] = gwrite.HELD_SRC
-        for name, slot, kept in (
-            ("corner_src", -2, gwrite.CORNER_SRC),
-            ("run_src", -1, gwrite.RUN_SRC),
+        # the points the kernel may name in the next chunk
+        for name, kept in (
+            ("held_src", gwrite.HELD_SRC),
+            ("corner_src", gwrite.CORNER_SRC),
+            ("run_src", gwrite.RUN_SRC),
         ):
             src = int(i_of[_I[name]])
-            if src >= 0:
-                self.kept_xyz[slot], self.kept_ab[slot] = xyz_all[src], ab_all[src]
+            if src != gwrite.NONE and src != kept:
+                self.kept[kept] = q_all[src]
                 i_of[_I[name]] = kept
         prev = int(i_of[_I["prev_idx"]])
         self.prev_pos = base + prev if prev >= 0 else (0 if prev == gwrite.CARRIED else None)
 
     def _point_lines(
         self,
-        lines: list[str],
+        lines: np.ndarray,
         code: np.ndarray,
         arg: np.ndarray,
-        xyz: list[str],
-        ab: list[str],
+        q_arr: np.ndarray,
         chunk: PointChunk,
     ) -> None:
         """The lines that name a point of the chunk but are no G1: the first
         point's G0, the line comments, machine functions and dwells."""
-        line_no = chunk.line.tolist()
         at = np.flatnonzero(code == gwrite.LINE)
-        for i, k in zip(at.tolist(), arg[at].tolist(), strict=True):
-            lines[i] = f"(line {line_no[k]})"
+        if at.size:
+            line_no = chunk.line[arg[at]].astype(float)
+            lines[at] = format_fixed_rows([("(line ", line_no, 0)], end=")\n")
         for i in np.flatnonzero((code == gwrite.G0) | (code >= gwrite.FN)).tolist():
             k = int(arg[i])
             if code[i] == gwrite.G0:
-                lines[i] = "G0 " + xyz[k] + ab[k]
+                cols = [(" " + a, q_arr[k : k + 1, j], self.dec) for j, a in enumerate("XYZAB")]
+                lines[i] = "G0" + format_fixed_rows(cols)[0]
             elif code[i] == gwrite.DWELL:
-                lines[i] = f"G4 P{float(chunk.dt[k]):.4f}"
+                lines[i] = f"G4 P{float(chunk.dt[k]):.4f}\n"
             else:
                 words = chunk.fn[k]
-                lines[i] = words_text(words)
+                text = words_text(words)
+                lines[i] = text + "\n"
                 if any(w in (("M", 2.0), ("M", 30.0)) for w in words):
-                    self.ended_by = lines[i]
+                    self.ended_by = text
 
     @property
-    def _const(self) -> list[str]:
-        """Each op's text where it names no point (:data:`gwrite.OPS`)."""
-        out = [""] * len(gwrite.OPS)
-        out[gwrite.G93], out[gwrite.G61], out[gwrite.G4P0] = "G93", "G61", "G4 P0"
-        out[gwrite.G64], out[gwrite.G94] = f"G64 P{self.blend:g}", "G94"
+    def _const(self) -> np.ndarray:
+        """Each op's line where it names no point (:data:`gwrite.OPS`), as an object
+        array to take the ops' lines from."""
+        out = np.full(len(gwrite.OPS), "", dtype=object)
+        out[gwrite.G93], out[gwrite.G61], out[gwrite.G4P0] = "G93\n", "G61\n", "G4 P0\n"
+        out[gwrite.G64], out[gwrite.G94] = f"G64 P{self.blend:g}\n", "G94\n"
         return out
 
     def _hand_out(self) -> list[Piece]:
@@ -375,7 +373,7 @@ class GcodeWriter:
         else:
             out, self.buf = self.buf[:keep], self.buf[keep:]
             i_of[_I["prev_idx"]] = gwrite.CARRIED
-        return [(0, "\n".join(out) + "\n")] if out else []
+        return [(0, "".join(out))] if out else []
 
     def _line_accel(self, d_xyz: list[float], d_ab: list[float]) -> float:
         """A line's acceleration limit along its X Y Z path [mm/s²], as LinuxCNC's
@@ -399,20 +397,15 @@ class GcodeWriter:
             np.zeros((0, 5)),
             True,
         )
-        self._lines(ops, [], [], None)
+        self._lines(ops, np.zeros((0, 5)), None)
         lines = self.buf
         self.buf = []
         if self.ended_by is None:
-            lines += ["G94", "M2"]
+            lines += ["G94\n", "M2\n"]
         n, t_total = int(self.state.i[_I["n"]]), float(self.state.f[_F["t_total"]])
-        lines.append(f"(end: {n} points, {t_total:.3f} s)")
-        lines.append("%")
-        return [(0, "\n".join(lines) + "\n")]
-
-
-def _rows(columns: list[tuple[str, np.ndarray, int]]) -> list[str]:
-    """The kernel's fixed-point rows, without their line ends."""
-    return [r[:-1] for r in format_fixed_rows(columns)]
+        lines.append(f"(end: {n} points, {t_total:.3f} s)\n")
+        lines.append("%\n")
+        return [(0, "".join(lines))]
 
 
 _I = {n: j for j, n in enumerate(gwrite.I_NAMES)}
