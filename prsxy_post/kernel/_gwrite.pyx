@@ -21,7 +21,7 @@ F_NAMES = (
 I_NAMES = (
     "all_exact", "n", "has_line", "last_line", "run_n", "run_src", "corner_src",
     "held_src", "exact", "after_settle", "prev_idx", "prev_turns", "prev_blend",
-    "has_prev", "patch",
+    "has_prev", "patch", "keep",
 )
 
 cdef enum:
@@ -42,7 +42,7 @@ cdef struct W:
     double len_sum, dt_sum, corner_t, prev_len, prev_t, patch_f
     long long all_exact, n, has_line, last_line, run_n, run_src, corner_src
     long long held_src, exact, after_settle, prev_idx, prev_turns, prev_blend
-    long long has_prev, patch
+    long long has_prev, patch, keep
     double last_q[5]
     double last_ab[2]
     double held_ab[2]
@@ -577,7 +577,7 @@ cdef void _load(W* w, double[::1] f, long long[::1] iv, st):
     w.all_exact, w.n, w.has_line, w.last_line, w.run_n = iv[0], iv[1], iv[2], iv[3], iv[4]
     w.run_src, w.corner_src, w.held_src, w.exact = iv[5], iv[6], iv[7], iv[8]
     w.after_settle, w.prev_idx, w.prev_turns, w.prev_blend = iv[9], iv[10], iv[11], iv[12]
-    w.has_prev, w.patch = iv[13], iv[14]
+    w.has_prev, w.patch, w.keep = iv[13], iv[14], iv[15]
     a = st.last_q
     for i in range(5):
         w.last_q[i] = a[i]
@@ -605,7 +605,7 @@ cdef void _store(W* w, double[::1] f, long long[::1] iv, st):
     iv[0], iv[1], iv[2], iv[3], iv[4] = w.all_exact, w.n, w.has_line, w.last_line, w.run_n
     iv[5], iv[6], iv[7], iv[8] = w.run_src, w.corner_src, w.held_src, w.exact
     iv[9], iv[10], iv[11], iv[12] = w.after_settle, w.prev_idx, w.prev_turns, w.prev_blend
-    iv[13], iv[14] = w.has_prev, w.patch
+    iv[13], iv[14], iv[15] = w.has_prev, w.patch, w.keep
     a = st.last_q
     for i in range(5):
         a[i] = w.last_q[i]
@@ -670,6 +670,19 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
         if end:
             _resolve_corner(&w, NULL, 0.0)
             _write_held(&w)
+        # the line that waits for the next chunk (_Run.hand_out)
+        if w.has_prev and w.prev_blend and w.prev_idx != NONE:
+            w.keep = w.prev_idx
+            w.prev_idx = CARRIED
+        else:
+            w.keep = NONE
+            w.prev_idx = NONE
+        if w.run_src >= 0:
+            w.run_src = -1
+        if w.corner_src >= 0:
+            w.corner_src = -2
+        if w.held_src != NONE:
+            w.held_src = -3
     _store(&w, f, iv, st)
     m = w.m
     return code[:m].copy(), arg[:m].copy(), ab[:m].copy(), val[:m].copy()

@@ -51,7 +51,7 @@ F_NAMES = (
 I_NAMES = (
     "all_exact", "n", "has_line", "last_line", "run_n", "run_src", "corner_src",
     "held_src", "exact", "after_settle", "prev_idx", "prev_turns", "prev_blend",
-    "has_prev", "patch",
+    "has_prev", "patch", "keep",
 )  # fmt: skip
 #: what the chunk did to the line carried from the chunk before (``patch``): its F
 #: lowered to ``patch_f``, or a G4 P0 after it
@@ -113,6 +113,7 @@ def new_state(
         ("corner_src", NONE),
         ("held_src", NONE),
         ("prev_idx", NONE),
+        ("keep", NONE),
     ):
         i[I_NAMES.index(name)] = iv
     z5 = np.zeros(5)
@@ -213,6 +214,7 @@ class _Run:
     prev_blend: int
     has_prev: int
     patch: int
+    keep: int
 
     def __init__(self, st: GState) -> None:
         for name, v in zip(F_NAMES, st.f.tolist(), strict=True):
@@ -411,6 +413,23 @@ class _Run:
             self.after_settle = 1
             self.prev_idx, self.prev_blend = NONE, 0
 
+    def hand_out(self) -> None:
+        """The call's end: the last line waits for the next chunk (``keep``: its op,
+        or CARRIED, the line carried in) where LinuxCNC may blend it into the next
+        line, whose F or stop that line decides; else ``keep`` is NONE."""
+        if self.has_prev and self.prev_blend and self.prev_idx != NONE:
+            self.keep, self.prev_idx = self.prev_idx, CARRIED
+        else:
+            self.keep, self.prev_idx = NONE, NONE
+        # the points the next chunk may name: the state holds them (held_ab,
+        # corner_q, the run's last row), the writer keeps their text
+        if self.run_src >= 0:
+            self.run_src = RUN_SRC
+        if self.corner_src >= 0:
+            self.corner_src = CORNER_SRC
+        if self.held_src != NONE:
+            self.held_src = HELD_SRC
+
     def point(self, k: int, *row: object) -> None:
         """The writer's loop body for the point k (``row``: its values)."""
         qk, dtk, line, spd, bend, fn, fn_end, dwell, lead, plan = row
@@ -477,8 +496,11 @@ def gcode_ops(
     the plan's speed at each point; block_end, fn (a machine function there),
     fn_end (it ends the program), dwell (N,) bool; lead (N, 5) what the real-axis
     tables add to each motor [mm]. ``end``: after the points, the program's end
-    (the held corner and points written). ``st`` is updated in place (the carried
-    line's patch in ``i[patch]``, ``f[patch_f]``; the writer clears it).
+    (the held corner and points written). ``st`` is updated in place: the line
+    carried in from the chunk before (the writer's first, it waits for this
+    chunk) lowered or stopped in ``i[patch]``, ``f[patch_f]`` (the writer clears
+    it); the line that waits for the next chunk in ``i[keep]`` (its op, or
+    CARRIED still, or NONE: none waits).
 
     Returns
     -------
@@ -515,6 +537,7 @@ def gcode_ops(
     if end:
         r.resolve_corner(None, 0.0)
         r.write_held()
+    r.hand_out()
     reserve(st, len(r.run) - int(st.i[I_NAMES.index("run_n")]))
     r.store(st)
     return (

@@ -213,8 +213,8 @@ class GcodeWriter:
         #: the lines written but not yet handed out: the last line that LinuxCNC may
         #: blend into the next waits for it, which may lower its F or stop it
         self.buf: list[str] = []
-        #: where in ``buf`` the last G1 stands (None: handed out, or none written)
-        self.prev_pos: int | None = None
+        #: where in ``buf`` the line that waits for the next chunk stands (None: none)
+        self.keep: int | None = None
 
     def begin(self) -> list[Piece]:
         ck = (
@@ -311,18 +311,14 @@ class GcodeWriter:
             self._point_lines(lines, code, arg, q_arr, chunk)
         self.buf += lines.tolist()
         i_of = st.i
-        # the points the kernel may name in the next chunk
-        for name, kept in (
-            ("held_src", gwrite.HELD_SRC),
-            ("corner_src", gwrite.CORNER_SRC),
-            ("run_src", gwrite.RUN_SRC),
-        ):
-            src = int(i_of[_I[name]])
-            if src != gwrite.NONE and src != kept:
-                self.kept[kept] = q_all[src]
-                i_of[_I[name]] = kept
-        prev = int(i_of[_I["prev_idx"]])
-        self.prev_pos = base + prev if prev >= 0 else (0 if prev == gwrite.CARRIED else None)
+        # the points the kernel may name in the next chunk (as the state holds them)
+        self.kept[gwrite.HELD_SRC, 3:] = st.held_ab
+        self.kept[gwrite.CORNER_SRC] = st.corner_q
+        run_n = int(i_of[_I["run_n"]])
+        if run_n:
+            self.kept[gwrite.RUN_SRC] = st.run_q[run_n - 1]
+        keep = int(i_of[_I["keep"]])
+        self.keep = base + keep if keep >= 0 else (0 if keep == gwrite.CARRIED else None)
 
     def _point_lines(
         self,
@@ -364,15 +360,11 @@ class GcodeWriter:
     def _hand_out(self) -> list[Piece]:
         """The lines written so far, but for a last G1 that LinuxCNC may blend into
         the next line, whose F or stop that line decides (it and the lines after it
-        stay in ``buf``, the kernel's ``prev_idx`` names it as carried)."""
-        i_of = self.state.i
-        keep = self.prev_pos
-        if keep is None or not (i_of[_I["has_prev"]] and i_of[_I["prev_blend"]]):
+        stay in ``buf``: the kernel's ``keep``)."""
+        if self.keep is None:
             out, self.buf = self.buf, []
-            i_of[_I["prev_idx"]] = gwrite.NONE
         else:
-            out, self.buf = self.buf[:keep], self.buf[keep:]
-            i_of[_I["prev_idx"]] = gwrite.CARRIED
+            out, self.buf = self.buf[: self.keep], self.buf[self.keep :]
         return [(0, "".join(out))] if out else []
 
     def _line_accel(self, d_xyz: list[float], d_ab: list[float]) -> float:
