@@ -2,10 +2,10 @@
 
 Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``, ``fk.py``,
 the planner's ``timelaw.py`` and ``path.py``, the play model's ``play.py``, the
-crossing windows' ``windows.py``:
-:data:`TWINS`) and a compiled twin in Cython (``_ik.pyx``, ...; built when the package
-is installed) that gives the same bits. This module picks one set for the whole
-program, once, at import:
+crossing windows' ``windows.py``, the corrected G-code writer's decisions'
+``gwrite.py``, in plain Python floats: :data:`TWINS`) and a compiled twin in Cython
+(``_ik.pyx``, ...; built when the package is installed) that gives the same bits.
+This module picks one set for the whole program, once, at import:
 
 - ``PRSXY_KERNEL=pure`` in the environment: the numpy reference (CI's pure leg);
 - otherwise the compiled kernels when the extension imports, else the reference.

@@ -4,8 +4,10 @@
 point by point, the same operations in the same order (see that module), so the
 two agree to the bit. Python's ``min`` and ``max`` as Python's (the first of
 equals), ``math.fsum`` exactly rounded as CPython sums it, ``math.hypot`` and
-``math.dist`` as CPython 3.11's ``vector_norm`` (not libm's ``hypot``). Compiled
-with -O2 -ffp-contract=off (no fused multiply-adds)."""
+``math.dist`` as CPython 3.11's ``vector_norm`` (not libm's ``hypot``; a later
+CPython that computes it otherwise fails tests/test_kernel_gwrite.py's
+``test_fsum_and_hypot_are_cpythons``). Compiled with -O2 -ffp-contract=off (no
+fused multiply-adds)."""
 
 import numpy as np
 

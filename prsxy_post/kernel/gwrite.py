@@ -164,8 +164,9 @@ def corner_cut(
 def line_accel(d_xyz: list[float], d_ab: list[float], accel: float, accel_deg: float) -> float:
     """A line's acceleration limit along its X Y Z path [mm/s²], as LinuxCNC's canon
     sets it: the path length over the longest time an axis takes at its own limit
-    (``getStraightAcceleration``, emccanon.cc:612-721); ``accel`` [mm/s²] and
-    ``accel_deg`` [deg/s²] the axes' limits."""
+    (``getStraightAcceleration``, emccanon.cc:612-721), up to √3 times the axes'
+    limit on a diagonal; ``accel`` [mm/s²] and ``accel_deg`` [deg/s²] the axes'
+    limits."""
     dtot = math.hypot(*d_xyz)
     tmax = max(
         max(abs(d) for d in d_xyz) / accel,
@@ -253,11 +254,17 @@ class _Run:
     # the decisions, in the order and arithmetic the writer made them
 
     def piece(self, qk: list[float], dtk: float) -> tuple[float, float]:
+        """The piece from the last held-back (or written) point to qk: (length, rate)."""
         prev = self.run[-1] if self.run else self.last_q
         step = math.dist(prev, qk)
         return step, (step / dtk if dtk > 0.0 else 0.0)
 
     def dips(self, qk: list[float], dtk: float, lead: list[float]) -> bool:
+        """Would the piece to qk speed up again after the held-back pieces slowed
+        down, or move what the real-axis tables add to a motor by more than ``tol``
+        (a motor crossing its play, whose timing its points carry)? A chord is timed
+        at its fastest piece (``chord_time``): it may hold a rise and a fall of the
+        planned speed, not a dip."""
         if not self.run:
             return False
         _, rate = self.piece(qk, dtk)
@@ -266,6 +273,8 @@ class _Run:
         return dip or moved > self.tol
 
     def hold(self, k: int, qk: list[float], dtk: float, lead: list[float], plan: float) -> None:
+        """Hold back the point k, qk (its piece's time dtk, the tables' lead, the
+        plan's mean speed over the piece)."""
         prev = self.run[-1] if self.run else self.last_q
         step, rate = self.piece(qk, dtk)
         if not self.run:
@@ -276,6 +285,8 @@ class _Run:
         self.dt_sum += dtk
         xyz_rate = math.dist(prev[:3], qk[:3]) / dtk if dtk > 0.0 else 0.0
         if plan > 0.0 and xyz_rate > 0.5 * plan:
+            # a piece that moves X Y Z about as planned (not a turn of A or B alone,
+            # planned in degrees per second): how far it stretches the planned path
             self.plan_peak = max(self.plan_peak, plan)
             self.stretch = min(self.stretch, xyz_rate / plan)
         if rate >= self.peak:
@@ -286,16 +297,33 @@ class _Run:
         self.run_src = k
 
     def chord_time(self) -> float:
+        """The time of the chord through the held-back points: its length at the rate
+        of its fastest piece, and its X Y Z no faster than the plan's fastest speed
+        times the least stretch of its pieces. LinuxCNC speeds up and slows down
+        along a line by its own acceleration limit (the profile's, as the plan's); a
+        line between stops timed at its mean speed cruised at the mean, below the
+        plan's speed. The pieces' lengths and times are summed left to right."""
         length, total = self.len_sum, self.dt_sum
         if len(self.run) == 1 or self.peak <= 0.0 or length <= 0.0:
             return total
         t = min(total, length / self.peak)
         if self.plan_peak > 0.0 and self.run and self.n > 0:
+            # LinuxCNC runs the chord's X Y Z at one speed; where a piece stretches
+            # the planned path less than another, the tool ran faster than planned
+            # there: no faster than the plan's fastest speed on the piece that
+            # stretches least
             xyz = math.dist(self.last_q[:3], self.run[-1][:3])
             t = max(t, xyz / (self.plan_peak * self.stretch))
         return t
 
     def within(self, qk: list[float]) -> bool:
+        """Would the chord from the last written point to qk pass the held-back points,
+        within ``tol`` in X Y Z and ``tilt_chord`` in A and B?
+
+        Each held point p is taken at its nearest place along the chord a + t d,
+        t = clip((p − a)·d / d·d, 0, 1) (A and B read as mm at 1 mm per degree), and
+        its offset |p − (a + t d)| judged. The dot products exactly rounded
+        (``math.fsum``), so that the twin can give the same bits."""
         if not self.run or self.n == 0:
             return True
         a = self.last_q
@@ -315,18 +343,23 @@ class _Run:
         return True
 
     def write_held(self) -> None:
+        """Write the last held-back point (it becomes the new chord start)."""
         if not self.run:
             return
         qh, src = self.run[-1], self.run_src
         t = self.chord_time()
         self.run = []
-        self.g1(src, qh, t, False)
+        self.g1(src, qh, t, False)  # only points in motion are held back
 
     def at_rest(self) -> None:
+        """A machine function or a dwell follows: LinuxCNC blends nothing across it."""
         if self.has_prev:
             self.prev_blend = 0
 
     def resolve_corner(self, q_next: list[float] | None, dt_next: float) -> None:
+        """Write the held block end, in G61 where LinuxCNC's parabolic blend would
+        cut the corner there by more than ``blend`` in X Y Z or ``tilt_cut`` in A
+        and B (the writer's module docstring)."""
         if self.corner_src == NONE:
             return
         qc, t, src = self.corner_q, self.corner_t, self.corner_src
@@ -338,6 +371,9 @@ class _Run:
         self.g1(src, qc, t, exact)
 
     def tilt_held(self, src: int, q: list[float]) -> int:
+        """The point whose A and B the line to ``q`` (the point ``src``) writes: the
+        tilt last written while q's is within ``tilt_hold`` of it (a line that moves
+        A or B by any amount LinuxCNC blends parabolically), else q's own."""
         if self.held_src != NONE:
             ab = self.held_ab
             if abs(q[3] - ab[0]) <= self.tilt_hold and abs(q[4] - ab[1]) <= self.tilt_hold:
@@ -347,6 +383,12 @@ class _Run:
         return src
 
     def g1(self, src: int, q: list[float], t: float, exact: bool) -> None:
+        """Write the line to ``q`` (the point ``src``) taking ``t`` seconds, in G61
+        where ``exact`` (a line ending where the motion stands, or at a corner
+        LinuxCNC's blend would cut too far), else in G64 P. Where LinuxCNC would
+        blend the line before into this one parabolically, that line is slowed down
+        or stopped (``blend_within_f``), and an exact line goes in G64 P, its G4 P0
+        stopping it all the same (the writer's module docstring, rule 4)."""
         exact = exact or bool(self.all_exact)
         ab_src = self.tilt_held(src, q)
         turns = self.held_ab != self.last_ab
@@ -359,10 +401,16 @@ class _Run:
             self.accel_deg,
         )
         self.last_ab = ab_now
+        # LinuxCNC blends the line before into this one parabolically where it was
+        # written in G64 P (no G4 P0 after it) and one of the two turns A or B
         if self.has_prev and self.prev_blend and (self.prev_turns or turns):
+            # this line's own acceleration is halved where its end is a parabolic
+            # join too: it turns A or B, or it is exact (G64 P and G4 P0, below)
             a_n = accel / 2.0 if turns or exact else accel
             self.blend_within_f(length, t, a_n)
         parabolic = self.has_prev and self.prev_blend and (self.prev_turns or turns)
+        # the first line after a dwell runs in G61 too: LinuxCNC refills its queue
+        # while it runs
         mode = (exact or bool(self.after_settle)) and not (
             exact and parabolic and not self.all_exact
         )
@@ -375,11 +423,26 @@ class _Run:
         self.prev_accel = accel
         self.after_settle = int(exact)
         if exact:
+            # LinuxCNC ends a line mid servo cycle and starts the next in the same
+            # cycle; a dwell waits for the motion to end
             self.emit(G4P0)
         self.last_q = q
         self.n += 1
 
     def blend_within_f(self, length_n: float, t_n: float, a_n: float) -> None:
+        """Keep LinuxCNC's parabolic blend of the previous line into the next one
+        (``length_n`` [mm] in ``t_n`` [s], speeding up at ``a_n`` [mm/s²])
+        within the larger of the two lines' written speeds: lower the previous
+        line's F, or, where that costs more time than a stop or where either line
+        is shorter than the blend, stop it there (G4 P0 after it, the next line in
+        G61).
+
+        The previous line slows down at a_t = a / 2 from v0 (at most its own
+        speed v_p), the next speeds up towards v_n at a_n (a / 2 or a) from a
+        servo cycle T earlier: their sum peaks at v0 + v_n (1 − a_t / a_n) + a_t T
+        (the writer's module docstring, rule 4). So v_p ≤ max(v_p, v_n) − v_n
+        (1 − a_t / a_n) − a_t T.
+        """
         idx, length, t = self.prev_idx, self.prev_len, self.prev_t
         if idx == NONE or t <= 0.0 or length <= 0.0:
             return
@@ -387,6 +450,10 @@ class _Run:
         v_n = length_n / t_n if t_n > 0.0 else 0.0
         a_t = self.prev_accel / 2.0
         v = max(v_p, v_n)
+        # a blend lasts v / a_t, and the line after it stops or blends again: a line
+        # shorter than twice that overlaps the blends, and the next leads by up to a
+        # cycle more (1.026 x F on a helix of 9 ms chords at F600 with one cycle's
+        # lead; 1.025 x F on pocket.ngc's helix of 8.5 ms chords at F400, blend 6.7 ms)
         lead = SERVO_PERIOD_S * (2.0 if min(t, t_n) < 2.0 * v / a_t else 1.0)
         if a_n >= a_t:
             v_safe = v - v_n * (1.0 - a_t / a_n) - a_t * lead
@@ -394,6 +461,9 @@ class _Run:
             v_safe = v - a_n * lead
         if v_safe >= v_p:
             return
+        # the time a stop costs: the previous line slows down at a_t, the next
+        # (G61) speeds up from rest at a and stops at its end, the one after it
+        # speeds up again
         stop_s = v / (2.0 * a_t) + 3.0 * v / (2.0 * 2.0 * a_t)
         slow_s = t * (v_p / v_safe - 1.0) if v_safe > 0.0 else math.inf
         if slow_s <= stop_s:

@@ -87,7 +87,7 @@ moving by more than the chord tolerance), whose points carry its timing. Measure
 ``bench/linuxcnc_speed.py``, docs/measurements.md.
 
 (4) A parabolic blend runs over F where written naively, and the writer keeps it
-within F (``_blend_within_f``). Where LinuxCNC blends a line ``tc`` parabolically
+within F (``blend_within_f``). Where LinuxCNC blends a line ``tc`` parabolically
 into ``nexttc`` (a join where either moves A or B, both in G64 P), it starts the
 blend once ``tc`` is on its final deceleration below its blend speed (``tcIsBlending``,
 tc.c:529-540) and from then on updates both each cycle (``tpHandleRegularCycle``,
@@ -127,6 +127,12 @@ line into which the line before is blended parabolically is written in G64 P wit
 its G4 P0, so that it too speeds up at half its limit. With ``g61_every_line = 1``
 every line runs in G61, which LinuxCNC never blends: F holds, and the program takes
 longer (``bench/linuxcnc_truth.py --g61-everywhere``).
+
+These rules decide, point by point, which points become lines, each line's time and
+F, its mode and the G4 P0 after it: the kernel makes those decisions
+(:mod:`prsxy_post.kernel.gwrite`, its functions named here: ``within``,
+``chord_time``, ``dips``, ``tilt_held``, ``resolve_corner``, ``g1``,
+``blend_within_f``; compiled in ``_gwrite.pyx``), and this writer makes the text.
 """
 
 from __future__ import annotations
