@@ -628,6 +628,8 @@ cdef void _store(W* w, double[::1] f, long long[::1] iv, st):
 def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint end):
     """:func:`prsxy_post.kernel.gwrite.gcode_ops`, compiled (``st.run_q`` must
     hold ``len(q)`` more points: :func:`gwrite.reserve`)."""
+    if np.ndim(q) != 2 or np.shape(q)[1] != 5 or np.ndim(lead) != 2 or np.shape(lead)[1] != 5:
+        raise ValueError(f"q and lead need (N, 5), got {np.shape(q)} and {np.shape(lead)}")
     cdef const double[:, ::1] qv = np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 5)
     cdef const double[::1] dtv = np.ascontiguousarray(dt, dtype=np.float64)
     cdef const long long[::1] lv = np.ascontiguousarray(line, dtype=np.int64)
