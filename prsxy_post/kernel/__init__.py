@@ -2,10 +2,10 @@
 
 Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``, ``fk.py``,
 the planner's ``timelaw.py`` and ``path.py``, the play model's ``play.py``, the
-crossing windows' ``windows.py``:
-:data:`TWINS`) and a compiled twin in Cython (``_ik.pyx``, ...; built when the package
-is installed) that gives the same bits. This module picks one set for the whole
-program, once, at import:
+crossing windows' ``windows.py``, the corrected G-code writer's decisions'
+``gwrite.py``, in plain Python floats: :data:`TWINS`) and a compiled twin in Cython
+(``_ik.pyx``, ...; built when the package is installed) that gives the same bits.
+This module picks one set for the whole program, once, at import:
 
 - ``PRSXY_KERNEL=pure`` in the environment: the numpy reference (CI's pure leg);
 - otherwise the compiled kernels when the extension imports, else the reference.
@@ -33,7 +33,7 @@ from types import ModuleType
 
 import numpy as np
 
-from . import fk, ik, legendre, path, play, timelaw
+from . import fk, gwrite, ik, legendre, path, play, timelaw
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
@@ -50,6 +50,7 @@ TWINS = {
     "path": "_path",
     "play": "_play",
     "windows": "_windows",
+    "gwrite": "_gwrite",
 }
 
 
@@ -504,5 +505,31 @@ def crossing_windows(
     compiled when :data:`COMPILED`."""
     out: tuple[np.ndarray, np.ndarray] = _crossing_windows(
         t0, t1, t_root, accel, rb, ra, tol, longest, chords, min_w
+    )
+    return out
+
+
+# the corrected G-code writer's decisions (kernel/gwrite.py and its twin _gwrite.pyx)
+_gcode_ops = _RUN["gwrite"].gcode_ops
+
+
+def gcode_ops(
+    st: gwrite.GState,
+    q: np.ndarray,
+    dt: np.ndarray,
+    line: np.ndarray,
+    speed: np.ndarray,
+    block_end: np.ndarray,
+    fn: np.ndarray,
+    fn_end: np.ndarray,
+    dwell: np.ndarray,
+    lead: np.ndarray,
+    end: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A chunk's points decided, one op per output line (``st`` updated in place):
+    :func:`gwrite.gcode_ops`, compiled when :data:`COMPILED`."""
+    gwrite.reserve(st, len(q))
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _gcode_ops(
+        st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, end
     )
     return out

@@ -87,7 +87,7 @@ moving by more than the chord tolerance), whose points carry its timing. Measure
 ``bench/linuxcnc_speed.py``, docs/measurements.md.
 
 (4) A parabolic blend runs over F where written naively, and the writer keeps it
-within F (``_blend_within_f``). Where LinuxCNC blends a line ``tc`` parabolically
+within F (``blend_within_f``). Where LinuxCNC blends a line ``tc`` parabolically
 into ``nexttc`` (a join where either moves A or B, both in G64 P), it starts the
 blend once ``tc`` is on its final deceleration below its blend speed (``tcIsBlending``,
 tc.c:529-540) and from then on updates both each cycle (``tpHandleRegularCycle``,
@@ -127,21 +127,27 @@ line into which the line before is blended parabolically is written in G64 P wit
 its G4 P0, so that it too speeds up at half its limit. With ``g61_every_line = 1``
 every line runs in G61, which LinuxCNC never blends: F holds, and the program takes
 longer (``bench/linuxcnc_truth.py --g61-everywhere``).
+
+These rules decide, point by point, which points become lines, each line's time and
+F, its mode and the G4 P0 after it: the kernel makes those decisions
+(:mod:`prsxy_post.kernel.gwrite`, its functions named here: ``within``,
+``chord_time``, ``dips``, ``tilt_held``, ``resolve_corner``, ``g1``,
+``blend_within_f``; compiled in ``_gwrite.pyx``), and this writer makes the text.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .. import kinematics
+from .. import kernel, kinematics
 from ..interpolate.geometry import CORNER_SHARE
+from ..kernel import gwrite
 from ..profile.output import OUTPUT_SETTINGS
 from .base import Dialect, Piece, Provenance, header, words_text
-from .cartesian import feed_words, written_points
+from .cartesian import written_points
 from .numbers import format_fixed_rows, round_clean
 
 if TYPE_CHECKING:
@@ -155,41 +161,11 @@ TILT_HOLD_SHARE = 0.6
 TILT_CHORD_SHARE = 0.2
 #: LinuxCNC's servo period [s] (its sample configurations' SERVO_PERIOD, as the
 #: tests' harness runs it): a parabolic blend's next line leads by one
-SERVO_PERIOD_S = 1e-3
+SERVO_PERIOD_S = gwrite.SERVO_PERIOD_S
 #: how much a chord's pieces may slow down and speed up again (a share of their rate)
-DIP_SHARE = 1e-3
-
-
-def corner_cut(
-    q_in: Sequence[float],
-    q_at: Sequence[float],
-    q_out: Sequence[float],
-    t_in: float,
-    t_out: float,
-    accel: float,
-) -> tuple[float, float]:
-    """How far LinuxCNC's parabolic blend of the lines q_in → q_at → q_out may cut
-    the corner at q_at: (X Y Z [mm], A B [deg]).
-
-    Poses (5,) [mm, mm, mm, deg, deg], line times t_in, t_out [s], the path
-    acceleration ``accel`` [mm/s²]. The blend lasts t = min(t_in, t_out, 2 v / a)
-    at the larger X Y Z speed v, and the pose's direction per mm of X Y Z turns
-    from d_in to d_out over it: |d_out − d_in| v t / 8 (lines that turn A or B
-    alone: |r_out − r_in| t / 8). An upper bound with the written speeds (module
-    docstring). Plain floats: the writer calls it at every block end in motion.
-    """
-    r_in = [(b - a) / t_in for a, b in zip(q_in, q_at, strict=True)]
-    r_out = [(b - a) / t_out for a, b in zip(q_at, q_out, strict=True)]
-    v_in, v_out = math.hypot(*r_in[:3]), math.hypot(*r_out[:3])
-    v = max(v_in, v_out)
-    t_blend = min(t_in, t_out, 2.0 * v / accel) if v > 0.0 else min(t_in, t_out)
-    if v_in > 0.0 and v_out > 0.0:
-        # the turn of the path's direction (per mm of X Y Z travel): a change of
-        # speed along the same line cuts nothing
-        turn = [(o / v_out - i / v_in) * v for i, o in zip(r_in, r_out, strict=True)]
-    else:
-        turn = [o - i for i, o in zip(r_in, r_out, strict=True)]
-    return math.hypot(*turn[:3]) * t_blend / 8.0, math.hypot(*turn[3:]) * t_blend / 8.0
+DIP_SHARE = gwrite.DIP_SHARE
+#: how far LinuxCNC's parabolic blend may cut a corner (the kernel's reference)
+corner_cut = gwrite.corner_cut
 
 
 class GcodeWriter:
@@ -197,79 +173,54 @@ class GcodeWriter:
 
     With a tolerance > 0, points are dropped while the chord from the last written
     point stays within it of every point in between (XYZ in mm, A/B read as mm at
-    1 mm per degree); a block's end point and every stop are always written.
+    1 mm per degree); a block's end point and every stop are always written. The
+    decisions are the kernel's (:func:`prsxy_post.kernel.gcode_ops`); this class
+    makes the lines' text from them.
     """
 
     def __init__(self, profile: Profile, settings: Mapping[str, Any], prov: Provenance) -> None:
         self.profile = profile
         self.prov = prov
-        self.tol = float(settings["tolerance_mm"])
         self.dec = int(settings["decimals"])
         #: every line in G61: LinuxCNC 2.9's parabolic blends run over F (module docstring)
         self.all_exact = bool(settings["g61_every_line"])
         self.cgeo = kinematics.controller_geometry(profile)
         self.blend = CORNER_SHARE * profile.interpolation.path_tolerance_mm
-        #: how far LinuxCNC may cut a tilt corner [deg] (module docstring)
-        self.tilt_cut = CORNER_SHARE * profile.interpolation.path_tolerance_arcsec / 3600.0
+        tol_deg = profile.interpolation.path_tolerance_arcsec / 3600.0
         #: how far a written A or B may stay from the compensated one [deg]: within
         #: it the last written tilt is written again (module docstring)
-        self.tilt_hold = TILT_HOLD_SHARE * profile.interpolation.path_tolerance_arcsec / 3600.0
+        tilt_hold = TILT_HOLD_SHARE * tol_deg
         if any(np.any(a.forward != a.reverse) for a in profile.axis_comp):
             # a held tilt moves the motors by a step and back, and a motor with play
             # that turns back crosses it (0.34 um off the path on the found programs
             # of test_controller_truth): the tilt is held only on machines without
-            self.tilt_hold = 0.0
-        #: how far a chord's A and B may stray from the points it replaces [deg]
-        self.tilt_chord = TILT_CHORD_SHARE * profile.interpolation.path_tolerance_arcsec / 3600.0
-        #: the A and B written last [deg], and their words
-        self.held: tuple[list[float], str] | None = None
-        #: the path acceleration LinuxCNC's axes are set to [mm/s²]
+            tilt_hold = 0.0
+        #: the path acceleration LinuxCNC's axes are set to [mm/s²], A's and B's [deg/s²]
         self.accel = profile.limits.max_accel_mm_s2
-        #: A's and B's acceleration limit [deg/s²]
         self.accel_deg = profile.limits.max_accel_deg_s2
-        #: the A and B written last [deg], and the acceleration limit LinuxCNC gives
-        #: the last line written [mm/s²] (``_line_accel``)
-        self.last_ab_deg: list[float] = [0.0, 0.0]
-        self.prev_accel = self.accel
-        self.n = 0
-        self.t_total = 0.0
-        self.last_line: int | None = None
-        self.last_q: list[float] | None = None
-        #: points held back: (point, its dt, its words)
-        self.run: list[tuple[list[float], float, str]] = []
-        #: the held-back pieces' rates [mm/s, a degree as a mm]: (each piece's length,
-        #: its dt), the fastest, and the slowest since the fastest
-        self.pieces: list[tuple[float, float]] = []
-        self.peak = 0.0
-        self.trough = 0.0
-        #: the plan's fastest speed over the held-back pieces that move X Y Z [mm/s],
-        #: their least stretch (X Y Z rate per planned speed), the last point's speed
-        self.plan_peak = 0.0
-        self.stretch = math.inf
-        self.last_speed = 0.0
-        #: what the tables added to the motors at the run's first point [mm]
-        self.lead0: list[float] = [0.0] * 5
+        #: the kernel's state between chunks: the tolerance, how far LinuxCNC may cut
+        #: a corner (``blend`` [mm], its tilt [deg]), the tilt hold, how far a chord's
+        #: A and B may stray from the points it replaces [deg] (module docstring)
+        self.state = gwrite.new_state(
+            tol=float(settings["tolerance_mm"]),
+            blend=self.blend,
+            tilt_cut=CORNER_SHARE * tol_deg,
+            tilt_hold=tilt_hold,
+            tilt_chord=TILT_CHORD_SHARE * tol_deg,
+            accel=self.accel,
+            accel_deg=self.accel_deg,
+            all_exact=self.all_exact,
+        )
+        #: the points kept from chunks before (as written): the tilt written last,
+        #: the held corner, the last held-back point (rows -3, -2, -1, as the kernel
+        #: names them)
+        self.kept = np.zeros((3, 5))
         self.ended_by: str | None = None
-        #: G61 (exact path) is active, for a line ending where the motion stands
-        self.exact = False
-        #: the last line written was followed by G4 P0, or none was written yet
-        #: (LinuxCNC's queue starts empty): the next runs in G61 too
-        self.after_settle = True
-        #: the lines written but not yet handed out: the last line that turns A or B
-        #: in G64 P waits for the next, which may lower its F (``_blend_safe``)
+        #: the lines written but not yet handed out: the last line that LinuxCNC may
+        #: blend into the next waits for it, which may lower its F or stop it
         self.buf: list[str] = []
-        #: the last G1 written: its index in ``buf`` (None once handed out), its X Y Z
-        #: length [mm] and time [s], whether it turned A or B, and whether LinuxCNC
-        #: may blend it into the next line (written in G64 P, no G4 P0 after it)
-        self.prev: tuple[int | None, float, float, bool, bool] | None = None
-        #: the A and B words of the last G1 written
-        self.last_ab = ""
-        #: a block's last point in motion, held until the next point shows how
-        #: far LinuxCNC would cut the corner there: (point, its segment's time,
-        #: its words)
-        self.corner: tuple[list[float], float, str] | None = None
-        #: the F words of this chunk's segment times (cartesian.feed_words)
-        self.f_words: dict[float, str] = {}
+        #: where in ``buf`` the line that waits for the next chunk stands (None: none)
+        self.keep: int | None = None
 
     def begin(self) -> list[Piece]:
         ck = (
@@ -302,348 +253,161 @@ class GcodeWriter:
         ]
         lines.append("G21 G90 G17 G40 G49 G94")
         lines.append("G61" if self.all_exact else f"G64 P{self.blend:g}")
-        self.exact = self.all_exact
         return [(0, "\n".join(lines) + "\n")]
 
     def feed(self, chunk: PointChunk) -> list[Piece]:
         if len(chunk) == 0:
             return []
         q_arr = round_clean(written_points(self.cgeo, chunk), self.dec)
-        # every point's "X.. Y.. Z.. A.. B.." at once (the same text as % per value),
-        # and the per-point values as Python lists: a loop over numpy scalars took
-        # most of the writer's time
-        rows = format_fixed_rows(
-            [((" " if i else "") + a, q_arr[:, i], self.dec) for i, a in enumerate("XYZAB")]
-        )
-        texts = [row[:-1] for row in rows]  # without the newline
-        self.f_words = feed_words(chunk.dt)
-        q = q_arr.tolist()
-        dt = chunk.dt.tolist()
-        line_no = chunk.line.tolist()
-        speed = chunk.speed.tolist()
-        block_end = chunk.block_end.tolist()
-        dwell = chunk.dwell.tolist()
+        fn = chunk.fn != None  # noqa: E711 (elementwise: the points with machine functions)
+        fn_end = np.zeros(len(chunk), dtype=bool)
+        for k in np.flatnonzero(fn).tolist():
+            fn_end[k] = any(w in (("M", 2.0), ("M", 30.0)) for w in chunk.fn[k])
         # what the real-axis tables add to each motor [mm]: it ramps where a motor
         # crosses its play
-        lead = (chunk.P_cmd - chunk.P_ideal).tolist()
-        lines = self.buf
-        # the plan's mean speed over each piece (it ramps linearly over a period)
-        plan = [0.5 * (a + b) for a, b in zip([self.last_speed, *speed[:-1]], speed, strict=True)]
-        self.last_speed = speed[-1]
-        for k in range(len(q)):
-            qk = q[k]
-            if self.n == 0:
-                lines.append("G0 " + texts[k])
-                lines.append("G93")
-                self.last_ab = texts[k][texts[k].index(" A") :]
-                self.last_ab_deg = qk[3:5]
-                self.last_q = qk
-                self.n = 1
-                continue
-            dtk = dt[k]
-            if self.corner is not None:
-                self._resolve_corner(lines, qk, dtk)
-            if line_no[k] != self.last_line:
-                lines.append(f"(line {line_no[k]})")
-                self.last_line = line_no[k]
-            self.t_total += dtk
-            words = chunk.fn[k]
-            if words is not None:
-                self._write_held(lines)
-                self._at_rest()
-                if any(w in (("M", 2.0), ("M", 30.0)) for w in words):
-                    lines.append("G94")  # back to units per minute before the end
-                    self.ended_by = words_text(words)
-                lines.append(words_text(words))
-                continue
-            if dwell[k] and qk == self.last_q:  # the pose stands: a dwell
-                self._write_held(lines)
-                self._at_rest()
-                lines.append(f"G4 P{dtk:.4f}")
-                continue
-            if self.tol > 0 and not block_end[k] and speed[k] > 0:
-                # a point that may be dropped: keep it back while the chord from the
-                # last written point to it passes all the held-back ones
-                if not self._within(qk) or self._dips(qk, dtk, lead[k]):
-                    self._write_held(lines)
-                self._hold(qk, dtk, texts[k], lead[k], plan[k])
-                continue
-            if self.run and (not self._within(qk) or self._dips(qk, dtk, lead[k])):
-                self._write_held(lines)
-            self._hold(qk, dtk, texts[k], lead[k], plan[k])
-            t = self._chord_time()
-            self.run = []
-            if speed[k] > 0.0 and block_end[k]:
-                self.corner = (qk, t, texts[k])  # written once the next point is known
-                continue
-            self._g1(lines, qk, texts[k], t, exact=speed[k] == 0.0)
+        lead = chunk.P_cmd - chunk.P_ideal
+        ops = kernel.gcode_ops(
+            self.state,
+            q_arr,
+            chunk.dt,
+            chunk.line,
+            chunk.speed,
+            chunk.block_end,
+            fn,
+            fn_end,
+            chunk.dwell,
+            lead,
+            False,
+        )
+        self._lines(ops, q_arr, chunk)
         return self._hand_out()
+
+    def _lines(
+        self,
+        ops: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        q_arr: np.ndarray,
+        chunk: PointChunk | None,
+    ) -> None:
+        """Append the lines of the kernel's ops (each with its line end) to ``buf``,
+        after what they did to the line carried in it, and keep the points the next
+        chunk may name."""
+        code, arg, abi, val = ops
+        st = self.state
+        patch = int(st.i[_I["patch"]])
+        if patch == gwrite.PATCH_F:
+            row = self.buf[0]
+            self.buf[0] = f"{row[: row.rindex(' F')]} F{float(st.f[_F['patch_f']]):.3f}\n"
+        elif patch == gwrite.PATCH_STOP:
+            self.buf.insert(1, "G4 P0\n")
+        st.i[_I["patch"]] = gwrite.PATCH_NONE
+        base = len(self.buf)
+        # negative indices name the kept points (gwrite.HELD_SRC, CORNER_SRC, RUN_SRC)
+        q_all = np.concatenate([q_arr, self.kept])
+        lines = self._const[code]
+        g1 = np.flatnonzero(code == gwrite.G1)
+        if g1.size:
+            # each G1's text in one call: X Y Z of its point, A B of the tilt it writes
+            xyz, ab = q_all[arg[g1]], q_all[abi[g1]]
+            cols = [("G1 X", xyz[:, 0]), (" Y", xyz[:, 1]), (" Z", xyz[:, 2])]
+            cols += [(" A", ab[:, 3]), (" B", ab[:, 4])]
+            lines[g1] = format_fixed_rows(
+                [(p, v, self.dec) for p, v in cols] + [(" F", val[g1], 3)]
+            )
+        if chunk is not None:
+            self._point_lines(lines, code, arg, q_arr, chunk)
+        self.buf += lines.tolist()
+        i_of = st.i
+        # the points the kernel may name in the next chunk (as the state holds them)
+        self.kept[gwrite.HELD_SRC, 3:] = st.held_ab
+        self.kept[gwrite.CORNER_SRC] = st.corner_q
+        run_n = int(i_of[_I["run_n"]])
+        if run_n:
+            self.kept[gwrite.RUN_SRC] = st.run_q[run_n - 1]
+        keep = int(i_of[_I["keep"]])
+        self.keep = base + keep if keep >= 0 else (0 if keep == gwrite.CARRIED else None)
+
+    def _point_lines(
+        self,
+        lines: np.ndarray,
+        code: np.ndarray,
+        arg: np.ndarray,
+        q_arr: np.ndarray,
+        chunk: PointChunk,
+    ) -> None:
+        """The lines that name a point of the chunk but are no G1: the first
+        point's G0, the line comments, machine functions and dwells."""
+        at = np.flatnonzero(code == gwrite.LINE)
+        if at.size:
+            line_no = chunk.line[arg[at]].astype(float)
+            lines[at] = format_fixed_rows([("(line ", line_no, 0)], end=")\n")
+        for i in np.flatnonzero((code == gwrite.G0) | (code >= gwrite.FN)).tolist():
+            k = int(arg[i])
+            if code[i] == gwrite.G0:
+                cols = [(" " + a, q_arr[k : k + 1, j], self.dec) for j, a in enumerate("XYZAB")]
+                lines[i] = "G0" + format_fixed_rows(cols)[0]
+            elif code[i] == gwrite.DWELL:
+                lines[i] = f"G4 P{float(chunk.dt[k]):.4f}\n"
+            else:
+                words = chunk.fn[k]
+                text = words_text(words)
+                lines[i] = text + "\n"
+                if any(w in (("M", 2.0), ("M", 30.0)) for w in words):
+                    self.ended_by = text
+
+    @property
+    def _const(self) -> np.ndarray:
+        """Each op's line where it names no point (:data:`gwrite.OPS`), as an object
+        array to take the ops' lines from."""
+        out = np.full(len(gwrite.OPS), "", dtype=object)
+        out[gwrite.G93], out[gwrite.G61], out[gwrite.G4P0] = "G93\n", "G61\n", "G4 P0\n"
+        out[gwrite.G64], out[gwrite.G94] = f"G64 P{self.blend:g}\n", "G94\n"
+        return out
 
     def _hand_out(self) -> list[Piece]:
         """The lines written so far, but for a last G1 that LinuxCNC may blend into
         the next line, whose F or stop that line decides (it and the lines after it
-        stay in ``buf``)."""
-        keep = self.prev[0] if self.prev is not None and self.prev[0] is not None else None
-        if keep is None or not (self.prev is not None and self.prev[4]):
+        stay in ``buf``: the kernel's ``keep``)."""
+        if self.keep is None:
             out, self.buf = self.buf, []
-            if self.prev is not None:
-                self.prev = (None, *self.prev[1:])
         else:
-            out, self.buf = self.buf[:keep], self.buf[keep:]
-            self.prev = (0, *self.prev[1:])
-        return [(0, "\n".join(out) + "\n")] if out else []
-
-    def _at_rest(self) -> None:
-        """A machine function or a dwell follows: LinuxCNC blends nothing across it."""
-        if self.prev is not None:
-            self.prev = (*self.prev[:4], False)
-
-    def _resolve_corner(self, lines: list[str], q_next: list[float] | None, dt_next: float) -> None:
-        """Write the held block end, in G61 where LinuxCNC's parabolic blend would
-        cut the corner there by more than ``blend`` in X Y Z or ``tilt_cut`` in A
-        and B (module docstring)."""
-        if self.corner is None:
-            return
-        qc, t, text = self.corner
-        self.corner = None
-        exact = False
-        if q_next is not None and self.last_q is not None and dt_next > 0.0:
-            mm, deg = corner_cut(self.last_q, qc, q_next, t, dt_next, self.accel)
-            exact = mm > self.blend or deg > self.tilt_cut
-        self._g1(lines, qc, text, t, exact=exact)
-
-    def _write_held(self, lines: list[str]) -> None:
-        """Write the last held-back point (it becomes the new chord start)."""
-        if not self.run:
-            return
-        qh, _, text = self.run[-1]
-        t = self._chord_time()
-        self.run = []
-        self._g1(lines, qh, text, t, exact=False)  # only points in motion are held back
-
-    def _g1(self, lines: list[str], q: list[float], text: str, t: float, *, exact: bool) -> None:
-        """Write the line to ``q`` (its words ``text``) taking ``t`` seconds, in G61
-        where ``exact`` (a line ending where the motion stands, or at a corner
-        LinuxCNC's blend would cut too far), else in G64 P. Where LinuxCNC would
-        blend the line before into this one parabolically, that line is slowed down
-        or stopped (``_blend_within_f``), and an exact line goes in G64 P, its G4 P0
-        stopping it all the same (module docstring, rule 4)."""
-        exact = exact or self.all_exact
-        words = self._tilt_held(q, text)
-        ab = words[words.index(" A") :]
-        turns = ab != self.last_ab
-        self.last_ab = ab
-        assert self.last_q is not None and self.held is not None
-        length = math.dist(self.last_q[:3], q[:3])
-        # the written A and B (held or not) and this line's acceleration limit
-        ab_now = list(self.held[0])
-        accel = self._line_accel(
-            [b - a for a, b in zip(self.last_q[:3], q[:3], strict=True)],
-            [b - a for a, b in zip(self.last_ab_deg, ab_now, strict=True)],
-        )
-        self.last_ab_deg = ab_now
-        prev = self.prev
-        # LinuxCNC blends the line before into this one parabolically where it was
-        # written in G64 P (no G4 P0 after it) and one of the two turns A or B
-        if prev is not None and prev[4] and (prev[3] or turns):
-            # this line's own acceleration is halved where its end is a parabolic
-            # join too: it turns A or B, or it is exact (G64 P and G4 P0, below)
-            a_n = accel / 2.0 if turns or exact else accel
-            self._blend_within_f(lines, prev, length, t, a_n)
-        parabolic = self.prev is not None and self.prev[4] and (self.prev[3] or turns)
-        # the first line after a dwell runs in G61 too: LinuxCNC refills its queue
-        # while it runs (module docstring)
-        mode = (exact or self.after_settle) and not (exact and parabolic and not self.all_exact)
-        if mode != self.exact:
-            lines.append("G61" if mode else f"G64 P{self.blend:g}")
-            self.exact = mode
-        lines.append(f"G1 {words} {self.f_words.get(t) or f'F{60.0 / t:.3f}'}")
-        self.prev = (len(lines) - 1, length, t, turns, not mode and not exact)
-        self.prev_accel = accel
-        self.after_settle = exact
-        if exact:
-            # LinuxCNC ends a line mid servo cycle and starts the next in the same
-            # cycle; a dwell waits for the motion to end (module docstring)
-            lines.append("G4 P0")
-        self.last_q = q
-        self.n += 1
-
-    def _blend_within_f(
-        self,
-        lines: list[str],
-        prev: tuple[int | None, float, float, bool, bool],
-        length_n: float,
-        t_n: float,
-        a_n: float,
-    ) -> None:
-        """Keep LinuxCNC's parabolic blend of the previous line into the next one
-        (``length_n`` [mm] in ``t_n`` [s], speeding up at ``a_n`` [mm/s²])
-        within the larger of the two lines' written speeds: lower the previous
-        line's F, or, where that costs more time than a stop or where either line
-        is shorter than the blend, stop it there (G4 P0 after it, the next line in
-        G61).
-
-        The previous line slows down at a_t = a / 2 from v0 (at most its own
-        speed v_p), the next speeds up towards v_n at a_n (a / 2 or a) from a
-        servo cycle T earlier: their sum peaks at v0 + v_n (1 − a_t / a_n) + a_t T
-        (module docstring, rule 4). So v_p ≤ max(v_p, v_n) − v_n (1 − a_t / a_n)
-        − a_t T.
-        """
-        idx, length, t, _, _ = prev
-        if idx is None or t <= 0.0 or length <= 0.0:
-            return
-        v_p = length / t
-        v_n = length_n / t_n if t_n > 0.0 else 0.0
-        a_t = self.prev_accel / 2.0
-        v = max(v_p, v_n)
-        # a blend lasts v / a_t, and the line after it stops or blends again: a line
-        # shorter than twice that overlaps the blends, and the next leads by up to a
-        # cycle more (1.026 x F on a helix of 9 ms chords at F600 with one cycle's
-        # lead; 1.025 x F on pocket.ngc's helix of 8.5 ms chords at F400, blend 6.7 ms)
-        lead = SERVO_PERIOD_S * (2.0 if min(t, t_n) < 2.0 * v / a_t else 1.0)
-        if a_n >= a_t:
-            v_safe = v - v_n * (1.0 - a_t / a_n) - a_t * lead
-        else:
-            v_safe = v - a_n * lead
-        if v_safe >= v_p:
-            return
-        # the time a stop costs: the previous line slows down at a_t, the next
-        # (G61) speeds up from rest at a and stops at its end, the one after it
-        # speeds up again
-        stop_s = v / (2.0 * a_t) + 3.0 * v / (2.0 * 2.0 * a_t)
-        slow_s = t * (v_p / v_safe - 1.0) if v_safe > 0.0 else math.inf
-        if slow_s <= stop_s:
-            row = lines[idx]
-            lines[idx] = f"{row[: row.rindex(' F')]} F{60.0 * v_safe / length:.3f}"
-        else:
-            lines.insert(idx + 1, "G4 P0")
-            self.after_settle = True
-            self.prev = (None, length, t, prev[3], False)
+            out, self.buf = self.buf[: self.keep], self.buf[self.keep :]
+        return [(0, "".join(out))] if out else []
 
     def _line_accel(self, d_xyz: list[float], d_ab: list[float]) -> float:
         """A line's acceleration limit along its X Y Z path [mm/s²], as LinuxCNC's
-        canon sets it: the path length over the longest time an axis takes at its
-        own limit (``getStraightAcceleration``, emccanon.cc:612-721), up to √3 times the
-        axes' limit on a diagonal (random 11's five-axis.ngc: 2175 mm/s², its blend
-        1.0031 x F at the 2000 mm/s² bound, measured)."""
-        dtot = math.hypot(*d_xyz)
-        tmax = max(
-            max(abs(d) for d in d_xyz) / self.accel,
-            max(abs(d) for d in d_ab) / self.accel_deg,
-        )
-        return dtot / tmax if dtot > 0.0 and tmax > 0.0 else self.accel
-
-    def _piece(self, qk: list[float], dtk: float) -> tuple[float, float]:
-        """The piece from the last held-back (or written) point to qk: (length, rate)."""
-        prev = self.run[-1][0] if self.run else self.last_q
-        assert prev is not None
-        step = math.dist(prev, qk)
-        return step, (step / dtk if dtk > 0.0 else 0.0)
-
-    def _dips(self, qk: list[float], dtk: float, lead: list[float]) -> bool:
-        """Would the piece to qk speed up again after the held-back pieces slowed
-        down, or move what the real-axis tables add to a motor by more than ``tol``
-        (a motor crossing its play, whose timing its points carry)? A chord is timed
-        at its fastest piece (``_chord_time``): it may hold a rise and a fall of the
-        planned speed, not a dip."""
-        if not self.run:
-            return False
-        _, rate = self._piece(qk, dtk)
-        moved = max(abs(a - b) for a, b in zip(lead, self.lead0, strict=True))
-        dip = self.trough < self.peak * (1.0 - DIP_SHARE) and rate > self.trough * (1.0 + DIP_SHARE)
-        return dip or moved > self.tol
-
-    def _hold(self, qk: list[float], dtk: float, text: str, lead: list[float], plan: float) -> None:
-        """Hold back the point qk (its piece's time dtk, its words, the tables' lead,
-        the plan's mean speed over the piece)."""
-        prev = self.run[-1][0] if self.run else self.last_q
-        assert prev is not None
-        step, rate = self._piece(qk, dtk)
-        if not self.run:
-            self.pieces, self.peak, self.trough, self.lead0 = [], 0.0, 0.0, lead
-            self.plan_peak, self.stretch = 0.0, math.inf
-        self.pieces.append((step, dtk))
-        xyz_rate = math.dist(prev[:3], qk[:3]) / dtk if dtk > 0.0 else 0.0
-        if plan > 0.0 and xyz_rate > 0.5 * plan:
-            # a piece that moves X Y Z about as planned (not a turn of A or B alone,
-            # planned in degrees per second): how far it stretches the planned path
-            self.plan_peak = max(self.plan_peak, plan)
-            self.stretch = min(self.stretch, xyz_rate / plan)
-        if rate >= self.peak:
-            self.peak = self.trough = rate
-        else:
-            self.trough = min(self.trough, rate)
-        self.run.append((qk, dtk, text))
-
-    def _chord_time(self) -> float:
-        """The time of the chord through the held-back points: its length at the rate
-        of its fastest piece, and its X Y Z no faster than the plan's fastest speed
-        times the least stretch of its pieces. LinuxCNC speeds up and slows down along a line by its
-        own acceleration limit (the profile's, as the plan's); a line between stops
-        timed at its mean speed cruised at the mean, below the plan's speed."""
-        length = sum(s for s, _ in self.pieces)
-        total = sum(d for _, d in self.pieces)
-        if len(self.pieces) == 1 or self.peak <= 0.0 or length <= 0.0:
-            return total
-        t = min(total, length / self.peak)
-        if self.plan_peak > 0.0 and self.run and self.last_q is not None:
-            # LinuxCNC runs the chord's X Y Z at one speed; where a piece stretches
-            # the planned path less than another, the tool ran faster than planned
-            # there: no faster than the plan's fastest speed on the piece that
-            # stretches least
-            xyz = math.dist(self.last_q[:3], self.run[-1][0][:3])
-            t = max(t, xyz / (self.plan_peak * self.stretch))
-        return t
-
-    def _tilt_held(self, q: list[float], text: str) -> str:
-        """The words of the point ``q`` with A and B as last written while they are
-        within ``tilt_hold`` of q's (a line that moves A or B by any amount LinuxCNC
-        blends parabolically: module docstring)."""
-        cut = text.index(" A")
-        if self.held is not None:
-            ab, words = self.held
-            if abs(q[3] - ab[0]) <= self.tilt_hold and abs(q[4] - ab[1]) <= self.tilt_hold:
-                return text[:cut] + words
-        self.held = (q[3:5], text[cut:])
-        return text
-
-    def _within(self, qk: list[float]) -> bool:
-        """Would the chord from the last written point to qk pass the held-back points,
-        within ``tol`` in X Y Z and ``tilt_chord`` in A and B?
-
-        Each held point p is taken at its nearest place along the chord a + t d,
-        t = clip((p − a)·d / d·d, 0, 1) (A and B read as mm at 1 mm per degree), and
-        its offset |p − (a + t d)| judged. In Python's floats, not numpy's: a run
-        holds a few points, and numpy's fixed cost per call was most of the G-code
-        writer's time."""
-        if not self.run or self.last_q is None:
-            return True
-        a = self.last_q
-        d = [x - y for x, y in zip(qk, a, strict=True)]
-        dd = math.fsum(x * x for x in d)
-        if dd == 0:
-            return False
-        tol, tilt = self.tol, self.tilt_chord
-        for p, _, _ in self.run:
-            t = math.fsum((x - y) * z for x, y, z in zip(p, a, d, strict=True)) / dd
-            t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
-            off = [abs(x - (y + t * z)) for x, y, z in zip(p, a, d, strict=True)]
-            if math.sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > tol:
-                return False
-            if off[3] > tilt or off[4] > tilt:
-                return False
-        return True
+        canon sets it (:func:`prsxy_post.kernel.gwrite.line_accel`): up to √3 times
+        the axes' limit on a diagonal (random 11's five-axis.ngc: 2175 mm/s², its
+        blend 1.0031 x F at the 2000 mm/s² bound, measured)."""
+        return gwrite.line_accel(d_xyz, d_ab, self.accel, self.accel_deg)
 
     def finish(self) -> list[Piece]:
+        empty = np.zeros(0)
+        ops = kernel.gcode_ops(
+            self.state,
+            np.zeros((0, 5)),
+            empty,
+            np.zeros(0, dtype=np.int64),
+            empty,
+            np.zeros(0, dtype=bool),
+            np.zeros(0, dtype=bool),
+            np.zeros(0, dtype=bool),
+            np.zeros(0, dtype=bool),
+            np.zeros((0, 5)),
+            True,
+        )
+        self._lines(ops, np.zeros((0, 5)), None)
         lines = self.buf
         self.buf = []
-        self._resolve_corner(lines, None, 0.0)
-        self._write_held(lines)
         if self.ended_by is None:
-            lines += ["G94", "M2"]
-        lines.append(f"(end: {self.n} points, {self.t_total:.3f} s)")
-        lines.append("%")
-        return [(0, "\n".join(lines) + "\n")]
+            lines += ["G94\n", "M2\n"]
+        n, t_total = int(self.state.i[_I["n"]]), float(self.state.f[_F["t_total"]])
+        lines.append(f"(end: {n} points, {t_total:.3f} s)\n")
+        lines.append("%\n")
+        return [(0, "".join(lines))]
+
+
+_I = {n: j for j, n in enumerate(gwrite.I_NAMES)}
+_F = {n: j for j, n in enumerate(gwrite.F_NAMES)}
 
 
 def _make(profile: Profile, settings: Mapping[str, Any], prov: Provenance) -> GcodeWriter:

@@ -1,0 +1,692 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
+# cython: initializedcheck=False
+"""The corrected G-code writer's decisions compiled: :mod:`prsxy_post.kernel.gwrite`
+point by point, the same operations in the same order (see that module), so the
+two agree to the bit. Python's ``min`` and ``max`` as Python's (the first of
+equals), ``math.fsum`` exactly rounded as CPython sums it, ``math.hypot`` and
+``math.dist`` as CPython 3.11's ``vector_norm`` (not libm's ``hypot``; a later
+CPython that computes it otherwise fails tests/test_kernel_gwrite.py's
+``test_fsum_and_hypot_are_cpythons``). Compiled with -O2 -ffp-contract=off (no
+fused multiply-adds)."""
+
+import numpy as np
+
+from libc.math cimport sqrt, fabs, frexp, ldexp, INFINITY, NAN
+from libc.string cimport memmove
+
+#: the reference's names of the state's scalars, in this module's order
+F_NAMES = (
+    "tol", "blend", "tilt_cut", "tilt_hold", "tilt_chord", "accel", "accel_deg",
+    "prev_accel", "t_total", "last_speed", "peak", "trough", "plan_peak", "stretch",
+    "len_sum", "dt_sum", "corner_t", "prev_len", "prev_t", "patch_f",
+)
+I_NAMES = (
+    "all_exact", "n", "has_line", "last_line", "run_n", "run_src", "corner_src",
+    "held_src", "exact", "after_settle", "prev_idx", "prev_turns", "prev_blend",
+    "has_prev", "patch", "keep",
+)
+
+cdef enum:
+    OP_G0, OP_G93, OP_LINE, OP_G61, OP_G64, OP_G1, OP_G4P0, OP_G94, OP_FN, OP_DWELL
+
+DEF NONE = -9
+DEF CARRIED = -1
+DEF PATCH_F = 1
+DEF PATCH_STOP = 2
+DEF SERVO_PERIOD_S = 1e-3
+DEF DIP_SHARE = 1e-3
+DEF T27 = 134217729.0  # 2**27 + 1: Dekker's split
+
+
+cdef struct W:
+    double tol, blend, tilt_cut, tilt_hold, tilt_chord, accel, accel_deg
+    double prev_accel, t_total, last_speed, peak, trough, plan_peak, stretch
+    double len_sum, dt_sum, corner_t, prev_len, prev_t, patch_f
+    long long all_exact, n, has_line, last_line, run_n, run_src, corner_src
+    long long held_src, exact, after_settle, prev_idx, prev_turns, prev_blend
+    long long has_prev, patch, keep
+    double last_q[5]
+    double last_ab[2]
+    double held_ab[2]
+    double lead0[5]
+    double corner_q[5]
+    double* run
+    long long* code
+    long long* arg
+    long long* ab
+    double* val
+    Py_ssize_t m
+
+
+# Python's max(a, b) and min(a, b): the first unless the second compares past it
+cdef inline double _pmax(double a, double b) noexcept nogil:
+    return b if b > a else a
+
+
+cdef inline double _pmin(double a, double b) noexcept nogil:
+    return b if b < a else a
+
+
+cdef double _fsum(const double* x, int n) noexcept nogil:
+    """math.fsum of n finite values: Shewchuk's partials (each sum's rounding
+    error kept as a partial, none overlapping), then the partials added from the
+    largest down while exact, the last rounding made half-even across partials."""
+    cdef double p[32]
+    cdef int np_ = 0, i, j
+    cdef double v, y, t, hi, lo = 0.0, yr
+    for j in range(n):
+        v = x[j]
+        i = 0
+        for jj in range(np_):
+            y = p[jj]
+            if fabs(v) < fabs(y):
+                t = v
+                v = y
+                y = t
+            hi = v + y
+            yr = hi - v
+            lo = y - yr
+            if lo != 0.0:
+                p[i] = lo
+                i += 1
+            v = hi
+        np_ = i
+        if v != 0.0:
+            p[np_] = v
+            np_ += 1
+    hi = 0.0
+    if np_ > 0:
+        np_ -= 1
+        hi = p[np_]
+        lo = 0.0
+        while np_ > 0:
+            v = hi
+            np_ -= 1
+            y = p[np_]
+            hi = v + y
+            yr = hi - v
+            lo = y - yr
+            if lo != 0.0:
+                break
+        if np_ > 0 and ((lo < 0.0 and p[np_ - 1] < 0.0) or (lo > 0.0 and p[np_ - 1] > 0.0)):
+            y = lo * 2.0
+            v = hi + y
+            yr = v - hi
+            if y == yr:
+                hi = v
+    return hi
+
+
+cdef double _vnorm(double* vec, int n, double mx, bint found_nan) noexcept nogil:
+    """CPython 3.11's vector_norm (math.hypot, math.dist) of n values >= 0 whose
+    largest is mx: scaled by a power of two, squares split exactly (Dekker), the
+    sum compensated, the root corrected by one differential step."""
+    cdef double x, scale, oldcsum, csum = 1.0, frac1 = 0.0, frac2 = 0.0, frac3 = 0.0
+    cdef double t, hi, lo, h
+    cdef int max_e, i
+    if mx == INFINITY:
+        return mx
+    if found_nan:
+        return NAN
+    if mx == 0.0 or n <= 1:
+        return mx
+    frexp(mx, &max_e)
+    if max_e >= -1023:
+        scale = ldexp(1.0, -max_e)
+        for i in range(n):
+            x = vec[i] * scale
+            t = x * T27
+            hi = t - (t - x)
+            lo = x - hi
+            x = hi * hi
+            oldcsum = csum
+            csum += x
+            frac1 += (oldcsum - csum) + x
+            x = 2.0 * hi * lo
+            oldcsum = csum
+            csum += x
+            frac2 += (oldcsum - csum) + x
+            frac3 += lo * lo
+        h = sqrt(csum - 1.0 + (frac1 + frac2 + frac3))
+        x = h
+        t = x * T27
+        hi = t - (t - x)
+        lo = x - hi
+        x = -hi * hi
+        oldcsum = csum
+        csum += x
+        frac1 += (oldcsum - csum) + x
+        x = -2.0 * hi * lo
+        oldcsum = csum
+        csum += x
+        frac2 += (oldcsum - csum) + x
+        x = -lo * lo
+        oldcsum = csum
+        csum += x
+        frac3 += (oldcsum - csum) + x
+        x = csum - 1.0 + (frac1 + frac2 + frac3)
+        return (h + x / (2.0 * h)) / scale
+    # ldexp(1.0, -max_e) would overflow: divide by the largest instead
+    for i in range(n):
+        x = vec[i] / mx
+        x = x * x
+        oldcsum = csum
+        csum += x
+        frac1 += (oldcsum - csum) + x
+    return mx * sqrt(csum - 1.0 + frac1)
+
+
+cdef double _hypot(const double* v, int n) noexcept nogil:
+    """math.hypot(*v[:n])."""
+    cdef double a[5]
+    cdef double mx = 0.0, x
+    cdef bint nan = False
+    cdef int i
+    for i in range(n):
+        x = fabs(v[i])
+        a[i] = x
+        nan = nan or x != x
+        if x > mx:
+            mx = x
+    return _vnorm(a, n, mx, nan)
+
+
+cdef double _dist(const double* p, const double* q, int n) noexcept nogil:
+    """math.dist(p[:n], q[:n])."""
+    cdef double a[5]
+    cdef double mx = 0.0, x
+    cdef bint nan = False
+    cdef int i
+    for i in range(n):
+        x = fabs(p[i] - q[i])
+        a[i] = x
+        nan = nan or x != x
+        if x > mx:
+            mx = x
+    return _vnorm(a, n, mx, nan)
+
+
+def fsum(x):
+    """math.fsum of finite values, compiled (for the differential tests)."""
+    cdef const double[::1] v = np.ascontiguousarray(x, dtype=np.float64)
+    if len(v) > 30:
+        raise ValueError(f"at most 30 values, got {len(v)}")
+    return _fsum(&v[0], <int>len(v)) if len(v) else 0.0
+
+
+def hypot(x):
+    """math.hypot(*x) of up to 5 values, compiled (for the differential tests)."""
+    cdef const double[::1] v = np.ascontiguousarray(x, dtype=np.float64)
+    if len(v) > 5:
+        raise ValueError(f"at most 5 values, got {len(v)}")
+    return _hypot(&v[0], <int>len(v)) if len(v) else 0.0
+
+
+cdef void _corner_cut(const double* q_in, const double* q_at, const double* q_out, double t_in,
+                      double t_out, double accel, double* mm, double* deg) noexcept nogil:
+    # gwrite.corner_cut
+    cdef double r_in[5]
+    cdef double r_out[5]
+    cdef double turn[5]
+    cdef double v_in, v_out, v, t_blend
+    cdef int i
+    for i in range(5):
+        r_in[i] = (q_at[i] - q_in[i]) / t_in
+    for i in range(5):
+        r_out[i] = (q_out[i] - q_at[i]) / t_out
+    v_in = _hypot(r_in, 3)
+    v_out = _hypot(r_out, 3)
+    v = _pmax(v_in, v_out)
+    if v > 0.0:
+        t_blend = _pmin(_pmin(t_in, t_out), 2.0 * v / accel)
+    else:
+        t_blend = _pmin(t_in, t_out)
+    if v_in > 0.0 and v_out > 0.0:
+        for i in range(5):
+            turn[i] = (r_out[i] / v_out - r_in[i] / v_in) * v
+    else:
+        for i in range(5):
+            turn[i] = r_out[i] - r_in[i]
+    mm[0] = _hypot(turn, 3) * t_blend / 8.0
+    deg[0] = _hypot(&turn[3], 2) * t_blend / 8.0
+
+
+cdef double _line_accel(const double* d_xyz, const double* d_ab, double accel,
+                        double accel_deg) noexcept nogil:
+    # gwrite.line_accel
+    cdef double dtot = _hypot(d_xyz, 3)
+    cdef double mx = fabs(d_xyz[0]), ma = fabs(d_ab[0]), tmax
+    cdef int i
+    for i in range(1, 3):
+        if fabs(d_xyz[i]) > mx:
+            mx = fabs(d_xyz[i])
+    if fabs(d_ab[1]) > ma:
+        ma = fabs(d_ab[1])
+    tmax = _pmax(mx / accel, ma / accel_deg)
+    return dtot / tmax if dtot > 0.0 and tmax > 0.0 else accel
+
+
+cdef inline void _emit(W* w, long long code, long long arg, long long ab, double val) noexcept nogil:
+    w.code[w.m] = code
+    w.arg[w.m] = arg
+    w.ab[w.m] = ab
+    w.val[w.m] = val
+    w.m += 1
+
+
+cdef inline const double* _last_held(W* w) noexcept nogil:
+    # the last held-back point, else the last written
+    return &w.run[5 * (w.run_n - 1)] if w.run_n else w.last_q
+
+
+cdef double _rate(W* w, const double* qk, double dtk, double* step) noexcept nogil:
+    # _Run.piece: (step, rate)
+    step[0] = _dist(_last_held(w), qk, 5)
+    return step[0] / dtk if dtk > 0.0 else 0.0
+
+
+cdef bint _dips(W* w, const double* qk, double dtk, const double* lead) noexcept nogil:
+    cdef double step, rate, moved, x
+    cdef bint dip
+    cdef int i
+    if not w.run_n:
+        return False
+    rate = _rate(w, qk, dtk, &step)
+    moved = fabs(lead[0] - w.lead0[0])
+    for i in range(1, 5):
+        x = fabs(lead[i] - w.lead0[i])
+        if x > moved:
+            moved = x
+    dip = w.trough < w.peak * (1.0 - DIP_SHARE) and rate > w.trough * (1.0 + DIP_SHARE)
+    return dip or moved > w.tol
+
+
+cdef void _hold(W* w, long long k, const double* qk, double dtk, const double* lead,
+                double plan) noexcept nogil:
+    cdef const double* prev = _last_held(w)
+    cdef double step, rate, xyz_rate
+    cdef int i
+    rate = _rate(w, qk, dtk, &step)
+    if not w.run_n:
+        w.peak = 0.0
+        w.trough = 0.0
+        for i in range(5):
+            w.lead0[i] = lead[i]
+        w.plan_peak = 0.0
+        w.stretch = INFINITY
+        w.len_sum = 0.0
+        w.dt_sum = 0.0
+    w.len_sum += step
+    w.dt_sum += dtk
+    xyz_rate = _dist(prev, qk, 3) / dtk if dtk > 0.0 else 0.0
+    if plan > 0.0 and xyz_rate > 0.5 * plan:
+        w.plan_peak = _pmax(w.plan_peak, plan)
+        w.stretch = _pmin(w.stretch, xyz_rate / plan)
+    if rate >= w.peak:
+        w.peak = rate
+        w.trough = rate
+    else:
+        w.trough = _pmin(w.trough, rate)
+    for i in range(5):
+        w.run[5 * w.run_n + i] = qk[i]
+    w.run_n += 1
+    w.run_src = k
+
+
+cdef double _chord_time(W* w) noexcept nogil:
+    cdef double length = w.len_sum, total = w.dt_sum, t, xyz
+    if w.run_n == 1 or w.peak <= 0.0 or length <= 0.0:
+        return total
+    t = _pmin(total, length / w.peak)
+    if w.plan_peak > 0.0 and w.run_n and w.n > 0:
+        xyz = _dist(w.last_q, &w.run[5 * (w.run_n - 1)], 3)
+        t = _pmax(t, xyz / (w.plan_peak * w.stretch))
+    return t
+
+
+cdef bint _within(W* w, const double* qk) noexcept nogil:
+    cdef const double* a = w.last_q
+    cdef const double* p
+    cdef double d[5]
+    cdef double x[5]
+    cdef double off[5]
+    cdef double dd, t
+    cdef int i, j
+    if not w.run_n or w.n == 0:
+        return True
+    for i in range(5):
+        d[i] = qk[i] - a[i]
+    for i in range(5):
+        x[i] = d[i] * d[i]
+    dd = _fsum(x, 5)
+    if dd == 0:
+        return False
+    for j in range(w.run_n):
+        p = &w.run[5 * j]
+        for i in range(5):
+            x[i] = (p[i] - a[i]) * d[i]
+        t = _fsum(x, 5) / dd
+        t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+        for i in range(5):
+            off[i] = fabs(p[i] - (a[i] + t * d[i]))
+        if sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > w.tol:
+            return False
+        if off[3] > w.tilt_chord or off[4] > w.tilt_chord:
+            return False
+    return True
+
+
+cdef void _blend_within_f(W* w, double length_n, double t_n, double a_n) noexcept nogil:
+    cdef long long idx = w.prev_idx
+    cdef double length = w.prev_len, t = w.prev_t
+    cdef double v_p, v_n, a_t, v, lead, v_safe, stop_s, slow_s, f
+    if idx == NONE or t <= 0.0 or length <= 0.0:
+        return
+    v_p = length / t
+    v_n = length_n / t_n if t_n > 0.0 else 0.0
+    a_t = w.prev_accel / 2.0
+    v = _pmax(v_p, v_n)
+    lead = SERVO_PERIOD_S * (2.0 if _pmin(t, t_n) < 2.0 * v / a_t else 1.0)
+    if a_n >= a_t:
+        v_safe = v - v_n * (1.0 - a_t / a_n) - a_t * lead
+    else:
+        v_safe = v - a_n * lead
+    if v_safe >= v_p:
+        return
+    stop_s = v / (2.0 * a_t) + 3.0 * v / (2.0 * 2.0 * a_t)
+    slow_s = t * (v_p / v_safe - 1.0) if v_safe > 0.0 else INFINITY
+    if slow_s <= stop_s:
+        f = 60.0 * v_safe / length
+        if idx == CARRIED:
+            w.patch = PATCH_F
+            w.patch_f = f
+        else:
+            w.val[idx] = f
+    else:
+        if idx == CARRIED:
+            w.patch = PATCH_STOP
+        else:
+            # a G4 P0 after the line idx: the ops after it move down by one
+            memmove(&w.code[idx + 2], &w.code[idx + 1], (w.m - idx - 1) * sizeof(long long))
+            memmove(&w.arg[idx + 2], &w.arg[idx + 1], (w.m - idx - 1) * sizeof(long long))
+            memmove(&w.ab[idx + 2], &w.ab[idx + 1], (w.m - idx - 1) * sizeof(long long))
+            memmove(&w.val[idx + 2], &w.val[idx + 1], (w.m - idx - 1) * sizeof(double))
+            w.code[idx + 1] = OP_G4P0
+            w.arg[idx + 1] = 0
+            w.ab[idx + 1] = 0
+            w.val[idx + 1] = 0.0
+            w.m += 1
+        w.after_settle = 1
+        w.prev_idx = NONE
+        w.prev_blend = 0
+
+
+cdef long long _tilt_held(W* w, long long src, const double* q) noexcept nogil:
+    if w.held_src != NONE:
+        if fabs(q[3] - w.held_ab[0]) <= w.tilt_hold and fabs(q[4] - w.held_ab[1]) <= w.tilt_hold:
+            return w.held_src
+    w.held_ab[0] = q[3]
+    w.held_ab[1] = q[4]
+    w.held_src = src
+    return src
+
+
+cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact) noexcept nogil:
+    cdef double q[5]
+    cdef double d_xyz[3]
+    cdef double d_ab[2]
+    cdef double length, accel, a_n
+    cdef long long ab_src
+    cdef bint turns, parabolic, mode
+    cdef int i
+    for i in range(5):
+        q[i] = q_in[i]  # q_in may be a held-back row the ops below do not touch
+    exact = exact or w.all_exact != 0
+    ab_src = _tilt_held(w, src, q)
+    turns = w.held_ab[0] != w.last_ab[0] or w.held_ab[1] != w.last_ab[1]
+    length = _dist(w.last_q, q, 3)
+    for i in range(3):
+        d_xyz[i] = q[i] - w.last_q[i]
+    for i in range(2):
+        d_ab[i] = w.held_ab[i] - w.last_ab[i]
+    accel = _line_accel(d_xyz, d_ab, w.accel, w.accel_deg)
+    w.last_ab[0] = w.held_ab[0]
+    w.last_ab[1] = w.held_ab[1]
+    if w.has_prev and w.prev_blend and (w.prev_turns or turns):
+        a_n = accel / 2.0 if turns or exact else accel
+        _blend_within_f(w, length, t, a_n)
+    parabolic = w.has_prev and w.prev_blend and (w.prev_turns or turns)
+    mode = (exact or w.after_settle != 0) and not (exact and parabolic and not w.all_exact)
+    if mode != (w.exact != 0):
+        _emit(w, OP_G61 if mode else OP_G64, 0, 0, 0.0)
+        w.exact = mode
+    _emit(w, OP_G1, src, ab_src, 60.0 / t)
+    w.has_prev = 1
+    w.prev_idx = w.m - 1
+    w.prev_len = length
+    w.prev_t = t
+    w.prev_turns = turns
+    w.prev_blend = not mode and not exact
+    w.prev_accel = accel
+    w.after_settle = exact
+    if exact:
+        _emit(w, OP_G4P0, 0, 0, 0.0)
+    for i in range(5):
+        w.last_q[i] = q[i]
+    w.n += 1
+
+
+cdef void _write_held(W* w) noexcept nogil:
+    cdef double qh[5]
+    cdef double t
+    cdef int i
+    if not w.run_n:
+        return
+    for i in range(5):
+        qh[i] = w.run[5 * (w.run_n - 1) + i]
+    t = _chord_time(w)
+    w.run_n = 0
+    _g1(w, w.run_src, qh, t, False)
+
+
+cdef inline void _at_rest(W* w) noexcept nogil:
+    if w.has_prev:
+        w.prev_blend = 0
+
+
+cdef void _resolve_corner(W* w, const double* q_next, double dt_next) noexcept nogil:
+    cdef double qc[5]
+    cdef double t = w.corner_t, mm, deg
+    cdef long long src = w.corner_src
+    cdef bint exact = False
+    cdef int i
+    if w.corner_src == NONE:
+        return
+    for i in range(5):
+        qc[i] = w.corner_q[i]
+    w.corner_src = NONE
+    if q_next != NULL and w.n > 0 and dt_next > 0.0:
+        _corner_cut(w.last_q, qc, q_next, t, dt_next, w.accel, &mm, &deg)
+        exact = mm > w.blend or deg > w.tilt_cut
+    _g1(w, src, qc, t, exact)
+
+
+cdef void _point(W* w, long long k, const double* qk, double dtk, long long line, double spd,
+                 bint bend, bint fn, bint fn_end, bint dwell, const double* lead,
+                 double plan) noexcept nogil:
+    # the writer's loop body for the point k (_Run.point)
+    cdef double t
+    cdef bint stands
+    cdef int i
+    if w.n == 0:
+        _emit(w, OP_G0, k, 0, 0.0)
+        _emit(w, OP_G93, 0, 0, 0.0)
+        w.last_ab[0] = qk[3]
+        w.last_ab[1] = qk[4]
+        for i in range(5):
+            w.last_q[i] = qk[i]
+        w.n = 1
+        return
+    if w.corner_src != NONE:
+        _resolve_corner(w, qk, dtk)
+    if not w.has_line or line != w.last_line:
+        _emit(w, OP_LINE, k, 0, 0.0)
+        w.has_line = 1
+        w.last_line = line
+    w.t_total += dtk
+    if fn:
+        _write_held(w)
+        _at_rest(w)
+        if fn_end:
+            _emit(w, OP_G94, 0, 0, 0.0)
+        _emit(w, OP_FN, k, 0, 0.0)
+        return
+    if dwell:
+        stands = True
+        for i in range(5):
+            stands = stands and qk[i] == w.last_q[i]
+        if stands:  # the pose stands: a dwell
+            _write_held(w)
+            _at_rest(w)
+            _emit(w, OP_DWELL, k, 0, 0.0)
+            return
+    if w.tol > 0 and not bend and spd > 0:
+        if not _within(w, qk) or _dips(w, qk, dtk, lead):
+            _write_held(w)
+        _hold(w, k, qk, dtk, lead, plan)
+        return
+    if w.run_n and (not _within(w, qk) or _dips(w, qk, dtk, lead)):
+        _write_held(w)
+    _hold(w, k, qk, dtk, lead, plan)
+    t = _chord_time(w)
+    w.run_n = 0
+    if spd > 0.0 and bend:
+        for i in range(5):
+            w.corner_q[i] = qk[i]
+        w.corner_t = t
+        w.corner_src = k
+        return
+    _g1(w, k, qk, t, spd == 0.0)
+
+
+cdef void _load(W* w, double[::1] f, long long[::1] iv, st):
+    cdef double[::1] a
+    cdef int i
+    w.tol, w.blend, w.tilt_cut, w.tilt_hold, w.tilt_chord = f[0], f[1], f[2], f[3], f[4]
+    w.accel, w.accel_deg, w.prev_accel, w.t_total, w.last_speed = f[5], f[6], f[7], f[8], f[9]
+    w.peak, w.trough, w.plan_peak, w.stretch, w.len_sum = f[10], f[11], f[12], f[13], f[14]
+    w.dt_sum, w.corner_t, w.prev_len, w.prev_t, w.patch_f = f[15], f[16], f[17], f[18], f[19]
+    w.all_exact, w.n, w.has_line, w.last_line, w.run_n = iv[0], iv[1], iv[2], iv[3], iv[4]
+    w.run_src, w.corner_src, w.held_src, w.exact = iv[5], iv[6], iv[7], iv[8]
+    w.after_settle, w.prev_idx, w.prev_turns, w.prev_blend = iv[9], iv[10], iv[11], iv[12]
+    w.has_prev, w.patch, w.keep = iv[13], iv[14], iv[15]
+    a = st.last_q
+    for i in range(5):
+        w.last_q[i] = a[i]
+    a = st.last_ab
+    for i in range(2):
+        w.last_ab[i] = a[i]
+    a = st.held_ab
+    for i in range(2):
+        w.held_ab[i] = a[i]
+    a = st.lead0
+    for i in range(5):
+        w.lead0[i] = a[i]
+    a = st.corner_q
+    for i in range(5):
+        w.corner_q[i] = a[i]
+
+
+cdef void _store(W* w, double[::1] f, long long[::1] iv, st):
+    cdef double[::1] a
+    cdef int i
+    f[0], f[1], f[2], f[3], f[4] = w.tol, w.blend, w.tilt_cut, w.tilt_hold, w.tilt_chord
+    f[5], f[6], f[7], f[8], f[9] = w.accel, w.accel_deg, w.prev_accel, w.t_total, w.last_speed
+    f[10], f[11], f[12], f[13], f[14] = w.peak, w.trough, w.plan_peak, w.stretch, w.len_sum
+    f[15], f[16], f[17], f[18], f[19] = w.dt_sum, w.corner_t, w.prev_len, w.prev_t, w.patch_f
+    iv[0], iv[1], iv[2], iv[3], iv[4] = w.all_exact, w.n, w.has_line, w.last_line, w.run_n
+    iv[5], iv[6], iv[7], iv[8] = w.run_src, w.corner_src, w.held_src, w.exact
+    iv[9], iv[10], iv[11], iv[12] = w.after_settle, w.prev_idx, w.prev_turns, w.prev_blend
+    iv[13], iv[14], iv[15] = w.has_prev, w.patch, w.keep
+    a = st.last_q
+    for i in range(5):
+        a[i] = w.last_q[i]
+    a = st.last_ab
+    for i in range(2):
+        a[i] = w.last_ab[i]
+    a = st.held_ab
+    for i in range(2):
+        a[i] = w.held_ab[i]
+    a = st.lead0
+    for i in range(5):
+        a[i] = w.lead0[i]
+    a = st.corner_q
+    for i in range(5):
+        a[i] = w.corner_q[i]
+
+
+def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint end):
+    """:func:`prsxy_post.kernel.gwrite.gcode_ops`, compiled (``st.run_q`` must
+    hold ``len(q)`` more points: :func:`gwrite.reserve`)."""
+    if np.ndim(q) != 2 or np.shape(q)[1] != 5 or np.ndim(lead) != 2 or np.shape(lead)[1] != 5:
+        raise ValueError(f"q and lead need (N, 5), got {np.shape(q)} and {np.shape(lead)}")
+    cdef const double[:, ::1] qv = np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 5)
+    cdef const double[::1] dtv = np.ascontiguousarray(dt, dtype=np.float64)
+    cdef const long long[::1] lv = np.ascontiguousarray(line, dtype=np.int64)
+    cdef const double[::1] sv = np.ascontiguousarray(speed, dtype=np.float64)
+    cdef const unsigned char[::1] bv = np.ascontiguousarray(block_end, dtype=bool).view(np.uint8)
+    cdef const unsigned char[::1] fv = np.ascontiguousarray(fn, dtype=bool).view(np.uint8)
+    cdef const unsigned char[::1] ev = np.ascontiguousarray(fn_end, dtype=bool).view(np.uint8)
+    cdef const unsigned char[::1] wv = np.ascontiguousarray(dwell, dtype=bool).view(np.uint8)
+    cdef const double[:, ::1] ld = np.ascontiguousarray(lead, dtype=np.float64).reshape(-1, 5)
+    cdef Py_ssize_t n = qv.shape[0], k
+    cdef double[::1] f = st.f
+    cdef long long[::1] iv = st.i
+    cdef double[:, ::1] run = st.run_q
+    cdef W w
+    cdef double prev_speed, plan
+    if not (dtv.shape[0] == lv.shape[0] == sv.shape[0] == bv.shape[0] == fv.shape[0]
+            == ev.shape[0] == wv.shape[0] == ld.shape[0] == n):
+        raise ValueError(f"every input needs one row per point ({n})")
+    if f.shape[0] != len(F_NAMES) or iv.shape[0] != len(I_NAMES) or run.shape[1] != 5:
+        raise ValueError("not a gwrite.GState")
+    if iv[4] + n > run.shape[0]:
+        raise ValueError(f"st.run_q holds {run.shape[0]} points, {iv[4] + n} may be held")
+    code = np.empty(14 * n + 16, dtype=np.int64)
+    arg = np.empty(14 * n + 16, dtype=np.int64)
+    ab = np.empty(14 * n + 16, dtype=np.int64)
+    val = np.empty(14 * n + 16, dtype=np.float64)
+    cdef long long[::1] cv = code, av = arg, abv = ab
+    cdef double[::1] vv = val
+    _load(&w, f, iv, st)
+    w.run = &run[0, 0]
+    w.code, w.arg, w.ab, w.val, w.m = &cv[0], &av[0], &abv[0], &vv[0], 0
+    with nogil:
+        prev_speed = w.last_speed
+        for k in range(n):
+            # the plan's mean speed over the piece (it ramps linearly over a period)
+            plan = 0.5 * (prev_speed + sv[k])
+            prev_speed = sv[k]
+            _point(&w, k, &qv[k, 0], dtv[k], lv[k], sv[k], bv[k], fv[k], ev[k], wv[k],
+                   &ld[k, 0], plan)
+        if n:
+            w.last_speed = sv[n - 1]
+        if end:
+            _resolve_corner(&w, NULL, 0.0)
+            _write_held(&w)
+        # the line that waits for the next chunk (_Run.hand_out)
+        if w.has_prev and w.prev_blend and w.prev_idx != NONE:
+            w.keep = w.prev_idx
+            w.prev_idx = CARRIED
+        else:
+            w.keep = NONE
+            w.prev_idx = NONE
+        if w.run_src >= 0:
+            w.run_src = -1
+        if w.corner_src >= 0:
+            w.corner_src = -2
+        if w.held_src != NONE:
+            w.held_src = -3
+    _store(&w, f, iv, st)
+    m = w.m
+    return code[:m].copy(), arg[:m].copy(), ab[:m].copy(), val[:m].copy()

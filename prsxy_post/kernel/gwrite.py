@@ -1,0 +1,618 @@
+"""The corrected G-code writer's per-point decisions: which points become lines,
+each line's time and F, its G61 / G64 P mode, a G4 P0 after it, a line before it
+slowed down or stopped.
+
+The plain-Python reference (Python's floats, ``math.fsum``, ``math.dist`` and
+``math.hypot``); ``_gwrite.pyx`` is its compiled twin, the same operations in the
+same order (the same bits: CPython's exactly rounded ``fsum`` and its ``hypot``,
+which is not libm's, written out there). The rules (why each, with LinuxCNC's
+source) are :mod:`prsxy_post.writers.linuxcnc`'s; this module only decides.
+
+A chunk's points go in as arrays, with a :class:`GState` carried from chunk to
+chunk (the held-back points, the held corner, the tilt last written, the last
+line written, which the next may slow down or stop). Out comes one op per output
+line (:data:`OPS`): the writer makes each line's text from its op, its point's
+row text and its F value. A point held back over a chunk's end is named by a
+negative index: ``RUN_SRC`` (-1) the last held-back point, ``CORNER_SRC`` (-2)
+the held corner, ``HELD_SRC`` (-3) the tilt written last, whose text the writer
+keeps.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: LinuxCNC's servo period [s]: a parabolic blend's next line leads by one
+SERVO_PERIOD_S = 1e-3
+#: how much a chord's pieces may slow down and speed up again (a share of their rate)
+DIP_SHARE = 1e-3
+
+#: op codes, one output line each: the first point (G0 and its row), G93, a line
+#: comment, G61, G64 P, a G1 (its point, the point whose A B it writes, F), G4 P0,
+#: G94 (before a program end), a machine function, a dwell (G4 P dt)
+G0, G93, LINE, G61, G64, G1, G4P0, G94, FN, DWELL = range(10)
+OPS = ("G0", "G93", "LINE", "G61", "G64", "G1", "G4P0", "G94", "FN", "DWELL")
+#: a text kept from an earlier chunk: the last held-back point, the held corner,
+#: the A B written last; NONE: no such point
+RUN_SRC, CORNER_SRC, HELD_SRC, NONE = -1, -2, -3, -9
+#: ``prev_idx`` of a line the writer carried over from the chunk before (its first)
+CARRIED = -1
+
+#: the float scalars of the state (``GState.f``), by index
+F_NAMES = (
+    "tol", "blend", "tilt_cut", "tilt_hold", "tilt_chord", "accel", "accel_deg",
+    "prev_accel", "t_total", "last_speed", "peak", "trough", "plan_peak", "stretch",
+    "len_sum", "dt_sum", "corner_t", "prev_len", "prev_t", "patch_f",
+)  # fmt: skip
+#: the integer scalars of the state (``GState.i``), by index
+I_NAMES = (
+    "all_exact", "n", "has_line", "last_line", "run_n", "run_src", "corner_src",
+    "held_src", "exact", "after_settle", "prev_idx", "prev_turns", "prev_blend",
+    "has_prev", "patch", "keep",
+)  # fmt: skip
+#: what the chunk did to the line carried from the chunk before (``patch``): its F
+#: lowered to ``patch_f``, or a G4 P0 after it
+PATCH_NONE, PATCH_F, PATCH_STOP = 0, 1, 2
+
+
+@dataclass
+class GState:
+    """The writer's state between chunks (mutable; both kernels update it in place).
+
+    f : (len(F_NAMES),) float64; i : (len(I_NAMES),) int64; last_q (5,) the last
+    point written [mm, mm, mm, deg, deg]; last_ab (2,) A B written last [deg];
+    held_ab (2,) the tilt held; lead0 (5,) the tables' lead at the run's first
+    point [mm]; corner_q (5,) the held corner; run_q (capacity, 5) the held-back
+    points (``i[run_n]`` of them).
+    """
+
+    f: np.ndarray
+    i: np.ndarray
+    last_q: np.ndarray
+    last_ab: np.ndarray
+    held_ab: np.ndarray
+    lead0: np.ndarray
+    corner_q: np.ndarray
+    run_q: np.ndarray
+
+
+def new_state(
+    tol: float,
+    blend: float,
+    tilt_cut: float,
+    tilt_hold: float,
+    tilt_chord: float,
+    accel: float,
+    accel_deg: float,
+    all_exact: bool,
+) -> GState:
+    """A writer's state before its first point (module docstring; the settings'
+    meanings are :class:`prsxy_post.writers.linuxcnc.GcodeWriter`'s)."""
+    f = np.zeros(len(F_NAMES))
+    i = np.zeros(len(I_NAMES), dtype=np.int64)
+    for name, v in (
+        ("tol", tol),
+        ("blend", blend),
+        ("tilt_cut", tilt_cut),
+        ("tilt_hold", tilt_hold),
+        ("tilt_chord", tilt_chord),
+        ("accel", accel),
+        ("accel_deg", accel_deg),
+        ("prev_accel", accel),
+        ("stretch", math.inf),
+    ):
+        f[F_NAMES.index(name)] = v
+    for name, iv in (
+        ("all_exact", int(all_exact)),
+        ("exact", int(all_exact)),
+        ("after_settle", 1),
+        ("run_src", NONE),
+        ("corner_src", NONE),
+        ("held_src", NONE),
+        ("prev_idx", NONE),
+        ("keep", NONE),
+    ):
+        i[I_NAMES.index(name)] = iv
+    z5 = np.zeros(5)
+    return GState(f, i, z5.copy(), np.zeros(2), np.zeros(2), z5.copy(), z5.copy(), np.zeros((8, 5)))
+
+
+def reserve(st: GState, more: int) -> None:
+    """Room in ``st.run_q`` for ``more`` held-back points beyond those held."""
+    n = int(st.i[I_NAMES.index("run_n")])
+    if n + more > len(st.run_q):
+        grown = np.zeros((max(2 * len(st.run_q), n + more), 5))
+        grown[:n] = st.run_q[:n]
+        st.run_q = grown
+
+
+def corner_cut(
+    q_in: list[float],
+    q_at: list[float],
+    q_out: list[float],
+    t_in: float,
+    t_out: float,
+    accel: float,
+) -> tuple[float, float]:
+    """How far LinuxCNC's parabolic blend of the lines q_in → q_at → q_out may cut
+    the corner at q_at: (X Y Z [mm], A B [deg]).
+
+    Poses (5,) [mm, mm, mm, deg, deg], line times t_in, t_out [s], the path
+    acceleration ``accel`` [mm/s²]. The blend lasts t = min(t_in, t_out, 2 v / a)
+    at the larger X Y Z speed v, and the pose's direction per mm of X Y Z turns
+    from d_in to d_out over it: |d_out − d_in| v t / 8 (lines that turn A or B
+    alone: |r_out − r_in| t / 8). An upper bound with the written speeds
+    (:mod:`prsxy_post.writers.linuxcnc`).
+    """
+    r_in = [(b - a) / t_in for a, b in zip(q_in, q_at, strict=True)]
+    r_out = [(b - a) / t_out for a, b in zip(q_at, q_out, strict=True)]
+    v_in, v_out = math.hypot(*r_in[:3]), math.hypot(*r_out[:3])
+    v = max(v_in, v_out)
+    t_blend = min(t_in, t_out, 2.0 * v / accel) if v > 0.0 else min(t_in, t_out)
+    if v_in > 0.0 and v_out > 0.0:
+        # the turn of the path's direction (per mm of X Y Z travel): a change of
+        # speed along the same line cuts nothing
+        turn = [(o / v_out - i / v_in) * v for i, o in zip(r_in, r_out, strict=True)]
+    else:
+        turn = [o - i for i, o in zip(r_in, r_out, strict=True)]
+    return math.hypot(*turn[:3]) * t_blend / 8.0, math.hypot(*turn[3:]) * t_blend / 8.0
+
+
+def line_accel(d_xyz: list[float], d_ab: list[float], accel: float, accel_deg: float) -> float:
+    """A line's acceleration limit along its X Y Z path [mm/s²], as LinuxCNC's canon
+    sets it: the path length over the longest time an axis takes at its own limit
+    (``getStraightAcceleration``, emccanon.cc:612-721), up to √3 times the axes'
+    limit on a diagonal; ``accel`` [mm/s²] and ``accel_deg`` [deg/s²] the axes'
+    limits."""
+    dtot = math.hypot(*d_xyz)
+    tmax = max(
+        max(abs(d) for d in d_xyz) / accel,
+        max(abs(d) for d in d_ab) / accel_deg,
+    )
+    return dtot / tmax if dtot > 0.0 and tmax > 0.0 else accel
+
+
+class _Run:
+    """The reference's working state: :class:`GState` as Python floats and lists,
+    and the ops written so far."""
+
+    # GState.f's and .i's scalars (F_NAMES, I_NAMES)
+    tol: float
+    blend: float
+    tilt_cut: float
+    tilt_hold: float
+    tilt_chord: float
+    accel: float
+    accel_deg: float
+    prev_accel: float
+    t_total: float
+    last_speed: float
+    peak: float
+    trough: float
+    plan_peak: float
+    stretch: float
+    len_sum: float
+    dt_sum: float
+    corner_t: float
+    prev_len: float
+    prev_t: float
+    patch_f: float
+    all_exact: int
+    n: int
+    has_line: int
+    last_line: int
+    run_n: int
+    run_src: int
+    corner_src: int
+    held_src: int
+    exact: int
+    after_settle: int
+    prev_idx: int
+    prev_turns: int
+    prev_blend: int
+    has_prev: int
+    patch: int
+    keep: int
+
+    def __init__(self, st: GState) -> None:
+        for name, v in zip(F_NAMES, st.f.tolist(), strict=True):
+            setattr(self, name, v)
+        for name, iv in zip(I_NAMES, st.i.tolist(), strict=True):
+            setattr(self, name, iv)
+        self.last_q: list[float] = st.last_q.tolist()
+        self.last_ab: list[float] = st.last_ab.tolist()
+        self.held_ab: list[float] = st.held_ab.tolist()
+        self.lead0: list[float] = st.lead0.tolist()
+        self.corner_q: list[float] = st.corner_q.tolist()
+        self.run: list[list[float]] = st.run_q[: self.run_n].tolist()
+        self.code: list[int] = []
+        self.arg: list[int] = []
+        self.ab: list[int] = []
+        self.val: list[float] = []
+
+    def store(self, st: GState) -> None:
+        self.run_n = len(self.run)
+        st.f[:] = [getattr(self, n) for n in F_NAMES]
+        st.i[:] = [int(getattr(self, n)) for n in I_NAMES]
+        st.last_q[:] = self.last_q
+        st.last_ab[:] = self.last_ab
+        st.held_ab[:] = self.held_ab
+        st.lead0[:] = self.lead0
+        st.corner_q[:] = self.corner_q
+        if self.run:
+            st.run_q[: self.run_n] = self.run
+
+    def emit(self, code: int, arg: int = 0, ab: int = 0, val: float = 0.0) -> None:
+        self.code.append(code)
+        self.arg.append(arg)
+        self.ab.append(ab)
+        self.val.append(val)
+
+    # the decisions, in the order and arithmetic the writer made them
+
+    def piece(self, qk: list[float], dtk: float) -> tuple[float, float]:
+        """The piece from the last held-back (or written) point to qk: (length, rate)."""
+        prev = self.run[-1] if self.run else self.last_q
+        step = math.dist(prev, qk)
+        return step, (step / dtk if dtk > 0.0 else 0.0)
+
+    def dips(self, qk: list[float], dtk: float, lead: list[float]) -> bool:
+        """Would the piece to qk speed up again after the held-back pieces slowed
+        down, or move what the real-axis tables add to a motor by more than ``tol``
+        (a motor crossing its play, whose timing its points carry)? A chord is timed
+        at its fastest piece (``chord_time``): it may hold a rise and a fall of the
+        planned speed, not a dip."""
+        if not self.run:
+            return False
+        _, rate = self.piece(qk, dtk)
+        moved = max(abs(a - b) for a, b in zip(lead, self.lead0, strict=True))
+        dip = self.trough < self.peak * (1.0 - DIP_SHARE) and rate > self.trough * (1.0 + DIP_SHARE)
+        return dip or moved > self.tol
+
+    def hold(self, k: int, qk: list[float], dtk: float, lead: list[float], plan: float) -> None:
+        """Hold back the point k, qk (its piece's time dtk, the tables' lead, the
+        plan's mean speed over the piece)."""
+        prev = self.run[-1] if self.run else self.last_q
+        step, rate = self.piece(qk, dtk)
+        if not self.run:
+            self.peak, self.trough, self.lead0 = 0.0, 0.0, lead
+            self.plan_peak, self.stretch = 0.0, math.inf
+            self.len_sum, self.dt_sum = 0.0, 0.0
+        self.len_sum += step
+        self.dt_sum += dtk
+        xyz_rate = math.dist(prev[:3], qk[:3]) / dtk if dtk > 0.0 else 0.0
+        if plan > 0.0 and xyz_rate > 0.5 * plan:
+            # a piece that moves X Y Z about as planned (not a turn of A or B alone,
+            # planned in degrees per second): how far it stretches the planned path
+            self.plan_peak = max(self.plan_peak, plan)
+            self.stretch = min(self.stretch, xyz_rate / plan)
+        if rate >= self.peak:
+            self.peak = self.trough = rate
+        else:
+            self.trough = min(self.trough, rate)
+        self.run.append(qk)
+        self.run_src = k
+
+    def chord_time(self) -> float:
+        """The time of the chord through the held-back points: its length at the rate
+        of its fastest piece, and its X Y Z no faster than the plan's fastest speed
+        times the least stretch of its pieces. LinuxCNC speeds up and slows down
+        along a line by its own acceleration limit (the profile's, as the plan's); a
+        line between stops timed at its mean speed cruised at the mean, below the
+        plan's speed. The pieces' lengths and times are summed left to right."""
+        length, total = self.len_sum, self.dt_sum
+        if len(self.run) == 1 or self.peak <= 0.0 or length <= 0.0:
+            return total
+        t = min(total, length / self.peak)
+        if self.plan_peak > 0.0 and self.run and self.n > 0:
+            # LinuxCNC runs the chord's X Y Z at one speed; where a piece stretches
+            # the planned path less than another, the tool ran faster than planned
+            # there: no faster than the plan's fastest speed on the piece that
+            # stretches least
+            xyz = math.dist(self.last_q[:3], self.run[-1][:3])
+            t = max(t, xyz / (self.plan_peak * self.stretch))
+        return t
+
+    def within(self, qk: list[float]) -> bool:
+        """Would the chord from the last written point to qk pass the held-back points,
+        within ``tol`` in X Y Z and ``tilt_chord`` in A and B?
+
+        Each held point p is taken at its nearest place along the chord a + t d,
+        t = clip((p − a)·d / d·d, 0, 1) (A and B read as mm at 1 mm per degree), and
+        its offset |p − (a + t d)| judged. The dot products exactly rounded
+        (``math.fsum``), so that the twin can give the same bits."""
+        if not self.run or self.n == 0:
+            return True
+        a = self.last_q
+        d = [x - y for x, y in zip(qk, a, strict=True)]
+        dd = math.fsum(x * x for x in d)
+        if dd == 0:
+            return False
+        tol, tilt = self.tol, self.tilt_chord
+        for p in self.run:
+            t = math.fsum((x - y) * z for x, y, z in zip(p, a, d, strict=True)) / dd
+            t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+            off = [abs(x - (y + t * z)) for x, y, z in zip(p, a, d, strict=True)]
+            if math.sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > tol:
+                return False
+            if off[3] > tilt or off[4] > tilt:
+                return False
+        return True
+
+    def write_held(self) -> None:
+        """Write the last held-back point (it becomes the new chord start)."""
+        if not self.run:
+            return
+        qh, src = self.run[-1], self.run_src
+        t = self.chord_time()
+        self.run = []
+        self.g1(src, qh, t, False)  # only points in motion are held back
+
+    def at_rest(self) -> None:
+        """A machine function or a dwell follows: LinuxCNC blends nothing across it."""
+        if self.has_prev:
+            self.prev_blend = 0
+
+    def resolve_corner(self, q_next: list[float] | None, dt_next: float) -> None:
+        """Write the held block end, in G61 where LinuxCNC's parabolic blend would
+        cut the corner there by more than ``blend`` in X Y Z or ``tilt_cut`` in A
+        and B (the writer's module docstring)."""
+        if self.corner_src == NONE:
+            return
+        qc, t, src = self.corner_q, self.corner_t, self.corner_src
+        self.corner_src = NONE
+        exact = False
+        if q_next is not None and self.n > 0 and dt_next > 0.0:
+            mm, deg = corner_cut(self.last_q, qc, q_next, t, dt_next, self.accel)
+            exact = mm > self.blend or deg > self.tilt_cut
+        self.g1(src, qc, t, exact)
+
+    def tilt_held(self, src: int, q: list[float]) -> int:
+        """The point whose A and B the line to ``q`` (the point ``src``) writes: the
+        tilt last written while q's is within ``tilt_hold`` of it (a line that moves
+        A or B by any amount LinuxCNC blends parabolically), else q's own."""
+        if self.held_src != NONE:
+            ab = self.held_ab
+            if abs(q[3] - ab[0]) <= self.tilt_hold and abs(q[4] - ab[1]) <= self.tilt_hold:
+                return int(self.held_src)
+        self.held_ab = q[3:5]
+        self.held_src = src
+        return src
+
+    def g1(self, src: int, q: list[float], t: float, exact: bool) -> None:
+        """Write the line to ``q`` (the point ``src``) taking ``t`` seconds, in G61
+        where ``exact`` (a line ending where the motion stands, or at a corner
+        LinuxCNC's blend would cut too far), else in G64 P. Where LinuxCNC would
+        blend the line before into this one parabolically, that line is slowed down
+        or stopped (``blend_within_f``), and an exact line goes in G64 P, its G4 P0
+        stopping it all the same (the writer's module docstring, rule 4)."""
+        exact = exact or bool(self.all_exact)
+        ab_src = self.tilt_held(src, q)
+        turns = self.held_ab != self.last_ab
+        length = math.dist(self.last_q[:3], q[:3])
+        ab_now = list(self.held_ab)
+        accel = line_accel(
+            [b - a for a, b in zip(self.last_q[:3], q[:3], strict=True)],
+            [b - a for a, b in zip(self.last_ab, ab_now, strict=True)],
+            self.accel,
+            self.accel_deg,
+        )
+        self.last_ab = ab_now
+        # LinuxCNC blends the line before into this one parabolically where it was
+        # written in G64 P (no G4 P0 after it) and one of the two turns A or B
+        if self.has_prev and self.prev_blend and (self.prev_turns or turns):
+            # this line's own acceleration is halved where its end is a parabolic
+            # join too: it turns A or B, or it is exact (G64 P and G4 P0, below)
+            a_n = accel / 2.0 if turns or exact else accel
+            self.blend_within_f(length, t, a_n)
+        parabolic = self.has_prev and self.prev_blend and (self.prev_turns or turns)
+        # the first line after a dwell runs in G61 too: LinuxCNC refills its queue
+        # while it runs
+        mode = (exact or bool(self.after_settle)) and not (
+            exact and parabolic and not self.all_exact
+        )
+        if mode != bool(self.exact):
+            self.emit(G61 if mode else G64)
+            self.exact = int(mode)
+        self.emit(G1, src, ab_src, 60.0 / t)
+        self.has_prev, self.prev_idx, self.prev_len, self.prev_t = 1, len(self.code) - 1, length, t
+        self.prev_turns, self.prev_blend = int(turns), int(not mode and not exact)
+        self.prev_accel = accel
+        self.after_settle = int(exact)
+        if exact:
+            # LinuxCNC ends a line mid servo cycle and starts the next in the same
+            # cycle; a dwell waits for the motion to end
+            self.emit(G4P0)
+        self.last_q = q
+        self.n += 1
+
+    def blend_within_f(self, length_n: float, t_n: float, a_n: float) -> None:
+        """Keep LinuxCNC's parabolic blend of the previous line into the next one
+        (``length_n`` [mm] in ``t_n`` [s], speeding up at ``a_n`` [mm/s²])
+        within the larger of the two lines' written speeds: lower the previous
+        line's F, or, where that costs more time than a stop or where either line
+        is shorter than the blend, stop it there (G4 P0 after it, the next line in
+        G61).
+
+        The previous line slows down at a_t = a / 2 from v0 (at most its own
+        speed v_p), the next speeds up towards v_n at a_n (a / 2 or a) from a
+        servo cycle T earlier: their sum peaks at v0 + v_n (1 − a_t / a_n) + a_t T
+        (the writer's module docstring, rule 4). So v_p ≤ max(v_p, v_n) − v_n
+        (1 − a_t / a_n) − a_t T.
+        """
+        idx, length, t = self.prev_idx, self.prev_len, self.prev_t
+        if idx == NONE or t <= 0.0 or length <= 0.0:
+            return
+        v_p = length / t
+        v_n = length_n / t_n if t_n > 0.0 else 0.0
+        a_t = self.prev_accel / 2.0
+        v = max(v_p, v_n)
+        # a blend lasts v / a_t, and the line after it stops or blends again: a line
+        # shorter than twice that overlaps the blends, and the next leads by up to a
+        # cycle more (1.026 x F on a helix of 9 ms chords at F600 with one cycle's
+        # lead; 1.025 x F on pocket.ngc's helix of 8.5 ms chords at F400, blend 6.7 ms)
+        lead = SERVO_PERIOD_S * (2.0 if min(t, t_n) < 2.0 * v / a_t else 1.0)
+        if a_n >= a_t:
+            v_safe = v - v_n * (1.0 - a_t / a_n) - a_t * lead
+        else:
+            v_safe = v - a_n * lead
+        if v_safe >= v_p:
+            return
+        # the time a stop costs: the previous line slows down at a_t, the next
+        # (G61) speeds up from rest at a and stops at its end, the one after it
+        # speeds up again
+        stop_s = v / (2.0 * a_t) + 3.0 * v / (2.0 * 2.0 * a_t)
+        slow_s = t * (v_p / v_safe - 1.0) if v_safe > 0.0 else math.inf
+        if slow_s <= stop_s:
+            f = 60.0 * v_safe / length
+            if idx == CARRIED:  # the line carried from the chunk before
+                self.patch, self.patch_f = PATCH_F, f
+            else:
+                self.val[idx] = f
+        else:
+            if idx == CARRIED:
+                self.patch = PATCH_STOP
+            else:
+                self.code.insert(idx + 1, G4P0)
+                self.arg.insert(idx + 1, 0)
+                self.ab.insert(idx + 1, 0)
+                self.val.insert(idx + 1, 0.0)
+            self.after_settle = 1
+            self.prev_idx, self.prev_blend = NONE, 0
+
+    def hand_out(self) -> None:
+        """The call's end: the last line waits for the next chunk (``keep``: its op,
+        or CARRIED, the line carried in) where LinuxCNC may blend it into the next
+        line, whose F or stop that line decides; else ``keep`` is NONE."""
+        if self.has_prev and self.prev_blend and self.prev_idx != NONE:
+            self.keep, self.prev_idx = self.prev_idx, CARRIED
+        else:
+            self.keep, self.prev_idx = NONE, NONE
+        # the points the next chunk may name: the state holds them (held_ab,
+        # corner_q, the run's last row), the writer keeps their text
+        if self.run_src >= 0:
+            self.run_src = RUN_SRC
+        if self.corner_src >= 0:
+            self.corner_src = CORNER_SRC
+        if self.held_src != NONE:
+            self.held_src = HELD_SRC
+
+    def point(self, k: int, *row: object) -> None:
+        """The writer's loop body for the point k (``row``: its values)."""
+        qk, dtk, line, spd, bend, fn, fn_end, dwell, lead, plan = row
+        assert isinstance(qk, list) and isinstance(dtk, float) and isinstance(spd, float)
+        assert isinstance(lead, list) and isinstance(plan, float) and isinstance(line, int)
+        if self.n == 0:
+            self.emit(G0, k)
+            self.emit(G93)
+            self.last_ab = qk[3:5]
+            self.last_q = qk
+            self.n = 1
+            return
+        if self.corner_src != NONE:
+            self.resolve_corner(qk, dtk)
+        if not self.has_line or line != self.last_line:
+            self.emit(LINE, k)
+            self.has_line, self.last_line = 1, line
+        self.t_total += dtk
+        if fn:
+            self.write_held()
+            self.at_rest()
+            if fn_end:
+                self.emit(G94)
+            self.emit(FN, k)
+            return
+        if dwell and qk == self.last_q:  # the pose stands: a dwell
+            self.write_held()
+            self.at_rest()
+            self.emit(DWELL, k)
+            return
+        if self.tol > 0 and not bend and spd > 0:
+            if not self.within(qk) or self.dips(qk, dtk, lead):
+                self.write_held()
+            self.hold(k, qk, dtk, lead, plan)
+            return
+        if self.run and (not self.within(qk) or self.dips(qk, dtk, lead)):
+            self.write_held()
+        self.hold(k, qk, dtk, lead, plan)
+        t = self.chord_time()
+        self.run = []
+        if spd > 0.0 and bend:
+            self.corner_q, self.corner_t, self.corner_src = qk, t, k
+            return
+        self.g1(k, qk, t, spd == 0.0)
+
+
+def gcode_ops(
+    st: GState,
+    q: np.ndarray,
+    dt: np.ndarray,
+    line: np.ndarray,
+    speed: np.ndarray,
+    block_end: np.ndarray,
+    fn: np.ndarray,
+    fn_end: np.ndarray,
+    dwell: np.ndarray,
+    lead: np.ndarray,
+    end: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A chunk's points decided: one op per output line.
+
+    q (N, 5) the written poses [mm, mm, mm, deg, deg] (rounded as written); dt (N,)
+    each point's segment time [s]; line (N,) int64 the source lines; speed (N,)
+    the plan's speed at each point; block_end, fn (a machine function there),
+    fn_end (it ends the program), dwell (N,) bool; lead (N, 5) what the real-axis
+    tables add to each motor [mm]. ``end``: after the points, the program's end
+    (the held corner and points written). ``st`` is updated in place: the line
+    carried in from the chunk before (the writer's first, it waits for this
+    chunk) lowered or stopped in ``i[patch]``, ``f[patch_f]`` (the writer clears
+    it); the line that waits for the next chunk in ``i[keep]`` (its op, or
+    CARRIED still, or NONE: none waits).
+
+    Returns
+    -------
+    code, arg, ab : (M,) int64
+        Each line's op (:data:`OPS`), its point (a G1's, a G0's, a line comment's,
+        a machine function's, a dwell's; :data:`RUN_SRC` / :data:`CORNER_SRC` for
+        one kept from a chunk before), and a G1's point whose A B it writes (or
+        :data:`HELD_SRC`).
+    val : (M,) float64
+        A G1's F (inverse time [1/min]).
+    """
+    r = _Run(st)
+    # the plan's mean speed over each piece (it ramps linearly over a period)
+    spd = speed.tolist()
+    plan = [0.5 * (a + b) for a, b in zip([r.last_speed, *spd[:-1]], spd, strict=False)]
+    if len(speed):
+        r.last_speed = float(speed[-1])
+    for k, row in enumerate(
+        zip(
+            q.tolist(),
+            dt.tolist(),
+            line.tolist(),
+            speed.tolist(),
+            block_end.tolist(),
+            fn.tolist(),
+            fn_end.tolist(),
+            dwell.tolist(),
+            lead.tolist(),
+            plan,
+            strict=True,
+        )
+    ):
+        r.point(k, *row)
+    if end:
+        r.resolve_corner(None, 0.0)
+        r.write_held()
+    r.hand_out()
+    reserve(st, len(r.run) - int(st.i[I_NAMES.index("run_n")]))
+    r.store(st)
+    return (
+        np.array(r.code, dtype=np.int64),
+        np.array(r.arg, dtype=np.int64),
+        np.array(r.ab, dtype=np.int64),
+        np.array(r.val, dtype=np.float64),
+    )

@@ -1,0 +1,253 @@
+"""The compiled G-code writer's decisions against their plain-Python reference: the
+same ops, F values and state, to the bit.
+
+Recorded inputs (every chunk the corrected G-code of the sample programs and of a
+generated bench program, bench/bench.py's, on its calibrated machine with tables
+and play, is decided in) and generated ones (hypothesis: runs of points moving
+straight, turning corners, stopping, dwelling, with machine functions and play
+crossings, A and B still, creeping or turning; tolerance 0 or not, the tilt held
+or not, ``g61_every_line`` on or off; cut into chunks at any point, so that held
+points, corners and the line before carry over). Also CPython's ``math.fsum`` and
+``math.hypot`` (which is not libm's hypot) against the twin's own.
+"""
+
+from __future__ import annotations
+
+import copy
+import importlib.util
+import itertools
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from prsxy_post import kernel
+from prsxy_post.convert import ConvertJob, convert_file
+from prsxy_post.kernel import gwrite
+
+from .conftest import ROOT
+from .kernel_cases import compiled, record, same_bits
+
+Ops = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _same_ops(got: Ops, want: Ops) -> bool:
+    return all(
+        np.array_equal(g, w) and g.dtype == w.dtype for g, w in zip(got[:3], want[:3], strict=True)
+    ) and same_bits(got[3], want[3])
+
+
+def _same_state(a: gwrite.GState, b: gwrite.GState) -> bool:
+    n = int(a.i[gwrite.I_NAMES.index("run_n")])
+    return np.array_equal(a.i, b.i) and all(
+        same_bits(x, y)
+        for x, y in (
+            (a.f, b.f),
+            (a.last_q, b.last_q),
+            (a.last_ab, b.last_ab),
+            (a.held_ab, b.held_ab),
+            (a.lead0, b.lead0),
+            (a.corner_q, b.corner_q),
+            (a.run_q[:n], b.run_q[:n]),
+        )
+    )
+
+
+def _both(args: tuple[Any, ...]) -> Ops:
+    """Run the reference and the twin from copies of the same state; assert they
+    agree (ops and state) and return the ops."""
+    _gwrite = compiled("_gwrite")
+    st_r, st_c = copy.deepcopy(args[0]), copy.deepcopy(args[0])
+    gwrite.reserve(st_c, len(args[1]))
+    want = gwrite.gcode_ops(st_r, *args[1:])
+    got = _gwrite.gcode_ops(st_c, *args[1:])
+    assert _same_ops(got, want)
+    assert _same_state(st_c, st_r)
+    return want
+
+
+def test_the_twin_names_the_state_as_the_reference() -> None:
+    _gwrite = compiled("_gwrite")
+    assert _gwrite.F_NAMES == gwrite.F_NAMES and _gwrite.I_NAMES == gwrite.I_NAMES
+
+
+_float = st.one_of(
+    st.floats(-1e3, 1e3),
+    st.floats(-1e-300, 1e-300),
+    st.floats(allow_nan=False, allow_infinity=False, min_value=-1e150, max_value=1e150),
+    st.sampled_from([0.0, -0.0, 1e-320, 5e-324, 1.0, 0.1, 3.0]),
+)
+
+
+@settings(max_examples=2000, deadline=None)
+@given(x=st.lists(_float, min_size=0, max_size=5))
+def test_fsum_and_hypot_are_cpythons(x: list[float]) -> None:
+    """The twin's exactly rounded sum is math.fsum's bits (Shewchuk's partials,
+    half-even across them), its hypot CPython's vector_norm (a split square and
+    a corrected root, not libm's hypot): cancelling pairs, subnormals, wide ranges."""
+    _gwrite = compiled("_gwrite")
+    xs = x + [-v for v in x[:1]]  # a pair that cancels exactly
+    for v in (x, xs, [a * 1e-3 for a in x]):
+        want = math.fsum(v)
+        got = _gwrite.fsum(np.array(v, dtype=float))
+        assert same_bits(np.array(got), np.array(want))
+    want_h = math.hypot(*x)
+    assert same_bits(np.array(_gwrite.hypot(np.array(x, dtype=float))), np.array(want_h))
+
+
+def test_sample_programs_decisions_are_bit_identical(tmp_path: Path) -> None:
+    calls = record("_gcode_ops", tmp_path)
+    # pocket, drill and five-axis as corrected G-code: their chunks and ends
+    assert len(calls) >= 6
+    lines = 0
+    for args in calls:
+        lines += int(np.sum(_both(args)[0] == gwrite.G1))
+    assert lines >= 500
+
+
+def _bench_module() -> Any:
+    spec = importlib.util.spec_from_file_location("prsxy_bench", ROOT / "bench" / "bench.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_bench_program_decisions_are_bit_identical(tmp_path: Path) -> None:
+    """bench/bench.py's generated five-axis program on its calibrated machine (tables
+    and play on every motor: the tilt is never held there)."""
+    bench = _bench_module()
+    prog = tmp_path / "bench.ngc"
+    prog.write_text(bench.generate(3000))
+    prof = bench.bench_profile(tmp_path / "bench.toml")
+    calls: list[tuple[Any, ...]] = []
+    inner: Callable[..., Ops] = kernel._gcode_ops
+
+    def spy(*args: Any) -> Ops:
+        calls.append(tuple(copy.deepcopy(a) for a in args))
+        return inner(*args)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(kernel, "_gcode_ops", spy)
+    try:
+        convert_file(ConvertJob(str(prog), str(prof), "gcode", str(tmp_path / "out.ngc")))
+    finally:
+        mp.undo()
+    assert len(calls) >= 2
+    ops = [_both(args) for args in calls]
+    g1 = sum(int(np.sum(o[0] == gwrite.G1)) for o in ops)
+    stops = sum(int(np.sum(o[0] == gwrite.G4P0)) for o in ops)
+    assert g1 > 5000 and stops > 0
+
+
+@st.composite
+def _program(draw: st.DrawFn) -> tuple[np.ndarray, ...]:
+    """A run of points as the chain hands them to the writer (module docstring)."""
+    n = draw(st.integers(1, 40))
+    pos = np.array(
+        [draw(st.floats(-100, 100)) for _ in range(3)]
+        + [draw(st.floats(-20, 20)) for _ in range(2)]
+    )
+    direction = np.array([draw(st.floats(-1, 1)) for _ in range(3)])
+    speed_now = draw(st.sampled_from([1.0, 10.0, 50.0, 0.2]))
+    ab_rate = draw(st.sampled_from([0.0, 1e-5, 1e-2, -3.0]))
+    lead_now = np.zeros(5)
+    rows = []
+    line = 1
+    kinds = ["move"] * 6 + ["corner", "stop", "dwell", "fn", "end", "cross", "tilt"]
+    for _ in range(n):
+        kind = draw(st.sampled_from(kinds))
+        dtk = draw(st.sampled_from([0.01, 0.0097, 0.004, 2.5e-4]))
+        if kind == "corner":
+            direction = np.array([draw(st.floats(-1, 1)) for _ in range(3)])
+        if kind == "tilt":
+            ab_rate = draw(st.sampled_from([0.0, 1e-5, 1e-2, -3.0]))
+        norm = float(np.linalg.norm(direction)) or 1.0
+        step = np.zeros(5)
+        still = kind in ("dwell", "fn", "end")
+        if not still:
+            step[:3] = direction / norm * speed_now * dtk
+            step[:3] += [draw(st.sampled_from([0.0, 1e-7, -3e-5, 2e-4])) for _ in range(3)]
+            step[3:] = ab_rate * dtk + draw(st.sampled_from([0.0, 1e-7, -2e-7]))
+        pos = pos + step
+        if kind == "cross":
+            lead_now[draw(st.integers(0, 4))] += draw(st.sampled_from([2e-3, -1e-4, 5e-6]))
+        line += draw(st.sampled_from([0, 0, 1, 2]))
+        stops = kind in ("stop", "dwell", "fn", "end")
+        rows.append(
+            (
+                *np.round(pos, 7).tolist(),
+                dtk,
+                line,
+                0.0 if stops else speed_now * draw(st.sampled_from([1.0, 0.5, 1.001])),
+                kind in ("corner", "stop") or (draw(st.booleans()) and draw(st.booleans())),
+                kind in ("fn", "end"),
+                kind == "end",
+                kind == "dwell" or (kind in ("fn", "end") and draw(st.booleans())),
+                *lead_now.tolist(),
+            )
+        )
+    a = np.array(rows, dtype=float)
+    q = np.round(a[:, :5], 7) + 0.0
+    return (
+        q,
+        a[:, 5].copy(),
+        a[:, 6].astype(np.int64),
+        a[:, 7].copy(),
+        a[:, 8] > 0,
+        a[:, 9] > 0,
+        a[:, 10] > 0,
+        a[:, 11] > 0,
+        np.ascontiguousarray(a[:, 12:17]),
+    )
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    prog=_program(),
+    tol=st.sampled_from([0.0, 1e-4, 5e-4, 1e-6]),
+    hold=st.booleans(),
+    all_exact=st.booleans(),
+    accel=st.sampled_from([(2000.0, 3000.0), (500.0, 100.0)]),
+    cuts=st.lists(st.integers(0, 40), max_size=3),
+)
+def test_generated_runs_are_bit_identical(
+    prog: tuple[np.ndarray, ...],
+    tol: float,
+    hold: bool,
+    all_exact: bool,
+    accel: tuple[float, float],
+    cuts: list[int],
+) -> None:
+    _gwrite = compiled("_gwrite")
+    arc = 0.5 / 3600.0
+    st_r = gwrite.new_state(
+        tol, 0.00025, 0.5 * arc, 0.6 * arc if hold else 0.0, 0.2 * arc, *accel, all_exact
+    )
+    st_c = copy.deepcopy(st_r)
+    n = len(prog[0])
+    edges = [0, *sorted(c for c in cuts if c < n), n]
+    ops: list[Ops] = []
+    for a, b in [*itertools.pairwise(edges), (n, n)]:
+        part = tuple(x[a:b] for x in prog)
+        end = a == n
+        want = gwrite.gcode_ops(st_r, *part, end)
+        gwrite.reserve(st_c, b - a)
+        got = _gwrite.gcode_ops(st_c, *part, end)
+        assert _same_ops(got, want)
+        assert _same_state(st_c, st_r)
+        ops.append(want)
+    code = np.concatenate([o[0] for o in ops])
+    assert code[0] == gwrite.G0
+    if all_exact:
+        # every line in G61, each followed by G4 P0 (a stop at every point)
+        assert not np.any(code == gwrite.G64)
+        for o in ops:
+            g1 = np.flatnonzero(o[0] == gwrite.G1)
+            assert np.all(o[0][g1 + 1] == gwrite.G4P0)
+    assert np.all(np.concatenate([o[3][o[0] == gwrite.G1] for o in ops]) > 0.0)
