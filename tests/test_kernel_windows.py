@@ -180,3 +180,36 @@ def test_a_window_with_no_acceleration_is_half_the_longest_each_side() -> None:
     for mod in (windows, compiled("_windows")):
         a, b = mod.crossing_windows(*args)
         assert a[0] == pytest.approx(0.0045) and b[0] == pytest.approx(0.0055)
+
+
+def test_compiled_windows_refuse_arrays_of_the_wrong_length() -> None:
+    """The twins run without bounds checks: each refuses arrays of another length
+    than its first with a ValueError naming what it expected and what it got."""
+    _windows = compiled("_windows")
+    n = 4
+    a = np.linspace(0.0, 1.0, n)
+    h = np.full(n, 0.01)
+    args = [a, a + 1.0, a + 2.0, -a, h]
+    names = ["V0", "P1", "V1", "h"]
+    for j, name in enumerate(names, start=1):
+        bad = list(args)
+        bad[j] = bad[j][:-1]
+        msg = rf"{name} must have one value a step \(4 values, as the first\), got 3"
+        with pytest.raises(ValueError, match=msg):
+            _windows.velocity_roots(*bad, np.ones(n), True)
+        with pytest.raises(ValueError, match=msg):
+            _windows.turning_points(*bad)
+        with pytest.raises(ValueError, match=msg):
+            _windows.dip_roots(*bad, np.ones(n), 1e-4, False)
+    with pytest.raises(ValueError, match=r"new must have .* got 2"):
+        _windows.velocity_roots(*args, np.ones(2), True)
+    with pytest.raises(ValueError, match=r"sg must have .* got 5"):
+        _windows.dip_roots(*args, np.ones(5), 1e-4, True)
+    t0, t1, tr, acc = a, a + 0.01, a + 0.005, np.ones(n)
+    inf = np.full(n, np.inf)
+    with pytest.raises(
+        ValueError, match=r"ra must have one value a window \(4 values, as the first\), got 3"
+    ):
+        _windows.crossing_windows(t0, t1, tr, acc, inf, inf[:-1], 1e-4, 1e-3, False, 2.5e-4)
+    with pytest.raises(ValueError, match=r"t_root must have .* got 3"):
+        _windows.crossing_windows(t0, t1, tr[:-1], acc, inf, inf, 1e-4, 1e-3, False, 2.5e-4)

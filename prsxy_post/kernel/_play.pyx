@@ -231,6 +231,19 @@ def _vec(p):
     return np.ascontiguousarray(p, dtype=np.float64)
 
 
+def _lengths(str what, Py_ssize_t n, **arrays):
+    """Refuse arrays of other lengths than ``n`` before the loops run without
+    bounds checks: a ValueError naming what was expected and what was got."""
+    for name, a in arrays.items():
+        if len(a) != n:
+            raise ValueError(f"{name} must have {what} ({n} values), got {len(a)}")
+
+
+def _motion_lengths(mo, Py_ssize_t n):
+    """A Motion's columns (and n) one value a point."""
+    _lengths("one value a point", n, **{f: getattr(mo, f) for f in mo._fields})
+
+
 def lo(t, p):
     """lo(p) [mm]: :func:`play.lo`."""
     cdef _Table tb = _table(t)
@@ -285,6 +298,7 @@ def slope(t, p, side):
     cdef const double[::1] x = _vec(p)
     cdef const double[::1] sd = _vec(side)
     cdef Py_ssize_t n = x.shape[0], i, k, lo_i, hi_i, mid
+    _lengths("one value a position", n, side=sd)
     out = np.empty(n)
     cdef double[::1] o = out
     cdef double v, pi_, w
@@ -317,6 +331,7 @@ def compensate_sided(t, target, side):
     cdef const double[::1] x = _vec(target)
     cdef const double[::1] sd = _vec(side)
     cdef Py_ssize_t n = x.shape[0], i, nu = 0, nd = 0
+    _lengths("one value a target", n, side=sd)
     out = np.empty(n)
     cdef double[::1] o = out
     if n == 0:
@@ -359,6 +374,7 @@ def clamp_scan(lo, hi):
     cdef const double[::1] a = _vec(lo)
     cdef const double[::1] b = _vec(hi)
     cdef Py_ssize_t n = a.shape[0], i
+    _lengths("one value a row, as lo", n, hi=b)
     out = np.empty(n)
     cdef double[::1] o = out
     cdef double y
@@ -622,6 +638,9 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
     cdef const double[::1] s = _vec(s_path)
     cdef Py_ssize_t m = o0.shape[0], n = s.shape[0], i, j, k, K
     cdef bint has_motion = motion is not None
+    _lengths("one value a crossing, as off0", m, way=wy, start=st, stop=sp)
+    if has_motion:
+        _lengths("one value a point, as s_path", n, dP=motion[0], V=motion[1], speed=motion[2])
     cdef const double[::1] dP
     cdef const double[::1] Vm
     cdef const double[::1] speed
@@ -705,6 +724,9 @@ def catch_up_commands(t, mo, off0, start, stop, P, V, double share, double hurry
     cdef double[::1] Pv = P
     cdef double[::1] Vv = V
     cdef Py_ssize_t n = s_path.shape[0], m = st.shape[0], i, k, K
+    _lengths("one value a point, as P", Pv.shape[0], V=Vv)
+    _motion_lengths(mo, Pv.shape[0])
+    _lengths("one value a crossing, as start", m, stop=sp, off0=off0)
     way_a = np.empty(m)
     cdef double[::1] way = way_a
     for i in range(m):
@@ -798,6 +820,9 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
     cdef const double[::1] Pi = mo.P_ideal
     cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0], i, upto = 0
     cdef double y0 = before[0], P0 = before[1], V0 = before[2]
+    _motion_lengths(mo, n)
+    _lengths("one value a point, as P", n, V=Vv)
+    _lengths("one value a crossing, as e", c, b=bv, shortfall=shortfall)
     for i in range(c):
         if ev[i] + 1 > upto:
             upto = ev[i] + 1
@@ -1050,6 +1075,7 @@ def creeps(sg, P, side, double ref, double drift):
     cdef const long[::1] s = np.ascontiguousarray(sg, dtype=np.int_)
     cdef const double[::1] p = _vec(P)
     cdef Py_ssize_t n = s.shape[0], start = 0, r
+    _lengths("one value a row, as sg", n, P=p)
     out_a = np.zeros(n, dtype=int)
     cdef long[::1] out = out_a
     cdef long cur_side = int(side), came = 0
@@ -1079,6 +1105,9 @@ def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, doub
     cdef const long[::1] sn = np.ascontiguousarray(s_new, dtype=np.int_)
     cdef Py_ssize_t m = v.shape[0], w = ev.shape[0], i, j, k
     cdef long lo_f
+    _lengths("one value a point, as V", m, resting=rest)
+    _lengths("one value a window, as e", w, f=fv, new=nv, last_row=lv)
+    _lengths("one value a standing crossing, as s_first", sf.shape[0], s_new=sn)
     out = np.empty(m, dtype=int)
     cdef long[::1] sg = out
     for i in range(m):

@@ -20,6 +20,16 @@ cdef inline double _min(double a, double b) noexcept nogil:
     return a if (a < b or a != a) else b
 
 
+def _lengths(str what, Py_ssize_t n, **arrays):
+    """Refuse arrays of other lengths than ``n`` before the loops run without
+    bounds checks: a ValueError naming what was expected and what was got."""
+    for name, a in arrays.items():
+        if a.shape[0] != n:
+            raise ValueError(
+                f"{name} must have {what} ({n} values, as the first), got {a.shape[0]}"
+            )
+
+
 cdef inline double _clip01(double x) noexcept nogil:
     # numpy's clip to [0, 1]: NaN stays, −0.0 stays
     if x != x:
@@ -54,6 +64,7 @@ def velocity_roots(P0, V0, P1, V1, h, new, bint has_new):
         new if has_new else np.zeros(p0.shape[0]), dtype=np.float64
     )
     cdef Py_ssize_t n = p0.shape[0], i
+    _lengths("one value a step", n, V0=v0, P1=p1, V1=v1, h=hh, new=nw)
     out_s = np.empty(n)
     out_a = np.empty(n)
     cdef double[::1] S = out_s
@@ -107,6 +118,7 @@ def turning_points(P0, V0, P1, V1, h):
     cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
     cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
     cdef Py_ssize_t n = p0.shape[0], i
+    _lengths("one value a step", n, V0=v0, P1=p1, V1=v1, h=hh)
     out_lo = np.empty(n)
     out_hi = np.empty(n)
     cdef double[::1] LO = out_lo
@@ -151,6 +163,7 @@ def dip_roots(P0, V0, P1, V1, h, sg, double tol, bint sets_off):
     cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
     cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
     cdef Py_ssize_t n = p0.shape[0], i, j, m = 0
+    _lengths("one value a step", n, V0=v0, P1=p1, V1=v1, h=hh, sg=np.asarray(sg))
     keep_a = np.zeros(n, dtype=bool)
     cdef unsigned char[::1] keep = keep_a.view(np.uint8)
     cdef const double[::1] r1
@@ -209,6 +222,7 @@ def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,
     cdef const double[::1] RB = np.ascontiguousarray(rb, dtype=np.float64)
     cdef const double[::1] RA = np.ascontiguousarray(ra, dtype=np.float64)
     cdef Py_ssize_t n = T0.shape[0], i
+    _lengths("one value a window", n, t1=T1, t_root=TR, accel=AC, rb=RB, ra=RA)
     out_a = np.empty(n)
     out_b = np.empty(n)
     cdef double[::1] A = out_a
