@@ -838,28 +838,26 @@ class Pipeline:
         v_before = float(self.last.speed[0]) if self.last is not None else 0.0
         qdot_before = self.last.qdot[0, :3] if self.last is not None else np.zeros(3)
 
-        # the forward Jacobian ∂q/∂P at the rows asked for so far (every motor's and
-        # window's questions share them: the IK's differences are the cost)
-        fwd = np.full((len(pc), 5, 5), np.nan)
-        done = np.zeros(len(pc), dtype=bool)
-
-        def forward_jacobian(k: np.ndarray) -> np.ndarray:
-            new = np.unique(k[~done[k]])
-            if new.size:
-                # P_ideal is the IK of q_target here (blends move it only later)
-                jac = ik_jacobian(
-                    self.geo, pc.q_target[new], pc.tool_length[new], DIR_STEP_MM, pc.P_ideal[new]
-                )
-                ok = np.all(np.isfinite(jac), axis=(1, 2))
-                if np.any(ok):
-                    try:
-                        fwd[new[ok]] = np.linalg.inv(jac[ok])
-                    except np.linalg.LinAlgError:
-                        # a singular pose: pinv gives a long lever (the shortest
-                        # window), not an error
-                        fwd[new[ok]] = np.linalg.pinv(jac[ok])
-                done[new] = True
-            return fwd[k]
+        def levers(k: np.ndarray, cols: np.ndarray) -> np.ndarray:
+            """(q, 3) J = ∂x_tip / ∂P_col at rows ``k`` for motors ``cols``: the
+            forward Jacobian ∂q/∂P made once a row asked (every motor's and window's
+            questions share them: the IK's differences are the cost), only there."""
+            rows, which = np.unique(k, return_inverse=True)
+            fwd = np.full((len(rows), 5, 5), np.nan)
+            # P_ideal is the IK of q_target here (blends move it only later)
+            jac = ik_jacobian(
+                self.geo, pc.q_target[rows], pc.tool_length[rows], DIR_STEP_MM, pc.P_ideal[rows]
+            )
+            ok = np.all(np.isfinite(jac), axis=(1, 2))
+            if np.any(ok):
+                try:
+                    fwd[ok] = np.linalg.inv(jac[ok])
+                except np.linalg.LinAlgError:
+                    # a singular pose: pinv gives a long lever (the shortest
+                    # window), not an error
+                    fwd[ok] = np.linalg.pinv(jac[ok])
+            out: np.ndarray = fwd[which, :3, cols]
+            return out
 
         def edge_speed(
             k: np.ndarray, frac: np.ndarray, cols: np.ndarray, accel: np.ndarray
@@ -870,7 +868,7 @@ class Pipeline:
             # of a (q, 5, 5) array: einsum's sums below take their order from the
             # strides (a contiguous (q, 3) sums otherwise in the last bit)
             buf = np.empty((len(k), 5, 5))
-            buf[:, :3, 0] = forward_jacobian(k)[np.arange(len(k)), :3, cols]
+            buf[:, :3, 0] = levers(k, cols)
             lever = buf[:, :3, 0]
             j2 = np.einsum("ij,ij->i", lever, lever)
             v0 = np.where(k >= 1, pc.speed[np.maximum(k - 1, 0)], v_before)

@@ -23,7 +23,7 @@ of it while the path goes on. So the jump gets a window of its own:
   cubic turns back and on again inside it: a tight curve's extreme between two
   points): two windows, one at each turning point, when the dip is deeper than
   the tolerance; and the same where a motor sets off from rest or standing the
-  other way first (:func:`_dip_roots`).
+  other way first (:func:`_motor_dips`).
 
 A chunk's reversals are planned in stages with no callback into the chain:
 :func:`find_reversals` (the reversals, their kinds, the roots on the steps'
@@ -52,6 +52,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernel
+from .kernel import windows as kernel_windows
 from .kernel.play import PlayTable
 
 #: ``edge_speed(k, s, cols, accel)``: the fastest [mm/s] motors ``cols`` (q,) may
@@ -560,7 +561,7 @@ def chord_windows(
 
 
 class _Dip(NamedTuple):
-    """A motor's dips (or settings-off back) in a chunk (:func:`_dip_roots`): the
+    """A motor's dips (or settings-off back) in a chunk (:func:`_motor_dips`): the
     steps ``k`` (m,), the way ``sg`` the motor moves at the step's end, the
     fractions ``s1``, ``s2`` of the step where it turns and its accelerations
     ``A1``, ``A2`` there [mm/s²], the steps' durations ``h``, their starts ``t0``,
@@ -578,48 +579,13 @@ class _Dip(NamedTuple):
     t1: np.ndarray
 
 
-def _dip_roots(
-    k: np.ndarray,
-    sg: np.ndarray,
-    P0: np.ndarray,
-    V0: np.ndarray,
-    P1: np.ndarray,
-    V1: np.ndarray,
-    t_end: np.ndarray,
-    dt: np.ndarray,
-    tol: float,
-    sets_off: bool = False,
-) -> _Dip:
-    """The two turning points of every step ``k`` whose cubic turns back and on
-    again while the motor moves the same way (``sg``) at both of its ends
-    (:func:`_dip_windows` gives their windows).
-
-    A dip shallower than ``tol`` is left alone: the part stands at the first
-    turning point while the motor goes back and forth within its play, and misses
-    the path by the dip's depth at most.
-
-    With ``sets_off``, the steps that a motor leaves from rest, or standing, the
-    way against ``sg``, the way it ends the step moving and its part is on: it
-    crosses to −sg as it sets off (at the step's start, s1 = 0) and back at the
-    root where its cubic turns to ``sg``; left alone where it goes back no
-    further than ``tol``.
-    """
-    keep, s1, s2, A1, A2 = kernel.dip_roots(P0, V0, P1, V1, dt[k], sg, tol, sets_off)
-    k, sg = k[keep], sg[keep]
-    h = dt[k]
-    t1 = t_end[k]
-    t0 = t1 - h
-    tm = t0 + 0.5 * (s1 + s2) * h
-    return _Dip(k, sg, s1, s2, A1, A2, h, t0, tm, t1)
-
-
 def _dip_windows(
     d: _Dip,
     rules: _Rules,
     w1: tuple[np.ndarray, np.ndarray] | None,
     w2: tuple[np.ndarray, np.ndarray] | None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The two crossings of every dip ``d`` (:func:`_dip_roots`), within the
+    """The two crossings of every dip ``d`` (:func:`_motor_dips`), within the
     ``reach`` w1, w2 (:func:`reach`; None: the tolerance alone decides) about its
     first and second turning point. Each of the two windows keeps to its own half
     of the step (cut between the two turning points), so that they never overlap.
@@ -1058,40 +1024,25 @@ def _turns(
     it got farthest its last way (the ``ref`` [mm] carried to the next chunk,
     :func:`.kernel.play.creeps`). ``side`` (5,) the side each motor is on before the chunk;
     ``drift`` [mm] the drift back that makes a creeping motor cross."""
-    n, off, dt = len(ch.dt), ch.off, ch.dt
-    sg = np.where(ch.rest, 0, signs(ch.V[:, col]))
+    off, dt = ch.off, ch.dt
+    p = ch.P[:, col]
     # creeps back become reversals; the reach is carried to the next chunk
-    crept, reach_ref = kernel.creeps(sg, ch.P[:, col], int(side[col]), ref, drift)
-    sg = np.where(crept != 0, crept, sg)
-    # the side a row comes from: the last direction before it, or the carried one
-    came = np.concatenate([[side[col]], kernel.carried(sg, side[col])[:-1]])
-    r = np.flatnonzero((sg != 0) & (sg != came))
-    r = r[(r - off >= 0) & (r - off < n)]
+    sg, came, r, kind, reach_ref = kernel.motor_turns(
+        ch.V[:, col], p, ch.rest, int(side[col]), ref, drift, off, V_EPS
+    )
     k = r - off
     new = sg[r]
-    p = ch.P[:, col]
     # a step whose chord goes the old way sets off that way first and turns
     # inside it: a reversal in motion, at the cubic's root, also where the step
     # leaves from rest or from a motor standing (a head motor through the extreme
     # of a tilt: 0.22 % over F, and 0.5 µm off the path from rest,
-    # test_controller_truth's found programs)
-    old_way = new * (p[r] - p[np.maximum(r - 1, 0)]) < 0.0
-    at_rest = (r == 0) | (ch.rest[np.maximum(r - 1, 0)] & ~old_way)
-    crept_f = (crept[r] != 0) & ~at_rest
-    # drifted back within a step that began moving the old way (it ends at rest,
-    # or creeping): the step's cubic turns inside it, and the window goes there
-    crept_f &= sg[np.maximum(r - 1, 0)] != -new
-    stood = (
-        ~at_rest
-        & ~crept_f
-        & (k >= 1)
-        & (r >= 2)
-        & (sg[np.maximum(r - 1, 0)] == 0)
-        & (sg[np.maximum(r - 2, 0)] == 0)
-        & (np.abs(p[np.maximum(r - 1, 0)] - p[np.maximum(r - 2, 0)]) < 1e-9)
-        & ~old_way
-    )
-    mid = ~(at_rest | crept_f | stood)
+    # test_controller_truth's found programs); drifted back within a step that
+    # began moving the old way (it ends at rest, or creeping): the step's cubic
+    # turns inside it, and the window goes there (kernel.windows.motor_turns)
+    at_rest = kind == kernel_windows.AT_REST
+    crept_f = kind == kernel_windows.CREPT
+    stood = kind == kernel_windows.STOOD
+    mid = kind == kernel_windows.MID
     km, rm = k[mid], r[mid]
     sr, acc = velocity_roots(p[rm - 1], ch.V[rm - 1, col], p[rm], ch.V[rm, col], dt[km], new[mid])
     turns = _Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc)
@@ -1136,36 +1087,40 @@ def _motor_windows(
 
 
 def _motor_dips(t: _Turns, ch: _Chunk, tol: float) -> list[_Dip]:
-    """One motor's dips and settings-off back (:func:`_dip_roots`), in that
-    order."""
-    sg, came, p, off, n = t.sg, t.came, t.p, ch.off, len(ch.dt)
+    """One motor's dips and settings-off back, in that order: the two turning
+    points of every step whose cubic turns back and on again while the motor
+    moves the same way at both of its ends (:func:`_dip_windows` gives their
+    windows), with the kernel's :func:`.kernel.windows.motor_dips`.
+
+    A dip shallower than ``tol`` is left alone: the part stands at the first
+    turning point while the motor goes back and forth within its play, and misses
+    the path by the dip's depth at most.
+
+    Setting off back: the steps that a motor leaves from rest, or standing, the
+    way against ``sg``, the way it ends the step moving and its part is on: it
+    crosses to −sg as it sets off (at the step's start, s1 = 0) and back at the
+    root where its cubic turns to ``sg``; left alone where it goes back no
+    further than ``tol``.
+    """
     # a dip: the motor moves the same way at both ends of a step, but the step's
     # cubic turns twice inside it (the extreme of a tight curve between two
-    # points, or a corner whose point carries the mean of its sides' velocities)
-    j_dip = np.flatnonzero((sg[1:] == sg[:-1]) & (sg[1:] != 0)) + 1
-    j_dip = j_dip[(j_dip - off >= 0) & (j_dip - off < n)]
+    # points, or a corner whose point carries the mean of its sides' velocities);
     # setting off back: a motor at rest or standing leaves with its chord against
     # the way it ends the step and its part is on: it goes the other way first
     # and turns inside the step (from rest through the extreme of a tilt: 0.5
     # µm off the path, test_controller_truth's found programs)
-    j_off = np.flatnonzero((sg[1:] != 0) & (sg[:-1] == 0)) + 1
-    j_off = j_off[(j_off - off >= 0) & (j_off - off < n) & (came[j_off] == sg[j_off])]
-    j_off = j_off[sg[j_off] * (p[j_off] - p[j_off - 1]) < 0.0]
-    return [
-        _dip_roots(
-            j - off,
-            sg[j],
-            p[j - 1],
-            ch.V[j - 1, t.col],
-            p[j],
-            ch.V[j, t.col],
-            ch.t_end,
-            ch.dt,
-            tol,
-            sets_off,
+    out = []
+    for sets_off in (False, True):
+        j, s1, s2, A1, A2 = kernel.motor_dips(
+            t.p, ch.V[:, t.col], ch.dt, t.sg, t.came, ch.off, tol, sets_off
         )
-        for j, sets_off in ((j_dip, False), (j_off, True))
-    ]
+        k = j - ch.off
+        h = ch.dt[k]
+        t1 = ch.t_end[k]
+        t0 = t1 - h
+        tm = t0 + 0.5 * (s1 + s2) * h
+        out.append(_Dip(k, t.sg[j], s1, s2, A1, A2, h, t0, tm, t1))
+    return out
 
 
 def _motion_windows(

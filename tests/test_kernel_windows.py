@@ -13,6 +13,7 @@ velocities, straight, nearly straight, turning twice, either way or none).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -29,11 +30,13 @@ def _same_pair(got: tuple[np.ndarray, np.ndarray], want: tuple[np.ndarray, np.nd
     return same_bits(got[0], want[0]) and same_bits(got[1], want[1])
 
 
-#: how often at least the samples' conversions call them, and on how many steps
-#: in all (dips: every step where a motor keeps its way and every setting-off,
-#: twice a motor with play and chunk, the turning points inside; roots: the
-#: reversals in motion, once a motor with play and chunk, few steps)
-ROOT_CALLS = {"_velocity_roots": (5, 3), "_dip_roots": (10, 100)}
+#: how often at least the samples' conversions call them, and on how many rows
+#: in all (a motor's reversals: every row, once a motor with play and chunk;
+#: dips: every row, twice a motor with play and chunk, the steps where it keeps
+#: its way and its settings-off; roots: the reversals in motion, once a motor
+#: with play and chunk, few steps). dip_roots runs inside motor_dips on both
+#: paths: generated inputs test it (test_generated_roots_are_bit_identical)
+ROOT_CALLS = {"_velocity_roots": (5, 3), "_motor_turns": (10, 100), "_motor_dips": (20, 100)}
 
 
 @pytest.mark.parametrize("attr", sorted(ROOT_CALLS))
@@ -213,3 +216,67 @@ def test_compiled_windows_refuse_arrays_of_the_wrong_length() -> None:
         _windows.crossing_windows(t0, t1, tr, acc, inf, inf[:-1], 1e-4, 1e-3, False, 2.5e-4)
     with pytest.raises(ValueError, match=r"t_root must have .* got 3"):
         _windows.crossing_windows(t0, t1, tr[:-1], acc, inf, inf, 1e-4, 1e-3, False, 2.5e-4)
+
+
+@st.composite
+def _motor_rows(draw: st.DrawFn) -> tuple[Any, ...]:
+    """A motor's rows as motor_turns takes them: velocities fast, creeping, zero
+    or −0.0 either way, positions drifting or standing, rows at rest; with or
+    without the point before the chunk (off)."""
+    n = draw(st.integers(0, 40))
+    v = st.one_of(
+        st.floats(-30.0, 30.0),
+        st.sampled_from([0.0, -0.0, 4e-4, -4e-4, 5e-4, -6e-4, 2.0, -2.0]),
+        st.floats(-1e-3, 1e-3),
+    )
+    V = np.array(draw(st.lists(v, min_size=n, max_size=n)), dtype=float)
+    steps = draw(
+        st.lists(
+            st.one_of(st.floats(-1e-2, 1e-2), st.just(0.0), st.floats(-1e-9, 1e-9)),
+            min_size=n,
+            max_size=n,
+        )
+    )
+    P = 10.0 + np.cumsum(np.array(steps, dtype=float))
+    rest = np.array(draw(st.lists(st.booleans(), min_size=n, max_size=n)), dtype=bool)
+    side = draw(st.sampled_from([1, -1]))
+    ref = draw(st.one_of(st.just(np.nan), st.floats(9.9, 10.1)))
+    off = draw(st.integers(0, 1)) if n else 0
+    return V, P, rest, side, ref, draw(st.sampled_from([5e-5, 1e-7])), off
+
+
+@settings(max_examples=300, deadline=None)
+@given(case=_motor_rows(), tol=st.sampled_from([0.0, 1e-7, 5e-5]), seed=st.integers(0, 2**16))
+def test_generated_motor_turns_and_dips_are_bit_identical(
+    case: tuple[Any, ...], tol: float, seed: int
+) -> None:
+    """A motor's reversals and their kinds, and its dips and settings-off back,
+    compiled against the reference: the same rows, kinds and roots to the bit."""
+    _windows = compiled("_windows")
+    V, P, rest, side, ref, drift, off = case
+    args = (V, P, rest, side, ref, drift, off, reversals.V_EPS)
+    want = windows.motor_turns(*args)
+    got = _windows.motor_turns(*args)
+    assert len(got) == len(want) and all(
+        same_bits(np.asarray(g), np.asarray(w)) for g, w in zip(got, want, strict=True)
+    )
+    assert got[3].dtype == np.int8 and set(got[3].tolist()) <= {0, 1, 2, 3}
+    sg, came = want[0], want[1]
+    h = np.random.default_rng(seed).choice([0.01, 0.00977, 2.5e-4], len(V) - off)
+    for sets_off in (False, True):
+        d_args = (P, V, h, sg, came, off, tol, sets_off)
+        w_d = windows.motor_dips(*d_args)
+        g_d = _windows.motor_dips(*d_args)
+        assert all(same_bits(g, w) for g, w in zip(g_d, w_d, strict=True))
+
+
+def test_compiled_motor_rows_refuse_arrays_of_the_wrong_length() -> None:
+    _windows = compiled("_windows")
+    V, P, rest = np.ones(5), np.ones(5), np.zeros(5, bool)
+    with pytest.raises(ValueError, match=r"rest must have one value a row, as V .* got 4"):
+        _windows.motor_turns(V, P, rest[:-1], 1, 0.0, 1e-4, 0, 5e-4)
+    sg = np.ones(5, dtype=int)
+    with pytest.raises(ValueError, match=r"came must have one value a row, as P .* got 3"):
+        _windows.motor_dips(P, V, np.ones(5), sg, sg[:3], 0, 1e-4, False)
+    with pytest.raises(ValueError, match=r"h must have at most 4 values \(one a step\), got 5"):
+        _windows.motor_dips(P, V, np.ones(5), sg, sg, 1, 1e-4, False)

@@ -231,17 +231,18 @@ def _vec(p):
     return np.ascontiguousarray(p, dtype=np.float64)
 
 
-def _lengths(str what, Py_ssize_t n, **arrays):
-    """Refuse arrays of other lengths than ``n`` before the loops run without
-    bounds checks: a ValueError naming what was expected and what was got."""
-    for name, a in arrays.items():
-        if len(a) != n:
-            raise ValueError(f"{name} must have {what} ({n} values), got {len(a)}")
+def _lengths(str what, Py_ssize_t n, **lengths):
+    """Refuse arrays whose ``lengths`` (name: length) are not ``n`` before the
+    loops run without bounds checks: a ValueError naming what was expected and
+    what was got."""
+    for name, got in lengths.items():
+        if got != n:
+            raise ValueError(f"{name} must have {what} ({n} values), got {got}")
 
 
 def _motion_lengths(mo, Py_ssize_t n):
     """A Motion's columns (and n) one value a point."""
-    _lengths("one value a point", n, **{f: getattr(mo, f) for f in mo._fields})
+    _lengths("one value a point", n, **{f: len(getattr(mo, f)) for f in mo._fields})
 
 
 def lo(t, p):
@@ -298,7 +299,7 @@ def slope(t, p, side):
     cdef const double[::1] x = _vec(p)
     cdef const double[::1] sd = _vec(side)
     cdef Py_ssize_t n = x.shape[0], i, k, lo_i, hi_i, mid
-    _lengths("one value a position", n, side=sd)
+    _lengths("one value a position", n, side=len(sd))
     out = np.empty(n)
     cdef double[::1] o = out
     cdef double v, pi_, w
@@ -331,7 +332,7 @@ def compensate_sided(t, target, side):
     cdef const double[::1] x = _vec(target)
     cdef const double[::1] sd = _vec(side)
     cdef Py_ssize_t n = x.shape[0], i, nu = 0, nd = 0
-    _lengths("one value a target", n, side=sd)
+    _lengths("one value a target", n, side=len(sd))
     out = np.empty(n)
     cdef double[::1] o = out
     if n == 0:
@@ -374,7 +375,7 @@ def clamp_scan(lo, hi):
     cdef const double[::1] a = _vec(lo)
     cdef const double[::1] b = _vec(hi)
     cdef Py_ssize_t n = a.shape[0], i
-    _lengths("one value a row, as lo", n, hi=b)
+    _lengths("one value a row, as lo", n, hi=len(b))
     out = np.empty(n)
     cdef double[::1] o = out
     cdef double y
@@ -638,9 +639,10 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
     cdef const double[::1] s = _vec(s_path)
     cdef Py_ssize_t m = o0.shape[0], n = s.shape[0], i, j, k, K
     cdef bint has_motion = motion is not None
-    _lengths("one value a crossing, as off0", m, way=wy, start=st, stop=sp)
+    _lengths("one value a crossing, as off0", m, way=len(wy), start=len(st), stop=len(sp))
     if has_motion:
-        _lengths("one value a point, as s_path", n, dP=motion[0], V=motion[1], speed=motion[2])
+        _lengths("one value a point, as s_path", n, dP=len(motion[0]), V=len(motion[1]),
+                 speed=len(motion[2]))
     cdef const double[::1] dP
     cdef const double[::1] Vm
     cdef const double[::1] speed
@@ -724,9 +726,9 @@ def catch_up_commands(t, mo, off0, start, stop, P, V, double share, double hurry
     cdef double[::1] Pv = P
     cdef double[::1] Vv = V
     cdef Py_ssize_t n = s_path.shape[0], m = st.shape[0], i, k, K
-    _lengths("one value a point, as P", Pv.shape[0], V=Vv)
+    _lengths("one value a point, as P", Pv.shape[0], V=len(Vv))
     _motion_lengths(mo, Pv.shape[0])
-    _lengths("one value a crossing, as start", m, stop=sp, off0=off0)
+    _lengths("one value a crossing, as start", m, stop=len(sp), off0=len(off0))
     way_a = np.empty(m)
     cdef double[::1] way = way_a
     for i in range(m):
@@ -821,8 +823,8 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
     cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0], i, upto = 0
     cdef double y0 = before[0], P0 = before[1], V0 = before[2]
     _motion_lengths(mo, n)
-    _lengths("one value a point, as P", n, V=Vv)
-    _lengths("one value a crossing, as e", c, b=bv, shortfall=shortfall)
+    _lengths("one value a point, as P", n, V=len(Vv))
+    _lengths("one value a crossing, as e", c, b=len(bv), shortfall=len(shortfall))
     for i in range(c):
         if ev[i] + 1 > upto:
             upto = ev[i] + 1
@@ -1075,7 +1077,7 @@ def creeps(sg, P, side, double ref, double drift):
     cdef const long[::1] s = np.ascontiguousarray(sg, dtype=np.int_)
     cdef const double[::1] p = _vec(P)
     cdef Py_ssize_t n = s.shape[0], start = 0, r
-    _lengths("one value a row, as sg", n, P=p)
+    _lengths("one value a row, as sg", n, P=len(p))
     out_a = np.zeros(n, dtype=int)
     cdef long[::1] out = out_a
     cdef long cur_side = int(side), came = 0
@@ -1105,9 +1107,9 @@ def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, doub
     cdef const long[::1] sn = np.ascontiguousarray(s_new, dtype=np.int_)
     cdef Py_ssize_t m = v.shape[0], w = ev.shape[0], i, j, k
     cdef long lo_f
-    _lengths("one value a point, as V", m, resting=rest)
-    _lengths("one value a window, as e", w, f=fv, new=nv, last_row=lv)
-    _lengths("one value a standing crossing, as s_first", sf.shape[0], s_new=sn)
+    _lengths("one value a point, as V", m, resting=len(rest))
+    _lengths("one value a window, as e", w, f=len(fv), new=len(nv), last_row=len(lv))
+    _lengths("one value a standing crossing, as s_first", sf.shape[0], s_new=len(sn))
     out = np.empty(m, dtype=int)
     cdef long[::1] sg = out
     for i in range(m):

@@ -13,7 +13,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .play import hermite, velocity_quadratic
+from .play import carried, creeps, hermite, velocity_quadratic
+
+#: A reversal's kind (:func:`motor_turns`): in motion (the window about the root
+#: of its step's cubic), at rest (a standing point), creeping back over a step's
+#: end, after the motor stood through the step before.
+MID, AT_REST, CREPT, STOOD = 0, 1, 2, 3
 
 
 def velocity_roots(
@@ -88,7 +93,7 @@ def dip_roots(
     """The steps (n,) whose cubic turns back and on again deeper than ``tol``
     [mm] while the motor moves the way ``sg`` at both ends, or (``sets_off``)
     that the motor leaves going back first further than ``tol``, and where they
-    turn; the rules are :func:`prsxy_post.reversals._dip_roots`'.
+    turn; the rules are :func:`prsxy_post.reversals._motor_dips`'.
 
     Returns
     -------
@@ -112,6 +117,99 @@ def dip_roots(
     hk = h[keep]
     a, b, _ = velocity_quadratic(P0[keep], V0[keep], P1[keep], V1[keep], hk)
     return keep, s1, s2, (2 * a * s1 + b) / hk, (2 * a * s2 + b) / hk
+
+
+def motor_turns(
+    V: np.ndarray,
+    P: np.ndarray,
+    rest: np.ndarray,
+    side: int,
+    ref: float,
+    drift: float,
+    off: int,
+    eps: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """One motor's reversals in a chunk and their kinds; the rules are
+    :func:`prsxy_post.reversals._turns`'.
+
+    Parameters
+    ----------
+    V, P : (off + n,) its wanted velocity [mm/s] and position [mm] at each row (the
+        point before the chunk first where ``off`` is 1)
+    rest : (off + n,) bool, the path stands at the row
+    side : the side it is on before the chunk (+1, −1)
+    ref, drift : where it got farthest its last way [mm] and the drift back that
+        makes a creeping motor cross [mm] (:func:`.play.creeps`)
+    eps : the slowest velocity with a direction [mm/s]
+
+    Returns
+    -------
+    sg : (off + n,) its direction at each row (creeps back made reversals)
+    came : (off + n,) the direction each row comes from
+    r : (m,) the rows where it reverses (rows of V, inside the chunk)
+    kind : (m,) int8, MID, AT_REST, CREPT or STOOD
+    reach : the ``ref`` carried to the next chunk
+    """
+    n = len(V) - off
+    sg = np.where(rest, 0, np.where(V > eps, 1, np.where(V < -eps, -1, 0)))
+    crept, reach = creeps(sg, P, side, ref, drift)
+    sg = np.where(crept != 0, crept, sg)
+    came = np.concatenate([[side], carried(sg, side)[:-1]])[: len(sg)]
+    r = np.flatnonzero((sg != 0) & (sg != came))
+    r = r[(r - off >= 0) & (r - off < n)]
+    new = sg[r]
+    b1, b2 = np.maximum(r - 1, 0), np.maximum(r - 2, 0)
+    old_way = new * (P[r] - P[b1]) < 0.0
+    at_rest = (r == 0) | (rest[b1] & ~old_way)
+    crept_f = (crept[r] != 0) & ~at_rest & (sg[b1] != -new)
+    stood = (
+        ~at_rest
+        & ~crept_f
+        & (r - off >= 1)
+        & (r >= 2)
+        & (sg[b1] == 0)
+        & (sg[b2] == 0)
+        & (np.abs(P[b1] - P[b2]) < 1e-9)
+        & ~old_way
+    )
+    kind = np.where(at_rest, AT_REST, np.where(crept_f, CREPT, np.where(stood, STOOD, MID)))
+    return sg, came, r, kind.astype(np.int8), reach
+
+
+def motor_dips(
+    P: np.ndarray,
+    V: np.ndarray,
+    h: np.ndarray,
+    sg: np.ndarray,
+    came: np.ndarray,
+    off: int,
+    tol: float,
+    sets_off: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One motor's dips (or, ``sets_off``, its settings-off back) in a chunk: the
+    rows j of ``P``, ``V``, ``sg``, ``came`` (off + n,) (:func:`motor_turns`) whose
+    step (``h`` (n,) [s], row j − off) the motor ends moving the way it began it
+    (or leaves from rest or standing, the way it comes from, with its chord
+    against it), and :func:`dip_roots` of those. The rules are
+    :func:`prsxy_post.reversals._motor_dips`'.
+
+    Returns
+    -------
+    j : (m,) the rows that dip
+    s1, s2, A1, A2 : (m,) as :func:`dip_roots`
+    """
+    n = len(h)
+    if sets_off:
+        j = np.flatnonzero((sg[1:] != 0) & (sg[:-1] == 0)) + 1
+        j = j[(j - off >= 0) & (j - off < n) & (came[j] == sg[j])]
+        j = j[sg[j] * (P[j] - P[j - 1]) < 0.0]
+    else:
+        j = np.flatnonzero((sg[1:] == sg[:-1]) & (sg[1:] != 0)) + 1
+        j = j[(j - off >= 0) & (j - off < n)]
+    keep, s1, s2, A1, A2 = dip_roots(
+        P[j - 1], V[j - 1], P[j], V[j], h[j - off], sg[j], tol, sets_off
+    )
+    return j[keep], s1, s2, A1, A2
 
 
 def crossing_windows(
