@@ -770,11 +770,11 @@ class Pipeline:
         ends = np.concatenate(
             [
                 rows.at(ins.w_kb, ins.w_tb, ins.w_t0b),
-                rows.first(np.array([k for k, _, _ in ins.stands], dtype=int)),
+                rows.first(ins.s_k),
             ]
         )
         begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
-        cols = np.concatenate([ins.w_col, np.array([c for _, c, _ in ins.stands], dtype=int)])
+        cols = np.concatenate([ins.w_col, ins.s_col])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
         return pc, side, contacts[np.lexsort((cols, begs, ends))]
 
@@ -1209,13 +1209,12 @@ class Pipeline:
         """The standing points and the points inside steps that the reversals need,
         and the chunk's step times cut at them."""
         parts: list[PointChunk] = []
-        e_step: list[int] = []
-        e_when: list[float] = []
-        e_before: list[bool] = []
+        e_step: list[np.ndarray] = [np.zeros(0, dtype=int)]
+        e_when: list[np.ndarray] = [np.zeros(0)]
+        e_before: list[np.ndarray] = [np.zeros(0, dtype=bool)]
         dt = pc.dt.copy()
-        if ins.stand:
-            ks_stand = np.array(sorted(ins.stand), dtype=int)
-            hold = np.array([ins.stand[k] for k in ks_stand.tolist()])
+        if len(ins.stand_k):
+            ks_stand, hold = ins.stand_k, ins.stand_t
             # each stands at the point before it (the chunk's first at the last one made)
             dup = pc.take(np.maximum(ks_stand - 1, 0))  # fancy indexing: copies
             if ks_stand[0] == 0:
@@ -1233,9 +1232,9 @@ class Pipeline:
             dup.dt[:] = hold
             dup.line[:] = pc.line[ks_stand]
             parts.append(dup)
-            e_step += ks_stand.tolist()
-            e_when += (t_end[ks_stand] - pc.dt[ks_stand]).tolist()
-            e_before += [True] * len(ks_stand)
+            e_step.append(ks_stand)
+            e_when.append(t_end[ks_stand] - pc.dt[ks_stand])
+            e_before.append(np.ones(len(ks_stand), dtype=bool))
         if len(ins.mid_k) and plan is not None:
             ks = ins.mid_k
             tt = ins.mid_t
@@ -1273,14 +1272,14 @@ class Pipeline:
                     V_cmd=V,
                 )
             )
-            e_step += ks.tolist()
-            e_when += tt.tolist()
-            e_before += [False] * m
+            e_step.append(ks)
+            e_when.append(tt)
+            e_before.append(np.zeros(m, dtype=bool))
         return (
             PointChunk.concat(parts),
-            np.array(e_step, dtype=int),
-            np.array(e_when),
-            np.array(e_before, dtype=bool),
+            np.concatenate(e_step).astype(int),
+            np.concatenate(e_when).astype(float),
+            np.concatenate(e_before),
             dt,
         )
 

@@ -140,8 +140,10 @@ def signs(V: np.ndarray) -> np.ndarray:
 class Insertions:
     """What a chunk of points needs for its reversals (:func:`plan_insertions`).
 
-    stand : row k -> duration of a standing point put before it
-    stands : (k, col, new) motors that cross at the standing point before row k
+    stand_k, stand_t : (s,) the rows k that get a standing point put before them
+        (sorted, distinct) and its duration [s]
+    s_k, s_col, s_new : (c,) the motors that cross at the standing point before
+        row s_k, and the side each crosses to, motor after motor
     w_k, w_col, w_ta, w_tb, w_new : (w,) crossing windows inside steps: in the step
         ending at row w_k, motor w_col is on its old side −w_new up to w_ta and on
         the new side from w_tb (a dip gives one motor two windows in one step)
@@ -160,8 +162,11 @@ class Insertions:
     """
 
     def __init__(self) -> None:
-        self.stand: dict[int, float] = {}
-        self.stands: list[tuple[int, int, int]] = []
+        self.stand_k = np.zeros(0, dtype=int)
+        self.stand_t = np.zeros(0)
+        self.s_k = np.zeros(0, dtype=int)
+        self.s_col = np.zeros(0, dtype=int)
+        self.s_new = np.zeros(0, dtype=int)
         self.w_k = np.zeros(0, dtype=int)
         self.w_col = np.zeros(0, dtype=int)
         self.w_ta = np.zeros(0)
@@ -176,7 +181,7 @@ class Insertions:
         self.blended = np.zeros(0, dtype=int)
 
     def __bool__(self) -> bool:
-        return bool(self.stand) or len(self.mid_k) > 0
+        return len(self.stand_k) > 0 or len(self.mid_k) > 0
 
 
 def velocity_roots(
@@ -958,10 +963,11 @@ def place_insertions(
     bent = None if corners_at is None else np.sort(corners_at)
     w = _Windows([], [], [], [], [])
     at = 0
+    s_k, s_col, s_new = [ins.s_k], [ins.s_col], [ins.s_new]
     for t, dips in zip(found.seen, found.dips, strict=True):
-        for kk, nn in zip(t.k[t.at_rest].tolist(), t.new[t.at_rest].tolist(), strict=True):
-            ins.stand[kk] = longest
-            ins.stands.append((kk, t.col, nn))
+        s_k.append(t.k[t.at_rest])
+        s_col.append(np.full(len(s_k[-1]), t.col))
+        s_new.append(t.new[t.at_rest])
         reaches: list[tuple[np.ndarray, np.ndarray] | None] = []
         for k, _, acc in _edge_parts(t, dips):
             if allowed is None:
@@ -977,6 +983,9 @@ def place_insertions(
         new_all = np.concatenate(news)
         w.col.append(np.full(len(new_all), t.col))
         w.new.append(new_all)
+    ins.s_k, ins.s_col, ins.s_new = (np.concatenate(x) for x in (s_k, s_col, s_new))
+    ins.stand_k = np.unique(ins.s_k)
+    ins.stand_t = np.full(len(ins.stand_k), longest)
     if w.col:
         _place_points(ins, ch, w, blends, near_first)
     return ins
@@ -1256,7 +1265,7 @@ def _blend_points(
     ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
     if near_first:
         early, tau_e = np.concatenate([[0], early]), np.concatenate([[near_first], tau_e])
-    keep = (early < n) & ~np.isin(early, np.fromiter(ins.stand, dtype=int, count=len(ins.stand)))
+    keep = (early < n) & ~np.isin(early, ins.stand_k)
     early, tau_e = early[keep], tau_e[keep]
     t_early = t_end[early] - dt[early] + tau_e
     edges, starts, stops = np.sort(et), np.sort(ins.w_ta), np.sort(ins.w_tb)
@@ -1358,9 +1367,7 @@ def sides(
     f_all = rows.first_plain(ins.w_k)
     e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b)
     last_row = np.searchsorted(rows.step, ins.w_kb, "right") - 1  # its end's step's end
-    s_k = np.array([k for k, _, _ in ins.stands], dtype=int)
-    s_col = np.array([c for _, c, _ in ins.stands], dtype=int)
-    s_new = np.array([n for _, _, n in ins.stands], dtype=int)
+    s_k, s_col, s_new = ins.s_k, ins.s_col, ins.s_new
     for col in cols:
         mine = np.flatnonzero(ins.w_col == col)
         mine = mine[np.argsort(e_all[mine], kind="stable")]
