@@ -169,16 +169,36 @@ cdef inline double _invert(double x, const double* vals, const double* breaks,
     return out
 
 
+cdef inline double _invert_g(double x, const double* vals, const double* breaks,
+                             const double* err, Py_ssize_t n, Py_ssize_t* g) noexcept nogil:
+    """:func:`_invert`, its interval searched from the guess ``g`` (numpy's interp
+    guesses the interval before; the interval found is the same, unique), the
+    interval found left in ``g``."""
+    cdef double out
+    if n == 1:
+        out = breaks[0]
+    elif x != x:
+        out = x
+    else:
+        g[0] = _find(x, vals, n, g[0])
+        out = _at(x, g[0], vals, breaks, n)
+    if x < vals[0]:
+        out = x - err[0]
+    elif x > vals[n - 1]:
+        out = x - err[n - 1]
+    return out
+
+
 cdef void _solve(const Tab* t, const double* target, double* out, Py_ssize_t n,
                  bint up, double* scratch) noexcept nogil:
     """lo⁻¹ (``up``) or hi⁻¹ of ``target`` (n,) into ``out``; ``scratch`` (n,)."""
     cdef const double* vals = t.lo_vals if up else t.hi_vals
     cdef const double* err = t.lo_err if up else t.hi_err
-    cdef Py_ssize_t i, it
+    cdef Py_ssize_t i, it, g = -1
     cdef double big, d
     cdef bint nan
     for i in range(n):
-        out[i] = _invert(target[i], vals, t.breaks, err, t.nb)
+        out[i] = _invert_g(target[i], vals, t.breaks, err, t.nb, &g)
     if t.nc == 0:
         return
     for it in range(30):
@@ -298,7 +318,7 @@ def slope(t, p, side):
     cdef const Tab* T = &tb.tab
     cdef const double[::1] x = _vec(p)
     cdef const double[::1] sd = _vec(side)
-    cdef Py_ssize_t n = x.shape[0], i, k, lo_i, hi_i, mid
+    cdef Py_ssize_t n = x.shape[0], i, k, lo_i = -1
     _lengths("one value a position", n, side=len(sd))
     out = np.empty(n)
     cdef double[::1] o = out
@@ -308,14 +328,9 @@ def slope(t, p, side):
         pi_ = x[i]
         if T.nb > 1:
             if pi_ >= T.breaks[0] and pi_ < T.breaks[T.nb - 1]:
-                lo_i = 0
-                hi_i = T.nb - 1  # breaks[lo_i] <= p < breaks[hi_i]
-                while hi_i - lo_i > 1:
-                    mid = (lo_i + hi_i) >> 1
-                    if T.breaks[mid] <= pi_:
-                        lo_i = mid
-                    else:
-                        hi_i = mid
+                # breaks[lo_i] <= p < breaks[lo_i + 1], unique: searched from the
+                # row before's
+                lo_i = _find(pi_, T.breaks, T.nb, lo_i)
                 v = v + (T.s_lo[lo_i] if sd[i] > 0 else T.s_hi[lo_i])
             else:
                 v = v + 0.0
