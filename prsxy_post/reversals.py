@@ -964,17 +964,23 @@ def place_insertions(
     w = _Windows([], [], [], [], [])
     at = 0
     s_k, s_col, s_new = [ins.s_k], [ins.s_col], [ins.s_new]
-    for t, dips in zip(found.seen, found.dips, strict=True):
+    parts = [_edge_parts(t, dips) for t, dips in zip(found.seen, found.dips, strict=True)]
+    if allowed is not None:
+        # every turning point's reach at once (edge_queries' order), sliced below
+        acc_all = np.concatenate([np.zeros(0)] + [acc for p in parts for _, _, acc in p])
+        q = len(acc_all)
+        r_before, r_after = reach((allowed[0][:q], allowed[1][:q]), acc_all)
+    for t, dips, edges in zip(found.seen, found.dips, parts, strict=True):
         s_k.append(t.k[t.at_rest])
         s_col.append(np.full(len(s_k[-1]), t.col))
         s_new.append(t.new[t.at_rest])
         reaches: list[tuple[np.ndarray, np.ndarray] | None] = []
-        for k, _, acc in _edge_parts(t, dips):
+        for k, _, _ in edges:
             if allowed is None:
                 reaches.append(None)
                 continue
             m = len(k)
-            reaches.append(reach((allowed[0][at : at + m], allowed[1][at : at + m]), acc))
+            reaches.append((r_before[at : at + m], r_after[at : at + m]))
             at += m
         ks, tas, tbs, news = _motor_windows(t, dips, ch, rules, bent, reaches)
         w.k.extend(ks)
@@ -1369,10 +1375,13 @@ def sides(
     f_all = rows.first_plain(ins.w_k)
     e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b)
     last_row = np.searchsorted(rows.step, ins.w_kb, "right") - 1  # its end's step's end
-    s_k, s_col, s_new = ins.s_k, ins.s_col, ins.s_new
-    for col in cols:
-        mine = np.flatnonzero(ins.w_col == col)
-        mine = mine[np.argsort(e_all[mine], kind="stable")]
+    s_first, s_col, s_new = rows.first(ins.s_k), ins.s_col, ins.s_new
+    # every motor's windows by their ends, in one sort (stable: as each motor's own)
+    by_col = np.lexsort((e_all, ins.w_col))
+    w_cols = ins.w_col[by_col]
+    lo, hi = np.searchsorted(w_cols, cols, "left"), np.searchsorted(w_cols, cols, "right")
+    for i, col in enumerate(cols):
+        mine = by_col[lo[i] : hi[i]]
         here = s_col == col
         # the points after a window's end inside its step (another motor's window,
         # a blend's point before a corner) are on the new side: where the path turns
@@ -1385,7 +1394,7 @@ def sides(
             e_all[mine],
             ins.w_new[mine],
             last_row[mine],
-            rows.first(s_k[here]),
+            s_first[here],
             s_new[here],
             int(side[col]),
             V_EPS,
