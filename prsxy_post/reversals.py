@@ -664,21 +664,9 @@ def corners(
     blend : (k,) bool, the corner is blended
     tau : (k,) [s] its τ
     """
-    dV = np.abs(V_out - V_in)
-    vi, vo = V_in[:, cols], V_out[:, cols]
-    # the slower side's velocity, signed along the faster side's way
-    fast = np.where(np.abs(vo) >= np.abs(vi), vo, vi)
-    slow = np.where(np.abs(vo) >= np.abs(vi), vi, vo) * np.where(fast < 0, -1.0, 1.0)
-    # a motor reversing at the corner (moving both ways) crosses its play in a
-    # window of its own (plan_insertions)
-    moves = (np.abs(fast) >= V_EPS) & (slow > -V_EPS)
-    d = dV[:, cols]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        left = np.clip(np.where(d > 0, 1.0 - 6.0 * slow / d, 0.0), 0.0, 1.0)
-    turn = (4.0 / 27.0) * h[:, None] * d / 2.0 * left**1.5
-    tau = np.maximum(BLEND_MIN_S, np.max(dV, axis=1, initial=0.0) / (2.0 * accel))
-    blend = np.any(moves & (turn > CORNER_TURN_MM), axis=1) & (tau <= 0.5 * h)
-    return blend, tau
+    return kernel.corner_blends(
+        V_in, V_out, np.asarray(cols, dtype=int), h, accel, V_EPS, CORNER_TURN_MM, BLEND_MIN_S
+    )
 
 
 #: The shortest τ of a blend [s]. Its steps' chords are written to 1e-7 mm (the

@@ -12,6 +12,8 @@ velocities, straight, nearly straight, turning twice, either way or none).
 
 from __future__ import annotations
 
+import copy
+import math
 from pathlib import Path
 from typing import Any
 
@@ -20,9 +22,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from prsxy_post import reversals
+from prsxy_post import kernel, reversals
+from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.kernel import windows
 
+from .conftest import ROOT
 from .kernel_cases import compiled, record, same_bits
 
 
@@ -280,3 +284,95 @@ def test_compiled_motor_rows_refuse_arrays_of_the_wrong_length() -> None:
         _windows.motor_dips(P, V, np.ones(5), sg, sg[:3], 0, 1e-4, False)
     with pytest.raises(ValueError, match=r"h must have at most 4 values \(one a step\), got 5"):
         _windows.motor_dips(P, V, np.ones(5), sg, sg, 1, 1e-4, False)
+
+
+def _polyline(n: int) -> str:
+    """A tilting polyline at F1500 turning 12° at each point, ten one way then ten
+    the other: corners taken at speed."""
+    lines = ["G21 G90 G17 G94", "G0 X0 Y0 Z5 A0 B0", "G1 Z0 F600"]
+    x = y = ang = 0.0
+    for i in range(n):
+        ang += math.radians(12 if (i // 10) % 2 else -12)
+        x, y = x + 2 * math.cos(ang), y + 2 * math.sin(ang)
+        a, b = 3 * math.sin(i / 5), 2 * math.cos(i / 7)
+        lines.append(f"G1 X{x:.3f} Y{y:.3f} A{a:.3f} B{b:.3f} F1500")
+    return "\n".join([*lines, "M2", ""])
+
+
+def test_converted_corner_blends_are_bit_identical(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The corners a PVT conversion looks at (a polyline at speed through a
+    profile with play; the sample programs have none), compiled against the
+    reference: blend and τ to the bit, some corners blended, some not."""
+    _windows = compiled("_windows")
+    calls: list[tuple[Any, ...]] = []
+    inner = kernel._corner_blends
+
+    def spy(*args: Any) -> Any:
+        calls.append(copy.deepcopy(args))
+        return inner(*args)
+
+    monkeypatch.setattr(kernel, "_corner_blends", spy)
+    program = tmp_path / "polyline.ngc"
+    program.write_text(_polyline(80))
+    prof = str(ROOT / "tests" / "data" / "vectors" / "perturbed.toml")
+    convert_file(ConvertJob(str(program), prof, "pmac", str(tmp_path / "out.pmc")))
+    assert sum(len(args[3]) for args in calls) >= 20
+    blended = corners = 0
+    for args in calls:
+        want = windows.corner_blends(*args)
+        got = _windows.corner_blends(*args)
+        assert same_bits(got[0], want[0]) and got[0].dtype == bool
+        assert same_bits(got[1], want[1])
+        blended += int(want[0].sum())
+        corners += len(want[0])
+    assert 0 < blended < corners
+
+
+_corner_v = st.one_of(
+    st.floats(-60.0, 60.0),
+    st.sampled_from([0.0, -0.0, 4e-4, -6e-4, 1.0, -1.0]),
+    st.floats(-1e-3, 1e-3),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    k=st.integers(0, 8),
+    data=st.data(),
+    cols=st.sampled_from([[0, 1, 2, 3, 4], [2], [0, 3], []]),
+    accel=st.sampled_from([250.0, 1e4, 1.0]),
+)
+def test_generated_corner_blends_are_bit_identical(
+    k: int, data: st.DataObject, cols: list[int], accel: float
+) -> None:
+    """Corners with motors standing on one side, slowing, reversing, creeping,
+    −0.0; steps from a servo cycle to 20 ms: blend and τ to the bit."""
+    _windows = compiled("_windows")
+    V_in = np.array(data.draw(st.lists(_corner_v, min_size=5 * k, max_size=5 * k))).reshape(k, 5)
+    V_out = np.array(data.draw(st.lists(_corner_v, min_size=5 * k, max_size=5 * k))).reshape(k, 5)
+    if k and data.draw(st.booleans()):
+        V_out[:, 1] = V_in[:, 1]  # a motor moving alike on both sides
+    h = np.array(data.draw(st.lists(st.floats(2.5e-4, 0.02), min_size=k, max_size=k)))
+    args = (V_in, V_out, np.array(cols, dtype=int), h, accel, 5e-4, 1e-6, 1e-3)
+    want = windows.corner_blends(*args)
+    got = _windows.corner_blends(*args)
+    assert same_bits(got[0], want[0]) and same_bits(got[1], want[1])
+
+
+def test_compiled_corner_blends_refuse_wrong_shapes() -> None:
+    _windows = compiled("_windows")
+    V = np.zeros((3, 5))
+    h = np.full(3, 0.01)
+    cols = np.array([0, 1])
+    with pytest.raises(
+        ValueError, match=r"V_in and V_out must be \(k, 5\), got \(3, 5\) and \(3, 4\)"
+    ):
+        _windows.corner_blends(V, V[:, :4], cols, h, 250.0, 5e-4, 1e-6, 1e-3)
+    with pytest.raises(
+        ValueError, match=r"h must have one row a corner, as V_in \(3 values.*got 2"
+    ):
+        _windows.corner_blends(V, V, cols, h[:2], 250.0, 5e-4, 1e-6, 1e-3)
+    with pytest.raises(ValueError, match=r"cols must be motor columns 0 to 4, got 5"):
+        _windows.corner_blends(V, V, np.array([5]), h, 250.0, 5e-4, 1e-6, 1e-3)

@@ -455,6 +455,27 @@ _velocity_roots = _RUN["windows"].velocity_roots
 _turning_points = _RUN["windows"].turning_points
 _dip_roots = _RUN["windows"].dip_roots
 _motor_turns = _RUN["windows"].motor_turns
+_corner_blends = _RUN["windows"].corner_blends
+
+
+def corner_blends(
+    V_in: np.ndarray,
+    V_out: np.ndarray,
+    cols: np.ndarray,
+    h: np.ndarray,
+    accel: float,
+    v_eps: float,
+    turn_mm: float,
+    blend_min: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The corners a PVT program blends and their τ: :func:`windows.corner_blends`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _corner_blends(
+        V_in, V_out, cols, h, accel, v_eps, turn_mm, blend_min
+    )
+    return out
+
+
 _motor_dips = _RUN["windows"].motor_dips
 
 

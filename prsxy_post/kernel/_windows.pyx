@@ -407,3 +407,67 @@ def motor_dips(P, V, h, sg, came, Py_ssize_t off, double tol, bint sets_off):
         sv[j] = s[jj[j]]
     keep, s1, s2, A1, A2 = dip_roots(P0, V0, P1, V1, hk, sk, tol, sets_off)
     return j_a[:m][keep], s1, s2, A1, A2
+
+
+def corner_blends(V_in, V_out, cols, h, double accel, double v_eps, double turn_mm,
+                  double blend_min):
+    """:func:`prsxy_post.kernel.windows.corner_blends`, compiled: a corner at a
+    time, the motors with play's (1 − 6 v / |ΔV|) in a (k, c) array as the
+    reference's, raised to 1.5 by numpy there (numpy's power, not the C library's
+    pow)."""
+    cdef const double[:, ::1] vin = np.ascontiguousarray(V_in, dtype=np.float64)
+    cdef const double[:, ::1] vout = np.ascontiguousarray(V_out, dtype=np.float64)
+    cdef const Py_ssize_t[::1] cv = np.ascontiguousarray(cols, dtype=np.intp)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef Py_ssize_t k = vin.shape[0], c = cv.shape[0], i, j, col
+    if vin.shape[1] != 5 or vout.shape[1] != 5:
+        raise ValueError(
+            f"V_in and V_out must be (k, 5), got {tuple(np.shape(V_in))} and "
+            f"{tuple(np.shape(V_out))}"
+        )
+    _lengths("one row a corner, as V_in", k, V_out=vout.shape[0], h=len(hh))
+    for j in range(c):
+        if not 0 <= cv[j] < 5:
+            raise ValueError(f"cols must be motor columns 0 to 4, got {cv[j]}")
+    left_a = np.empty((k, c))
+    moves_a = np.empty((k, c), dtype=np.uint8)
+    cdef double[:, ::1] left = left_a
+    cdef unsigned char[:, ::1] moves = moves_a
+    cdef double vi, vo, fast, slow, d, x
+    for i in range(k):
+        for j in range(c):
+            col = cv[j]
+            vi = vin[i, col]
+            vo = vout[i, col]
+            if fabs(vo) >= fabs(vi):
+                fast = vo
+                slow = vi
+            else:
+                fast = vi
+                slow = vo
+            slow = slow * (-1.0 if fast < 0 else 1.0)
+            moves[i, j] = (fabs(fast) >= v_eps) and (slow > -v_eps)
+            d = fabs(vo - vi)
+            x = 1.0 - 6.0 * slow / d if d > 0 else 0.0
+            left[i, j] = _clip01(x)
+    cdef const double[:, ::1] p15 = np.ascontiguousarray(left_a ** 1.5)
+    blend_a = np.zeros(k, dtype=bool)
+    tau_a = np.empty(k)
+    cdef unsigned char[::1] blend = blend_a.view(np.uint8)
+    cdef double[::1] tau = tau_a
+    cdef double m, turn
+    cdef bint any_turn
+    for i in range(k):
+        m = 0.0
+        for j in range(5):
+            m = _max(m, fabs(vout[i, j] - vin[i, j]))
+        tau[i] = _max(blend_min, m / (2.0 * accel))
+        any_turn = False
+        for j in range(c):
+            col = cv[j]
+            d = fabs(vout[i, col] - vin[i, col])
+            turn = (4.0 / 27.0) * hh[i] * d / 2.0 * p15[i, j]
+            if moves[i, j] and turn > turn_mm:
+                any_turn = True
+        blend[i] = any_turn and (tau[i] <= 0.5 * hh[i])
+    return blend_a, tau_a

@@ -2,7 +2,9 @@
 (:func:`velocity_roots`, :func:`turning_points`), which steps dip and where
 (:func:`dip_roots`), and a window's edges from the
 root, the acceleration there, the tolerance and the reach on each side
-(:func:`crossing_windows`).
+(:func:`crossing_windows`); a motor's reversals in a chunk and their kinds
+(:func:`motor_turns`), its dips and settings-off back (:func:`motor_dips`); the
+corners a PVT program blends (:func:`corner_blends`).
 
 The numpy reference; ``_windows.pyx`` is its compiled twin, the same operations in
 the same order (the same bits). The rules (why each) are
@@ -210,6 +212,47 @@ def motor_dips(
         P[j - 1], V[j - 1], P[j], V[j], h[j - off], sg[j], tol, sets_off
     )
     return j[keep], s1, s2, A1, A2
+
+
+def corner_blends(
+    V_in: np.ndarray,
+    V_out: np.ndarray,
+    cols: np.ndarray,
+    h: np.ndarray,
+    accel: float,
+    v_eps: float,
+    turn_mm: float,
+    blend_min: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The corners blended and their τ; the rules are
+    :func:`prsxy_post.reversals.corners`'.
+
+    Parameters
+    ----------
+    V_in, V_out : (k, 5) the motors' velocities each side of each corner [mm/s]
+    cols : (c,) ints, the motors with play
+    h : (k,) the standing side's step [s]
+    accel : the blend's acceleration [mm/s²]
+    v_eps, turn_mm, blend_min : reversals.V_EPS, CORNER_TURN_MM, BLEND_MIN_S
+
+    Returns
+    -------
+    blend : (k,) bool
+    tau : (k,) [s]
+    """
+    dV = np.abs(V_out - V_in)
+    vi, vo = V_in[:, cols], V_out[:, cols]
+    # the slower side's velocity, signed along the faster side's way
+    fast = np.where(np.abs(vo) >= np.abs(vi), vo, vi)
+    slow = np.where(np.abs(vo) >= np.abs(vi), vi, vo) * np.where(fast < 0, -1.0, 1.0)
+    moves = (np.abs(fast) >= v_eps) & (slow > -v_eps)
+    d = dV[:, cols]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        left = np.clip(np.where(d > 0, 1.0 - 6.0 * slow / d, 0.0), 0.0, 1.0)
+    turn = (4.0 / 27.0) * h[:, None] * d / 2.0 * left**1.5
+    tau = np.maximum(blend_min, np.max(dV, axis=1, initial=0.0) / (2.0 * accel))
+    blend = np.any(moves & (turn > turn_mm), axis=1) & (tau <= 0.5 * h)
+    return blend, tau
 
 
 def crossing_windows(
