@@ -467,8 +467,10 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
     cdef const double[::1] hv = _vec(dt)
     cdef const long[::1] st = np.ascontiguousarray(steps, dtype=np.int_)
     cdef Py_ssize_t n = Pv.shape[0], w = st.shape[0]
-    cdef Py_ssize_t i, j, k, m, nt = 0, ti
-    if int(np.sum(st)) != n or y0v.shape[0] != w or P0v.shape[0] != w or V0v.shape[0] != w:
+    cdef Py_ssize_t i, j, k, m, nt = 0, ti, total = 0
+    for j in range(w):
+        total += st[j]
+    if total != n or y0v.shape[0] != w or P0v.shape[0] != w or V0v.shape[0] != w:
         raise ValueError("steps must sum to len(P), and y0, P0, V0 have one value a stretch")
     if Vv.shape[0] != n or hv.shape[0] != n:
         raise ValueError("P, V and dt must have one value a step")
