@@ -1145,4 +1145,10 @@ def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, doub
     for i in range(sf.shape[0]):
         k = sf[i] if sf[i] >= 0 else sf[i] + m
         sg[k] = sn[i]
-    return carried(out, side)
+    # carried(out, side) in place: the last direction at or before each row
+    cdef long cur = side
+    for i in range(m):
+        if sg[i] != 0:
+            cur = sg[i]
+        sg[i] = cur
+    return out
