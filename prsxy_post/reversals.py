@@ -716,8 +716,9 @@ def _snap(k: np.ndarray, t: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.nd
 class _Turns(NamedTuple):
     """One motor's reversals in a chunk (:func:`plan_insertions`): its directions
     ``sg`` per row and the one each row comes from, the reversals' steps ``k`` and
-    new ways, its wanted positions ``p``, each reversal's kind, and the roots
-    ``sr`` [fraction of the step] and accelerations ``acc`` of those in motion."""
+    new ways, its wanted positions ``p``, each reversal's kind, the roots ``sr``
+    [fraction of the step] and accelerations ``acc`` of those in motion, and its
+    wanted velocities ``v``."""
 
     col: int
     sg: np.ndarray
@@ -731,6 +732,7 @@ class _Turns(NamedTuple):
     mid: np.ndarray
     sr: np.ndarray
     acc: np.ndarray
+    v: np.ndarray
 
 
 class _Chunk(NamedTuple):
@@ -1030,10 +1032,11 @@ def _turns(
     :func:`.kernel.play.creeps`). ``side`` (5,) the side each motor is on before the chunk;
     ``drift`` [mm] the drift back that makes a creeping motor cross."""
     off, dt = ch.off, ch.dt
-    p = ch.P[:, col]
+    # the motor's columns made contiguous once (the kernels take them so)
+    p, v = np.ascontiguousarray(ch.P[:, col]), np.ascontiguousarray(ch.V[:, col])
     # creeps back become reversals; the reach is carried to the next chunk
     sg, came, r, kind, reach_ref = kernel.motor_turns(
-        ch.V[:, col], p, ch.rest, int(side[col]), ref, drift, off, V_EPS
+        v, p, ch.rest, int(side[col]), ref, drift, off, V_EPS
     )
     k = r - off
     new = sg[r]
@@ -1049,8 +1052,8 @@ def _turns(
     stood = kind == kernel_windows.STOOD
     mid = kind == kernel_windows.MID
     km, rm = k[mid], r[mid]
-    sr, acc = velocity_roots(p[rm - 1], ch.V[rm - 1, col], p[rm], ch.V[rm, col], dt[km], new[mid])
-    turns = _Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc)
+    sr, acc = velocity_roots(p[rm - 1], v[rm - 1], p[rm], v[rm], dt[km], new[mid])
+    turns = _Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc, v)
     return turns, reach_ref
 
 
@@ -1116,9 +1119,7 @@ def _motor_dips(t: _Turns, ch: _Chunk, tol: float) -> list[_Dip]:
     # µm off the path, test_controller_truth's found programs)
     out = []
     for sets_off in (False, True):
-        j, s1, s2, A1, A2 = kernel.motor_dips(
-            t.p, ch.V[:, t.col], ch.dt, t.sg, t.came, ch.off, tol, sets_off
-        )
+        j, s1, s2, A1, A2 = kernel.motor_dips(t.p, t.v, ch.dt, t.sg, t.came, ch.off, tol, sets_off)
         k = j - ch.off
         h = ch.dt[k]
         t1 = ch.t_end[k]
