@@ -770,11 +770,11 @@ class Pipeline:
         ends = np.concatenate(
             [
                 rows.at(ins.w_kb, ins.w_tb, ins.w_t0b),
-                rows.first(np.array([k for k, _, _ in ins.stands], dtype=int)),
+                rows.first(ins.s_k),
             ]
         )
         begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
-        cols = np.concatenate([ins.w_col, np.array([c for _, c, _ in ins.stands], dtype=int)])
+        cols = np.concatenate([ins.w_col, ins.s_col])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
         return pc, side, contacts[np.lexsort((cols, begs, ends))]
 
@@ -838,28 +838,26 @@ class Pipeline:
         v_before = float(self.last.speed[0]) if self.last is not None else 0.0
         qdot_before = self.last.qdot[0, :3] if self.last is not None else np.zeros(3)
 
-        # the forward Jacobian ∂q/∂P at the rows asked for so far (every motor's and
-        # window's questions share them: the IK's differences are the cost)
-        fwd = np.full((len(pc), 5, 5), np.nan)
-        done = np.zeros(len(pc), dtype=bool)
-
-        def forward_jacobian(k: np.ndarray) -> np.ndarray:
-            new = np.unique(k[~done[k]])
-            if new.size:
-                # P_ideal is the IK of q_target here (blends move it only later)
-                jac = ik_jacobian(
-                    self.geo, pc.q_target[new], pc.tool_length[new], DIR_STEP_MM, pc.P_ideal[new]
-                )
-                ok = np.all(np.isfinite(jac), axis=(1, 2))
-                if np.any(ok):
-                    try:
-                        fwd[new[ok]] = np.linalg.inv(jac[ok])
-                    except np.linalg.LinAlgError:
-                        # a singular pose: pinv gives a long lever (the shortest
-                        # window), not an error
-                        fwd[new[ok]] = np.linalg.pinv(jac[ok])
-                done[new] = True
-            return fwd[k]
+        def levers(k: np.ndarray, cols: np.ndarray) -> np.ndarray:
+            """(q, 3) J = ∂x_tip / ∂P_col at rows ``k`` for motors ``cols``: the
+            forward Jacobian ∂q/∂P made once a row asked (every motor's and window's
+            questions share them: the IK's differences are the cost), only there."""
+            rows, which = np.unique(k, return_inverse=True)
+            fwd = np.full((len(rows), 5, 5), np.nan)
+            # P_ideal is the IK of q_target here (blends move it only later)
+            jac = ik_jacobian(
+                self.geo, pc.q_target[rows], pc.tool_length[rows], DIR_STEP_MM, pc.P_ideal[rows]
+            )
+            ok = np.all(np.isfinite(jac), axis=(1, 2))
+            if np.any(ok):
+                try:
+                    fwd[ok] = np.linalg.inv(jac[ok])
+                except np.linalg.LinAlgError:
+                    # a singular pose: pinv gives a long lever (the shortest
+                    # window), not an error
+                    fwd[ok] = np.linalg.pinv(jac[ok])
+            out: np.ndarray = fwd[which, :3, cols]
+            return out
 
         def edge_speed(
             k: np.ndarray, frac: np.ndarray, cols: np.ndarray, accel: np.ndarray
@@ -870,7 +868,7 @@ class Pipeline:
             # of a (q, 5, 5) array: einsum's sums below take their order from the
             # strides (a contiguous (q, 3) sums otherwise in the last bit)
             buf = np.empty((len(k), 5, 5))
-            buf[:, :3, 0] = forward_jacobian(k)[np.arange(len(k)), :3, cols]
+            buf[:, :3, 0] = levers(k, cols)
             lever = buf[:, :3, 0]
             j2 = np.einsum("ij,ij->i", lever, lever)
             v0 = np.where(k >= 1, pc.speed[np.maximum(k - 1, 0)], v_before)
@@ -1211,13 +1209,12 @@ class Pipeline:
         """The standing points and the points inside steps that the reversals need,
         and the chunk's step times cut at them."""
         parts: list[PointChunk] = []
-        e_step: list[int] = []
-        e_when: list[float] = []
-        e_before: list[bool] = []
+        e_step: list[np.ndarray] = [np.zeros(0, dtype=int)]
+        e_when: list[np.ndarray] = [np.zeros(0)]
+        e_before: list[np.ndarray] = [np.zeros(0, dtype=bool)]
         dt = pc.dt.copy()
-        if ins.stand:
-            ks_stand = np.array(sorted(ins.stand), dtype=int)
-            hold = np.array([ins.stand[k] for k in ks_stand.tolist()])
+        if len(ins.stand_k):
+            ks_stand, hold = ins.stand_k, ins.stand_t
             # each stands at the point before it (the chunk's first at the last one made)
             dup = pc.take(np.maximum(ks_stand - 1, 0))  # fancy indexing: copies
             if ks_stand[0] == 0:
@@ -1235,9 +1232,9 @@ class Pipeline:
             dup.dt[:] = hold
             dup.line[:] = pc.line[ks_stand]
             parts.append(dup)
-            e_step += ks_stand.tolist()
-            e_when += (t_end[ks_stand] - pc.dt[ks_stand]).tolist()
-            e_before += [True] * len(ks_stand)
+            e_step.append(ks_stand)
+            e_when.append(t_end[ks_stand] - pc.dt[ks_stand])
+            e_before.append(np.ones(len(ks_stand), dtype=bool))
         if len(ins.mid_k) and plan is not None:
             ks = ins.mid_k
             tt = ins.mid_t
@@ -1275,14 +1272,14 @@ class Pipeline:
                     V_cmd=V,
                 )
             )
-            e_step += ks.tolist()
-            e_when += tt.tolist()
-            e_before += [False] * m
+            e_step.append(ks)
+            e_when.append(tt)
+            e_before.append(np.zeros(m, dtype=bool))
         return (
             PointChunk.concat(parts),
-            np.array(e_step, dtype=int),
-            np.array(e_when),
-            np.array(e_before, dtype=bool),
+            np.concatenate(e_step).astype(int),
+            np.concatenate(e_when).astype(float),
+            np.concatenate(e_before),
             dt,
         )
 

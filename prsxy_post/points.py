@@ -59,6 +59,10 @@ class PointChunk:
         return len(self.dt)
 
     def take(self, sl: slice | np.ndarray) -> PointChunk:
+        if isinstance(sl, np.ndarray) and sl.dtype.kind in "iu":
+            # rows by position: np.take gathers an (n, 5) array's rows several
+            # times faster than fancy indexing does, the same values
+            return PointChunk(**{f.name: _rows(getattr(self, f.name), sl) for f in fields(self)})
         return PointChunk(**{f.name: getattr(self, f.name)[sl] for f in fields(self)})
 
     @staticmethod
@@ -100,3 +104,10 @@ class Written:
 
     space: str = "motor"
     digit: float = 1e-7
+
+
+def _rows(a: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``a[idx]`` for integer rows ``idx``: np.take along the first axis for a
+    table, plain indexing (faster there) for a column."""
+    out: np.ndarray = np.take(a, idx, axis=0) if a.ndim > 1 else a[idx]
+    return out

@@ -23,7 +23,7 @@ of it while the path goes on. So the jump gets a window of its own:
   cubic turns back and on again inside it: a tight curve's extreme between two
   points): two windows, one at each turning point, when the dip is deeper than
   the tolerance; and the same where a motor sets off from rest or standing the
-  other way first (:func:`_dip_roots`).
+  other way first (:func:`_motor_dips`).
 
 A chunk's reversals are planned in stages with no callback into the chain:
 :func:`find_reversals` (the reversals, their kinds, the roots on the steps'
@@ -52,6 +52,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernel
+from .kernel import windows as kernel_windows
 from .kernel.play import PlayTable
 
 #: ``edge_speed(k, s, cols, accel)``: the fastest [mm/s] motors ``cols`` (q,) may
@@ -139,8 +140,10 @@ def signs(V: np.ndarray) -> np.ndarray:
 class Insertions:
     """What a chunk of points needs for its reversals (:func:`plan_insertions`).
 
-    stand : row k -> duration of a standing point put before it
-    stands : (k, col, new) motors that cross at the standing point before row k
+    stand_k, stand_t : (s,) the rows k that get a standing point put before them
+        (sorted, distinct) and its duration [s]
+    s_k, s_col, s_new : (c,) the motors that cross at the standing point before
+        row s_k, and the side each crosses to, motor after motor
     w_k, w_col, w_ta, w_tb, w_new : (w,) crossing windows inside steps: in the step
         ending at row w_k, motor w_col is on its old side −w_new up to w_ta and on
         the new side from w_tb (a dip gives one motor two windows in one step)
@@ -159,8 +162,11 @@ class Insertions:
     """
 
     def __init__(self) -> None:
-        self.stand: dict[int, float] = {}
-        self.stands: list[tuple[int, int, int]] = []
+        self.stand_k = np.zeros(0, dtype=int)
+        self.stand_t = np.zeros(0)
+        self.s_k = np.zeros(0, dtype=int)
+        self.s_col = np.zeros(0, dtype=int)
+        self.s_new = np.zeros(0, dtype=int)
         self.w_k = np.zeros(0, dtype=int)
         self.w_col = np.zeros(0, dtype=int)
         self.w_ta = np.zeros(0)
@@ -175,7 +181,7 @@ class Insertions:
         self.blended = np.zeros(0, dtype=int)
 
     def __bool__(self) -> bool:
-        return bool(self.stand) or len(self.mid_k) > 0
+        return len(self.stand_k) > 0 or len(self.mid_k) > 0
 
 
 def velocity_roots(
@@ -560,7 +566,7 @@ def chord_windows(
 
 
 class _Dip(NamedTuple):
-    """A motor's dips (or settings-off back) in a chunk (:func:`_dip_roots`): the
+    """A motor's dips (or settings-off back) in a chunk (:func:`_motor_dips`): the
     steps ``k`` (m,), the way ``sg`` the motor moves at the step's end, the
     fractions ``s1``, ``s2`` of the step where it turns and its accelerations
     ``A1``, ``A2`` there [mm/s²], the steps' durations ``h``, their starts ``t0``,
@@ -578,48 +584,13 @@ class _Dip(NamedTuple):
     t1: np.ndarray
 
 
-def _dip_roots(
-    k: np.ndarray,
-    sg: np.ndarray,
-    P0: np.ndarray,
-    V0: np.ndarray,
-    P1: np.ndarray,
-    V1: np.ndarray,
-    t_end: np.ndarray,
-    dt: np.ndarray,
-    tol: float,
-    sets_off: bool = False,
-) -> _Dip:
-    """The two turning points of every step ``k`` whose cubic turns back and on
-    again while the motor moves the same way (``sg``) at both of its ends
-    (:func:`_dip_windows` gives their windows).
-
-    A dip shallower than ``tol`` is left alone: the part stands at the first
-    turning point while the motor goes back and forth within its play, and misses
-    the path by the dip's depth at most.
-
-    With ``sets_off``, the steps that a motor leaves from rest, or standing, the
-    way against ``sg``, the way it ends the step moving and its part is on: it
-    crosses to −sg as it sets off (at the step's start, s1 = 0) and back at the
-    root where its cubic turns to ``sg``; left alone where it goes back no
-    further than ``tol``.
-    """
-    keep, s1, s2, A1, A2 = kernel.dip_roots(P0, V0, P1, V1, dt[k], sg, tol, sets_off)
-    k, sg = k[keep], sg[keep]
-    h = dt[k]
-    t1 = t_end[k]
-    t0 = t1 - h
-    tm = t0 + 0.5 * (s1 + s2) * h
-    return _Dip(k, sg, s1, s2, A1, A2, h, t0, tm, t1)
-
-
 def _dip_windows(
     d: _Dip,
     rules: _Rules,
     w1: tuple[np.ndarray, np.ndarray] | None,
     w2: tuple[np.ndarray, np.ndarray] | None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The two crossings of every dip ``d`` (:func:`_dip_roots`), within the
+    """The two crossings of every dip ``d`` (:func:`_motor_dips`), within the
     ``reach`` w1, w2 (:func:`reach`; None: the tolerance alone decides) about its
     first and second turning point. Each of the two windows keeps to its own half
     of the step (cut between the two turning points), so that they never overlap.
@@ -693,21 +664,9 @@ def corners(
     blend : (k,) bool, the corner is blended
     tau : (k,) [s] its τ
     """
-    dV = np.abs(V_out - V_in)
-    vi, vo = V_in[:, cols], V_out[:, cols]
-    # the slower side's velocity, signed along the faster side's way
-    fast = np.where(np.abs(vo) >= np.abs(vi), vo, vi)
-    slow = np.where(np.abs(vo) >= np.abs(vi), vi, vo) * np.where(fast < 0, -1.0, 1.0)
-    # a motor reversing at the corner (moving both ways) crosses its play in a
-    # window of its own (plan_insertions)
-    moves = (np.abs(fast) >= V_EPS) & (slow > -V_EPS)
-    d = dV[:, cols]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        left = np.clip(np.where(d > 0, 1.0 - 6.0 * slow / d, 0.0), 0.0, 1.0)
-    turn = (4.0 / 27.0) * h[:, None] * d / 2.0 * left**1.5
-    tau = np.maximum(BLEND_MIN_S, np.max(dV, axis=1, initial=0.0) / (2.0 * accel))
-    blend = np.any(moves & (turn > CORNER_TURN_MM), axis=1) & (tau <= 0.5 * h)
-    return blend, tau
+    return kernel.corner_blends(
+        V_in, V_out, np.asarray(cols, dtype=int), h, accel, V_EPS, CORNER_TURN_MM, BLEND_MIN_S
+    )
 
 
 #: The shortest τ of a blend [s]. Its steps' chords are written to 1e-7 mm (the
@@ -757,8 +716,9 @@ def _snap(k: np.ndarray, t: np.ndarray, t0: np.ndarray, t1: np.ndarray) -> np.nd
 class _Turns(NamedTuple):
     """One motor's reversals in a chunk (:func:`plan_insertions`): its directions
     ``sg`` per row and the one each row comes from, the reversals' steps ``k`` and
-    new ways, its wanted positions ``p``, each reversal's kind, and the roots
-    ``sr`` [fraction of the step] and accelerations ``acc`` of those in motion."""
+    new ways, its wanted positions ``p``, each reversal's kind, the roots ``sr``
+    [fraction of the step] and accelerations ``acc`` of those in motion, and its
+    wanted velocities ``v``."""
 
     col: int
     sg: np.ndarray
@@ -772,6 +732,7 @@ class _Turns(NamedTuple):
     mid: np.ndarray
     sr: np.ndarray
     acc: np.ndarray
+    v: np.ndarray
 
 
 class _Chunk(NamedTuple):
@@ -992,17 +953,24 @@ def place_insertions(
     bent = None if corners_at is None else np.sort(corners_at)
     w = _Windows([], [], [], [], [])
     at = 0
-    for t, dips in zip(found.seen, found.dips, strict=True):
-        for kk, nn in zip(t.k[t.at_rest].tolist(), t.new[t.at_rest].tolist(), strict=True):
-            ins.stand[kk] = longest
-            ins.stands.append((kk, t.col, nn))
+    s_k, s_col, s_new = [ins.s_k], [ins.s_col], [ins.s_new]
+    parts = [_edge_parts(t, dips) for t, dips in zip(found.seen, found.dips, strict=True)]
+    if allowed is not None:
+        # every turning point's reach at once (edge_queries' order), sliced below
+        acc_all = np.concatenate([np.zeros(0)] + [acc for p in parts for _, _, acc in p])
+        q = len(acc_all)
+        r_before, r_after = reach((allowed[0][:q], allowed[1][:q]), acc_all)
+    for t, dips, edges in zip(found.seen, found.dips, parts, strict=True):
+        s_k.append(t.k[t.at_rest])
+        s_col.append(np.full(len(s_k[-1]), t.col))
+        s_new.append(t.new[t.at_rest])
         reaches: list[tuple[np.ndarray, np.ndarray] | None] = []
-        for k, _, acc in _edge_parts(t, dips):
+        for k, _, _ in edges:
             if allowed is None:
                 reaches.append(None)
                 continue
             m = len(k)
-            reaches.append(reach((allowed[0][at : at + m], allowed[1][at : at + m]), acc))
+            reaches.append((r_before[at : at + m], r_after[at : at + m]))
             at += m
         ks, tas, tbs, news = _motor_windows(t, dips, ch, rules, bent, reaches)
         w.k.extend(ks)
@@ -1011,6 +979,11 @@ def place_insertions(
         new_all = np.concatenate(news)
         w.col.append(np.full(len(new_all), t.col))
         w.new.append(new_all)
+    ins.s_k, ins.s_col, ins.s_new = (np.concatenate(x) for x in (s_k, s_col, s_new))
+    # distinct rows, sorted (np.unique's answer, a tenth of its time here)
+    rows = np.sort(ins.s_k)
+    ins.stand_k = rows[np.concatenate([[True], rows[1:] != rows[:-1]])] if len(rows) else rows
+    ins.stand_t = np.full(len(ins.stand_k), longest)
     if w.col:
         _place_points(ins, ch, w, blends, near_first)
     return ins
@@ -1058,43 +1031,29 @@ def _turns(
     it got farthest its last way (the ``ref`` [mm] carried to the next chunk,
     :func:`.kernel.play.creeps`). ``side`` (5,) the side each motor is on before the chunk;
     ``drift`` [mm] the drift back that makes a creeping motor cross."""
-    n, off, dt = len(ch.dt), ch.off, ch.dt
-    sg = np.where(ch.rest, 0, signs(ch.V[:, col]))
+    off, dt = ch.off, ch.dt
+    # the motor's columns made contiguous once (the kernels take them so)
+    p, v = np.ascontiguousarray(ch.P[:, col]), np.ascontiguousarray(ch.V[:, col])
     # creeps back become reversals; the reach is carried to the next chunk
-    crept, reach_ref = kernel.creeps(sg, ch.P[:, col], int(side[col]), ref, drift)
-    sg = np.where(crept != 0, crept, sg)
-    # the side a row comes from: the last direction before it, or the carried one
-    came = np.concatenate([[side[col]], kernel.carried(sg, side[col])[:-1]])
-    r = np.flatnonzero((sg != 0) & (sg != came))
-    r = r[(r - off >= 0) & (r - off < n)]
+    sg, came, r, kind, reach_ref = kernel.motor_turns(
+        v, p, ch.rest, int(side[col]), ref, drift, off, V_EPS
+    )
     k = r - off
     new = sg[r]
-    p = ch.P[:, col]
     # a step whose chord goes the old way sets off that way first and turns
     # inside it: a reversal in motion, at the cubic's root, also where the step
     # leaves from rest or from a motor standing (a head motor through the extreme
     # of a tilt: 0.22 % over F, and 0.5 µm off the path from rest,
-    # test_controller_truth's found programs)
-    old_way = new * (p[r] - p[np.maximum(r - 1, 0)]) < 0.0
-    at_rest = (r == 0) | (ch.rest[np.maximum(r - 1, 0)] & ~old_way)
-    crept_f = (crept[r] != 0) & ~at_rest
-    # drifted back within a step that began moving the old way (it ends at rest,
-    # or creeping): the step's cubic turns inside it, and the window goes there
-    crept_f &= sg[np.maximum(r - 1, 0)] != -new
-    stood = (
-        ~at_rest
-        & ~crept_f
-        & (k >= 1)
-        & (r >= 2)
-        & (sg[np.maximum(r - 1, 0)] == 0)
-        & (sg[np.maximum(r - 2, 0)] == 0)
-        & (np.abs(p[np.maximum(r - 1, 0)] - p[np.maximum(r - 2, 0)]) < 1e-9)
-        & ~old_way
-    )
-    mid = ~(at_rest | crept_f | stood)
+    # test_controller_truth's found programs); drifted back within a step that
+    # began moving the old way (it ends at rest, or creeping): the step's cubic
+    # turns inside it, and the window goes there (kernel.windows.motor_turns)
+    at_rest = kind == kernel_windows.AT_REST
+    crept_f = kind == kernel_windows.CREPT
+    stood = kind == kernel_windows.STOOD
+    mid = kind == kernel_windows.MID
     km, rm = k[mid], r[mid]
-    sr, acc = velocity_roots(p[rm - 1], ch.V[rm - 1, col], p[rm], ch.V[rm, col], dt[km], new[mid])
-    turns = _Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc)
+    sr, acc = velocity_roots(p[rm - 1], v[rm - 1], p[rm], v[rm], dt[km], new[mid])
+    turns = _Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc, v)
     return turns, reach_ref
 
 
@@ -1136,36 +1095,38 @@ def _motor_windows(
 
 
 def _motor_dips(t: _Turns, ch: _Chunk, tol: float) -> list[_Dip]:
-    """One motor's dips and settings-off back (:func:`_dip_roots`), in that
-    order."""
-    sg, came, p, off, n = t.sg, t.came, t.p, ch.off, len(ch.dt)
+    """One motor's dips and settings-off back, in that order: the two turning
+    points of every step whose cubic turns back and on again while the motor
+    moves the same way at both of its ends (:func:`_dip_windows` gives their
+    windows), with the kernel's :func:`.kernel.windows.motor_dips`.
+
+    A dip shallower than ``tol`` is left alone: the part stands at the first
+    turning point while the motor goes back and forth within its play, and misses
+    the path by the dip's depth at most.
+
+    Setting off back: the steps that a motor leaves from rest, or standing, the
+    way against ``sg``, the way it ends the step moving and its part is on: it
+    crosses to −sg as it sets off (at the step's start, s1 = 0) and back at the
+    root where its cubic turns to ``sg``; left alone where it goes back no
+    further than ``tol``.
+    """
     # a dip: the motor moves the same way at both ends of a step, but the step's
     # cubic turns twice inside it (the extreme of a tight curve between two
-    # points, or a corner whose point carries the mean of its sides' velocities)
-    j_dip = np.flatnonzero((sg[1:] == sg[:-1]) & (sg[1:] != 0)) + 1
-    j_dip = j_dip[(j_dip - off >= 0) & (j_dip - off < n)]
+    # points, or a corner whose point carries the mean of its sides' velocities);
     # setting off back: a motor at rest or standing leaves with its chord against
     # the way it ends the step and its part is on: it goes the other way first
     # and turns inside the step (from rest through the extreme of a tilt: 0.5
     # µm off the path, test_controller_truth's found programs)
-    j_off = np.flatnonzero((sg[1:] != 0) & (sg[:-1] == 0)) + 1
-    j_off = j_off[(j_off - off >= 0) & (j_off - off < n) & (came[j_off] == sg[j_off])]
-    j_off = j_off[sg[j_off] * (p[j_off] - p[j_off - 1]) < 0.0]
-    return [
-        _dip_roots(
-            j - off,
-            sg[j],
-            p[j - 1],
-            ch.V[j - 1, t.col],
-            p[j],
-            ch.V[j, t.col],
-            ch.t_end,
-            ch.dt,
-            tol,
-            sets_off,
-        )
-        for j, sets_off in ((j_dip, False), (j_off, True))
-    ]
+    out = []
+    for sets_off in (False, True):
+        j, s1, s2, A1, A2 = kernel.motor_dips(t.p, t.v, ch.dt, t.sg, t.came, ch.off, tol, sets_off)
+        k = j - ch.off
+        h = ch.dt[k]
+        t1 = ch.t_end[k]
+        t0 = t1 - h
+        tm = t0 + 0.5 * (s1 + s2) * h
+        out.append(_Dip(k, t.sg[j], s1, s2, A1, A2, h, t0, tm, t1))
+    return out
 
 
 def _motion_windows(
@@ -1301,7 +1262,7 @@ def _blend_points(
     ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
     if near_first:
         early, tau_e = np.concatenate([[0], early]), np.concatenate([[near_first], tau_e])
-    keep = (early < n) & ~np.isin(early, np.fromiter(ins.stand, dtype=int, count=len(ins.stand)))
+    keep = (early < n) & ~_in_sorted(early, ins.stand_k)
     early, tau_e = early[keep], tau_e[keep]
     t_early = t_end[early] - dt[early] + tau_e
     edges, starts, stops = np.sort(et), np.sort(ins.w_ta), np.sort(ins.w_tb)
@@ -1403,12 +1364,13 @@ def sides(
     f_all = rows.first_plain(ins.w_k)
     e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b)
     last_row = np.searchsorted(rows.step, ins.w_kb, "right") - 1  # its end's step's end
-    s_k = np.array([k for k, _, _ in ins.stands], dtype=int)
-    s_col = np.array([c for _, c, _ in ins.stands], dtype=int)
-    s_new = np.array([n for _, _, n in ins.stands], dtype=int)
-    for col in cols:
-        mine = np.flatnonzero(ins.w_col == col)
-        mine = mine[np.argsort(e_all[mine], kind="stable")]
+    s_first, s_col, s_new = rows.first(ins.s_k), ins.s_col, ins.s_new
+    # every motor's windows by their ends, in one sort (stable: as each motor's own)
+    by_col = np.lexsort((e_all, ins.w_col))
+    w_cols = ins.w_col[by_col]
+    lo, hi = np.searchsorted(w_cols, cols, "left"), np.searchsorted(w_cols, cols, "right")
+    for i, col in enumerate(cols):
+        mine = by_col[lo[i] : hi[i]]
         here = s_col == col
         # the points after a window's end inside its step (another motor's window,
         # a blend's point before a corner) are on the new side: where the path turns
@@ -1421,7 +1383,7 @@ def sides(
             e_all[mine],
             ins.w_new[mine],
             last_row[mine],
-            rows.first(s_k[here]),
+            s_first[here],
             s_new[here],
             int(side[col]),
             V_EPS,

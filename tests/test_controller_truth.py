@@ -586,7 +586,7 @@ ENCLOSURE_ARC_WITH_A_TILT = (
 #: its part is on, and turns down inside the line's first step: the points said
 #: "down" only, so U's part stood through the step, 0.500 µm off the path and
 #: 0.66 arcsec off the tool axis. U now crosses up as it sets off and down at its
-#: cubic's root (reversals._dip_roots, sets_off): 0.055 µm, 0.08 arcsec.
+#: cubic's root (reversals._motor_dips, setting off): 0.055 µm, 0.08 arcsec.
 COMPASS_SETS_OFF_BACK = (
     "G21 G90 G17 G94 G40 G49 G54 G80 F500\nG0 X-2.982145 Y-4.009648 Z-5.000000 A0 B0\n"
     "G0 X-2.982145 Y-4.009648 Z0.000000\n"

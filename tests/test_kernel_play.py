@@ -33,8 +33,6 @@ ENTRIES: dict[str, Any] = {
     "_play_slope": play.slope,
     "_compensate_sided": play.compensate_sided,
     "_settle_crossings": play.settle_crossings,
-    "_carried": play.carried,
-    "_creeps": play.creeps,
     "_motor_sides": play.motor_sides,
 }
 
@@ -46,14 +44,14 @@ def _same(got: Any, want: Any) -> bool:
 
 
 #: what the chain calls through the kernel's names, and how often at least while
-#: the samples convert (the envelopes alone at the start)
+#: the samples convert (the envelopes alone at the start). carried and creeps run
+#: inside windows.motor_turns on both paths (its recorded and generated inputs:
+#: tests/test_kernel_windows.py), and on generated inputs here
 RECORDED = {
     "_play_lo": 1,
     "_play_slope": 10,
     "_compensate_sided": 10,
     "_settle_crossings": 3,
-    "_carried": 10,
-    "_creeps": 10,
     "_motor_sides": 10,
 }
 #: what the settle calls inside the kernel (recorded from the reference settle on
@@ -77,7 +75,7 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
         want = ENTRIES[attr](*args)
         got = getattr(_play, attr.removeprefix("_play_").removeprefix("_"))(*args)
         assert _same(tuple(got) if attr == "_settle_crossings" else got, want), attr
-        if attr in ("_carried", "_motor_sides"):
+        if attr == "_motor_sides":
             assert got.dtype == want.dtype
 
 
@@ -439,3 +437,62 @@ def test_signed_zeros_clamp_as_numpy_does() -> None:
     hi = np.roll(lo, 1)
     for a, b in ((lo, hi), (hi, lo), (lo, lo), (-np.abs(lo), np.abs(hi))):
         assert same_bits(_play.clamp_scan(a, b), play.clamp_scan(a, b))
+
+
+def _short(a: np.ndarray) -> np.ndarray:
+    return a[:-1].copy()
+
+
+def test_compiled_play_refuses_arrays_of_the_wrong_length() -> None:
+    """The twins run without bounds checks: every public function that takes
+    arrays of one length refuses others with a ValueError naming what it
+    expected and what it got (before, a short array read past its end)."""
+    _play = compiled("_play")
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-50.0, 0.0, 50.0]), np.zeros(3), np.array([0.004, 0.002, 0.004]))
+    ).flat
+    n = 6
+    p, side = np.linspace(-1.0, 1.0, n), np.ones(n)
+    with pytest.raises(
+        ValueError, match=r"side must have one value a position \(6 values\), got 5"
+    ):
+        _play.slope(t, p, _short(side))
+    with pytest.raises(ValueError, match=r"side must have .* got 5"):
+        _play.compensate_sided(t, p, _short(side))
+    with pytest.raises(ValueError, match=r"hi must have .* got 5"):
+        _play.clamp_scan(p, _short(p))
+    sg = np.zeros(n, dtype=int)
+    with pytest.raises(ValueError, match=r"P must have one value a row, as sg \(6 values\), got 5"):
+        _play.creeps(sg, _short(p), 1, 0.0, 1e-3)
+    e = np.array([2])
+    with pytest.raises(ValueError, match=r"resting must have .* got 5"):
+        _play.motor_sides(p, np.zeros(n - 1, bool), e, e, e, e, e[:0], e[:0], 1, 5e-4)
+    with pytest.raises(ValueError, match=r"last_row must have .* \(1 values\), got 0"):
+        _play.motor_sides(p, np.zeros(n, bool), e, e, e, e[:0], e[:0], e[:0], 1, 5e-4)
+    with pytest.raises(ValueError, match=r"s_new must have .* got 0"):
+        _play.motor_sides(p, np.zeros(n, bool), e, e, e, e, e, e[:0], 1, 5e-4)
+    s_path = np.cumsum(np.full(n, 0.1))
+    with pytest.raises(ValueError, match=r"way must have one value a crossing.* got 0"):
+        _play.catch_up(np.ones(1), np.ones(0), e, e, s_path, 5e-5, 2.0)
+    with pytest.raises(ValueError, match=r"speed must have one value a point.* got 5"):
+        _play.catch_up(np.ones(1), np.ones(1), e, e, s_path, 5e-5, 2.0, (p, p, _short(p)))
+    mo = _motion(np.random.default_rng(1), n)
+    P, V = mo.P_ideal.copy(), mo.V_ideal.copy()
+    for bad in mo._fields:
+        short_mo = mo._replace(**{bad: _short(getattr(mo, bad))})
+        with pytest.raises(ValueError, match=rf"{bad} must have one value a point"):
+            _play.catch_up_commands(t, short_mo, np.ones(1), e, e + 1, P, V, 5e-5, 2.0)
+        with pytest.raises(ValueError, match=rf"{bad} must have one value a point"):
+            _play.settle_crossings(
+                t, short_mo, (0.0, 0.0, 0.0), e, e - 1, np.zeros(1), P, V, True, 5e-5, 2.0
+            )
+    with pytest.raises(ValueError, match=r"V must have .* got 5"):
+        _play.catch_up_commands(t, mo, np.ones(1), e, e + 1, P, _short(V), 5e-5, 2.0)
+    with pytest.raises(ValueError, match=r"stop must have one value a crossing.* got 2"):
+        _play.catch_up_commands(t, mo, np.ones(1), e, np.array([3, 4]), P, V, 5e-5, 2.0)
+    with pytest.raises(ValueError, match=r"shortfall must have one value a crossing.* got 0"):
+        _play.settle_crossings(t, mo, (0.0, 0.0, 0.0), e, e - 1, np.zeros(0), P, V, True, 5e-5, 2.0)
+    with pytest.raises(ValueError, match=r"V must have one value a point, as P .* got 5"):
+        _play.settle_crossings(
+            t, mo, (0.0, 0.0, 0.0), e, e - 1, np.zeros(1), P, _short(V), True, 5e-5, 2.0
+        )

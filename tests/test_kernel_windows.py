@@ -12,16 +12,21 @@ velocities, straight, nearly straight, turning twice, either way or none).
 
 from __future__ import annotations
 
+import copy
+import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from prsxy_post import reversals
+from prsxy_post import kernel, reversals
+from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.kernel import windows
 
+from .conftest import ROOT
 from .kernel_cases import compiled, record, same_bits
 
 
@@ -29,11 +34,13 @@ def _same_pair(got: tuple[np.ndarray, np.ndarray], want: tuple[np.ndarray, np.nd
     return same_bits(got[0], want[0]) and same_bits(got[1], want[1])
 
 
-#: how often at least the samples' conversions call them, and on how many steps
-#: in all (dips: every step where a motor keeps its way and every setting-off,
-#: twice a motor with play and chunk, the turning points inside; roots: the
-#: reversals in motion, once a motor with play and chunk, few steps)
-ROOT_CALLS = {"_velocity_roots": (5, 3), "_dip_roots": (10, 100)}
+#: how often at least the samples' conversions call them, and on how many rows
+#: in all (a motor's reversals: every row, once a motor with play and chunk;
+#: dips: every row, twice a motor with play and chunk, the steps where it keeps
+#: its way and its settings-off; roots: the reversals in motion, once a motor
+#: with play and chunk, few steps). dip_roots runs inside motor_dips on both
+#: paths: generated inputs test it (test_generated_roots_are_bit_identical)
+ROOT_CALLS = {"_velocity_roots": (5, 3), "_motor_turns": (10, 100), "_motor_dips": (20, 100)}
 
 
 @pytest.mark.parametrize("attr", sorted(ROOT_CALLS))
@@ -180,3 +187,192 @@ def test_a_window_with_no_acceleration_is_half_the_longest_each_side() -> None:
     for mod in (windows, compiled("_windows")):
         a, b = mod.crossing_windows(*args)
         assert a[0] == pytest.approx(0.0045) and b[0] == pytest.approx(0.0055)
+
+
+def test_compiled_windows_refuse_arrays_of_the_wrong_length() -> None:
+    """The twins run without bounds checks: each refuses arrays of another length
+    than its first with a ValueError naming what it expected and what it got."""
+    _windows = compiled("_windows")
+    n = 4
+    a = np.linspace(0.0, 1.0, n)
+    h = np.full(n, 0.01)
+    args = [a, a + 1.0, a + 2.0, -a, h]
+    names = ["V0", "P1", "V1", "h"]
+    for j, name in enumerate(names, start=1):
+        bad = list(args)
+        bad[j] = bad[j][:-1]
+        msg = rf"{name} must have one value a step \(4 values, as the first\), got 3"
+        with pytest.raises(ValueError, match=msg):
+            _windows.velocity_roots(*bad, np.ones(n), True)
+        with pytest.raises(ValueError, match=msg):
+            _windows.turning_points(*bad)
+        with pytest.raises(ValueError, match=msg):
+            _windows.dip_roots(*bad, np.ones(n), 1e-4, False)
+    with pytest.raises(ValueError, match=r"new must have .* got 2"):
+        _windows.velocity_roots(*args, np.ones(2), True)
+    with pytest.raises(ValueError, match=r"sg must have .* got 5"):
+        _windows.dip_roots(*args, np.ones(5), 1e-4, True)
+    t0, t1, tr, acc = a, a + 0.01, a + 0.005, np.ones(n)
+    inf = np.full(n, np.inf)
+    with pytest.raises(
+        ValueError, match=r"ra must have one value a window \(4 values, as the first\), got 3"
+    ):
+        _windows.crossing_windows(t0, t1, tr, acc, inf, inf[:-1], 1e-4, 1e-3, False, 2.5e-4)
+    with pytest.raises(ValueError, match=r"t_root must have .* got 3"):
+        _windows.crossing_windows(t0, t1, tr[:-1], acc, inf, inf, 1e-4, 1e-3, False, 2.5e-4)
+
+
+@st.composite
+def _motor_rows(draw: st.DrawFn) -> tuple[Any, ...]:
+    """A motor's rows as motor_turns takes them: velocities fast, creeping, zero
+    or −0.0 either way, positions drifting or standing, rows at rest; with or
+    without the point before the chunk (off)."""
+    n = draw(st.integers(0, 40))
+    v = st.one_of(
+        st.floats(-30.0, 30.0),
+        st.sampled_from([0.0, -0.0, 4e-4, -4e-4, 5e-4, -6e-4, 2.0, -2.0]),
+        st.floats(-1e-3, 1e-3),
+    )
+    V = np.array(draw(st.lists(v, min_size=n, max_size=n)), dtype=float)
+    steps = draw(
+        st.lists(
+            st.one_of(st.floats(-1e-2, 1e-2), st.just(0.0), st.floats(-1e-9, 1e-9)),
+            min_size=n,
+            max_size=n,
+        )
+    )
+    P = 10.0 + np.cumsum(np.array(steps, dtype=float))
+    rest = np.array(draw(st.lists(st.booleans(), min_size=n, max_size=n)), dtype=bool)
+    side = draw(st.sampled_from([1, -1]))
+    ref = draw(st.one_of(st.just(np.nan), st.floats(9.9, 10.1)))
+    off = draw(st.integers(0, 1)) if n else 0
+    return V, P, rest, side, ref, draw(st.sampled_from([5e-5, 1e-7])), off
+
+
+@settings(max_examples=300, deadline=None)
+@given(case=_motor_rows(), tol=st.sampled_from([0.0, 1e-7, 5e-5]), seed=st.integers(0, 2**16))
+def test_generated_motor_turns_and_dips_are_bit_identical(
+    case: tuple[Any, ...], tol: float, seed: int
+) -> None:
+    """A motor's reversals and their kinds, and its dips and settings-off back,
+    compiled against the reference: the same rows, kinds and roots to the bit."""
+    _windows = compiled("_windows")
+    V, P, rest, side, ref, drift, off = case
+    args = (V, P, rest, side, ref, drift, off, reversals.V_EPS)
+    want = windows.motor_turns(*args)
+    got = _windows.motor_turns(*args)
+    assert len(got) == len(want) and all(
+        same_bits(np.asarray(g), np.asarray(w)) for g, w in zip(got, want, strict=True)
+    )
+    assert got[3].dtype == np.int8 and set(got[3].tolist()) <= {0, 1, 2, 3}
+    sg, came = want[0], want[1]
+    h = np.random.default_rng(seed).choice([0.01, 0.00977, 2.5e-4], len(V) - off)
+    for sets_off in (False, True):
+        d_args = (P, V, h, sg, came, off, tol, sets_off)
+        w_d = windows.motor_dips(*d_args)
+        g_d = _windows.motor_dips(*d_args)
+        assert all(same_bits(g, w) for g, w in zip(g_d, w_d, strict=True))
+
+
+def test_compiled_motor_rows_refuse_arrays_of_the_wrong_length() -> None:
+    _windows = compiled("_windows")
+    V, P, rest = np.ones(5), np.ones(5), np.zeros(5, bool)
+    with pytest.raises(ValueError, match=r"rest must have one value a row, as V .* got 4"):
+        _windows.motor_turns(V, P, rest[:-1], 1, 0.0, 1e-4, 0, 5e-4)
+    sg = np.ones(5, dtype=int)
+    with pytest.raises(ValueError, match=r"came must have one value a row, as P .* got 3"):
+        _windows.motor_dips(P, V, np.ones(5), sg, sg[:3], 0, 1e-4, False)
+    with pytest.raises(ValueError, match=r"h must have at most 4 values \(one a step\), got 5"):
+        _windows.motor_dips(P, V, np.ones(5), sg, sg, 1, 1e-4, False)
+
+
+def _polyline(n: int) -> str:
+    """A tilting polyline at F1500 turning 12° at each point, ten one way then ten
+    the other: corners taken at speed."""
+    lines = ["G21 G90 G17 G94", "G0 X0 Y0 Z5 A0 B0", "G1 Z0 F600"]
+    x = y = ang = 0.0
+    for i in range(n):
+        ang += math.radians(12 if (i // 10) % 2 else -12)
+        x, y = x + 2 * math.cos(ang), y + 2 * math.sin(ang)
+        a, b = 3 * math.sin(i / 5), 2 * math.cos(i / 7)
+        lines.append(f"G1 X{x:.3f} Y{y:.3f} A{a:.3f} B{b:.3f} F1500")
+    return "\n".join([*lines, "M2", ""])
+
+
+def test_converted_corner_blends_are_bit_identical(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The corners a PVT conversion looks at (a polyline at speed through a
+    profile with play; the sample programs have none), compiled against the
+    reference: blend and τ to the bit, some corners blended, some not."""
+    _windows = compiled("_windows")
+    calls: list[tuple[Any, ...]] = []
+    inner = kernel._corner_blends
+
+    def spy(*args: Any) -> Any:
+        calls.append(copy.deepcopy(args))
+        return inner(*args)
+
+    monkeypatch.setattr(kernel, "_corner_blends", spy)
+    program = tmp_path / "polyline.ngc"
+    program.write_text(_polyline(80))
+    prof = str(ROOT / "tests" / "data" / "vectors" / "perturbed.toml")
+    convert_file(ConvertJob(str(program), prof, "pmac", str(tmp_path / "out.pmc")))
+    assert sum(len(args[3]) for args in calls) >= 20
+    blended = corners = 0
+    for args in calls:
+        want = windows.corner_blends(*args)
+        got = _windows.corner_blends(*args)
+        assert same_bits(got[0], want[0]) and got[0].dtype == bool
+        assert same_bits(got[1], want[1])
+        blended += int(want[0].sum())
+        corners += len(want[0])
+    assert 0 < blended < corners
+
+
+_corner_v = st.one_of(
+    st.floats(-60.0, 60.0),
+    st.sampled_from([0.0, -0.0, 4e-4, -6e-4, 1.0, -1.0]),
+    st.floats(-1e-3, 1e-3),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    k=st.integers(0, 8),
+    data=st.data(),
+    cols=st.sampled_from([[0, 1, 2, 3, 4], [2], [0, 3], []]),
+    accel=st.sampled_from([250.0, 1e4, 1.0]),
+)
+def test_generated_corner_blends_are_bit_identical(
+    k: int, data: st.DataObject, cols: list[int], accel: float
+) -> None:
+    """Corners with motors standing on one side, slowing, reversing, creeping,
+    −0.0; steps from a servo cycle to 20 ms: blend and τ to the bit."""
+    _windows = compiled("_windows")
+    V_in = np.array(data.draw(st.lists(_corner_v, min_size=5 * k, max_size=5 * k))).reshape(k, 5)
+    V_out = np.array(data.draw(st.lists(_corner_v, min_size=5 * k, max_size=5 * k))).reshape(k, 5)
+    if k and data.draw(st.booleans()):
+        V_out[:, 1] = V_in[:, 1]  # a motor moving alike on both sides
+    h = np.array(data.draw(st.lists(st.floats(2.5e-4, 0.02), min_size=k, max_size=k)))
+    args = (V_in, V_out, np.array(cols, dtype=int), h, accel, 5e-4, 1e-6, 1e-3)
+    want = windows.corner_blends(*args)
+    got = _windows.corner_blends(*args)
+    assert same_bits(got[0], want[0]) and same_bits(got[1], want[1])
+
+
+def test_compiled_corner_blends_refuse_wrong_shapes() -> None:
+    _windows = compiled("_windows")
+    V = np.zeros((3, 5))
+    h = np.full(3, 0.01)
+    cols = np.array([0, 1])
+    with pytest.raises(
+        ValueError, match=r"V_in and V_out must be \(k, 5\), got \(3, 5\) and \(3, 4\)"
+    ):
+        _windows.corner_blends(V, V[:, :4], cols, h, 250.0, 5e-4, 1e-6, 1e-3)
+    with pytest.raises(
+        ValueError, match=r"h must have one row a corner, as V_in \(3 values.*got 2"
+    ):
+        _windows.corner_blends(V, V, cols, h[:2], 250.0, 5e-4, 1e-6, 1e-3)
+    with pytest.raises(ValueError, match=r"cols must be motor columns 0 to 4, got 5"):
+        _windows.corner_blends(V, V, np.array([5]), h, 250.0, 5e-4, 1e-6, 1e-3)

@@ -445,6 +445,65 @@ _crossing_windows = _RUN["windows"].crossing_windows
 _velocity_roots = _RUN["windows"].velocity_roots
 _turning_points = _RUN["windows"].turning_points
 _dip_roots = _RUN["windows"].dip_roots
+_motor_turns = _RUN["windows"].motor_turns
+_corner_blends = _RUN["windows"].corner_blends
+
+
+def corner_blends(
+    V_in: np.ndarray,
+    V_out: np.ndarray,
+    cols: np.ndarray,
+    h: np.ndarray,
+    accel: float,
+    v_eps: float,
+    turn_mm: float,
+    blend_min: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The corners a PVT program blends and their τ: :func:`windows.corner_blends`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _corner_blends(
+        V_in, V_out, cols, h, accel, v_eps, turn_mm, blend_min
+    )
+    return out
+
+
+_motor_dips = _RUN["windows"].motor_dips
+
+
+def motor_turns(
+    V: np.ndarray,
+    P: np.ndarray,
+    rest: np.ndarray,
+    side: int,
+    ref: float,
+    drift: float,
+    off: int,
+    eps: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """A motor's reversals in a chunk and their kinds: :func:`windows.motor_turns`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float] = _motor_turns(
+        V, P, rest, side, ref, drift, off, eps
+    )
+    return out
+
+
+def motor_dips(
+    P: np.ndarray,
+    V: np.ndarray,
+    h: np.ndarray,
+    sg: np.ndarray,
+    came: np.ndarray,
+    off: int,
+    tol: float,
+    sets_off: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A motor's dips or settings-off back in a chunk: :func:`windows.motor_dips`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _motor_dips(
+        P, V, h, sg, came, off, tol, sets_off
+    )
+    return out
 
 
 def dip_roots(

@@ -169,16 +169,36 @@ cdef inline double _invert(double x, const double* vals, const double* breaks,
     return out
 
 
+cdef inline double _invert_g(double x, const double* vals, const double* breaks,
+                             const double* err, Py_ssize_t n, Py_ssize_t* g) noexcept nogil:
+    """:func:`_invert`, its interval searched from the guess ``g`` (numpy's interp
+    guesses the interval before; the interval found is the same, unique), the
+    interval found left in ``g``."""
+    cdef double out
+    if n == 1:
+        out = breaks[0]
+    elif x != x:
+        out = x
+    else:
+        g[0] = _find(x, vals, n, g[0])
+        out = _at(x, g[0], vals, breaks, n)
+    if x < vals[0]:
+        out = x - err[0]
+    elif x > vals[n - 1]:
+        out = x - err[n - 1]
+    return out
+
+
 cdef void _solve(const Tab* t, const double* target, double* out, Py_ssize_t n,
                  bint up, double* scratch) noexcept nogil:
     """lo⁻¹ (``up``) or hi⁻¹ of ``target`` (n,) into ``out``; ``scratch`` (n,)."""
     cdef const double* vals = t.lo_vals if up else t.hi_vals
     cdef const double* err = t.lo_err if up else t.hi_err
-    cdef Py_ssize_t i, it
+    cdef Py_ssize_t i, it, g = -1
     cdef double big, d
     cdef bint nan
     for i in range(n):
-        out[i] = _invert(target[i], vals, t.breaks, err, t.nb)
+        out[i] = _invert_g(target[i], vals, t.breaks, err, t.nb, &g)
     if t.nc == 0:
         return
     for it in range(30):
@@ -229,6 +249,20 @@ cdef _Table _table(t):
 
 def _vec(p):
     return np.ascontiguousarray(p, dtype=np.float64)
+
+
+def _lengths(str what, Py_ssize_t n, **lengths):
+    """Refuse arrays whose ``lengths`` (name: length) are not ``n`` before the
+    loops run without bounds checks: a ValueError naming what was expected and
+    what was got."""
+    for name, got in lengths.items():
+        if got != n:
+            raise ValueError(f"{name} must have {what} ({n} values), got {got}")
+
+
+def _motion_lengths(mo, Py_ssize_t n):
+    """A Motion's columns (and n) one value a point."""
+    _lengths("one value a point", n, **{f: len(getattr(mo, f)) for f in mo._fields})
 
 
 def lo(t, p):
@@ -284,7 +318,8 @@ def slope(t, p, side):
     cdef const Tab* T = &tb.tab
     cdef const double[::1] x = _vec(p)
     cdef const double[::1] sd = _vec(side)
-    cdef Py_ssize_t n = x.shape[0], i, k, lo_i, hi_i, mid
+    cdef Py_ssize_t n = x.shape[0], i, k, lo_i = -1
+    _lengths("one value a position", n, side=len(sd))
     out = np.empty(n)
     cdef double[::1] o = out
     cdef double v, pi_, w
@@ -293,14 +328,9 @@ def slope(t, p, side):
         pi_ = x[i]
         if T.nb > 1:
             if pi_ >= T.breaks[0] and pi_ < T.breaks[T.nb - 1]:
-                lo_i = 0
-                hi_i = T.nb - 1  # breaks[lo_i] <= p < breaks[hi_i]
-                while hi_i - lo_i > 1:
-                    mid = (lo_i + hi_i) >> 1
-                    if T.breaks[mid] <= pi_:
-                        lo_i = mid
-                    else:
-                        hi_i = mid
+                # breaks[lo_i] <= p < breaks[lo_i + 1], unique: searched from the
+                # row before's
+                lo_i = _find(pi_, T.breaks, T.nb, lo_i)
                 v = v + (T.s_lo[lo_i] if sd[i] > 0 else T.s_hi[lo_i])
             else:
                 v = v + 0.0
@@ -317,6 +347,7 @@ def compensate_sided(t, target, side):
     cdef const double[::1] x = _vec(target)
     cdef const double[::1] sd = _vec(side)
     cdef Py_ssize_t n = x.shape[0], i, nu = 0, nd = 0
+    _lengths("one value a target", n, side=len(sd))
     out = np.empty(n)
     cdef double[::1] o = out
     if n == 0:
@@ -359,6 +390,7 @@ def clamp_scan(lo, hi):
     cdef const double[::1] a = _vec(lo)
     cdef const double[::1] b = _vec(hi)
     cdef Py_ssize_t n = a.shape[0], i
+    _lengths("one value a row, as lo", n, hi=len(b))
     out = np.empty(n)
     cdef double[::1] o = out
     cdef double y
@@ -435,8 +467,10 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
     cdef const double[::1] hv = _vec(dt)
     cdef const long[::1] st = np.ascontiguousarray(steps, dtype=np.int_)
     cdef Py_ssize_t n = Pv.shape[0], w = st.shape[0]
-    cdef Py_ssize_t i, j, k, m, nt = 0, ti
-    if int(np.sum(st)) != n or y0v.shape[0] != w or P0v.shape[0] != w or V0v.shape[0] != w:
+    cdef Py_ssize_t i, j, k, m, nt = 0, ti, total = 0
+    for j in range(w):
+        total += st[j]
+    if total != n or y0v.shape[0] != w or P0v.shape[0] != w or V0v.shape[0] != w:
         raise ValueError("steps must sum to len(P), and y0, P0, V0 have one value a stretch")
     if Vv.shape[0] != n or hv.shape[0] != n:
         raise ValueError("P, V and dt must have one value a step")
@@ -622,6 +656,10 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
     cdef const double[::1] s = _vec(s_path)
     cdef Py_ssize_t m = o0.shape[0], n = s.shape[0], i, j, k, K
     cdef bint has_motion = motion is not None
+    _lengths("one value a crossing, as off0", m, way=len(wy), start=len(st), stop=len(sp))
+    if has_motion:
+        _lengths("one value a point, as s_path", n, dP=len(motion[0]), V=len(motion[1]),
+                 speed=len(motion[2]))
     cdef const double[::1] dP
     cdef const double[::1] Vm
     cdef const double[::1] speed
@@ -705,6 +743,9 @@ def catch_up_commands(t, mo, off0, start, stop, P, V, double share, double hurry
     cdef double[::1] Pv = P
     cdef double[::1] Vv = V
     cdef Py_ssize_t n = s_path.shape[0], m = st.shape[0], i, k, K
+    _lengths("one value a point, as P", Pv.shape[0], V=len(Vv))
+    _motion_lengths(mo, Pv.shape[0])
+    _lengths("one value a crossing, as start", m, stop=len(sp), off0=len(off0))
     way_a = np.empty(m)
     cdef double[::1] way = way_a
     for i in range(m):
@@ -798,6 +839,9 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
     cdef const double[::1] Pi = mo.P_ideal
     cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0], i, upto = 0
     cdef double y0 = before[0], P0 = before[1], V0 = before[2]
+    _motion_lengths(mo, n)
+    _lengths("one value a point, as P", n, V=len(Vv))
+    _lengths("one value a crossing, as e", c, b=len(bv), shortfall=len(shortfall))
     for i in range(c):
         if ev[i] + 1 > upto:
             upto = ev[i] + 1
@@ -1050,6 +1094,7 @@ def creeps(sg, P, side, double ref, double drift):
     cdef const long[::1] s = np.ascontiguousarray(sg, dtype=np.int_)
     cdef const double[::1] p = _vec(P)
     cdef Py_ssize_t n = s.shape[0], start = 0, r
+    _lengths("one value a row, as sg", n, P=len(p))
     out_a = np.zeros(n, dtype=int)
     cdef long[::1] out = out_a
     cdef long cur_side = int(side), came = 0
@@ -1079,6 +1124,9 @@ def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, doub
     cdef const long[::1] sn = np.ascontiguousarray(s_new, dtype=np.int_)
     cdef Py_ssize_t m = v.shape[0], w = ev.shape[0], i, j, k
     cdef long lo_f
+    _lengths("one value a point, as V", m, resting=len(rest))
+    _lengths("one value a window, as e", w, f=len(fv), new=len(nv), last_row=len(lv))
+    _lengths("one value a standing crossing, as s_first", sf.shape[0], s_new=len(sn))
     out = np.empty(m, dtype=int)
     cdef long[::1] sg = out
     for i in range(m):
@@ -1097,4 +1145,10 @@ def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, doub
     for i in range(sf.shape[0]):
         k = sf[i] if sf[i] >= 0 else sf[i] + m
         sg[k] = sn[i]
-    return carried(out, side)
+    # carried(out, side) in place: the last direction at or before each row
+    cdef long cur = side
+    for i in range(m):
+        if sg[i] != 0:
+            cur = sg[i]
+        sg[i] = cur
+    return out

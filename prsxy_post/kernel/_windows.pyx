@@ -7,6 +7,8 @@ bit. numpy's ``maximum`` and ``minimum`` as numpy's (a NaN wins). Compiled with 
 
 import numpy as np
 
+from ._play import creeps as _creeps
+
 from libc.math cimport sqrt, fabs, copysign, INFINITY, NAN
 
 
@@ -18,6 +20,15 @@ cdef inline double _max(double a, double b) noexcept nogil:
 
 cdef inline double _min(double a, double b) noexcept nogil:
     return a if (a < b or a != a) else b
+
+
+def _lengths(str what, Py_ssize_t n, **lengths):
+    """Refuse arrays whose ``lengths`` (name: length) are not ``n`` before the
+    loops run without bounds checks: a ValueError naming what was expected and
+    what was got."""
+    for name, got in lengths.items():
+        if got != n:
+            raise ValueError(f"{name} must have {what} ({n} values, as the first), got {got}")
 
 
 cdef inline double _clip01(double x) noexcept nogil:
@@ -54,6 +65,8 @@ def velocity_roots(P0, V0, P1, V1, h, new, bint has_new):
         new if has_new else np.zeros(p0.shape[0]), dtype=np.float64
     )
     cdef Py_ssize_t n = p0.shape[0], i
+    _lengths("one value a step", n, V0=len(v0), P1=len(p1), V1=len(v1), h=len(hh),
+             new=len(nw))
     out_s = np.empty(n)
     out_a = np.empty(n)
     cdef double[::1] S = out_s
@@ -107,6 +120,7 @@ def turning_points(P0, V0, P1, V1, h):
     cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
     cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
     cdef Py_ssize_t n = p0.shape[0], i
+    _lengths("one value a step", n, V0=len(v0), P1=len(p1), V1=len(v1), h=len(hh))
     out_lo = np.empty(n)
     out_hi = np.empty(n)
     cdef double[::1] LO = out_lo
@@ -151,6 +165,8 @@ def dip_roots(P0, V0, P1, V1, h, sg, double tol, bint sets_off):
     cdef const double[::1] v1 = np.ascontiguousarray(V1, dtype=np.float64)
     cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
     cdef Py_ssize_t n = p0.shape[0], i, j, m = 0
+    _lengths("one value a step", n, V0=len(v0), P1=len(p1), V1=len(v1), h=len(hh),
+             sg=len(sg))
     keep_a = np.zeros(n, dtype=bool)
     cdef unsigned char[::1] keep = keep_a.view(np.uint8)
     cdef const double[::1] r1
@@ -209,6 +225,8 @@ def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,
     cdef const double[::1] RB = np.ascontiguousarray(rb, dtype=np.float64)
     cdef const double[::1] RA = np.ascontiguousarray(ra, dtype=np.float64)
     cdef Py_ssize_t n = T0.shape[0], i
+    _lengths("one value a window", n, t1=len(T1), t_root=len(TR), accel=len(AC), rb=len(RB),
+             ra=len(RA))
     out_a = np.empty(n)
     out_b = np.empty(n)
     cdef double[::1] A = out_a
@@ -267,3 +285,189 @@ def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,
             A[i] = x0 if whole else a
             B[i] = x1 if whole else b
     return out_a, out_b
+
+
+# the kinds of :func:`motor_turns` (windows.MID, AT_REST, CREPT, STOOD)
+cdef signed char MID = 0, AT_REST = 1, CREPT = 2, STOOD = 3
+
+
+def motor_turns(V, P, rest, long side, double ref, double drift, Py_ssize_t off,
+                double eps):
+    """:func:`prsxy_post.kernel.windows.motor_turns`, compiled (the creeps by the
+    compiled :func:`prsxy_post.kernel.play.creeps`)."""
+    P_a = np.ascontiguousarray(P, dtype=np.float64)
+    cdef const double[::1] v = np.ascontiguousarray(V, dtype=np.float64)
+    cdef const double[::1] p = P_a
+    cdef const unsigned char[::1] rs = np.ascontiguousarray(rest, dtype=np.bool_).view(np.uint8)
+    cdef Py_ssize_t N = v.shape[0], i, m = 0, b1, b2
+    _lengths("one value a row, as V", N, P=len(p), rest=len(rs))
+    sg_a = np.empty(N, dtype=np.int_)
+    cdef long[::1] sg = sg_a
+    for i in range(N):
+        sg[i] = 0 if rs[i] else (1 if v[i] > eps else (-1 if v[i] < -eps else 0))
+    crept_a, reach = _creeps(sg_a, P_a, side, ref, drift)
+    cdef const long[::1] cr = crept_a
+    came_a = np.empty(N, dtype=np.int_)
+    cdef long[::1] came = came_a
+    cdef long cur = side, nw
+    for i in range(N):
+        if cr[i] != 0:
+            sg[i] = cr[i]
+        came[i] = cur
+        if sg[i] != 0:
+            cur = sg[i]
+    for i in range(off, N):
+        if sg[i] != 0 and sg[i] != came[i]:
+            m += 1
+    r_a = np.empty(m, dtype=np.intp)
+    kind_a = np.empty(m, dtype=np.int8)
+    cdef Py_ssize_t[::1] r = r_a
+    cdef signed char[::1] kind = kind_a
+    cdef bint old_way, at_rest, crept_f, stood
+    m = 0
+    for i in range(off, N):
+        if not (sg[i] != 0 and sg[i] != came[i]):
+            continue
+        nw = sg[i]
+        b1 = i - 1 if i >= 1 else 0
+        b2 = i - 2 if i >= 2 else 0
+        old_way = nw * (p[i] - p[b1]) < 0.0
+        at_rest = i == 0 or (rs[b1] and not old_way)
+        crept_f = cr[i] != 0 and not at_rest and sg[b1] != -nw
+        stood = (
+            not at_rest and not crept_f and i - off >= 1 and i >= 2 and sg[b1] == 0
+            and sg[b2] == 0 and fabs(p[b1] - p[b2]) < 1e-9 and not old_way
+        )
+        r[m] = i
+        kind[m] = AT_REST if at_rest else (CREPT if crept_f else (STOOD if stood else MID))
+        m += 1
+    return sg_a, came_a, r_a, kind_a, reach
+
+
+cdef inline bint _turns_twice(double P0, double V0, double P1, double V1,
+                              double h) noexcept nogil:
+    # turning_points' test for one step, its operations as there
+    cdef double a, b, c, disc, qq, r1, r2, lo, hi
+    a = _vq(P0, V0, P1, V1, h, &b)
+    c = V0
+    disc = b * b - 4.0 * a * c
+    if not (disc > 0 and fabs(a) > 0):
+        return False  # most steps: the roots need not be made
+    qq = -0.5 * (b + copysign(sqrt(_max(disc, 0.0)), b))
+    r1 = qq / a
+    r2 = c / qq
+    lo = _min(r1, r2)
+    hi = _max(r1, r2)
+    return (lo > 0) and (hi < 1) and (hi > lo)
+
+
+def motor_dips(P, V, h, sg, came, Py_ssize_t off, double tol, bint sets_off):
+    """:func:`prsxy_post.kernel.windows.motor_dips`, compiled: the candidate steps
+    found in one pass (a dip's only where the step's cubic turns twice inside it,
+    :func:`turning_points`' test: :func:`dip_roots` keeps no other), then
+    :func:`dip_roots` over them (the same rows in the same order as the
+    reference's turning rows, so numpy's cubes of the same array)."""
+    cdef const double[::1] p = np.ascontiguousarray(P, dtype=np.float64)
+    cdef const double[::1] v = np.ascontiguousarray(V, dtype=np.float64)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef const long[::1] s = np.ascontiguousarray(sg, dtype=np.int_)
+    cdef const long[::1] c = np.ascontiguousarray(came, dtype=np.int_)
+    cdef Py_ssize_t N = p.shape[0], n = hh.shape[0], j, m = 0, lo_j, hi_j
+    _lengths("one value a row, as P", N, V=len(v), sg=len(s), came=len(c))
+    if n > N - off:
+        raise ValueError(f"h must have at most {N - off} values (one a step), got {n}")
+    j_a = np.empty(N, dtype=np.intp)
+    cdef Py_ssize_t[::1] jj = j_a
+    lo_j = off if off > 1 else 1
+    hi_j = off + n if off + n < N else N
+    for j in range(lo_j, hi_j):
+        if sets_off:
+            if (s[j] != 0 and s[j - 1] == 0 and c[j] == s[j]
+                    and s[j] * (p[j] - p[j - 1]) < 0.0):
+                jj[m] = j
+                m += 1
+        elif s[j] == s[j - 1] and s[j] != 0:
+            if _turns_twice(p[j - 1], v[j - 1], p[j], v[j], hh[j - off]):
+                jj[m] = j
+                m += 1
+    P0, V0, P1, V1 = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    hk, sk = np.empty(m), np.empty(m)
+    cdef double[::1] a0 = P0
+    cdef double[::1] b0 = V0
+    cdef double[::1] a1 = P1
+    cdef double[::1] b1 = V1
+    cdef double[::1] hv = hk
+    cdef double[::1] sv = sk
+    for j in range(m):
+        a0[j] = p[jj[j] - 1]
+        b0[j] = v[jj[j] - 1]
+        a1[j] = p[jj[j]]
+        b1[j] = v[jj[j]]
+        hv[j] = hh[jj[j] - off]
+        sv[j] = s[jj[j]]
+    keep, s1, s2, A1, A2 = dip_roots(P0, V0, P1, V1, hk, sk, tol, sets_off)
+    return j_a[:m][keep], s1, s2, A1, A2
+
+
+def corner_blends(V_in, V_out, cols, h, double accel, double v_eps, double turn_mm,
+                  double blend_min):
+    """:func:`prsxy_post.kernel.windows.corner_blends`, compiled: a corner at a
+    time, the motors with play's (1 − 6 v / |ΔV|) in a (k, c) array as the
+    reference's, raised to 1.5 by numpy there (numpy's power, not the C library's
+    pow)."""
+    cdef const double[:, ::1] vin = np.ascontiguousarray(V_in, dtype=np.float64)
+    cdef const double[:, ::1] vout = np.ascontiguousarray(V_out, dtype=np.float64)
+    cdef const Py_ssize_t[::1] cv = np.ascontiguousarray(cols, dtype=np.intp)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef Py_ssize_t k = vin.shape[0], c = cv.shape[0], i, j, col
+    if vin.shape[1] != 5 or vout.shape[1] != 5:
+        raise ValueError(
+            f"V_in and V_out must be (k, 5), got {tuple(np.shape(V_in))} and "
+            f"{tuple(np.shape(V_out))}"
+        )
+    _lengths("one row a corner, as V_in", k, V_out=vout.shape[0], h=len(hh))
+    for j in range(c):
+        if not 0 <= cv[j] < 5:
+            raise ValueError(f"cols must be motor columns 0 to 4, got {cv[j]}")
+    left_a = np.empty((k, c))
+    moves_a = np.empty((k, c), dtype=np.uint8)
+    cdef double[:, ::1] left = left_a
+    cdef unsigned char[:, ::1] moves = moves_a
+    cdef double vi, vo, fast, slow, d, x
+    for i in range(k):
+        for j in range(c):
+            col = cv[j]
+            vi = vin[i, col]
+            vo = vout[i, col]
+            if fabs(vo) >= fabs(vi):
+                fast = vo
+                slow = vi
+            else:
+                fast = vi
+                slow = vo
+            slow = slow * (-1.0 if fast < 0 else 1.0)
+            moves[i, j] = (fabs(fast) >= v_eps) and (slow > -v_eps)
+            d = fabs(vo - vi)
+            x = 1.0 - 6.0 * slow / d if d > 0 else 0.0
+            left[i, j] = _clip01(x)
+    cdef const double[:, ::1] p15 = np.ascontiguousarray(left_a ** 1.5)
+    blend_a = np.zeros(k, dtype=bool)
+    tau_a = np.empty(k)
+    cdef unsigned char[::1] blend = blend_a.view(np.uint8)
+    cdef double[::1] tau = tau_a
+    cdef double m, turn
+    cdef bint any_turn
+    for i in range(k):
+        m = 0.0
+        for j in range(5):
+            m = _max(m, fabs(vout[i, j] - vin[i, j]))
+        tau[i] = _max(blend_min, m / (2.0 * accel))
+        any_turn = False
+        for j in range(c):
+            col = cv[j]
+            d = fabs(vout[i, col] - vin[i, col])
+            turn = (4.0 / 27.0) * hh[i] * d / 2.0 * p15[i, j]
+            if moves[i, j] and turn > turn_mm:
+                any_turn = True
+        blend[i] = any_turn and (tau[i] <= 0.5 * hh[i])
+    return blend_a, tau_a

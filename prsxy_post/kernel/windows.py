@@ -2,7 +2,9 @@
 (:func:`velocity_roots`, :func:`turning_points`), which steps dip and where
 (:func:`dip_roots`), and a window's edges from the
 root, the acceleration there, the tolerance and the reach on each side
-(:func:`crossing_windows`).
+(:func:`crossing_windows`); a motor's reversals in a chunk and their kinds
+(:func:`motor_turns`), its dips and settings-off back (:func:`motor_dips`); the
+corners a PVT program blends (:func:`corner_blends`).
 
 The numpy reference; ``_windows.pyx`` is its compiled twin, the same operations in
 the same order (the same bits). The rules (why each) are
@@ -13,7 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .play import hermite, velocity_quadratic
+from .play import carried, creeps, hermite, velocity_quadratic
+
+#: A reversal's kind (:func:`motor_turns`): in motion (the window about the root
+#: of its step's cubic), at rest (a standing point), creeping back over a step's
+#: end, after the motor stood through the step before.
+MID, AT_REST, CREPT, STOOD = 0, 1, 2, 3
 
 
 def velocity_roots(
@@ -88,7 +95,7 @@ def dip_roots(
     """The steps (n,) whose cubic turns back and on again deeper than ``tol``
     [mm] while the motor moves the way ``sg`` at both ends, or (``sets_off``)
     that the motor leaves going back first further than ``tol``, and where they
-    turn; the rules are :func:`prsxy_post.reversals._dip_roots`'.
+    turn; the rules are :func:`prsxy_post.reversals._motor_dips`'.
 
     Returns
     -------
@@ -112,6 +119,140 @@ def dip_roots(
     hk = h[keep]
     a, b, _ = velocity_quadratic(P0[keep], V0[keep], P1[keep], V1[keep], hk)
     return keep, s1, s2, (2 * a * s1 + b) / hk, (2 * a * s2 + b) / hk
+
+
+def motor_turns(
+    V: np.ndarray,
+    P: np.ndarray,
+    rest: np.ndarray,
+    side: int,
+    ref: float,
+    drift: float,
+    off: int,
+    eps: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """One motor's reversals in a chunk and their kinds; the rules are
+    :func:`prsxy_post.reversals._turns`'.
+
+    Parameters
+    ----------
+    V, P : (off + n,) its wanted velocity [mm/s] and position [mm] at each row (the
+        point before the chunk first where ``off`` is 1)
+    rest : (off + n,) bool, the path stands at the row
+    side : the side it is on before the chunk (+1, −1)
+    ref, drift : where it got farthest its last way [mm] and the drift back that
+        makes a creeping motor cross [mm] (:func:`.play.creeps`)
+    eps : the slowest velocity with a direction [mm/s]
+
+    Returns
+    -------
+    sg : (off + n,) its direction at each row (creeps back made reversals)
+    came : (off + n,) the direction each row comes from
+    r : (m,) the rows where it reverses (rows of V, inside the chunk)
+    kind : (m,) int8, MID, AT_REST, CREPT or STOOD
+    reach : the ``ref`` carried to the next chunk
+    """
+    n = len(V) - off
+    sg = np.where(rest, 0, np.where(V > eps, 1, np.where(V < -eps, -1, 0)))
+    crept, reach = creeps(sg, P, side, ref, drift)
+    sg = np.where(crept != 0, crept, sg)
+    came = np.concatenate([[side], carried(sg, side)[:-1]])[: len(sg)]
+    r = np.flatnonzero((sg != 0) & (sg != came))
+    r = r[(r - off >= 0) & (r - off < n)]
+    new = sg[r]
+    b1, b2 = np.maximum(r - 1, 0), np.maximum(r - 2, 0)
+    old_way = new * (P[r] - P[b1]) < 0.0
+    at_rest = (r == 0) | (rest[b1] & ~old_way)
+    crept_f = (crept[r] != 0) & ~at_rest & (sg[b1] != -new)
+    stood = (
+        ~at_rest
+        & ~crept_f
+        & (r - off >= 1)
+        & (r >= 2)
+        & (sg[b1] == 0)
+        & (sg[b2] == 0)
+        & (np.abs(P[b1] - P[b2]) < 1e-9)
+        & ~old_way
+    )
+    kind = np.where(at_rest, AT_REST, np.where(crept_f, CREPT, np.where(stood, STOOD, MID)))
+    return sg, came, r, kind.astype(np.int8), reach
+
+
+def motor_dips(
+    P: np.ndarray,
+    V: np.ndarray,
+    h: np.ndarray,
+    sg: np.ndarray,
+    came: np.ndarray,
+    off: int,
+    tol: float,
+    sets_off: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One motor's dips (or, ``sets_off``, its settings-off back) in a chunk: the
+    rows j of ``P``, ``V``, ``sg``, ``came`` (off + n,) (:func:`motor_turns`) whose
+    step (``h`` (n,) [s], row j − off) the motor ends moving the way it began it
+    (or leaves from rest or standing, the way it comes from, with its chord
+    against it), and :func:`dip_roots` of those. The rules are
+    :func:`prsxy_post.reversals._motor_dips`'.
+
+    Returns
+    -------
+    j : (m,) the rows that dip
+    s1, s2, A1, A2 : (m,) as :func:`dip_roots`
+    """
+    n = len(h)
+    if sets_off:
+        j = np.flatnonzero((sg[1:] != 0) & (sg[:-1] == 0)) + 1
+        j = j[(j - off >= 0) & (j - off < n) & (came[j] == sg[j])]
+        j = j[sg[j] * (P[j] - P[j - 1]) < 0.0]
+    else:
+        j = np.flatnonzero((sg[1:] == sg[:-1]) & (sg[1:] != 0)) + 1
+        j = j[(j - off >= 0) & (j - off < n)]
+    keep, s1, s2, A1, A2 = dip_roots(
+        P[j - 1], V[j - 1], P[j], V[j], h[j - off], sg[j], tol, sets_off
+    )
+    return j[keep], s1, s2, A1, A2
+
+
+def corner_blends(
+    V_in: np.ndarray,
+    V_out: np.ndarray,
+    cols: np.ndarray,
+    h: np.ndarray,
+    accel: float,
+    v_eps: float,
+    turn_mm: float,
+    blend_min: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The corners blended and their τ; the rules are
+    :func:`prsxy_post.reversals.corners`'.
+
+    Parameters
+    ----------
+    V_in, V_out : (k, 5) the motors' velocities each side of each corner [mm/s]
+    cols : (c,) ints, the motors with play
+    h : (k,) the standing side's step [s]
+    accel : the blend's acceleration [mm/s²]
+    v_eps, turn_mm, blend_min : reversals.V_EPS, CORNER_TURN_MM, BLEND_MIN_S
+
+    Returns
+    -------
+    blend : (k,) bool
+    tau : (k,) [s]
+    """
+    dV = np.abs(V_out - V_in)
+    vi, vo = V_in[:, cols], V_out[:, cols]
+    # the slower side's velocity, signed along the faster side's way
+    fast = np.where(np.abs(vo) >= np.abs(vi), vo, vi)
+    slow = np.where(np.abs(vo) >= np.abs(vi), vi, vo) * np.where(fast < 0, -1.0, 1.0)
+    moves = (np.abs(fast) >= v_eps) & (slow > -v_eps)
+    d = dV[:, cols]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        left = np.clip(np.where(d > 0, 1.0 - 6.0 * slow / d, 0.0), 0.0, 1.0)
+    turn = (4.0 / 27.0) * h[:, None] * d / 2.0 * left**1.5
+    tau = np.maximum(blend_min, np.max(dV, axis=1, initial=0.0) / (2.0 * accel))
+    blend = np.any(moves & (turn > turn_mm), axis=1) & (tau <= 0.5 * h)
+    return blend, tau
 
 
 def crossing_windows(
