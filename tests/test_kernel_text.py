@@ -41,7 +41,9 @@ def test_sample_programs_rows_are_byte_identical(tmp_path: Path) -> None:
         want = text.format_fixed_rows(columns, end)
         assert _text.format_fixed_rows(columns, end) == want
         rows += len(want)
-    assert rows > 5_000
+    # the G-code writer formats the lines it writes (4 002 rows over the samples),
+    # not every point
+    assert rows > 3_000
 
 
 @settings(max_examples=300, deadline=None)
