@@ -31,7 +31,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.polynomial import legendre
 
 from . import kernel
 from .errors import FitError, ProfileError
@@ -73,6 +72,9 @@ def _exponents(nvar: int, degree: int) -> list[tuple[int, ...]]:
 
 def _legendre_table(u: np.ndarray, degree: int) -> np.ndarray:
     """P_0..P_degree at u, shape (N, degree + 1)."""
+    # here: numpy.polynomial costs 2 ms of start-up, and only fits need it
+    from numpy.polynomial import legendre
+
     return legendre.legvander(u, degree)
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import numpy as np
 
@@ -88,8 +89,7 @@ class PointChunk:
         return PointChunk(**{f.name: z(f.name) for f in fields(PointChunk)})
 
 
-@dataclass(frozen=True)
-class Written:
+class Written(NamedTuple):
     """How the output writes its numbers, for what must survive their rounding.
 
     space : "motor": each motor's position is written (a PVT program); "pose": the

@@ -37,7 +37,7 @@ def _plan_and_points(n_blocks: int, points_per_block: list[int]) -> tuple[Plan, 
         proto[name] = np.arange(n_blocks, dtype=float)
     proto["dq_in"] = np.repeat(np.arange(n_blocks, dtype=float)[:, None], 5, axis=1)
     blocks = Blocks(**proto)
-    law = TimeLaw(*(np.arange(n_blocks, dtype=float) for _ in TimeLaw.__dataclass_fields__))
+    law = TimeLaw(*(np.arange(n_blocks, dtype=float) for _ in TimeLaw._fields))
     block = np.repeat(np.arange(n_blocks), points_per_block)
     n = len(block)
     samples = Samples(

@@ -66,16 +66,14 @@ Problem = tuple[str, int, str | None]
 # ---------------------------------------------------------------- what a line holds
 
 
-@dataclass(frozen=True, slots=True)
-class WordItem:
+class WordItem(NamedTuple):
     letter: str  # upper case
     value: float | Value
     text: str
     column: int
 
 
-@dataclass(frozen=True, slots=True)
-class SetItem:
+class SetItem(NamedTuple):
     """``#n=value`` or ``#<name>=value``: ``target`` is an int, an expression for
     the number, or the name (a str)."""
 
@@ -85,8 +83,7 @@ class SetItem:
     value_column: int
 
 
-@dataclass(frozen=True, slots=True)
-class OWord:
+class OWord(NamedTuple):
     """An O-word line (or M98 / M99 acting as one).
 
     kind : sub endsub call do while repeat if elseif else endif break continue
@@ -114,8 +111,7 @@ BLANK, PERCENT, BLOCK = 0, 1, 2
 MAX_LINE = 252
 
 
-@dataclass(frozen=True, slots=True)
-class Parsed:
+class Parsed(NamedTuple):
     """A line read but not evaluated (depends on the text only)."""
 
     kind: int

@@ -60,8 +60,7 @@ ANGULAR_EPS_DEG = 1e-9
 ARC_TANGENTIAL_SHARE = 0.5
 
 
-@dataclass(frozen=True)
-class PlanLimits:
+class PlanLimits(NamedTuple):
     """What the planner must respect (profile ``[limits]`` and ``[interpolation]``).
 
     rapid_mm_min, rapid_deg_min : G0 speeds along XYZ, and of A/B-only moves

@@ -15,13 +15,12 @@ arithmetic in C, so the two agree to the bit (``tests/test_kernel_fk.py``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 
-@dataclass(frozen=True)
-class FKArrays:
+class FKArrays(NamedTuple):
     """A geometry as the FK's arithmetic takes it, made once per geometry.
 
     g, u, d : (3, 3) guide points [mm], hinge axes and guide directions, one leg
