@@ -12,7 +12,6 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -61,12 +60,14 @@ def parse_pose(text: str, option: str) -> tuple[float, ...]:
 # ------------------------------------------------------------------ error handling
 
 
-@dataclass
 class Ctx:
-    debug: bool = False
-    quiet: bool = False
-    #: the files the command has written (whole), for what Ctrl-C says
-    written: list[str] = field(default_factory=list)
+    """The command's context object: --debug, and the files the command has
+    written (whole), for what Ctrl-C says."""
+
+    def __init__(self, debug: bool = False, quiet: bool = False) -> None:
+        self.debug = debug
+        self.quiet = quiet
+        self.written: list[str] = []
 
 
 def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:

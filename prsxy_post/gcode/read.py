@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import NamedTuple
 
 from ..errors import GCodeError
@@ -128,16 +127,26 @@ class Parsed(NamedTuple):
     words: tuple[Word, ...] | None = None
 
 
-@dataclass(slots=True)
 class Block:
     """One line's words with their values, ready to execute."""
 
-    line: int
-    words: tuple[Word, ...]
-    sets: tuple[tuple[int | str, float], ...] = ()
-    comment: str | None = None
-    has_text: bool = True
-    percent: bool = False
+    __slots__ = ("comment", "has_text", "line", "percent", "sets", "words")
+
+    def __init__(
+        self,
+        line: int,
+        words: tuple[Word, ...],
+        sets: tuple[tuple[int | str, float], ...] = (),
+        comment: str | None = None,
+        has_text: bool = True,
+        percent: bool = False,
+    ) -> None:
+        self.line = line
+        self.words = words
+        self.sets = sets
+        self.comment = comment
+        self.has_text = has_text
+        self.percent = percent
 
 
 # ---------------------------------------------------------------- the text
