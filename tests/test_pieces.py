@@ -31,7 +31,7 @@ from .conftest import ROOT
 def _plan_and_points(n_blocks: int, points_per_block: list[int]) -> tuple[Plan, Samples]:
     """A plan of n blocks (only the fields the cutting touches matter) and its
     points, each carrying its block's global number in ``line``."""
-    fields = Blocks.__dataclass_fields__
+    fields = Blocks.FIELDS
     proto = {}
     for name in fields:
         proto[name] = np.arange(n_blocks, dtype=float)
