@@ -41,7 +41,7 @@ def _plan_and_points(n_blocks: int, points_per_block: list[int]) -> tuple[Plan, 
     block = np.repeat(np.arange(n_blocks), points_per_block)
     n = len(block)
     samples = Samples(
-        **{name: np.zeros(n) for name in Samples.__dataclass_fields__ if name != "block"},
+        **{name: np.zeros(n) for name in Samples.FIELDS if name != "block"},
         block=block,
     )
     samples = Samples(**{**samples.__dict__, "line": block.copy()})
