@@ -117,7 +117,6 @@ class MotorTable:
         return float(np.max(self.hi_err - self.lo_err))
 
 
-@dataclass
 class PlayState:
     """What the play model and the compensation remember between chunks.
 
@@ -126,9 +125,12 @@ class PlayState:
     command : last command (compensation)
     """
 
-    y: float | None = None
-    target: float | None = None
-    command: float | None = None
+    def __init__(
+        self, y: float | None = None, target: float | None = None, command: float | None = None
+    ) -> None:
+        self.y = y
+        self.target = target
+        self.command = command
 
 
 def play_model(

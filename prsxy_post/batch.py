@@ -14,7 +14,6 @@ import signal
 import time
 import traceback
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 from . import sinks
@@ -22,7 +21,6 @@ from .convert import ConvertJob, convert_file
 from .errors import ProcessFailed, PrsxyError
 
 
-@dataclass
 class Outcome:
     """What became of one job of :func:`convert_many`.
 
@@ -31,10 +29,17 @@ class Outcome:
         written) or "stopped" (interrupted; nothing of it written)
     """
 
-    job: ConvertJob
-    state: str = "waiting"
-    written: list[str] = field(default_factory=list)
-    error: PrsxyError | None = None
+    def __init__(
+        self,
+        job: ConvertJob,
+        state: str = "waiting",
+        written: list[str] | None = None,
+        error: PrsxyError | None = None,
+    ) -> None:
+        self.job = job
+        self.state = state
+        self.written = [] if written is None else written
+        self.error = error
 
 
 class Interrupted(KeyboardInterrupt):

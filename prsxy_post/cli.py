@@ -7,14 +7,11 @@ rerun with ``--debug`` for the traceback and report it).
 from __future__ import annotations
 
 import functools
-import json
 import os
 import sys
 import threading
 import time
-import traceback
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -63,12 +60,14 @@ def parse_pose(text: str, option: str) -> tuple[float, ...]:
 # ------------------------------------------------------------------ error handling
 
 
-@dataclass
 class Ctx:
-    debug: bool = False
-    quiet: bool = False
-    #: the files the command has written (whole), for what Ctrl-C says
-    written: list[str] = field(default_factory=list)
+    """The command's context object: --debug, and the files the command has
+    written (whole), for what Ctrl-C says."""
+
+    def __init__(self, debug: bool = False, quiet: bool = False) -> None:
+        self.debug = debug
+        self.quiet = quiet
+        self.written: list[str] = []
 
 
 def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:
@@ -102,6 +101,8 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
             return fn(*args, **kwargs)
         except PrsxyError as err:
             if ctx.debug:
+                import traceback
+
                 traceback.print_exc()
             fail(err)
         except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException):
@@ -120,6 +121,8 @@ def guarded(fn: Callable[..., Any]) -> Callable[..., Any]:
             sys.exit(1)
         except Exception as exc:  # a bug: say so plainly
             if ctx.debug:
+                import traceback
+
                 traceback.print_exc()
             click.echo(
                 f"internal error: {type(exc).__name__}: {exc} (this is a bug in "
@@ -266,6 +269,8 @@ start_option = click.option(
 @guarded
 def inspect(program: str, profile_path: str | None, start: str | None, as_json: bool) -> None:
     """Print the interpreted motions of PROGRAM (workpiece frame, mm, degrees)."""
+    import json
+
     from . import gcode
     from . import program as prog
 
@@ -1050,6 +1055,8 @@ def calibrate(
     virtual-axis error map from what remains. Each stage prints what it changed
     and the residuals before and after.
     """
+    import json
+
     from . import calibrate as cal
 
     _check_output(output, [profile_path], in_place)
@@ -1135,6 +1142,8 @@ def diagnose(
     quiet: bool,
 ) -> None:
     """Find where PROFILE's simulation and the measurements DATA disagree and why."""
+    import json
+
     from . import diagnose as dg
 
     if output:
@@ -1249,6 +1258,8 @@ def ballbar(
     is G2, seen from +Z (XY), +Y (XZ) or +X (YZ). Polar plots overlay a circle's
     ccw and cw runs on one µm/div scale, seen from that side.
     """
+    import json
+
     from . import ballbar as bb
     from . import measure, plots
 

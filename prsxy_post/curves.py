@@ -23,18 +23,27 @@ A and B (which G5 cannot move) go linearly from the motion's start to its end.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.polynomial.legendre import leggauss
 
 if TYPE_CHECKING:
     from scipy.interpolate import BSpline
 
 #: arc-length accuracy of :meth:`Nurbs.u_at` [mm]
 LENGTH_TOLERANCE = 1e-9
-_GAUSS = {n: leggauss(n) for n in (8, 16)}
+
+
+@functools.cache
+def _gauss(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss–Legendre nodes and weights of order ``n`` on [-1, 1] (made on first
+    use: numpy.polynomial costs 2 ms of every command's start-up otherwise)."""
+    from numpy.polynomial.legendre import leggauss
+
+    x, w = leggauss(n)
+    return x, w
 
 
 @dataclass(frozen=True, eq=False)
@@ -142,7 +151,7 @@ class Nurbs:
 
     # -- arc length
     def _quad(self, a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
-        x, w = _GAUSS[n]
+        x, w = _gauss(n)
         mid, half = (a + b) / 2.0, (b - a) / 2.0
         u = mid[..., None] + half[..., None] * x
         return np.sum(self.speed(u) * w, axis=-1) * half

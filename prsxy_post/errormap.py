@@ -26,12 +26,11 @@ from __future__ import annotations
 
 import functools
 import itertools
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.polynomial import legendre
 
 from . import kernel
 from .errors import FitError, ProfileError
@@ -62,6 +61,8 @@ STRUCTURES: dict[str, dict[str, tuple[tuple[tuple[int, ...], ...], ...]]] = {
         "b": ((ZAB,),),
     },
 }
+#: a Legendre product: the variables (0..4: x y z A B) and their degrees
+Term = tuple[tuple[int, ...], tuple[int, ...]]
 UNITS = {"x": "mm", "y": "mm", "z": "mm", "a": "deg", "b": "deg"}
 
 
@@ -73,6 +74,9 @@ def _exponents(nvar: int, degree: int) -> list[tuple[int, ...]]:
 
 def _legendre_table(u: np.ndarray, degree: int) -> np.ndarray:
     """P_0..P_degree at u, shape (N, degree + 1)."""
+    # here: numpy.polynomial costs 2 ms of start-up, and only fits need it
+    from numpy.polynomial import legendre
+
     return legendre.legvander(u, degree)
 
 
@@ -85,6 +89,30 @@ def legendre_tables(
     return {v: _legendre_table(u[:, v], max(degree, 2)) for v in range(5)}
 
 
+def _columns(comp: str, degree: int, structure: str = "eq5") -> Iterator[tuple[Term, Term | None]]:
+    """Each column of a component's design after the constant: its Legendre
+    product (variables, exponents), and the second one it is multiplied by for a
+    coupling group (else None), in :func:`design`'s order."""
+    for spec in STRUCTURES[structure][comp]:
+        if len(spec) == 1:
+            group = spec[0]
+            for e in _exponents(len(group), degree):
+                yield (group, e), None
+        else:
+            ga, gb = spec
+            for ea in _exponents(len(ga), 1):
+                for eb in _exponents(len(gb), min(degree, 2)):
+                    yield (ga, ea), (gb, eb)
+
+
+def design_terms(comp: str, degree: int, structure: str = "eq5") -> list[Term]:
+    """(variables, exponents) of each column of :func:`design` after the first:
+    what the columns are, without evaluating them."""
+    return [
+        a if b is None else (a[0] + b[0], a[1] + b[1]) for a, b in _columns(comp, degree, structure)
+    ]
+
+
 def design(
     q: np.ndarray,
     comp: str,
@@ -93,7 +121,7 @@ def design(
     hi: np.ndarray,
     structure: str = "eq5",
     tables: dict[int, np.ndarray] | None = None,
-) -> tuple[np.ndarray, list[tuple[tuple[int, ...], ...]]]:
+) -> tuple[np.ndarray, list[Term]]:
     """Design matrix of one component: a constant, then every group's terms.
 
     A group of one variable set holds every Legendre product of total degree
@@ -104,11 +132,11 @@ def design(
     -------
     X : (N, m) ndarray
     terms : list of (variables, exponents) describing each column after the first
+        (:func:`design_terms`)
     """
     if tables is None:
         tables = legendre_tables(q, lo, hi, degree)
     cols = [np.ones(len(q))]
-    terms: list[tuple[tuple[int, ...], ...]] = []
 
     def product(group: tuple[int, ...], e: tuple[int, ...]) -> np.ndarray:
         col = np.ones(len(q))
@@ -117,19 +145,9 @@ def design(
                 col = col * tables[v][:, k]
         return col
 
-    for spec in STRUCTURES[structure][comp]:
-        if len(spec) == 1:
-            group = spec[0]
-            for e in _exponents(len(group), degree):
-                cols.append(product(group, e))
-                terms.append((group, e))
-        else:
-            ga, gb = spec
-            for ea in _exponents(len(ga), 1):
-                for eb in _exponents(len(gb), min(degree, 2)):
-                    cols.append(product(ga, ea) * product(gb, eb))
-                    terms.append((ga + gb, ea + eb))
-    return np.column_stack(cols), terms
+    for a, b in _columns(comp, degree, structure):
+        cols.append(product(*a) if b is None else product(*a) * product(*b))
+    return np.column_stack(cols), design_terms(comp, degree, structure)
 
 
 @dataclass(frozen=True)
@@ -183,9 +201,7 @@ class ErrorMap:
         for i, c in enumerate(COMPONENTS):
             if c not in self.coef:
                 continue
-            _, terms = design(
-                np.zeros((1, 5)), c, self.degree[c], self.lo, self.hi, self.structure[c]
-            )
+            terms = design_terms(c, self.degree[c], self.structure[c])
             coef = self.coef[c]
             entries.append((0, i, float(coef[0])))
             for j, (group, e) in enumerate(terms, 1):
@@ -249,12 +265,12 @@ class ErrorMap:
                     " or ".join(repr(k) for k in STRUCTURES),
                 )
             co = np.asarray(v.get("coef", []), dtype=float)
-            X, _ = design(np.zeros((1, 5)), c, deg, lo, hi, st)
-            if co.shape != (X.shape[1],) or not np.all(np.isfinite(co)):
+            n = 1 + len(design_terms(c, deg, st))
+            if co.shape != (n,) or not np.all(np.isfinite(co)):
                 raise bad(
                     f"components.{c}.coef",
                     f"has {co.size} values",
-                    f"{X.shape[1]} finite coefficients for degree {deg}",
+                    f"{n} finite coefficients for degree {deg}",
                 )
             degree[c], coef[c], struct[c] = deg, co, st
             cv[c] = float(v.get("cv_rms", np.nan))

@@ -9,12 +9,11 @@ Both sit below the chain and the writers, so neither imports the other.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
 
-@dataclass
 class PointChunk:
     """A run of consecutive points with everything the chain computed.
 
@@ -35,25 +34,69 @@ class PointChunk:
     q_target : (n, 5) the pose handed to the IK, after the virtual-axis map
     P_ideal, V_ideal : (n, 5) [mm, mm/s] where the motors must be and how fast
     P_cmd, V_cmd : (n, 5) the commands after the real-axis tables and servo lead
+
+    A plain class (not a dataclass): equality and repr of arrays are of no use, and
+    a dataclass's generated methods cost every command start-up to make.
     """
 
-    q: np.ndarray
-    qdot: np.ndarray
-    dt: np.ndarray
-    t: np.ndarray
-    line: np.ndarray
-    first: np.ndarray
-    tool_length: np.ndarray
-    speed: np.ndarray
-    dwell: np.ndarray
-    fn: np.ndarray
-    block_end: np.ndarray
-    split: np.ndarray
-    q_target: np.ndarray
-    P_ideal: np.ndarray
-    V_ideal: np.ndarray
-    P_cmd: np.ndarray
-    V_cmd: np.ndarray
+    #: the fields, in the order the constructor takes them
+    FIELDS: ClassVar[tuple[str, ...]] = (
+        "q",
+        "qdot",
+        "dt",
+        "t",
+        "line",
+        "first",
+        "tool_length",
+        "speed",
+        "dwell",
+        "fn",
+        "block_end",
+        "split",
+        "q_target",
+        "P_ideal",
+        "V_ideal",
+        "P_cmd",
+        "V_cmd",
+    )
+
+    def __init__(
+        self,
+        q: np.ndarray,
+        qdot: np.ndarray,
+        dt: np.ndarray,
+        t: np.ndarray,
+        line: np.ndarray,
+        first: np.ndarray,
+        tool_length: np.ndarray,
+        speed: np.ndarray,
+        dwell: np.ndarray,
+        fn: np.ndarray,
+        block_end: np.ndarray,
+        split: np.ndarray,
+        q_target: np.ndarray,
+        P_ideal: np.ndarray,
+        V_ideal: np.ndarray,
+        P_cmd: np.ndarray,
+        V_cmd: np.ndarray,
+    ) -> None:
+        self.q = q
+        self.qdot = qdot
+        self.dt = dt
+        self.t = t
+        self.line = line
+        self.first = first
+        self.tool_length = tool_length
+        self.speed = speed
+        self.dwell = dwell
+        self.fn = fn
+        self.block_end = block_end
+        self.split = split
+        self.q_target = q_target
+        self.P_ideal = P_ideal
+        self.V_ideal = V_ideal
+        self.P_cmd = P_cmd
+        self.V_cmd = V_cmd
 
     def __len__(self) -> int:
         return len(self.dt)
@@ -62,16 +105,13 @@ class PointChunk:
         if isinstance(sl, np.ndarray) and sl.dtype.kind in "iu":
             # rows by position: np.take gathers an (n, 5) array's rows several
             # times faster than fancy indexing does, the same values
-            return PointChunk(**{f.name: _rows(getattr(self, f.name), sl) for f in fields(self)})
-        return PointChunk(**{f.name: getattr(self, f.name)[sl] for f in fields(self)})
+            return PointChunk(**{f: _rows(getattr(self, f), sl) for f in self.FIELDS})
+        return PointChunk(**{f: getattr(self, f)[sl] for f in self.FIELDS})
 
     @staticmethod
     def concat(chunks: Sequence[PointChunk]) -> PointChunk:
         return PointChunk(
-            **{
-                f.name: np.concatenate([getattr(c, f.name) for c in chunks])
-                for f in fields(PointChunk)
-            }
+            **{f: np.concatenate([getattr(c, f) for c in chunks]) for f in PointChunk.FIELDS}
         )
 
     @staticmethod
@@ -89,11 +129,10 @@ class PointChunk:
                 return np.empty(0, dtype=object)
             return np.zeros(0)
 
-        return PointChunk(**{f.name: z(f.name) for f in fields(PointChunk)})
+        return PointChunk(**{f: z(f) for f in PointChunk.FIELDS})
 
 
-@dataclass(frozen=True)
-class Written:
+class Written(NamedTuple):
     """How the output writes its numbers, for what must survive their rounding.
 
     space : "motor": each motor's position is written (a PVT program); "pose": the

@@ -11,8 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -32,8 +31,7 @@ KINDS = ("feed", "reach", "tilt", "travel")
 TOLERANCE = 1e-9
 
 
-@dataclass(frozen=True)
-class Problem:
+class Problem(NamedTuple):
     """One kind of problem on one G-code line, at the line's worst point.
 
     kind : "feed", "reach", "tilt" or "travel"

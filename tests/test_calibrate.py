@@ -298,3 +298,28 @@ def test_servo_lags_are_said_in_one_sentence_against_the_motors_without_one() ->
         "Servo lag against motors 1, 2, 3 (position data cannot see a lag common to every "
         "motor; none is written): motor 5 -0.250 ms (± 0.02), motor 6 +0.400 ms (± 0.02).",
     ]
+
+
+def test_design_terms_name_the_columns_of_the_design() -> None:
+    """Each column of the map's design after the constant is the product of the
+    Legendre polynomials its term names (numpy's legval, one variable at a time), for
+    every structure, component and degree; ErrorMap.from_dict counts a component's
+    coefficients from these terms without evaluating the design."""
+    from numpy.polynomial import legendre
+
+    rng = np.random.default_rng(3)
+    lo, hi = np.array([-100.0, -80, -50, -20, -20]), np.array([100.0, 80, 30, 20, 20])
+    q = rng.uniform(lo, hi, (40, 5))
+    u = 2.0 * (q - lo) / (hi - lo) - 1.0
+    for structure, comps in errormap.STRUCTURES.items():
+        for comp in comps:
+            for degree in range(5):
+                X, terms = errormap.design(q, comp, degree, lo, hi, structure)
+                assert terms == errormap.design_terms(comp, degree, structure)
+                assert X.shape == (len(q), 1 + len(terms))
+                np.testing.assert_array_equal(X[:, 0], 1.0)
+                for j, (variables, exps) in enumerate(terms, 1):
+                    want = np.ones(len(q))
+                    for v, k in zip(variables, exps, strict=True):
+                        want = want * legendre.legval(u[:, v], np.eye(k + 1)[k])
+                    np.testing.assert_allclose(X[:, j], want, rtol=1e-12, atol=1e-12)

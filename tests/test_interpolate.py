@@ -211,7 +211,7 @@ def test_segment_limit_bounds_curves_and_leaves_lines_free(segment: str) -> None
     rng = np.random.default_rng(5)
     r = np.concatenate([rng.uniform(0, 500, 500), np.full(300, np.inf), [0.0, np.nan, 1e300]])
     rng.shuffle(r)
-    b = g.Blocks(**{f: np.zeros(len(r)) for f in g.Blocks.__dataclass_fields__})
+    b = g.Blocks(**{f: np.zeros(len(r)) for f in g.Blocks.FIELDS})
     b.curv_r = r
     lim = g.PlanLimits(segment=segment)
     tol = g.CURVE_SHARE * lim.tolerance_mm

@@ -10,7 +10,6 @@ must be the C library's on the machine the tests run on: checked here too.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -50,10 +49,7 @@ def test_sample_programs_ik_is_bit_identical(tmp_path: Path) -> None:
 
 def same_cols(got: ik.PlatformCols, want: ik.PlatformCols) -> bool:
     """Every column of two platform solutions equal to the bit."""
-    return all(
-        same_bits(getattr(got, f.name), getattr(want, f.name))
-        for f in dataclasses.fields(ik.PlatformCols)
-    )
+    return all(same_bits(getattr(got, f), getattr(want, f)) for f in ik.PlatformCols._fields)
 
 
 def test_sample_programs_platform_cols_are_bit_identical(tmp_path: Path) -> None:
@@ -95,8 +91,8 @@ def test_generated_poses_are_bit_identical(
     straight: np.ndarray | None,
 ) -> None:
     _ik = compiled("_ik")
-    m = dataclasses.replace(
-        _arrays(path), scale_x=scale, scale_y=-scale, squareness=square, straightness=straight
+    m = _arrays(path)._replace(
+        scale_x=scale, scale_y=-scale, squareness=square, straightness=straight
     )
     q = np.array(poses, dtype=float)
     tz = ik.tool_z(m, len(q), tool)
@@ -125,7 +121,7 @@ def test_bowed_guides_run_the_reference() -> None:
     """The compiled IK hands a geometry with bowed guides to the reference (kernel
     module docstring): the same numbers, by construction."""
     _ik = compiled("_ik")
-    m = dataclasses.replace(_arrays(PROFILES[0]), bow=np.array([0.01, -0.02, 0.005]))
+    m = _arrays(PROFILES[0])._replace(bow=np.array([0.01, -0.02, 0.005]))
     q = np.array([[10.0, -5.0, -20.0, 12.0, -7.0]])
     tz = ik.tool_z(m, 1, None)
     assert same_bits(_ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz))

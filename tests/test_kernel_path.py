@@ -159,7 +159,7 @@ def test_the_blocks_arcs_reach_the_kernel_in_their_planes() -> None:
     from prsxy_post.interpolate.geometry import PLANE_AXES, Blocks, path_arrays
 
     plane = np.array([0, 17, 18, 19])
-    b = Blocks(**{f: np.zeros(4) for f in Blocks.__dataclass_fields__})
+    b = Blocks(**{f: np.zeros(4) for f in Blocks.FIELDS})
     b.plane = plane
     b.kind = np.array([1, 2, 2, 2])
     p = path_arrays(b)

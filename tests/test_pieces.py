@@ -31,17 +31,17 @@ from .conftest import ROOT
 def _plan_and_points(n_blocks: int, points_per_block: list[int]) -> tuple[Plan, Samples]:
     """A plan of n blocks (only the fields the cutting touches matter) and its
     points, each carrying its block's global number in ``line``."""
-    fields = Blocks.__dataclass_fields__
+    fields = Blocks.FIELDS
     proto = {}
     for name in fields:
         proto[name] = np.arange(n_blocks, dtype=float)
     proto["dq_in"] = np.repeat(np.arange(n_blocks, dtype=float)[:, None], 5, axis=1)
     blocks = Blocks(**proto)
-    law = TimeLaw(*(np.arange(n_blocks, dtype=float) for _ in TimeLaw.__dataclass_fields__))
+    law = TimeLaw(*(np.arange(n_blocks, dtype=float) for _ in TimeLaw._fields))
     block = np.repeat(np.arange(n_blocks), points_per_block)
     n = len(block)
     samples = Samples(
-        **{name: np.zeros(n) for name in Samples.__dataclass_fields__ if name != "block"},
+        **{name: np.zeros(n) for name in Samples.FIELDS if name != "block"},
         block=block,
     )
     samples = Samples(**{**samples.__dict__, "line": block.copy()})

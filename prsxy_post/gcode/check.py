@@ -12,7 +12,6 @@ needs which code to use it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 from ..errors import GCodeError
 from .codes import (
@@ -30,15 +29,24 @@ from .read import Word, fail
 _AXIS_LETTERS = ("X", "Y", "Z", "A", "B")
 
 
-@dataclass(slots=True)
 class Words:
     """A block's words sorted (LinuxCNC's block struct)."""
 
-    seen: dict[str, Word] = field(default_factory=dict)  # letters other than G M N
-    g: dict[int, tuple[float, Word]] = field(default_factory=dict)  # group → (code, word)
-    m: dict[int, tuple[int, Word]] = field(default_factory=dict)  # group → (code, word)
-    motion: float | None = None  # the motion the block makes (80: G80)
-    axis: dict[str, Word] = field(default_factory=dict)
+    __slots__ = ("axis", "g", "m", "motion", "seen")
+
+    def __init__(
+        self,
+        seen: dict[str, Word] | None = None,
+        g: dict[int, tuple[float, Word]] | None = None,
+        m: dict[int, tuple[int, Word]] | None = None,
+        motion: float | None = None,
+        axis: dict[str, Word] | None = None,
+    ) -> None:
+        self.seen = {} if seen is None else seen  # letters other than G M N
+        self.g = {} if g is None else g  # group → (code, word)
+        self.m = {} if m is None else m  # group → (code, word)
+        self.motion = motion  # the motion the block makes (80: G80)
+        self.axis = {} if axis is None else axis
 
 
 def classify(

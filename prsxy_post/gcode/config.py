@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from .motion import Pose
 
 
-@dataclass(frozen=True)
-class ToolEntry:
+class ToolEntry(NamedTuple):
     """A tool of the profile's tool table."""
 
     length: float  # mm, the G43 H<n> length offset

@@ -32,7 +32,6 @@ Labels of ``if``, loops and their ends are local to the subroutine they are in
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 from ..errors import GCodeError
 from .execute import Interpreter
@@ -43,28 +42,38 @@ from .read import OWord, fail
 Position = tuple[str, int]
 
 
-@dataclass
 class Offset:
     """A label met in the program (LinuxCNC's ``offset`` struct)."""
 
-    kind: str
-    file: str
-    index: int  # the line's own index: jumping here reads it again
-    repeat_count: int = -1
+    def __init__(self, kind: str, file: str, index: int, repeat_count: int = -1) -> None:
+        self.kind = kind
+        self.file = file
+        self.index = index  # the line's own index: jumping here reads it again
+        self.repeat_count = repeat_count
 
 
-@dataclass
 class Frame:
     """One level of the call stack (LinuxCNC's ``context``)."""
 
-    name: str | None = None  # the subroutine running at this level
-    call_type: str = "none"  # "none" (the program), "o" (O-word call), "m98"
-    ret: Position | None = None  # where the caller continues
-    ret_line: int = 0  # its line number, for motions made below
-    saved: list[float] = field(default_factory=list)  # the caller's #1-#30
-    m98_loops: int = -1  # M98 L: passes left
-    context: dict[str, object] | None = None  # M70/M73: the modal state saved here
-    restore_on_return: bool = False  # M73
+    def __init__(
+        self,
+        name: str | None = None,
+        call_type: str = "none",
+        ret: Position | None = None,
+        ret_line: int = 0,
+        saved: list[float] | None = None,
+        m98_loops: int = -1,
+        context: dict[str, object] | None = None,
+        restore_on_return: bool = False,
+    ) -> None:
+        self.name = name  # the subroutine running at this level
+        self.call_type = call_type  # "none" (the program), "o" (O-word call), "m98"
+        self.ret = ret  # where the caller continues
+        self.ret_line = ret_line  # its line number, for motions made below
+        self.saved = [] if saved is None else saved  # the caller's #1-#30
+        self.m98_loops = m98_loops  # M98 L: passes left
+        self.context = context  # M70/M73: the modal state saved here
+        self.restore_on_return = restore_on_return  # M73
 
 
 class Jump(Exception):

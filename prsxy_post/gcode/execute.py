@@ -15,7 +15,6 @@ from .comp import straight as comp_straight
 from .comp import turn_off as comp_off
 from .comp import turn_on as comp_on
 from .config import InterpreterConfig, ToolEntry
-from .cycles import cycle
 from .expr import ExprError
 from .functions import io, overrides, restore_blocks, snapshot, spindle_mode, tool_number
 from .messages import expand, kind_of
@@ -596,6 +595,8 @@ class Interpreter:
         self._seen = seen
         if motion in CYCLES:
             self.no_comp("a canned cycle", line, next(iter(axis_words.values()), None))
+            from .cycles import cycle  # here: most programs have no canned cycle
+
             cycle(self, int(motion), axis_words, seen, line, new)
             st.motion = motion
             return

@@ -12,6 +12,7 @@ reference runs too).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import re
@@ -34,12 +35,20 @@ from .read import Word
 #: left, so no match ever needs to backtrack) make it a third faster; only the
 #: zeros of G00 must be able to give one back.
 _NUM = r"[ \t]*+([-+]?+(?:[0-9]++\.?+[0-9]*+|\.[0-9]++))[ \t]*+"
-_FAST_LINE = re.compile(
+_FAST_LINE = (
     r"^[ \t]*+(?:[Nn][ \t]*+[0-9]++[ \t]*+)?+(?:[Gg][ \t]*+0*([0-3])(?![0-9.])[ \t]*+)?+"
     + "".join(f"(?:[{c}{c.lower()}]{_NUM})?+" for c in "XYZABIJKRF")
-    + r"(.*)$",
-    re.M,
+    + r"(.*)$"
 )
+
+
+@functools.cache
+def _fast_line() -> re.Pattern[str]:
+    """:data:`_FAST_LINE` compiled, on first use (the compiled twin matches
+    without it, and compiling it is 1 ms of every command's start-up)."""
+    return re.compile(_FAST_LINE, re.M)
+
+
 _ARC_LETTERS = ("X", "Y", "Z", "A", "B", "I", "J", "K", "R", "F")
 #: lines matched at once: large enough that the regex runs in C for most of the
 #: time, small enough that what a batch makes stays in the CPU's caches (measured:
@@ -195,7 +204,7 @@ def _fast_arc(it: Interpreter, motion: int, words: tuple[str, ...], n: int) -> b
 def pure_matches(batch: list[str]) -> list[tuple[str, ...]]:
     """The regex's groups of each line of a batch, for :func:`fast_run`; none (no
     fast path) when a line holds a character that ends lines."""
-    matches = _FAST_LINE.findall("\n".join(batch))
+    matches = _fast_line().findall("\n".join(batch))
     return matches if len(matches) == len(batch) else []
 
 

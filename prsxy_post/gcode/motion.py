@@ -4,9 +4,10 @@ function of the machine, in the workpiece frame, mm and degrees."""
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
-from ..curves import Nurbs
+if TYPE_CHECKING:
+    from ..curves import Nurbs
 
 MM_PER_INCH = 25.4
 

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import NamedTuple
 
 from ..errors import GCodeError
@@ -66,16 +65,14 @@ Problem = tuple[str, int, str | None]
 # ---------------------------------------------------------------- what a line holds
 
 
-@dataclass(frozen=True, slots=True)
-class WordItem:
+class WordItem(NamedTuple):
     letter: str  # upper case
     value: float | Value
     text: str
     column: int
 
 
-@dataclass(frozen=True, slots=True)
-class SetItem:
+class SetItem(NamedTuple):
     """``#n=value`` or ``#<name>=value``: ``target`` is an int, an expression for
     the number, or the name (a str)."""
 
@@ -85,8 +82,7 @@ class SetItem:
     value_column: int
 
 
-@dataclass(frozen=True, slots=True)
-class OWord:
+class OWord(NamedTuple):
     """An O-word line (or M98 / M99 acting as one).
 
     kind : sub endsub call do while repeat if elseif else endif break continue
@@ -114,8 +110,7 @@ BLANK, PERCENT, BLOCK = 0, 1, 2
 MAX_LINE = 252
 
 
-@dataclass(frozen=True, slots=True)
-class Parsed:
+class Parsed(NamedTuple):
     """A line read but not evaluated (depends on the text only)."""
 
     kind: int
@@ -132,16 +127,26 @@ class Parsed:
     words: tuple[Word, ...] | None = None
 
 
-@dataclass(slots=True)
 class Block:
     """One line's words with their values, ready to execute."""
 
-    line: int
-    words: tuple[Word, ...]
-    sets: tuple[tuple[int | str, float], ...] = ()
-    comment: str | None = None
-    has_text: bool = True
-    percent: bool = False
+    __slots__ = ("comment", "has_text", "line", "percent", "sets", "words")
+
+    def __init__(
+        self,
+        line: int,
+        words: tuple[Word, ...],
+        sets: tuple[tuple[int | str, float], ...] = (),
+        comment: str | None = None,
+        has_text: bool = True,
+        percent: bool = False,
+    ) -> None:
+        self.line = line
+        self.words = words
+        self.sets = sets
+        self.comment = comment
+        self.has_text = has_text
+        self.percent = percent
 
 
 # ---------------------------------------------------------------- the text

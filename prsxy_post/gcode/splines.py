@@ -26,11 +26,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..curves import Nurbs
 from .moves import target
 from .read import Word
 
 if TYPE_CHECKING:
+    from ..curves import Nurbs
     from .execute import Interpreter
 
 
@@ -85,6 +85,8 @@ def bezier(
         st.g5_i, st.g5_j = -p, -q
     ctrl.append((end[0], end[1]))
     pts = np.array([(x, y, start[2]) for x, y in ctrl])
+    from ..curves import Nurbs  # here: a program without curves never loads them
+
     _emit(it, line, start, end, Nurbs.bezier(pts), w)
 
 
@@ -142,6 +144,8 @@ def nurbs_end(it: Interpreter, w: Word, line: int) -> None:
     start = list(st.pos)
     end = list(st.pos)
     end[0], end[1] = float(pts[-1][0]), float(pts[-1][1])
+    from ..curves import Nurbs  # here: a program without curves never loads them
+
     _emit(it, line, start, end, Nurbs.linuxcnc(pts, weights, st.nurbs_order), w)
     st.nurbs = []
     st.motion = None

@@ -23,8 +23,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
@@ -60,8 +59,7 @@ ANGULAR_EPS_DEG = 1e-9
 ARC_TANGENTIAL_SHARE = 0.5
 
 
-@dataclass(frozen=True)
-class PlanLimits:
+class PlanLimits(NamedTuple):
     """What the planner must respect (profile ``[limits]`` and ``[interpolation]``).
 
     rapid_mm_min, rapid_deg_min : G0 speeds along XYZ, and of A/B-only moves
@@ -102,7 +100,6 @@ REVERSAL_SHARE = 0.1
 SPEED_SHARE = 5e-4
 
 
-@dataclass
 class Blocks:
     """Motions as arrays, one row per block (zero-length moves removed).
 
@@ -133,47 +130,109 @@ class Blocks:
     curve : (n,) object, the :class:`~prsxy_post.curves.Nurbs` of curve blocks, else None
     split_after : (n,) int8, a split program's part ends at rest after this block:
         1 at a stop the program makes, 2 at a stop put there for the split
+
+    A plain class (not a dataclass): equality and repr of arrays are of no use, and
+    a dataclass's generated methods cost every command start-up to make.
     """
 
-    kind: np.ndarray
-    start: np.ndarray
-    end: np.ndarray
-    line: np.ndarray
-    tool_length: np.ndarray
-    length: np.ndarray
-    angular: np.ndarray
-    vmax: np.ndarray
-    accel: np.ndarray
-    duration: np.ndarray
-    plane: np.ndarray
-    center: np.ndarray
-    sweep: np.ndarray
-    r0: np.ndarray
-    r1: np.ndarray
-    theta0: np.ndarray
-    dq_in: np.ndarray
-    dq_out: np.ndarray
-    dP_in: np.ndarray
-    dP_out: np.ndarray
-    cross_in: np.ndarray
-    tol: np.ndarray
-    tol_deg: np.ndarray
-    curv_r: np.ndarray
-    fn: np.ndarray
-    curve: np.ndarray
-    split_after: np.ndarray
+    #: the fields, in the order the constructor takes them
+    FIELDS: ClassVar[tuple[str, ...]] = (
+        "kind",
+        "start",
+        "end",
+        "line",
+        "tool_length",
+        "length",
+        "angular",
+        "vmax",
+        "accel",
+        "duration",
+        "plane",
+        "center",
+        "sweep",
+        "r0",
+        "r1",
+        "theta0",
+        "dq_in",
+        "dq_out",
+        "dP_in",
+        "dP_out",
+        "cross_in",
+        "tol",
+        "tol_deg",
+        "curv_r",
+        "fn",
+        "curve",
+        "split_after",
+    )
+
+    def __init__(
+        self,
+        kind: np.ndarray,
+        start: np.ndarray,
+        end: np.ndarray,
+        line: np.ndarray,
+        tool_length: np.ndarray,
+        length: np.ndarray,
+        angular: np.ndarray,
+        vmax: np.ndarray,
+        accel: np.ndarray,
+        duration: np.ndarray,
+        plane: np.ndarray,
+        center: np.ndarray,
+        sweep: np.ndarray,
+        r0: np.ndarray,
+        r1: np.ndarray,
+        theta0: np.ndarray,
+        dq_in: np.ndarray,
+        dq_out: np.ndarray,
+        dP_in: np.ndarray,
+        dP_out: np.ndarray,
+        cross_in: np.ndarray,
+        tol: np.ndarray,
+        tol_deg: np.ndarray,
+        curv_r: np.ndarray,
+        fn: np.ndarray,
+        curve: np.ndarray,
+        split_after: np.ndarray,
+    ) -> None:
+        self.kind = kind
+        self.start = start
+        self.end = end
+        self.line = line
+        self.tool_length = tool_length
+        self.length = length
+        self.angular = angular
+        self.vmax = vmax
+        self.accel = accel
+        self.duration = duration
+        self.plane = plane
+        self.center = center
+        self.sweep = sweep
+        self.r0 = r0
+        self.r1 = r1
+        self.theta0 = theta0
+        self.dq_in = dq_in
+        self.dq_out = dq_out
+        self.dP_in = dP_in
+        self.dP_out = dP_out
+        self.cross_in = cross_in
+        self.tol = tol
+        self.tol_deg = tol_deg
+        self.curv_r = curv_r
+        self.fn = fn
+        self.curve = curve
+        self.split_after = split_after
 
     def __len__(self) -> int:
         return len(self.kind)
 
     def take(self, sl: slice | np.ndarray) -> Blocks:
-        return Blocks(**{f.name: getattr(self, f.name)[sl] for f in fields(self)})
+        return Blocks(**{f: getattr(self, f)[sl] for f in self.FIELDS})
 
     @staticmethod
     def concat(parts: Sequence[Blocks]) -> Blocks:
-        return Blocks(
-            **{f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(Blocks)}
-        )
+        return Blocks(**{f: np.concatenate([getattr(p, f) for p in parts]) for f in Blocks.FIELDS})
 
     @property
     def stops(self) -> np.ndarray:

@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import fields
 
 import numpy as np
 
@@ -332,24 +331,19 @@ class Plan:
 
     def head(self, k: int) -> Plan:
         """The plan of its first k blocks (where the rest is cut off)."""
-        law = TimeLaw(**{f.name: getattr(self.law, f.name)[:k] for f in fields(self.law)})
+        law = TimeLaw._make(v[:k] for v in self.law)
         nxt = self.blocks.dq_in[k] if k < len(self.blocks) else self.next_dq_in
         return Plan(self.blocks.take(slice(0, k)), law, nxt)
 
     def tail(self, k: int) -> Plan:
         """The plan of its blocks from the k-th on."""
-        law = TimeLaw(**{f.name: getattr(self.law, f.name)[k:] for f in fields(self.law)})
+        law = TimeLaw._make(v[k:] for v in self.law)
         return Plan(self.blocks.take(slice(k, None)), law, self.next_dq_in)
 
     @staticmethod
     def concat(plans: Sequence[Plan]) -> Plan:
         """Consecutive plans as one (the last one's next tangent)."""
-        law = TimeLaw(
-            **{
-                f.name: np.concatenate([getattr(p.law, f.name) for p in plans])
-                for f in fields(TimeLaw)
-            }
-        )
+        law = TimeLaw._make(map(np.concatenate, zip(*(p.law for p in plans), strict=True)))
         return Plan(Blocks.concat([p.blocks for p in plans]), law, plans[-1].next_dq_in)
 
 

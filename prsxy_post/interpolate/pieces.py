@@ -11,8 +11,6 @@ the output, the same however the program was fed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
-
 import numpy as np
 
 from .lookahead import Plan
@@ -23,16 +21,21 @@ from .sampling import Samples
 PIECE_BLOCKS = 4096
 
 
-@dataclass
 class Pieces:
     """Committed plans and their points in, pieces of :data:`PIECE_BLOCKS` out.
 
     ``add`` the runs in program order; ``take`` returns the pieces that are whole
     (every piece, the last one short, once ``final``)."""
 
-    size: int = field(default_factory=lambda: PIECE_BLOCKS)
-    runs: list[tuple[Plan, Samples]] = field(default_factory=list)
-    held: int = 0  # blocks in ``runs``
+    def __init__(
+        self,
+        size: int | None = None,
+        runs: list[tuple[Plan, Samples]] | None = None,
+        held: int = 0,
+    ) -> None:
+        self.size = PIECE_BLOCKS if size is None else size
+        self.runs = [] if runs is None else runs
+        self.held = held  # blocks in ``runs``
 
     def add(self, plan: Plan, samples: Samples) -> None:
         if len(plan.blocks):
@@ -70,4 +73,5 @@ def _between(plan: Plan, samples: Samples, start: int, stop: int) -> tuple[Plan,
         return plan, samples
     lo, hi = np.searchsorted(samples.block, [start, stop])
     part = samples.take(slice(int(lo), int(hi)))
-    return plan.head(stop).tail(start), replace(part, block=part.block - start)
+    part.block = part.block - start  # part is new: samples' own block stays as it is
+    return plan.head(stop).tail(start), part

@@ -12,7 +12,7 @@ duration.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from typing import ClassVar
 
 import numpy as np
 
@@ -22,7 +22,6 @@ from .lookahead import Plan
 from .timelaw import TimeLaw
 
 
-@dataclass(frozen=True)
 class Samples:
     """Interpolation points.
 
@@ -40,33 +39,69 @@ class Samples:
     block_end : (N,) bool, the last point of its block
     split : (N,) int8, a split program's part ends at rest at this point (1: a stop
         the program makes, 2: a stop put there for the split), else 0
+
+    A plain class (not a dataclass): equality and repr of arrays are of no use, and
+    a dataclass's generated methods cost every command start-up to make.
     """
 
-    q: np.ndarray
-    qdot: np.ndarray
-    dt: np.ndarray
-    line: np.ndarray
-    block: np.ndarray
-    tau: np.ndarray
-    first: np.ndarray
-    tool_length: np.ndarray
-    speed: np.ndarray
-    dwell: np.ndarray
-    fn: np.ndarray
-    block_end: np.ndarray
-    split: np.ndarray
+    #: the fields, in the order the constructor takes them
+    FIELDS: ClassVar[tuple[str, ...]] = (
+        "q",
+        "qdot",
+        "dt",
+        "line",
+        "block",
+        "tau",
+        "first",
+        "tool_length",
+        "speed",
+        "dwell",
+        "fn",
+        "block_end",
+        "split",
+    )
+
+    def __init__(
+        self,
+        q: np.ndarray,
+        qdot: np.ndarray,
+        dt: np.ndarray,
+        line: np.ndarray,
+        block: np.ndarray,
+        tau: np.ndarray,
+        first: np.ndarray,
+        tool_length: np.ndarray,
+        speed: np.ndarray,
+        dwell: np.ndarray,
+        fn: np.ndarray,
+        block_end: np.ndarray,
+        split: np.ndarray,
+    ) -> None:
+        self.q = q
+        self.qdot = qdot
+        self.dt = dt
+        self.line = line
+        self.block = block
+        self.tau = tau
+        self.first = first
+        self.tool_length = tool_length
+        self.speed = speed
+        self.dwell = dwell
+        self.fn = fn
+        self.block_end = block_end
+        self.split = split
 
     def __len__(self) -> int:
         return len(self.dt)
 
     def take(self, sel: slice | np.ndarray) -> Samples:
-        return Samples(**{f.name: getattr(self, f.name)[sel] for f in fields(self)})
+        return Samples(**{f: getattr(self, f)[sel] for f in self.FIELDS})
 
     @staticmethod
     def concat(parts: Sequence[Samples], offsets: Sequence[int]) -> Samples:
         """Consecutive runs of points as one; ``offsets``: where each run's plan
         begins in the joined plan (its points' ``block`` are moved by that)."""
-        out = {f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(Samples)}
+        out = {f: np.concatenate([getattr(p, f) for p in parts]) for f in Samples.FIELDS}
         out["block"] = np.concatenate([p.block + o for p, o in zip(parts, offsets, strict=True)])
         return Samples(**out)
 

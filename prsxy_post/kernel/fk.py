@@ -21,14 +21,13 @@ test_numpy_trig_is_the_c_librarys_here``; where that fails, they would go throug
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 
-@dataclass(frozen=True)
-class FKArrays:
-    """A geometry as the FK takes it, made once per geometry.
+class FKArrays(NamedTuple):
+    """A geometry as the FK's arithmetic takes it, made once per geometry.
 
     g, u : (3, 3) guide points [mm] and hinge axes, one leg a row
     b : (3, 3) ball joints in the platform frame [mm], one leg a row

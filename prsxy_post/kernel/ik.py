@@ -17,7 +17,7 @@ library's, checked by the same tests), ρ = sqrt(Kc² + Ks²) instead of ``hypot
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -27,8 +27,7 @@ from . import libm
 BOW_REF_MM = 100.0
 
 
-@dataclass(frozen=True)
-class IKArrays:
+class IKArrays(NamedTuple):
     """A geometry flattened into what the IK needs, made once per geometry.
 
     u, b, g, d : (3, 3) hinge axes, ball joints (platform frame), guide points,
@@ -69,8 +68,7 @@ def tool_z(m: IKArrays, n: int, tool_length_offset: np.ndarray | float | None) -
     return tz
 
 
-@dataclass(frozen=True)
-class PlatformCols:
+class PlatformCols(NamedTuple):
     """The platform solution in columns (N,) each: cosines and sines of A, B and γ,
     γ [rad] and the centre c (N, 3) [mm]."""
 

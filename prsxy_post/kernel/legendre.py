@@ -16,13 +16,12 @@ order, so the two agree to the bit (``tests/test_kernel_legendre.py``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 
-@dataclass(frozen=True)
-class MapArrays:
+class MapArrays(NamedTuple):
     """A fitted map flattened into what its evaluation needs, made once per map.
 
     lo : (5,) the domain's lower corner [mm, mm, mm, deg, deg]

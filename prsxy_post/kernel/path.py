@@ -21,15 +21,14 @@ library's on both sides (:mod:`.libm`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from . import libm
 
 
-@dataclass(frozen=True)
-class PathArrays:
+class PathArrays(NamedTuple):
     """Blocks' paths, one row per block (n of them).
 
     start, end : (n, 5) [mm, mm, mm, deg, deg]

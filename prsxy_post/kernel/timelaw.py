@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -35,8 +35,7 @@ import numpy as np
 BISECT_STEPS = 60
 
 
-@dataclass(frozen=True)
-class TimeLaw:
+class TimeLaw(NamedTuple):
     """Per block (n,): entry v0, exit v1, peak vp [mm/s or deg/s], the accelerations
     of the first and last phase a1, a3 (≤ the block's limit) [mm/s² or deg/s²], the
     phase times t1, t2, t3 and the duration [s]. Dwells and machine functions stand

@@ -9,11 +9,10 @@ names; a test holds the two registries equal).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from typing import NamedTuple
 
 
-@dataclass(frozen=True)
-class Setting:
+class Setting(NamedTuple):
     """One key of a dialect's profile section.
 
     default : value when absent (its type is the key's type: int or float)

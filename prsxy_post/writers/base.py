@@ -15,8 +15,7 @@ go. Nothing here touches files.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 from .. import __version__
 from ..points import Written
@@ -29,8 +28,7 @@ if TYPE_CHECKING:
 Piece = tuple[int, str]  # (output part, text)
 
 
-@dataclass(frozen=True)
-class Provenance:
+class Provenance(NamedTuple):
     """What a program was made from, for its header."""
 
     source: str
@@ -52,8 +50,7 @@ class Writer(Protocol):
     def finish(self) -> list[Piece]: ...
 
 
-@dataclass(frozen=True)
-class Dialect:
+class Dialect(NamedTuple):
     """A registry entry.
 
     name : the ``--format`` value and the profile section ``[output.<name>]``
