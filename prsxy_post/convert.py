@@ -95,8 +95,9 @@ class ConvertStats:
 def _planned_here(
     job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any = None
 ) -> Iterator[Any]:
-    """The program's motions, chunk by chunk, through :func:`chain.prepare` and the
-    planner (:class:`chain.Planning`), the last one final."""
+    """The program's motions, chunk by chunk, through :func:`chain.prepare`, the
+    planner and the map and IK of its pieces' points (:class:`chain.Planning`,
+    :meth:`~chain.Planning.cut`), the last one final."""
     from . import chain, gcode, program
 
     cfg = program.interpreter_config(prof, job.start, on_message=job.on_message)
@@ -131,9 +132,10 @@ def _planned_here(
         prepared = chain.prepare(batch, prof, limits)
         counts["parse"] += time.perf_counter() - t0
         counts["motions"] += len(batch)
-        yield planning.plan(prepared)
+        yield planning.cut(planning.plan(prepared), solve=True)
         if len(batch) < job.chunk:
-            yield planning.plan(chain.prepare([], prof, limits), final=True)
+            last = planning.plan(chain.prepare([], prof, limits), final=True)
+            yield planning.cut(last, solve=True)
             return
 
 
@@ -343,8 +345,8 @@ def _convert_file(
                 else sinks.WriterHere(writer, parts)
             )
             out.begin()
-            for planned in source:
-                for pc in pipe.feed_planned(planned):
+            for ready in source:
+                for pc in pipe.feed_ready(ready):
                     n_points += len(pc)
                     out.feed(pc)
         written_parts = out.finish()
