@@ -30,7 +30,7 @@ import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -76,10 +76,40 @@ def _fork_context() -> Any:
     return multiprocessing.get_context("fork")
 
 
+#: bytes a pipe between the processes holds: a chunk of points (MB) goes in a few
+#: writes, not a hundred of the default 64 KiB, each of which waits for the
+#: reading thread to get the interpreter lock
+PIPE_BYTES = 4 << 20
+
+
 def pipe(duplex: bool) -> tuple[Any, Any]:
-    """A pipe between this process and one :func:`forked` from it."""
+    """A pipe between this process and one :func:`forked` from it, holding up to
+    :data:`PIPE_BYTES` where the system allows."""
     ends: tuple[Any, Any] = _fork_context().Pipe(duplex=duplex)
+    for end in ends:
+        _widen(end.fileno())
     return ends
+
+
+def _widen(fd: int) -> None:
+    """Let the pipe or socket ``fd`` hold :data:`PIPE_BYTES` (or as much as the
+    system lets an unprivileged process: /proc/sys/fs/pipe-max-size,
+    net.core.wmem_max). Only the speed depends on it."""
+    import fcntl
+    import socket
+    import stat
+
+    if stat.S_ISFIFO(os.fstat(fd).st_mode):
+        for size in (PIPE_BYTES, 1 << 20):
+            try:
+                fcntl.fcntl(fd, fcntl.F_SETPIPE_SZ, size)
+                return
+            except (OSError, AttributeError):
+                continue
+        return
+    with socket.socket(fileno=os.dup(fd)) as sock:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, PIPE_BYTES)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, PIPE_BYTES)
 
 
 def forked(target: Callable[..., None], *args: Any) -> Any:
@@ -264,7 +294,7 @@ def _serve(conn: Any, here: WriterHere) -> None:
                     if kind == "begin":
                         here.begin()
                     elif kind == "feed":
-                        here.feed(msg[1])
+                        here.feed(_chunk(msg[1]))
                     elif kind == "finish":
                         written = here.finish()
                         written.peak_rss_mb = peak_rss_mb()
@@ -293,6 +323,23 @@ def _serve(conn: Any, here: WriterHere) -> None:
         conn.close()
 
 
+def _fields(chunk: Any, names: tuple[str, ...]) -> dict[str, Any]:
+    """The fields ``names`` of a point chunk, for :func:`_chunk` to rebuild."""
+    return {name: getattr(chunk, name) for name in names}
+
+
+def _chunk(sent: Any) -> Any:
+    """A point chunk from what :class:`WriterProcess` sent: the whole chunk, or
+    the fields its writer reads (:func:`_fields`); the others None, so that a
+    writer reading one it did not declare fails loudly."""
+    if not isinstance(sent, dict):
+        return sent
+    from .points import PointChunk
+
+    given: dict[str, Any] = {f.name: sent.get(f.name) for f in fields(PointChunk)}
+    return PointChunk(**given)
+
+
 class WriterProcess:
     """The writer in a process of its own (forked with the writer and parts as
     made here, before any text): the chain sends each chunk down a pipe and goes
@@ -303,6 +350,7 @@ class WriterProcess:
         self.conn, child = pipe(duplex=True)
         self.proc = forked(_serve, child, WriterHere(writer, parts))
         child.close()
+        self.reads: tuple[str, ...] | None = getattr(writer, "reads", None)
         self.output = parts.output
         self.done = False
         self.result: Written | None = None
@@ -327,7 +375,8 @@ class WriterProcess:
         self._send("begin")
 
     def feed(self, chunk: Any) -> None:
-        self._send("feed", chunk)
+        # only what the writer reads crosses (a third of a chunk's bytes for PMAC)
+        self._send("feed", chunk if self.reads is None else _fields(chunk, self.reads))
 
     def _answer(self) -> tuple[Any, ...]:
         try:
