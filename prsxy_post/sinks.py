@@ -76,19 +76,33 @@ def _fork_context() -> Any:
     return multiprocessing.get_context("fork")
 
 
-#: bytes a pipe between the processes holds: a chunk of points (MB) goes in a few
-#: writes, not a hundred of the default 64 KiB, each of which waits for the
-#: reading thread to get the interpreter lock
+#: bytes a pipe between the processes holds: a chunk of points (MB) goes in one
+#: write, not in many of the 64 KiB a pipe holds, each waiting for the reading
+#: thread to get the interpreter lock (while the writing process stands)
 PIPE_BYTES = 4 << 20
 
 
 def pipe(duplex: bool) -> tuple[Channel, Channel]:
     """A pipe between this process and one :func:`forked` from it (its ends
-    :class:`Channel` s), holding up to :data:`PIPE_BYTES` where the system allows."""
-    ends = _fork_context().Pipe(duplex=duplex)
+    :class:`Channel` s): a pair of connected Unix sockets, whose buffers hold
+    :data:`PIPE_BYTES` where the system allows (an OS pipe holds at most 1 MiB
+    unprivileged). ``duplex``: both ends may send (else only the second sends,
+    the first receives)."""
+    ends = _fork_context().Pipe(duplex=True)
     for end in ends:
         _widen(end.fileno())
     return Channel(ends[0]), Channel(ends[1])
+
+
+def _widen(fd: int) -> None:
+    """Let the socket ``fd`` hold :data:`PIPE_BYTES` each way (Linux doubles the
+    value asked for, then caps it at net.core.wmem_max and rmem_max). Only the
+    speed depends on it."""
+    import socket
+
+    with socket.socket(fileno=os.dup(fd)) as sock:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, PIPE_BYTES)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, PIPE_BYTES)
 
 
 class Channel:
@@ -185,27 +199,6 @@ class Channel:
                 else:
                     views[0] = views[0][n:]
                     n = 0
-
-
-def _widen(fd: int) -> None:
-    """Let the pipe or socket ``fd`` hold :data:`PIPE_BYTES` (or as much as the
-    system lets an unprivileged process: /proc/sys/fs/pipe-max-size,
-    net.core.wmem_max). Only the speed depends on it."""
-    import fcntl
-    import socket
-    import stat
-
-    if stat.S_ISFIFO(os.fstat(fd).st_mode):
-        for size in (PIPE_BYTES, 1 << 20):
-            try:
-                fcntl.fcntl(fd, fcntl.F_SETPIPE_SZ, size)
-                return
-            except (OSError, AttributeError):
-                continue
-        return
-    with socket.socket(fileno=os.dup(fd)) as sock:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, PIPE_BYTES)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, PIPE_BYTES)
 
 
 def forked(target: Callable[..., None], *args: Any) -> Any:
