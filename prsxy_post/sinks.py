@@ -86,8 +86,8 @@ def pipe(duplex: bool) -> tuple[Channel, Channel]:
     """A pipe between this process and one :func:`forked` from it (its ends
     :class:`Channel` s): a pair of connected Unix sockets, whose buffers hold
     :data:`PIPE_BYTES` where the system allows (an OS pipe holds at most 1 MiB
-    unprivileged). ``duplex``: both ends may send (else only the second sends,
-    the first receives)."""
+    unprivileged). ``duplex`` says how the caller uses it: both ends send, or
+    only the second (the sockets carry either way)."""
     ends = _fork_context().Pipe(duplex=True)
     for end in ends:
         _widen(end.fileno())
