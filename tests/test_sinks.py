@@ -165,3 +165,41 @@ def test_the_writer_process_is_sent_only_what_its_writer_reads(tmp_path: Path) -
     assert here == apart
     slim = sinks._chunk(sinks._fields(PointChunk.empty(), PmacWriter.reads))
     assert slim.P_cmd.shape == (0, 5) and slim.q is None
+
+
+def test_a_channel_carries_arrays_whole_and_says_when_the_other_end_closed() -> None:
+    """What crosses between the processes comes out equal, every kind of array a
+    chunk holds (contiguous either way, strided, object, bool, empty), writable;
+    a message eight times what the pipe holds (sent while the other end reads)
+    whole;
+    and a closed end is EOFError, as multiprocessing's Connection says it."""
+    import threading
+
+    import numpy as np
+
+    recv, send = sinks.pipe(duplex=False)
+    grid = np.arange(20.0).reshape(4, 5)
+    sent = {
+        "q": grid,
+        "fortran": np.asfortranarray(grid),
+        "strided": grid[:, ::2],
+        "fn": np.array([None, (("M", 3.0),)], dtype=object),
+        "dwell": np.array([True, False, True]),
+        "split": np.arange(3, dtype=np.int8),
+        "none": np.zeros((0, 5)),
+        "big": np.random.default_rng(0).normal(size=(sinks.PIPE_BYTES,)),  # 8 x PIPE_BYTES
+    }
+    t = threading.Thread(target=send.send, args=(("chunk", sent, 7),), daemon=True)
+    t.start()
+    kind, got, n = recv.recv()
+    assert (kind, n) == ("chunk", 7)
+    for name, value in sent.items():
+        assert got[name].dtype == value.dtype and got[name].shape == value.shape, name
+        assert np.array_equal(got[name], value) if name != "fn" else list(got[name]) == list(value)
+        assert got[name].flags.writeable, name
+    t.join(timeout=30.0)
+    assert not t.is_alive()  # everything sent was read
+    send.close()
+    with pytest.raises(EOFError):
+        recv.recv()
+    recv.close()
