@@ -171,8 +171,7 @@ def test_a_channel_carries_arrays_whole_and_says_when_the_other_end_closed() -> 
     """What crosses between the processes comes out equal, every kind of array a
     chunk holds (contiguous either way, strided, object, bool, empty), writable;
     a message eight times what the pipe holds (sent while the other end reads)
-    whole;
-    and a closed end is EOFError, as multiprocessing's Connection says it."""
+    whole; and a closed end is EOFError, as multiprocessing's Connection says it."""
     import threading
 
     import numpy as np
