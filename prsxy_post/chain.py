@@ -212,11 +212,55 @@ class Planned:
     seconds: float = 0.0
 
 
+@dataclass
+class Solved:
+    """Points' poses through the virtual-axis map and the IK (:meth:`Planning.solve`).
+
+    q_target, P, V : (n, 5) [mm, mm, mm, deg, deg], [mm], [mm/s] the pose handed to
+        the IK, the motors' positions and velocities there (V None when a problem
+        stops the program before them)
+    reachable : every point reachable
+    problems : the poses' problems (tilt, reach), raised (or collected) by the
+        points' half as it comes to them
+    seconds : the map's and the IK's time on them
+    """
+
+    q_target: np.ndarray
+    P: np.ndarray
+    V: np.ndarray | None
+    reachable: bool
+    problems: list[PrsxyError]
+    seconds: tuple[float, float] = (0.0, 0.0)
+
+
+#: a piece of the program (:mod:`.interpolate.pieces`): its plan, its points and
+#: their poses solved (None: to be solved by the points' half)
+Piece = tuple[Plan, Samples, Solved | None]
+
+
+@dataclass
+class Ready:
+    """A planned chunk in the pieces the points' half makes its points from, in the
+    order it takes them (:meth:`Planning.cut`); what :class:`Planned` says, with
+    ``earlier``: the pieces made before its ``problems`` are raised, and
+    ``pieces``: those made after the start point, before ``late``."""
+
+    problems: list[PrsxyError]
+    earlier: list[Piece] = field(default_factory=list)
+    start_line: int | None = None
+    pieces: list[Piece] = field(default_factory=list)
+    late: list[PrsxyError] = field(default_factory=list)
+    final: bool = False
+    moves_nothing: bool = False
+    seconds: float = 0.0
+
+
 class Planning:
     """The planner's half of the chain: look-ahead, time law, where split parts
-    end, the work guard, and the points' times and poses. It carries no state
-    that the points' half changes, so it may run in another process (the
-    conversion runs it in the interpreter's) with the same result.
+    end, the work guard, the points' times and poses, the pieces the points are
+    made from and the poses through the map and the IK (:meth:`cut`). It carries
+    no state that the points' half changes, so it may run in another process
+    (the conversion runs it in the interpreter's) with the same result.
 
     Parameters as :class:`Pipeline`'s (the start pose is the points' half's).
     """
@@ -258,6 +302,8 @@ class Planning:
         # the work guard's counters: the points and time planned so far
         self.n_planned = 0
         self.t_planned = 0.0
+        # the planner's runs, cut again where the output does not depend on them
+        self.pieces = Pieces()
 
     def plan(self, prepared: Prepared, final: bool = False) -> Planned:
         """Plan a prepared chunk (the last one with ``final``)."""
@@ -297,6 +343,58 @@ class Planning:
         out.moves_nothing = final and not self.any_motion
         out.seconds = time.perf_counter() - t0
         return out
+
+    def cut(self, planned: Planned, solve: bool = False) -> Ready:
+        """A planned chunk in whole pieces (:mod:`.interpolate.pieces`; the rest held
+        for the next), in the order :meth:`Pipeline.feed_ready` makes their points;
+        with ``solve``, their poses solved too (:meth:`solve`)."""
+        out = Ready(
+            planned.problems,
+            start_line=planned.start_line,
+            late=planned.late,
+            final=planned.final,
+            moves_nothing=planned.moves_nothing,
+            seconds=planned.seconds,
+        )
+
+        def solved(pieces: list[tuple[Plan, Samples]]) -> list[Piece]:
+            return [
+                (plan, s, self.solve(s.q, s.qdot, s.tool_length, s.line) if solve else None)
+                for plan, s in pieces
+            ]
+
+        if planned.problems:  # the points of earlier lines, and their problems, first
+            out.earlier = solved(self.pieces.take(final=True))
+        if planned.plan is not None and planned.samples is not None:
+            self.pieces.add(planned.plan, planned.samples)
+        out.pieces = solved(self.pieces.take(final=planned.final or bool(planned.late)))
+        return out
+
+    def solve(self, q: np.ndarray, qdot: np.ndarray, tool: np.ndarray, line: np.ndarray) -> Solved:
+        """Virtual-axis map, IK and the IK's velocity for points ``q`` (n, 5) moving
+        at ``qdot`` (n, 5) with tool lengths ``tool`` (n,), at G-code lines ``line``
+        (n,); their problems returned, not raised."""
+        t0 = time.perf_counter()
+        q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
+        t1 = time.perf_counter()
+        ik = kinematics.inverse(self.geo, q_t, tool)
+        pose = [
+            *checks.tilt_problems(self.profile, q, line),
+            *checks.reach_problems(self.geo, q_t, tool, ik.P, line),
+        ]
+        problems = [p.error(self.profile) for p in pose]
+        reachable = bool(np.all(ik.reachable))
+        if problems and not self.collect:  # the first stops the program here
+            return Solved(q_t, ik.P, None, reachable, problems)
+        V = np.zeros_like(ik.P)
+        moving = np.flatnonzero(np.any(qdot != 0.0, axis=1))
+        if moving.size:
+            # e(Q) changes by µm over mm: its share of the velocity (1e-4 of it)
+            # moves the cubic by far less than the rounding of the written numbers
+            V[moving] = ik_derivative(
+                self.geo, q_t[moving], qdot[moving], tool[moving], ik.P[moving], VEL_STEP_S
+            )
+        return Solved(q_t, ik.P, V, reachable, problems, (t1 - t0, time.perf_counter() - t1))
 
     def _directions(self, b: Blocks) -> None:
         """The motors with play: dP/ds at each moving block's ends (the IK's
@@ -519,8 +617,6 @@ class Pipeline:
         self.held: PointChunk | None = None  # points waiting for the servo lead
         self.prev_out: PointChunk | None = None  # the last point released
         self.problems: list[PrsxyError] = []
-        # the planner's runs, cut again where the output does not depend on them
-        self.pieces = Pieces()
         self.t = 0.0
         self.n_points = 0
         #: seconds spent per stage (for the benchmark and profiling)
@@ -545,23 +641,27 @@ class Pipeline:
         return self.feed_planned(self.planning.plan(prepared, final))
 
     def feed_planned(self, planned: Planned) -> list[PointChunk]:
-        """:meth:`feed` for a chunk already through :meth:`Planning.plan` (here or
-        in another process): its points, compensated, as they become final."""
-        self.timings["interpolate"] += planned.seconds
+        """:meth:`feed` for a chunk already through :meth:`Planning.plan`: its
+        points, compensated, as they become final."""
+        return self.feed_ready(self.planning.cut(planned))
+
+    def feed_ready(self, ready: Ready) -> list[PointChunk]:
+        """:meth:`feed` for a chunk already through :meth:`Planning.plan` and
+        :meth:`Planning.cut` (here or in another process, whose ``planning`` then
+        holds the planner's state): its points, compensated, as they become final."""
+        self.timings["interpolate"] += ready.seconds
         out: list[PointChunk] = []
-        if planned.problems:  # the points of earlier lines, and their problems, first
-            out += self._made(self.pieces.take(final=True))
-            self._problem(planned.problems)
-        if planned.start_line is not None:
-            first = self._start_point(planned.start_line)
+        if ready.problems:  # the points of earlier lines, and their problems, first
+            out += self._made(ready.earlier)
+            self._problem(ready.problems)
+        if ready.start_line is not None:
+            first = self._start_point(ready.start_line)
             if first is not None:
                 out.append(first)
-        if planned.plan is not None and planned.samples is not None:
-            self.pieces.add(planned.plan, planned.samples)
-        out += self._made(self.pieces.take(final=planned.final or bool(planned.late)))
-        self._problem(planned.late)
-        if planned.final:
-            if planned.moves_nothing:
+        out += self._made(ready.pieces)
+        self._problem(ready.late)
+        if ready.final:
+            if ready.moves_nothing:
                 raise LimitError(
                     "the program moves nothing",
                     expected="at least one move (G0, G1, G2, G3) or dwell",
@@ -574,11 +674,11 @@ class Pipeline:
     def finish(self) -> list[PointChunk]:
         return self.feed([], final=True)
 
-    def _made(self, pieces: list[tuple[Plan, Samples]]) -> list[PointChunk]:
+    def _made(self, pieces: list[Piece]) -> list[PointChunk]:
         """The points of whole pieces (:mod:`.interpolate.pieces`), as they become final."""
         out = []
-        for plan, samples in pieces:
-            pc = self._points(plan, samples)
+        for plan, samples, solved in pieces:
+            pc = self._points(plan, samples, solved)
             if pc is not None:
                 out.append(pc)
         return out
@@ -608,24 +708,16 @@ class Pipeline:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
         """Virtual-axis map, IK and the IK's velocity for points: (q_target, P, V,
         every point reachable)."""
-        t0 = time.perf_counter()
-        q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
-        t1 = time.perf_counter()
-        ik = kinematics.inverse(self.geo, q_t, tool)
-        pose = [
-            *checks.tilt_problems(self.profile, q, line),
-            *checks.reach_problems(self.geo, q_t, tool, ik.P, line),
-        ]
-        self._problem([p.error(self.profile) for p in pose])
-        V = np.zeros_like(ik.P)
-        moving = np.flatnonzero(np.any(qdot != 0.0, axis=1))
-        if moving.size:
-            # e(Q) changes by µm over mm: its share of the velocity (1e-4 of it)
-            # moves the cubic by far less than the rounding of the written numbers
-            V[moving] = self._ik_velocity(q_t[moving], qdot[moving], tool[moving], ik.P[moving])
-        self.timings["error_map"] += t1 - t0
-        self.timings["kinematics"] += time.perf_counter() - t1
-        return q_t, ik.P, V, bool(np.all(ik.reachable))
+        return self._solved(self.planning.solve(q, qdot, tool, line))
+
+    def _solved(self, solved: Solved) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+        """:meth:`_solve`'s answer from :meth:`Planning.solve`'s: its problems
+        raised (or collected) here, in the points' order."""
+        self._problem(solved.problems)
+        assert solved.V is not None  # None only with a problem raised above
+        self.timings["error_map"] += solved.seconds[0]
+        self.timings["kinematics"] += solved.seconds[1]
+        return solved.q_target, solved.P, solved.V, solved.reachable
 
     def _ik_velocity(
         self, q_t: np.ndarray, qdot: np.ndarray, tool: np.ndarray, P: np.ndarray
@@ -634,8 +726,12 @@ class Pipeline:
         (whose IK is ``P``): :func:`ik_derivative` over VEL_STEP_S."""
         return ik_derivative(self.geo, q_t, qdot, tool, P, VEL_STEP_S)
 
-    def _points(self, plan: Plan | None, s: Samples) -> PointChunk | None:
-        q_t, P, V, reachable = self._solve(s.q, s.qdot, s.tool_length, s.line)
+    def _points(
+        self, plan: Plan | None, s: Samples, solved: Solved | None = None
+    ) -> PointChunk | None:
+        if solved is None:
+            solved = self.planning.solve(s.q, s.qdot, s.tool_length, s.line)
+        q_t, P, V, reachable = self._solved(solved)
         pc = PointChunk(
             q=s.q,
             qdot=s.qdot,

@@ -5,8 +5,9 @@ The library's conversion engine (the ``convert`` command is a thin shell over
 line batches, interpreted, and fed chunk by chunk through the compensation
 chain (:mod:`prsxy_post.chain`) into the dialect's writer; memory stays flat on
 programs of millions of lines. A program of :data:`PARALLEL_FROM_BYTES` or more
-may be read, interpreted and planned in a second process while this one runs the
-rest of the chain, and its text formatted and written in a third
+may be read, interpreted and planned, and its points put through the error map and
+the IK, in a second process while this one runs the rest of the chain (reversals,
+real-axis tables, play, servo lead), and its text formatted and written in a third
 (:mod:`prsxy_post.sinks`); the output is byte for byte the same.
 
 Example
@@ -58,7 +59,8 @@ class ConvertJob:
     stages : which compensation stages run
     options : how it was asked for, for the output's header
     chunk : motions per chunk through the chain (the output does not depend on it)
-    parallel : read, interpret and plan the program in a second process, and write
+    parallel : read, interpret and plan the program, and solve its points' map and
+        IK, in a second process, and write
         the output in a third, while this one runs the rest of the chain (the output
         is the same; only the wall time changes)
     on_message : receives the program's messages (gcode.InterpreterConfig)
@@ -95,8 +97,9 @@ class ConvertStats:
 def _planned_here(
     job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any = None
 ) -> Iterator[Any]:
-    """The program's motions, chunk by chunk, through :func:`chain.prepare` and the
-    planner (:class:`chain.Planning`), the last one final."""
+    """The program's motions, chunk by chunk, through :func:`chain.prepare`, the
+    planner and the map and IK of its pieces' points (:class:`chain.Planning`,
+    :meth:`~chain.Planning.cut`), the last one final."""
     from . import chain, gcode, program
 
     cfg = program.interpreter_config(prof, job.start, on_message=job.on_message)
@@ -131,14 +134,15 @@ def _planned_here(
         prepared = chain.prepare(batch, prof, limits)
         counts["parse"] += time.perf_counter() - t0
         counts["motions"] += len(batch)
-        yield planning.plan(prepared)
+        yield planning.cut(planning.plan(prepared), solve=True)
         if len(batch) < job.chunk:
-            yield planning.plan(chain.prepare([], prof, limits), final=True)
+            last = planning.plan(chain.prepare([], prof, limits), final=True)
+            yield planning.cut(last, solve=True)
             return
 
 
 def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
-    """Runs in the interpreter process: sends ("chunk", planned, chars read),
+    """Runs in the interpreter process: sends ("chunk", chain.Ready, chars read),
     then ("done", counts, peak MB, chars read), or ("error", PrsxyError) / ("crash", text).
     Stopped (SIGTERM, :func:`sinks.stop`), it just ends: nobody reads any more."""
     chars = [0]
@@ -148,8 +152,8 @@ def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
 
     counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
     try:
-        for planned in _planned_here(job, prof, counts, progress):
-            conn.send(("chunk", planned, chars[0]))
+        for ready in _planned_here(job, prof, counts, progress):
+            conn.send(("chunk", ready, chars[0]))
         conn.send(("done", counts, peak_rss_mb(), chars[0]))
     except PrsxyError as err:
         conn.send(("error", err, counts))
@@ -165,7 +169,8 @@ def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
 def _planned_chunks(
     job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any
 ) -> Iterator[Iterator[Any]]:
-    """Planned chunks of the program (read, interpreted, planned and sampled), made
+    """Planned chunks of the program (read, interpreted, planned and sampled, cut
+    into pieces whose points' map and IK are solved: :class:`chain.Ready`), made
     here or, with ``job.parallel`` where processes can fork, by a second process
     that runs ahead, at most :data:`AHEAD` chunks (a bounded queue, then the pipe,
     hold it back), so memory stays bounded. Errors arrive in program order: every
@@ -343,8 +348,8 @@ def _convert_file(
                 else sinks.WriterHere(writer, parts)
             )
             out.begin()
-            for planned in source:
-                for pc in pipe.feed_planned(planned):
+            for ready in source:
+                for pc in pipe.feed_ready(ready):
                     n_points += len(pc)
                     out.feed(pc)
         written_parts = out.finish()

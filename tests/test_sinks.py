@@ -5,6 +5,7 @@ left on disk by a conversion that fails."""
 from __future__ import annotations
 
 import os
+from dataclasses import fields
 from pathlib import Path
 
 import pytest
@@ -14,6 +15,7 @@ from prsxy_post import sinks
 from prsxy_post.chain import Stages
 from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.errors import PrsxyError
+from prsxy_post.points import PointChunk
 
 ROOT = Path(__file__).resolve().parent.parent
 SHOP = ROOT / "profiles" / "prsxy-shop.toml"
@@ -144,3 +146,59 @@ def test_leftovers_of_a_killed_writer_are_its_own_temp_files_only(tmp_path: Path
     sinks.remove_leftovers(str(tmp_path / "x.pmc"))
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(others)
     sinks.remove_leftovers("-")  # standard output has no files
+
+
+def test_the_writer_process_is_sent_only_what_its_writer_reads(tmp_path: Path) -> None:
+    """The PMAC writer declares the point fields it reads, and only those cross to
+    its process; the others arrive as None, so a field it read undeclared would
+    fail the conversion. With machine functions, dwells and split parts (every
+    field the writer uses), the bytes are those written in one process."""
+    from prsxy_post.writers.pmac import PmacWriter
+
+    assert set(PmacWriter.reads) < {f.name for f in fields(PointChunk)}
+    prof = _profile(tmp_path, max_points_per_program=4000)
+    program = _program(tmp_path, 6000, ["S12000 M3", "G4 P0.5", "X1 Y1", "M5"])
+    here = _run(program, prof, tmp_path / "a" / "job.pmc", parallel=False)
+    apart = _run(program, prof, tmp_path / "b" / "job.pmc", parallel=True)
+    assert isinstance(here, dict) and isinstance(apart, dict)
+    assert len(here) > 1 and any("M3" in text.decode() for text in here.values())
+    assert here == apart
+    slim = sinks._chunk(sinks._fields(PointChunk.empty(), PmacWriter.reads))
+    assert slim.P_cmd.shape == (0, 5) and slim.q is None
+
+
+def test_a_channel_carries_arrays_whole_and_says_when_the_other_end_closed() -> None:
+    """What crosses between the processes comes out equal, every kind of array a
+    chunk holds (contiguous either way, strided, object, bool, empty), writable;
+    a message eight times what the pipe holds (sent while the other end reads)
+    whole; and a closed end is EOFError, as multiprocessing's Connection says it."""
+    import threading
+
+    import numpy as np
+
+    recv, send = sinks.pipe(duplex=False)
+    grid = np.arange(20.0).reshape(4, 5)
+    sent = {
+        "q": grid,
+        "fortran": np.asfortranarray(grid),
+        "strided": grid[:, ::2],
+        "fn": np.array([None, (("M", 3.0),)], dtype=object),
+        "dwell": np.array([True, False, True]),
+        "split": np.arange(3, dtype=np.int8),
+        "none": np.zeros((0, 5)),
+        "big": np.random.default_rng(0).normal(size=(sinks.PIPE_BYTES,)),  # 8 x PIPE_BYTES
+    }
+    t = threading.Thread(target=send.send, args=(("chunk", sent, 7),), daemon=True)
+    t.start()
+    kind, got, n = recv.recv()
+    assert (kind, n) == ("chunk", 7)
+    for name, value in sent.items():
+        assert got[name].dtype == value.dtype and got[name].shape == value.shape, name
+        assert np.array_equal(got[name], value) if name != "fn" else list(got[name]) == list(value)
+        assert got[name].flags.writeable, name
+    t.join(timeout=30.0)
+    assert not t.is_alive()  # everything sent was read
+    send.close()
+    with pytest.raises(EOFError):
+        recv.recv()
+    recv.close()

@@ -65,6 +65,10 @@ SETTINGS = OUTPUT_SETTINGS["pmac"]
 class PmacWriter:
     """A Turbo PMAC PVT motion program, streamed (module docstring)."""
 
+    #: the point fields :meth:`feed` reads: a writer in a process of its own is
+    #: sent only these (:class:`prsxy_post.sinks.WriterProcess`)
+    reads = ("P_cmd", "V_cmd", "dt", "dwell", "line", "split", "fn")
+
     def __init__(self, profile: Profile, settings: Mapping[str, Any], prov: Provenance) -> None:
         self.profile = profile
         self.prov = prov

@@ -1,0 +1,63 @@
+"""The conversion's processes (prsxy_post.convert): the interpreter process
+reads, plans and solves the points' map and IK ahead of the main process, and
+every error still arrives where one process would meet it, first in the program,
+at its line and column."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from prsxy_post.chain import Stages
+from prsxy_post.convert import ConvertJob, convert_file
+from prsxy_post.errors import PrsxyError
+
+from .conftest import ROOT
+
+SHOP = str(ROOT / "profiles" / "prsxy-shop.toml")
+
+
+def _program(tmp_path: Path, n: int, at: dict[int, str]) -> str:
+    """n moving lines, line k (1-based, from the second) replaced by at[k]."""
+    lines = ["G21 G90 G1 F3000"]
+    for k in range(2, n + 1):
+        lines.append(at.get(k, f"X{(k % 40) * 0.25:.2f} Y{(k % 9) * 0.5:.1f}"))
+    path = tmp_path / "job.ngc"
+    path.write_text("\n".join([*lines, "M2"]) + "\n")
+    return str(path)
+
+
+def _error(program: str, out: Path, parallel: bool) -> str:
+    job = ConvertJob(program, SHOP, "pmac", str(out), None, Stages(), "", 700, parallel)
+    with pytest.raises(PrsxyError) as err:
+        convert_file(job)
+    assert not out.exists()
+    return str(err.value)
+
+
+#: a tilt past the profile's 30° in a short move: found with the points' map and IK
+TILT = {6999: "X0 A29.9", 7000: "X0 A30.5"}
+
+
+@pytest.mark.parametrize(
+    ("at", "line"),
+    [
+        (TILT, 7000),  # found by the interpreter process (chain.Planning.solve)
+        ({**TILT, 9000: "G1 X1 Q"}, 7000),  # and a G-code error after it
+        ({3000: "X900", **TILT}, 3000),  # beyond X's travel before it: the main process's
+        ({9000: "G1 X1 Q"}, 9000),  # a G-code error alone
+    ],
+)
+def test_errors_arrive_in_program_order_from_the_interpreter_process(
+    tmp_path: Path, at: dict[int, str], line: int
+) -> None:
+    """Whichever process finds it (the pose problems of a piece's points are
+    found with their map and IK in the interpreter process, and raised by the
+    main one as it comes to them), the error is the one a single process
+    reports: the first in the program, located."""
+    program = _program(tmp_path, 10_000, at)
+    here = _error(program, tmp_path / "a.pmc", parallel=False)
+    apart = _error(program, tmp_path / "b.pmc", parallel=True)
+    assert apart == here
+    assert here.startswith(f"{program}:{line}:"), here
