@@ -30,7 +30,7 @@ import threading
 import time
 import traceback
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -425,7 +425,7 @@ def _chunk(sent: Any) -> Any:
         return sent
     from .points import PointChunk
 
-    given: dict[str, Any] = {f.name: sent.get(f.name) for f in fields(PointChunk)}
+    given: dict[str, Any] = {name: sent.get(name) for name in PointChunk.FIELDS}
     return PointChunk(**given)
 
 

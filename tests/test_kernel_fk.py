@@ -230,6 +230,6 @@ def test_compiled_fk_refuses_wrong_shapes() -> None:
     with pytest.raises(ValueError):
         _fk.fk_system(m, off, x[:, :5])
     with pytest.raises(ValueError):
-        _fk.fk_residual(dataclasses.replace(m, L=np.ones(2)), off, x)
+        _fk.fk_residual(m._replace(L=np.ones(2)), off, x)
     with pytest.raises(ValueError):
         _fk.solve6(np.zeros((4, 6, 5)), x)
