@@ -1073,9 +1073,12 @@ class Pipeline:
         arrays (:func:`.kernel.play.settle_crossings`).
         """
         s_path = self._path_run(pc)
+        # motors often reverse at the same point: the IK's Jacobian once a row
+        rows, at = np.unique(contacts[:, 0], return_inverse=True)
+        short = self._shorts(pc.q_target[rows], pc.tool_length[rows], at, contacts[:, 2])
         for col in self.play_cols:
-            mine = contacts[contacts[:, 2] == col]
-            self._settle_motor(pc, side, mine, col, P_cmd, V_cmd, s_path)
+            ours = contacts[:, 2] == col
+            self._settle_motor(pc, side, contacts[ours], short[ours], col, P_cmd, V_cmd, s_path)
         if self.limits.segment != "cubic":
             self._straight_through(pc, contacts, P_cmd)
         self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
@@ -1094,13 +1097,15 @@ class Pipeline:
         pc: PointChunk,
         side: np.ndarray,
         mine: np.ndarray,
+        short: np.ndarray,
         col: int,
         P_cmd: np.ndarray,
         V_cmd: np.ndarray,
         s_path: np.ndarray,
     ) -> None:
         """:meth:`_settle` for motor ``col`` through its crossings ``mine`` (c, 3)
-        (rows of the contacts: end, beginning, column): its commands in ``P_cmd``,
+        (rows of the contacts: end, beginning, column), each ending ``short`` (c,)
+        [mm] of its contact (:meth:`_crossing_short`): its commands in ``P_cmd``,
         ``V_cmd`` (n, 5) [mm, mm/s] updated in place, an offset left from the
         chunk before taken up first; where its part is after the chunk kept in
         ``play_y`` [mm]. ``s_path`` (n,) [mm] as :meth:`_path_run`."""
@@ -1146,7 +1151,9 @@ class Pipeline:
             if not np.isnan(carry):
                 self.catch[col] = carry
         if len(mine):
-            y0, P0, V0 = self._settle_crossings(pc, mine, col, (y0, P0, V0), P_cmd, V_cmd, mo)
+            y0, P0, V0 = self._settle_crossings(
+                pc, mine, short, col, (y0, P0, V0), P_cmd, V_cmd, mo
+            )
             # from the last contact on, the corrected commands carry the part
             rest = slice(int(mine[:, 0].max()) + 1, len(pc))
         else:
@@ -1174,6 +1181,7 @@ class Pipeline:
         self,
         pc: PointChunk,
         mine: np.ndarray,
+        short: np.ndarray,
         col: int,
         before: tuple[float, float, float],
         P_cmd: np.ndarray,
@@ -1181,18 +1189,16 @@ class Pipeline:
         mo: play.Motion,
     ) -> tuple[float, float, float]:
         """End each of motor ``col``'s crossings ``mine`` where its part really
-        stands, followed from ``before`` (the part [mm], the command [mm, mm/s]
-        before the chunk) through the commands as made, and take up the part's
-        offset after each, an offset carried into the next crossing reckoned again
+        stands (``short`` (c,) [mm] of it: :meth:`_crossing_short`), followed
+        from ``before`` (the part [mm], the command [mm, mm/s] before the chunk)
+        through the commands as made, and take up the part's offset after each, an
+        offset carried into the next crossing reckoned again
         (:func:`.kernel.play.settle_crossings`); ``mo`` the motor's columns. Returns
         the part, the command's position and velocity at the last contact."""
         cubic = self.limits.segment == "cubic"
         table = self.tables[MOTORS[col]]
         e, b = mine[:, 0], mine[:, 1]
         self._across(pc, e, b, col, before[1], P_cmd, V_cmd)
-        # a written digit short of the contact: rounded past it, the motor
-        # would push its part within the window's last servo cycles
-        short = self._crossing_short(pc.q_target[e], pc.tool_length[e], col)
         r = kernel.settle_crossings(
             table.flat,
             mo,
@@ -1288,11 +1294,21 @@ class Pipeline:
         a PVT program (seven decimals), 1.0025 x F60 from 1 nm in a corrected
         G-code (six) (test_controller_truth's found programs). The part is met
         that much later, at the path's own speed."""
+        return self._shorts(q, tool, np.arange(len(q)), np.full(len(q), col))
+
+    def _shorts(
+        self, q: np.ndarray, tool: np.ndarray, at: np.ndarray, col: np.ndarray
+    ) -> np.ndarray:
+        """(M,) [mm] :meth:`_crossing_short` of crossings ending at poses ``q[at]``
+        of motors ``col`` (M,): the IK's Jacobian taken once a pose, however many
+        motors end a crossing there. A written digit short of the contact: rounded
+        past it, the motor would push its part within the window's last servo
+        cycles."""
         digit = self.written.digit
         if self.written.space == "motor" or not len(q):
-            return np.full(len(q), digit)
+            return np.full(len(at), digit)
         jac = ik_jacobian(self.geo, q, tool, DIR_STEP_MM)
-        return digit * np.abs(jac[:, col, :]).sum(axis=1)
+        return digit * np.abs(jac[at, col, :]).sum(axis=1)
 
     def _new_points(
         self,
