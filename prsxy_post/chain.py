@@ -852,9 +852,9 @@ class Pipeline:
             rank = np.concatenate([np.full(n, 2), np.where(e_before, 0, 1)])
             when_all = np.concatenate([when, e_when])
             order = np.lexsort((when_all, rank, step_all))
-            row = np.empty(len(order), dtype=np.intp)
-            row[order] = np.arange(len(order))
-            pc = _interleaved(pc, dt, extra, row[:n], row[n:])
+            both = PointChunk.concat([pc, extra])
+            both.dt = np.concatenate([dt, extra.dt])
+            pc = both.take(order)
             step = step_all[order]
             when = when_all[order]
             before = np.concatenate([before, e_before])[order]
@@ -1431,24 +1431,6 @@ class Pipeline:
         travel = checks.travel_problems(self.profile, ready.P_cmd, ready.line)
         self._problem([p.error(self.profile) for p in travel])
         return ready
-
-
-def _interleaved(
-    a: PointChunk, a_dt: np.ndarray, b: PointChunk, at_a: np.ndarray, at_b: np.ndarray
-) -> PointChunk:
-    """The points of ``a`` (its step times ``a_dt`` (n,) [s] in place of its own)
-    and of ``b`` in one chunk: ``a``'s i-th at row ``at_a[i]``, ``b``'s j-th at row
-    ``at_b[j]``, together every row once. The values of ``PointChunk.concat`` then
-    ``take``, each field written once (the reversals' new points into the chunk)."""
-    rows = len(at_a) + len(at_b)
-    fields = {}
-    for f in PointChunk.FIELDS:
-        x, y = (a_dt if f == "dt" else getattr(a, f)), getattr(b, f)
-        out = np.empty((rows, *x.shape[1:]), dtype=np.result_type(x, y))
-        out[at_a] = x
-        out[at_b] = y
-        fields[f] = out
-    return PointChunk(**fields)
 
 
 def _windows_over(b: np.ndarray, e: np.ndarray, k: np.ndarray) -> np.ndarray:
