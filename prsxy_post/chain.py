@@ -860,15 +860,12 @@ class Pipeline:
             before = np.concatenate([before, e_before])[order]
             resting = pc.speed == 0.0
         rows = reversals.Rows(step, when, before)
-        side = reversals.sides(rows, pc.V_ideal, resting, ins, self.play_cols, self.side)
+        side, w_end, s_first = reversals.sides_and_ends(
+            rows, pc.V_ideal, resting, ins, self.play_cols, self.side
+        )
         self.side = side[-1].copy() if len(side) else self.side
         # where each crossing ends (the motor meets its part) and where it began
-        ends = np.concatenate(
-            [
-                rows.at(ins.w_kb, ins.w_tb, ins.w_t0b),
-                rows.first(ins.s_k),
-            ]
-        )
+        ends = np.concatenate([w_end, s_first])
         begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
         cols = np.concatenate([ins.w_col, ins.s_col])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
