@@ -1073,9 +1073,16 @@ class Pipeline:
         # motors often reverse at the same point: the IK's Jacobian once a row
         rows, at = np.unique(contacts[:, 0], return_inverse=True)
         short = self._shorts(pc.q_target[rows], pc.tool_length[rows], at, contacts[:, 2])
+        # every motor's columns as contiguous rows, made in one pass each (a
+        # column copied alone reads the whole array)
+        by_motor = (
+            np.ascontiguousarray(pc.P_ideal.T, dtype=float),
+            np.ascontiguousarray(pc.V_ideal.T, dtype=float),
+            np.ascontiguousarray(side.T, dtype=float),
+        )
         for col in self.play_cols:
             ours = contacts[:, 2] == col
-            self._settle_motor(pc, side, contacts[ours], short[ours], col, P_cmd, V_cmd, s_path)
+            self._settle_motor(pc, by_motor, contacts[ours], short[ours], col, P_cmd, V_cmd, s_path)
         if self.limits.segment != "cubic":
             self._straight_through(pc, contacts, P_cmd)
         self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
@@ -1092,7 +1099,7 @@ class Pipeline:
     def _settle_motor(
         self,
         pc: PointChunk,
-        side: np.ndarray,
+        by_motor: tuple[np.ndarray, np.ndarray, np.ndarray],
         mine: np.ndarray,
         short: np.ndarray,
         col: int,
@@ -1102,7 +1109,8 @@ class Pipeline:
     ) -> None:
         """:meth:`_settle` for motor ``col`` through its crossings ``mine`` (c, 3)
         (rows of the contacts: end, beginning, column), each ending ``short`` (c,)
-        [mm] of its contact (:meth:`_crossing_short`): its commands in ``P_cmd``,
+        [mm] of its contact (:meth:`_crossing_short`); ``by_motor`` the chunk's
+        P_ideal, V_ideal and sides transposed, (5, n) each: its commands in ``P_cmd``,
         ``V_cmd`` (n, 5) [mm, mm/s] updated in place, an offset left from the
         chunk before taken up first; where its part is after the chunk kept in
         ``play_y`` [mm]. ``s_path`` (n,) [mm] as :meth:`_path_run`."""
@@ -1113,19 +1121,12 @@ class Pipeline:
         # the motor's wanted moves into each point (the first from the last point
         # made): a part left ahead of its way is taken up no faster than they go
         P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
-        dP = np.diff(pc.P_ideal[:, col], prepend=P_before)
+        P_ideal, V_ideal, side = (a[col] for a in by_motor)
+        dP = np.diff(P_ideal, prepend=P_before)
         mo = play.Motion(
             *(
                 np.ascontiguousarray(a, dtype=float)
-                for a in (
-                    pc.P_ideal[:, col],
-                    pc.V_ideal[:, col],
-                    dP,
-                    pc.speed,
-                    pc.dt,
-                    s_path,
-                    side[:, col],
-                )
+                for a in (P_ideal, V_ideal, dP, pc.speed, pc.dt, s_path, side)
             )
         )
         carried = self.catch.pop(col, 0.0)
