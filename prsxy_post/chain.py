@@ -1070,9 +1070,12 @@ class Pipeline:
         arrays (:func:`.kernel.play.settle_crossings`).
         """
         s_path = self._path_run(pc)
-        # motors often reverse at the same point: the IK's Jacobian once a row
-        rows, at = np.unique(contacts[:, 0], return_inverse=True)
-        short = self._shorts(pc.q_target[rows], pc.tool_length[rows], at, contacts[:, 2])
+        if self.written.space == "motor":
+            short = np.full(len(contacts), self.written.digit)
+        else:
+            # motors often reverse at the same point: the IK's Jacobian once a row
+            rows, at = np.unique(contacts[:, 0], return_inverse=True)
+            short = self._shorts(pc.q_target[rows], pc.tool_length[rows], at, contacts[:, 2])
         # every motor's columns as contiguous rows, made in one pass each (a
         # column copied alone reads the whole array)
         by_motor = (
