@@ -860,15 +860,12 @@ class Pipeline:
             before = np.concatenate([before, e_before])[order]
             resting = pc.speed == 0.0
         rows = reversals.Rows(step, when, before)
-        side = reversals.sides(rows, pc.V_ideal, resting, ins, self.play_cols, self.side)
+        side, w_end, s_first = reversals.sides_and_ends(
+            rows, pc.V_ideal, resting, ins, self.play_cols, self.side
+        )
         self.side = side[-1].copy() if len(side) else self.side
         # where each crossing ends (the motor meets its part) and where it began
-        ends = np.concatenate(
-            [
-                rows.at(ins.w_kb, ins.w_tb, ins.w_t0b),
-                rows.first(ins.s_k),
-            ]
-        )
+        ends = np.concatenate([w_end, s_first])
         begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
         cols = np.concatenate([ins.w_col, ins.s_col])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
@@ -1073,9 +1070,22 @@ class Pipeline:
         arrays (:func:`.kernel.play.settle_crossings`).
         """
         s_path = self._path_run(pc)
+        if self.written.space == "motor":
+            short = np.full(len(contacts), self.written.digit)
+        else:
+            # motors often reverse at the same point: the IK's Jacobian once a row
+            rows, at = np.unique(contacts[:, 0], return_inverse=True)
+            short = self._shorts(pc.q_target[rows], pc.tool_length[rows], at, contacts[:, 2])
+        # every motor's columns as contiguous rows, made in one pass each (a
+        # column copied alone reads the whole array)
+        by_motor = (
+            np.ascontiguousarray(pc.P_ideal.T, dtype=float),
+            np.ascontiguousarray(pc.V_ideal.T, dtype=float),
+            np.ascontiguousarray(side.T, dtype=float),
+        )
         for col in self.play_cols:
-            mine = contacts[contacts[:, 2] == col]
-            self._settle_motor(pc, side, mine, col, P_cmd, V_cmd, s_path)
+            ours = contacts[:, 2] == col
+            self._settle_motor(pc, by_motor, contacts[ours], short[ours], col, P_cmd, V_cmd, s_path)
         if self.limits.segment != "cubic":
             self._straight_through(pc, contacts, P_cmd)
         self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
@@ -1092,15 +1102,18 @@ class Pipeline:
     def _settle_motor(
         self,
         pc: PointChunk,
-        side: np.ndarray,
+        by_motor: tuple[np.ndarray, np.ndarray, np.ndarray],
         mine: np.ndarray,
+        short: np.ndarray,
         col: int,
         P_cmd: np.ndarray,
         V_cmd: np.ndarray,
         s_path: np.ndarray,
     ) -> None:
         """:meth:`_settle` for motor ``col`` through its crossings ``mine`` (c, 3)
-        (rows of the contacts: end, beginning, column): its commands in ``P_cmd``,
+        (rows of the contacts: end, beginning, column), each ending ``short`` (c,)
+        [mm] of its contact (:meth:`_crossing_short`); ``by_motor`` the chunk's
+        P_ideal, V_ideal and sides transposed, (5, n) each: its commands in ``P_cmd``,
         ``V_cmd`` (n, 5) [mm, mm/s] updated in place, an offset left from the
         chunk before taken up first; where its part is after the chunk kept in
         ``play_y`` [mm]. ``s_path`` (n,) [mm] as :meth:`_path_run`."""
@@ -1111,19 +1124,12 @@ class Pipeline:
         # the motor's wanted moves into each point (the first from the last point
         # made): a part left ahead of its way is taken up no faster than they go
         P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
-        dP = np.diff(pc.P_ideal[:, col], prepend=P_before)
+        P_ideal, V_ideal, side = (a[col] for a in by_motor)
+        dP = np.diff(P_ideal, prepend=P_before)
         mo = play.Motion(
             *(
                 np.ascontiguousarray(a, dtype=float)
-                for a in (
-                    pc.P_ideal[:, col],
-                    pc.V_ideal[:, col],
-                    dP,
-                    pc.speed,
-                    pc.dt,
-                    s_path,
-                    side[:, col],
-                )
+                for a in (P_ideal, V_ideal, dP, pc.speed, pc.dt, s_path, side)
             )
         )
         carried = self.catch.pop(col, 0.0)
@@ -1146,7 +1152,9 @@ class Pipeline:
             if not np.isnan(carry):
                 self.catch[col] = carry
         if len(mine):
-            y0, P0, V0 = self._settle_crossings(pc, mine, col, (y0, P0, V0), P_cmd, V_cmd, mo)
+            y0, P0, V0 = self._settle_crossings(
+                pc, mine, short, col, (y0, P0, V0), P_cmd, V_cmd, mo
+            )
             # from the last contact on, the corrected commands carry the part
             rest = slice(int(mine[:, 0].max()) + 1, len(pc))
         else:
@@ -1174,6 +1182,7 @@ class Pipeline:
         self,
         pc: PointChunk,
         mine: np.ndarray,
+        short: np.ndarray,
         col: int,
         before: tuple[float, float, float],
         P_cmd: np.ndarray,
@@ -1181,18 +1190,16 @@ class Pipeline:
         mo: play.Motion,
     ) -> tuple[float, float, float]:
         """End each of motor ``col``'s crossings ``mine`` where its part really
-        stands, followed from ``before`` (the part [mm], the command [mm, mm/s]
-        before the chunk) through the commands as made, and take up the part's
-        offset after each, an offset carried into the next crossing reckoned again
+        stands (``short`` (c,) [mm] of it: :meth:`_crossing_short`), followed
+        from ``before`` (the part [mm], the command [mm, mm/s] before the chunk)
+        through the commands as made, and take up the part's offset after each, an
+        offset carried into the next crossing reckoned again
         (:func:`.kernel.play.settle_crossings`); ``mo`` the motor's columns. Returns
         the part, the command's position and velocity at the last contact."""
         cubic = self.limits.segment == "cubic"
         table = self.tables[MOTORS[col]]
         e, b = mine[:, 0], mine[:, 1]
         self._across(pc, e, b, col, before[1], P_cmd, V_cmd)
-        # a written digit short of the contact: rounded past it, the motor
-        # would push its part within the window's last servo cycles
-        short = self._crossing_short(pc.q_target[e], pc.tool_length[e], col)
         r = kernel.settle_crossings(
             table.flat,
             mo,
@@ -1288,11 +1295,21 @@ class Pipeline:
         a PVT program (seven decimals), 1.0025 x F60 from 1 nm in a corrected
         G-code (six) (test_controller_truth's found programs). The part is met
         that much later, at the path's own speed."""
+        return self._shorts(q, tool, np.arange(len(q)), np.full(len(q), col))
+
+    def _shorts(
+        self, q: np.ndarray, tool: np.ndarray, at: np.ndarray, col: np.ndarray
+    ) -> np.ndarray:
+        """(M,) [mm] :meth:`_crossing_short` of crossings ending at poses ``q[at]``
+        of motors ``col`` (M,): the IK's Jacobian taken once a pose, however many
+        motors end a crossing there. A written digit short of the contact: rounded
+        past it, the motor would push its part within the window's last servo
+        cycles."""
         digit = self.written.digit
         if self.written.space == "motor" or not len(q):
-            return np.full(len(q), digit)
+            return np.full(len(at), digit)
         jac = ik_jacobian(self.geo, q, tool, DIR_STEP_MM)
-        return digit * np.abs(jac[:, col, :]).sum(axis=1)
+        return digit * np.abs(jac[at, col, :]).sum(axis=1)
 
     def _new_points(
         self,

@@ -1348,6 +1348,19 @@ def sides(
     cols: list[int],
     side: np.ndarray,
 ) -> np.ndarray:
+    """The side (+1, −1) every motor is on at every point of a chunk:
+    :func:`sides_and_ends`' first answer."""
+    return sides_and_ends(rows, V, resting, ins, cols, side)[0]
+
+
+def sides_and_ends(
+    rows: Rows,
+    V: np.ndarray,
+    resting: np.ndarray,
+    ins: Insertions,
+    cols: list[int],
+    side: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The side (+1, −1) every motor is on at every point of a chunk (new points
     included), and so which of lo⁻¹ and hi⁻¹ commands it: the direction of its
     planned velocity, held while it stands, switched inside a crossing window only
@@ -1358,6 +1371,11 @@ def sides(
     rows : the chunk's points (:class:`Rows`)
     V, resting : (m, 5), (m,) planned motor velocities, path at rest
     side : (5,) the side before the chunk
+
+    Returns the sides (m, 5), and the points where the windows end
+    (``rows.at(ins.w_kb, ins.w_tb, ins.w_t0b)``) and where the standing
+    crossings' steps begin (``rows.first(ins.s_k)``), which the sides are made
+    from: the crossings' ends.
     """
     m = len(rows.step)
     out = np.tile(np.asarray(side, dtype=int), (m, 1))
@@ -1388,7 +1406,7 @@ def sides(
             int(side[col]),
             V_EPS,
         )
-    return out
+    return out, e_all, s_first
 
 
 def catch_up(

@@ -428,6 +428,13 @@ def test_a_dip_inside_a_step_gets_two_crossings() -> None:
     e = rows.at(ins.w_k, ins.w_tb, ins.w_t0)
     col = side[:, 3]
     assert np.all(col[: e[0]] == 1) and np.all(col[e[0] : e[1]] == -1) and np.all(col[e[1] :] == 1)
+    # the crossings' ends the chain takes from sides_and_ends are the rows' own
+    same, w_end, s_first = reversals.sides_and_ends(
+        rows, Vr, np.zeros(len(rows.step), dtype=bool), ins, [3], np.ones(5)
+    )
+    assert np.array_equal(same, side)
+    assert np.array_equal(w_end, rows.at(ins.w_kb, ins.w_tb, ins.w_t0b))
+    assert np.array_equal(s_first, rows.first(ins.s_k))
     # shallow: the part standing through it misses the path by less than the tolerance
     P_shallow = np.array([[P0] * 5, [P0 + 0.6e-3] * 5])
     assert 0 < depth(P0 + 0.6e-3) < tol

@@ -413,6 +413,11 @@ cdef Py_ssize_t _roots(const double* Pa, const double* Va, const double* P, cons
     cdef Py_ssize_t i, nt = 0
     cdef double h, hh, d, a, b, c, disc, sq, r1, r2
     cdef bint ok1, ok2
+    if not cubic:
+        # straight lines: no step turns inside (ok1, ok2 below are false)
+        for i in range(n):
+            kind[i] = 0
+        return 0
     for i in range(n):
         h = hv[i]
         hh = h if h > 0 else INFINITY
@@ -421,6 +426,11 @@ cdef Py_ssize_t _roots(const double* Pa, const double* Va, const double* P, cons
         b = -6.0 * d - 4.0 * Va[i] - 2.0 * V[i]
         c = Va[i]
         disc = b * b - 4.0 * a * c
+        kind[i] = 0
+        if not (disc >= 0 and h > 0):
+            # no root inside (ok1, ok2 below are false, NaN included): the
+            # square root and the divisions are not needed
+            continue
         sq = sqrt(_max(disc, 0.0))
         if fabs(a) > 1e-300:
             r1 = (-b - sq) / (2 * a)
@@ -430,7 +440,6 @@ cdef Py_ssize_t _roots(const double* Pa, const double* Va, const double* P, cons
             r2 = -1.0
         ok1 = disc >= 0 and r1 > 0 and r1 < 1 and h > 0 and cubic
         ok2 = disc >= 0 and r2 > 0 and r2 < 1 and h > 0 and fabs(r2 - r1) > 0 and cubic
-        kind[i] = 0
         if ok1 and ok2:
             S[2 * nt] = _min(r1, r2)
             S[2 * nt + 1] = _max(r1, r2)
