@@ -36,8 +36,9 @@ G64 P tolerance (the blend's deviation is bounded by P, LinuxCNC's G-code docs,
 
 from __future__ import annotations
 
+import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -329,8 +330,9 @@ class GcodeRun:
     its Cartesian space (XYZAB), timed by G93 inverse time.
 
     q : (n, 5) the written points; t : (n,) time at each; line : (n,) source line
-    q_dense, t_dense, seg : the straight segments sampled
+    q_dense, t_dense, seg : the segments sampled (arcs as LinuxCNC runs them)
     functions, dwells, blend : machine-function lines, G4 dwells (point, s), the G64 P
+    arcs : the G2/G3 moves, by the index of the point they end at
     """
 
     q: np.ndarray
@@ -342,11 +344,77 @@ class GcodeRun:
     functions: list[tuple[int, str]]
     dwells: list[tuple[int, float]]
     blend: float | None
+    arcs: dict[int, GcodeArc] = field(default_factory=dict)
+
+
+#: the plane's first and second axis and its normal (rs274ngc), by G17, G18, G19
+ARC_PLANES = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}
+
+
+@dataclass(frozen=True)
+class GcodeArc:
+    """A G2/G3 as LinuxCNC runs it (emccanon.cc ARC_FEED, _posemath.c pmCircleInit):
+    in the plane's (u, v) the radius runs linearly in the angle from the start's to
+    the end's, the axis w and A, B linearly; ``center`` (3,) X Y Z (its w unused)."""
+
+    center: tuple[float, float, float]
+    plane: int
+    ccw: bool
+
+    def geometry(self, a: np.ndarray, b: np.ndarray) -> tuple[float, float, float, float]:
+        """(start angle, sweep [rad], start radius, end radius) from a to b."""
+        iu, iv, _ = ARC_PLANES[self.plane]
+        cu, cv = self.center[iu], self.center[iv]
+        th0 = math.atan2(a[iv] - cv, a[iu] - cu)
+        th1 = math.atan2(b[iv] - cv, b[iu] - cu)
+        # canon's wrap: a sweep in (0, 2 pi] the arc's way (emccanon.cc:1665-1669)
+        sweep = (th1 - th0) % (2 * math.pi) if self.ccw else -((th0 - th1) % (2 * math.pi))
+        if sweep == 0.0:
+            sweep = 2 * math.pi if self.ccw else -2 * math.pi
+        r0 = math.hypot(a[iu] - cu, a[iv] - cv)
+        r1 = math.hypot(b[iu] - cu, b[iv] - cv)
+        return th0, sweep, r0, r1
+
+    def at(self, a: np.ndarray, b: np.ndarray, f: np.ndarray) -> np.ndarray:
+        """The poses (len(f), 5) at the shares ``f`` of the angle from a to b."""
+        iu, iv, _ = ARC_PLANES[self.plane]
+        th0, sweep, r0, r1 = self.geometry(a, b)
+        th = th0 + sweep * f
+        r = r0 + (r1 - r0) * f
+        out = a[None, :] + (b - a)[None, :] * f[:, None]
+        out[:, iu] = self.center[iu] + r * np.cos(th)
+        out[:, iv] = self.center[iv] + r * np.sin(th)
+        return out
+
+    def distance(self, a: np.ndarray, b: np.ndarray, q: np.ndarray, w_deg: float) -> np.ndarray:
+        """How far the poses q (m, 5) are from the arc a → b: at each pose's own
+        angle (clipped to the arc), |radial, axial, A B × w_deg| [mm]."""
+        iu, iv, _ = ARC_PLANES[self.plane]
+        th0, sweep, _, _ = self.geometry(a, b)
+        th = np.arctan2(q[:, iv] - self.center[iv], q[:, iu] - self.center[iu])
+        d = (th - th0) % (2 * math.pi) if sweep > 0 else -((th0 - th) % (2 * math.pi))
+        # angles beyond the arc's ends: the nearer end
+        beyond = np.abs(d) > abs(sweep)
+        past_end = np.abs(np.abs(d) - abs(sweep)) < 2 * math.pi - np.abs(d)
+        f = np.where(beyond, np.where(past_end, 1.0, 0.0), d / sweep)
+        p = self.at(a, b, f)
+        w = np.array([1.0, 1.0, 1.0, w_deg, w_deg])
+        return np.linalg.norm((q - p) * w, axis=1)
+
+
+def arc_substeps(arc: GcodeArc, a: np.ndarray, b: np.ndarray, substeps: int) -> int:
+    """Samples along an arc: at least ``substeps``, and chords of them within 1 nm."""
+    _, sweep, r0, r1 = arc.geometry(a, b)
+    r = max(r0, r1, 1e-9)
+    return max(substeps, math.ceil(abs(sweep) / math.sqrt(8e-6 / r)))
 
 
 def run_gcode(text: str, substeps: int = 8) -> GcodeRun:
-    """Read corrected G-code back (G0 start, G93 G1 X Y Z A B F, G4 P, functions)."""
+    """Read corrected G-code back (G0 start, G93 G1 X Y Z A B F, G2/G3 with I J K in
+    G17/G18/G19, G4 P, functions)."""
     q: list[list[float]] = []
+    arcs: dict[int, GcodeArc] = {}
+    plane = 17
     t: list[float] = []
     line: list[int] = []
     functions: list[tuple[int, str]] = []
@@ -361,8 +429,21 @@ def run_gcode(text: str, substeps: int = 8) -> GcodeRun:
             continue
         if s.startswith("(") or s in ("%", ""):
             continue
-        w = dict(re.findall(r"([XYZABFP])(-?\d+\.?\d*)", s))
-        if s.startswith("G64"):
+        w = dict(re.findall(r"([XYZABFPIJK])(-?\d+\.?\d*)", s))
+        planes = re.findall(r"\bG(17|18|19)\b", s)
+        if planes:
+            plane = int(planes[-1])
+        if s.startswith(("G2 ", "G3 ")):
+            iu, iv, _ = ARC_PLANES[plane]
+            start = q[-1]
+            center = list(start[:3])
+            for i in (iu, iv):
+                center[i] += float(w.get("IJK"[i], 0.0))
+            q.append([float(w[a]) for a in "XYZAB"])
+            t.append(t[-1] + 60.0 / float(w["F"]))
+            line.append(cur)
+            arcs[len(q) - 1] = GcodeArc((center[0], center[1], center[2]), plane, s[1] == "3")
+        elif s.startswith("G64"):
             blend = float(w["P"])
         elif s.startswith("G0 ") or s.startswith("G1 "):
             q.append([float(w[a]) for a in "XYZAB"])
@@ -375,7 +456,7 @@ def run_gcode(text: str, substeps: int = 8) -> GcodeRun:
             if float(w["P"]) > 0.0:  # G4 P0 waits for the motion to end, no time
                 dwells.append((len(q) - 1, float(w["P"])))
         elif re.fullmatch(r"(?:[GMTS]-?[\d.]+\s*)+", s) and not s.startswith(
-            ("G2", "G9", "G64", "G61")
+            ("G2", "G9", "G64", "G61", "G17", "G18", "G19")
         ):
             functions.append((len(q) - 1, s))
     qa = np.array(q)
@@ -385,14 +466,35 @@ def run_gcode(text: str, substeps: int = 8) -> GcodeRun:
     dense = a[:, None, :] + (b - a)[:, None, :] * s[None, :, None]
     td = ta[:-1, None] + (ta[1:] - ta[:-1])[:, None] * s[None, :]
     seg = np.repeat(np.arange(1, len(qa)), substeps)
+    q_dense = np.vstack([qa[:1], dense.reshape(-1, 5)])
+    t_dense = np.concatenate([[0.0], td.reshape(-1)])
+    seg_dense = np.concatenate([[0], seg])
+    if arcs:
+        # each arc sampled along its own path (time linear in its angle)
+        qs, ts, ks = [q_dense[:1]], [t_dense[:1]], [seg_dense[:1]]
+        for k in range(1, len(qa)):
+            arc = arcs.get(k)
+            if arc is None:
+                sl = slice(1 + (k - 1) * substeps, 1 + k * substeps)
+                qs.append(q_dense[sl])
+                ts.append(t_dense[sl])
+                ks.append(seg_dense[sl])
+                continue
+            n = arc_substeps(arc, qa[k - 1], qa[k], substeps)
+            f = np.linspace(0.0, 1.0, n + 1)[1:]
+            qs.append(arc.at(qa[k - 1], qa[k], f))
+            ts.append(ta[k - 1] + (ta[k] - ta[k - 1]) * f)
+            ks.append(np.full(n, k))
+        q_dense, t_dense, seg_dense = np.vstack(qs), np.concatenate(ts), np.concatenate(ks)
     return GcodeRun(
         qa,
         ta,
         np.array(line),
-        np.vstack([qa[:1], dense.reshape(-1, 5)]),
-        np.concatenate([[0.0], td.reshape(-1)]),
-        np.concatenate([[0], seg]),
+        q_dense,
+        t_dense,
+        seg_dense,
         functions,
         dwells,
         blend,
+        arcs,
     )

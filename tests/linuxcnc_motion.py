@@ -369,23 +369,26 @@ def _run_once(
 
 def motion_lines(text: str) -> dict[int, int]:
     """File line (1-based) -> index of the written point that line ends at, for
-    every G0/G1/G4 line (the points `tests.controllers.run_gcode` reads)."""
+    every G0/G1/G2/G3/G4 line (the points `tests.controllers.run_gcode` reads)."""
     out: dict[int, int] = {}
     k = -1
     for no, raw in enumerate(text.splitlines(), 1):
-        if raw.strip().startswith(("G0 ", "G1 ", "G4 ")):
+        if raw.strip().startswith(("G0 ", "G1 ", "G2 ", "G3 ", "G4 ")):
             k += 1
             out[no] = k
     return out
 
 
-def segments(run_: MotionRun, text: str, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def segments(
+    run_: MotionRun, text: str, points: np.ndarray, arcs: dict | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """For each cycle, the written point whose segment it is in, (m,), and the
     commanded pose's distance from that segment [mm, a degree weighing as a µm].
 
     ``motion.program-line`` names the segment being executed; in a blend two are,
     so the nearer of the named one and its neighbours (in pose space, a degree
-    weighing as a µm) is taken."""
+    weighing as a µm) is taken. ``arcs``: the G2/G3 moves by the point they end at
+    (`tests.controllers.GcodeRun.arcs`), whose distance is to the arc."""
     of = motion_lines(text)
     seg = np.array([of.get(int(n), -1) for n in run_.line])
     # before the first motion line and after the last: the first and last segment
@@ -395,13 +398,26 @@ def segments(run_: MotionRun, text: str, points: np.ndarray) -> tuple[np.ndarray
     best = np.full(len(seg), np.inf)
     out = seg.copy()
     w = np.array([1.0, 1.0, 1.0, 1e-3, 1e-3])
+    # segments that are arcs, counted up to each point: an arc is long, so the
+    # segment executing is the named one or next to it; farther candidates are
+    # only taken over lines (a blend over several short ones)
+    is_arc = np.zeros(len(points), dtype=int)
+    is_arc[list(arcs or {})] = 1
+    arcs_upto = np.cumsum(is_arc)
     for off in range(-3, 4):
         k = np.clip(seg + off, 1, len(points) - 1)
+        lo, hi = np.minimum(seg, k), np.maximum(seg, k)
+        past_an_arc = (arcs_upto[hi] - arcs_upto[lo - 1] > 0) & (abs(off) > 1)
         a, b = points[k - 1], points[k]
         ab = b - a
         n2 = np.einsum("ij,ij->i", ab, ab)
         u = np.clip(np.einsum("ij,ij->i", run_.q - a, ab) / np.where(n2 > 0, n2, 1.0), 0.0, 1.0)
         d = np.linalg.norm((run_.q - (a + u[:, None] * ab)) * w, axis=1)
+        for j, arc in (arcs or {}).items():
+            on = np.flatnonzero(k == j)
+            if len(on):
+                d[on] = arc.distance(points[j - 1], points[j], run_.q[on], w[3])
+        d[past_an_arc] = np.inf
         nearer = d < best - 1e-15
         best[nearer] = d[nearer]
         out[nearer] = k[nearer]

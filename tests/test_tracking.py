@@ -66,16 +66,37 @@ def read_pmac(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def read_gcode_points(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Written G-code points (N, 5), segment times [s] from G93 F, source lines."""
+    """Written G-code points (N, 5), segment times [s] from G93 F, source lines. A
+    G2/G3 is its arc as LinuxCNC runs it (tests/controllers.GcodeArc), sampled
+    in chords within 1 nm of it, its time shared evenly by the angle."""
+    from . import controllers as ctl
+
     q, dt, line = [], [], []
     cur = 0
+    plane = 17
     for s in text.splitlines():
         m = re.match(r"\(line (\d+)\)", s)
         if m:
             cur = int(m.group(1))
             continue
-        w = dict(re.findall(r"([XYZABFP])(-?\d+\.?\d*)", s))
-        if s.startswith("G0 ") or s.startswith("G1 "):
+        w = dict(re.findall(r"([XYZABFPIJK])(-?\d+\.?\d*)", s))
+        planes = re.findall(r"\bG(17|18|19)\b", s)
+        if planes:
+            plane = int(planes[-1])
+        if s.startswith(("G2 ", "G3 ")):
+            a = np.array(q[-1])
+            b = np.array([float(w[c]) for c in "XYZAB"])
+            iu, iv, _ = ctl.ARC_PLANES[plane]
+            center = list(a[:3])
+            for i in (iu, iv):
+                center[i] += float(w.get("IJK"[i], 0.0))
+            arc = ctl.GcodeArc((center[0], center[1], center[2]), plane, s[1] == "3")
+            n = ctl.arc_substeps(arc, a, b, 1)
+            for p in arc.at(a, b, np.linspace(0.0, 1.0, n + 1)[1:]):
+                q.append(p.tolist())
+                dt.append(60.0 / float(w["F"]) / n)
+                line.append(cur)
+        elif s.startswith("G0 ") or s.startswith("G1 "):
             q.append([float(w[a]) for a in "XYZAB"])
             dt.append(60.0 / float(w["F"]) if "F" in w else 0.0)
             line.append(cur)
