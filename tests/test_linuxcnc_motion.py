@@ -83,7 +83,7 @@ def run_on_linuxcnc(truth, motions, res, text: str) -> tuple[ctl.Trace, lm.Motio
     written = ctl.run_gcode(text)
     run = lm.run(text, truth.limits, written.q[0], timeout_s=3.0 * written.t[-1] + 30.0)
     assert not run.errors, run.errors
-    seg, off = lm.segments(run, text, written.q)
+    seg, off = lm.segments(run, text, written.q, written.arcs)
     s = np.linspace(0.0, 1.0, SUBSTEPS + 1)[1:]
     q = np.vstack(
         [
@@ -377,7 +377,7 @@ def measure(truth, text: str) -> dict[str, float]:
         "speed": tr.speed_ratio,
         "path_um": tr.path_mm * 1e3,
         "axis_arcsec": tr.ab_deg * 3600.0,
-        "lines": float(texts[0].count("\nG1 ")),
+        "lines": float(sum(texts[0].count(f"\n{g} ") for g in ("G1", "G2", "G3"))),
     }
 
 
@@ -387,23 +387,11 @@ def measure(truth, text: str) -> dict[str, float]:
         (12, "lines", 3000.0),
         (11, "helix", 3000.0),
         (11, "arcs", 3000.0),
-        pytest.param(
-            13,
-            "arcs",
-            10000.0,
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="open: 2.4-2.5 s against 1.79 s planned (1.89 s uncorrected). "
-                "The chords of an R10 arc within 0.1 um are 0.09 mm: LinuxCNC runs a line "
-                "in no less than 1.02 servo cycles (tp.c:1708-1709 "
-                "tpComputeOptimalVelocity, tp_types.h TP_MIN_SEGMENT_CYCLES), at most "
-                "88 mm/s where F10000 is 167 mm/s, and its joins of the chords slow it "
-                "further (0.25 um chords, fewer and longer, ran 2.73 s). Needs arcs "
-                "written as G2/G3; even so LinuxCNC takes an arc at no more than "
-                "sqrt(0.866 a R) (blendmath.c:1640-1676 pmCircleActualMaxVel): the "
-                "uncorrected program takes 1.053 x the plan",
-            ),
-        ),
+        # 2.4-2.5 s against 1.79 s planned (1.89 s uncorrected) while the arcs were
+        # chords of 0.09 mm, which LinuxCNC runs at no more than 88 mm/s (tp.c:1708-1709
+        # tpComputeOptimalVelocity, TP_MIN_SEGMENT_CYCLES); written as G2/G3 (rule 5),
+        # 1.026 x the plan, 0.975 x the uncorrected program, 0.498 um
+        (13, "arcs", 10000.0),
         # 1.50 x F before the writer kept LinuxCNC's parabolic blends within F
         # (writers/linuxcnc.py, rule 4): the blend into a G61 line
         (11, "five-axis", 600.0),

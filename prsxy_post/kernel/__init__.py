@@ -568,8 +568,10 @@ def crossing_windows(
     return out
 
 
-# the corrected G-code writer's decisions (kernel/gwrite.py and its twin _gwrite.pyx)
-_gcode_ops = _RUN["gwrite"].gcode_ops
+# the corrected G-code writer's decisions (kernel/gwrite.py and its twin _gwrite.pyx).
+# The arcs (writers/linuxcnc.py rule 5) are in the reference only so far: the twin
+# is not called until it takes them too (docs/notes/arcs-port.md)
+_gcode_ops = gwrite.gcode_ops
 
 
 def gcode_ops(
@@ -584,11 +586,14 @@ def gcode_ops(
     dwell: np.ndarray,
     lead: np.ndarray,
     end: bool,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    arc_of: np.ndarray,
+    arc_i: np.ndarray,
+    arc_f: np.ndarray,
+) -> gwrite.Ops:
     """A chunk's points decided, one op per output line (``st`` updated in place):
     :func:`gwrite.gcode_ops`, compiled when :data:`COMPILED`."""
     gwrite.reserve(st, len(q))
-    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _gcode_ops(
-        st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, end
+    out: gwrite.Ops = _gcode_ops(
+        st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, end, arc_of, arc_i, arc_f
     )
     return out

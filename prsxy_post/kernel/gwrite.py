@@ -33,8 +33,8 @@ DIP_SHARE = 1e-3
 #: op codes, one output line each: the first point (G0 and its row), G93, a line
 #: comment, G61, G64 P, a G1 (its point, the point whose A B it writes, F), G4 P0,
 #: G94 (before a program end), a machine function, a dwell (G4 P dt)
-G0, G93, LINE, G61, G64, G1, G4P0, G94, FN, DWELL = range(10)
-OPS = ("G0", "G93", "LINE", "G61", "G64", "G1", "G4P0", "G94", "FN", "DWELL")
+G0, G93, LINE, G61, G64, G1, G4P0, G94, FN, DWELL, ARC, PLANE = range(12)
+OPS = ("G0", "G93", "LINE", "G61", "G64", "G1", "G4P0", "G94", "FN", "DWELL", "ARC", "PLANE")
 #: a text kept from an earlier chunk: the last held-back point, the held corner,
 #: the A B written last; NONE: no such point
 RUN_SRC, CORNER_SRC, HELD_SRC, NONE = -1, -2, -3, -9
@@ -46,16 +46,27 @@ F_NAMES = (
     "tol", "blend", "tilt_cut", "tilt_hold", "tilt_chord", "accel", "accel_deg",
     "prev_accel", "t_total", "last_speed", "peak", "trough", "plan_peak", "stretch",
     "len_sum", "dt_sum", "corner_t", "prev_len", "prev_t", "patch_f",
+    "smooth", "arc_hold", "speed0", "ca_len", "ca_dt",
 )  # fmt: skip
 #: the integer scalars of the state (``GState.i``), by index
 I_NAMES = (
     "all_exact", "n", "has_line", "last_line", "run_n", "run_src", "corner_src",
     "held_src", "exact", "after_settle", "prev_idx", "prev_turns", "prev_blend",
     "has_prev", "patch", "keep",
+    "plane", "stop_at", "req_kind", "req_arc", "req_answer", "corner_arc", "ca_plane",
+    "ca_from", "decimals",
 )  # fmt: skip
 #: what the chunk did to the line carried from the chunk before (``patch``): its F
 #: lowered to ``patch_f``, or a G4 P0 after it
 PATCH_NONE, PATCH_F, PATCH_STOP = 0, 1, 2
+#: what the kernel asks of the writer where it stops mid chunk (``i[stop_at]`` the
+#: point, ``i[req_arc]`` the arc): its points from the stop as arcs again
+#: (``arcs.refit_arcs``), and with ARC_TO first the arc from its start to the point
+#: before as one arc (``i[req_answer]``: its index, or -1 where none fits)
+REQ_REARC, REQ_ARC_TO = 1, 2
+#: the columns of the arcs' integer rows (``arc_i``) and float rows (``arc_f``)
+A_START, A_END, A_PLANE, A_REFIT = range(4)
+A_LEN, A_RADIUS = range(2)
 
 
 @dataclass
@@ -66,7 +77,10 @@ class GState:
     point written [mm, mm, mm, deg, deg]; last_ab (2,) A B written last [deg];
     held_ab (2,) the tilt held; lead0 (5,) the tables' lead at the run's first
     point [mm]; corner_q (5,) the held corner; run_q (capacity, 5) the held-back
-    points (``i[run_n]`` of them).
+    points (``i[run_n]`` of them); corner_in (5,) where a line into the held
+    corner closing an arc would start (``_Run.arc_in``); pend_i (M, 4) int64 and
+    pend_v (M,) the ops of a chunk stopped mid way (code, arg, ab, aux; val),
+    pend_t (J, 2) its centered tilts [deg].
     """
 
     f: np.ndarray
@@ -77,6 +91,10 @@ class GState:
     lead0: np.ndarray
     corner_q: np.ndarray
     run_q: np.ndarray
+    corner_in: np.ndarray
+    pend_i: np.ndarray
+    pend_v: np.ndarray
+    pend_t: np.ndarray
 
 
 def new_state(
@@ -88,6 +106,9 @@ def new_state(
     accel: float,
     accel_deg: float,
     all_exact: bool,
+    smooth: float = 0.0,
+    arc_hold: float = 0.0,
+    decimals: int = 4,
 ) -> GState:
     """A writer's state before its first point (module docstring; the settings'
     meanings are :class:`prsxy_post.writers.linuxcnc.GcodeWriter`'s)."""
@@ -103,6 +124,8 @@ def new_state(
         ("accel_deg", accel_deg),
         ("prev_accel", accel),
         ("stretch", math.inf),
+        ("smooth", smooth),
+        ("arc_hold", arc_hold),
     ):
         f[F_NAMES.index(name)] = v
     for name, iv in (
@@ -114,10 +137,30 @@ def new_state(
         ("held_src", NONE),
         ("prev_idx", NONE),
         ("keep", NONE),
+        ("plane", 17),
+        ("stop_at", NONE),
+        ("req_arc", NONE),
+        ("req_answer", NONE),
+        ("corner_arc", NONE),
+        ("ca_from", NONE),
+        ("decimals", decimals),
     ):
         i[I_NAMES.index(name)] = iv
     z5 = np.zeros(5)
-    return GState(f, i, z5.copy(), np.zeros(2), np.zeros(2), z5.copy(), z5.copy(), np.zeros((8, 5)))
+    return GState(
+        f,
+        i,
+        z5.copy(),
+        np.zeros(2),
+        np.zeros(2),
+        z5.copy(),
+        z5.copy(),
+        np.zeros((8, 5)),
+        z5.copy(),
+        np.zeros((0, 4), dtype=np.int64),
+        np.zeros(0),
+        np.zeros((0, 2)),
+    )
 
 
 def reserve(st: GState, more: int) -> None:
@@ -200,6 +243,11 @@ class _Run:
     prev_len: float
     prev_t: float
     patch_f: float
+    smooth: float
+    arc_hold: float
+    speed0: float
+    ca_len: float
+    ca_dt: float
     all_exact: int
     n: int
     has_line: int
@@ -216,6 +264,15 @@ class _Run:
     has_prev: int
     patch: int
     keep: int
+    plane: int
+    stop_at: int
+    req_kind: int
+    req_arc: int
+    req_answer: int
+    corner_arc: int
+    ca_plane: int
+    ca_from: int
+    decimals: int
 
     def __init__(self, st: GState) -> None:
         for name, v in zip(F_NAMES, st.f.tolist(), strict=True):
@@ -228,10 +285,21 @@ class _Run:
         self.lead0: list[float] = st.lead0.tolist()
         self.corner_q: list[float] = st.corner_q.tolist()
         self.run: list[list[float]] = st.run_q[: self.run_n].tolist()
-        self.code: list[int] = []
-        self.arg: list[int] = []
-        self.ab: list[int] = []
-        self.val: list[float] = []
+        self.corner_in: list[float] = st.corner_in.tolist()
+        # a chunk stopped mid way (stop_at) goes on with its ops so far
+        pend = st.pend_i.T.tolist() if self.stop_at != NONE else [[], [], [], []]
+        self.code: list[int] = pend[0]
+        self.arg: list[int] = pend[1]
+        self.ab: list[int] = pend[2]
+        self.aux: list[int] = pend[3]
+        self.val: list[float] = st.pend_v.tolist() if self.stop_at != NONE else []
+        self.tilts: list[list[float]] = st.pend_t.tolist() if self.stop_at != NONE else []
+        # the chunk's points and arcs (gcode_ops sets them)
+        self.q: list[list[float]] = []
+        self.dt: list[float] = []
+        self.arc_of: list[int] = []
+        self.arc_i: list[list[int]] = []
+        self.arc_f: list[list[float]] = []
 
     def store(self, st: GState) -> None:
         self.run_n = len(self.run)
@@ -244,12 +312,21 @@ class _Run:
         st.corner_q[:] = self.corner_q
         if self.run:
             st.run_q[: self.run_n] = self.run
+        st.corner_in[:] = self.corner_in
+        if self.stop_at != NONE:
+            st.pend_i = np.array([self.code, self.arg, self.ab, self.aux], dtype=np.int64).T
+            st.pend_v = np.array(self.val, dtype=np.float64)
+            st.pend_t = np.array(self.tilts, dtype=np.float64).reshape(-1, 2)
+        else:
+            st.pend_i = np.zeros((0, 4), dtype=np.int64)
+            st.pend_v, st.pend_t = np.zeros(0), np.zeros((0, 2))
 
-    def emit(self, code: int, arg: int = 0, ab: int = 0, val: float = 0.0) -> None:
+    def emit(self, code: int, arg: int = 0, ab: int = 0, val: float = 0.0, aux: int = 0) -> None:
         self.code.append(code)
         self.arg.append(arg)
         self.ab.append(ab)
         self.val.append(val)
+        self.aux.append(aux)
 
     # the decisions, in the order and arithmetic the writer made them
 
@@ -296,13 +373,14 @@ class _Run:
         self.run.append(qk)
         self.run_src = k
 
-    def chord_time(self) -> float:
+    def chord_time(self, arc_mm: float = 0.0) -> float:
         """The time of the chord through the held-back points: its length at the rate
         of its fastest piece, and its X Y Z no faster than the plan's fastest speed
         times the least stretch of its pieces. LinuxCNC speeds up and slows down
         along a line by its own acceleration limit (the profile's, as the plan's); a
         line between stops timed at its mean speed cruised at the mean, below the
-        plan's speed. The pieces' lengths and times are summed left to right."""
+        plan's speed. The pieces' lengths and times are summed left to right. An
+        arc's X Y Z run ``arc_mm`` [mm], its length, rather than the chord's."""
         length, total = self.len_sum, self.dt_sum
         if len(self.run) == 1 or self.peak <= 0.0 or length <= 0.0:
             return total
@@ -312,7 +390,7 @@ class _Run:
             # the planned path less than another, the tool ran faster than planned
             # there: no faster than the plan's fastest speed on the piece that
             # stretches least
-            xyz = math.dist(self.last_q[:3], self.run[-1][:3])
+            xyz = max(math.dist(self.last_q[:3], self.run[-1][:3]), arc_mm)
             t = max(t, xyz / (self.plan_peak * self.stretch))
         return t
 
@@ -364,35 +442,53 @@ class _Run:
             return
         qc, t, src = self.corner_q, self.corner_t, self.corner_src
         self.corner_src = NONE
+        # an arc's end: the corner is its last piece's (rule 5)
+        arc, q_in, t_in = self.corner_arc, self.last_q, t
+        if arc != NONE:
+            q_in, t_in = self.corner_in, self.ca_dt
+        self.corner_arc = NONE
         exact = False
         if q_next is not None and self.n > 0 and dt_next > 0.0:
-            mm, deg = corner_cut(self.last_q, qc, q_next, t, dt_next, self.accel)
+            mm, deg = corner_cut(q_in, qc, q_next, t_in, dt_next, self.accel)
             exact = mm > self.blend or deg > self.tilt_cut
-        self.g1(src, qc, t, exact)
+        self.g1(src, qc, t, exact, arc, self.ca_len, self.ca_plane)
 
-    def tilt_held(self, src: int, q: list[float]) -> int:
+    def tilt_held(self, src: int, q: list[float], hold: float) -> int:
         """The point whose A and B the line to ``q`` (the point ``src``) writes: the
-        tilt last written while q's is within ``tilt_hold`` of it (a line that moves
-        A or B by any amount LinuxCNC blends parabolically), else q's own."""
+        tilt last written while q's is within ``hold`` of it (``tilt_hold``, an arc's
+        ``arc_hold``: a line that moves A or B by any amount LinuxCNC blends
+        parabolically), else q's own."""
         if self.held_src != NONE:
             ab = self.held_ab
-            if abs(q[3] - ab[0]) <= self.tilt_hold and abs(q[4] - ab[1]) <= self.tilt_hold:
+            if abs(q[3] - ab[0]) <= hold and abs(q[4] - ab[1]) <= hold:
                 return int(self.held_src)
         self.held_ab = q[3:5]
         self.held_src = src
         return src
 
-    def g1(self, src: int, q: list[float], t: float, exact: bool) -> None:
+    def g1(
+        self,
+        src: int,
+        q: list[float],
+        t: float,
+        exact: bool,
+        arc: int = NONE,
+        arc_len: float = 0.0,
+        plane: int = 17,
+    ) -> None:
         """Write the line to ``q`` (the point ``src``) taking ``t`` seconds, in G61
         where ``exact`` (a line ending where the motion stands, or at a corner
         LinuxCNC's blend would cut too far), else in G64 P. Where LinuxCNC would
         blend the line before into this one parabolically, that line is slowed down
         or stopped (``blend_within_f``), and an exact line goes in G64 P, its G4 P0
-        stopping it all the same (the writer's module docstring, rule 4)."""
+        stopping it all the same (the writer's module docstring, rule 4). With
+        ``arc`` (an arc's index, or CORNER_SRC: the held corner's), the move is that
+        G2/G3 of ``arc_len`` [mm] in ``plane`` (rule 5), its acceleration limit the
+        axes' (emccanon.cc:1783-1791)."""
         exact = exact or bool(self.all_exact)
-        ab_src = self.tilt_held(src, q)
+        ab_src = self.tilt_held(src, q, self.tilt_hold if arc == NONE else self.arc_hold)
         turns = self.held_ab != self.last_ab
-        length = math.dist(self.last_q[:3], q[:3])
+        length = math.dist(self.last_q[:3], q[:3]) if arc == NONE else arc_len
         ab_now = list(self.held_ab)
         accel = line_accel(
             [b - a for a, b in zip(self.last_q[:3], q[:3], strict=True)],
@@ -400,6 +496,8 @@ class _Run:
             self.accel,
             self.accel_deg,
         )
+        if arc != NONE:
+            accel = self.accel
         self.last_ab = ab_now
         # LinuxCNC blends the line before into this one parabolically where it was
         # written in G64 P (no G4 P0 after it) and one of the two turns A or B
@@ -417,7 +515,13 @@ class _Run:
         if mode != bool(self.exact):
             self.emit(G61 if mode else G64)
             self.exact = int(mode)
-        self.emit(G1, src, ab_src, 60.0 / t)
+        if arc == NONE:
+            self.emit(G1, src, ab_src, 60.0 / t)
+        else:
+            if plane != self.plane:
+                self.emit(PLANE, 0, 0, 0.0, plane)
+                self.plane = plane
+            self.emit(ARC, src, ab_src, 60.0 / t, arc)
         self.has_prev, self.prev_idx, self.prev_len, self.prev_t = 1, len(self.code) - 1, length, t
         self.prev_turns, self.prev_blend = int(turns), int(not mode and not exact)
         self.prev_accel = accel
@@ -480,6 +584,7 @@ class _Run:
                 self.arg.insert(idx + 1, 0)
                 self.ab.insert(idx + 1, 0)
                 self.val.insert(idx + 1, 0.0)
+                self.aux.insert(idx + 1, 0)
             self.after_settle = 1
             self.prev_idx, self.prev_blend = NONE, 0
 
@@ -497,21 +602,157 @@ class _Run:
             self.run_src = RUN_SRC
         if self.corner_src >= 0:
             self.corner_src = CORNER_SRC
+        # the arc the held corner closes: the writer keeps it (ca_from its index)
+        self.ca_from = NONE
+        if self.corner_arc >= 0:
+            self.ca_from, self.corner_arc = self.corner_arc, CORNER_SRC
         if self.held_src != NONE:
             self.held_src = HELD_SRC
 
-    def point(self, k: int, *row: object) -> None:
-        """The writer's loop body for the point k (``row``: its values)."""
+    # arcs (the writer's module docstring, rule 5)
+
+    def arc_time(self, a: int) -> float:
+        """The held-back points' time as the arc ``a``: a chord's (``chord_time``)
+        with the arc's length, and no faster than LinuxCNC's smoothing allows: its
+        commanded path runs (7/24) (v T)² / R inside an arc of radius R at the speed
+        v, within ``smooth`` where v ≤ √(24 R smooth / 7) / T."""
+        length, radius = self.arc_f[a][A_LEN], self.arc_f[a][A_RADIUS]
+        t = self.chord_time(length)
+        if self.smooth > 0.0 and radius > 0.0:
+            v = math.sqrt(24.0 * radius * self.smooth / 7.0) / SERVO_PERIOD_S
+            t = max(t, length / v)
+        return t
+
+    def arc_in(
+        self, a: int, t: float, q_before: list[float], q_end: list[float], dt: float
+    ) -> list[float]:
+        """Where a line into the arc's end would start to arrive in ``dt`` at the
+        arc's written speed, along its last piece: its corner is judged as if
+        LinuxCNC ran the end at the arc's speed."""
+        d = [b - x for x, b in zip(q_before, q_end, strict=True)]
+        n = math.hypot(*d[:3])
+        if n <= 0.0 or t <= 0.0:
+            return q_before
+        step = self.arc_f[a][A_LEN] / t * dt / n
+        return [e - x * step for e, x in zip(q_end, d, strict=True)]
+
+    def center_tilt(self, a: int) -> None:
+        """Before a run of arcs whose start is still held back: hold A and B from
+        its start at the value nearest the one held that covers the run's tilt
+        within ``arc_hold`` and its ends' within ``tilt_hold`` (or, where none
+        does, at the start's moved towards the run's end by that much), so that the
+        arcs turn them as seldom as possible (rule 5). The line to the start writes
+        it; the value is a new row of the chunk's tilts (its ``ab``: N + row)."""
+        if self.tilt_hold <= 0.0 or self.held_src == NONE or not self.run:
+            return
+        start, end = self.arc_i[a][A_START], self.arc_i[a][A_END]
+        if self.run[-1] != self.q[start]:
+            return
+        n = len(self.q)
+        while end + 1 < n and self.arc_of[end + 1] >= 0:
+            nxt = self.arc_i[self.arc_of[end + 1]]
+            if nxt[A_START] != end:
+                break
+            end = nxt[A_END]
+        q = np.asarray(self.q)
+        ab = q[start : end + 1, 3:5]
+        lo, hi = ab.min(axis=0), ab.max(axis=0)
+        held = np.asarray(self.held_ab, dtype=float)
+        # within arc_hold of every point, and within tilt_hold of the start and of
+        # the end and the point after it (the lines to the start and from the end
+        # are chords: a chord that turned A or B into a stop slowed LinuxCNC's arc)
+        ends = q[[start, end, min(end + 1, n - 1)], 3:5]
+        low = np.maximum(hi - self.arc_hold, ends.max(axis=0) - self.tilt_hold)
+        high = np.minimum(lo + self.arc_hold, ends.min(axis=0) + self.tilt_hold)
+        if np.all(held >= low) and np.all(held <= high):
+            return  # the tilt held covers the run
+        margin = 0.001 * self.tilt_hold  # the written value's rounding
+        value = np.where(
+            low + margin <= high - margin,
+            np.clip(held, low + margin, high - margin),
+            ab[0] + np.sign(ab[-1] - ab[0]) * (self.tilt_hold - margin),
+        )
+        value = np.round(value, self.decimals) + 0.0
+        self.held_ab = value.tolist()
+        self.held_src = n + len(self.tilts)
+        self.tilts.append(self.held_ab)
+
+    def tilt_leaves(self, qk: list[float]) -> bool:
+        """Would the point qk's A or B be written anew on an arc? Never where the
+        tilt is not held (a machine with play: every line turns it)."""
+        if self.arc_hold <= 0.0 or self.held_src == NONE:
+            return False
+        ab = self.held_ab
+        return abs(qk[3] - ab[0]) > self.arc_hold or abs(qk[4] - ab[1]) > self.arc_hold
+
+    def write_arc_to(self, k: int, part: int) -> None:
+        """Write the held-back points of the arc up to the point before k as the arc
+        ``part`` (the writer's refit from the arc's start), or, where none fits
+        (``part`` < 0), each as a line of its own piece."""
+        if not self.run:
+            return
+        if part >= 0:
+            qh, src = self.run[-1], self.run_src
+            t = self.arc_time(part)
+            self.run = []
+            self.g1(src, qh, t, False, part, self.arc_f[part][A_LEN], self.arc_i[part][A_PLANE])
+            return
+        held, self.run = self.run, []
+        first = k - len(held)  # the held points are the arc's, up to k - 1
+        for j, qh in enumerate(held):
+            self.g1(first + j, qh, self.dt[first + j], False)
+
+    def on_arc(
+        self, k: int, qk: list[float], dtk: float, lead: list[float], plan: float, bend: bool
+    ) -> bool:
+        """The point k on an arc after its start: held back, the arc written at its
+        end (held as the corner at a block's end). True where the writer must refit
+        first (``stop_at``, ``req_kind``, ``req_arc``): the arc starts after a stop
+        or where the line to its start was not written, or A or B leave the held
+        tilt here (the arc ends a point before, a line of one piece turns them)."""
+        a = self.arc_of[k]
+        start, end, plane, refit = self.arc_i[a]
+        if k == start + 1:
+            self.center_tilt(a)
+            self.write_held()  # the arc starts where a line ends
+            # the line after a stop runs in G61: one piece, and the arc from its end
+            settled = self.after_settle and not self.all_exact and not refit
+            if settled or self.last_q != self.q[start]:
+                self.stop_at, self.req_kind, self.req_arc = k, REQ_REARC, a
+                return True
+        elif self.tilt_leaves(qk):
+            self.stop_at, self.req_kind, self.req_arc = k, REQ_ARC_TO, a
+            return True
+        self.hold(k, qk, dtk, lead, plan)
+        if k == end:
+            t = self.arc_time(a)
+            self.run = []
+            if bend:  # its corner is known with the next point
+                self.corner_q, self.corner_t, self.corner_src = qk, t, k
+                self.corner_arc, self.ca_dt = a, dtk
+                self.ca_len, self.ca_plane = self.arc_f[a][A_LEN], plane
+                self.corner_in = self.arc_in(a, t, self.q[k - 1], qk, dtk)
+            else:
+                self.g1(k, qk, t, False, a, self.arc_f[a][A_LEN], plane)
+        return False
+
+    def point(self, k: int, row: tuple, resume: bool) -> bool:
+        """The writer's loop body for the point k (``row``: its values); with
+        ``resume``, from where the writer answered its request. True where it stops
+        for a request (``on_arc``)."""
         qk, dtk, line, spd, bend, fn, fn_end, dwell, lead, plan = row
-        assert isinstance(qk, list) and isinstance(dtk, float) and isinstance(spd, float)
-        assert isinstance(lead, list) and isinstance(plan, float) and isinstance(line, int)
+        if resume:
+            if self.req_kind == REQ_ARC_TO:
+                self.write_arc_to(k, self.req_answer)
+            self.stop_at = self.req_kind = NONE
+            return self.chords(k, qk, dtk, spd, bend, lead, plan)
         if self.n == 0:
             self.emit(G0, k)
             self.emit(G93)
             self.last_ab = qk[3:5]
             self.last_q = qk
             self.n = 1
-            return
+            return False
         if self.corner_src != NONE:
             self.resolve_corner(qk, dtk)
         if not self.has_line or line != self.last_line:
@@ -524,17 +765,33 @@ class _Run:
             if fn_end:
                 self.emit(G94)
             self.emit(FN, k)
-            return
+            return False
         if dwell and qk == self.last_q:  # the pose stands: a dwell
             self.write_held()
             self.at_rest()
             self.emit(DWELL, k)
-            return
+            return False
+        if self.arc_of and self.arc_of[k] >= 0:
+            return self.on_arc(k, qk, dtk, lead, plan, bend)
+        return self.chords(k, qk, dtk, spd, bend, lead, plan)
+
+    def chords(
+        self,
+        k: int,
+        qk: list[float],
+        dtk: float,
+        spd: float,
+        bend: bool,
+        lead: list[float],
+        plan: float,
+    ) -> bool:
+        """The point k off arcs: held back while a chord passes the held points, else
+        written (a block's end held as the corner)."""
         if self.tol > 0 and not bend and spd > 0:
             if not self.within(qk) or self.dips(qk, dtk, lead):
                 self.write_held()
             self.hold(k, qk, dtk, lead, plan)
-            return
+            return False
         if self.run and (not self.within(qk) or self.dips(qk, dtk, lead)):
             self.write_held()
         self.hold(k, qk, dtk, lead, plan)
@@ -542,8 +799,12 @@ class _Run:
         self.run = []
         if spd > 0.0 and bend:
             self.corner_q, self.corner_t, self.corner_src = qk, t, k
-            return
+            return False
         self.g1(k, qk, t, spd == 0.0)
+        return False
+
+
+Ops = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 def gcode_ops(
@@ -558,7 +819,10 @@ def gcode_ops(
     dwell: np.ndarray,
     lead: np.ndarray,
     end: bool,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    arc_of: np.ndarray | None = None,
+    arc_i: np.ndarray | None = None,
+    arc_f: np.ndarray | None = None,
+) -> Ops:
     """A chunk's points decided: one op per output line.
 
     q (N, 5) the written poses [mm, mm, mm, deg, deg] (rounded as written); dt (N,)
@@ -572,28 +836,47 @@ def gcode_ops(
     it); the line that waits for the next chunk in ``i[keep]`` (its op, or
     CARRIED still, or NONE: none waits).
 
+    Arcs (rule 5; the writer finds them, ``writers.arcs.find_arcs``): arc_of (N,)
+    int64 the arc each point lies on after its start (-1: none); arc_i (M, 4)
+    int64 each arc's start, end, plane and whether it is a refit (:data:`A_START`
+    ...); arc_f (M, 2) its X Y Z length [mm] and least radius [mm]. Where the
+    writer must refit (``i[stop_at]`` ≥ 0: :data:`REQ_REARC`, :data:`REQ_ARC_TO`)
+    the call returns no ops; the writer answers (changing arc_of, adding arcs) and
+    calls again with the same points: the chunk goes on from there.
+
     Returns
     -------
-    code, arg, ab : (M,) int64
-        Each line's op (:data:`OPS`), its point (a G1's, a G0's, a line comment's,
-        a machine function's, a dwell's; :data:`RUN_SRC` / :data:`CORNER_SRC` for
-        one kept from a chunk before), and a G1's point whose A B it writes (or
-        :data:`HELD_SRC`).
+    code, arg, ab, aux : (M,) int64
+        Each line's op (:data:`OPS`), its point (a G1's, an ARC's, a G0's, a line
+        comment's, a machine function's, a dwell's; :data:`RUN_SRC` /
+        :data:`CORNER_SRC` for one kept from a chunk before), a G1's or an ARC's
+        point whose A B it writes (or :data:`HELD_SRC`; N + j: the j-th centered
+        tilt), an ARC's arc (CORNER_SRC: the one the writer kept) or a PLANE's
+        plane (17, 18, 19).
     val : (M,) float64
-        A G1's F (inverse time [1/min]).
+        A G1's or an ARC's F (inverse time [1/min]).
+    tilts : (J, 2) float64
+        The tilts held before runs of arcs [deg] (``_Run.center_tilt``).
     """
     r = _Run(st)
+    resume = r.stop_at != NONE
+    k0 = r.stop_at if resume else 0
+    if not resume:
+        r.speed0 = r.last_speed
+        if len(speed):
+            r.last_speed = float(speed[-1])
     # the plan's mean speed over each piece (it ramps linearly over a period)
     spd = speed.tolist()
-    plan = [0.5 * (a + b) for a, b in zip([r.last_speed, *spd[:-1]], spd, strict=False)]
-    if len(speed):
-        r.last_speed = float(speed[-1])
-    for k, row in enumerate(
+    plan = [0.5 * (a + b) for a, b in zip([r.speed0, *spd[:-1]], spd, strict=False)]
+    r.q, r.dt = q.tolist(), dt.tolist()
+    if arc_of is not None and arc_i is not None and arc_f is not None:
+        r.arc_of, r.arc_i, r.arc_f = arc_of.tolist(), arc_i.tolist(), arc_f.tolist()
+    rows = list(
         zip(
-            q.tolist(),
-            dt.tolist(),
+            r.q,
+            r.dt,
             line.tolist(),
-            speed.tolist(),
+            spd,
             block_end.tolist(),
             fn.tolist(),
             fn_end.tolist(),
@@ -602,8 +885,13 @@ def gcode_ops(
             plan,
             strict=True,
         )
-    ):
-        r.point(k, *row)
+    )
+    for k in range(k0, len(rows)):
+        if r.point(k, rows[k], resume and k == k0):
+            reserve(st, len(r.run) - int(st.i[I_NAMES.index("run_n")]))
+            r.store(st)
+            empty = np.zeros(0, dtype=np.int64)
+            return empty, empty, empty, empty, np.zeros(0), np.zeros((0, 2))
     if end:
         r.resolve_corner(None, 0.0)
         r.write_held()
@@ -614,5 +902,7 @@ def gcode_ops(
         np.array(r.code, dtype=np.int64),
         np.array(r.arg, dtype=np.int64),
         np.array(r.ab, dtype=np.int64),
+        np.array(r.aux, dtype=np.int64),
         np.array(r.val, dtype=np.float64),
+        np.array(r.tilts, dtype=np.float64).reshape(-1, 2),
     )

@@ -128,6 +128,54 @@ its G4 P0, so that it too speeds up at half its limit. With ``g61_every_line = 1
 every line runs in G61, which LinuxCNC never blends: F holds, and the program takes
 longer (``bench/linuxcnc_truth.py --g61-everywhere``).
 
+(5) Arcs are written as arcs. Chords within 0.1 µm of an R10 arc are 0.09 mm,
+which LinuxCNC runs no faster than 88 mm/s (rule 2; F10000 is 167 mm/s) and joins
+slowly: arcs and helices at F10000 ran 1.34-1.49 x the plan. Where the points of a
+run still lie on a circle (a helix: a circle and its axis) within ``tolerance_mm``,
+A and B within ``TILT_CHORD_SHARE`` of the tolerance of a line between the ends,
+one G2/G3 replaces them (:mod:`.arcs`: the fit, verified against every point as
+LinuxCNC runs the written words, emccanon.cc:1482-1830 ARC_FEED), in G17, G18 or
+G19 (a plane word on a line of its own where it changes), I J K the center's
+offsets from the start in the writer's decimals, timed in G93 as a chord is (rule
+3) with the arc's X Y Z length. Where the fit fails the run is split, and the
+chords go on. The rules it keeps: an arc never spans a dip of the plan's speed or
+a play crossing (rule 3); it ends at a block's end in motion (an arc short of it
+left a line of one piece between two arcs, and the near-tangent join of a line of
+under two servo cycles with an arc cost a slow-down: 1.23 x the plan on arcs
+F10000, measured), its corner judged from its last piece; after a stop the first
+line is one piece in G61 and the arc starts at its end (the line after a dwell
+runs in G61, above; an arc in G61 would stop at its end). LinuxCNC runs an arc at
+no more than √(0.866 a R_eff) (``tcUpdateCircleAccRatio``, tc.c:748-760, at
+``tcFinalizeLength``, tc.c:769-785, calling ``pmCircleActualMaxVel``,
+blendmath.c:1640-1676: ``BLEND_ACC_RATIO_NORMAL`` = √(1 − 0.5²), blendmath.h:19-20,
+R_eff = r + h²/r with h the arc's whole rise, ``pmCircleEffectiveMinRadius``,
+blendmath.c:1843-1858) and along it at half of a (``tcGetTangentialMaxAccel``,
+tc.c:73-85), as the plan does (``interpolate.geometry.ARC_TANGENTIAL_SHARE``); but
+a is halved where the arc ends in a parabolic join (``tcGetOverallMaxAccel``,
+tc.c:55-68), that is where it or the next line turns A or B (rule 1): an arc that
+turns A or B, and the one before it, ran at 0.71 of the plan's speed on a small
+radius, and rule 4 stopped the one before (a helix on a machine with errors, whose
+compensated tilt changes along it: 1.07 x the plan at F3000). So where the tilt
+is held an arc turns neither: an arc's A and B, constant, may stay ``arc_hold``
+(``tilt_hold`` and ``tilt_chord``, 0.4 arcsec) from its points', as far as a
+chord's may (held, and straying along the chord); before a run of arcs the tilt is
+held at the value nearest the one held that covers the whole run within that and
+its start within ``tilt_hold`` (``_center_tilt``; the line to the run's start turns
+it, after a stop for the most part), and where the written A or B must change all
+the same, the arc ends a point
+before, a line of one piece turns them, and the arc goes on from its end: LinuxCNC
+all but stops there (from 93 to 6 mm/s on the helix at F10000, measured), as at
+every line that turns A or B.
+LinuxCNC's motion controller does not command the planner's points: each joint's
+command is a cubic B-spline through way points (x₋₁ + 4 x + x₊₁) / 6 of them
+(``cubicAddPoint`` and ``cubicInterpolate``, control.c:1358-1377; ``wayPoint``,
+cubic.c:97-101), which on a circle of radius R at the speed v, sampled every servo
+cycle T, lie (v T)² / (6 R) inside it; a drive that moves straight between its 1 ms
+commands cuts (v T)² / (8 R) more: (7/24) (v T)² / R, 0.505 µm on R10 at the plan's
+131.6 mm/s (arcs and helix F10000 on the nominal machine, measured). An arc is
+timed no faster than that keeps within the path tolerance less ``tolerance_mm``
+(0.4 µm in the shop profile): v ≤ √(24 R e / 7) / T (117 mm/s on R10).
+
 These rules decide, point by point, which points become lines, each line's time and
 F, its mode and the G4 P0 after it: the kernel makes those decisions
 (:mod:`prsxy_post.kernel.gwrite`, its functions named here: ``within``,
@@ -137,6 +185,7 @@ F, its mode and the G4 P0 after it: the kernel makes those decisions
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
@@ -146,6 +195,7 @@ from .. import kernel, kinematics
 from ..interpolate.geometry import CORNER_SHARE
 from ..kernel import gwrite
 from ..profile.output import OUTPUT_SETTINGS
+from .arcs import Arc, arc_words, find_arcs, refit_arcs
 from .base import Dialect, Piece, Provenance, header, words_text
 from .cartesian import written_points
 from .numbers import format_fixed_rows, round_clean
@@ -201,8 +251,14 @@ class GcodeWriter:
         #: the kernel's state between chunks: the tolerance, how far LinuxCNC may cut
         #: a corner (``blend`` [mm], its tilt [deg]), the tilt hold, how far a chord's
         #: A and B may stray from the points it replaces [deg] (module docstring)
+        #: the chord tolerance [mm] and how far a chord's A and B may stray [deg]
+        self.tol = float(settings["tolerance_mm"])
+        self.tilt_chord = TILT_CHORD_SHARE * tol_deg
+        #: how far an arc's A and B, held, may stay from its points' [deg]: a held
+        #: tilt's share and a chord's, as a chord's A and B may (an arc's are constant)
+        self.arc_hold = tilt_hold + self.tilt_chord if tilt_hold > 0.0 else 0.0
         self.state = gwrite.new_state(
-            tol=float(settings["tolerance_mm"]),
+            tol=self.tol,
             blend=self.blend,
             tilt_cut=CORNER_SHARE * tol_deg,
             tilt_hold=tilt_hold,
@@ -210,6 +266,11 @@ class GcodeWriter:
             accel=self.accel,
             accel_deg=self.accel_deg,
             all_exact=self.all_exact,
+            # how far LinuxCNC's smoothing may take an arc inside [mm]: the path
+            # tolerance less the chord tolerance (rule 5)
+            smooth=max(profile.interpolation.path_tolerance_mm - self.tol, 0.0),
+            arc_hold=self.arc_hold,
+            decimals=self.dec,
         )
         #: the points kept from chunks before (as written): the tilt written last,
         #: the held corner, the last held-back point (rows -3, -2, -1, as the kernel
@@ -221,6 +282,8 @@ class GcodeWriter:
         self.buf: list[str] = []
         #: where in ``buf`` the line that waits for the next chunk stands (None: none)
         self.keep: int | None = None
+        #: the arc the corner held over a chunk's end closes (the kernel's CORNER_SRC)
+        self.kept_arc: Arc | None = None
 
     def begin(self) -> list[Piece]:
         ck = (
@@ -266,32 +329,104 @@ class GcodeWriter:
         # what the real-axis tables add to each motor [mm]: it ramps where a motor
         # crosses its play
         lead = chunk.P_cmd - chunk.P_ideal
-        ops = kernel.gcode_ops(
-            self.state,
-            q_arr,
-            chunk.dt,
-            chunk.line,
-            chunk.speed,
-            chunk.block_end,
-            fn,
-            fn_end,
-            chunk.dwell,
-            lead,
-            False,
-        )
-        self._lines(ops, q_arr, chunk)
+        # arcs kept as arcs (rule 5): found before the kernel decides, refitted where
+        # it asks (a later start, known only as it goes: after a stop, or where A or
+        # B leave the held tilt)
+        arcs, arc_of = self._arcs(q_arr, chunk, fn)
+        refit = [False] * len(arcs)
+        start_q = self.state.last_q.copy()  # where the chunk's first move starts
+        while True:
+            arc_i = np.array(
+                [[a.start, a.end, a.plane, r] for a, r in zip(arcs, refit, strict=True)],
+                dtype=np.int64,
+            ).reshape(-1, 4)
+            arc_f = np.array([[a.length, a.radius] for a in arcs], dtype=float).reshape(-1, 2)
+            ops = kernel.gcode_ops(
+                self.state,
+                q_arr,
+                chunk.dt,
+                chunk.line,
+                chunk.speed,
+                chunk.block_end,
+                fn,
+                fn_end,
+                chunk.dwell,
+                lead,
+                False,
+                arc_of,
+                arc_i,
+                arc_f,
+            )
+            k = int(self.state.i[_I["stop_at"]])
+            if k < 0:
+                break
+            self._answer(q_arr, arcs, refit, arc_of, k)
+        self._lines(ops, q_arr, chunk, arcs, start_q)
         return self._hand_out()
+
+    def _answer(
+        self, q: np.ndarray, arcs: list[Arc], refit: list[bool], arc_of: np.ndarray, k: int
+    ) -> None:
+        """The kernel's request at the point k (:data:`gwrite.REQ_REARC`,
+        :data:`gwrite.REQ_ARC_TO`): the arc's points from k as arcs again
+        (:func:`.arcs.refit_arcs`, those no arc fits left to lines), and for
+        ARC_TO first the arc from its start to k - 1 as one arc, where one fits."""
+        st = self.state
+        arc = arcs[int(st.i[_I["req_arc"]])]
+        if int(st.i[_I["req_kind"]]) == gwrite.REQ_ARC_TO:
+            parts = refit_arcs(q, arc, arc.start, self.tol, self.tilt_chord, self.dec, k - 1)
+            st.i[_I["req_answer"]] = -1
+            if len(parts) == 1 and parts[0].end == k - 1:
+                arcs.append(parts[0])
+                refit.append(True)
+                st.i[_I["req_answer"]] = len(arcs) - 1
+        arc_of[k : arc.end + 1] = -1
+        for part in refit_arcs(q, arc, k, self.tol, self.tilt_chord, self.dec):
+            arcs.append(part)
+            refit.append(True)
+            arc_of[part.start + 1 : part.end + 1] = len(arcs) - 1
+
+    def _arcs(
+        self, q: np.ndarray, chunk: PointChunk, fn: np.ndarray
+    ) -> tuple[list[Arc], np.ndarray]:
+        """The arcs among the chunk's points (:func:`.arcs.find_arcs`, rule 5) and,
+        for each point, the arc it lies on after its start (-1: none)."""
+        n = len(q)
+        arc_of = np.full(n, -1, dtype=np.int64)
+        if self.tol <= 0.0 or n < 2:
+            return [], arc_of
+        moving = (chunk.speed > 0.0) & ~chunk.dwell & ~fn
+        step = np.r_[0.0, np.linalg.norm(np.diff(q, axis=0), axis=1)]
+        rate = np.divide(step, chunk.dt, out=np.zeros(n), where=chunk.dt > 0.0)
+        found = find_arcs(
+            q,
+            moving & ~chunk.block_end,
+            moving & chunk.block_end,
+            rate,
+            chunk.P_cmd - chunk.P_ideal,
+            self.tol,
+            self.tilt_chord,
+            self.dec,
+            DIP_SHARE,
+            # where the tilt is held, an arc is split where it changes (rule 5)
+            2.0 * self.arc_hold if self.arc_hold > 0.0 else math.inf,
+        )
+        for i, arc in enumerate(found):
+            arc_of[arc.start + 1 : arc.end + 1] = i
+        return found, arc_of
 
     def _lines(
         self,
-        ops: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        ops: gwrite.Ops,
         q_arr: np.ndarray,
         chunk: PointChunk | None,
+        arcs: list[Arc],
+        start_q: np.ndarray,
     ) -> None:
         """Append the lines of the kernel's ops (each with its line end) to ``buf``,
-        after what they did to the line carried in it, and keep the points the next
-        chunk may name."""
-        code, arg, abi, val = ops
+        after what they did to the line carried in it, and keep the points (and the
+        arc) the next chunk may name. ``start_q``: the last point written before."""
+        code, arg, abi, aux, val, tilts = ops
         st = self.state
         patch = int(st.i[_I["patch"]])
         if patch == gwrite.PATCH_F:
@@ -302,9 +437,12 @@ class GcodeWriter:
         st.i[_I["patch"]] = gwrite.PATCH_NONE
         base = len(self.buf)
         # negative indices name the kept points (gwrite.HELD_SRC, CORNER_SRC, RUN_SRC)
-        q_all = np.concatenate([q_arr, self.kept])
+        # and N + j the tilts centered before runs of arcs
+        tilt_rows = np.zeros((len(tilts), 5))
+        tilt_rows[:, 3:] = tilts
+        q_all = np.concatenate([q_arr, tilt_rows, self.kept])
         lines = self._const[code]
-        g1 = np.flatnonzero(code == gwrite.G1)
+        g1 = np.flatnonzero((code == gwrite.G1) | (code == gwrite.ARC))
         if g1.size:
             # each G1's text in one call: X Y Z of its point, A B of the tilt it writes
             xyz, ab = q_all[arg[g1]], q_all[abi[g1]]
@@ -313,6 +451,7 @@ class GcodeWriter:
             lines[g1] = format_fixed_rows(
                 [(p, v, self.dec) for p, v in cols] + [(" F", val[g1], 3)]
             )
+        self._arc_lines(lines, code, arg, aux, q_all, arcs, start_q)
         if chunk is not None:
             self._point_lines(lines, code, arg, q_arr, chunk)
         self.buf += lines.tolist()
@@ -323,6 +462,9 @@ class GcodeWriter:
         run_n = int(i_of[_I["run_n"]])
         if run_n:
             self.kept[gwrite.RUN_SRC] = st.run_q[run_n - 1]
+        ca_from = int(i_of[_I["ca_from"]])
+        if ca_from >= 0:
+            self.kept_arc = arcs[ca_from]
         keep = int(i_of[_I["keep"]])
         self.keep = base + keep if keep >= 0 else (0 if keep == gwrite.CARRIED else None)
 
@@ -340,7 +482,8 @@ class GcodeWriter:
         if at.size:
             line_no = chunk.line[arg[at]].astype(float)
             lines[at] = format_fixed_rows([("(line ", line_no, 0)], end=")\n")
-        for i in np.flatnonzero((code == gwrite.G0) | (code >= gwrite.FN)).tolist():
+        named = (code == gwrite.G0) | (code == gwrite.FN) | (code == gwrite.DWELL)
+        for i in np.flatnonzero(named).tolist():
             k = int(arg[i])
             if code[i] == gwrite.G0:
                 cols = [(" " + a, q_arr[k : k + 1, j], self.dec) for j, a in enumerate("XYZAB")]
@@ -353,6 +496,42 @@ class GcodeWriter:
                 lines[i] = text + "\n"
                 if any(w in (("M", 2.0), ("M", 30.0)) for w in words):
                     self.ended_by = text
+
+    def _arc_lines(
+        self,
+        lines: np.ndarray,
+        code: np.ndarray,
+        arg: np.ndarray,
+        aux: np.ndarray,
+        q_all: np.ndarray,
+        arcs: list[Arc],
+        start_q: np.ndarray,
+    ) -> None:
+        """The G2/G3 lines (their G1 text made the arc's: its motion word and center
+        words, offsets from the point written before) and the plane words."""
+        at = np.flatnonzero(
+            (code == gwrite.ARC)
+            | (code == gwrite.PLANE)
+            | (code == gwrite.G1)
+            | (code == gwrite.G0)
+        )
+        if not np.any(code[at] >= gwrite.ARC):
+            return
+        start = start_q.tolist()
+        for i in at.tolist():
+            c = int(code[i])
+            if c == gwrite.PLANE:
+                lines[i] = f"G{int(aux[i])}\n"
+                continue
+            if c == gwrite.ARC:
+                a = int(aux[i])
+                arc = self.kept_arc if a == gwrite.CORNER_SRC else arcs[a]
+                assert arc is not None
+                head, tail = arc_words(arc, start, self.dec)
+                row = lines[i]
+                cut = row.rindex(" F")
+                lines[i] = head + row[2:cut] + tail + row[cut:]
+            start = q_all[int(arg[i])].tolist()
 
     @property
     def _const(self) -> np.ndarray:
@@ -394,8 +573,11 @@ class GcodeWriter:
             np.zeros(0, dtype=bool),
             np.zeros((0, 5)),
             True,
+            np.zeros(0, dtype=np.int64),
+            np.zeros((0, 4), dtype=np.int64),
+            np.zeros((0, 2)),
         )
-        self._lines(ops, np.zeros((0, 5)), None)
+        self._lines(ops, np.zeros((0, 5)), None, [], self.state.last_q.copy())
         lines = self.buf
         self.buf = []
         if self.ended_by is None:
