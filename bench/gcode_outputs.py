@@ -3,10 +3,11 @@
 For comparing two writers' text byte for byte (the arcs port of issue 33: main's
 kernel writer against the branch ``h/arcs``'s Python writer): run it from each
 checkout into its own directory, then ``cmp`` the files pairwise. Programs: the
-generated ones of ``tests.test_linuxcnc_motion.PROGRAMS`` at F600, F3000, F10000
-and the samples; machines: the nominal one and random 11 and 13 with contract
-errors, without play (``bench/linuxcnc_speed.py``'s) and with it (the tilt is then
-never held); each fed to the chain at once and ``--chunk`` motions at a time.
+generated ones of ``tests.test_linuxcnc_motion.PROGRAMS`` at F600, F3000, F10000,
+the samples and helices that turn A and B a little; machines: the nominal one and
+random 11 and 13 with contract errors, without play (``bench/linuxcnc_speed.py``'s)
+and with it (the tilt is then never held); each fed to the chain at once and
+``--chunk`` motions at a time.
 
     python bench/gcode_outputs.py /tmp/out-mine
     cd /tmp/h-arcs && python /path/to/bench/gcode_outputs.py /tmp/out-arcs --root .
@@ -34,6 +35,18 @@ def main() -> None:
 
     jobs = [(f"{n}-F{f:g}", PROGRAMS[n](f)) for n in PROGRAMS for f in (600.0, 3000.0, 10000.0)]
     jobs += [(p.stem, p.read_text()) for p in sorted((root / "samples").glob("*.ngc"))]
+    # helices that turn A a little (the held tilt must change along the arcs)
+    from tests.test_linuxcnc_motion import HEAD
+
+    for turn in (0.002, 0.01, 0.05):
+        for f in (600.0, 3000.0):
+            jobs.append(
+                (
+                    f"tilted-helix-{turn:g}-F{f:g}",
+                    HEAD + f"G0 X10 Y0 Z2 A0 B0\nG1 Z0 F{f}\nG2 X10 Y0 Z-3 I-10 J0 P2 A{turn:g} "
+                    f"B{-turn / 2:g}\nG0 Z2\nM2\n",
+                )
+            )
     machines = [("nominal", truth_machine("nominal", None))]
     for s in args.seeds:
         machines.append((f"r{s}", truth_machine("random", s, play=False)))
