@@ -568,10 +568,8 @@ def crossing_windows(
     return out
 
 
-# the corrected G-code writer's decisions (kernel/gwrite.py and its twin _gwrite.pyx).
-# The arcs (writers/linuxcnc.py rule 5) are in the reference only so far: the twin
-# is not called until it takes them too (docs/notes/arcs-port.md)
-_gcode_ops = gwrite.gcode_ops
+# the corrected G-code writer's decisions (kernel/gwrite.py and its twin _gwrite.pyx)
+_gcode_ops = _RUN["gwrite"].gcode_ops
 
 
 def gcode_ops(

@@ -11,7 +11,7 @@ fused multiply-adds)."""
 
 import numpy as np
 
-from libc.math cimport sqrt, fabs, frexp, ldexp, INFINITY, NAN
+from libc.math cimport sqrt, fabs, frexp, ldexp, rint, INFINITY, NAN
 from libc.string cimport memmove
 
 #: the reference's names of the state's scalars, in this module's order
@@ -19,20 +19,27 @@ F_NAMES = (
     "tol", "blend", "tilt_cut", "tilt_hold", "tilt_chord", "accel", "accel_deg",
     "prev_accel", "t_total", "last_speed", "peak", "trough", "plan_peak", "stretch",
     "len_sum", "dt_sum", "corner_t", "prev_len", "prev_t", "patch_f",
+    "smooth", "arc_hold", "speed0", "ca_len", "ca_dt",
 )
 I_NAMES = (
     "all_exact", "n", "has_line", "last_line", "run_n", "run_src", "corner_src",
     "held_src", "exact", "after_settle", "prev_idx", "prev_turns", "prev_blend",
     "has_prev", "patch", "keep",
+    "plane", "stop_at", "req_kind", "req_arc", "req_answer", "corner_arc", "ca_plane",
+    "ca_from", "decimals",
 )
 
 cdef enum:
-    OP_G0, OP_G93, OP_LINE, OP_G61, OP_G64, OP_G1, OP_G4P0, OP_G94, OP_FN, OP_DWELL
+    OP_G0, OP_G93, OP_LINE, OP_G61, OP_G64, OP_G1, OP_G4P0, OP_G94, OP_FN, OP_DWELL, OP_ARC,
+    OP_PLANE
 
 DEF NONE = -9
 DEF CARRIED = -1
 DEF PATCH_F = 1
 DEF PATCH_STOP = 2
+DEF CORNER_SRC = -2
+DEF REQ_REARC = 1
+DEF REQ_ARC_TO = 2
 DEF SERVO_PERIOD_S = 1e-3
 DEF DIP_SHARE = 1e-3
 DEF T27 = 134217729.0  # 2**27 + 1: Dekker's split
@@ -45,17 +52,33 @@ cdef struct W:
     long long all_exact, n, has_line, last_line, run_n, run_src, corner_src
     long long held_src, exact, after_settle, prev_idx, prev_turns, prev_blend
     long long has_prev, patch, keep
+    double smooth, arc_hold, speed0, ca_len, ca_dt
+    long long plane, stop_at, req_kind, req_arc, req_answer, corner_arc, ca_plane
+    long long ca_from, decimals
     double last_q[5]
     double last_ab[2]
     double held_ab[2]
     double lead0[5]
     double corner_q[5]
+    double corner_in[5]
     double* run
     long long* code
     long long* arg
     long long* ab
+    long long* aux
     double* val
     Py_ssize_t m
+    # the chunk's points (n of them, rows of 5), their times, and its arcs
+    const double* q
+    const double* dt
+    Py_ssize_t npts
+    const long long* arc_of
+    const long long* arc_i
+    const double* arc_f
+    bint has_arcs
+    # the tilts centered before runs of arcs (rows of 2), nt of them
+    double* tilts
+    Py_ssize_t nt
 
 
 # Python's max(a, b) and min(a, b): the first unless the second compares past it
@@ -65,6 +88,15 @@ cdef inline double _pmax(double a, double b) noexcept nogil:
 
 cdef inline double _pmin(double a, double b) noexcept nogil:
     return b if b < a else a
+
+
+# numpy's maximum and minimum of two values that are no NaN
+cdef inline double _npmax(double a, double b) noexcept nogil:
+    return a if a >= b else b
+
+
+cdef inline double _npmin(double a, double b) noexcept nogil:
+    return a if a <= b else b
 
 
 cdef double _fsum(const double* x, int n) noexcept nogil:
@@ -266,11 +298,13 @@ cdef double _line_accel(const double* d_xyz, const double* d_ab, double accel,
     return dtot / tmax if dtot > 0.0 and tmax > 0.0 else accel
 
 
-cdef inline void _emit(W* w, long long code, long long arg, long long ab, double val) noexcept nogil:
+cdef inline void _emit(W* w, long long code, long long arg, long long ab, double val,
+                       long long aux=0) noexcept nogil:
     w.code[w.m] = code
     w.arg[w.m] = arg
     w.ab[w.m] = ab
     w.val[w.m] = val
+    w.aux[w.m] = aux
     w.m += 1
 
 
@@ -333,13 +367,13 @@ cdef void _hold(W* w, long long k, const double* qk, double dtk, const double* l
     w.run_src = k
 
 
-cdef double _chord_time(W* w) noexcept nogil:
+cdef double _chord_time(W* w, double arc_mm=0.0) noexcept nogil:
     cdef double length = w.len_sum, total = w.dt_sum, t, xyz
     if w.run_n == 1 or w.peak <= 0.0 or length <= 0.0:
         return total
     t = _pmin(total, length / w.peak)
     if w.plan_peak > 0.0 and w.run_n and w.n > 0:
-        xyz = _dist(w.last_q, &w.run[5 * (w.run_n - 1)], 3)
+        xyz = _pmax(_dist(w.last_q, &w.run[5 * (w.run_n - 1)], 3), arc_mm)
         t = _pmax(t, xyz / (w.plan_peak * w.stretch))
     return t
 
@@ -411,19 +445,21 @@ cdef void _blend_within_f(W* w, double length_n, double t_n, double a_n) noexcep
             memmove(&w.arg[idx + 2], &w.arg[idx + 1], (w.m - idx - 1) * sizeof(long long))
             memmove(&w.ab[idx + 2], &w.ab[idx + 1], (w.m - idx - 1) * sizeof(long long))
             memmove(&w.val[idx + 2], &w.val[idx + 1], (w.m - idx - 1) * sizeof(double))
+            memmove(&w.aux[idx + 2], &w.aux[idx + 1], (w.m - idx - 1) * sizeof(long long))
             w.code[idx + 1] = OP_G4P0
             w.arg[idx + 1] = 0
             w.ab[idx + 1] = 0
             w.val[idx + 1] = 0.0
+            w.aux[idx + 1] = 0
             w.m += 1
         w.after_settle = 1
         w.prev_idx = NONE
         w.prev_blend = 0
 
 
-cdef long long _tilt_held(W* w, long long src, const double* q) noexcept nogil:
+cdef long long _tilt_held(W* w, long long src, const double* q, double hold) noexcept nogil:
     if w.held_src != NONE:
-        if fabs(q[3] - w.held_ab[0]) <= w.tilt_hold and fabs(q[4] - w.held_ab[1]) <= w.tilt_hold:
+        if fabs(q[3] - w.held_ab[0]) <= hold and fabs(q[4] - w.held_ab[1]) <= hold:
             return w.held_src
     w.held_ab[0] = q[3]
     w.held_ab[1] = q[4]
@@ -431,7 +467,8 @@ cdef long long _tilt_held(W* w, long long src, const double* q) noexcept nogil:
     return src
 
 
-cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact) noexcept nogil:
+cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact,
+              long long arc=NONE, double arc_len=0.0, long long plane=17) noexcept nogil:
     cdef double q[5]
     cdef double d_xyz[3]
     cdef double d_ab[2]
@@ -442,14 +479,16 @@ cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact) noe
     for i in range(5):
         q[i] = q_in[i]  # q_in may be a held-back row the ops below do not touch
     exact = exact or w.all_exact != 0
-    ab_src = _tilt_held(w, src, q)
+    ab_src = _tilt_held(w, src, q, w.tilt_hold if arc == NONE else w.arc_hold)
     turns = w.held_ab[0] != w.last_ab[0] or w.held_ab[1] != w.last_ab[1]
-    length = _dist(w.last_q, q, 3)
+    length = _dist(w.last_q, q, 3) if arc == NONE else arc_len
     for i in range(3):
         d_xyz[i] = q[i] - w.last_q[i]
     for i in range(2):
         d_ab[i] = w.held_ab[i] - w.last_ab[i]
     accel = _line_accel(d_xyz, d_ab, w.accel, w.accel_deg)
+    if arc != NONE:
+        accel = w.accel
     w.last_ab[0] = w.held_ab[0]
     w.last_ab[1] = w.held_ab[1]
     if w.has_prev and w.prev_blend and (w.prev_turns or turns):
@@ -460,7 +499,13 @@ cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact) noe
     if mode != (w.exact != 0):
         _emit(w, OP_G61 if mode else OP_G64, 0, 0, 0.0)
         w.exact = mode
-    _emit(w, OP_G1, src, ab_src, 60.0 / t)
+    if arc == NONE:
+        _emit(w, OP_G1, src, ab_src, 60.0 / t)
+    else:
+        if plane != w.plane:
+            _emit(w, OP_PLANE, 0, 0, 0.0, plane)
+            w.plane = plane
+        _emit(w, OP_ARC, src, ab_src, 60.0 / t, arc)
     w.has_prev = 1
     w.prev_idx = w.m - 1
     w.prev_len = length
@@ -496,8 +541,9 @@ cdef inline void _at_rest(W* w) noexcept nogil:
 
 cdef void _resolve_corner(W* w, const double* q_next, double dt_next) noexcept nogil:
     cdef double qc[5]
-    cdef double t = w.corner_t, mm, deg
-    cdef long long src = w.corner_src
+    cdef double q_in[5]
+    cdef double t = w.corner_t, mm, deg, t_in
+    cdef long long src = w.corner_src, arc
     cdef bint exact = False
     cdef int i
     if w.corner_src == NONE:
@@ -505,51 +551,197 @@ cdef void _resolve_corner(W* w, const double* q_next, double dt_next) noexcept n
     for i in range(5):
         qc[i] = w.corner_q[i]
     w.corner_src = NONE
+    # an arc's end: the corner is its last piece's (rule 5)
+    arc = w.corner_arc
+    t_in = t
+    for i in range(5):
+        q_in[i] = w.last_q[i]
+    if arc != NONE:
+        for i in range(5):
+            q_in[i] = w.corner_in[i]
+        t_in = w.ca_dt
+    w.corner_arc = NONE
     if q_next != NULL and w.n > 0 and dt_next > 0.0:
-        _corner_cut(w.last_q, qc, q_next, t, dt_next, w.accel, &mm, &deg)
+        _corner_cut(q_in, qc, q_next, t_in, dt_next, w.accel, &mm, &deg)
         exact = mm > w.blend or deg > w.tilt_cut
-    _g1(w, src, qc, t, exact)
+    _g1(w, src, qc, t, exact, arc, w.ca_len, w.ca_plane)
 
 
-cdef void _point(W* w, long long k, const double* qk, double dtk, long long line, double spd,
-                 bint bend, bint fn, bint fn_end, bint dwell, const double* lead,
-                 double plan) noexcept nogil:
-    # the writer's loop body for the point k (_Run.point)
-    cdef double t
-    cdef bint stands
+cdef inline bint _same5(const double* a, const double* b) noexcept nogil:
     cdef int i
-    if w.n == 0:
-        _emit(w, OP_G0, k, 0, 0.0)
-        _emit(w, OP_G93, 0, 0, 0.0)
-        w.last_ab[0] = qk[3]
-        w.last_ab[1] = qk[4]
+    for i in range(5):
+        if a[i] != b[i]:
+            return False
+    return True
+
+
+cdef double _arc_time(W* w, long long a) noexcept nogil:
+    # _Run.arc_time
+    cdef double length = w.arc_f[2 * a], radius = w.arc_f[2 * a + 1], t, v
+    t = _chord_time(w, length)
+    if w.smooth > 0.0 and radius > 0.0:
+        v = sqrt(24.0 * radius * w.smooth / 7.0) / SERVO_PERIOD_S
+        t = _pmax(t, length / v)
+    return t
+
+
+cdef void _arc_in(W* w, long long a, double t, const double* q_before, const double* q_end,
+                  double dt, double* out) noexcept nogil:
+    # _Run.arc_in
+    cdef double d[5]
+    cdef double nrm, step
+    cdef int i
+    for i in range(5):
+        d[i] = q_end[i] - q_before[i]
+    nrm = _hypot(d, 3)
+    if nrm <= 0.0 or t <= 0.0:
         for i in range(5):
-            w.last_q[i] = qk[i]
-        w.n = 1
+            out[i] = q_before[i]
         return
-    if w.corner_src != NONE:
-        _resolve_corner(w, qk, dtk)
-    if not w.has_line or line != w.last_line:
-        _emit(w, OP_LINE, k, 0, 0.0)
-        w.has_line = 1
-        w.last_line = line
-    w.t_total += dtk
-    if fn:
+    step = w.arc_f[2 * a] / t * dt / nrm
+    for i in range(5):
+        out[i] = q_end[i] - d[i] * step
+
+
+cdef void _center_tilt(W* w, long long a) noexcept nogil:
+    # _Run.center_tilt, numpy's operations one column at a time
+    cdef long long start = w.arc_i[4 * a], end = w.arc_i[4 * a + 1], nxt, j, rows[3]
+    cdef double lo[2]
+    cdef double hi[2]
+    cdef double low[2]
+    cdef double high[2]
+    cdef double value[2]
+    cdef double emax, emin, x, margin, scale, d
+    cdef bint covers = True
+    cdef int c, r
+    if w.tilt_hold <= 0.0 or w.held_src == NONE or not w.run_n:
+        return
+    if not _same5(&w.run[5 * (w.run_n - 1)], &w.q[5 * start]):
+        return
+    while end + 1 < w.npts and w.arc_of[end + 1] >= 0:
+        nxt = w.arc_of[end + 1]
+        if w.arc_i[4 * nxt] != end:
+            break
+        end = w.arc_i[4 * nxt + 1]
+    rows[0] = start
+    rows[1] = end
+    rows[2] = end + 1 if end + 1 < w.npts - 1 else w.npts - 1
+    for c in range(2):
+        lo[c] = w.q[5 * start + 3 + c]
+        hi[c] = lo[c]
+        for j in range(start + 1, end + 1):
+            x = w.q[5 * j + 3 + c]
+            if x < lo[c]:
+                lo[c] = x
+            if x > hi[c]:
+                hi[c] = x
+        emax = w.q[5 * rows[0] + 3 + c]
+        emin = emax
+        for r in range(1, 3):
+            x = w.q[5 * rows[r] + 3 + c]
+            if x > emax:
+                emax = x
+            if x < emin:
+                emin = x
+        low[c] = _npmax(hi[c] - w.arc_hold, emax - w.tilt_hold)
+        high[c] = _npmin(lo[c] + w.arc_hold, emin + w.tilt_hold)
+        covers = covers and w.held_ab[c] >= low[c] and w.held_ab[c] <= high[c]
+    if covers:
+        return  # the tilt held covers the run
+    margin = 0.001 * w.tilt_hold
+    scale = 1.0
+    for c in range(w.decimals):
+        scale = scale * 10.0
+    for c in range(2):
+        if low[c] + margin <= high[c] - margin:
+            value[c] = _npmin(_npmax(w.held_ab[c], low[c] + margin), high[c] - margin)
+        else:
+            d = w.q[5 * end + 3 + c] - w.q[5 * start + 3 + c]
+            x = 1.0 if d > 0.0 else (-1.0 if d < 0.0 else 0.0)
+            value[c] = w.q[5 * start + 3 + c] + x * (w.tilt_hold - margin)
+        value[c] = rint(value[c] * scale) / scale + 0.0
+        w.held_ab[c] = value[c]
+        w.tilts[2 * w.nt + c] = value[c]
+    w.held_src = w.npts + w.nt
+    w.nt += 1
+
+
+cdef bint _tilt_leaves(W* w, const double* qk) noexcept nogil:
+    if w.arc_hold <= 0.0 or w.held_src == NONE:
+        return False
+    return fabs(qk[3] - w.held_ab[0]) > w.arc_hold or fabs(qk[4] - w.held_ab[1]) > w.arc_hold
+
+
+cdef void _write_arc_to(W* w, long long k, long long part) noexcept nogil:
+    # _Run.write_arc_to
+    cdef double qh[5]
+    cdef double t
+    cdef long long first, j, held_n
+    cdef int i
+    if not w.run_n:
+        return
+    if part >= 0:
+        for i in range(5):
+            qh[i] = w.run[5 * (w.run_n - 1) + i]
+        t = _arc_time(w, part)
+        w.run_n = 0
+        _g1(w, w.run_src, qh, t, False, part, w.arc_f[2 * part], w.arc_i[4 * part + 2])
+        return
+    held_n = w.run_n
+    w.run_n = 0
+    first = k - held_n
+    for j in range(held_n):
+        # the held rows stay as they are: _g1 copies its point, and holds none
+        _g1(w, first + j, &w.run[5 * j], w.dt[first + j], False)
+
+
+cdef bint _on_arc(W* w, long long k, const double* qk, double dtk, const double* lead,
+                  double plan, bint bend) noexcept nogil:
+    # _Run.on_arc
+    cdef long long a = w.arc_of[k]
+    cdef long long start = w.arc_i[4 * a], end = w.arc_i[4 * a + 1]
+    cdef long long plane = w.arc_i[4 * a + 2], refit = w.arc_i[4 * a + 3]
+    cdef double t
+    cdef bint settled
+    cdef int i
+    if k == start + 1:
+        _center_tilt(w, a)
         _write_held(w)
-        _at_rest(w)
-        if fn_end:
-            _emit(w, OP_G94, 0, 0, 0.0)
-        _emit(w, OP_FN, k, 0, 0.0)
-        return
-    if dwell:
-        stands = True
-        for i in range(5):
-            stands = stands and qk[i] == w.last_q[i]
-        if stands:  # the pose stands: a dwell
-            _write_held(w)
-            _at_rest(w)
-            _emit(w, OP_DWELL, k, 0, 0.0)
-            return
+        settled = w.after_settle and not w.all_exact and not refit
+        if settled or not _same5(w.last_q, &w.q[5 * start]):
+            w.stop_at = k
+            w.req_kind = REQ_REARC
+            w.req_arc = a
+            return True
+    elif _tilt_leaves(w, qk):
+        w.stop_at = k
+        w.req_kind = REQ_ARC_TO
+        w.req_arc = a
+        return True
+    _hold(w, k, qk, dtk, lead, plan)
+    if k == end:
+        t = _arc_time(w, a)
+        w.run_n = 0
+        if bend:
+            for i in range(5):
+                w.corner_q[i] = qk[i]
+            w.corner_t = t
+            w.corner_src = k
+            w.corner_arc = a
+            w.ca_dt = dtk
+            w.ca_len = w.arc_f[2 * a]
+            w.ca_plane = plane
+            _arc_in(w, a, t, &w.q[5 * (k - 1)], qk, dtk, w.corner_in)
+        else:
+            _g1(w, k, qk, t, False, a, w.arc_f[2 * a], plane)
+    return False
+
+
+cdef void _chords(W* w, long long k, const double* qk, double dtk, double spd, bint bend,
+                  const double* lead, double plan) noexcept nogil:
+    # _Run.chords
+    cdef double t
+    cdef int i
     if w.tol > 0 and not bend and spd > 0:
         if not _within(w, qk) or _dips(w, qk, dtk, lead):
             _write_held(w)
@@ -569,6 +761,57 @@ cdef void _point(W* w, long long k, const double* qk, double dtk, long long line
     _g1(w, k, qk, t, spd == 0.0)
 
 
+cdef bint _point(W* w, long long k, const double* qk, double dtk, long long line, double spd,
+                 bint bend, bint fn, bint fn_end, bint dwell, const double* lead,
+                 double plan, bint resume) noexcept nogil:
+    # the writer's loop body for the point k (_Run.point): True where it stops
+    cdef bint stands
+    cdef int i
+    if resume:
+        if w.req_kind == REQ_ARC_TO:
+            _write_arc_to(w, k, w.req_answer)
+        w.stop_at = NONE
+        w.req_kind = NONE
+        _chords(w, k, qk, dtk, spd, bend, lead, plan)
+        return False
+    if w.n == 0:
+        _emit(w, OP_G0, k, 0, 0.0)
+        _emit(w, OP_G93, 0, 0, 0.0)
+        w.last_ab[0] = qk[3]
+        w.last_ab[1] = qk[4]
+        for i in range(5):
+            w.last_q[i] = qk[i]
+        w.n = 1
+        return False
+    if w.corner_src != NONE:
+        _resolve_corner(w, qk, dtk)
+    if not w.has_line or line != w.last_line:
+        _emit(w, OP_LINE, k, 0, 0.0)
+        w.has_line = 1
+        w.last_line = line
+    w.t_total += dtk
+    if fn:
+        _write_held(w)
+        _at_rest(w)
+        if fn_end:
+            _emit(w, OP_G94, 0, 0, 0.0)
+        _emit(w, OP_FN, k, 0, 0.0)
+        return False
+    if dwell:
+        stands = True
+        for i in range(5):
+            stands = stands and qk[i] == w.last_q[i]
+        if stands:  # the pose stands: a dwell
+            _write_held(w)
+            _at_rest(w)
+            _emit(w, OP_DWELL, k, 0, 0.0)
+            return False
+    if w.has_arcs and w.arc_of[k] >= 0:
+        return _on_arc(w, k, qk, dtk, lead, plan, bend)
+    _chords(w, k, qk, dtk, spd, bend, lead, plan)
+    return False
+
+
 cdef void _load(W* w, double[::1] f, long long[::1] iv, st):
     cdef double[::1] a
     cdef int i
@@ -580,6 +823,13 @@ cdef void _load(W* w, double[::1] f, long long[::1] iv, st):
     w.run_src, w.corner_src, w.held_src, w.exact = iv[5], iv[6], iv[7], iv[8]
     w.after_settle, w.prev_idx, w.prev_turns, w.prev_blend = iv[9], iv[10], iv[11], iv[12]
     w.has_prev, w.patch, w.keep = iv[13], iv[14], iv[15]
+    w.smooth, w.arc_hold, w.speed0, w.ca_len, w.ca_dt = f[20], f[21], f[22], f[23], f[24]
+    w.plane, w.stop_at, w.req_kind, w.req_arc = iv[16], iv[17], iv[18], iv[19]
+    w.req_answer, w.corner_arc, w.ca_plane, w.ca_from, w.decimals = (
+        iv[20], iv[21], iv[22], iv[23], iv[24])
+    a = st.corner_in
+    for i in range(5):
+        w.corner_in[i] = a[i]
     a = st.last_q
     for i in range(5):
         w.last_q[i] = a[i]
@@ -608,6 +858,13 @@ cdef void _store(W* w, double[::1] f, long long[::1] iv, st):
     iv[5], iv[6], iv[7], iv[8] = w.run_src, w.corner_src, w.held_src, w.exact
     iv[9], iv[10], iv[11], iv[12] = w.after_settle, w.prev_idx, w.prev_turns, w.prev_blend
     iv[13], iv[14], iv[15] = w.has_prev, w.patch, w.keep
+    f[20], f[21], f[22], f[23], f[24] = w.smooth, w.arc_hold, w.speed0, w.ca_len, w.ca_dt
+    iv[16], iv[17], iv[18], iv[19] = w.plane, w.stop_at, w.req_kind, w.req_arc
+    iv[20], iv[21], iv[22], iv[23], iv[24] = (
+        w.req_answer, w.corner_arc, w.ca_plane, w.ca_from, w.decimals)
+    a = st.corner_in
+    for i in range(5):
+        a[i] = w.corner_in[i]
     a = st.last_q
     for i in range(5):
         a[i] = w.last_q[i]
@@ -625,7 +882,8 @@ cdef void _store(W* w, double[::1] f, long long[::1] iv, st):
         a[i] = w.corner_q[i]
 
 
-def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint end):
+def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint end,
+              arc_of=None, arc_i=None, arc_f=None):
     """:func:`prsxy_post.kernel.gwrite.gcode_ops`, compiled (``st.run_q`` must
     hold ``len(q)`` more points: :func:`gwrite.reserve`)."""
     if np.ndim(q) != 2 or np.shape(q)[1] != 5 or np.ndim(lead) != 2 or np.shape(lead)[1] != 5:
@@ -639,54 +897,108 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     cdef const unsigned char[::1] ev = np.ascontiguousarray(fn_end, dtype=bool).view(np.uint8)
     cdef const unsigned char[::1] wv = np.ascontiguousarray(dwell, dtype=bool).view(np.uint8)
     cdef const double[:, ::1] ld = np.ascontiguousarray(lead, dtype=np.float64).reshape(-1, 5)
-    cdef Py_ssize_t n = qv.shape[0], k
+    cdef Py_ssize_t n = qv.shape[0], k, k0, m0, nt0
     cdef double[::1] f = st.f
     cdef long long[::1] iv = st.i
     cdef double[:, ::1] run = st.run_q
     cdef W w
     cdef double prev_speed, plan
+    cdef bint resume, stopped = False
+    has_arcs = arc_of is not None
+    if not has_arcs:
+        arc_of, arc_i, arc_f = np.zeros(0, np.int64), np.zeros((0, 4), np.int64), np.zeros((0, 2))
+    cdef const long long[::1] aov = np.ascontiguousarray(arc_of, dtype=np.int64)
+    cdef const long long[:, ::1] aiv = np.ascontiguousarray(arc_i, dtype=np.int64).reshape(-1, 4)
+    cdef const double[:, ::1] afv = np.ascontiguousarray(arc_f, dtype=np.float64).reshape(-1, 2)
     if not (dtv.shape[0] == lv.shape[0] == sv.shape[0] == bv.shape[0] == fv.shape[0]
             == ev.shape[0] == wv.shape[0] == ld.shape[0] == n):
         raise ValueError(f"every input needs one row per point ({n})")
+    if has_arcs and aov.shape[0] != n:
+        raise ValueError(f"arc_of needs one row per point ({n}), got {aov.shape[0]}")
+    if has_arcs and (np.any(np.asarray(arc_of) >= aiv.shape[0]) or aiv.shape[0] != afv.shape[0]):
+        raise ValueError("arc_of names an arc arc_i and arc_f do not hold")
+    if has_arcs and aiv.shape[0] and (np.any(np.asarray(arc_i)[:, :2] < 0)
+                                      or np.any(np.asarray(arc_i)[:, :2] >= n)):
+        raise ValueError("an arc's start or end is no point of the chunk")
     if f.shape[0] != len(F_NAMES) or iv.shape[0] != len(I_NAMES) or run.shape[1] != 5:
         raise ValueError("not a gwrite.GState")
     if iv[4] + n > run.shape[0]:
         raise ValueError(f"st.run_q holds {run.shape[0]} points, {iv[4] + n} may be held")
-    code = np.empty(14 * n + 16, dtype=np.int64)
-    arg = np.empty(14 * n + 16, dtype=np.int64)
-    ab = np.empty(14 * n + 16, dtype=np.int64)
-    val = np.empty(14 * n + 16, dtype=np.float64)
-    cdef long long[::1] cv = code, av = arg, abv = ab
+    resume = iv[17] != NONE
+    pend_i = np.ascontiguousarray(st.pend_i, dtype=np.int64).reshape(-1, 4) if resume else None
+    m0 = pend_i.shape[0] if resume else 0
+    nt0 = len(st.pend_t) if resume else 0
+    cap = m0 + 14 * n + 16
+    code = np.empty(cap, dtype=np.int64)
+    arg = np.empty(cap, dtype=np.int64)
+    ab = np.empty(cap, dtype=np.int64)
+    aux = np.empty(cap, dtype=np.int64)
+    val = np.empty(cap, dtype=np.float64)
+    tilts = np.empty((nt0 + n + 1, 2), dtype=np.float64)
+    if resume:
+        code[:m0], arg[:m0], ab[:m0], aux[:m0] = pend_i[:, 0], pend_i[:, 1], pend_i[:, 2], pend_i[:, 3]
+        val[:m0] = st.pend_v
+        tilts[:nt0] = np.asarray(st.pend_t).reshape(-1, 2)
+    cdef long long[::1] cv = code, av = arg, abv = ab, xv = aux
     cdef double[::1] vv = val
+    cdef double[:, ::1] tv = tilts
     _load(&w, f, iv, st)
     w.run = &run[0, 0]
-    w.code, w.arg, w.ab, w.val, w.m = &cv[0], &av[0], &abv[0], &vv[0], 0
+    w.code, w.arg, w.ab, w.aux, w.val, w.m = &cv[0], &av[0], &abv[0], &xv[0], &vv[0], m0
+    w.q = &qv[0, 0] if n else NULL
+    w.dt = &dtv[0] if n else NULL
+    w.npts = n
+    w.has_arcs = has_arcs and n > 0
+    w.arc_of = &aov[0] if aov.shape[0] else NULL
+    w.arc_i = &aiv[0, 0] if aiv.shape[0] else NULL
+    w.arc_f = &afv[0, 0] if afv.shape[0] else NULL
+    w.tilts = &tv[0, 0]
+    w.nt = nt0
     with nogil:
-        prev_speed = w.last_speed
-        for k in range(n):
+        k0 = w.stop_at if resume else 0
+        if not resume:
+            w.speed0 = w.last_speed
+            if n:
+                w.last_speed = sv[n - 1]
+        prev_speed = w.speed0 if k0 == 0 else sv[k0 - 1]
+        for k in range(k0, n):
             # the plan's mean speed over the piece (it ramps linearly over a period)
             plan = 0.5 * (prev_speed + sv[k])
             prev_speed = sv[k]
-            _point(&w, k, &qv[k, 0], dtv[k], lv[k], sv[k], bv[k], fv[k], ev[k], wv[k],
-                   &ld[k, 0], plan)
-        if n:
-            w.last_speed = sv[n - 1]
-        if end:
-            _resolve_corner(&w, NULL, 0.0)
-            _write_held(&w)
-        # the line that waits for the next chunk (_Run.hand_out)
-        if w.has_prev and w.prev_blend and w.prev_idx != NONE:
-            w.keep = w.prev_idx
-            w.prev_idx = CARRIED
-        else:
-            w.keep = NONE
-            w.prev_idx = NONE
-        if w.run_src >= 0:
-            w.run_src = -1
-        if w.corner_src >= 0:
-            w.corner_src = -2
-        if w.held_src != NONE:
-            w.held_src = -3
+            if _point(&w, k, &qv[k, 0], dtv[k], lv[k], sv[k], bv[k], fv[k], ev[k], wv[k],
+                      &ld[k, 0], plan, resume and k == k0):
+                stopped = True
+                break
+        if not stopped:
+            if end:
+                _resolve_corner(&w, NULL, 0.0)
+                _write_held(&w)
+            # the line that waits for the next chunk (_Run.hand_out)
+            if w.has_prev and w.prev_blend and w.prev_idx != NONE:
+                w.keep = w.prev_idx
+                w.prev_idx = CARRIED
+            else:
+                w.keep = NONE
+                w.prev_idx = NONE
+            if w.run_src >= 0:
+                w.run_src = -1
+            if w.corner_src >= 0:
+                w.corner_src = CORNER_SRC
+            w.ca_from = NONE
+            if w.corner_arc >= 0:
+                w.ca_from = w.corner_arc
+                w.corner_arc = CORNER_SRC
+            if w.held_src != NONE:
+                w.held_src = -3
     _store(&w, f, iv, st)
     m = w.m
-    return code[:m].copy(), arg[:m].copy(), ab[:m].copy(), val[:m].copy()
+    if stopped:
+        st.pend_i = np.stack([code[:m], arg[:m], ab[:m], aux[:m]], axis=1).copy()
+        st.pend_v = val[:m].copy()
+        st.pend_t = tilts[: w.nt].copy()
+        e = np.zeros(0, dtype=np.int64)
+        return e, e.copy(), e.copy(), e.copy(), np.zeros(0), np.zeros((0, 2))
+    st.pend_i = np.zeros((0, 4), dtype=np.int64)
+    st.pend_v, st.pend_t = np.zeros(0), np.zeros((0, 2))
+    return (code[:m].copy(), arg[:m].copy(), ab[:m].copy(), aux[:m].copy(), val[:m].copy(),
+            tilts[: w.nt].copy())
