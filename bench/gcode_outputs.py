@@ -47,6 +47,14 @@ def main() -> None:
                     f"B{-turn / 2:g}\nG0 Z2\nM2\n",
                 )
             )
+    # arcs in G18 and G19
+    jobs.append(
+        (
+            "planes-F3000",
+            HEAD + "G0 X3 Y0 Z2\nG1 Z0 F3000\nG18 G2 X-3 Z0 I-3 K0\nG19 G3 Y3 Z0 J1.5 K0\n"
+            "G17\nG0 Z5\nM2\n",
+        )
+    )
     machines = [("nominal", truth_machine("nominal", None))]
     for s in args.seeds:
         machines.append((f"r{s}", truth_machine("random", s, play=False)))

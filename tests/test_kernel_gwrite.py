@@ -8,7 +8,10 @@ straight, turning corners, stopping, dwelling, with machine functions and play
 crossings, A and B still, creeping or turning; tolerance 0 or not, the tilt held
 or not, ``g61_every_line`` on or off; cut into chunks at any point, so that held
 points, corners and the line before carry over). Also CPython's ``math.fsum`` and
-``math.hypot`` (which is not libm's hypot) against the twin's own.
+``math.hypot`` (which is not libm's hypot) against the twin's own. Arcs (the
+writer's rule 5): every call, stops for a refit and resumes included, of arcs,
+helices and helices that turn A and B a little, on the nominal machine and random
+ones with and without play, whole and in chunks.
 """
 
 from __future__ import annotations
@@ -33,28 +36,41 @@ from prsxy_post.kernel import gwrite
 from .conftest import ROOT
 from .kernel_cases import compiled, record, same_bits
 
-Ops = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+Ops = gwrite.Ops
 
 
 def _same_ops(got: Ops, want: Ops) -> bool:
-    return all(
-        np.array_equal(g, w) and g.dtype == w.dtype for g, w in zip(got[:3], want[:3], strict=True)
-    ) and same_bits(got[3], want[3])
+    return (
+        all(
+            np.array_equal(g, w) and g.dtype == w.dtype
+            for g, w in zip(got[:4], want[:4], strict=True)
+        )
+        and same_bits(got[4], want[4])
+        and got[5].shape == want[5].shape
+        and same_bits(got[5], want[5])
+    )
 
 
 def _same_state(a: gwrite.GState, b: gwrite.GState) -> bool:
     n = int(a.i[gwrite.I_NAMES.index("run_n")])
-    return np.array_equal(a.i, b.i) and all(
-        same_bits(x, y)
-        for x, y in (
-            (a.f, b.f),
-            (a.last_q, b.last_q),
-            (a.last_ab, b.last_ab),
-            (a.held_ab, b.held_ab),
-            (a.lead0, b.lead0),
-            (a.corner_q, b.corner_q),
-            (a.run_q[:n], b.run_q[:n]),
+    return (
+        np.array_equal(a.i, b.i)
+        and all(
+            same_bits(x, y)
+            for x, y in (
+                (a.f, b.f),
+                (a.last_q, b.last_q),
+                (a.last_ab, b.last_ab),
+                (a.held_ab, b.held_ab),
+                (a.lead0, b.lead0),
+                (a.corner_q, b.corner_q),
+                (a.run_q[:n], b.run_q[:n]),
+                (a.corner_in, b.corner_in),
+                (a.pend_v, b.pend_v),
+                (a.pend_t, b.pend_t),
+            )
         )
+        and np.array_equal(a.pend_i, b.pend_i)
     )
 
 
@@ -104,10 +120,14 @@ def test_sample_programs_decisions_are_bit_identical(tmp_path: Path) -> None:
     calls = record("_gcode_ops", tmp_path)
     # pocket, drill and five-axis as corrected G-code: their chunks and ends
     assert len(calls) >= 6
-    lines = 0
+    lines, arcs = 0, 0
     for args in calls:
-        lines += int(np.sum(_both(args)[0] == gwrite.G1))
-    assert lines >= 500
+        code = _both(args)[0]
+        lines += int(np.sum(code == gwrite.G1))
+        arcs += int(np.sum(code == gwrite.ARC))
+    # pocket's helix and five-axis's arcs are G2/G3 (rule 5): a few lines and arcs
+    # where there were 500 lines and more
+    assert lines >= 40 and arcs >= 10
 
 
 def _bench_module() -> Any:
@@ -141,8 +161,10 @@ def test_bench_program_decisions_are_bit_identical(tmp_path: Path) -> None:
     assert len(calls) >= 2
     ops = [_both(args) for args in calls]
     g1 = sum(int(np.sum(o[0] == gwrite.G1)) for o in ops)
+    arcs = sum(int(np.sum(o[0] == gwrite.ARC)) for o in ops)
     stops = sum(int(np.sum(o[0] == gwrite.G4P0)) for o in ops)
-    assert g1 > 5000 and stops > 0
+    # its arcs are G2/G3 (rule 5): 4935 lines and the arcs where 5000 lines and more were
+    assert g1 > 4500 and arcs > 0 and g1 + arcs > 5000 and stops > 0
 
 
 @st.composite
@@ -250,4 +272,60 @@ def test_generated_runs_are_bit_identical(
         for o in ops:
             g1 = np.flatnonzero(o[0] == gwrite.G1)
             assert np.all(o[0][g1 + 1] == gwrite.G4P0)
-    assert np.all(np.concatenate([o[3][o[0] == gwrite.G1] for o in ops]) > 0.0)
+    assert np.all(np.concatenate([o[4][o[0] == gwrite.G1] for o in ops]) > 0.0)
+
+
+def _arc_programs() -> list[str]:
+    from .test_linuxcnc_motion import HEAD, PROGRAMS
+
+    out = [PROGRAMS[n](f) for n in ("arcs", "helix") for f in (600.0, 10000.0)]
+    for turn in (0.002, 0.05):
+        out.append(
+            HEAD + f"G0 X10 Y0 Z2 A0 B0\nG1 Z0 F3000\nG2 X10 Y0 Z-3 I-10 J0 P2 A{turn:g} "
+            f"B{-turn / 2:g}\nG0 Z2\nM2\n"
+        )
+    # arcs in G18 and G19 (a plane word where it changes)
+    out.append(
+        HEAD + "G0 X3 Y0 Z2\nG1 Z0 F3000\nG18 G2 X-3 Z0 I-3 K0\nG19 G3 Y3 Z0 J1.5 K0\n"
+        "G17\nG0 Z5\nM2\n"
+    )
+    return out
+
+
+def test_arcs_decisions_are_bit_identical() -> None:
+    """Every call while arcs, helices and helices that turn A and B a little
+    convert (rule 5): the ARC and PLANE ops, the tilts centered before runs of
+    arcs, and the stops where the writer refits (after a stop; where A or B leave
+    the held tilt: REQ_ARC_TO) and the calls that go on from them."""
+    from .test_tracking import convert, truth_machine
+
+    calls: list[tuple[Any, ...]] = []
+    inner: Callable[..., Ops] = kernel._gcode_ops
+
+    def spy(*args: Any) -> Ops:
+        calls.append(tuple(copy.deepcopy(a) for a in args))
+        return inner(*args)
+
+    machines = [
+        truth_machine("nominal", None),
+        truth_machine("random", 11, play=False),
+        truth_machine("random", 13),
+    ]
+    mp = pytest.MonkeyPatch()
+    mp.setattr(kernel, "_gcode_ops", spy)
+    try:
+        for m in machines:
+            for text in _arc_programs():
+                for chunk in (0, 5):
+                    convert(m, text, "gcode", chunk)
+    finally:
+        mp.undo()
+    kinds = [int(c[0].i[gwrite.I_NAMES.index("req_kind")]) for c in calls]
+    resumed = [int(c[0].i[gwrite.I_NAMES.index("stop_at")]) >= 0 for c in calls]
+    ops = [_both(args) for args in calls]
+    code = np.concatenate([o[0] for o in ops])
+    assert np.sum(code == gwrite.ARC) > 100 and np.sum(code == gwrite.PLANE) > 0
+    assert sum(len(o[5]) for o in ops) > 0  # tilts centered
+    # resumes after both kinds of request
+    assert sum(r and k == gwrite.REQ_REARC for r, k in zip(resumed, kinds, strict=True)) > 0
+    assert sum(r and k == gwrite.REQ_ARC_TO for r, k in zip(resumed, kinds, strict=True)) > 0
