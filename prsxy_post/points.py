@@ -1,20 +1,51 @@
 """The stream's point types: what the chain hands the writers.
 
-:class:`PointChunk` is a run of consecutive points with everything the chain
-computed for them; :class:`Written` says how a dialect rounds its numbers, which
-the chain must know to end a crossing of a motor's play beyond their rounding.
-Both sit below the chain and the writers, so neither imports the other.
+:class:`Columns` is a record of equal-length arrays, one row per item (a point, a
+block), whose rows are taken and whose records are joined field by field (the
+planner's blocks and samples are such records too). :class:`PointChunk` is a run
+of consecutive points with everything the chain computed for them;
+:class:`Written` says how a dialect rounds its numbers, which the chain must know
+to end a crossing of a motor's play beyond their rounding. All sit below the chain
+and the writers, so neither imports the other.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import ClassVar, NamedTuple
+from typing import Any, ClassVar, NamedTuple, TypeVar
 
 import numpy as np
 
+R = TypeVar("R", bound="Columns")
 
-class PointChunk:
+
+class Columns:
+    """A record of arrays with one row per item: :data:`FIELDS` names them in the
+    order the constructor takes them (a plain class, not a dataclass: equality and
+    repr of arrays are of no use, and a dataclass's generated methods cost every
+    command start-up to make)."""
+
+    #: the fields, in the order the constructor takes them
+    FIELDS: ClassVar[tuple[str, ...]] = ()
+
+    def take(self: R, sel: slice | np.ndarray) -> R:
+        """The rows ``sel`` (a slice, a mask or row numbers) of every field."""
+        make: Any = type(self)
+        if isinstance(sel, np.ndarray) and sel.dtype.kind in "iu":
+            # rows by position: np.take gathers an (n, 5) array's rows several
+            # times faster than fancy indexing does, the same values
+            out: R = make(**{f: _rows(getattr(self, f), sel) for f in self.FIELDS})
+        else:
+            out = make(**{f: getattr(self, f)[sel] for f in self.FIELDS})
+        return out
+
+    @classmethod
+    def joined(cls, parts: Sequence[Columns]) -> dict[str, np.ndarray]:
+        """Every field of ``parts`` (records of this class) joined, by name."""
+        return {f: np.concatenate([getattr(p, f) for p in parts]) for f in cls.FIELDS}
+
+
+class PointChunk(Columns):
     """A run of consecutive points with everything the chain computed.
 
     q : (n, 5) [mm, mm, mm, deg, deg] the programmed path (workpiece frame)
@@ -35,8 +66,8 @@ class PointChunk:
     P_ideal, V_ideal : (n, 5) [mm, mm/s] where the motors must be and how fast
     P_cmd, V_cmd : (n, 5) the commands after the real-axis tables and servo lead
 
-    A plain class (not a dataclass): equality and repr of arrays are of no use, and
-    a dataclass's generated methods cost every command start-up to make.
+    A :class:`~prsxy_post.points.Columns` record (rows taken, records joined field
+    by field).
     """
 
     #: the fields, in the order the constructor takes them
@@ -101,18 +132,9 @@ class PointChunk:
     def __len__(self) -> int:
         return len(self.dt)
 
-    def take(self, sl: slice | np.ndarray) -> PointChunk:
-        if isinstance(sl, np.ndarray) and sl.dtype.kind in "iu":
-            # rows by position: np.take gathers an (n, 5) array's rows several
-            # times faster than fancy indexing does, the same values
-            return PointChunk(**{f: _rows(getattr(self, f), sl) for f in self.FIELDS})
-        return PointChunk(**{f: getattr(self, f)[sl] for f in self.FIELDS})
-
     @staticmethod
     def concat(chunks: Sequence[PointChunk]) -> PointChunk:
-        return PointChunk(
-            **{f: np.concatenate([getattr(c, f) for c in chunks]) for f in PointChunk.FIELDS}
-        )
+        return PointChunk(**PointChunk.joined(chunks))
 
     @staticmethod
     def empty() -> PointChunk:

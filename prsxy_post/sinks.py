@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import ProcessFailed, PrsxyError, write_failed
+from .points import PointChunk
 from .runtime import peak_rss_mb
 
 Piece = tuple[int, str]
@@ -423,8 +424,6 @@ def _chunk(sent: Any) -> Any:
     writer reading one it did not declare fails loudly."""
     if not isinstance(sent, dict):
         return sent
-    from .points import PointChunk
-
     given: dict[str, Any] = {name: sent.get(name) for name in PointChunk.FIELDS}
     return PointChunk(**given)
 

@@ -30,6 +30,7 @@ import numpy as np
 from .. import kernel
 from ..gcode import EXACT_STOP, Motion
 from ..kernel.path import PathArrays
+from ..points import Columns
 
 KIND_RAPID, KIND_FEED, KIND_ARC, KIND_DWELL, KIND_FUNCTION, KIND_CURVE = 0, 1, 2, 3, 4, 5
 _KIND = {
@@ -100,7 +101,7 @@ REVERSAL_SHARE = 0.1
 SPEED_SHARE = 5e-4
 
 
-class Blocks:
+class Blocks(Columns):
     """Motions as arrays, one row per block (zero-length moves removed).
 
     kind : (n,) int, KIND_*
@@ -131,8 +132,8 @@ class Blocks:
     split_after : (n,) int8, a split program's part ends at rest after this block:
         1 at a stop the program makes, 2 at a stop put there for the split
 
-    A plain class (not a dataclass): equality and repr of arrays are of no use, and
-    a dataclass's generated methods cost every command start-up to make.
+    A :class:`~prsxy_post.points.Columns` record (rows taken, records joined field
+    by field).
     """
 
     #: the fields, in the order the constructor takes them
@@ -227,12 +228,9 @@ class Blocks:
     def __len__(self) -> int:
         return len(self.kind)
 
-    def take(self, sl: slice | np.ndarray) -> Blocks:
-        return Blocks(**{f: getattr(self, f)[sl] for f in self.FIELDS})
-
     @staticmethod
     def concat(parts: Sequence[Blocks]) -> Blocks:
-        return Blocks(**{f: np.concatenate([getattr(p, f) for p in parts]) for f in Blocks.FIELDS})
+        return Blocks(**Blocks.joined(parts))
 
     @property
     def stops(self) -> np.ndarray:

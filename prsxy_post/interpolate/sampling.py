@@ -17,12 +17,13 @@ from typing import ClassVar
 import numpy as np
 
 from .. import kernel
+from ..points import Columns
 from .geometry import KIND_DWELL, KIND_FUNCTION, Blocks, PlanLimits, pose_at, segment_limit
 from .lookahead import Plan
 from .timelaw import TimeLaw
 
 
-class Samples:
+class Samples(Columns):
     """Interpolation points.
 
     q : (N, 5) [mm, mm, mm, deg, deg] workpiece frame, on the programmed path
@@ -40,8 +41,8 @@ class Samples:
     split : (N,) int8, a split program's part ends at rest at this point (1: a stop
         the program makes, 2: a stop put there for the split), else 0
 
-    A plain class (not a dataclass): equality and repr of arrays are of no use, and
-    a dataclass's generated methods cost every command start-up to make.
+    A :class:`~prsxy_post.points.Columns` record (rows taken, records joined field
+    by field).
     """
 
     #: the fields, in the order the constructor takes them
@@ -94,14 +95,11 @@ class Samples:
     def __len__(self) -> int:
         return len(self.dt)
 
-    def take(self, sel: slice | np.ndarray) -> Samples:
-        return Samples(**{f: getattr(self, f)[sel] for f in self.FIELDS})
-
     @staticmethod
     def concat(parts: Sequence[Samples], offsets: Sequence[int]) -> Samples:
         """Consecutive runs of points as one; ``offsets``: where each run's plan
         begins in the joined plan (its points' ``block`` are moved by that)."""
-        out = {f: np.concatenate([getattr(p, f) for p in parts]) for f in Samples.FIELDS}
+        out = Samples.joined(parts)
         out["block"] = np.concatenate([p.block + o for p, o in zip(parts, offsets, strict=True)])
         return Samples(**out)
 
