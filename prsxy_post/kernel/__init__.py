@@ -3,7 +3,8 @@
 Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``, ``fk.py``,
 the planner's ``timelaw.py`` and ``path.py``, the play model's ``play.py``, the
 crossing windows' ``windows.py``, the corrected G-code writer's decisions'
-``gwrite.py``, in plain Python floats: :data:`TWINS`) and a compiled twin in Cython
+``gwrite.py`` in plain Python floats, its arc search's ``arcs.py``: :data:`TWINS`) and a
+compiled twin in Cython
 (``_ik.pyx``, ...; built when the package is installed) that gives the same bits.
 This module picks one set for the whole program, once, at import:
 
@@ -51,6 +52,7 @@ TWINS = {
     "play": "_play",
     "windows": "_windows",
     "gwrite": "_gwrite",
+    "arcs": "_arcs",
 }
 
 
@@ -593,5 +595,55 @@ def gcode_ops(
     gwrite.reserve(st, len(q))
     out: gwrite.Ops = _gcode_ops(
         st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, end, arc_of, arc_i, arc_f
+    )
+    return out
+
+
+# the arc search of corrected G-code (kernel/arcs.py and its twin _arcs.pyx)
+_fit_arc = _RUN["arcs"].fit_arc
+_find_arcs = _RUN["arcs"].find_arcs
+_refit_arcs = _RUN["arcs"].refit_arcs
+
+
+def fit_arc(q: np.ndarray, plane: int, tol_mm: float, tol_deg: float, decimals: int) -> np.ndarray:
+    """The arc from q[0] to q[-1] through the points between, as a row (7,) (NaN:
+    none): :func:`arcs.fit_arc`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _fit_arc(q, plane, tol_mm, tol_deg, decimals)
+    return out
+
+
+def find_arcs(
+    q: np.ndarray,
+    free: np.ndarray,
+    ends: np.ndarray,
+    rate: np.ndarray,
+    lead: np.ndarray,
+    tol_mm: float,
+    tol_deg: float,
+    decimals: int,
+    dip_share: float,
+    tilt_span: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The arcs among a chunk's written points, as rows (arc_i (M, 4), arc_f (M, 6)):
+    :func:`arcs.find_arcs`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _find_arcs(
+        q, free, ends, rate, lead, tol_mm, tol_deg, decimals, dip_share, tilt_span
+    )
+    return out
+
+
+def refit_arcs(
+    q: np.ndarray,
+    plane: int,
+    start: int,
+    end: int,
+    tol_mm: float,
+    tol_deg: float,
+    decimals: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The points q[start : end + 1] as arcs in ``plane``, as rows:
+    :func:`arcs.refit_arcs`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _refit_arcs(
+        q, plane, start, end, tol_mm, tol_deg, decimals
     )
     return out

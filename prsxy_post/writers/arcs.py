@@ -27,26 +27,24 @@ closed-form least squares in one unknown, t = Σ a b / Σ b², a = |p − m|² �
 b = 2 n·(p − m)), and every point is then verified against the arc with the center
 rounded as it is written. Runs grow while the fit holds (doubling, then bisection)
 and split where it fails.
+
+The fit and the search run in the kernel (:mod:`prsxy_post.kernel.arcs`, compiled
+as ``_arcs.pyx``), once a chunk, on arrays; this module turns its rows into
+:class:`Arc` records and writes an arc's words.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-#: the plane's first and second axis and its normal (rs274ngc's order), by G17/G18/G19
-PLANES: dict[int, tuple[int, int, int]] = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}
-#: the fewest points an arc replaces (its end included): below it a chord or two do
-MIN_POINTS = 4
-#: the largest sweep of one arc [rad]: the center comes from the chord's bisector,
-#: ill-conditioned as the ends close in on a full turn
-MAX_SWEEP = 1.5 * math.pi
-#: half the window over which a point is looked at for a bend: an arc is looked
-#: for only where the points 2 x this apart stray from their chord by more than the
-#: tolerance (elsewhere the chords are long)
-WINDOW = 4
+from .. import kernel
+from ..kernel.arcs import MAX_SWEEP, MIN_POINTS, PLANES, WINDOW
+
+__all__ = ["MAX_SWEEP", "MIN_POINTS", "PLANES", "WINDOW", "Arc", "arc_words"]
+__all__ += ["find_arcs", "fit_arc", "refit_arcs"]
 
 
 @dataclass(frozen=True)
@@ -71,6 +69,16 @@ class Arc:
     radius: float
 
 
+def _arcs(rows: tuple[np.ndarray, np.ndarray]) -> list[Arc]:
+    """The kernel's rows (arc_i (M, 4): start, end, plane, ccw; arc_f (M, 6): the
+    center X Y Z, length, error, radius) as records."""
+    arc_i, arc_f = rows
+    return [
+        Arc(s, e, p, bool(c), (f[0], f[1], f[2]), f[3], f[4], f[5])
+        for (s, e, p, c), f in zip(arc_i.tolist(), arc_f.tolist(), strict=True)
+    ]
+
+
 def fit_arc(q: np.ndarray, plane: int, tol_mm: float, tol_deg: float, decimals: int) -> Arc | None:
     """The arc from q[0] to q[-1] through the points between, or None.
 
@@ -80,113 +88,13 @@ def fit_arc(q: np.ndarray, plane: int, tol_mm: float, tol_deg: float, decimals: 
     farther than ``tol_mm`` from the arc, its A or B farther than ``tol_deg`` from
     the line between the ends' (A and B run linearly along the move), the angles
     do not advance one way, the sweep exceeds :data:`MAX_SWEEP`, or the points lie
-    on the chord (no circle to fit).
+    on the chord (no circle to fit). :func:`prsxy_post.kernel.fit_arc`.
     """
-    iu, iv, iw = PLANES[plane]
-    s, e = q[0], q[-1]
-    su, sv, eu, ev = s[iu], s[iv], e[iu], e[iv]
-    cu, cv = eu - su, ev - sv
-    chord = math.hypot(cu, cv)
-    if chord <= 0.0 or len(q) < 3:
+    row = kernel.fit_arc(q, plane, tol_mm, tol_deg, decimals)
+    if math.isnan(row[0]):
         return None
-    nu, nv = -cv / chord, cu / chord
-    mu, mv = 0.5 * (su + eu), 0.5 * (sv + ev)
-    xu, xv = q[1:-1, iu] - mu, q[1:-1, iv] - mv
-    a = xu * xu + xv * xv - 0.25 * chord * chord
-    b = 2.0 * (nu * xu + nv * xv)
-    bb = float(np.dot(b, b))
-    if bb <= 0.0:
-        return None
-    t = float(np.dot(a, b)) / bb
-    # the center as written: offsets from the (written) start, rounded
-    off_u = round(mu + t * nu - su, decimals)
-    off_v = round(mv + t * nv - sv, decimals)
-    ccu, ccv = float(su + off_u), float(sv + off_v)
-    pu, pv = q[:, iu] - ccu, q[:, iv] - ccv
-    rho = np.hypot(pu, pv)
-    r0, r1 = float(rho[0]), float(rho[-1])
-    # a radius beyond both ends' by more than the tolerance fails whatever the angles
-    if float(rho.max()) > max(r0, r1) + tol_mm or float(rho.min()) < min(r0, r1) - tol_mm:
-        return None
-    # the angles, unwrapped along the points (each step within ±pi)
-    steps = np.diff(np.arctan2(pv, pu))
-    steps = (steps + math.pi) % (2.0 * math.pi) - math.pi
-    if not (np.all(steps > 0.0) or np.all(steps < 0.0)):
-        return None
-    phi = np.concatenate(([0.0], np.cumsum(steps)))
-    sweep = float(phi[-1])
-    if abs(sweep) > MAX_SWEEP:
-        return None
-    f = phi / sweep
-    radial = rho - (r0 + (r1 - r0) * f)
-    axial = q[:, iw] - (s[iw] + (e[iw] - s[iw]) * f)
-    err = float(np.sqrt(radial * radial + axial * axial).max())
-    if not err <= tol_mm:
-        return None
-    ab = q[:, 3:5] - (s[3:5] + (e[3:5] - s[3:5]) * f[:, None])
-    if not float(np.abs(ab).max()) <= tol_deg:
-        return None
-    center = [0.0, 0.0, 0.0]
-    center[iu], center[iv], center[iw] = ccu, ccv, float(s[iw])
-    # LinuxCNC's length: the spiral's by the smaller radius and the radial change,
-    # with the axial motion (emccanon.cc:1754-1762)
-    spiral = math.hypot(min(r0, r1) * abs(sweep), r1 - r0)
-    length = math.hypot(spiral, float(e[iw] - s[iw]))
-    return Arc(
-        0,
-        len(q) - 1,
-        plane,
-        sweep > 0.0,
-        (center[0], center[1], center[2]),
-        length,
-        err,
-        min(r0, r1),
-    )
-
-
-def _best_fit(
-    q: np.ndarray, tol_mm: float, tol_deg: float, decimals: int, planes: tuple[int, ...]
-) -> Arc | None:
-    """The arc through q in whichever of ``planes`` fits it best, or None."""
-    best: Arc | None = None
-    for plane in planes:
-        arc = fit_arc(q, plane, tol_mm, tol_deg, decimals)
-        if arc is not None and (best is None or arc.error_mm < best.error_mm):
-            best = arc
-    return best
-
-
-def _bends(q: np.ndarray, tol_mm: float) -> np.ndarray:
-    """(n,) bool: points where the chord of the points ``WINDOW`` before and after
-    strays from the point by more than ``tol_mm`` in X Y Z (a bend chords serve
-    badly)."""
-    n = len(q)
-    out = np.zeros(n, dtype=bool)
-    w = WINDOW
-    if n < 2 * w + 1:
-        return out
-    a, p, b = q[: n - 2 * w, :3], q[w : n - w, :3], q[2 * w :, :3]
-    d = b - a
-    dd = np.einsum("ij,ij->i", d, d)
-    u = np.einsum("ij,ij->i", p - a, d) / np.where(dd > 0.0, dd, 1.0)
-    off = np.linalg.norm(p - (a + u[:, None] * d), axis=1)
-    out[w : n - w] = (off > tol_mm) & (dd > 0.0)
-    return out
-
-
-def _keeps(rate: np.ndarray, lead: np.ndarray, lead_tol: float, dip_share: float) -> bool:
-    """Whether one line may carry these pieces' timing: the rates (of the pieces
-    after the start) do not dip and rise again by more than ``dip_share`` (the line
-    is timed at its fastest piece), and what the real-axis tables add to a motor
-    (``lead``, the start's first) moves by no more than ``lead_tol``."""
-    if float(np.abs(lead[1:] - lead[0]).max(initial=0.0)) > lead_tol:
-        return False
-    peak = np.maximum.accumulate(rate)
-    dipped = np.flatnonzero(rate < peak * (1.0 - dip_share))
-    if len(dipped) == 0:
-        return True
-    tail = rate[dipped[0] :]
-    return bool(np.all(tail <= np.minimum.accumulate(tail) * (1.0 + dip_share)))
+    f = row.tolist()
+    return Arc(0, len(q) - 1, plane, f[0] > 0.0, (f[1], f[2], f[3]), f[4], f[5], f[6])
 
 
 def find_arcs(
@@ -219,85 +127,16 @@ def find_arcs(
     Every point after an arc's start up to the one before its end is free; the
     arcs do not overlap; each replaces at least :data:`MIN_POINTS` points and
     strays from its chord by more than ``tol_mm`` (elsewhere one line does).
-    Greedy from the start of each run of free points with a bend (or the last
-    arc's end): the run grows by doubling while an arc fits
-    (:func:`fit_arc`, every plane) and the rates and the tables allow one line,
-    then by bisection to the longest that fits.
+    Greedy from the start of each run of free points with a bend (the points
+    :data:`WINDOW` before and after stray from their chord by more than ``tol_mm``)
+    or the last arc's end: the run grows by doubling while an arc fits (every
+    plane at first, then the plane of the first fit) and the rates (no dip and rise
+    by more than ``dip_share``) and the tables allow one line, then by bisection
+    to the longest that fits. :func:`prsxy_post.kernel.find_arcs`, one call.
     """
-    n = len(q)
-    out: list[Arc] = []
-    if n < MIN_POINTS + 1:
-        return out
-    bends = _bends(q, tol_mm) & free
-    # each run of free points: its first and last index, for each of its points
-    edge = np.flatnonzero(np.diff(np.r_[False, free, False].astype(np.int8)))
-    first_free = np.full(n, -1)
-    last_free = np.full(n, -1)
-    for a, b in zip(edge[::2], edge[1::2], strict=True):
-        first_free[a:b], last_free[a:b] = a, b - 1
-    i0 = 0
-    for c in np.flatnonzero(bends):
-        if int(c) < i0:
-            continue
-        # from the point before the run where a line may end there in motion (a
-        # block's end), else from its first point: after a stop LinuxCNC runs the
-        # first line in G61 (.linuxcnc), and that is one piece, not the arc
-        before = int(first_free[c]) - 1
-        start = max(before if before >= 0 and ends[before] else before + 1, i0)
-        if start >= n - 1 or not free[start + 1]:
-            continue
-        hi = int(last_free[start + 1])
-        if hi + 1 < n and ends[hi + 1]:
-            hi += 1
-
-        planes: tuple[int, ...] = tuple(PLANES)
-
-        def fits(e: int, s: int = start) -> Arc | None:
-            if not _keeps(rate[s + 1 : e + 1], lead[s : e + 1], tol_mm, dip_share):
-                return None
-            ab = q[s : e + 1, 3:5]
-            if float((ab.max(axis=0) - ab.min(axis=0)).max()) > tilt_span:
-                return None
-            return _best_fit(q[s : e + 1], tol_mm, tol_deg, decimals, planes)  # noqa: B023
-
-        good: tuple[int, Arc] | None = None
-        step = MIN_POINTS
-        e = start + step
-        bad = hi + 1
-        while e <= hi:
-            arc = fits(e)
-            if arc is None:
-                bad = e
-                break
-            good = (e, arc)
-            planes = (arc.plane,)  # the run grows in the plane it started in
-            step *= 2
-            e = start + step
-        if good is None:
-            # no arc from here: the next bend tries a start a few points later
-            i0 = start + MIN_POINTS
-            continue
-        lo = good[0]
-        hi_try = min(bad, hi + 1)
-        while hi_try - lo > 1:
-            mid = (lo + hi_try) // 2
-            arc = fits(mid)
-            if arc is None:
-                hi_try = mid
-            else:
-                lo, good = mid, (mid, arc)
-        end, arc = good
-        seg = q[start : end + 1, :3]
-        d = seg[-1] - seg[0]
-        dd = float(d @ d)
-        u = np.clip((seg - seg[0]) @ d / dd, 0.0, 1.0) if dd > 0.0 else np.zeros(len(seg))
-        sag = float(np.linalg.norm(seg - (seg[0] + u[:, None] * d), axis=1).max())
-        if sag <= tol_mm:
-            i0 = end  # one chord does
-            continue
-        out.append(replace(arc, start=start, end=end))
-        i0 = end
-    return out
+    return _arcs(
+        kernel.find_arcs(q, free, ends, rate, lead, tol_mm, tol_deg, decimals, dip_share, tilt_span)
+    )
 
 
 def refit_arcs(
@@ -313,34 +152,10 @@ def refit_arcs(
     arcs in its plane: the longest that fits from ``start``, then from its end on
     (doubling, then bisection); a point no arc of 2 or more fits from is left to
     a line. Where the ends move, the circle through them moves too, and one arc
-    may no longer fit the points its parent did."""
+    may no longer fit the points its parent did. :func:`prsxy_post.kernel.refit_arcs`.
+    """
     end = arc.end if end is None else end
-    out: list[Arc] = []
-    s = start
-    while end - s >= 2:
-        good: Arc | None = None
-        e, bad = s + 2, end + 1
-        while e <= end:
-            a = fit_arc(q[s : e + 1], arc.plane, tol_mm, tol_deg, decimals)
-            if a is None:
-                bad = e
-                break
-            good = replace(a, start=s, end=e)
-            e = s + 2 * (e - s)
-        if good is None:
-            s += 1
-            continue
-        lo, hi = good.end, min(bad, end + 1)
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            a = fit_arc(q[s : mid + 1], arc.plane, tol_mm, tol_deg, decimals)
-            if a is None:
-                hi = mid
-            else:
-                lo, good = mid, replace(a, start=s, end=mid)
-        out.append(good)
-        s = good.end
-    return out
+    return _arcs(kernel.refit_arcs(q, arc.plane, start, end, tol_mm, tol_deg, decimals))
 
 
 #: the center's words by plane: offsets along the plane's first and second axis

@@ -333,14 +333,12 @@ class GcodeWriter:
         # it asks (a later start, known only as it goes: after a stop, or where A or
         # B leave the held tilt)
         arcs, arc_of = self._arcs(q_arr, chunk, fn)
-        refit = [False] * len(arcs)
+        # the arcs as the kernel takes them: start, end, plane, refitted; length, radius
+        arc_i = np.array([[a.start, a.end, a.plane, 0] for a in arcs], dtype=np.int64)
+        arc_i = arc_i.reshape(-1, 4)
+        arc_f = np.array([[a.length, a.radius] for a in arcs], dtype=float).reshape(-1, 2)
         start_q = self.state.last_q.copy()  # where the chunk's first move starts
         while True:
-            arc_i = np.array(
-                [[a.start, a.end, a.plane, r] for a, r in zip(arcs, refit, strict=True)],
-                dtype=np.int64,
-            ).reshape(-1, 4)
-            arc_f = np.array([[a.length, a.radius] for a in arcs], dtype=float).reshape(-1, 2)
             ops = kernel.gcode_ops(
                 self.state,
                 q_arr,
@@ -360,31 +358,35 @@ class GcodeWriter:
             k = int(self.state.i[_I["stop_at"]])
             if k < 0:
                 break
-            self._answer(q_arr, arcs, refit, arc_of, k)
+            new = self._answer(q_arr, arcs, arc_of, k)
+            if new:
+                rows = [[a.start, a.end, a.plane, 1] for a in new]
+                arc_i = np.concatenate([arc_i, np.array(rows, dtype=np.int64)])
+                arc_f = np.concatenate([arc_f, [[a.length, a.radius] for a in new]])
         self._lines(ops, q_arr, chunk, arcs, start_q)
         return self._hand_out()
 
-    def _answer(
-        self, q: np.ndarray, arcs: list[Arc], refit: list[bool], arc_of: np.ndarray, k: int
-    ) -> None:
+    def _answer(self, q: np.ndarray, arcs: list[Arc], arc_of: np.ndarray, k: int) -> list[Arc]:
         """The kernel's request at the point k (:data:`gwrite.REQ_REARC`,
         :data:`gwrite.REQ_ARC_TO`): the arc's points from k as arcs again
         (:func:`.arcs.refit_arcs`, those no arc fits left to lines), and for
-        ARC_TO first the arc from its start to k - 1 as one arc, where one fits."""
+        ARC_TO first the arc from its start to k - 1 as one arc, where one fits.
+        The new arcs are appended to ``arcs`` and returned (the kernel takes them
+        as refitted)."""
         st = self.state
+        n0 = len(arcs)
         arc = arcs[int(st.i[_I["req_arc"]])]
         if int(st.i[_I["req_kind"]]) == gwrite.REQ_ARC_TO:
             parts = refit_arcs(q, arc, arc.start, self.tol, self.tilt_chord, self.dec, k - 1)
             st.i[_I["req_answer"]] = -1
             if len(parts) == 1 and parts[0].end == k - 1:
                 arcs.append(parts[0])
-                refit.append(True)
                 st.i[_I["req_answer"]] = len(arcs) - 1
         arc_of[k : arc.end + 1] = -1
         for part in refit_arcs(q, arc, k, self.tol, self.tilt_chord, self.dec):
             arcs.append(part)
-            refit.append(True)
             arc_of[part.start + 1 : part.end + 1] = len(arcs) - 1
+        return arcs[n0:]
 
     def _arcs(
         self, q: np.ndarray, chunk: PointChunk, fn: np.ndarray
@@ -509,29 +511,25 @@ class GcodeWriter:
     ) -> None:
         """The G2/G3 lines (their G1 text made the arc's: its motion word and center
         words, offsets from the point written before) and the plane words."""
-        at = np.flatnonzero(
-            (code == gwrite.ARC)
-            | (code == gwrite.PLANE)
-            | (code == gwrite.G1)
-            | (code == gwrite.G0)
-        )
-        if not np.any(code[at] >= gwrite.ARC):
+        for i in np.flatnonzero(code == gwrite.PLANE).tolist():
+            lines[i] = f"G{int(aux[i])}\n"
+        # each arc's start: the point of the move written before it (G0, G1 or an
+        # arc), or the chunk's start
+        moves = np.flatnonzero((code == gwrite.ARC) | (code == gwrite.G1) | (code == gwrite.G0))
+        pos = np.flatnonzero(code[moves] == gwrite.ARC)
+        if not pos.size:
             return
-        start = start_q.tolist()
-        for i in at.tolist():
-            c = int(code[i])
-            if c == gwrite.PLANE:
-                lines[i] = f"G{int(aux[i])}\n"
-                continue
-            if c == gwrite.ARC:
-                a = int(aux[i])
-                arc = self.kept_arc if a == gwrite.CORNER_SRC else arcs[a]
-                assert arc is not None
-                head, tail = arc_words(arc, start, self.dec)
-                row = lines[i]
-                cut = row.rindex(" F")
-                lines[i] = head + row[2:cut] + tail + row[cut:]
-            start = q_all[int(arg[i])].tolist()
+        before = q_all[arg[moves[np.maximum(pos - 1, 0)]]]
+        starts = before.tolist()
+        if pos[0] == 0:
+            starts[0] = start_q.tolist()
+        for i, a, start in zip(moves[pos].tolist(), aux[moves[pos]].tolist(), starts, strict=True):
+            arc = self.kept_arc if a == gwrite.CORNER_SRC else arcs[a]
+            assert arc is not None
+            head, tail = arc_words(arc, start, self.dec)
+            row = lines[i]
+            cut = row.rindex(" F")
+            lines[i] = head + row[2:cut] + tail + row[cut:]
 
     @property
     def _const(self) -> np.ndarray:
