@@ -41,26 +41,15 @@ cdef inline double _wrap(double d) noexcept nogil:
     return m - M_PI
 
 
-cdef bint _fit(const double* q, Py_ssize_t m, int plane, double tol_mm, double tol_deg,
-               double p10, double* rho, double* phi, double* out) noexcept nogil:
-    """arcs.fit of the m rows (5 values each) at q: out[0..6] ccw, the center X Y Z,
-    the length, the error, the radius; False where no arc fits. rho, phi: m
-    values of scratch each."""
-    cdef int iu, iv, iw
+cdef bint _center(const double* q, Py_ssize_t m, int iu, int iv, double p10,
+                  double* cc) noexcept nogil:
+    """The center of the arc from q's first row to its last through the rows between
+    (m ≥ 3) in the plane's (u, v), as written: cc[0], cc[1]; False where the points
+    lie on the chord (arcs.fit's first part)."""
     cdef Py_ssize_t i, last = (m - 1) * 5
-    cdef double su, sv, sw, eu, ev, ew, cu, cv, chord, nu, nv, mu, mv, k, xu, xv, a, b
-    cdef double bb = 0.0, ab = 0.0, t, ccu, ccv, pu, pv, r0, r1, r_lo, r_hi, ang, prev, step, sweep
-    cdef double f, radial, axial, e, err, sa, sb, ea, eb, x, y, spiral
-    cdef int way
-    if m < 3:
-        return False
-    _axes(plane, &iu, &iv, &iw)
-    su = q[iu]
-    sv = q[iv]
-    sw = q[iw]
-    eu = q[last + iu]
-    ev = q[last + iv]
-    ew = q[last + iw]
+    cdef double su = q[iu], sv = q[iv], eu = q[last + iu], ev = q[last + iv]
+    cdef double cu, cv, chord, nu, nv, mu, mv, k, xu, xv, a, b, t
+    cdef double bb = 0.0, ab = 0.0
     cu = eu - su
     cv = ev - sv
     chord = sqrt(cu * cu + cv * cv)
@@ -85,14 +74,25 @@ cdef bint _fit(const double* q, Py_ssize_t m, int plane, double tol_mm, double t
     if not bb > 0.0:
         return False
     t = ab / bb
-    ccu = su + rint((mu + t * nu - su) * p10) / p10
-    ccv = sv + rint((mv + t * nv - sv) * p10) / p10
-    pu = su - ccu
-    pv = sv - ccv
+    cc[0] = su + rint((mu + t * nu - su) * p10) / p10
+    cc[1] = sv + rint((mv + t * nv - sv) * p10) / p10
+    return True
+
+
+cdef bint _angles(const double* q, Py_ssize_t m, int iu, int iv, double ccu, double ccv,
+                  double tol_mm, double* rho, double* phi) noexcept nogil:
+    """Each row's radius rho[i] and angle from the first phi[i] (unwrapped); False
+    where a radius leaves the band of the ends' by more than ``tol_mm`` or the
+    angles do not advance one way."""
+    cdef Py_ssize_t i, last = (m - 1) * 5
+    cdef double pu, pv, r0, r1, r_lo, r_hi, ang, prev, step
+    cdef int way = 0
+    pu = q[iu] - ccu
+    pv = q[iv] - ccv
     r0 = sqrt(pu * pu + pv * pv)
     prev = atan2(pv, pu)
-    pu = eu - ccu
-    pv = ev - ccv
+    pu = q[last + iu] - ccu
+    pv = q[last + iv] - ccv
     r1 = sqrt(pu * pu + pv * pv)
     if r1 < r0:
         r_lo = r1
@@ -103,10 +103,8 @@ cdef bint _fit(const double* q, Py_ssize_t m, int plane, double tol_mm, double t
     r_hi = r_hi + tol_mm
     if r0 > r_hi or r0 < r_lo - tol_mm:
         return False
-    # the radii within the band, the angles one way, in one pass
     rho[0] = r0
     phi[0] = 0.0
-    way = 0
     for i in range(1, m):
         pu = q[i * 5 + iu] - ccu
         pv = q[i * 5 + iv] - ccv
@@ -130,14 +128,38 @@ cdef bint _fit(const double* q, Py_ssize_t m, int plane, double tol_mm, double t
             phi[i] = step
         else:
             phi[i] = phi[i - 1] + step
+    return True
+
+
+cdef bint _fit(const double* q, Py_ssize_t m, int plane, double tol_mm, double tol_deg,
+               double p10, double* rho, double* phi, double* out) noexcept nogil:
+    """arcs.fit of the m rows (5 values each) at q: out[0..6] ccw, the center X Y Z,
+    the length, the error, the radius; False where no arc fits. rho, phi: m
+    values of scratch each."""
+    cdef int iu, iv, iw
+    cdef Py_ssize_t i, last = (m - 1) * 5
+    cdef double cc[2]
+    cdef double sw, ew, r0, r1, r_lo, sweep, f, radial, axial, e, err = 0.0
+    cdef double sa, sb, ea, eb, x, y, spiral
+    if m < 3:
+        return False
+    _axes(plane, &iu, &iv, &iw)
+    if not _center(q, m, iu, iv, p10, cc):
+        return False
+    if not _angles(q, m, iu, iv, cc[0], cc[1], tol_mm, rho, phi):
+        return False
     sweep = phi[m - 1]
     if not fabs(sweep) <= MAX_SWEEP:
         return False
+    r0 = rho[0]
+    r1 = rho[m - 1]
+    r_lo = r1 if r1 < r0 else r0
+    sw = q[iw]
+    ew = q[last + iw]
     sa = q[3]
     sb = q[4]
     ea = q[last + 3]
     eb = q[last + 4]
-    err = 0.0
     for i in range(m):
         f = phi[i] / sweep
         radial = rho[i] - (r0 + (r1 - r0) * f)
@@ -152,8 +174,8 @@ cdef bint _fit(const double* q, Py_ssize_t m, int plane, double tol_mm, double t
         if not fabs(q[i * 5 + 4] - (sb + (eb - sb) * f)) <= tol_deg:
             return False
     out[0] = 1.0 if sweep > 0.0 else 0.0
-    out[1 + iu] = ccu
-    out[1 + iv] = ccv
+    out[1 + iu] = cc[0]
+    out[1 + iv] = cc[1]
     out[1 + iw] = sw
     x = r_lo * fabs(sweep)
     y = r1 - r0
