@@ -41,9 +41,10 @@ def test_sample_programs_rows_are_byte_identical(tmp_path: Path) -> None:
         want = text.format_fixed_rows(columns, end)
         assert _text.format_fixed_rows(columns, end) == want
         rows += len(want)
-    # the G-code writer formats the lines it writes (4 002 rows over the samples),
-    # not every point
-    assert rows > 3_000
+    # the G-code writer formats the lines it writes, not every point: 108 rows over
+    # the samples since their arcs are written as G2/G3 (issue 33; 4 002 before),
+    # each arc's row among them; the generated rows below cover the formatting
+    assert rows > 100
 
 
 @settings(max_examples=300, deadline=None)
