@@ -1237,7 +1237,11 @@ class Pipeline:
         k = b[alone] + 1
         # in no other window, no window's edge, no machine function there
         within = _windows_over(b, e, k)
-        edge = np.isin(k, e) | np.isin(k, b)
+        # a window's edge: marked once a point (np.isin sorts both every chunk)
+        edges = np.zeros(len(pc) + 1, dtype=bool)
+        edges[e] = True
+        edges[b] = True  # b = −1 (before the chunk) marks the spare last slot
+        edge = edges[k]
         plain = np.array([f is None for f in pc.fn[k]], dtype=bool)
         ok = (within == 1) & ~edge & plain & ~pc.dwell[k]
         k, bb, ee = k[ok], b[alone][ok], e[alone][ok]
