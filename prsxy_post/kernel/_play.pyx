@@ -404,52 +404,81 @@ def clamp_scan(lo, hi):
     return out
 
 
-cdef Py_ssize_t _roots(const double* Pa, const double* Va, const double* P, const double* V,
-                       const double* hv, Py_ssize_t n, bint cubic, signed char* kind,
-                       double* S) noexcept nogil:
+cdef inline bint _out01(double num, double den) noexcept nogil:
+    """num / den rounded is surely not inside (0, 1), seen without dividing:
+    rounding is monotone and keeps 0 and 1, so a quotient at or below 0 or at or
+    above 1 stays there (NaN and the unsure: False, the division decides)."""
+    if den > 0:
+        return num <= 0 or num >= den
+    if den < 0:
+        return num >= 0 or num <= den
+    return False
+
+
+cdef Py_ssize_t _roots(const double* P0, const double* V0, const long* st, Py_ssize_t w,
+                       const double* P, const double* V, const double* hv, Py_ssize_t n,
+                       bint cubic, signed char* kind, double* S) noexcept nogil:
     """Each step's turning points inside it (0, 1 or 2 into ``kind``; their
     fractions into the rows of S (n, 2), NaN for a missing second), as
-    :func:`play.follow_stretches` finds them; returns how many steps turn."""
-    cdef Py_ssize_t i, nt = 0
-    cdef double h, hh, d, a, b, c, disc, sq, r1, r2
+    :func:`play.follow_stretches` finds them, the command before each step taken
+    where it is (a stretch's first from ``P0``, ``V0``); returns how many steps
+    turn."""
+    cdef Py_ssize_t i = 0, j, k, nt = 0
+    cdef double h, hh, d, a, b, c, disc, sq, r1, r2, pa, va, den, n1, n2
     cdef bint ok1, ok2
     if not cubic:
         # straight lines: no step turns inside (ok1, ok2 below are false)
         for i in range(n):
             kind[i] = 0
         return 0
-    for i in range(n):
-        h = hv[i]
-        hh = h if h > 0 else INFINITY
-        d = (Pa[i] - P[i]) / hh
-        a = 6.0 * d + 3.0 * (Va[i] + V[i])
-        b = -6.0 * d - 4.0 * Va[i] - 2.0 * V[i]
-        c = Va[i]
-        disc = b * b - 4.0 * a * c
-        kind[i] = 0
-        if not (disc >= 0 and h > 0):
-            # no root inside (ok1, ok2 below are false, NaN included): the
-            # square root and the divisions are not needed
-            continue
-        sq = sqrt(_max(disc, 0.0))
-        if fabs(a) > 1e-300:
-            r1 = (-b - sq) / (2 * a)
-            r2 = (-b + sq) / (2 * a)
-        else:
-            r1 = -c / b if b != 0 else -1.0
-            r2 = -1.0
-        ok1 = disc >= 0 and r1 > 0 and r1 < 1 and h > 0 and cubic
-        ok2 = disc >= 0 and r2 > 0 and r2 < 1 and h > 0 and fabs(r2 - r1) > 0 and cubic
-        if ok1 and ok2:
-            S[2 * nt] = _min(r1, r2)
-            S[2 * nt + 1] = _max(r1, r2)
-            kind[i] = 2
-            nt += 1
-        elif ok1 or ok2:
-            S[2 * nt] = r1 if ok1 else r2
-            S[2 * nt + 1] = NAN
-            kind[i] = 1
-            nt += 1
+    for j in range(w):
+        for k in range(st[j]):
+            if k == 0:
+                pa = P0[j]
+                va = V0[j]
+            else:
+                pa = P[i - 1]
+                va = V[i - 1]
+            h = hv[i]
+            hh = h if h > 0 else INFINITY
+            d = (pa - P[i]) / hh
+            a = 6.0 * d + 3.0 * (va + V[i])
+            b = -6.0 * d - 4.0 * va - 2.0 * V[i]
+            c = va
+            disc = b * b - 4.0 * a * c
+            kind[i] = 0
+            if not (disc >= 0 and h > 0):
+                # no root inside (ok1, ok2 below are false, NaN included): the
+                # square root and the divisions are not needed
+                i += 1
+                continue
+            sq = sqrt(_max(disc, 0.0))
+            if fabs(a) > 1e-300:
+                den = 2 * a
+                n1 = -b - sq
+                n2 = -b + sq
+                if _out01(n1, den) and _out01(n2, den):
+                    # neither root inside (ok1, ok2 below are false): no division
+                    i += 1
+                    continue
+                r1 = n1 / den
+                r2 = n2 / den
+            else:
+                r1 = -c / b if b != 0 else -1.0
+                r2 = -1.0
+            ok1 = disc >= 0 and r1 > 0 and r1 < 1 and h > 0 and cubic
+            ok2 = disc >= 0 and r2 > 0 and r2 < 1 and h > 0 and fabs(r2 - r1) > 0 and cubic
+            if ok1 and ok2:
+                S[2 * nt] = _min(r1, r2)
+                S[2 * nt + 1] = _max(r1, r2)
+                kind[i] = 2
+                nt += 1
+            elif ok1 or ok2:
+                S[2 * nt] = r1 if ok1 else r2
+                S[2 * nt + 1] = NAN
+                kind[i] = 1
+                nt += 1
+            i += 1
     return nt
 
 
@@ -491,27 +520,18 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
     cdef double[::1] ye = y_end
     cdef double[::1] ymn = y_min
     cdef double[::1] ymx = y_max
-    # per step: the command before it and its turning points (0, 1 or 2)
-    Pa_a = np.empty(n)
-    Va_a = np.empty(n)
-    kind_a = np.zeros(n, dtype=np.int8)  # 0: none, 1: one turn, 2: two
-    cdef double[::1] Pa = Pa_a
-    cdef double[::1] Va = Va_a
+    # per step: its turning points (0, 1 or 2) and where they are
+    kind_a = np.empty(n, dtype=np.int8)  # 0: none, 1: one turn, 2: two
     cdef signed char[::1] kind = kind_a
     S_a = np.empty((n, 2))
     cdef double[:, ::1] S = S_a
-    i = 0
-    for j in range(w):
-        for k in range(st[j]):
-            Pa[i] = P0v[j] if k == 0 else Pv[i - 1]
-            Va[i] = V0v[j] if k == 0 else Vv[i - 1]
-            i += 1
-    nt = _roots(&Pa[0], &Va[0], &Pv[0], &Vv[0], &hv[0], n, cubic, &kind[0], &S[0, 0])
+    nt = _roots(&P0v[0], &V0v[0], &st[0], w, &Pv[0], &Vv[0], &hv[0], n, cubic, &kind[0],
+                &S[0, 0])
     # s**3 as the reference takes it: numpy's power over the (turns, 2) array
     cdef double[:, ::1] S3
     if nt:
         S3 = np.ascontiguousarray(S_a[:nt]) ** 3
-    cdef double x, y = 0.0, lo_x, hi_x, mn, mx
+    cdef double x, y = 0.0, lo_x, hi_x, mn, mx, pa = 0.0, va = 0.0
     cdef bint started = False
     cdef Py_ssize_t g = -1
     i = 0
@@ -522,19 +542,29 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
                 # the stretch opens where its part stands
                 y = y0v[j] if not started else _min(_max(y, y0v[j]), y0v[j])
                 started = True
-            mn = INFINITY
-            mx = -INFINITY
-            for m in range(kind[i] + 1):
-                if m < kind[i]:
-                    x = _hermite(S[ti, m], S3[ti, m], Pa[i], Va[i], Pv[i], Vv[i], hv[i])
-                else:
-                    x = Pv[i]
-                g = _lo_hi(T, x, &lo_x, &hi_x, g)
-                y = _min(_max(y, lo_x), hi_x)
-                mn = _min(mn, y)  # numpy's reduce: a NaN wins
-                mx = _max(mx, y)
             if kind[i]:
+                # the command before the step, for its cubic
+                pa = P0v[j] if k == 0 else Pv[i - 1]
+                va = V0v[j] if k == 0 else Vv[i - 1]
+                mn = INFINITY
+                mx = -INFINITY
+                for m in range(kind[i]):
+                    x = _hermite(S[ti, m], S3[ti, m], pa, va, Pv[i], Vv[i], hv[i])
+                    g = _lo_hi(T, x, &lo_x, &hi_x, g)
+                    y = _min(_max(y, lo_x), hi_x)
+                    mn = _min(mn, y)  # numpy's reduce: a NaN wins
+                    mx = _max(mx, y)
                 ti += 1
+                g = _lo_hi(T, Pv[i], &lo_x, &hi_x, g)
+                y = _min(_max(y, lo_x), hi_x)
+                mn = _min(mn, y)
+                mx = _max(mx, y)
+            else:
+                g = _lo_hi(T, Pv[i], &lo_x, &hi_x, g)
+                y = _min(_max(y, lo_x), hi_x)
+                # one sample: numpy's reduce of one value is the value
+                mn = y
+                mx = y
             ye[i] = y
             ymn[i] = mn
             ymx[i] = mx
@@ -567,20 +597,20 @@ cdef void _taken_up_ahead(const double* off, const double* wy, const signed char
     cdef Py_ssize_t i, j, k = 0
     cdef double cum = 0.0, before, ds, take, w, sv
     for i in range(m):
+        if not ahead[i]:
+            # takes of 0.0: the running sum (never −0.0) stays as it is
+            k += length[i]
+            continue
         before = cum
         w = wy[i]
         for j in range(length[i]):
-            if ahead[i]:
-                ds = s[idx[k]] - (s[idx[k] - 1] if idx[k] >= 1 else 0.0)
-                take = _min(rate[i] * ds, _max(0.5 * w * dP[idx[k]], 0.0))
-            else:
-                take = 0.0
+            ds = s[idx[k]] - (s[idx[k] - 1] if idx[k] >= 1 else 0.0)
+            take = _min(rate[i] * ds, _max(0.5 * w * dP[idx[k]], 0.0))
             cum = cum + take
-            if ahead[i]:
-                mag[k] = _max(fabs(off[i]) - (cum - before), 0.0)
-                sv = speed[idx[k]]
-                if sv > 0:
-                    steep_motor[k] = _max(0.5 * w * Vm[idx[k]], 0.0) / sv
+            mag[k] = _max(fabs(off[i]) - (cum - before), 0.0)
+            sv = speed[idx[k]]
+            if sv > 0:
+                steep_motor[k] = _max(0.5 * w * Vm[idx[k]], 0.0) / sv
             k += 1
 
 
@@ -618,17 +648,23 @@ cdef Py_ssize_t _rates(const double* off, const signed char* ahead, const long* 
         need = fabs(off[i]) / room if room > 0 else INFINITY
         rate[i] = _max(need, share) if need <= hurry * share else share
         key = s0[i] + fabs(off[i]) / rate[i]
-        lo_ = 0
-        hi_ = n
-        while lo_ < hi_:
-            mid = (lo_ + hi_) >> 1
-            if _lt(s[mid], key):
-                lo_ = mid + 1
-            else:
-                hi_ = mid
-        gone = lo_
-        end = last[i] + 1 if ahead[i] else (last[i] + 1 if last[i] + 1 < gone else gone)
         first = st[i] + 1
+        if ahead[i]:
+            end = last[i] + 1
+        else:
+            # searched between first and last + 1 only: s (sorted, NaN last) puts
+            # a point found before first at first, and one after last + 1 at
+            # last + 1, where end and length below clip it the same
+            lo_ = first
+            hi_ = last[i] + 1
+            while lo_ < hi_:
+                mid = (lo_ + hi_) >> 1
+                if _lt(s[mid], key):
+                    lo_ = mid + 1
+                else:
+                    hi_ = mid
+            gone = lo_
+            end = last[i] + 1 if last[i] + 1 < gone else gone
         length[i] = end - first if end - first > 0 else 0
         K += length[i]
     return K
