@@ -645,7 +645,8 @@ cdef void _taken_up_ahead(const double* off, const double* wy, const signed char
             take = _min(rate[i] * ds, _max(0.5 * w * dP[idx[k]], 0.0))
             cum = cum + take
             mag[k] = _max(fabs(off[i]) - (cum - before), 0.0)
-            sv = speed[idx[k]]
+            # the motor's limit only where an offset is left (_slopes reads no other)
+            sv = speed[idx[k]] if mag[k] > 0 else 0.0
             if sv > 0:
                 steep_motor[k] = _max(0.5 * w * Vm[idx[k]], 0.0) / sv
             k += 1
