@@ -34,6 +34,10 @@ cdef struct Tab:
     const double* amp
     const double* period
     const double* phase
+    # the inverses' slopes, breaks over vals, interval by interval (b − 1,): the
+    # division numpy's interp makes (beforehand, or at each point: the same)
+    const double* si_lo
+    const double* si_hi
     Py_ssize_t nb
     Py_ssize_t nc
 
@@ -172,10 +176,11 @@ cdef inline double _invert(double x, const double* vals, const double* breaks,
 
 
 cdef inline double _invert_g(double x, const double* vals, const double* breaks,
-                             const double* err, Py_ssize_t n, Py_ssize_t* g) noexcept nogil:
+                             const double* err, const double* si, Py_ssize_t n,
+                             Py_ssize_t* g) noexcept nogil:
     """:func:`_invert`, its interval searched from the guess ``g`` (numpy's interp
     guesses the interval before; the interval found is the same, unique), the
-    interval found left in ``g``."""
+    interval found left in ``g``; ``si`` the intervals' slopes (breaks over vals)."""
     cdef double out
     if n == 1:
         out = breaks[0]
@@ -183,7 +188,7 @@ cdef inline double _invert_g(double x, const double* vals, const double* breaks,
         out = x
     else:
         g[0] = _find(x, vals, n, g[0])
-        out = _at(x, g[0], vals, breaks, n)
+        out = _at_s(x, g[0], vals, breaks, si, n)
     if x < vals[0]:
         out = x - err[0]
     elif x > vals[n - 1]:
@@ -196,11 +201,12 @@ cdef void _solve(const Tab* t, const double* target, double* out, Py_ssize_t n,
     """lo⁻¹ (``up``) or hi⁻¹ of ``target`` (n,) into ``out``; ``scratch`` (n,)."""
     cdef const double* vals = t.lo_vals if up else t.hi_vals
     cdef const double* err = t.lo_err if up else t.hi_err
+    cdef const double* si = t.si_lo if up else t.si_hi
     cdef Py_ssize_t i, it, g = -1
     cdef double big, d
     cdef bint nan
     for i in range(n):
-        out[i] = _invert_g(target[i], vals, t.breaks, err, t.nb, &g)
+        out[i] = _invert_g(target[i], vals, t.breaks, err, si, t.nb, &g)
     if t.nc == 0:
         return
     for it in range(30):
@@ -229,7 +235,22 @@ cdef class _Table:
         cdef const double* ptr[10]
         cdef Py_ssize_t size[10]
         cdef int k
+        cdef Py_ssize_t j
+        cdef double[::1] si_lo
+        cdef double[::1] si_hi
         self.keep = [np.ascontiguousarray(a, dtype=np.float64) for a in t]
+        nb = len(self.keep[0])
+        si = np.empty((2, nb))
+        si_lo, si_hi = si[0], si[1]
+        cdef const double[::1] br = self.keep[0]
+        cdef const double[::1] lv = self.keep[3]
+        cdef const double[::1] hv = self.keep[4]
+        for j in range(nb - 1):
+            si_lo[j] = (br[j + 1] - br[j]) / (lv[j + 1] - lv[j])
+            si_hi[j] = (br[j + 1] - br[j]) / (hv[j + 1] - hv[j])
+        self.keep.append(si)
+        self.tab.si_lo = &si_lo[0] if nb else NULL
+        self.tab.si_hi = &si_hi[0] if nb else NULL
         for k in range(10):
             v = self.keep[k]
             size[k] = v.shape[0]
@@ -355,8 +376,16 @@ cdef int _sided_core(const Tab* T, const double* x, const double* sd, Py_ssize_t
     """:func:`play.compensate_sided` of ``x`` (n,) on sides ``sd`` (n,) into ``o``:
     each side solved as one array (the periodic terms' iteration runs until the
     whole array has settled, as the reference's)."""
-    cdef Py_ssize_t i, nu = 0, nd = 0
+    cdef Py_ssize_t i, nu = 0, nd = 0, g_up = -1, g_dn = -1
     if n == 0:
+        return 0
+    if T.nc == 0:
+        # no iteration: each value on its own (the guesses change the time only)
+        for i in range(n):
+            if sd[i] > 0:
+                o[i] = _invert_g(x[i], T.lo_vals, T.breaks, T.lo_err, T.si_lo, T.nb, &g_up)
+            else:
+                o[i] = _invert_g(x[i], T.hi_vals, T.breaks, T.hi_err, T.si_hi, T.nb, &g_dn)
         return 0
     cdef double* g = <double*>PyMem_Malloc(3 * n * sizeof(double))
     if g == NULL:
