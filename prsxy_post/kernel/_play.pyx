@@ -263,11 +263,24 @@ cdef class _Table:
         self.tab.nc = size[7]
 
 
+#: the tables made, by the id of the PlayTable they hold (kept alive here, so the id
+#: is theirs): a table (``MotorTable.flat``, made once) is made into its struct once
+#: rather than at every call
+_TABLES = {}
+
+
 cdef _Table _table(t):
     # the settle hands its pieces the table it made once
     if type(t) is _Table:
         return <_Table>t
-    return _Table(t)
+    hit = _TABLES.get(id(t))
+    if hit is not None and hit[0] is t:
+        return <_Table>hit[1]
+    tb = _Table(t)
+    if len(_TABLES) >= 64:
+        _TABLES.clear()
+    _TABLES[id(t)] = (t, tb)
+    return tb
 
 
 def _vec(p):
