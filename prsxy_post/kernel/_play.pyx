@@ -512,8 +512,8 @@ cdef Py_ssize_t _roots(const double* P0, const double* V0, const long* st, Py_ss
                 # square root and the divisions are not needed
                 i += 1
                 continue
-            sq = sqrt(_max(disc, 0.0))
             if fabs(a) > 1e-300:
+                sq = sqrt(_max(disc, 0.0))  # (the other branch takes no root)
                 den = 2 * a
                 n1 = -b - sq
                 n2 = -b + sq
