@@ -1205,7 +1205,8 @@ class Pipeline:
         cubic = self.limits.segment == "cubic"
         table = self.tables[MOTORS[col]]
         e, b = mine[:, 0], mine[:, 1]
-        self._across(t, e, b, before[1], P_cmd[col], V_cmd[col])
+        across = self._across_rows(t, e, b)
+        self._across(across, before[1], P_cmd[col], V_cmd[col])
         r = kernel.settle_crossings(
             table.flat,
             mo,
@@ -1222,7 +1223,7 @@ class Pipeline:
         P_cmd[col], V_cmd[col] = r.P, r.V
         if not np.isnan(r.carry):
             self.catch[col] = r.carry
-        self._across(t, e, b, before[1], P_cmd[col], V_cmd[col])
+        self._across(across, before[1], P_cmd[col], V_cmd[col])
         return r.y, r.P_last, r.V_last
 
     def _straight_through(
@@ -1264,33 +1265,43 @@ class Pipeline:
         k, bb, ee, frac = k[near], bb[near], ee[near], frac[near]
         P_cmd[:, k] = P_cmd[:, bb] + frac.T * (P_cmd[:, ee] - P_cmd[:, bb])
 
-    def _across(
-        self,
-        t: np.ndarray,
-        e: np.ndarray,
-        b: np.ndarray,
-        P0: float,
-        P: np.ndarray,
-        V: np.ndarray,
-    ) -> None:
-        """Straight lines between the points (corrected G-code): the points inside
-        a motor's crossing windows that begin at ``b`` and end at ``e`` (a step's
-        end where the window reaches past it, another motor's window edge) on the
-        straight way from the window's first command to its last, by time ``t``
-        (n,) [s] since the point before the chunk (``P0``: the command before the
-        chunk). Commanded on the old side, the motor pushed its part on up to the
-        point inside, and the window was one on one side of the root. The motor's
-        commands ``P``, ``V`` (n,) [mm, mm/s] are updated in place."""
+    def _across_rows(
+        self, t: np.ndarray, e: np.ndarray, b: np.ndarray
+    ) -> tuple[np.ndarray, ...] | None:
+        """The points inside a motor's crossing windows that begin at ``b`` and end
+        at ``e`` for :meth:`_across`, with what it reckons from the times ``t`` (n,)
+        [s] since the point before the chunk: the points, each window's first point
+        (clipped to 0) and whether it is in the chunk, its last point, and the
+        time from the first to the last and to each point. None where there are
+        none (or the segments are cubics)."""
         inner = e - b - 1
         if self.limits.segment == "cubic" or not np.any(inner > 0):
-            return
+            return None
         w = np.flatnonzero(inner > 0)
         idx = play.ranges(b[w] + 1, inner[w])
         bb, ee = np.repeat(b[w], inner[w]), np.repeat(e[w], inner[w])
-        t_b = np.where(bb >= 0, t[np.maximum(bb, 0)], 0.0)
-        P_b = np.where(bb >= 0, P[np.maximum(bb, 0)], P0)
-        rate = (P[ee] - P_b) / (t[ee] - t_b)
-        P[idx] = P_b + rate * (t[idx] - t_b)
+        inside, b0 = bb >= 0, np.maximum(bb, 0)
+        t_b = np.where(inside, t[b0], 0.0)
+        return idx, b0, inside, ee, t[ee] - t_b, t[idx] - t_b
+
+    @staticmethod
+    def _across(
+        rows: tuple[np.ndarray, ...] | None, P0: float, P: np.ndarray, V: np.ndarray
+    ) -> None:
+        """Straight lines between the points (corrected G-code): the points inside
+        a motor's crossing windows (``rows``: :meth:`_across_rows`; a step's end
+        where the window reaches past it, another motor's window edge) on the
+        straight way from the window's first command to its last, by time (``P0``:
+        the command before the chunk). Commanded on the old side, the motor pushed
+        its part on up to the point inside, and the window was one on one side of
+        the root. The motor's commands ``P``, ``V`` (n,) [mm, mm/s] are updated in
+        place."""
+        if rows is None:
+            return
+        idx, b0, inside, ee, span, since = rows
+        P_b = np.where(inside, P[b0], P0)
+        rate = (P[ee] - P_b) / span
+        P[idx] = P_b + rate * since
         V[idx] = rate
 
     def _crossing_short(self, q: np.ndarray, tool: np.ndarray, col: int) -> np.ndarray:
