@@ -1133,7 +1133,11 @@ class Pipeline:
         # made): a part left ahead of its way is taken up no faster than they go
         P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
         P_ideal, V_ideal, side = (a[col] for a in by_motor)
-        dP = np.diff(P_ideal, prepend=P_before)
+        # np.diff with P_before prepended, without the joined copy
+        dP = np.empty(n)
+        if n:
+            dP[0] = P_ideal[0] - P_before
+            np.subtract(P_ideal[1:], P_ideal[:-1], out=dP[1:])
         mo = play.Motion(
             *(
                 np.ascontiguousarray(a, dtype=float)
