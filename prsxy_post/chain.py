@@ -765,14 +765,21 @@ class Pipeline:
             self.t = float(t[-1])
         self.n_points += len(pc)
         if reachable and self.table_cols:
-            P_cmd = pc.P_ideal.copy()
-            V_cmd = pc.V_ideal.copy()
+            # every motor's columns as contiguous rows (5, n), made in one pass each
+            # (a column read alone reads the whole array): the commands are made
+            # motor by motor in these rows and turned back once
+            by_motor = (
+                np.ascontiguousarray(pc.P_ideal.T, dtype=float),
+                np.ascontiguousarray(pc.V_ideal.T, dtype=float),
+                np.ascontiguousarray(side.T, dtype=float),
+            )
+            P_cmd, V_cmd = by_motor[0].copy(), by_motor[1].copy()
             for col, table in self.table_cols:
-                P_cmd[:, col] = axiscomp.compensate_sided(table, pc.P_ideal[:, col], side[:, col])
-                V_cmd[:, col] = pc.V_ideal[:, col] / table.slope(P_cmd[:, col], side[:, col])
+                P_cmd[col] = axiscomp.compensate_sided(table, by_motor[0][col], by_motor[2][col])
+                V_cmd[col] = by_motor[1][col] / table.slope(P_cmd[col], by_motor[2][col])
             if self.play_cols:
-                self._settle(pc, side, contacts, P_cmd, V_cmd)
-            pc.P_cmd, pc.V_cmd = P_cmd, V_cmd
+                self._settle(pc, by_motor, contacts, P_cmd, V_cmd)
+            pc.P_cmd, pc.V_cmd = np.ascontiguousarray(P_cmd.T), np.ascontiguousarray(V_cmd.T)
         self.timings["axis_tables"] += time.perf_counter() - t0
         self.last = pc.take(slice(len(pc) - 1, len(pc)))
         self.last_plain = plain_last
@@ -1042,7 +1049,7 @@ class Pipeline:
     def _settle(
         self,
         pc: PointChunk,
-        side: np.ndarray,
+        by_motor: tuple[np.ndarray, np.ndarray, np.ndarray],
         contacts: np.ndarray,
         P_cmd: np.ndarray,
         V_cmd: np.ndarray,
@@ -1068,27 +1075,26 @@ class Pipeline:
         commands as written, :func:`.kernel.play.follow_stretches`), and what is left
         at the chunk's end goes on in the next. Per motor, the kernel does it over
         arrays (:func:`.kernel.play.settle_crossings`).
+
+        ``by_motor``: the chunk's P_ideal, V_ideal and sides, (5, n) each; the
+        commands ``P_cmd``, ``V_cmd`` (5, n) [mm, mm/s] are rows the same way.
         """
         s_path = self._path_run(pc)
+        t = np.cumsum(pc.dt)  # since the point before the chunk
         if self.written.space == "motor":
             short = np.full(len(contacts), self.written.digit)
         else:
             # motors often reverse at the same point: the IK's Jacobian once a row
             rows, at = np.unique(contacts[:, 0], return_inverse=True)
             short = self._shorts(pc.q_target[rows], pc.tool_length[rows], at, contacts[:, 2])
-        # every motor's columns as contiguous rows, made in one pass each (a
-        # column copied alone reads the whole array)
-        by_motor = (
-            np.ascontiguousarray(pc.P_ideal.T, dtype=float),
-            np.ascontiguousarray(pc.V_ideal.T, dtype=float),
-            np.ascontiguousarray(side.T, dtype=float),
-        )
         for col in self.play_cols:
             ours = contacts[:, 2] == col
-            self._settle_motor(pc, by_motor, contacts[ours], short[ours], col, P_cmd, V_cmd, s_path)
+            self._settle_motor(
+                pc, by_motor, contacts[ours], short[ours], col, P_cmd, V_cmd, (s_path, t)
+            )
         if self.limits.segment != "cubic":
-            self._straight_through(pc, contacts, P_cmd)
-        self.last_cmd = (P_cmd[-1].copy(), V_cmd[-1].copy())
+            self._straight_through(pc, contacts, P_cmd, t)
+        self.last_cmd = (P_cmd[:, -1].copy(), V_cmd[:, -1].copy())
 
     def _path_run(self, pc: PointChunk) -> np.ndarray:
         """The path length run by each point since the point before the chunk,
@@ -1108,16 +1114,18 @@ class Pipeline:
         col: int,
         P_cmd: np.ndarray,
         V_cmd: np.ndarray,
-        s_path: np.ndarray,
+        runs: tuple[np.ndarray, np.ndarray],
     ) -> None:
         """:meth:`_settle` for motor ``col`` through its crossings ``mine`` (c, 3)
         (rows of the contacts: end, beginning, column), each ending ``short`` (c,)
         [mm] of its contact (:meth:`_crossing_short`); ``by_motor`` the chunk's
         P_ideal, V_ideal and sides transposed, (5, n) each: its commands in ``P_cmd``,
-        ``V_cmd`` (n, 5) [mm, mm/s] updated in place, an offset left from the
+        ``V_cmd`` (5, n) [mm, mm/s] updated in place, an offset left from the
         chunk before taken up first; where its part is after the chunk kept in
-        ``play_y`` [mm]. ``s_path`` (n,) [mm] as :meth:`_path_run`."""
+        ``play_y`` [mm]. ``runs``: s_path (n,) [mm] as :meth:`_path_run`, and the
+        time (n,) [s] since the point before the chunk."""
         n = len(pc)
+        s_path, t = runs
         cubic = self.limits.segment == "cubic"
         table = self.tables[MOTORS[col]]
         y0, P0, V0 = self._part_before(col, P_cmd)
@@ -1125,7 +1133,11 @@ class Pipeline:
         # made): a part left ahead of its way is taken up no faster than they go
         P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
         P_ideal, V_ideal, side = (a[col] for a in by_motor)
-        dP = np.diff(P_ideal, prepend=P_before)
+        # np.diff with P_before prepended, without the joined copy
+        dP = np.empty(n)
+        if n:
+            dP[0] = P_ideal[0] - P_before
+            np.subtract(P_ideal[1:], P_ideal[:-1], out=dP[1:])
         mo = play.Motion(
             *(
                 np.ascontiguousarray(a, dtype=float)
@@ -1136,25 +1148,22 @@ class Pipeline:
         if carried:
             # what it leaves where the first crossing begins, the follow below sees
             stop = int(mine[0, 1]) if len(mine) else n
-            P, V = np.ascontiguousarray(P_cmd[:, col]), np.ascontiguousarray(V_cmd[:, col])
+            # the motor's rows, contiguous: updated in place
             _, carry = kernel.catch_up_commands(
                 table.flat,
                 mo,
                 np.array([carried]),
                 np.array([-1]),
                 np.array([stop]),
-                P,
-                V,
+                P_cmd[col],
+                V_cmd[col],
                 reversals.CATCH_UP_SHARE,
                 reversals.CATCH_UP_HURRY,
             )
-            P_cmd[:, col], V_cmd[:, col] = P, V
             if not np.isnan(carry):
                 self.catch[col] = carry
         if len(mine):
-            y0, P0, V0 = self._settle_crossings(
-                pc, mine, short, col, (y0, P0, V0), P_cmd, V_cmd, mo
-            )
+            y0, P0, V0 = self._settle_crossings(mine, short, col, (y0, P0, V0), P_cmd, V_cmd, mo, t)
             # from the last contact on, the corrected commands carry the part
             rest = slice(int(mine[:, 0].max()) + 1, len(pc))
         else:
@@ -1162,25 +1171,24 @@ class Pipeline:
         if rest.start < len(pc):
             y0 = float(
                 reversals.follow(
-                    table.flat, y0, P0, V0, P_cmd[rest, col], V_cmd[rest, col], pc.dt[rest], cubic
+                    table.flat, y0, P0, V0, P_cmd[col, rest], V_cmd[col, rest], pc.dt[rest], cubic
                 )[0][-1]
             )
         self.play_y[col] = y0
 
     def _part_before(self, col: int, P_cmd: np.ndarray) -> tuple[float, float, float]:
         """Where motor ``col``'s part stands before the chunk [mm], and the
-        command's position [mm] and velocity [mm/s] there."""
+        command's position [mm] and velocity [mm/s] there (``P_cmd`` (5, n))."""
         if self.last_cmd is None:
             table = self.tables[MOTORS[col]]
             # the contract: the first point is approached from below
-            y0 = float(table.lo(P_cmd[:1, col])[0])
-            return y0, float(P_cmd[0, col]), 0.0
+            y0 = float(table.lo(P_cmd[col, :1])[0])
+            return y0, float(P_cmd[col, 0]), 0.0
         prev_P, prev_V = self.last_cmd
         return self.play_y[col], float(prev_P[col]), float(prev_V[col])
 
     def _settle_crossings(
         self,
-        pc: PointChunk,
         mine: np.ndarray,
         short: np.ndarray,
         col: int,
@@ -1188,18 +1196,21 @@ class Pipeline:
         P_cmd: np.ndarray,
         V_cmd: np.ndarray,
         mo: play.Motion,
+        t: np.ndarray,
     ) -> tuple[float, float, float]:
         """End each of motor ``col``'s crossings ``mine`` where its part really
         stands (``short`` (c,) [mm] of it: :meth:`_crossing_short`), followed
         from ``before`` (the part [mm], the command [mm, mm/s] before the chunk)
         through the commands as made, and take up the part's offset after each, an
         offset carried into the next crossing reckoned again
-        (:func:`.kernel.play.settle_crossings`); ``mo`` the motor's columns. Returns
-        the part, the command's position and velocity at the last contact."""
+        (:func:`.kernel.play.settle_crossings`); ``mo`` the motor's columns, ``t``
+        (n,) [s] the time since the point before the chunk, the commands (5, n).
+        Returns the part, the command's position and velocity at the last contact."""
         cubic = self.limits.segment == "cubic"
         table = self.tables[MOTORS[col]]
         e, b = mine[:, 0], mine[:, 1]
-        self._across(pc, e, b, col, before[1], P_cmd, V_cmd)
+        across = self._across_rows(t, e, b)
+        self._across(across, before[1], P_cmd[col], V_cmd[col])
         r = kernel.settle_crossings(
             table.flat,
             mo,
@@ -1207,19 +1218,21 @@ class Pipeline:
             e,
             b,
             short,
-            P_cmd[:, col],
-            V_cmd[:, col],
+            P_cmd[col],
+            V_cmd[col],
             cubic,
             reversals.CATCH_UP_SHARE,
             reversals.CATCH_UP_HURRY,
         )
-        P_cmd[:, col], V_cmd[:, col] = r.P, r.V
+        P_cmd[col], V_cmd[col] = r.P, r.V
         if not np.isnan(r.carry):
             self.catch[col] = r.carry
-        self._across(pc, e, b, col, before[1], P_cmd, V_cmd)
+        self._across(across, before[1], P_cmd[col], V_cmd[col])
         return r.y, r.P_last, r.V_last
 
-    def _straight_through(self, pc: PointChunk, contacts: np.ndarray, P_cmd: np.ndarray) -> None:
+    def _straight_through(
+        self, pc: PointChunk, contacts: np.ndarray, P_cmd: np.ndarray, t: np.ndarray
+    ) -> None:
         """Straight lines between the points (corrected G-code): a planned point
         alone inside a crossing window (one that reaches over its step's end or
         start, :func:`.reversals.chord_windows`) put
@@ -1229,7 +1242,9 @@ class Pipeline:
         one before the root, standing 0.29 ms before it and 0.07 after, ran 0.29 %
         over F (test_controller_truth's found programs). Where the window's chord
         strays from the curve by more than a step's chord may (CURVE_SHARE of the
-        tolerance: interpolate.geometry), the point stays on the curve."""
+        tolerance: interpolate.geometry), the point stays on the curve. ``P_cmd``
+        (5, n) [mm] the commands, motor by motor; ``t`` (n,) [s] the time since
+        the point before the chunk."""
         e, b = contacts[:, 0], contacts[:, 1]
         alone = np.flatnonzero((e - b == 2) & (b >= 0))
         if not alone.size:
@@ -1237,11 +1252,14 @@ class Pipeline:
         k = b[alone] + 1
         # in no other window, no window's edge, no machine function there
         within = _windows_over(b, e, k)
-        edge = np.isin(k, e) | np.isin(k, b)
+        # a window's edge: marked once a point (np.isin sorts both every chunk)
+        edges = np.zeros(len(pc) + 1, dtype=bool)
+        edges[e] = True
+        edges[b] = True  # b = −1 (before the chunk) marks the spare last slot
+        edge = edges[k]
         plain = np.array([f is None for f in pc.fn[k]], dtype=bool)
         ok = (within == 1) & ~edge & plain & ~pc.dwell[k]
         k, bb, ee = k[ok], b[alone][ok], e[alone][ok]
-        t = np.cumsum(pc.dt)  # since the point before the chunk
         frac = ((t[k] - t[bb]) / (t[ee] - t[bb]))[:, None]
         q = pc.q
         stray = q[k] - (q[bb] + frac * (q[ee] - q[bb]))
@@ -1249,37 +1267,46 @@ class Pipeline:
             np.linalg.norm(stray[:, 3:], axis=1) <= CURVE_SHARE * self.limits.tolerance_deg
         )
         k, bb, ee, frac = k[near], bb[near], ee[near], frac[near]
-        P_cmd[k] = P_cmd[bb] + frac * (P_cmd[ee] - P_cmd[bb])
+        P_cmd[:, k] = P_cmd[:, bb] + frac.T * (P_cmd[:, ee] - P_cmd[:, bb])
 
-    def _across(
-        self,
-        pc: PointChunk,
-        e: np.ndarray,
-        b: np.ndarray,
-        col: int,
-        P0: float,
-        P_cmd: np.ndarray,
-        V_cmd: np.ndarray,
-    ) -> None:
-        """Straight lines between the points (corrected G-code): the points inside
-        crossing windows of motor ``col`` that begin at ``b`` and end at ``e`` (a
-        step's end where the window reaches past it, another motor's window edge)
-        on the straight way from the window's first command to its last, by time
-        (``P0``: the command before the chunk). Commanded on the old side, the motor
-        pushed its part on up to the point inside, and the window was one on one
-        side of the root."""
+    def _across_rows(
+        self, t: np.ndarray, e: np.ndarray, b: np.ndarray
+    ) -> tuple[np.ndarray, ...] | None:
+        """The points inside a motor's crossing windows that begin at ``b`` and end
+        at ``e`` for :meth:`_across`, with what it reckons from the times ``t`` (n,)
+        [s] since the point before the chunk: the points, each window's first point
+        (clipped to 0) and whether it is in the chunk, its last point, and the
+        time from the first to the last and to each point. None where there are
+        none (or the segments are cubics)."""
         inner = e - b - 1
         if self.limits.segment == "cubic" or not np.any(inner > 0):
-            return
+            return None
         w = np.flatnonzero(inner > 0)
         idx = play.ranges(b[w] + 1, inner[w])
         bb, ee = np.repeat(b[w], inner[w]), np.repeat(e[w], inner[w])
-        t = np.cumsum(pc.dt)  # since the point before the chunk
-        t_b = np.where(bb >= 0, t[np.maximum(bb, 0)], 0.0)
-        P_b = np.where(bb >= 0, P_cmd[np.maximum(bb, 0), col], P0)
-        rate = (P_cmd[ee, col] - P_b) / (t[ee] - t_b)
-        P_cmd[idx, col] = P_b + rate * (t[idx] - t_b)
-        V_cmd[idx, col] = rate
+        inside, b0 = bb >= 0, np.maximum(bb, 0)
+        t_b = np.where(inside, t[b0], 0.0)
+        return idx, b0, inside, ee, t[ee] - t_b, t[idx] - t_b
+
+    @staticmethod
+    def _across(
+        rows: tuple[np.ndarray, ...] | None, P0: float, P: np.ndarray, V: np.ndarray
+    ) -> None:
+        """Straight lines between the points (corrected G-code): the points inside
+        a motor's crossing windows (``rows``: :meth:`_across_rows`; a step's end
+        where the window reaches past it, another motor's window edge) on the
+        straight way from the window's first command to its last, by time (``P0``:
+        the command before the chunk). Commanded on the old side, the motor pushed
+        its part on up to the point inside, and the window was one on one side of
+        the root. The motor's commands ``P``, ``V`` (n,) [mm, mm/s] are updated in
+        place."""
+        if rows is None:
+            return
+        idx, b0, inside, ee, span, since = rows
+        P_b = np.where(inside, P[b0], P0)
+        rate = (P[ee] - P_b) / span
+        P[idx] = P_b + rate * since
+        V[idx] = rate
 
     def _crossing_short(self, q: np.ndarray, tool: np.ndarray, col: int) -> np.ndarray:
         """How far [mm] short of where motor ``col`` meets its part a crossing

@@ -16,7 +16,9 @@ import numpy as np
 
 from . import play as _pure
 
+from cpython.mem cimport PyMem_Malloc, PyMem_Free
 from libc.math cimport sin, cos, sqrt, fabs, copysign, INFINITY, NAN, M_PI
+from libc.string cimport memcpy
 
 cdef double TWO_PI = 2 * M_PI
 
@@ -32,6 +34,10 @@ cdef struct Tab:
     const double* amp
     const double* period
     const double* phase
+    # the inverses' slopes, breaks over vals, interval by interval (b − 1,): the
+    # division numpy's interp makes (beforehand, or at each point: the same)
+    const double* si_lo
+    const double* si_hi
     Py_ssize_t nb
     Py_ssize_t nc
 
@@ -170,10 +176,11 @@ cdef inline double _invert(double x, const double* vals, const double* breaks,
 
 
 cdef inline double _invert_g(double x, const double* vals, const double* breaks,
-                             const double* err, Py_ssize_t n, Py_ssize_t* g) noexcept nogil:
+                             const double* err, const double* si, Py_ssize_t n,
+                             Py_ssize_t* g) noexcept nogil:
     """:func:`_invert`, its interval searched from the guess ``g`` (numpy's interp
     guesses the interval before; the interval found is the same, unique), the
-    interval found left in ``g``."""
+    interval found left in ``g``; ``si`` the intervals' slopes (breaks over vals)."""
     cdef double out
     if n == 1:
         out = breaks[0]
@@ -181,7 +188,7 @@ cdef inline double _invert_g(double x, const double* vals, const double* breaks,
         out = x
     else:
         g[0] = _find(x, vals, n, g[0])
-        out = _at(x, g[0], vals, breaks, n)
+        out = _at_s(x, g[0], vals, breaks, si, n)
     if x < vals[0]:
         out = x - err[0]
     elif x > vals[n - 1]:
@@ -194,11 +201,12 @@ cdef void _solve(const Tab* t, const double* target, double* out, Py_ssize_t n,
     """lo⁻¹ (``up``) or hi⁻¹ of ``target`` (n,) into ``out``; ``scratch`` (n,)."""
     cdef const double* vals = t.lo_vals if up else t.hi_vals
     cdef const double* err = t.lo_err if up else t.hi_err
+    cdef const double* si = t.si_lo if up else t.si_hi
     cdef Py_ssize_t i, it, g = -1
     cdef double big, d
     cdef bint nan
     for i in range(n):
-        out[i] = _invert_g(target[i], vals, t.breaks, err, t.nb, &g)
+        out[i] = _invert_g(target[i], vals, t.breaks, err, si, t.nb, &g)
     if t.nc == 0:
         return
     for it in range(30):
@@ -227,7 +235,22 @@ cdef class _Table:
         cdef const double* ptr[10]
         cdef Py_ssize_t size[10]
         cdef int k
+        cdef Py_ssize_t j
+        cdef double[::1] si_lo
+        cdef double[::1] si_hi
         self.keep = [np.ascontiguousarray(a, dtype=np.float64) for a in t]
+        nb = len(self.keep[0])
+        si = np.empty((2, nb))
+        si_lo, si_hi = si[0], si[1]
+        cdef const double[::1] br = self.keep[0]
+        cdef const double[::1] lv = self.keep[3]
+        cdef const double[::1] hv = self.keep[4]
+        for j in range(nb - 1):
+            si_lo[j] = (br[j + 1] - br[j]) / (lv[j + 1] - lv[j])
+            si_hi[j] = (br[j + 1] - br[j]) / (hv[j + 1] - hv[j])
+        self.keep.append(si)
+        self.tab.si_lo = &si_lo[0] if nb else NULL
+        self.tab.si_hi = &si_hi[0] if nb else NULL
         for k in range(10):
             v = self.keep[k]
             size[k] = v.shape[0]
@@ -240,11 +263,24 @@ cdef class _Table:
         self.tab.nc = size[7]
 
 
+#: the tables made, by the id of the PlayTable they hold (kept alive here, so the id
+#: is theirs): a table (``MotorTable.flat``, made once) is made into its struct once
+#: rather than at every call
+_TABLES = {}
+
+
 cdef _Table _table(t):
     # the settle hands its pieces the table it made once
     if type(t) is _Table:
         return <_Table>t
-    return _Table(t)
+    hit = _TABLES.get(id(t))
+    if hit is not None and hit[0] is t:
+        return <_Table>hit[1]
+    tb = _Table(t)
+    if len(_TABLES) >= 64:
+        _TABLES.clear()
+    _TABLES[id(t)] = (t, tb)
+    return tb
 
 
 def _vec(p):
@@ -312,16 +348,10 @@ def hi_inv(t, target):
     return _inv(t, target, False)
 
 
-def slope(t, p, side):
-    """d lo/dp or d hi/dp: :func:`play.slope`."""
-    cdef _Table tb = _table(t)
-    cdef const Tab* T = &tb.tab
-    cdef const double[::1] x = _vec(p)
-    cdef const double[::1] sd = _vec(side)
-    cdef Py_ssize_t n = x.shape[0], i, k, lo_i = -1
-    _lengths("one value a position", n, side=len(sd))
-    out = np.empty(n)
-    cdef double[::1] o = out
+cdef void _slope_core(const Tab* T, const double* x, const double* sd, Py_ssize_t n,
+                      double* o) noexcept nogil:
+    """:func:`play.slope` of ``x`` (n,) on sides ``sd`` (n,) into ``o``."""
+    cdef Py_ssize_t i, k, lo_i = -1
     cdef double v, pi_, w
     for i in range(n):
         v = 1.0
@@ -338,34 +368,49 @@ def slope(t, p, side):
             w = TWO_PI / T.period[k]
             v = v + T.amp[k] * w * cos(w * pi_ + T.phase[k])
         o[i] = v
+
+
+def slope(t, p, side):
+    """d lo/dp or d hi/dp: :func:`play.slope`."""
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(p)
+    cdef const double[::1] sd = _vec(side)
+    cdef Py_ssize_t n = x.shape[0]
+    _lengths("one value a position", n, side=len(sd))
+    out = np.empty(n)
+    cdef double[::1] o = out
+    if n:
+        _slope_core(&tb.tab, &x[0], &sd[0], n, &o[0])
     return out
 
 
-def compensate_sided(t, target, side):
-    """Commands pushed from ``side``: :func:`play.compensate_sided`."""
-    cdef _Table tb = _table(t)
-    cdef const double[::1] x = _vec(target)
-    cdef const double[::1] sd = _vec(side)
-    cdef Py_ssize_t n = x.shape[0], i, nu = 0, nd = 0
-    _lengths("one value a target", n, side=len(sd))
-    out = np.empty(n)
-    cdef double[::1] o = out
+cdef int _sided_core(const Tab* T, const double* x, const double* sd, Py_ssize_t n,
+                     double* o) except -1:
+    """:func:`play.compensate_sided` of ``x`` (n,) on sides ``sd`` (n,) into ``o``:
+    each side solved as one array (the periodic terms' iteration runs until the
+    whole array has settled, as the reference's)."""
+    cdef Py_ssize_t i, nu = 0, nd = 0, g_up = -1, g_dn = -1
     if n == 0:
-        return out
-    gather = np.empty(n)
-    res = np.empty(n)
-    scratch = np.empty(n)
-    cdef double[::1] g = gather
-    cdef double[::1] r = res
-    cdef double[::1] s = scratch
-    # each side solved as one array (the periodic terms' iteration runs until the
-    # whole array has settled, as the reference's)
+        return 0
+    if T.nc == 0:
+        # no iteration: each value on its own (the guesses change the time only)
+        for i in range(n):
+            if sd[i] > 0:
+                o[i] = _invert_g(x[i], T.lo_vals, T.breaks, T.lo_err, T.si_lo, T.nb, &g_up)
+            else:
+                o[i] = _invert_g(x[i], T.hi_vals, T.breaks, T.hi_err, T.si_hi, T.nb, &g_dn)
+        return 0
+    cdef double* g = <double*>PyMem_Malloc(3 * n * sizeof(double))
+    if g == NULL:
+        raise MemoryError()
+    cdef double* r = g + n
+    cdef double* sc = g + 2 * n
     for i in range(n):
         if sd[i] > 0:
             g[nu] = x[i]
             nu += 1
     if nu:
-        _solve(&tb.tab, &g[0], &r[0], nu, True, &s[0])
+        _solve(T, g, r, nu, True, sc)
         nu = 0
         for i in range(n):
             if sd[i] > 0:
@@ -376,12 +421,27 @@ def compensate_sided(t, target, side):
             g[nd] = x[i]
             nd += 1
     if nd:
-        _solve(&tb.tab, &g[0], &r[0], nd, False, &s[0])
+        _solve(T, g, r, nd, False, sc)
         nd = 0
         for i in range(n):
             if not sd[i] > 0:
                 o[i] = r[nd]
                 nd += 1
+    PyMem_Free(g)
+    return 0
+
+
+def compensate_sided(t, target, side):
+    """Commands pushed from ``side``: :func:`play.compensate_sided`."""
+    cdef _Table tb = _table(t)
+    cdef const double[::1] x = _vec(target)
+    cdef const double[::1] sd = _vec(side)
+    cdef Py_ssize_t n = x.shape[0]
+    _lengths("one value a target", n, side=len(sd))
+    out = np.empty(n)
+    cdef double[::1] o = out
+    if n:
+        _sided_core(&tb.tab, &x[0], &sd[0], n, &o[0])
     return out
 
 
@@ -404,52 +464,81 @@ def clamp_scan(lo, hi):
     return out
 
 
-cdef Py_ssize_t _roots(const double* Pa, const double* Va, const double* P, const double* V,
-                       const double* hv, Py_ssize_t n, bint cubic, signed char* kind,
-                       double* S) noexcept nogil:
+cdef inline bint _out01(double num, double den) noexcept nogil:
+    """num / den rounded is surely not inside (0, 1), seen without dividing:
+    rounding is monotone and keeps 0 and 1, so a quotient at or below 0 or at or
+    above 1 stays there (NaN and the unsure: False, the division decides)."""
+    if den > 0:
+        return num <= 0 or num >= den
+    if den < 0:
+        return num >= 0 or num <= den
+    return False
+
+
+cdef Py_ssize_t _roots(const double* P0, const double* V0, const long* st, Py_ssize_t w,
+                       const double* P, const double* V, const double* hv, Py_ssize_t n,
+                       bint cubic, signed char* kind, double* S) noexcept nogil:
     """Each step's turning points inside it (0, 1 or 2 into ``kind``; their
     fractions into the rows of S (n, 2), NaN for a missing second), as
-    :func:`play.follow_stretches` finds them; returns how many steps turn."""
-    cdef Py_ssize_t i, nt = 0
-    cdef double h, hh, d, a, b, c, disc, sq, r1, r2
+    :func:`play.follow_stretches` finds them, the command before each step taken
+    where it is (a stretch's first from ``P0``, ``V0``); returns how many steps
+    turn."""
+    cdef Py_ssize_t i = 0, j, k, nt = 0
+    cdef double h, hh, d, a, b, c, disc, sq, r1, r2, pa, va, den, n1, n2
     cdef bint ok1, ok2
     if not cubic:
         # straight lines: no step turns inside (ok1, ok2 below are false)
         for i in range(n):
             kind[i] = 0
         return 0
-    for i in range(n):
-        h = hv[i]
-        hh = h if h > 0 else INFINITY
-        d = (Pa[i] - P[i]) / hh
-        a = 6.0 * d + 3.0 * (Va[i] + V[i])
-        b = -6.0 * d - 4.0 * Va[i] - 2.0 * V[i]
-        c = Va[i]
-        disc = b * b - 4.0 * a * c
-        kind[i] = 0
-        if not (disc >= 0 and h > 0):
-            # no root inside (ok1, ok2 below are false, NaN included): the
-            # square root and the divisions are not needed
-            continue
-        sq = sqrt(_max(disc, 0.0))
-        if fabs(a) > 1e-300:
-            r1 = (-b - sq) / (2 * a)
-            r2 = (-b + sq) / (2 * a)
-        else:
-            r1 = -c / b if b != 0 else -1.0
-            r2 = -1.0
-        ok1 = disc >= 0 and r1 > 0 and r1 < 1 and h > 0 and cubic
-        ok2 = disc >= 0 and r2 > 0 and r2 < 1 and h > 0 and fabs(r2 - r1) > 0 and cubic
-        if ok1 and ok2:
-            S[2 * nt] = _min(r1, r2)
-            S[2 * nt + 1] = _max(r1, r2)
-            kind[i] = 2
-            nt += 1
-        elif ok1 or ok2:
-            S[2 * nt] = r1 if ok1 else r2
-            S[2 * nt + 1] = NAN
-            kind[i] = 1
-            nt += 1
+    for j in range(w):
+        for k in range(st[j]):
+            if k == 0:
+                pa = P0[j]
+                va = V0[j]
+            else:
+                pa = P[i - 1]
+                va = V[i - 1]
+            h = hv[i]
+            hh = h if h > 0 else INFINITY
+            d = (pa - P[i]) / hh
+            a = 6.0 * d + 3.0 * (va + V[i])
+            b = -6.0 * d - 4.0 * va - 2.0 * V[i]
+            c = va
+            disc = b * b - 4.0 * a * c
+            kind[i] = 0
+            if not (disc >= 0 and h > 0):
+                # no root inside (ok1, ok2 below are false, NaN included): the
+                # square root and the divisions are not needed
+                i += 1
+                continue
+            if fabs(a) > 1e-300:
+                sq = sqrt(_max(disc, 0.0))  # (the other branch takes no root)
+                den = 2 * a
+                n1 = -b - sq
+                n2 = -b + sq
+                if _out01(n1, den) and _out01(n2, den):
+                    # neither root inside (ok1, ok2 below are false): no division
+                    i += 1
+                    continue
+                r1 = n1 / den
+                r2 = n2 / den
+            else:
+                r1 = -c / b if b != 0 else -1.0
+                r2 = -1.0
+            ok1 = disc >= 0 and r1 > 0 and r1 < 1 and h > 0 and cubic
+            ok2 = disc >= 0 and r2 > 0 and r2 < 1 and h > 0 and fabs(r2 - r1) > 0 and cubic
+            if ok1 and ok2:
+                S[2 * nt] = _min(r1, r2)
+                S[2 * nt + 1] = _max(r1, r2)
+                kind[i] = 2
+                nt += 1
+            elif ok1 or ok2:
+                S[2 * nt] = r1 if ok1 else r2
+                S[2 * nt + 1] = NAN
+                kind[i] = 1
+                nt += 1
+            i += 1
     return nt
 
 
@@ -464,10 +553,77 @@ cdef inline double _hermite(double s, double s3, double P0, double V0, double P1
     return h00 * P0 + h10 * (h * V0) + h01 * P1 + h11 * (h * V1)
 
 
+cdef int _follow_core(const Tab* T, const double* y0v, const double* P0v, const double* V0v,
+                      const long* st, Py_ssize_t w, const double* Pv, const double* Vv,
+                      const double* hv, Py_ssize_t n, bint cubic, double* ye, double* ymn,
+                      double* ymx) except -1:
+    """:func:`play.follow_stretches` over pointers: the stretches' starts (w,), their
+    steps (n,) (``st`` (w,) of them each) into ``ye``, ``ymn``, ``ymx`` (n,)."""
+    cdef Py_ssize_t i, j, k, m, nt, ti
+    if n == 0:
+        return 0
+    # per step: its turning points (0, 1 or 2) and where they are
+    cdef signed char* kind = <signed char*>PyMem_Malloc(n)
+    cdef double* S = <double*>PyMem_Malloc(2 * n * sizeof(double))
+    if kind == NULL or S == NULL:
+        PyMem_Free(kind)
+        PyMem_Free(S)
+        raise MemoryError()
+    nt = _roots(P0v, V0v, st, w, Pv, Vv, hv, n, cubic, kind, S)
+    # s**3 as the reference takes it: numpy's power over the (turns, 2) array
+    cdef double[:, ::1] Sv
+    cdef const double[:, ::1] S3
+    if nt:
+        S_a = np.empty((nt, 2))
+        Sv = S_a
+        memcpy(&Sv[0, 0], S, 2 * nt * sizeof(double))
+        S3 = S_a ** 3
+    cdef double x, y = 0.0, lo_x, hi_x, mn, mx, pa = 0.0, va = 0.0
+    cdef bint started = False
+    cdef Py_ssize_t g = -1
+    i = 0
+    ti = 0
+    for j in range(w):
+        for k in range(st[j]):
+            if k == 0:
+                # the stretch opens where its part stands
+                y = y0v[j] if not started else _min(_max(y, y0v[j]), y0v[j])
+                started = True
+            if kind[i]:
+                # the command before the step, for its cubic
+                pa = P0v[j] if k == 0 else Pv[i - 1]
+                va = V0v[j] if k == 0 else Vv[i - 1]
+                mn = INFINITY
+                mx = -INFINITY
+                for m in range(kind[i]):
+                    x = _hermite(S[2 * ti + m], S3[ti, m], pa, va, Pv[i], Vv[i], hv[i])
+                    g = _lo_hi(T, x, &lo_x, &hi_x, g)
+                    y = _min(_max(y, lo_x), hi_x)
+                    mn = _min(mn, y)  # numpy's reduce: a NaN wins
+                    mx = _max(mx, y)
+                ti += 1
+                g = _lo_hi(T, Pv[i], &lo_x, &hi_x, g)
+                y = _min(_max(y, lo_x), hi_x)
+                mn = _min(mn, y)
+                mx = _max(mx, y)
+            else:
+                g = _lo_hi(T, Pv[i], &lo_x, &hi_x, g)
+                y = _min(_max(y, lo_x), hi_x)
+                # one sample: numpy's reduce of one value is the value
+                mn = y
+                mx = y
+            ye[i] = y
+            ymn[i] = mn
+            ymx[i] = mx
+            i += 1
+    PyMem_Free(kind)
+    PyMem_Free(S)
+    return 0
+
+
 def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
     """The part along the commands' cubics: :func:`play.follow_stretches`."""
     cdef _Table tb = _table(t)
-    cdef const Tab* T = &tb.tab
     cdef const double[::1] y0v = _vec(y0)
     cdef const double[::1] P0v = _vec(P0)
     cdef const double[::1] V0v = _vec(V0)
@@ -475,8 +631,7 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
     cdef const double[::1] Vv = _vec(V)
     cdef const double[::1] hv = _vec(dt)
     cdef const long[::1] st = np.ascontiguousarray(steps, dtype=np.int_)
-    cdef Py_ssize_t n = Pv.shape[0], w = st.shape[0]
-    cdef Py_ssize_t i, j, k, m, nt = 0, ti, total = 0
+    cdef Py_ssize_t n = Pv.shape[0], w = st.shape[0], j, total = 0
     for j in range(w):
         total += st[j]
     if total != n or y0v.shape[0] != w or P0v.shape[0] != w or V0v.shape[0] != w:
@@ -491,54 +646,8 @@ def follow_stretches(t, y0, P0, V0, P, V, dt, steps, bint cubic=True):
     cdef double[::1] ye = y_end
     cdef double[::1] ymn = y_min
     cdef double[::1] ymx = y_max
-    # per step: the command before it and its turning points (0, 1 or 2)
-    Pa_a = np.empty(n)
-    Va_a = np.empty(n)
-    kind_a = np.zeros(n, dtype=np.int8)  # 0: none, 1: one turn, 2: two
-    cdef double[::1] Pa = Pa_a
-    cdef double[::1] Va = Va_a
-    cdef signed char[::1] kind = kind_a
-    S_a = np.empty((n, 2))
-    cdef double[:, ::1] S = S_a
-    i = 0
-    for j in range(w):
-        for k in range(st[j]):
-            Pa[i] = P0v[j] if k == 0 else Pv[i - 1]
-            Va[i] = V0v[j] if k == 0 else Vv[i - 1]
-            i += 1
-    nt = _roots(&Pa[0], &Va[0], &Pv[0], &Vv[0], &hv[0], n, cubic, &kind[0], &S[0, 0])
-    # s**3 as the reference takes it: numpy's power over the (turns, 2) array
-    cdef double[:, ::1] S3
-    if nt:
-        S3 = np.ascontiguousarray(S_a[:nt]) ** 3
-    cdef double x, y = 0.0, lo_x, hi_x, mn, mx
-    cdef bint started = False
-    cdef Py_ssize_t g = -1
-    i = 0
-    ti = 0
-    for j in range(w):
-        for k in range(st[j]):
-            if k == 0:
-                # the stretch opens where its part stands
-                y = y0v[j] if not started else _min(_max(y, y0v[j]), y0v[j])
-                started = True
-            mn = INFINITY
-            mx = -INFINITY
-            for m in range(kind[i] + 1):
-                if m < kind[i]:
-                    x = _hermite(S[ti, m], S3[ti, m], Pa[i], Va[i], Pv[i], Vv[i], hv[i])
-                else:
-                    x = Pv[i]
-                g = _lo_hi(T, x, &lo_x, &hi_x, g)
-                y = _min(_max(y, lo_x), hi_x)
-                mn = _min(mn, y)  # numpy's reduce: a NaN wins
-                mx = _max(mx, y)
-            if kind[i]:
-                ti += 1
-            ye[i] = y
-            ymn[i] = mn
-            ymx[i] = mx
-            i += 1
+    _follow_core(&tb.tab, &y0v[0], &P0v[0], &V0v[0], &st[0], w, &Pv[0], &Vv[0], &hv[0], n,
+                 cubic, &ye[0], &ymn[0], &ymx[0])
     return y_end, y_min, y_max
 
 
@@ -567,20 +676,21 @@ cdef void _taken_up_ahead(const double* off, const double* wy, const signed char
     cdef Py_ssize_t i, j, k = 0
     cdef double cum = 0.0, before, ds, take, w, sv
     for i in range(m):
+        if not ahead[i]:
+            # takes of 0.0: the running sum (never −0.0) stays as it is
+            k += length[i]
+            continue
         before = cum
         w = wy[i]
         for j in range(length[i]):
-            if ahead[i]:
-                ds = s[idx[k]] - (s[idx[k] - 1] if idx[k] >= 1 else 0.0)
-                take = _min(rate[i] * ds, _max(0.5 * w * dP[idx[k]], 0.0))
-            else:
-                take = 0.0
+            ds = s[idx[k]] - (s[idx[k] - 1] if idx[k] >= 1 else 0.0)
+            take = _min(rate[i] * ds, _max(0.5 * w * dP[idx[k]], 0.0))
             cum = cum + take
-            if ahead[i]:
-                mag[k] = _max(fabs(off[i]) - (cum - before), 0.0)
-                sv = speed[idx[k]]
-                if sv > 0:
-                    steep_motor[k] = _max(0.5 * w * Vm[idx[k]], 0.0) / sv
+            mag[k] = _max(fabs(off[i]) - (cum - before), 0.0)
+            # the motor's limit only where an offset is left (_slopes reads no other)
+            sv = speed[idx[k]] if mag[k] > 0 else 0.0
+            if sv > 0:
+                steep_motor[k] = _max(0.5 * w * Vm[idx[k]], 0.0) / sv
             k += 1
 
 
@@ -618,17 +728,23 @@ cdef Py_ssize_t _rates(const double* off, const signed char* ahead, const long* 
         need = fabs(off[i]) / room if room > 0 else INFINITY
         rate[i] = _max(need, share) if need <= hurry * share else share
         key = s0[i] + fabs(off[i]) / rate[i]
-        lo_ = 0
-        hi_ = n
-        while lo_ < hi_:
-            mid = (lo_ + hi_) >> 1
-            if _lt(s[mid], key):
-                lo_ = mid + 1
-            else:
-                hi_ = mid
-        gone = lo_
-        end = last[i] + 1 if ahead[i] else (last[i] + 1 if last[i] + 1 < gone else gone)
         first = st[i] + 1
+        if ahead[i]:
+            end = last[i] + 1
+        else:
+            # searched between first and last + 1 only: s (sorted, NaN last) puts
+            # a point found before first at first, and one after last + 1 at
+            # last + 1, where end and length below clip it the same
+            lo_ = first
+            hi_ = last[i] + 1
+            while lo_ < hi_:
+                mid = (lo_ + hi_) >> 1
+                if _lt(s[mid], key):
+                    lo_ = mid + 1
+                else:
+                    hi_ = mid
+            gone = lo_
+            end = last[i] + 1 if last[i] + 1 < gone else gone
         length[i] = end - first if end - first > 0 else 0
         K += length[i]
     return K
@@ -656,6 +772,78 @@ cdef void _slopes(const double* off, const double* rate, const long* length, Py_
             k += 1
 
 
+cdef Py_ssize_t _catch_up_core(const double* o0, const double* wy, const long* st,
+                               const long* sp, Py_ssize_t m, const double* s, Py_ssize_t n,
+                               double share, double hurry, bint has_motion,
+                               const double* dP, const double* Vm, const double* speed,
+                               long** oidx, double** ooff, double** oslope,
+                               double* left) except -1:
+    """:func:`play.catch_up` over pointers: the points with an offset left, their
+    offsets and slopes into ``oidx``, ``ooff``, ``oslope`` (allocated here, the
+    caller frees them; their count returned), the offsets left into ``left``
+    (m,)."""
+    cdef Py_ssize_t i, j, k, K, nk = 0
+    cdef double x, mag0
+    cdef bint any_ahead = False
+    oidx[0] = NULL
+    ooff[0] = NULL
+    oslope[0] = NULL
+    cdef char* mem = <char*>PyMem_Malloc(m * (3 * sizeof(double) + 2 * sizeof(long) + 1) + 1)
+    if mem == NULL:
+        raise MemoryError()
+    cdef double* off = <double*>mem
+    cdef double* s0 = off + m
+    cdef double* rate = s0 + m
+    cdef long* last = <long*>(rate + m)
+    cdef long* length = last + m
+    cdef signed char* ahead = <signed char*>(length + m)
+    for i in range(m):
+        x = o0[i] * wy[i]
+        ahead[i] = x > 0 and has_motion
+        any_ahead = any_ahead or ahead[i]
+        off[i] = o0[i] if (x < 0 or ahead[i]) else 0.0
+    if n == 0:
+        for i in range(m):
+            left[i] = off[i]
+        PyMem_Free(mem)
+        return 0
+    K = _rates(off, ahead, st, sp, m, s, n, share, hurry, s0, rate, last, length)
+    cdef char* kmem = <char*>PyMem_Malloc(K * (2 * sizeof(double) + sizeof(long)) + 1)
+    if kmem == NULL:
+        PyMem_Free(mem)
+        raise MemoryError()
+    cdef double* mag = <double*>kmem
+    cdef double* steep_motor = mag + K
+    cdef long* idx = <long*>(steep_motor + K)
+    k = 0
+    for i in range(m):
+        mag0 = fabs(off[i])
+        for j in range(length[i]):
+            idx[k] = st[i] + 1 + j
+            mag[k] = _max(mag0 - rate[i] * (s[idx[k]] - s0[i]), 0.0)
+            steep_motor[k] = INFINITY
+            k += 1
+    if has_motion and any_ahead:
+        _taken_up_ahead(off, wy, ahead, rate, length, m, idx, s, dP, Vm, speed, mag, steep_motor)
+    _left_at_last(off, st, last, s0, rate, length, ahead, any_ahead, m, s, mag, left)
+    # _catch_up_slopes, and only the points with an offset left
+    for k in range(K):
+        if mag[k] > 0:
+            nk += 1
+    oidx[0] = <long*>PyMem_Malloc(nk * sizeof(long) + 1)
+    ooff[0] = <double*>PyMem_Malloc(nk * sizeof(double) + 1)
+    oslope[0] = <double*>PyMem_Malloc(nk * sizeof(double) + 1)
+    if oidx[0] == NULL or ooff[0] == NULL or oslope[0] == NULL:
+        PyMem_Free(mem)
+        PyMem_Free(kmem)
+        raise MemoryError()
+    if nk:
+        _slopes(off, rate, length, m, idx, mag, steep_motor, s, n, oidx[0], ooff[0], oslope[0])
+    PyMem_Free(mem)
+    PyMem_Free(kmem)
+    return nk
+
+
 def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=None):
     """The offsets taken up after crossings: :func:`play.catch_up`."""
     cdef const double[::1] o0 = _vec(off0)
@@ -663,7 +851,7 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
     cdef const long[::1] st = np.ascontiguousarray(start, dtype=np.int_)
     cdef const long[::1] sp = np.ascontiguousarray(stop, dtype=np.int_)
     cdef const double[::1] s = _vec(s_path)
-    cdef Py_ssize_t m = o0.shape[0], n = s.shape[0], i, j, k, K
+    cdef Py_ssize_t m = o0.shape[0], n = s.shape[0], nk
     cdef bint has_motion = motion is not None
     _lengths("one value a crossing, as off0", m, way=len(wy), start=len(st), stop=len(sp))
     if has_motion:
@@ -672,126 +860,140 @@ def catch_up(off0, way, start, stop, s_path, double share, double hurry, motion=
     cdef const double[::1] dP
     cdef const double[::1] Vm
     cdef const double[::1] speed
-    if has_motion:
+    cdef const double* p_dP = NULL
+    cdef const double* p_Vm = NULL
+    cdef const double* p_sp = NULL
+    if has_motion and n:
         dP = _vec(motion[0])
         Vm = _vec(motion[1])
         speed = _vec(motion[2])
-    off_a = np.empty(m)
-    ahead_a = np.zeros(m, dtype=np.int8)
-    cdef double[::1] off = off_a
-    cdef signed char[::1] ahead = ahead_a
-    cdef bint any_ahead = False
-    cdef double x
-    for i in range(m):
-        x = o0[i] * wy[i]
-        ahead[i] = x > 0 and has_motion
-        any_ahead = any_ahead or ahead[i]
-        off[i] = o0[i] if (x < 0 or ahead[i]) else 0.0
-    if n == 0:
-        none = np.zeros(0)
-        return none.astype(int), none, none, off_a
-    s0_a = np.empty(m)
-    rate_a = np.empty(m)
-    last_a = np.empty(m, dtype=np.int_)
-    len_a = np.empty(m, dtype=np.int_)
-    cdef double[::1] s0 = s0_a
-    cdef double[::1] rate = rate_a
-    cdef long[::1] last = last_a
-    cdef long[::1] length = len_a
-    cdef double mag0
-    K = _rates(&off[0], &ahead[0], &st[0], &sp[0], m, &s[0], n, share, hurry, &s0[0],
-               &rate[0], &last[0], &length[0])
-    idx_a = np.empty(K, dtype=np.int_)
-    mag_a = np.empty(K)
-    steep_a = np.full(K, INFINITY)
-    cdef long[::1] idx = idx_a
-    cdef double[::1] mag = mag_a
-    cdef double[::1] steep_motor = steep_a
-    k = 0
-    for i in range(m):
-        mag0 = fabs(off[i])
-        for j in range(length[i]):
-            idx[k] = st[i] + 1 + j
-            mag[k] = _max(mag0 - rate[i] * (s[idx[k]] - s0[i]), 0.0)
-            k += 1
-    if has_motion and any_ahead:
-        _taken_up_ahead(&off[0], &wy[0], &ahead[0], &rate[0], &length[0], m, &idx[0] if K else NULL,
-                        &s[0], &dP[0], &Vm[0], &speed[0], &mag[0] if K else NULL,
-                        &steep_motor[0] if K else NULL)
+        p_dP, p_Vm, p_sp = &dP[0], &Vm[0], &speed[0]
     left_a = np.empty(m)
+    if m == 0:
+        none = np.zeros(0)
+        return none.astype(int), none, none.copy(), left_a
     cdef double[::1] left = left_a
-    _left_at_last(&off[0], &st[0], &last[0], &s0[0], &rate[0], &length[0], &ahead[0],
-                  any_ahead, m, &s[0], &mag[0] if K else NULL, &left[0])
-    # _catch_up_slopes, and only the points with an offset left
-    cdef Py_ssize_t nk = 0
-    for k in range(K):
-        if mag[k] > 0:
-            nk += 1
-    oidx_a = np.empty(nk, dtype=np.int_)
-    ooff_a = np.empty(nk)
-    oslope_a = np.empty(nk)
-    cdef long[::1] oidx = oidx_a
-    cdef double[::1] ooff = ooff_a
-    cdef double[::1] oslope = oslope_a
+    cdef long* oidx
+    cdef double* ooff
+    cdef double* oslope
+    nk = _catch_up_core(&o0[0], &wy[0], &st[0], &sp[0], m, &s[0] if n else NULL, n, share,
+                        hurry, has_motion, p_dP, p_Vm, p_sp, &oidx, &ooff, &oslope, &left[0])
+    idx_a = np.empty(nk, dtype=np.int_)
+    off_a = np.empty(nk)
+    slope_a = np.empty(nk)
+    cdef long[::1] iv = idx_a
+    cdef double[::1] ov = off_a
+    cdef double[::1] sv = slope_a
     if nk:
-        _slopes(&off[0], &rate[0], &length[0], m, &idx[0], &mag[0], &steep_motor[0], &s[0], n,
-                &oidx[0], &ooff[0], &oslope[0])
-    return oidx_a, ooff_a, oslope_a, left_a
+        memcpy(&iv[0], oidx, nk * sizeof(long))
+        memcpy(&ov[0], ooff, nk * sizeof(double))
+        memcpy(&sv[0], oslope, nk * sizeof(double))
+    PyMem_Free(oidx)
+    PyMem_Free(ooff)
+    PyMem_Free(oslope)
+    return idx_a, off_a, slope_a, left_a
+
+
+cdef struct Mo:
+    # one motor's columns over a chunk (play.Motion), n values each
+    const double* P_ideal
+    const double* V_ideal
+    const double* dP
+    const double* speed
+    const double* dt
+    const double* s_path
+    const double* side
+    Py_ssize_t n
+
+
+cdef class _Motion:
+    """A Motion's columns held as contiguous doubles, and the struct on them."""
+    cdef Mo mo
+    cdef object keep
+
+    def __init__(self, mo):
+        cdef const double[::1] v
+        cdef const double* ptr[7]
+        cdef int k
+        self.keep = [np.ascontiguousarray(a, dtype=np.float64) for a in mo]
+        for k in range(7):
+            v = self.keep[k]
+            ptr[k] = &v[0] if v.shape[0] else NULL
+        self.mo.P_ideal, self.mo.V_ideal, self.mo.dP, self.mo.speed = ptr[0], ptr[1], ptr[2], ptr[3]
+        self.mo.dt, self.mo.s_path, self.mo.side = ptr[4], ptr[5], ptr[6]
+        self.mo.n = len(self.keep[0])
+
+
+cdef int _commands_core(const Tab* T, const Mo* mo, const double* off0, const long* st,
+                        const long* sp, Py_ssize_t m, double* Pv, double* Vv, double share,
+                        double hurry, double* left, double* carry) except -1:
+    """:func:`play.catch_up_commands` over pointers: ``Pv``, ``Vv`` (n,) updated in
+    place, the offsets left into ``left`` (m,), the offset carried into ``carry``."""
+    cdef Py_ssize_t n = mo.n, i, k, K
+    cdef long* idx
+    cdef double* off
+    cdef double* slp
+    cdef double* way = <double*>PyMem_Malloc(m * sizeof(double) + 1)
+    if way == NULL:
+        raise MemoryError()
+    for i in range(m):
+        way[i] = mo.side[st[i] if st[i] > 0 else 0]
+    K = _catch_up_core(off0, way, st, sp, m, mo.s_path, n, share, hurry, True, mo.dP,
+                       mo.V_ideal, mo.speed, &idx, &off, &slp, left)
+    PyMem_Free(way)
+    carry[0] = NAN
+    if m and sp[m - 1] >= n and left[m - 1] != 0.0:
+        carry[0] = left[m - 1]
+    cdef double* buf = <double*>PyMem_Malloc(4 * K * sizeof(double) + 1)
+    if buf == NULL:
+        PyMem_Free(idx)
+        PyMem_Free(off)
+        PyMem_Free(slp)
+        raise MemoryError()
+    cdef double* tg = buf
+    cdef double* sd = buf + K
+    cdef double* pk = buf + 2 * K
+    cdef double* sl = buf + 3 * K
+    if K:
+        for k in range(K):
+            tg[k] = mo.P_ideal[idx[k]] + off[k]
+            sd[k] = mo.side[idx[k]]
+        _sided_core(T, tg, sd, K, pk)
+        _slope_core(T, pk, sd, K, sl)
+        for k in range(K):
+            Pv[idx[k]] = pk[k]
+            Vv[idx[k]] = (mo.V_ideal[idx[k]] + slp[k] * mo.speed[idx[k]]) / sl[k]
+    for i in range(m):
+        if not sp[i] < n:
+            left[i] = 0.0
+    PyMem_Free(buf)
+    PyMem_Free(idx)
+    PyMem_Free(off)
+    PyMem_Free(slp)
+    return 0
 
 
 def catch_up_commands(t, mo, off0, start, stop, P, V, double share, double hurry):
     """The take-up's commands: :func:`play.catch_up_commands` (``P``, ``V``
     contiguous float arrays, updated in place)."""
-    cdef const double[::1] s_path = mo.s_path
-    cdef const double[::1] side = mo.side
-    cdef const double[::1] Pi = mo.P_ideal
-    cdef const double[::1] Vi = mo.V_ideal
-    cdef const double[::1] speed = mo.speed
-    cdef const long[::1] st = np.ascontiguousarray(start, dtype=np.int_)
-    cdef const long[::1] sp = np.ascontiguousarray(stop, dtype=np.int_)
+    cdef _Table tb = _table(t)
     cdef double[::1] Pv = P
     cdef double[::1] Vv = V
-    cdef Py_ssize_t n = s_path.shape[0], m = st.shape[0], i, k, K
     _lengths("one value a point, as P", Pv.shape[0], V=len(Vv))
     _motion_lengths(mo, Pv.shape[0])
-    _lengths("one value a crossing, as start", m, stop=len(sp), off0=len(off0))
-    way_a = np.empty(m)
-    cdef double[::1] way = way_a
-    for i in range(m):
-        way[i] = side[st[i] if st[i] > 0 else 0]
-    idx_a, off_a, slope_a, left_a = catch_up(
-        off0, way_a, st.base, sp.base, mo.s_path, share, hurry, (mo.dP, mo.V_ideal, mo.speed)
-    )
-    cdef const long[::1] idx = idx_a
-    cdef const double[::1] off = off_a
-    cdef const double[::1] slp = slope_a
+    cdef _Motion mv = _Motion(mo)
+    cdef const long[::1] st = np.ascontiguousarray(start, dtype=np.int_)
+    cdef const long[::1] sp = np.ascontiguousarray(stop, dtype=np.int_)
+    cdef const double[::1] o0 = _vec(off0)
+    cdef Py_ssize_t m = st.shape[0]
+    _lengths("one value a crossing, as start", m, stop=len(sp), off0=len(o0))
+    left_a = np.empty(m)
     cdef double[::1] left = left_a
-    carry = NAN
-    if m and sp[m - 1] >= n and left[m - 1] != 0.0:
-        carry = left[m - 1]
-    K = idx.shape[0]
-    cdef double[::1] tg
-    cdef double[::1] sd
-    cdef double[::1] pk
-    cdef const double[::1] sl
-    if K:
-        tg_a = np.empty(K)
-        sd_a = np.empty(K)
-        tg = tg_a
-        sd = sd_a
-        for k in range(K):
-            tg[k] = Pi[idx[k]] + off[k]
-            sd[k] = side[idx[k]]
-        pk_a = compensate_sided(t, tg_a, sd_a)
-        pk = pk_a
-        sl_a = slope(t, pk_a, sd_a)
-        sl = sl_a
-        for k in range(K):
-            Pv[idx[k]] = pk[k]
-            Vv[idx[k]] = (Vi[idx[k]] + slp[k] * speed[idx[k]]) / sl[k]
-    for i in range(m):
-        if not sp[i] < n:
-            left[i] = 0.0
+    cdef double carry = NAN
+    if m:
+        _commands_core(&tb.tab, &mv.mo, &o0[0], &st[0], &sp[0], m,
+                       &Pv[0] if Pv.shape[0] else NULL, &Vv[0] if Vv.shape[0] else NULL,
+                       share, hurry, &left[0], &carry)
     return left_a, carry
 
 
@@ -817,218 +1019,248 @@ cdef void _extreme(const double* lo, const double* hi, Py_ssize_t n, const long*
             out[i] = _max(x, beg[i])
 
 
+cdef int _contact_core(const Tab* T, const double* y, const signed char* u, const double* sh,
+                       Py_ssize_t c, double* out) except -1:
+    """:func:`play._contact` of ``y`` (c,) into ``out`` (lo⁻¹ and hi⁻¹ each over the
+    whole array, as the reference's np.where takes them)."""
+    cdef Py_ssize_t i
+    if c == 0:
+        return 0
+    cdef double* buf = <double*>PyMem_Malloc(3 * c * sizeof(double))
+    if buf == NULL:
+        raise MemoryError()
+    cdef double* a = buf
+    cdef double* b = buf + c
+    _solve(T, y, a, c, True, buf + 2 * c)
+    _solve(T, y, b, c, False, buf + 2 * c)
+    for i in range(c):
+        out[i] = a[i] - sh[i] if u[i] else b[i] + sh[i]
+    PyMem_Free(buf)
+    return 0
+
+
 def _contact(t, y, up, shortfall):
-    """:func:`play._contact` (lo⁻¹ and hi⁻¹ each over the whole array, as the
-    reference's np.where takes them)."""
-    cdef const double[::1] a = lo_inv(t, y)
-    cdef const double[::1] b = hi_inv(t, y)
-    cdef const signed char[::1] u = up
-    cdef const double[::1] s = shortfall
-    cdef Py_ssize_t i, c = a.shape[0]
+    """:func:`play._contact`."""
+    cdef _Table tb = _table(t)
+    cdef const double[::1] yv = _vec(y)
+    cdef const signed char[::1] u = np.ascontiguousarray(up, dtype=np.int8)
+    cdef const double[::1] s = _vec(shortfall)
+    cdef Py_ssize_t c = yv.shape[0]
+    _lengths("one value a crossing, as y", c, up=len(u), shortfall=len(s))
     out = np.empty(c)
     cdef double[::1] o = out
-    for i in range(c):
-        o[i] = a[i] - s[i] if u[i] else b[i] + s[i]
+    if c:
+        _contact_core(&tb.tab, &yv[0], &u[0], &s[0], c, &o[0])
     return out
+
+
+cdef struct Crossings:
+    # a motor's c crossings as settle_crossings holds them
+    const long* e
+    const long* b
+    const signed char* u
+    const double* shortfall
+    const long* stops
+    const double* made
+    const double* P_made
+    const double* V_made
+    Py_ssize_t c
 
 
 def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double share,
                      double hurry):
     """The crossings ended where the parts stand: :func:`play.settle_crossings`."""
-    mo = type(mo)(*[np.ascontiguousarray(a, dtype=np.float64) for a in mo])
-    shortfall = np.ascontiguousarray(shortfall, dtype=np.float64)
-    t = _table(t)
+    cdef _Table tb = _table(t)
+    cdef const Tab* T = &tb.tab
+    cdef _Motion mv = _Motion(mo)
+    cdef const double[::1] shv = _vec(shortfall)
     P_a = np.array(P, dtype=np.float64)
     V_a = np.array(V, dtype=np.float64)
     cdef double[::1] Pv = P_a
     cdef double[::1] Vv = V_a
     cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
     cdef const long[::1] bv = np.ascontiguousarray(b, dtype=np.int_)
-    cdef const double[::1] side = mo.side
-    cdef const double[::1] Pi = mo.P_ideal
-    cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0], i, upto = 0
-    cdef double y0 = before[0], P0 = before[1], V0 = before[2]
+    cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0], i, k, upto = 0, w
+    cdef double y0 = before[0], P0 = before[1], V0 = before[2], carry = NAN, cr
     _motion_lengths(mo, n)
     _lengths("one value a point, as P", n, V=len(Vv))
-    _lengths("one value a crossing, as e", c, b=len(bv), shortfall=len(shortfall))
+    _lengths("one value a crossing, as e", c, b=len(bv), shortfall=len(shv))
     for i in range(c):
         if ev[i] + 1 > upto:
             upto = ev[i] + 1
-    one = np.ones(1)
-    y_pt_a, lo_a, hi_a = follow_stretches(
-        t, y0 * one, P0 * one, V0 * one, P_a[:upto], V_a[:upto], mo.dt[:upto],
-        np.array([upto]), cubic
-    )
-    cdef const double[::1] y_pt = y_pt_a
-    cdef const double[::1] lo_ = lo_a
-    cdef const double[::1] hi_ = hi_a
-    at_beg_a = np.empty(c)
-    cuts_a = np.empty(2 * c, dtype=np.int_)
-    u_a = np.empty(c, dtype=np.int8)
-    stops_a = np.empty(c, dtype=np.int_)
-    made_a = np.empty(c)
-    y_s_a = np.empty(c)
-    off_a = np.empty(c)
-    cdef double[::1] at_beg = at_beg_a
-    cdef long[::1] cuts = cuts_a
-    cdef signed char[::1] u = u_a
-    cdef long[::1] stops = stops_a
-    cdef double[::1] made = made_a
-    cdef double[::1] y_s = y_s_a
-    cdef double[::1] off = off_a
-    for i in range(c):
-        at_beg[i] = y_pt[bv[i] if bv[i] > 0 else 0] if bv[i] >= 0 else y0
-        cuts[2 * i] = bv[i] + 1 if bv[i] + 1 > 0 else 0
-        cuts[2 * i + 1] = ev[i] + 1
-        u[i] = side[ev[i]] > 0
-        stops[i] = bv[i + 1] if i + 1 < c else n
-        made[i] = Pv[ev[i]]
-    _extreme(&lo_[0], &hi_[0], upto, &cuts[0], &at_beg[0], &u[0], &y_s[0], c)
-    cdef const double[::1] ct = _contact(t, y_s_a, u_a, shortfall)
-    for i in range(c):
-        Pv[ev[i]] = ct[i]
-        off[i] = y_s[i] - Pi[ev[i]]
-    P_made = P_a.copy()
-    V_made = V_a.copy()
-    left_a, carry = catch_up_commands(t, mo, off_a, ev.base, stops_a, P_a, V_a, share, hurry)
-    cdef double[::1] left = left_a
-    todo_l = [i for i in range(1, c) if left[i - 1] != 0.0]
-    x = (ev, bv, u, shortfall, stops, made, P_made, V_made)
-    while todo_l:
-        todo_l, cr = _reckon_again(t, mo, x, todo_l, y_s, left, P_a, V_a, cubic, share, hurry)
+    # the work arrays: n values (the follow's three, the commands as made) and c
+    cdef double* buf = <double*>PyMem_Malloc((5 * n + 6 * c + 1) * sizeof(double))
+    cdef long* ibuf = <long*>PyMem_Malloc((5 * c + 1) * sizeof(long))
+    cdef signed char* u = <signed char*>PyMem_Malloc(c + 1)
+    if buf == NULL or ibuf == NULL or u == NULL:
+        PyMem_Free(buf)
+        PyMem_Free(ibuf)
+        PyMem_Free(u)
+        raise MemoryError()
+    cdef double* y_pt = buf
+    cdef double* lo_ = buf + n
+    cdef double* hi_ = buf + 2 * n
+    cdef double* P_made = buf + 3 * n
+    cdef double* V_made = buf + 4 * n
+    cdef double* at_beg = buf + 5 * n
+    cdef double* made = at_beg + c
+    cdef double* y_s = made + c
+    cdef double* off = y_s + c
+    cdef double* left = off + c
+    cdef double* ct = left + c
+    cdef long* cuts = ibuf
+    cdef long* stops = ibuf + 2 * c
+    cdef long* todo = ibuf + 3 * c
+    cdef long* nxt = ibuf + 4 * c
+    cdef long one_step = upto
+    cdef Crossings X
+    try:
+        _follow_core(T, &y0, &P0, &V0, &one_step, 1, &Pv[0], &Vv[0], mv.mo.dt, upto, cubic,
+                     y_pt, lo_, hi_)
+        for i in range(c):
+            at_beg[i] = y_pt[bv[i] if bv[i] > 0 else 0] if bv[i] >= 0 else y0
+            cuts[2 * i] = bv[i] + 1 if bv[i] + 1 > 0 else 0
+            cuts[2 * i + 1] = ev[i] + 1
+            u[i] = mv.mo.side[ev[i]] > 0
+            stops[i] = bv[i + 1] if i + 1 < c else n
+            made[i] = Pv[ev[i]]
+        _extreme(lo_, hi_, upto, cuts, at_beg, u, y_s, c)
+        _contact_core(T, y_s, u, &shv[0], c, ct)
+        for i in range(c):
+            Pv[ev[i]] = ct[i]
+            off[i] = y_s[i] - mv.mo.P_ideal[ev[i]]
+        memcpy(P_made, &Pv[0], n * sizeof(double))
+        memcpy(V_made, &Vv[0], n * sizeof(double))
+        _commands_core(T, &mv.mo, off, &ev[0], stops, c, &Pv[0], &Vv[0], share, hurry, left,
+                       &cr)
         if cr == cr:
             carry = cr
-    cdef Py_ssize_t k = 0
-    for i in range(c):
-        if ev[i] > ev[k]:
-            k = i
-    return _pure.Settled(P_a, V_a, y_s[k], Pv[upto - 1], Vv[upto - 1], carry)
+        # a part still off where the next crossing begins takes that offset into it
+        w = 0
+        for i in range(1, c):
+            if left[i - 1] != 0.0:
+                todo[w] = i
+                w += 1
+        X.e, X.b, X.u, X.shortfall, X.stops = &ev[0], &bv[0], u, &shv[0], stops
+        X.made, X.P_made, X.V_made, X.c = made, P_made, V_made, c
+        while w:
+            w = _reckon_again(T, &mv.mo, &X, todo, w, y_s, left, &Pv[0], &Vv[0], cubic, share,
+                              hurry, &cr, nxt)
+            if cr == cr:
+                carry = cr
+            todo, nxt = nxt, todo
+        k = 0
+        for i in range(c):
+            if ev[i] > ev[k]:
+                k = i
+        return _pure.Settled(P_a, V_a, y_s[k], Pv[upto - 1], Vv[upto - 1], carry)
+    finally:
+        PyMem_Free(buf)
+        PyMem_Free(ibuf)
+        PyMem_Free(u)
 
 
-def _stretches(const long[::1] e, const long[::1] todo, const double[::1] y_s,
-               const double[::1] Pv, const double[::1] Vv, const double[::1] dt,
-               const double[::1] made):
-    """The stretches a round follows (:func:`play._reckon_again`): from each
-    crossing before to each crossing's end, its end as made; returns follow's
-    y0, P0, V0, P, V, dt and steps."""
-    cdef Py_ssize_t w = todo.shape[0], i, j, k = 0, K = 0, ti, ep
-    span_a = np.empty(w, dtype=np.int_)
-    cdef long[::1] span = span_a
+cdef Py_ssize_t _reckon_again(const Tab* T, const Mo* mo, const Crossings* X, const long* todo,
+                              Py_ssize_t w, double* y_s, double* left, double* Pv, double* Vv,
+                              bint cubic, double share, double hurry, double* carry,
+                              long* moved) except -1:
+    """One round: :func:`play._reckon_again` for the crossings ``todo`` (w,); the
+    crossings the next round reckons again into ``moved``, their count returned."""
+    cdef Py_ssize_t n = mo.n, c = X.c, i, j, k, K = 0, ti, ep, ej, into, base, hi_end, nm
+    cdef long* span = <long*>PyMem_Malloc((4 * w + 1) * sizeof(long))
+    if span == NULL:
+        raise MemoryError()
+    cdef long* cuts = span + w
+    cdef long* ejv = span + 3 * w
     for i in range(w):
-        span[i] = e[todo[i]] - e[todo[i] - 1]
+        span[i] = X.e[todo[i]] - X.e[todo[i] - 1]
         K += span[i]
-    y0_a, P0_a, V0_a = np.empty(w), np.empty(w), np.empty(w)
-    Pw_a, Vw_a, dtw_a = np.empty(K), np.empty(K), np.empty(K)
-    cdef double[::1] y0 = y0_a
-    cdef double[::1] P0 = P0_a
-    cdef double[::1] V0 = V0_a
-    cdef double[::1] Pw = Pw_a
-    cdef double[::1] Vw = Vw_a
-    cdef double[::1] dtw = dtw_a
-    for i in range(w):
-        ti = todo[i]
-        ep = e[ti - 1]
-        y0[i] = y_s[ti - 1]
-        P0[i] = Pv[ep]
-        V0[i] = Vv[ep]
-        for j in range(span[i]):
-            Pw[k] = Pv[ep + 1 + j]
-            Vw[k] = Vv[ep + 1 + j]
-            dtw[k] = dt[ep + 1 + j]
-            k += 1
-    # the crossings' ends as made (numpy's order: the last write wins, index −1
-    # the last element)
-    k = 0
-    for i in range(w):
-        k += span[i]
-        if K:
-            Pw[k - 1 if k >= 1 else K - 1] = made[todo[i]]
-    return y0_a, P0_a, V0_a, Pw_a, Vw_a, dtw_a, span_a
-
-
-def _taken_again(const long[::1] e, const long[::1] stops, const long[::1] todo,
-                 double[::1] y_s, const double[::1] ys, const double[::1] ct,
-                 double[::1] Pv, double[::1] Vv, const double[::1] P_made,
-                 const double[::1] V_made, const double[::1] Pi):
-    """A round's crossings ended where their parts stand (``ys``, commands ``ct``),
-    the take-up after each back to the commands as made; returns the offsets,
-    starts and stops of the take-ups to make again."""
-    cdef Py_ssize_t w = todo.shape[0], n = Pv.shape[0], i, j, ti, ej, hi_end
-    off_a = np.empty(w)
-    ej_a = np.empty(w, dtype=np.int_)
-    st_a = np.empty(w, dtype=np.int_)
-    cdef double[::1] off = off_a
-    cdef long[::1] ejv = ej_a
-    cdef long[::1] stv = st_a
-    for i in range(w):
-        y_s[todo[i]] = ys[i]
-    for i in range(w):
-        Pv[e[todo[i]]] = ct[i]
-    for i in range(w):
-        ti = todo[i]
-        ej = e[ti]
-        hi_end = stops[ti] + 1 if stops[ti] + 1 < n else n
-        for j in range(ej + 1, hi_end):
-            Pv[j] = P_made[j]
-            Vv[j] = V_made[j]
-        off[i] = y_s[ti] - Pi[ej]
-        ejv[i] = ej
-        stv[i] = stops[ti]
-    return off_a, ej_a, st_a
-
-
-def _reckon_again(t, mo, x, list todo_l, double[::1] y_s, double[::1] left, P_a, V_a,
-                  bint cubic, double share, double hurry):
-    """One round: :func:`play._reckon_again`."""
-    cdef const long[::1] e
-    cdef const long[::1] b
-    cdef const signed char[::1] u
-    cdef long[::1] stops
-    cdef double[::1] made
-    e, b, u, short_a, stops, made, P_made_a, V_made_a = x
-    cdef const double[::1] shortfall = short_a
-    cdef Py_ssize_t c = e.shape[0], w = len(todo_l), i, K, ti, ep, into, base = 0
-    todo_a = np.array(todo_l, dtype=np.int_)
-    cdef const long[::1] todo = todo_a
-    args = _stretches(e, todo, y_s, P_a, V_a, mo.dt, made)
-    cdef const long[::1] span = args[6]
-    K = args[3].shape[0]
-    y_w_a, lo_w_a, hi_w_a = follow_stretches(t, *args, cubic)
-    cdef const double[::1] y_w = y_w_a
-    cdef const double[::1] lo_w = lo_w_a
-    cdef const double[::1] hi_w = hi_w_a
-    beg_a, ys_a, sh_a = np.empty(w), np.empty(w), np.empty(w)
-    cuts_a = np.empty(2 * w, dtype=np.int_)
-    uu_a = np.empty(w, dtype=np.int8)
-    cdef double[::1] beg = beg_a
-    cdef long[::1] cuts = cuts_a
-    cdef signed char[::1] uu = uu_a
-    cdef double[::1] ys = ys_a
-    cdef double[::1] sh = sh_a
-    for i in range(w):
-        ti = todo[i]
-        ep = e[ti - 1]
-        into = b[ti] - ep if b[ti] - ep > 0 else 0
-        beg[i] = y_w[base + into - 1] if into > 0 else y_s[ti - 1]
-        cuts[2 * i] = base + into
-        cuts[2 * i + 1] = base + span[i]
-        uu[i] = u[ti]
-        sh[i] = shortfall[ti]
-        base += span[i]
-    _extreme(&lo_w[0], &hi_w[0], K, &cuts[0], &beg[0], &uu[0], &ys[0], w)
-    ct = _contact(t, ys_a, uu_a, sh_a)
-    off_a, ej_a, st_a = _taken_again(
-        e, stops, todo, y_s, ys_a, ct, P_a, V_a, P_made_a, V_made_a, mo.P_ideal
-    )
-    new_left_a, carry = catch_up_commands(t, mo, off_a, ej_a, st_a, P_a, V_a, share, hurry)
-    cdef const double[::1] new_left = new_left_a
-    moved = []
-    for i in range(w):
-        ti = todo[i]
-        if new_left[i] != left[ti] and ti + 1 < c:
-            moved.append(ti + 1)
-        left[ti] = new_left[i]
-    return moved, carry
+    cdef double* buf = <double*>PyMem_Malloc((6 * K + 12 * w + 1) * sizeof(double))
+    cdef signed char* uu = <signed char*>PyMem_Malloc(w + 1)
+    if buf == NULL or uu == NULL:
+        PyMem_Free(span)
+        PyMem_Free(buf)
+        PyMem_Free(uu)
+        raise MemoryError()
+    cdef double* Pw = buf
+    cdef double* Vw = buf + K
+    cdef double* dtw = buf + 2 * K
+    cdef double* y_w = buf + 3 * K
+    cdef double* lo_w = buf + 4 * K
+    cdef double* hi_w = buf + 5 * K
+    cdef double* y0 = buf + 6 * K
+    cdef double* P0 = y0 + w
+    cdef double* V0 = P0 + w
+    cdef double* beg = V0 + w
+    cdef double* ys = beg + w
+    cdef double* sh = ys + w
+    cdef double* ct = sh + w
+    cdef double* off = ct + w
+    cdef double* new_left = off + w
+    try:
+        # the stretches: from each crossing before to each crossing's end
+        k = 0
+        for i in range(w):
+            ti = todo[i]
+            ep = X.e[ti - 1]
+            y0[i] = y_s[ti - 1]
+            P0[i] = Pv[ep]
+            V0[i] = Vv[ep]
+            for j in range(span[i]):
+                Pw[k] = Pv[ep + 1 + j]
+                Vw[k] = Vv[ep + 1 + j]
+                dtw[k] = mo.dt[ep + 1 + j]
+                k += 1
+        # the crossings' ends as made (numpy's order: the last write wins, index −1
+        # the last element)
+        k = 0
+        for i in range(w):
+            k += span[i]
+            if K:
+                Pw[k - 1 if k >= 1 else K - 1] = X.made[todo[i]]
+        _follow_core(T, y0, P0, V0, span, w, Pw, Vw, dtw, K, cubic, y_w, lo_w, hi_w)
+        base = 0
+        for i in range(w):
+            ti = todo[i]
+            ep = X.e[ti - 1]
+            into = X.b[ti] - ep if X.b[ti] - ep > 0 else 0
+            beg[i] = y_w[base + into - 1] if into > 0 else y_s[ti - 1]
+            cuts[2 * i] = base + into
+            cuts[2 * i + 1] = base + span[i]
+            uu[i] = X.u[ti]
+            sh[i] = X.shortfall[ti]
+            base += span[i]
+        _extreme(lo_w, hi_w, K, cuts, beg, uu, ys, w)
+        _contact_core(T, ys, uu, sh, w, ct)
+        # ended where their parts stand, the take-up after each back to the
+        # commands as made
+        for i in range(w):
+            y_s[todo[i]] = ys[i]
+        for i in range(w):
+            Pv[X.e[todo[i]]] = ct[i]
+        for i in range(w):
+            ti = todo[i]
+            ej = X.e[ti]
+            hi_end = X.stops[ti] + 1 if X.stops[ti] + 1 < n else n
+            for j in range(ej + 1, hi_end):
+                Pv[j] = X.P_made[j]
+                Vv[j] = X.V_made[j]
+            off[i] = y_s[ti] - mo.P_ideal[ej]
+            ejv[i] = ej
+            cuts[i] = X.stops[ti]  # the round's stops (cuts no longer needed)
+        _commands_core(T, mo, off, ejv, cuts, w, Pv, Vv, share, hurry, new_left, carry)
+        nm = 0
+        for i in range(w):
+            ti = todo[i]
+            if new_left[i] != left[ti] and ti + 1 < c:
+                moved[nm] = ti + 1
+                nm += 1
+            left[ti] = new_left[i]
+        return nm
+    finally:
+        PyMem_Free(span)
+        PyMem_Free(buf)
+        PyMem_Free(uu)
 
 
 def carried(sg, side):
