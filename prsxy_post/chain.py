@@ -28,6 +28,7 @@ import numpy as np
 from . import axiscomp, kernel, kinematics, reversals
 from . import rules as checks
 from .errors import LimitError, PrsxyError
+from .gcode.rows import ROW_LINE, MotionTable
 from .interpolate import (
     Blocks,
     Plan,
@@ -102,8 +103,9 @@ def ik_geometry(profile: Profile, stages: Stages) -> kinematics.Geometry:
 ErrorFunction = Callable[[np.ndarray], np.ndarray]
 
 
-def check_motions(motions: Sequence[Motion], profile: Profile) -> list[PrsxyError]:
-    """Problems visible in the program itself: feed above the machine's maximum."""
+def check_motions(motions: Sequence[Motion] | MotionTable, profile: Profile) -> list[PrsxyError]:
+    """Problems visible in the program itself (its motions, or their table):
+    feed above the machine's maximum."""
     return [p.error(profile) for p in checks.feed_problems(profile, motions)]
 
 
@@ -134,12 +136,19 @@ class Prepared:
     problems: list[PrsxyError]
 
 
-def prepare(motions: Sequence[Motion], profile: Profile, limits: PlanLimits) -> Prepared:
-    """Planning arrays and program-level problems of a chunk of motions."""
+def prepare(
+    motions: Sequence[Motion] | MotionTable, profile: Profile, limits: PlanLimits
+) -> Prepared:
+    """Planning arrays and program-level problems of a chunk of motions (or of
+    their table, :mod:`.gcode.rows`)."""
+    if isinstance(motions, MotionTable):
+        first = int(motions.rows[0, ROW_LINE]) if len(motions) else 0
+    else:
+        first = motions[0].line if motions else 0
     return Prepared(
         blocks_from_motions(motions, limits),
         len(motions),
-        motions[0].line if motions else 0,
+        first,
         check_motions(motions, profile),
     )
 
