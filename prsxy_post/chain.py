@@ -153,6 +153,9 @@ def prepare(
     )
 
 
+#: the play columns when every motor has play
+_ALL_MOTORS = list(range(len(MOTORS)))
+
 #: One-sided step [s] of the directional derivative of the IK along the planned
 #: velocity: the IK moves by ~v·1e-6 s (under a µm), where its curvature makes an
 #: error of 1e-9 of the velocity and rounding one of 1e-8 mm/s.
@@ -415,33 +418,62 @@ class Planning:
         creep does not set it, as the points' half watches a creep's drift instead;
         at the start, up, the contract's approach from below)."""
         k = np.flatnonzero(~b.stops)
-        if not k.size:
-            return
-        tool = np.tile(b.tool_length[k], 2)
-        q = np.vstack([b.start[k], b.end[k]])
-        dq = np.vstack([b.dq_in[k], -b.dq_out[k]])
-        P = self._ends_ik(q, tool)
-        d = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
-        cols = self.play_cols
         n = len(k)
-        d_in, d_out = d[:n, cols], -d[n:, cols]
-        b.dP_in[k[:, None], cols] = d_in
-        b.dP_out[k[:, None], cols] = d_out
+        if not n:
+            return
+        # each moving block's start and end, with the tangent into the block from
+        # there: from whole columns where every block moves (a CAM program's
+        # chunks), the same rows gathered where not
+        every = n == len(b)
+        q = np.empty((2 * n, 5))
+        dq = np.empty((2 * n, 5))
+        if every:
+            q[:n], q[n:], dq[:n] = b.start, b.end, b.dq_in
+            np.negative(b.dq_out, out=dq[n:])
+            tool = np.concatenate([b.tool_length, b.tool_length])
+        else:
+            q[:n], q[n:], dq[:n] = b.start[k], b.end[k], b.dq_in[k]
+            np.negative(b.dq_out[k], out=dq[n:])
+            tool = np.tile(b.tool_length[k], 2)
+        P = self._ends_ik(q, tool)
+        # ik_derivative's difference, through the kernel's IK rows (the same P)
+        d = (self._ik_rows(q + DIR_STEP_MM * dq, tool) - P) / DIR_STEP_MM
+        cols = self.play_cols
+        if cols == _ALL_MOTORS:
+            d_in, d_out = d[:n], -d[n:]
+        else:
+            d_in, d_out = d[:n, cols], -d[n:, cols]
+        if every and cols == _ALL_MOTORS:
+            b.dP_in[:], b.dP_out[:] = d_in, d_out
+        else:
+            b.dP_in[k[:, None], cols] = d_in
+            b.dP_out[k[:, None], cols] = d_out
         # each moving block's start, then its end, in order: the way each motor
         # last moved clearly up to it, carried on from the chunk before
         ends = np.empty((2 * n, len(cols)))
         ends[0::2], ends[1::2] = d_in, d_out
         way = np.where(np.abs(ends) > REVERSAL_SLOPE, np.sign(ends), 0.0)
         came = kernel.carried(way, self.way)
-        before = np.vstack([self.way[None], came[:-1]])
+        # the way before each start: the chunk's before the first, else the way
+        # after the block before's end
+        before = np.empty((n, len(cols)))
+        before[0], before[1:] = self.way, came[1:-1:2]
         self.way = came[-1].copy()
-        stood = np.vstack([self.stood[None], np.abs(d_out[:-1]) <= STAND_SLOPE])
-        self.stood = np.abs(d_out[-1]) <= STAND_SLOPE
+        still = np.abs(d_out) <= STAND_SLOPE
+        stood = np.empty((n, len(cols)), dtype=bool)
+        stood[0], stood[1:] = self.stood, still[:-1]
+        self.stood = still[-1].copy()
         # setting off faster than a creep at the block's speed limit (the points'
         # half takes a direction from V_EPS on)
         sets_off = np.abs(d_in) * b.vmax[k, None] > reversals.V_EPS
-        against = sets_off & (np.sign(d_in) == -before[0::2]) & stood
+        against = sets_off & (np.sign(d_in) == -before) & stood
         b.cross_in[k] = np.any(against, axis=1)
+
+    def _ik_rows(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
+        """(m, 5) [mm] :func:`kinematics.inverse`'s P of poses ``q`` (m, 5) with tool
+        lengths ``tool`` (m,), without its other results."""
+        m = self.geo.ik_arrays
+        return kernel.inverse_rows(m, q, kernel.ik.tool_z(m, len(q), tool))
 
     def _ends_ik(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
         """(2n, 5) [mm] the IK of n blocks' starts (``q``'s first n rows) and ends
@@ -457,10 +489,10 @@ class Planning:
             tool_bits[1:n] == tool_bits[n : 2 * n - 1]
         )
         P = np.empty((2 * n, 5))
-        P[n:] = kinematics.inverse(self.geo, q[n:], tool[n:]).P
+        P[n:] = self._ik_rows(q[n:], tool[n:])
         P[1:n] = P[n : 2 * n - 1]
         fresh = np.flatnonzero(~again)
-        P[fresh] = kinematics.inverse(self.geo, q[fresh], tool[fresh]).P
+        P[fresh] = self._ik_rows(q[fresh], tool[fresh])
         return P
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:
