@@ -339,7 +339,8 @@ class Planning:
                 self.any_motion = True
             # before any point is made: a long move to an unreachable place is an
             # error at its line, and a block of a billion points is never tried
-            n_steps = steps(done, plan.law, self.limits).sum(axis=1)
+            phases = steps(done, plan.law, self.limits)
+            n_steps = phases.sum(axis=1)
             long = np.flatnonzero(n_steps > 256)
             if long.size:
                 out.late = self._end_problems(done.take(long))
@@ -349,9 +350,9 @@ class Planning:
                     worst_line = min(e.line or 0 for e in out.late)
                     cut = int(long[np.flatnonzero(done.line[long] == worst_line)[0]])
                     plan = plan.head(cut)
-                    n_steps = n_steps[:cut]
+                    n_steps, phases = n_steps[:cut], phases[:cut]
             self._guard(plan, n_steps)
-            out.plan, out.samples = plan, sample(plan, self.limits)
+            out.plan, out.samples = plan, sample(plan, self.limits, phases)
         out.moves_nothing = final and not self.any_motion
         out.seconds = time.perf_counter() - t0
         return out

@@ -326,8 +326,11 @@ def blocks_from_motions(motions: Sequence[Motion] | MotionTable, limits: PlanLim
     if not keep.all():
         b = b.take(keep)
     moving = ~b.stops
-    if np.any(moving):
-        k = np.flatnonzero(moving)
+    k = np.flatnonzero(moving)
+    if len(k) == len(b) and len(k):  # every block moves: the tangents are the columns
+        b.dq_in = pose_at(b, k, np.zeros(len(k)))[1]
+        b.dq_out = pose_at(b, k, b.length)[1]
+    elif len(k):
         _, b.dq_in[k] = pose_at(b, k, np.zeros(len(k)))
         _, b.dq_out[k] = pose_at(b, k, b.length[k])
     return b

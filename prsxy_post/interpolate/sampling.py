@@ -134,10 +134,13 @@ def next_tangent(plan: Plan, blk: np.ndarray) -> np.ndarray:
     return nxt[blk]
 
 
-def sample(plan: Plan, limits: PlanLimits) -> Samples:
-    """Points of a plan's blocks, in time order, each block's end point last."""
+def sample(plan: Plan, limits: PlanLimits, n_steps: np.ndarray | None = None) -> Samples:
+    """Points of a plan's blocks, in time order, each block's end point last;
+    ``n_steps``: the plan's :func:`steps`, where the caller has them."""
     b, law = plan.blocks, plan.law
-    blk, tau, step, last_of_block = kernel.phase_times(law, steps(b, law, limits))
+    if n_steps is None:
+        n_steps = steps(b, law, limits)
+    blk, tau, step, last_of_block = kernel.phase_times(law, n_steps)
     first = np.ones(len(blk), dtype=bool)
     first[1:] = blk[1:] != blk[:-1]
 
