@@ -132,3 +132,17 @@ def test_rows_around_a_motion_the_reference_arc_makes_stay_in_order() -> None:
     kinds = [type(x).__name__ if isinstance(x, np.ndarray) else x.kind for x in items]
     assert kinds == ["feed", "ndarray", "arc", "ndarray", "function"]
     assert [int(r[rows.ROW_LINE]) for r in rows.table(items).rows] == [1, 2, 3, 4, 5, 6]
+
+
+def test_a_run_cut_short_holds_only_its_own_rows() -> None:
+    """A run of rows ended by a line the full path takes (here a comment) is its
+    rows alone, not a view of the room left for the rest of the batch, which
+    would stay alive until its chunk is planned."""
+    compiled()
+    lines = ["G21 G90 G94 G1 X0 Y0 F100"]
+    for j in range(100):
+        lines += [f"X{j}.5", f"Y{j}", "(a comment)"]
+    items = list(gcode.iter_motion_items([[*lines, "M2"]], CFG))
+    runs = [x for x in items if isinstance(x, np.ndarray)]
+    assert len(runs) == 100 and all(len(r) == 2 for r in runs)
+    assert all(r.base is None for r in runs)

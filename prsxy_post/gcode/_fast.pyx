@@ -555,6 +555,15 @@ cdef void _row(double[:, ::1] R, Py_ssize_t r, Py_ssize_t line, int kind, const 
     R[r, 20] = 0.0
 
 
+cdef object _filled(object run, Py_ssize_t nrow):
+    """The rows written of a run: the array itself when full, else a copy of them
+    (a view would hold the room for the rest of the batch until its chunk is
+    planned)."""
+    if nrow == len(run):
+        return run
+    return run[:nrow].copy()
+
+
 cdef object _fast(it, list lines, Py_ssize_t i, Py_ssize_t n0, bint rows):
     cdef Groups gr
     cdef Text t
@@ -620,7 +629,7 @@ cdef object _fast(it, list lines, Py_ssize_t i, Py_ssize_t n0, bint rows):
                 if not _fast_arc(it, m, _words(s, &gr), n0 + k + 1):
                     break
                 if rows and nrow and len(out) > mark:  # the rows so far go before it
-                    out.insert(mark, run[:nrow])
+                    out.insert(mark, _filled(run, nrow))
                     run, nrow = None, 0
                 pos = st.pos
                 here, md.p = tuple(pos), pos
@@ -669,7 +678,7 @@ cdef object _fast(it, list lines, Py_ssize_t i, Py_ssize_t n0, bint rows):
         md.p = e
         k += 1
     if nrow:
-        PyList_Append(out, run[:nrow])
+        PyList_Append(out, _filled(run, nrow))
     if k > i:
         st.pos, st.motion, st.feed = list(md.p), motion, feed_obj
         if new_motion:
