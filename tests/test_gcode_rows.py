@@ -68,6 +68,8 @@ def test_a_programs_table_gives_the_columns_its_motions_give(path: Path) -> None
     want = geometry.motion_columns(motions)
     _assert_same_columns(geometry.motion_columns(rows.table(items)), want)
     _assert_same_columns(geometry.motion_columns(rows.table(motions)), want)
+    one_by_one = np.array([rows.row_of(m) for m in motions], dtype=float)
+    assert rows.rows_of(motions).tobytes() == one_by_one.tobytes()
 
 
 def test_the_generated_program_comes_as_rows_and_plans_the_same(nominal: Profile) -> None:

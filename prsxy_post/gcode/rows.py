@@ -84,10 +84,38 @@ def row_of(m: Motion) -> tuple[float, ...]:
 
 
 def rows_of(motions: Sequence[Motion]) -> np.ndarray:
-    """(n, WIDTH) the rows of motions."""
-    if not motions:
-        return np.empty((0, WIDTH))
-    return np.array([row_of(m) for m in motions], dtype=float).reshape(-1, WIDTH)
+    """(n, WIDTH) the rows of motions (:func:`row_of` of each, filled a column at
+    a time)."""
+    n = len(motions)
+    out = np.zeros((n, WIDTH))
+    if not n:
+        return out
+    # one pass over the motions (Motion is a tuple): a column per field
+    cols = list(zip(*motions, strict=True))
+    f = Motion._fields.index
+    out[:, ROW_LINE] = np.fromiter(cols[f("line")], float, n)
+    kinds = cols[f("kind")]
+    out[:, ROW_KIND] = np.fromiter((KIND[k] for k in kinds), float, n)
+    out[:, ROW_START] = _poses(cols[f("start")])
+    out[:, ROW_END] = _poses(cols[f("end")])
+    out[:, ROW_FEED] = np.fromiter(cols[f("feed")], float, n)
+    arcs = [i for i, k in enumerate(kinds) if k == "arc"]
+    if arcs:
+        planes, centers, turns = cols[f("plane")], cols[f("center")], cols[f("rotation")]
+        out[arcs, ROW_PLANE] = [planes[i] for i in arcs]
+        out[arcs, ROW_CENTER] = [centers[i] for i in arcs]
+        out[arcs, ROW_ROTATION] = [turns[i] for i in arcs]
+    out[:, ROW_TOOL_LENGTH] = np.fromiter(cols[f("tool_length")], float, n)
+    out[:, ROW_PATH_TOL] = np.fromiter(
+        (math.nan if t is None else t for t in cols[f("path_tol")]), float, n
+    )
+    out[:, ROW_DURATION] = np.fromiter(cols[f("duration")], float, n)
+    return out
+
+
+def _poses(col: Sequence[Sequence[float]]) -> np.ndarray:
+    """(n, 5) the poses of a column of them (each five numbers)."""
+    return np.fromiter(itertools.chain.from_iterable(col), float, 5 * len(col)).reshape(-1, 5)
 
 
 class MotionTable(NamedTuple):
@@ -114,16 +142,25 @@ def table(items: Sequence[Item]) -> MotionTable:
     parts: list[np.ndarray] = []
     objects: list[tuple[int, Motion]] = []
     at = 0
-    for is_rows, group in itertools.groupby(items, key=lambda x: isinstance(x, np.ndarray)):
-        if is_rows:
-            for r in group:
-                parts.append(r)  # type: ignore[arg-type]
-                at += len(r)
-            continue
-        ms: list[Motion] = list(group)  # type: ignore[arg-type]
-        objects += [(at + j, m) for j, m in enumerate(ms) if _special(m)]
-        parts.append(rows_of(ms))
-        at += len(ms)
+    group: list[Motion] = []  # the Motions since the last run of rows
+
+    def close() -> None:
+        nonlocal at, group
+        objects.extend((at + j, m) for j, m in enumerate(group) if _special(m))
+        parts.append(rows_of(group))
+        at += len(group)
+        group = []
+
+    for item in items:
+        if type(item) is np.ndarray:
+            if group:
+                close()
+            parts.append(item)
+            at += len(item)
+        else:
+            group.append(item)  # type: ignore[arg-type]
+    if group:
+        close()
     if not parts:
         return MotionTable(np.empty((0, WIDTH)), objects)
     rows = parts[0] if len(parts) == 1 else np.concatenate(parts)
@@ -132,7 +169,7 @@ def table(items: Sequence[Item]) -> MotionTable:
 
 def count(item: Item) -> int:
     """Motions in an item."""
-    return len(item) if isinstance(item, np.ndarray) else 1
+    return len(item) if type(item) is np.ndarray else 1
 
 
 def chunks(items: Iterable[Item], size: int) -> Iterator[list[Item]]:
@@ -143,14 +180,18 @@ def chunks(items: Iterable[Item], size: int) -> Iterator[list[Item]]:
     chunk: list[Item] = []
     held = 0
     for item in items:
-        n = count(item)
+        if type(item) is not np.ndarray:  # a Motion
+            chunk.append(item)
+            held += 1
+            if held == size:
+                yield chunk
+                chunk, held = [], 0
+            continue
+        n = len(item)
         while held + n >= size:
             cut = size - held
-            if isinstance(item, np.ndarray):
-                chunk.append(item[:cut])
-                item = item[cut:]
-            else:
-                chunk.append(item)
+            chunk.append(item[:cut])
+            item = item[cut:]
             yield chunk
             chunk, held, n = [], 0, n - cut
         if n:
