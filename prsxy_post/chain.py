@@ -340,7 +340,7 @@ class Planning:
             # before any point is made: a long move to an unreachable place is an
             # error at its line, and a block of a billion points is never tried
             phases = steps(done, plan.law, self.limits)
-            n_steps = phases.sum(axis=1)
+            n_steps = phases[:, 0] + phases[:, 1] + phases[:, 2]  # (a sum over rows of 3)
             long = np.flatnonzero(n_steps > 256)
             if long.size:
                 out.late = self._end_problems(done.take(long))
@@ -468,7 +468,10 @@ class Planning:
         # half takes a direction from V_EPS on)
         sets_off = np.abs(d_in) * b.vmax[k, None] > reversals.V_EPS
         against = sets_off & (np.sign(d_in) == -before) & stood
-        b.cross_in[k] = np.any(against, axis=1)
+        crosses = against[:, 0].copy()  # any over each row, a column at a time
+        for j in range(1, len(cols)):
+            crosses |= against[:, j]
+        b.cross_in[k] = crosses
 
     def _ik_rows(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
         """(m, 5) [mm] :func:`kinematics.inverse`'s P of poses ``q`` (m, 5) with tool
@@ -483,10 +486,11 @@ class Planning:
         every junction), takes that end's IK: the IK solves each row alone, so
         the same row gives the same bits (a quarter of the planner's IK saved)."""
         n = len(q) // 2
-        bits = q.view(np.int64)
+        # each row's 40 bytes as one value (np.all over rows of 5 is slow)
+        bits = np.ascontiguousarray(q).view(np.dtype((np.void, q.itemsize * 5))).reshape(-1)
         tool_bits = tool.view(np.int64)
         again = np.zeros(n, dtype=bool)
-        again[1:] = np.all(bits[1:n] == bits[n : 2 * n - 1], axis=1) & (
+        again[1:] = (bits[1:n] == bits[n : 2 * n - 1]) & (
             tool_bits[1:n] == tool_bits[n : 2 * n - 1]
         )
         P = np.empty((2 * n, 5))
