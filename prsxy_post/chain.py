@@ -28,6 +28,7 @@ import numpy as np
 from . import axiscomp, kernel, kinematics, reversals
 from . import rules as checks
 from .errors import LimitError, PrsxyError
+from .gcode.rows import ROW_LINE, MotionTable
 from .interpolate import (
     Blocks,
     Plan,
@@ -102,8 +103,9 @@ def ik_geometry(profile: Profile, stages: Stages) -> kinematics.Geometry:
 ErrorFunction = Callable[[np.ndarray], np.ndarray]
 
 
-def check_motions(motions: Sequence[Motion], profile: Profile) -> list[PrsxyError]:
-    """Problems visible in the program itself: feed above the machine's maximum."""
+def check_motions(motions: Sequence[Motion] | MotionTable, profile: Profile) -> list[PrsxyError]:
+    """Problems visible in the program itself (its motions, or their table):
+    feed above the machine's maximum."""
     return [p.error(profile) for p in checks.feed_problems(profile, motions)]
 
 
@@ -134,15 +136,25 @@ class Prepared:
     problems: list[PrsxyError]
 
 
-def prepare(motions: Sequence[Motion], profile: Profile, limits: PlanLimits) -> Prepared:
-    """Planning arrays and program-level problems of a chunk of motions."""
+def prepare(
+    motions: Sequence[Motion] | MotionTable, profile: Profile, limits: PlanLimits
+) -> Prepared:
+    """Planning arrays and program-level problems of a chunk of motions (or of
+    their table, :mod:`.gcode.rows`)."""
+    if isinstance(motions, MotionTable):
+        first = int(motions.rows[0, ROW_LINE]) if len(motions) else 0
+    else:
+        first = motions[0].line if motions else 0
     return Prepared(
         blocks_from_motions(motions, limits),
         len(motions),
-        motions[0].line if motions else 0,
+        first,
         check_motions(motions, profile),
     )
 
+
+#: the play columns when every motor has play
+_ALL_MOTORS = list(range(len(MOTORS)))
 
 #: One-sided step [s] of the directional derivative of the IK along the planned
 #: velocity: the IK moves by ~v·1e-6 s (under a µm), where its curvature makes an
@@ -327,7 +339,8 @@ class Planning:
                 self.any_motion = True
             # before any point is made: a long move to an unreachable place is an
             # error at its line, and a block of a billion points is never tried
-            n_steps = steps(done, plan.law, self.limits).sum(axis=1)
+            phases = steps(done, plan.law, self.limits)
+            n_steps = phases[:, 0] + phases[:, 1] + phases[:, 2]  # (a sum over rows of 3)
             long = np.flatnonzero(n_steps > 256)
             if long.size:
                 out.late = self._end_problems(done.take(long))
@@ -337,9 +350,9 @@ class Planning:
                     worst_line = min(e.line or 0 for e in out.late)
                     cut = int(long[np.flatnonzero(done.line[long] == worst_line)[0]])
                     plan = plan.head(cut)
-                    n_steps = n_steps[:cut]
+                    n_steps, phases = n_steps[:cut], phases[:cut]
             self._guard(plan, n_steps)
-            out.plan, out.samples = plan, sample(plan, self.limits)
+            out.plan, out.samples = plan, sample(plan, self.limits, phases)
         out.moves_nothing = final and not self.any_motion
         out.seconds = time.perf_counter() - t0
         return out
@@ -406,33 +419,65 @@ class Planning:
         creep does not set it, as the points' half watches a creep's drift instead;
         at the start, up, the contract's approach from below)."""
         k = np.flatnonzero(~b.stops)
-        if not k.size:
-            return
-        tool = np.tile(b.tool_length[k], 2)
-        q = np.vstack([b.start[k], b.end[k]])
-        dq = np.vstack([b.dq_in[k], -b.dq_out[k]])
-        P = self._ends_ik(q, tool)
-        d = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
-        cols = self.play_cols
         n = len(k)
-        d_in, d_out = d[:n, cols], -d[n:, cols]
-        b.dP_in[k[:, None], cols] = d_in
-        b.dP_out[k[:, None], cols] = d_out
+        if not n:
+            return
+        # each moving block's start and end, with the tangent into the block from
+        # there: from whole columns where every block moves (a CAM program's
+        # chunks), the same rows gathered where not
+        every = n == len(b)
+        q = np.empty((2 * n, 5))
+        dq = np.empty((2 * n, 5))
+        if every:
+            q[:n], q[n:], dq[:n] = b.start, b.end, b.dq_in
+            np.negative(b.dq_out, out=dq[n:])
+            tool = np.concatenate([b.tool_length, b.tool_length])
+        else:
+            q[:n], q[n:], dq[:n] = b.start[k], b.end[k], b.dq_in[k]
+            np.negative(b.dq_out[k], out=dq[n:])
+            tool = np.tile(b.tool_length[k], 2)
+        P = self._ends_ik(q, tool)
+        # ik_derivative's difference, through the kernel's IK rows (the same P)
+        d = (self._ik_rows(q + DIR_STEP_MM * dq, tool) - P) / DIR_STEP_MM
+        cols = self.play_cols
+        if cols == _ALL_MOTORS:
+            d_in, d_out = d[:n], -d[n:]
+        else:
+            d_in, d_out = d[:n, cols], -d[n:, cols]
+        if every and cols == _ALL_MOTORS:
+            b.dP_in[:], b.dP_out[:] = d_in, d_out
+        else:
+            b.dP_in[k[:, None], cols] = d_in
+            b.dP_out[k[:, None], cols] = d_out
         # each moving block's start, then its end, in order: the way each motor
         # last moved clearly up to it, carried on from the chunk before
         ends = np.empty((2 * n, len(cols)))
         ends[0::2], ends[1::2] = d_in, d_out
         way = np.where(np.abs(ends) > REVERSAL_SLOPE, np.sign(ends), 0.0)
         came = kernel.carried(way, self.way)
-        before = np.vstack([self.way[None], came[:-1]])
+        # the way before each start: the chunk's before the first, else the way
+        # after the block before's end
+        before = np.empty((n, len(cols)))
+        before[0], before[1:] = self.way, came[1:-1:2]
         self.way = came[-1].copy()
-        stood = np.vstack([self.stood[None], np.abs(d_out[:-1]) <= STAND_SLOPE])
-        self.stood = np.abs(d_out[-1]) <= STAND_SLOPE
+        still = np.abs(d_out) <= STAND_SLOPE
+        stood = np.empty((n, len(cols)), dtype=bool)
+        stood[0], stood[1:] = self.stood, still[:-1]
+        self.stood = still[-1].copy()
         # setting off faster than a creep at the block's speed limit (the points'
         # half takes a direction from V_EPS on)
         sets_off = np.abs(d_in) * b.vmax[k, None] > reversals.V_EPS
-        against = sets_off & (np.sign(d_in) == -before[0::2]) & stood
-        b.cross_in[k] = np.any(against, axis=1)
+        against = sets_off & (np.sign(d_in) == -before) & stood
+        crosses = against[:, 0].copy()  # any over each row, a column at a time
+        for j in range(1, len(cols)):
+            crosses |= against[:, j]
+        b.cross_in[k] = crosses
+
+    def _ik_rows(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
+        """(m, 5) [mm] :func:`kinematics.inverse`'s P of poses ``q`` (m, 5) with tool
+        lengths ``tool`` (m,), without its other results."""
+        m = self.geo.ik_arrays
+        return kernel.inverse_rows(m, q, kernel.ik.tool_z(m, len(q), tool))
 
     def _ends_ik(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
         """(2n, 5) [mm] the IK of n blocks' starts (``q``'s first n rows) and ends
@@ -441,17 +486,18 @@ class Planning:
         every junction), takes that end's IK: the IK solves each row alone, so
         the same row gives the same bits (a quarter of the planner's IK saved)."""
         n = len(q) // 2
-        bits = q.view(np.int64)
+        # each row's 40 bytes as one value (np.all over rows of 5 is slow)
+        bits = np.ascontiguousarray(q).view(np.dtype((np.void, q.itemsize * 5))).reshape(-1)
         tool_bits = tool.view(np.int64)
         again = np.zeros(n, dtype=bool)
-        again[1:] = np.all(bits[1:n] == bits[n : 2 * n - 1], axis=1) & (
+        again[1:] = (bits[1:n] == bits[n : 2 * n - 1]) & (
             tool_bits[1:n] == tool_bits[n : 2 * n - 1]
         )
         P = np.empty((2 * n, 5))
-        P[n:] = kinematics.inverse(self.geo, q[n:], tool[n:]).P
+        P[n:] = self._ik_rows(q[n:], tool[n:])
         P[1:n] = P[n : 2 * n - 1]
         fresh = np.flatnonzero(~again)
-        P[fresh] = kinematics.inverse(self.geo, q[fresh], tool[fresh]).P
+        P[fresh] = self._ik_rows(q[fresh], tool[fresh])
         return P
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:

@@ -20,7 +20,6 @@ Example
 from __future__ import annotations
 
 import contextlib
-import itertools
 import os
 import queue
 import sys
@@ -116,7 +115,8 @@ def _planned_here(
     )
     # a program whose loops and calls jump back reads those lines again from the file
     lines_from = gcode.FileLines(job.program) if job.program != "-" else None
-    motions = gcode.iter_motions_batched(counted(batches), cfg, job.program, lines_from=lines_from)
+    # the moves of the compiled fast path come as rows, never a Motion each
+    items = gcode.iter_motion_items(counted(batches), cfg, job.program, lines_from=lines_from)
     from . import errormap, writers
 
     dialect = writers.dialect(job.fmt)
@@ -128,9 +128,10 @@ def _planned_here(
         max_part_points=dialect.parts(writers.settings_of(prof, job.fmt)),
     )
     limits = planning.limits
+    chunks = gcode.rows.chunks(items, job.chunk)
     while True:
         t0 = time.perf_counter()
-        batch = list(itertools.islice(motions, job.chunk))
+        batch = gcode.rows.table(next(chunks))
         prepared = chain.prepare(batch, prof, limits)
         counts["parse"] += time.perf_counter() - t0
         counts["motions"] += len(batch)

@@ -17,6 +17,7 @@ import numpy as np
 
 from . import kinematics
 from .errors import LimitError, PrsxyError, ReachError
+from .gcode import rows
 from .profile import MOTORS, Profile
 
 if TYPE_CHECKING:
@@ -69,9 +70,18 @@ def _worst_per_line(excess: np.ndarray, lines: np.ndarray) -> np.ndarray:
     return np.asarray(ranked[first])
 
 
-def feed_problems(profile: Profile, motions: Sequence[Motion]) -> list[Problem]:
-    """Programmed feeds above ``limits.max_feed_mm_min``, one per motion."""
+def feed_problems(profile: Profile, motions: Sequence[Motion] | rows.MotionTable) -> list[Problem]:
+    """Programmed feeds above ``limits.max_feed_mm_min``, one per motion (or row of
+    their table, :mod:`prsxy_post.gcode.rows`)."""
     fmax = float(profile.limits.max_feed_mm_min)
+    if isinstance(motions, rows.MotionTable):
+        r = motions.rows
+        kind, feed = r[:, rows.ROW_KIND], r[:, rows.ROW_FEED]
+        over = ((kind == rows.KIND_FEED) | (kind == rows.KIND_ARC)) & (feed > fmax)
+        return [
+            Problem("feed", int(r[i, rows.ROW_LINE]), float(feed[i]), float(feed[i]) - fmax)
+            for i in np.flatnonzero(over).tolist()
+        ]
     return [
         Problem("feed", m.line, m.feed, m.feed - fmax)
         for m in motions

@@ -3,7 +3,10 @@
 The interpreter runs each program twice, once per implementation of the fast path,
 and must give the same motions, every field of every Motion to the bit (floats
 compared as their IEEE bytes, so 0.0 is not -0.0; types too), the same error
-after the same motions, and take the same lines the fast way. Programs: the
+after the same motions, and take the same lines the fast way. And a third time
+in rows mode (gcode/rows.py, what convert runs: the compiled twin writes its
+moves as rows of a table): the table of its motions must be the reference's
+motions' table to the bit, with the same error and the same lines taken. Programs: the
 samples, the tests/data programs (feature programs and the real CAM corpus),
 bench.py's generated five-axis program, and generated CAM lines (hypothesis)
 with odd spacing, signs, leading and trailing dots, long numbers (past the exact
@@ -84,7 +87,7 @@ def outcome(
     got: list[object] = []
     error = None
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(fast, "SELECTED", fast.FastPath(path.name, path.matches, run))
+        mp.setattr(fast, "SELECTED", fast.FastPath(path.name, path.matches, run, path.run_rows))
         try:
             for m in gcode.iter_motions(lines, CFG, source):
                 got.append(bits(m))
@@ -95,8 +98,41 @@ def outcome(
     return got, error, taken
 
 
+def rows_outcome(
+    lines: list[str], path: fast.FastPath, source: str = "t.ngc"
+) -> tuple[object, str | None, int]:
+    """:func:`outcome` in rows mode: (the table of the motions to the bit, the
+    error, the lines taken fast)."""
+    taken = 0
+
+    def run(it: Any, matches: list[Any], i: int, n0: int) -> int:
+        nonlocal taken
+        k = path.run_rows(it, matches, i, n0)
+        taken += k - i
+        return k
+
+    items: list[gcode.rows.Item] = []
+    error = None
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(fast, "SELECTED", fast.FastPath(path.name, path.matches, path.run, run))
+        try:
+            for item in gcode.iter_motion_items([lines], CFG, source):
+                items.append(item)
+        except GCodeError as exc:
+            error = str(exc)
+        except (OverflowError, ValueError) as exc:
+            error = f"{type(exc).__name__}: {exc}"
+    return table_bits(items), error, taken
+
+
+def table_bits(items: list[gcode.rows.Item]) -> object:
+    t = gcode.rows.table(items)
+    return bits(t.rows), [(i, bits(m)) for i, m in t.objects]
+
+
 def same(lines: list[str], source: str = "t.ngc") -> int:
-    """Assert both fast paths give the same; the number of lines taken fast."""
+    """Assert both fast paths give the same, in both modes; the number of lines
+    taken fast."""
     want = outcome(lines, fast.PURE, source)
     got = outcome(lines, compiled(), source)
     assert got[1] == want[1]
@@ -104,6 +140,9 @@ def same(lines: list[str], source: str = "t.ngc") -> int:
     for k, (g, w) in enumerate(zip(got[0], want[0], strict=True)):
         assert g == w, f"motion {k}"
     assert got[2] == want[2]
+    pure_rows = rows_outcome(lines, fast.PURE, source)
+    assert pure_rows[1:] == want[1:]  # the reference makes Motions in rows mode too
+    assert rows_outcome(lines, compiled(), source) == pure_rows
     return want[2]
 
 

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 from prsxy_post import chain, gcode, interpolate, program
 from prsxy_post import profile as profile_mod
@@ -228,3 +231,19 @@ def test_segment_limit_bounds_curves_and_leaves_lines_free(segment: str) -> None
     one = np.flatnonzero(np.isfinite(r) & (r > 1))[0]
     if segment == "chord":  # the chord's sagitta at the step is the share of tol
         assert np.isclose(got[one] ** 2 / (8 * r[one]), tol, rtol=1e-12)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    hnp.arrays(
+        np.float64,
+        st.tuples(st.integers(0, 300), st.integers(1, 5)),
+        elements=st.floats(-1e150, 1e150) | st.sampled_from([0.0, -0.0, 1e-160]),
+    )
+)
+def test_row_norm_is_numpys_norm_of_each_row_to_the_bit(x: np.ndarray) -> None:
+    """The look-ahead's row_norm sums the squares in column order, as numpy's
+    norm(axis=1) does (the junctions' turns must keep their bits)."""
+    from prsxy_post.interpolate.lookahead import row_norm
+
+    assert row_norm(x).tobytes() == np.linalg.norm(x, axis=1).tobytes()

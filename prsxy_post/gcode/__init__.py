@@ -18,7 +18,8 @@ The package follows the split of LinuxCNC's own interpreter (rs274ngc):
   and :mod:`.messages`: machine functions and speaking comments;
 - :mod:`.fast`: the common CAM block, matched over a batch of lines at once;
 - :mod:`.stream`: :func:`iter_motions`, running it all over a program's lines as
-  they come.
+  they come; :mod:`.rows`: motions as rows of a float table (the compiled fast
+  path writes its moves there directly, :func:`iter_motion_items`).
 
 Motions are what the machine does, in the workpiece frame (LinuxCNC's machine
 coordinates: program coordinates plus the G92 offset, turned by the system's
@@ -49,12 +50,13 @@ runs, as in LinuxCNC's default); the first ``%`` line starts the program and a
 second one ends it; M2/M30 end the program (nothing after them is read).
 """
 
+from . import rows
 from .config import InterpreterConfig, ToolEntry
 from .execute import Interpreter
 from .lines import FileLines, ProgramLines, batches_of, iter_line_batches, split_lines
 from .motion import EXACT_STOP, MM_PER_INCH, Motion, Pose, motion_to_json
 from .read import Block, Word, evaluate, parse
-from .stream import interpret, iter_motions, iter_motions_batched
+from .stream import interpret, iter_motion_items, iter_motions, iter_motions_batched
 
 __all__ = [
     "EXACT_STOP",
@@ -72,9 +74,11 @@ __all__ = [
     "evaluate",
     "interpret",
     "iter_line_batches",
+    "iter_motion_items",
     "iter_motions",
     "iter_motions_batched",
     "motion_to_json",
     "parse",
+    "rows",
     "split_lines",
 ]

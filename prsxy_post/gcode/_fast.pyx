@@ -150,19 +150,28 @@ cdef double _RT[2]  # LinuxCNC's radius tolerance, mm and inch
 cdef double _SA[2]  # the spiral's absolute tolerance, mm and inch
 cdef double _SR = 0.0  # its relative tolerance
 cdef double _PI = 3.141592653589793
+cdef double _NAN_D = float("nan")  # _NAN's value
+cdef Py_ssize_t _WIDTH = 21  # the columns of a row (rows.WIDTH)
+cdef object _NEW_ROWS = None  # numpy.empty
 
 
 def bind(motion_type, fast_arc, pure_run, pure_matches, double mm_per_inch, nan, hypot,
-         radius_tol, spiral_abs, double spiral_rel):
+         radius_tol, spiral_abs, double spiral_rel, Py_ssize_t width, new_rows):
     """The reference's pieces this twin uses (gcode.fast calls it once): ``nan``
     is the very object the reference puts in a rapid (math.nan), so that motions
     compare equal as tuples (a tuple compares NaN by identity); ``hypot`` is
     Python's math.hypot (not libm's: CPython computes its own); the arc
-    tolerances are moves.py's, by unit."""
+    tolerances are moves.py's, by unit; ``width`` and ``new_rows`` (numpy.empty)
+    the rows mode's rows (rows.WIDTH, whose ROW_* columns :func:`_row` writes)."""
     global _Motion, _fast_arc, _pure_run, _pure_matches, _NAN, _MM_PER_INCH, _hypot, _SR
+    global _NAN_D, _NEW_ROWS
+    if width != _WIDTH:
+        raise ValueError(f"rows of {width} columns (this twin writes {_WIDTH})")
     _Motion, _fast_arc, _pure_run, _pure_matches = motion_type, fast_arc, pure_run, pure_matches
     _MM_PER_INCH = mm_per_inch
     _NAN = nan
+    _NAN_D = nan
+    _NEW_ROWS = new_rows
     _hypot = hypot
     _RT[0], _RT[1] = radius_tol["mm"], radius_tol["inch"]
     _SA[0], _SA[1] = spiral_abs["mm"], spiral_abs["inch"]
@@ -438,24 +447,25 @@ _AXES[1] = [2, 0, 1, 7, 5, 6]  # G18: K I
 _AXES[2] = [1, 2, 0, 6, 7, 5]  # G19: J K
 
 
-cdef object _arc(Modal *md, Text *t, str s, Groups *gr, int m, double feed, tuple here,
-                 double *e, int *given, object line, object plane_obj, tuple tail):
-    """The Motion of a G2/G3 as moves.arc makes it (target, arc_center, sweep_of,
-    arc_length, feed_rate; one turn, G94, no rotation), or None where the reference
-    must decide: a block it refuses, or numbers that are not finite."""
-    cdef double u0, v0, u1, v1, cu, cv, rad, a1, b1, sweep, length, rate
-    cdef double c[3]
+cdef int _arc(Modal *md, Text *t, str s, Groups *gr, int m, double feed, double *e,
+              int *given, double *c, double *rate) except -1:
+    """A G2/G3 as moves.arc computes it (target, arc_center, sweep_of, arc_length,
+    feed_rate; one turn, G94, no rotation): 1 with its end in ``e`` (``given``:
+    the axis words given), centre in ``c`` [mm] and feed in ``rate``; 0 where
+    the reference must decide: a block it refuses, or numbers that are not
+    finite."""
+    cdef double u0, v0, u1, v1, cu, cv, rad, a1, b1, sweep, length
     cdef const int *ax
     if md.plane == 0:
-        return None
+        return 0
     ax = _AXES[md.plane - 17]
     _end_point(md, t, s, gr, e, given)
     if not (_finite5(e) and _finite5(md.p)) or feed <= 0:
-        return None
+        return 0
     u0, v0 = md.p[ax[0]] / md.sc, md.p[ax[1]] / md.sc
     u1, v1 = e[ax[0]] / md.sc, e[ax[1]] / md.sc
     if not _center(md, t, s, gr, m, ax, u0, v0, u1, v1, &cu, &cv):
-        return None
+        return 0
     rad = _hyp(u0 - cu, v0 - cv) * md.sc
     a1 = atan2(v0 - cv, u0 - cu)  # moves.sweep_of, one turn
     b1 = atan2(v1 - cv, u1 - cu)
@@ -469,15 +479,11 @@ cdef object _arc(Modal *md, Text *t, str s, Groups *gr, int m, double feed, tupl
         sweep = (b1 - a1) + 0.0  # + (rotation + 1) * 2 * pi
     length = _hyp(rad * sweep, e[ax[2]] - md.p[ax[2]])
     if length > 1e-12 or (md.p[3] - e[3] == 0 and md.p[4] - e[4] == 0):  # moves.feed_rate
-        rate = feed * (_MM_PER_INCH if md.inch else 1.0)
+        rate[0] = feed * (_MM_PER_INCH if md.inch else 1.0)
     else:
-        rate = feed
+        rate[0] = feed
     c[ax[0]], c[ax[1]], c[ax[2]] = cu * md.sc, cv * md.sc, e[ax[2]]
-    end = prsxy_end(here, e, given)
-    rotation = 1 if m == 3 else -1
-    return prsxy_motion_of(
-        _Motion, (line, "arc", here, end, rate, plane_obj, (c[0], c[1], c[2]), rotation) + tail
-    )
+    return 1
 
 
 def matches_of(list batch):
@@ -518,15 +524,59 @@ cdef double _straight_rate(Modal *md, int m, double f, const double *e) noexcept
 def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
     """:func:`prsxy_post.gcode.fast.fast_run` over ``lines`` (the batch) from ``i``:
     the same motions and state, the index of the first line not taken."""
+    return _fast(it, lines, i, n0, False)
+
+
+def fast_rows(it, list lines, Py_ssize_t i, Py_ssize_t n0):
+    """:func:`fast_run` in rows mode (:mod:`prsxy_post.gcode.rows`): the moves it
+    makes itself go into ``it.out`` as runs of rows (``(n, WIDTH)`` float arrays)
+    instead of Motions, in their place among the Motions the reference's arcs
+    make; the same state, the same index returned."""
+    return _fast(it, lines, i, n0, True)
+
+
+cdef void _row(double[:, ::1] R, Py_ssize_t r, Py_ssize_t line, int kind, const double *p,
+               const double *e, double rate, int plane, const double *c, int rotation,
+               double tool_length, double path_tol) noexcept:
+    """Row ``r`` of a run (rows.ROW_* columns)."""
+    cdef int j
+    R[r, 0] = <double>line
+    R[r, 1] = kind
+    for j in range(5):
+        R[r, 2 + j] = p[j]
+        R[r, 7 + j] = e[j]
+    R[r, 12] = rate
+    R[r, 13] = plane
+    for j in range(3):
+        R[r, 14 + j] = c[j]
+    R[r, 17] = rotation
+    R[r, 18] = tool_length
+    R[r, 19] = path_tol
+    R[r, 20] = 0.0
+
+
+cdef object _filled(object run, Py_ssize_t nrow):
+    """The rows written of a run: the array itself when full, else a copy of them
+    (a view would hold the room for the rest of the batch until its chunk is
+    planned)."""
+    if nrow == len(run):
+        return run
+    return run[:nrow].copy()
+
+
+cdef object _fast(it, list lines, Py_ssize_t i, Py_ssize_t n0, bint rows):
     cdef Groups gr
     cdef Text t
     cdef Modal md
-    cdef Py_ssize_t nlines = len(lines), k = i
+    cdef Py_ssize_t nlines = len(lines), k = i, nrow = 0, mark
     cdef bint new_motion = False
-    cdef int m
+    cdef int m, plane
     cdef int given[5]
-    cdef double f, rate_d, last_rate = 0.0
+    cdef double f, rate_d, last_rate = 0.0, tool_length = 0.0, path_tol = 0.0
     cdef double e[5]
+    cdef double c[3]
+    cdef double zero[3]
+    cdef double[:, ::1] R
     if i >= nlines:
         return i
     cdef str s = lines[i]
@@ -544,6 +594,12 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
     head = (0, None, 0, 0.0, st.tool_length, st.tool, st.spindle * st.spindle_dir, False,
             st.path_tol, (), None)
     out, here = it.out, tuple(st.pos)  # the start, as the position's float objects
+    run = None  # rows mode: the run of rows under way
+    if rows:
+        tool_length = float(st.tool_length)
+        path_tol = _NAN if st.path_tol is None else float(st.path_tol)
+        plane = md.plane
+        zero[0] = zero[1] = zero[2] = 0.0
     while k < nlines:
         if k > i:
             s = lines[k]
@@ -562,34 +618,57 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
             break
         else:
             f = md.feed
+        if rows and run is None:
+            run = _NEW_ROWS((nlines - k, _WIDTH))
+            R = run
         if m >= 2:
-            done = _arc(&md, &t, s, &gr, m, f, here, e, given, n0 + k + 1, st.plane, head[3:])
-            if done is None:  # the reference decides, with the words as text
+            if not _arc(&md, &t, s, &gr, m, f, e, given, c, &rate_d):
+                # the reference decides, with the words as text
                 st.pos, st.motion, st.feed = list(md.p), motion, feed_obj
+                mark = len(out)
                 if not _fast_arc(it, m, _words(s, &gr), n0 + k + 1):
                     break
+                if rows and nrow and len(out) > mark:  # the rows so far go before it
+                    out.insert(mark, _filled(run, nrow))
+                    run, nrow = None, 0
                 pos = st.pos
                 here, md.p = tuple(pos), pos
                 motion, feed_obj = st.motion, st.feed
                 md.feed, md.mcode = feed_obj, m  # _fast_arc leaves st.motion = m
                 k += 1
                 continue
-            PyList_Append(out, done)
-            here = done[3]
+            if rows:
+                _row(R, nrow, n0 + k + 1, 2, md.p, e, rate_d, plane, c, 2 * m - 5,
+                     tool_length, path_tol)
+                nrow += 1
+            else:
+                end = prsxy_end(here, e, given)
+                PyList_Append(out, prsxy_motion_of(
+                    _Motion,
+                    (n0 + k + 1, "arc", here, end, rate_d, st.plane, (c[0], c[1], c[2]),
+                     2 * m - 5) + head[3:],
+                ))
+                here = end
         else:
             if gr.s[5] >= 0 or gr.s[6] >= 0 or gr.s[7] >= 0 or gr.s[8] >= 0:
                 break
             _end_point(&md, &t, s, &gr, e, given)
-            if m == 0:
-                rate, kind = _NAN, "rapid"
+            if rows:
+                rate_d = _NAN_D if m == 0 else _straight_rate(&md, m, f, e)
+                _row(R, nrow, n0 + k + 1, 0 if m == 0 else 1, md.p, e, rate_d, 0, zero, 0,
+                     tool_length, path_tol)
+                nrow += 1
             else:
-                rate_d, kind = _straight_rate(&md, m, f, e), "feed"
-                if last_rate_obj is None or not prsxy_same_bits(rate_d, last_rate):
-                    last_rate, last_rate_obj = rate_d, rate_d  # one float object per rate
-                rate = last_rate_obj
-            end = prsxy_end(here, e, given)
-            PyList_Append(out, prsxy_motion(_Motion, n0 + k + 1, kind, here, end, rate, head))
-            here = end
+                if m == 0:
+                    rate, kind = _NAN, "rapid"
+                else:
+                    rate_d, kind = _straight_rate(&md, m, f, e), "feed"
+                    if last_rate_obj is None or not prsxy_same_bits(rate_d, last_rate):
+                        last_rate, last_rate_obj = rate_d, rate_d  # one float object per rate
+                    rate = last_rate_obj
+                end = prsxy_end(here, e, given)
+                PyList_Append(out, prsxy_motion(_Motion, n0 + k + 1, kind, here, end, rate, head))
+                here = end
         if gr.s[9] >= 0:
             md.feed, feed_obj = f, f
         if gr.g >= 0:
@@ -598,6 +677,8 @@ def fast_run(it, list lines, Py_ssize_t i, Py_ssize_t n0):
             motion, md.mcode = m, m
         md.p = e
         k += 1
+    if nrow:
+        PyList_Append(out, _filled(run, nrow))
     if k > i:
         st.pos, st.motion, st.feed = list(md.p), motion, feed_obj
         if new_motion:

@@ -26,6 +26,7 @@ from .execute import Interpreter
 from .motion import MM_PER_INCH, Motion
 from .moves import RADIUS_TOLERANCE, SPIRAL_ABS_TOLERANCE, SPIRAL_REL_TOLERANCE, arc
 from .read import Word
+from .rows import WIDTH, new_rows
 
 #: The common CAM block: an optional N, an optional G0/G1/G2/G3, axis words in the
 #: order X Y Z A B, arc words I J K R, an optional F (each at most once), nothing
@@ -209,22 +210,25 @@ def pure_matches(batch: list[str]) -> list[tuple[str, ...]]:
 
 
 class FastPath(NamedTuple):
-    """One implementation of the fast path: ``run(it, matches(batch), i, n0)``."""
+    """One implementation of the fast path: ``run(it, matches(batch), i, n0)``;
+    ``run_rows`` the same in rows mode (:mod:`.rows`: the moves it takes as runs
+    of rows in ``it.out``; the reference makes Motions there too)."""
 
     name: str
     matches: Callable[[list[str]], list[Any]]
     run: Callable[[Interpreter, list[Any], int, int], int]
+    run_rows: Callable[[Interpreter, list[Any], int, int], int]
 
 
 #: the reference
-PURE = FastPath("pure", pure_matches, fast_run)
+PURE = FastPath("pure", pure_matches, fast_run, fast_run)
 
 
 def _compiled() -> FastPath | None:
     """The compiled twin bound to this module's pieces, or None where it is not
     built."""
     try:
-        from ._fast import bind, matches_of
+        from ._fast import bind, fast_rows, matches_of
         from ._fast import fast_run as compiled_run
     except ImportError:
         return None
@@ -239,8 +243,10 @@ def _compiled() -> FastPath | None:
         RADIUS_TOLERANCE,
         SPIRAL_ABS_TOLERANCE,
         SPIRAL_REL_TOLERANCE,
+        WIDTH,
+        new_rows,
     )
-    return FastPath("compiled", matches_of, compiled_run)
+    return FastPath("compiled", matches_of, compiled_run, fast_rows)
 
 
 #: the compiled twin (None when not built), and the one the stream runs

@@ -22,6 +22,7 @@ from .execute import Interpreter
 from .lines import BATCH, ProgramLines, split_lines
 from .motion import Motion
 from .read import BLANK, PERCENT, Block, OWord, Parsed, evaluate, fail, parse
+from .rows import Item
 
 #: parsed lines kept for reuse (by text); cleared when full, so memory stays flat
 _CACHE_SIZE = 20_000
@@ -47,7 +48,7 @@ def iter_motions(
         Located at ``source:line:column`` with the offending word.
     """
     seq = lines if isinstance(lines, list) else list(lines)
-    return _run(ProgramLines.of(seq), config, source, fast)
+    return _run(ProgramLines.of(seq), config, source, fast)  # type: ignore[return-value]
 
 
 def iter_motions_batched(
@@ -63,7 +64,21 @@ def iter_motions_batched(
     programs whose loops and calls jump back (:class:`~.lines.FileLines` for a
     file); without it the lines from the first O-word on are kept in memory.
     """
-    return _run(ProgramLines(batches, lines_from), config, source, fast)
+    return _run(ProgramLines(batches, lines_from), config, source, fast)  # type: ignore[return-value]
+
+
+def iter_motion_items(
+    batches: Iterable[list[str]],
+    config: InterpreterConfig | None = None,
+    source: str = "<string>",
+    lines_from: Callable[[int], Iterable[list[str]]] | None = None,
+) -> Generator[Item, None, None]:
+    """:func:`iter_motions_batched` in rows mode: the moves the compiled fast path
+    takes come as runs of rows (``(n, WIDTH)`` arrays, :mod:`.rows`), every other
+    motion as a Motion, in program order; :func:`.rows.chunks` and
+    :func:`.rows.table` make them into tables. (The reference fast path gives
+    Motions only.)"""
+    return _run(ProgramLines(batches, lines_from), config, source, True, rows=True)
 
 
 def interpret(
@@ -83,8 +98,12 @@ def _rebatch(batches: Iterator[list[str]]) -> Iterator[list[str]]:
 
 
 def _run(
-    main: ProgramLines, config: InterpreterConfig | None, source: str, fast: bool
-) -> Generator[Motion, None, None]:
+    main: ProgramLines,
+    config: InterpreterConfig | None,
+    source: str,
+    fast: bool,
+    rows: bool = False,
+) -> Generator[Item, None, None]:
     cfg = config or InterpreterConfig()
     it = Interpreter(cfg, source)
     ctl = Control(it, cfg.max_loop_passes)
@@ -105,7 +124,7 @@ def _run(
     remembered = False
     add_named = params.add_named
     path = fastpath.SELECTED
-    fast_matches, fast_run = path.matches, path.run
+    fast_matches, fast_run = path.matches, path.run_rows if rows else path.run
     while True:
         if i >= len(batch):
             if out:

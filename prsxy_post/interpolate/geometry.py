@@ -29,18 +29,22 @@ import numpy as np
 
 from .. import kernel
 from ..gcode import EXACT_STOP, Motion
+from ..gcode import rows as gcode_rows
+from ..gcode.rows import (
+    KIND_ARC,
+    KIND_CURVE,
+    KIND_DWELL,
+    KIND_FUNCTION,
+    KIND_RAPID,
+    MotionTable,
+)
+from ..gcode.rows import (
+    KIND_FEED as KIND_FEED,  # (the interpolate package names it)
+)
 from ..kernel.path import PathArrays
 from ..points import Columns
 
-KIND_RAPID, KIND_FEED, KIND_ARC, KIND_DWELL, KIND_FUNCTION, KIND_CURVE = 0, 1, 2, 3, 4, 5
-_KIND = {
-    "rapid": KIND_RAPID,
-    "feed": KIND_FEED,
-    "arc": KIND_ARC,
-    "dwell": KIND_DWELL,
-    "function": KIND_FUNCTION,
-    "curve": KIND_CURVE,
-}
+_KIND = gcode_rows.KIND
 #: points of a curve where its curvature is looked at, per knot span
 CURVATURE_SAMPLES = 64
 
@@ -275,8 +279,9 @@ def _plane_axes(plane: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return iu, iv, iw
 
 
-def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks:
-    """Turn interpreted motions into planning arrays (vectorised); no-motion moves are dropped.
+def blocks_from_motions(motions: Sequence[Motion] | MotionTable, limits: PlanLimits) -> Blocks:
+    """Turn interpreted motions (or their table, :mod:`prsxy_post.gcode.rows`) into
+    planning arrays (vectorised); no-motion moves are dropped.
 
     Speed limits: F (mm/min) along XYZ, or degrees/min for rotary-only moves;
     the profile's rapid rates for G0; A/B rates and accelerations capped by the
@@ -284,7 +289,7 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
     :data:`ARC_TANGENTIAL_SHARE` of the limit and the speed keeps the centripetal
     acceleration v²/r within the rest.
     """
-    m = _motion_columns(motions)
+    m = motion_columns(motions)
     n = len(m.kind)
     e = _extents(m)
     length, angular, keep, vmax, accel = _speed_limits(m, e, limits)
@@ -321,8 +326,11 @@ def blocks_from_motions(motions: Sequence[Motion], limits: PlanLimits) -> Blocks
     if not keep.all():
         b = b.take(keep)
     moving = ~b.stops
-    if np.any(moving):
-        k = np.flatnonzero(moving)
+    k = np.flatnonzero(moving)
+    if len(k) == len(b) and len(k):  # every block moves: the tangents are the columns
+        b.dq_in = pose_at(b, k, np.zeros(len(k)))[1]
+        b.dq_out = pose_at(b, k, b.length)[1]
+    elif len(k):
         _, b.dq_in[k] = pose_at(b, k, np.zeros(len(k)))
         _, b.dq_out[k] = pose_at(b, k, b.length[k])
     return b
@@ -361,6 +369,41 @@ def _poses(col: Sequence[Sequence[float]]) -> np.ndarray:
     """(n, 5) the poses of a column of them (each five numbers: gcode.Pose)."""
     # one flat pass: twice as fast as numpy finding the nested tuples' shape
     return np.fromiter(itertools.chain.from_iterable(col), float, 5 * len(col)).reshape(-1, 5)
+
+
+def motion_columns(motions: Sequence[Motion] | MotionTable) -> _MotionColumns:
+    """The fields of motions, or of their table, as columns (:class:`_MotionColumns`)."""
+    if isinstance(motions, MotionTable):
+        return _table_columns(motions)
+    return _motion_columns(motions)
+
+
+def _table_columns(t: MotionTable) -> _MotionColumns:
+    """:func:`_motion_columns` of a table (the same arrays)."""
+    r = t.rows
+    n = len(r)
+    fn = np.empty(n, dtype=object)
+    curve = np.empty(n, dtype=object)
+    for i, m in t.objects:
+        if m.kind == "function":
+            fn[i] = m.words
+        else:
+            curve[i] = m.curve
+    return _MotionColumns(
+        kind=r[:, gcode_rows.ROW_KIND].astype(int),
+        start=np.ascontiguousarray(r[:, gcode_rows.ROW_START]),
+        end=np.ascontiguousarray(r[:, gcode_rows.ROW_END]),
+        line=r[:, gcode_rows.ROW_LINE].astype(int),
+        tool_length=r[:, gcode_rows.ROW_TOOL_LENGTH].copy(),
+        feed=r[:, gcode_rows.ROW_FEED].copy(),
+        duration=r[:, gcode_rows.ROW_DURATION].copy(),
+        path_tol=r[:, gcode_rows.ROW_PATH_TOL].copy(),
+        fn=fn,
+        curve=curve,
+        plane=r[:, gcode_rows.ROW_PLANE].astype(int),
+        center=np.ascontiguousarray(r[:, gcode_rows.ROW_CENTER]),
+        rotation=r[:, gcode_rows.ROW_ROTATION].astype(int),
+    )
 
 
 def _motion_columns(motions: Sequence[Motion]) -> _MotionColumns:

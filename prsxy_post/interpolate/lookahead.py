@@ -74,6 +74,18 @@ HEAD_MOTORS = 3
 TABLE_STAND_SHARE = 1e-4
 
 
+def row_norm(x: np.ndarray) -> np.ndarray:
+    """(n,) the Euclidean norm of each row of ``x`` (n, k), k small: the squares
+    summed in column order, as ``np.linalg.norm(x, axis=1)`` sums them (the same
+    bits), without numpy's reduction machinery over rows of a few (several times
+    its cost on a chunk's blocks)."""
+    sq = x * x
+    total = sq[:, 0].copy()
+    for j in range(1, x.shape[1]):
+        total += sq[:, j]
+    return np.sqrt(total)
+
+
 def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarray]:
     """Speed limit at the end of each block (its junction with the next one).
 
@@ -89,8 +101,8 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
     corner = np.zeros(n + 1, dtype=bool)
     if n < 2:
         return vj, corner
-    d_xyz = np.linalg.norm(b.dq_in[1:, :3] - b.dq_out[:-1, :3], axis=1)
-    d_ab = np.linalg.norm(b.dq_in[1:, 3:] - b.dq_out[:-1, 3:], axis=1)
+    d_xyz = row_norm(b.dq_in[1:, :3] - b.dq_out[:-1, :3])
+    d_ab = row_norm(b.dq_in[1:, 3:] - b.dq_out[:-1, 3:])
     v = _blend_speeds(b, limits, d_xyz, d_ab)
     stop = _plain_stops(b, d_xyz) | _play_stops(b)
     v = np.where(stop, 0.0, v)
@@ -214,9 +226,7 @@ def corner_bend(b: Blocks) -> np.ndarray:
     of 1) holds the blocks beside it to cos(θ/2) of their limit."""
     out = np.ones(len(b) + 1)
     if len(b) > 1:
-        out[1:-1] = np.minimum(
-            1.0, 0.5 * np.linalg.norm(b.dq_in[1:, :3] + b.dq_out[:-1, :3], axis=1)
-        )
+        out[1:-1] = np.minimum(1.0, 0.5 * row_norm(b.dq_in[1:, :3] + b.dq_out[:-1, :3]))
     return out
 
 

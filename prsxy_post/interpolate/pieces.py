@@ -43,19 +43,48 @@ class Pieces:
             self.held += len(plan.blocks)
 
     def take(self, final: bool = False) -> list[tuple[Plan, Samples]]:
-        """The whole pieces held, in order (and the rest as one, with ``final``)."""
+        """The whole pieces held, in order (and the rest as one, with ``final``).
+
+        A piece is joined from the parts of the runs it spans only (the rest of
+        the last run is kept as it is, a view, until the next pieces need it):
+        every point is copied once on its way through, not again with the runs
+        held after it."""
         if self.held < self.size and not (final and self.held):
             return []
-        plan, samples = _joined(self.runs)
+        # where each run begins among the blocks held
+        begins = np.cumsum([0] + [len(p.blocks) for p, _ in self.runs]).tolist()
         out = []
         start = 0
         while self.held - start >= self.size or (final and start < self.held):
             stop = min(start + self.size, self.held)
-            out.append(_between(plan, samples, start, stop))
+            out.append(self._span(begins, start, stop))
             start = stop
-        self.runs = [_between(plan, samples, start, self.held)] if start < self.held else []
+        rest = self._parts(begins, start, self.held)
+        self.runs = [(plan, samples) for plan, samples, _ in rest]
         self.held -= start
         return out
+
+    def _parts(self, begins: list[int], start: int, stop: int) -> list[tuple[Plan, Samples, int]]:
+        """Blocks start..stop of the runs held, run by run: (plan, points, index of
+        the run) of each run's part."""
+        out = []
+        for j, (plan, samples) in enumerate(self.runs):
+            lo, hi = max(start, begins[j]), min(stop, begins[j + 1])
+            if lo < hi:
+                out.append((*_between(plan, samples, lo - begins[j], hi - begins[j]), j))
+        return out
+
+    def _span(self, begins: list[int], start: int, stop: int) -> tuple[Plan, Samples]:
+        """Blocks start..stop of the runs held as one plan and its points, as
+        :func:`_between` cuts them out of all the runs joined."""
+        parts = self._parts(begins, start, stop)
+        plan, samples = _joined([(p, s) for p, s, _ in parts])
+        j = parts[-1][2]
+        if stop == begins[j + 1] and j + 1 < len(self.runs):
+            # the tangent past the end: the next run's first block's (the runs
+            # joined would give that block's)
+            plan = Plan(plan.blocks, plan.law, self.runs[j + 1][0].blocks.dq_in[0])
+        return plan, samples
 
 
 def _joined(runs: list[tuple[Plan, Samples]]) -> tuple[Plan, Samples]:

@@ -134,28 +134,43 @@ def next_tangent(plan: Plan, blk: np.ndarray) -> np.ndarray:
     return nxt[blk]
 
 
-def sample(plan: Plan, limits: PlanLimits) -> Samples:
-    """Points of a plan's blocks, in time order, each block's end point last."""
+def sample(plan: Plan, limits: PlanLimits, n_steps: np.ndarray | None = None) -> Samples:
+    """Points of a plan's blocks, in time order, each block's end point last;
+    ``n_steps``: the plan's :func:`steps`, where the caller has them."""
     b, law = plan.blocks, plan.law
-    blk, tau, step, last_of_block = kernel.phase_times(law, steps(b, law, limits))
+    if n_steps is None:
+        n_steps = steps(b, law, limits)
+    blk, tau, step, last_of_block = kernel.phase_times(law, n_steps)
     first = np.ones(len(blk), dtype=bool)
     first[1:] = blk[1:] != blk[:-1]
 
-    stand = b.stops[blk]
     along, v_along = kernel.along(law, blk, tau)
-    s = np.where(last_of_block | stand, b.length[blk], along)
+    kind = b.kind[blk]
+    if np.any(b.stops):
+        stand = b.stops[blk]
+        s = np.where(last_of_block | stand, b.length[blk], along)
+        v = np.where(stand, 0.0, v_along)
+        v = np.where(last_of_block & ~stand, law.v1[blk], v)
+        dt = np.where(stand, np.where(kind == KIND_DWELL, b.duration[blk], 0.0), step)
+    else:  # the same with no point standing (most chunks of a CAM program)
+        stand = np.zeros(len(blk), dtype=bool)
+        s = np.where(last_of_block, b.length[blk], along)
+        v = np.where(last_of_block, law.v1[blk], v_along)
+        dt = step
     q, dq = pose_at(b, blk, s)
-    v = np.where(stand, 0.0, v_along)
-    v = np.where(last_of_block & ~stand, law.v1[blk], v)
     # a junction taken at speed: the mean of the velocities on its two sides (the
     # same vector where the path is tangent)
     at_speed = last_of_block & ~stand & (v > 0)
     dq_next = np.vstack([b.dq_in[1:], plan.next_dq_in[None, :]])[: len(b)]
     qdot = kernel.velocities(v, dq, blk, at_speed, b.dq_out, dq_next)
-    dt = np.where(stand, np.where(b.kind[blk] == KIND_DWELL, b.duration[blk], 0.0), step)
     fn = np.empty(len(blk), dtype=object)
-    is_fn = b.kind[blk] == KIND_FUNCTION
-    fn[is_fn] = b.fn[blk[is_fn]]
+    is_fn = kind == KIND_FUNCTION
+    if np.any(is_fn):
+        fn[is_fn] = b.fn[blk[is_fn]]
+    if np.any(b.split_after):
+        split = np.where(last_of_block, b.split_after[blk], 0).astype(np.int8)
+    else:
+        split = np.zeros(len(blk), dtype=np.int8)
     return Samples(
         q=q,
         qdot=qdot,
@@ -169,7 +184,7 @@ def sample(plan: Plan, limits: PlanLimits) -> Samples:
         dwell=stand,
         fn=fn,
         block_end=last_of_block,
-        split=np.where(last_of_block, b.split_after[blk], 0).astype(np.int8),
+        split=split,
     )
 
 
