@@ -50,6 +50,13 @@ cdef struct _Geo:
     double origin[3]
     double tx
     double ty
+    # the table: 1 + s_x, 1 + s_y, σ, and the straightness (k_x, k_y) when given
+    double sx1
+    double sy1
+    double sq
+    bint straight
+    double kx
+    double ky
 
 
 cdef _Geo _geo(m):
@@ -58,6 +65,15 @@ cdef _Geo _geo(m):
     cdef Py_ssize_t k, j
     G.tx = float(m.tool[0])
     G.ty = float(m.tool[1])
+    G.sx1 = 1.0 + float(m.scale_x)
+    G.sy1 = 1.0 + float(m.scale_y)
+    G.sq = float(m.squareness)
+    G.straight = m.straightness is not None
+    G.kx = 0.0
+    G.ky = 0.0
+    if G.straight:
+        G.kx = float(m.straightness[0])
+        G.ky = float(m.straightness[1])
     for k in range(3):
         G.L2[k] = float(m.L2[k])
         G.gu[k] = float(m.gu[k])
@@ -157,78 +173,177 @@ def platform_cols(m, const double[:, :] q, const double[:] tz):
     return _pure.PlatformCols(*cols_a, c_a)
 
 
-def inverse_rows(m, const double[:, :] q, const double[:] tz):
-    """Motor positions P (N, 5) [mm]; the compiled twin of ``ik.inverse_rows``.
-    A geometry with bowed guides goes to the reference (its Newton sums are
-    numpy's einsum, whose order is numpy's own)."""
-    if m.bow is not None:
-        return _pure.inverse_rows(m, np.asarray(q), np.asarray(tz))
-    cdef Py_ssize_t n = q.shape[0], i, k, j
-    if q.shape[1] != 5 or tz.shape[0] != n:
-        raise ValueError("q must be (N, 5) and tz (N,)")
-    cdef _Geo G = _geo(m)
-    cdef double sx1 = 1.0 + float(m.scale_x), sy1 = 1.0 + float(m.scale_y)
-    cdef double sq = float(m.squareness)
-    cdef bint straight = m.straightness is not None
-    cdef double kx = 0.0, ky = 0.0
-    if straight:
-        kx = float(m.straightness[0])
-        ky = float(m.straightness[1])
-
-    out = np.empty((n, 5))
-    cdef double[:, :] P = out
+cdef inline void _row(
+    const _Geo* G, double q0, double q1, double q2, double q3, double q4, double tzi,
+    double* P
+) noexcept nogil:
+    """One pose's motor positions P[0..4] (``ik.inverse_rows``, straight guides)."""
     cdef double ca, sa, cb, sb, cg, sg
     cdef double o[10]
     cdef double c[3]
     cdef double v[3]
     cdef double x, y, y2, z2, w0, w1, w2, rbx, rby, rbz
     cdef double dv, disc, Dx, Dy, p5, p6, t0, t1, t2
+    cdef int k, j
+    _platform(G, q2, q3, q4, tzi, o)
+    ca = o[0]
+    sa = o[1]
+    cb = o[2]
+    sb = o[3]
+    cg = o[4]
+    sg = o[5]
+    c[0] = o[7]
+    c[1] = o[8]
+    c[2] = o[9]
+    for k in range(3):
+        # R b_k (ik.rotate), then v_k = c + R b_k − g_k
+        w0 = G.b[k][0]
+        w1 = G.b[k][1]
+        w2 = G.b[k][2]
+        x = cg * w0 - sg * w1
+        y = sg * w0 + cg * w1
+        y2 = ca * y - sa * w2
+        z2 = sa * y + ca * w2
+        rbx = cb * x + sb * z2
+        rby = y2
+        rbz = -sb * x + cb * z2
+        v[0] = c[0] + rbx - G.g[k][0]
+        v[1] = c[1] + rby - G.g[k][1]
+        v[2] = c[2] + rbz - G.g[k][2]
+        dv = v[0] * G.d[k][0] + v[1] * G.d[k][1] + v[2] * G.d[k][2]
+        disc = dv * dv - (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + G.L2[k]
+        P[k] = dv + sqrt(disc)
+    # R t
+    t0 = G.tx
+    t1 = G.ty
+    t2 = tzi
+    x = cg * t0 - sg * t1
+    y = sg * t0 + cg * t1
+    y2 = ca * y - sa * t2
+    z2 = sa * y + ca * t2
+    Dx = G.origin[0] + q0 - (c[0] + (cb * x + sb * z2))
+    Dy = G.origin[1] + q1 - (c[1] + y2)
+    p6 = Dy / G.sy1
+    p5 = (Dx - G.sq * p6) / G.sx1
+    if G.straight:
+        for j in range(4):
+            p6 = (Dy - G.kx * ((p5 / 1000.0) * (p5 / 1000.0))) / G.sy1
+            p5 = (Dx - G.sq * p6 - G.ky * ((p6 / 1000.0) * (p6 / 1000.0))) / G.sx1
+    P[3] = p5
+    P[4] = p6
+
+
+def inverse_rows(m, const double[:, :] q, const double[:] tz):
+    """Motor positions P (N, 5) [mm]; the compiled twin of ``ik.inverse_rows``.
+    A geometry with bowed guides goes to the reference (its Newton sums are
+    numpy's einsum, whose order is numpy's own)."""
+    if m.bow is not None:
+        return _pure.inverse_rows(m, np.asarray(q), np.asarray(tz))
+    cdef Py_ssize_t n = q.shape[0], i, k
+    if q.shape[1] != 5 or tz.shape[0] != n:
+        raise ValueError("q must be (N, 5) and tz (N,)")
+    cdef _Geo G = _geo(m)
+    out = np.empty((n, 5))
+    cdef double[:, ::1] P = out
     with nogil:
         for i in range(n):
-            _platform(&G, q[i, 2], q[i, 3], q[i, 4], tz[i], o)
-            ca = o[0]
-            sa = o[1]
-            cb = o[2]
-            sb = o[3]
-            cg = o[4]
-            sg = o[5]
-            c[0] = o[7]
-            c[1] = o[8]
-            c[2] = o[9]
-            for k in range(3):
-                # R b_k (ik.rotate), then v_k = c + R b_k − g_k
-                w0 = G.b[k][0]
-                w1 = G.b[k][1]
-                w2 = G.b[k][2]
-                x = cg * w0 - sg * w1
-                y = sg * w0 + cg * w1
-                y2 = ca * y - sa * w2
-                z2 = sa * y + ca * w2
-                rbx = cb * x + sb * z2
-                rby = y2
-                rbz = -sb * x + cb * z2
-                v[0] = c[0] + rbx - G.g[k][0]
-                v[1] = c[1] + rby - G.g[k][1]
-                v[2] = c[2] + rbz - G.g[k][2]
-                dv = v[0] * G.d[k][0] + v[1] * G.d[k][1] + v[2] * G.d[k][2]
-                disc = dv * dv - (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + G.L2[k]
-                P[i, k] = dv + sqrt(disc)
-            # R t
-            t0 = G.tx
-            t1 = G.ty
-            t2 = tz[i]
-            x = cg * t0 - sg * t1
-            y = sg * t0 + cg * t1
-            y2 = ca * y - sa * t2
-            z2 = sa * y + ca * t2
-            Dx = G.origin[0] + q[i, 0] - (c[0] + (cb * x + sb * z2))
-            Dy = G.origin[1] + q[i, 1] - (c[1] + y2)
-            p6 = Dy / sy1
-            p5 = (Dx - sq * p6) / sx1
-            if straight:
-                for j in range(4):
-                    p6 = (Dy - kx * ((p5 / 1000.0) * (p5 / 1000.0))) / sy1
-                    p5 = (Dx - sq * p6 - ky * ((p6 / 1000.0) * (p6 / 1000.0))) / sx1
-            P[i, 3] = p5
-            P[i, 4] = p6
+            _row(&G, q[i, 0], q[i, 1], q[i, 2], q[i, 3], q[i, 4], tz[i], &P[i, 0])
+    return out
+
+
+def derivative_rows(m, const double[:, :] q, const double[:, :] dq, const double[:] tz,
+                    const double[:, :] P, double step):
+    """(N, 5) the IK's one-sided difference along ``dq`` over ``step`` from poses
+    ``q`` whose IK is ``P``: the compiled twin of ``ik.derivative_rows``."""
+    if m.bow is not None:
+        return _pure.derivative_rows(
+            m, np.asarray(q), np.asarray(dq), np.asarray(tz), np.asarray(P), step
+        )
+    cdef Py_ssize_t n = q.shape[0], i, k
+    if q.shape[1] != 5 or dq.shape[0] != n or dq.shape[1] != 5 or tz.shape[0] != n \
+            or P.shape[0] != n or P.shape[1] != 5:
+        raise ValueError("q, dq and P must be (N, 5) and tz (N,), one row a pose")
+    cdef _Geo G = _geo(m)
+    out = np.empty((n, 5))
+    cdef double[:, ::1] D = out
+    cdef double Ps[5]
+    with nogil:
+        for i in range(n):
+            _row(&G, q[i, 0] + step * dq[i, 0], q[i, 1] + step * dq[i, 1],
+                 q[i, 2] + step * dq[i, 2], q[i, 3] + step * dq[i, 3],
+                 q[i, 4] + step * dq[i, 4], tz[i], Ps)
+            for k in range(5):
+                D[i, k] = (Ps[k] - P[i, k]) / step
+    return out
+
+
+def motion_rows(m, const double[:, :] q, const double[:, :] qdot, const double[:] tz,
+                double step):
+    """The IK P (N, 5) of poses ``q`` and its velocity V (N, 5) along ``qdot``
+    (0 where a row's ``qdot`` is): the compiled twin of ``ik.motion_rows``, both in
+    one pass over the rows."""
+    if m.bow is not None:
+        return _pure.motion_rows(m, np.asarray(q), np.asarray(qdot), np.asarray(tz), step)
+    cdef Py_ssize_t n = q.shape[0], i, k
+    if q.shape[1] != 5 or qdot.shape[0] != n or qdot.shape[1] != 5 or tz.shape[0] != n:
+        raise ValueError("q and qdot must be (N, 5) and tz (N,), one row a pose")
+    cdef _Geo G = _geo(m)
+    P_a = np.empty((n, 5))
+    V_a = np.empty((n, 5))
+    cdef double[:, ::1] P = P_a
+    cdef double[:, ::1] V = V_a
+    cdef double Ps[5]
+    with nogil:
+        for i in range(n):
+            _row(&G, q[i, 0], q[i, 1], q[i, 2], q[i, 3], q[i, 4], tz[i], &P[i, 0])
+            if (qdot[i, 0] != 0.0 or qdot[i, 1] != 0.0 or qdot[i, 2] != 0.0
+                    or qdot[i, 3] != 0.0 or qdot[i, 4] != 0.0):
+                _row(&G, q[i, 0] + step * qdot[i, 0], q[i, 1] + step * qdot[i, 1],
+                     q[i, 2] + step * qdot[i, 2], q[i, 3] + step * qdot[i, 3],
+                     q[i, 4] + step * qdot[i, 4], tz[i], Ps)
+                for k in range(5):
+                    V[i, k] = (Ps[k] - P[i, k]) / step
+            else:
+                for k in range(5):
+                    V[i, k] = 0.0
+    return P_a, V_a
+
+
+def jacobian_rows(m, const double[:, :] q, const double[:] tz, double step, P=None):
+    """(N, 5, 5) ∂P_i/∂q_j by the IK's one-sided differences over ``step`` along
+    each coordinate, from ``P`` (the IK of ``q``; solved here when None): the
+    compiled twin of ``ik.jacobian_rows``."""
+    if m.bow is not None:
+        return _pure.jacobian_rows(
+            m, np.asarray(q), np.asarray(tz), step, None if P is None else np.asarray(P)
+        )
+    cdef Py_ssize_t n = q.shape[0], i, j, k
+    if q.shape[1] != 5 or tz.shape[0] != n:
+        raise ValueError("q must be (N, 5) and tz (N,), one row a pose")
+    cdef const double[:, :] Pv
+    cdef bint given = P is not None
+    if given:
+        Pv = P
+        if Pv.shape[0] != n or Pv.shape[1] != 5:
+            raise ValueError(f"P must be ({n}, 5) as q, got {np.shape(P)}")
+    cdef _Geo G = _geo(m)
+    out = np.empty((n, 5, 5))
+    cdef double[:, :, ::1] J = out
+    cdef double P0[5]
+    cdef double Ps[5]
+    cdef double qs[5]
+    with nogil:
+        for i in range(n):
+            if given:
+                for k in range(5):
+                    P0[k] = Pv[i, k]
+            else:
+                _row(&G, q[i, 0], q[i, 1], q[i, 2], q[i, 3], q[i, 4], tz[i], P0)
+            for j in range(5):
+                for k in range(5):
+                    qs[k] = q[i, k]
+                qs[j] = q[i, j] + step
+                _row(&G, qs[0], qs[1], qs[2], qs[3], qs[4], tz[i], Ps)
+                for k in range(5):
+                    J[i, k, j] = (Ps[k] - P0[k]) / step
     return out
