@@ -379,7 +379,9 @@ class Planning:
             *checks.reach_problems(self.geo, q_t, tool, P, line),
         ]
         problems = [p.error(self.profile) for p in pose]
-        reachable = bool(np.isfinite(P).all())
+        with np.errstate(over="ignore", invalid="ignore"):
+            # a finite sum: every position finite (a NaN or inf would not be)
+            reachable = bool(np.isfinite(P.sum()) or np.isfinite(P).all())
         if problems and not self.collect:  # the first stops the program here
             return Solved(q_t, P, None, reachable, problems)
         return Solved(q_t, P, V, reachable, problems, (t1 - t0, time.perf_counter() - t1))
