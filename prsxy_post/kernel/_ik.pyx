@@ -7,7 +7,7 @@ would round differently from numpy's separate multiply and add)."""
 
 import numpy as np
 
-from libc.math cimport acos, atan2, cos, fabs, fmod, sin, sqrt, copysign, NAN, M_PI
+from libc.math cimport acos, atan2, cos, fabs, fmod, sin, sqrt, copysign, signbit, NAN, M_PI
 
 from . import ik as _pure
 
@@ -29,7 +29,12 @@ cdef double TWO_PI = 2 * M_PI
 cdef inline double _wrap(double a) nogil:
     # numpy's remainder (npy_divmod): fmod, then moved to the divisor's sign
     cdef double x = a + M_PI
-    cdef double mod = fmod(x, TWO_PI)
+    cdef double mod
+    # fmod(x, y) is x itself for |x| < |y| (fmod is exact): the call only beyond
+    if fabs(x) < TWO_PI:
+        mod = x
+    else:
+        mod = fmod(x, TWO_PI)
     if mod != 0.0:
         if (TWO_PI < 0) != (mod < 0):
             mod += TWO_PI
@@ -90,19 +95,28 @@ cdef _Geo _geo(m):
     return G
 
 
-cdef inline void _platform(
-    const _Geo* G, double qz, double qa, double qb, double tzi, double* o
-) noexcept nogil:
-    """Step 1 of the IK for one pose (``ik.platform_cols``): o = (ca, sa, cb, sb,
-    cg, sg, gamma, c0, c1, c2)."""
-    cdef double a_rad, b_rad, ca, sa, cb, sb, uR0, uR1, uR2
-    cdef double const_legs[3]
-    cdef double cos_legs[3]
-    cdef double sin_legs[3]
-    cdef double r_legs[3]
-    cdef double rz0, rz1, rz2, const_z, cos_z, sin_z, K0, Kc, Ks, rho, phi, ratio, delta
-    cdef double g1, g2, gamma, cg, sg, r_z
-    cdef int k, j
+cdef struct _Tilt:
+    # what step 1 of the IK takes from the tilts A, B alone (``ik.platform_cols``):
+    # their cosines and sines, the legs' and the tip's terms of r(γ), and
+    # Kc cos γ + Ks sin γ as ρ cos(γ − φ)
+    double ca
+    double sa
+    double cb
+    double sb
+    double rz2
+    double cos_z
+    double sin_z
+    double rho
+    double phi
+    double const_legs[3]
+    double cos_legs[3]
+    double sin_legs[3]
+
+
+cdef inline void _tilt(const _Geo* G, double qa, double qb, _Tilt* T) noexcept nogil:
+    """Step 1 of the IK, its part that depends on A and B [deg] only."""
+    cdef double a_rad, b_rad, ca, sa, cb, sb, uR0, uR1, uR2, rz0, rz1, Kc, Ks
+    cdef int k
     a_rad = qa * DEG2RAD
     b_rad = qb * DEG2RAD
     ca = cos(a_rad)
@@ -113,42 +127,69 @@ cdef inline void _platform(
         uR0 = cb * G.u[k][0] - sb * G.u[k][2]
         uR1 = sb * sa * G.u[k][0] + ca * G.u[k][1] + cb * sa * G.u[k][2]
         uR2 = sb * ca * G.u[k][0] - sa * G.u[k][1] + cb * ca * G.u[k][2]
-        const_legs[k] = G.gu[k] - uR2 * G.b[k][2]
-        cos_legs[k] = -(uR0 * G.b[k][0] + uR1 * G.b[k][1])
-        sin_legs[k] = -(uR1 * G.b[k][0] - uR0 * G.b[k][1])
+        T.const_legs[k] = G.gu[k] - uR2 * G.b[k][2]
+        T.cos_legs[k] = -(uR0 * G.b[k][0] + uR1 * G.b[k][1])
+        T.sin_legs[k] = -(uR1 * G.b[k][0] - uR0 * G.b[k][1])
     rz0 = -sb
     rz1 = cb * sa
-    rz2 = cb * ca
-    const_z = G.origin[2] + qz - rz2 * tzi
-    cos_z = -(rz0 * G.tx + rz1 * G.ty)
-    sin_z = -(rz1 * G.tx - rz0 * G.ty)
-    K0 = const_legs[0] * G.nul[0] + const_legs[1] * G.nul[1] + const_legs[2] * G.nul[2] + const_z * G.nul[3]
-    Kc = cos_legs[0] * G.nul[0] + cos_legs[1] * G.nul[1] + cos_legs[2] * G.nul[2] + cos_z * G.nul[3]
-    Ks = sin_legs[0] * G.nul[0] + sin_legs[1] * G.nul[1] + sin_legs[2] * G.nul[2] + sin_z * G.nul[3]
-    rho = sqrt(Kc * Kc + Ks * Ks)
-    phi = atan2(Ks, Kc)
-    ratio = -K0 / rho
+    T.rz2 = cb * ca
+    T.cos_z = -(rz0 * G.tx + rz1 * G.ty)
+    T.sin_z = -(rz1 * G.tx - rz0 * G.ty)
+    Kc = (T.cos_legs[0] * G.nul[0] + T.cos_legs[1] * G.nul[1] + T.cos_legs[2] * G.nul[2]
+          + T.cos_z * G.nul[3])
+    Ks = (T.sin_legs[0] * G.nul[0] + T.sin_legs[1] * G.nul[1] + T.sin_legs[2] * G.nul[2]
+          + T.sin_z * G.nul[3])
+    T.rho = sqrt(Kc * Kc + Ks * Ks)
+    T.phi = atan2(Ks, Kc)
+    T.ca = ca
+    T.sa = sa
+    T.cb = cb
+    T.sb = sb
+
+
+cdef inline void _spin(
+    const _Geo* G, const _Tilt* T, double qz, double tzi, double* o
+) noexcept nogil:
+    """Step 1 of the IK from its tilts' part ``T``, the height z and the tool's
+    ``tzi``: o = (ca, sa, cb, sb, cg, sg, gamma, c0, c1, c2)."""
+    cdef double r_legs[3]
+    cdef double const_z, K0, ratio, delta, g1, g2, gamma, cg, sg, r_z
+    cdef int k, j
+    const_z = G.origin[2] + qz - T.rz2 * tzi
+    K0 = (T.const_legs[0] * G.nul[0] + T.const_legs[1] * G.nul[1]
+          + T.const_legs[2] * G.nul[2] + const_z * G.nul[3])
+    ratio = -K0 / T.rho
     if fabs(ratio) <= 1.0:
         delta = acos(ratio)
     else:
         delta = NAN
-    g1 = _wrap(phi + delta)
-    g2 = _wrap(phi - delta)
+    g1 = _wrap(T.phi + delta)
+    g2 = _wrap(T.phi - delta)
     gamma = g1 if fabs(g1) <= fabs(g2) else g2
     cg = cos(gamma)
     sg = sin(gamma)
     for k in range(3):
-        r_legs[k] = const_legs[k] + cos_legs[k] * cg + sin_legs[k] * sg
-    r_z = const_z + cos_z * cg + sin_z * sg
+        r_legs[k] = T.const_legs[k] + T.cos_legs[k] * cg + T.sin_legs[k] * sg
+    r_z = const_z + T.cos_z * cg + T.sin_z * sg
     for j in range(3):
         o[7 + j] = r_legs[0] * G.Mp[j][0] + r_legs[1] * G.Mp[j][1] + r_legs[2] * G.Mp[j][2] + r_z * G.Mp[j][3]
-    o[0] = ca
-    o[1] = sa
-    o[2] = cb
-    o[3] = sb
+    o[0] = T.ca
+    o[1] = T.sa
+    o[2] = T.cb
+    o[3] = T.sb
     o[4] = cg
     o[5] = sg
     o[6] = gamma
+
+
+cdef inline void _platform(
+    const _Geo* G, double qz, double qa, double qb, double tzi, double* o
+) noexcept nogil:
+    """Step 1 of the IK for one pose (``ik.platform_cols``): o = (ca, sa, cb, sb,
+    cg, sg, gamma, c0, c1, c2)."""
+    cdef _Tilt T
+    _tilt(G, qa, qb, &T)
+    _spin(G, &T, qz, tzi, o)
 
 
 def platform_cols(m, const double[:, :] q, const double[:] tz):
@@ -178,14 +219,48 @@ cdef inline void _row(
     double* P
 ) noexcept nogil:
     """One pose's motor positions P[0..4] (``ik.inverse_rows``, straight guides)."""
-    cdef double ca, sa, cb, sb, cg, sg
     cdef double o[10]
+    _platform(G, q2, q3, q4, tzi, o)
+    _legs(G, o, q0, q1, tzi, P)
+
+
+cdef inline bint _same(double x, double y) noexcept nogil:
+    """x and y the same bits (NaN: never; 0.0 is not −0.0)."""
+    return x == y and signbit(x) == signbit(y)
+
+
+cdef inline void _stepped(
+    const _Geo* G, const _Tilt* T, const double* o, double q2, double q3, double q4,
+    double s0, double s1, double s2, double s3, double s4, double tzi, double* P
+) noexcept nogil:
+    """The motor positions P[0..4] of the pose s stepped from q, whose step 1 of
+    the IK is ``T``, ``o``: the part of step 1 that s shares with q to the bit (its
+    tilts; and its height) is q's, the same numbers as :func:`_row` of s."""
+    cdef _Tilt Ts
+    cdef double os[10]
+    if _same(s3, q3) and _same(s4, q4):
+        if _same(s2, q2):
+            _legs(G, o, s0, s1, tzi, P)
+        else:
+            _spin(G, T, s2, tzi, os)
+            _legs(G, os, s0, s1, tzi, P)
+    else:
+        _tilt(G, s3, s4, &Ts)
+        _spin(G, &Ts, s2, tzi, os)
+        _legs(G, os, s0, s1, tzi, P)
+
+
+cdef inline void _legs(
+    const _Geo* G, const double* o, double q0, double q1, double tzi, double* P
+) noexcept nogil:
+    """Motor positions P[0..4] from step 1 of the IK, ``o`` (:func:`_platform`),
+    and the pose's x, y."""
+    cdef double ca, sa, cb, sb, cg, sg
     cdef double c[3]
     cdef double v[3]
     cdef double x, y, y2, z2, w0, w1, w2, rbx, rby, rbz
     cdef double dv, disc, Dx, Dy, p5, p6, t0, t1, t2
     cdef int k, j
-    _platform(G, q2, q3, q4, tzi, o)
     ca = o[0]
     sa = o[1]
     cb = o[2]
@@ -293,14 +368,19 @@ def motion_rows(m, const double[:, :] q, const double[:, :] qdot, const double[:
     cdef double[:, ::1] P = P_a
     cdef double[:, ::1] V = V_a
     cdef double Ps[5]
+    cdef double o[10]
+    cdef _Tilt T
     with nogil:
         for i in range(n):
-            _row(&G, q[i, 0], q[i, 1], q[i, 2], q[i, 3], q[i, 4], tz[i], &P[i, 0])
+            _tilt(&G, q[i, 3], q[i, 4], &T)
+            _spin(&G, &T, q[i, 2], tz[i], o)
+            _legs(&G, o, q[i, 0], q[i, 1], tz[i], &P[i, 0])
             if (qdot[i, 0] != 0.0 or qdot[i, 1] != 0.0 or qdot[i, 2] != 0.0
                     or qdot[i, 3] != 0.0 or qdot[i, 4] != 0.0):
-                _row(&G, q[i, 0] + step * qdot[i, 0], q[i, 1] + step * qdot[i, 1],
-                     q[i, 2] + step * qdot[i, 2], q[i, 3] + step * qdot[i, 3],
-                     q[i, 4] + step * qdot[i, 4], tz[i], Ps)
+                _stepped(&G, &T, o, q[i, 2], q[i, 3], q[i, 4],
+                         q[i, 0] + step * qdot[i, 0], q[i, 1] + step * qdot[i, 1],
+                         q[i, 2] + step * qdot[i, 2], q[i, 3] + step * qdot[i, 3],
+                         q[i, 4] + step * qdot[i, 4], tz[i], Ps)
                 for k in range(5):
                     V[i, k] = (Ps[k] - P[i, k]) / step
             else:
@@ -332,18 +412,23 @@ def jacobian_rows(m, const double[:, :] q, const double[:] tz, double step, P=No
     cdef double P0[5]
     cdef double Ps[5]
     cdef double qs[5]
+    cdef double o[10]
+    cdef _Tilt T
     with nogil:
         for i in range(n):
+            _tilt(&G, q[i, 3], q[i, 4], &T)
+            _spin(&G, &T, q[i, 2], tz[i], o)
             if given:
                 for k in range(5):
                     P0[k] = Pv[i, k]
             else:
-                _row(&G, q[i, 0], q[i, 1], q[i, 2], q[i, 3], q[i, 4], tz[i], P0)
+                _legs(&G, o, q[i, 0], q[i, 1], tz[i], P0)
             for j in range(5):
                 for k in range(5):
                     qs[k] = q[i, k]
                 qs[j] = q[i, j] + step
-                _row(&G, qs[0], qs[1], qs[2], qs[3], qs[4], tz[i], Ps)
+                _stepped(&G, &T, o, q[i, 2], q[i, 3], q[i, 4],
+                         qs[0], qs[1], qs[2], qs[3], qs[4], tz[i], Ps)
                 for k in range(5):
                     J[i, k, j] = (Ps[k] - P0[k]) / step
     return out
