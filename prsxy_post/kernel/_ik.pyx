@@ -308,6 +308,18 @@ cdef inline void _legs(
     P[4] = p6
 
 
+cdef inline void _tilt_kept(
+    const _Geo* G, double qa, double qb, _Tilt* T, double* kept
+) noexcept nogil:
+    """:func:`_tilt` into ``T``, unless ``T`` holds it already: ``kept`` the tilts
+    it was made for (NaN: none), the same bits as (qa, qb) (poses along a path keep
+    their tilts from point to point: the same inputs, the same numbers)."""
+    if not (_same(qa, kept[0]) and _same(qb, kept[1])):
+        _tilt(G, qa, qb, T)
+        kept[0] = qa
+        kept[1] = qb
+
+
 def inverse_rows(m, const double[:, :] q, const double[:] tz):
     """Motor positions P (N, 5) [mm]; the compiled twin of ``ik.inverse_rows``.
     A geometry with bowed guides goes to the reference (its Newton sums are
@@ -320,9 +332,16 @@ def inverse_rows(m, const double[:, :] q, const double[:] tz):
     cdef _Geo G = _geo(m)
     out = np.empty((n, 5))
     cdef double[:, ::1] P = out
+    cdef double o[10]
+    cdef _Tilt T
+    cdef double kept[2]
+    kept[0] = NAN
+    kept[1] = NAN
     with nogil:
         for i in range(n):
-            _row(&G, q[i, 0], q[i, 1], q[i, 2], q[i, 3], q[i, 4], tz[i], &P[i, 0])
+            _tilt_kept(&G, q[i, 3], q[i, 4], &T, kept)
+            _spin(&G, &T, q[i, 2], tz[i], o)
+            _legs(&G, o, q[i, 0], q[i, 1], tz[i], &P[i, 0])
     return out
 
 
@@ -342,11 +361,19 @@ def derivative_rows(m, const double[:, :] q, const double[:, :] dq, const double
     out = np.empty((n, 5))
     cdef double[:, ::1] D = out
     cdef double Ps[5]
+    cdef double o[10]
+    cdef _Tilt T
+    cdef double kept[2]
+    cdef double sa, sb
+    kept[0] = NAN
+    kept[1] = NAN
     with nogil:
         for i in range(n):
-            _row(&G, q[i, 0] + step * dq[i, 0], q[i, 1] + step * dq[i, 1],
-                 q[i, 2] + step * dq[i, 2], q[i, 3] + step * dq[i, 3],
-                 q[i, 4] + step * dq[i, 4], tz[i], Ps)
+            sa = q[i, 3] + step * dq[i, 3]
+            sb = q[i, 4] + step * dq[i, 4]
+            _tilt_kept(&G, sa, sb, &T, kept)
+            _spin(&G, &T, q[i, 2] + step * dq[i, 2], tz[i], o)
+            _legs(&G, o, q[i, 0] + step * dq[i, 0], q[i, 1] + step * dq[i, 1], tz[i], Ps)
             for k in range(5):
                 D[i, k] = (Ps[k] - P[i, k]) / step
     return out
@@ -370,9 +397,12 @@ def motion_rows(m, const double[:, :] q, const double[:, :] qdot, const double[:
     cdef double Ps[5]
     cdef double o[10]
     cdef _Tilt T
+    cdef double kept[2]
+    kept[0] = NAN
+    kept[1] = NAN
     with nogil:
         for i in range(n):
-            _tilt(&G, q[i, 3], q[i, 4], &T)
+            _tilt_kept(&G, q[i, 3], q[i, 4], &T, kept)
             _spin(&G, &T, q[i, 2], tz[i], o)
             _legs(&G, o, q[i, 0], q[i, 1], tz[i], &P[i, 0])
             if (qdot[i, 0] != 0.0 or qdot[i, 1] != 0.0 or qdot[i, 2] != 0.0
@@ -414,9 +444,12 @@ def jacobian_rows(m, const double[:, :] q, const double[:] tz, double step, P=No
     cdef double qs[5]
     cdef double o[10]
     cdef _Tilt T
+    cdef double kept[2]
+    kept[0] = NAN
+    kept[1] = NAN
     with nogil:
         for i in range(n):
-            _tilt(&G, q[i, 3], q[i, 4], &T)
+            _tilt_kept(&G, q[i, 3], q[i, 4], &T, kept)
             _spin(&G, &T, q[i, 2], tz[i], o)
             if given:
                 for k in range(5):
