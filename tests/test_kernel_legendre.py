@@ -123,6 +123,29 @@ def test_generated_maps_are_bit_identical(
         )
 
 
+@pytest.mark.parametrize("degree", [0, 1, 3, 8])
+def test_poses_with_nan_are_bit_identical(degree: int) -> None:
+    """A NaN coordinate makes NaN only the products that take it, and the
+    components whose terms use them (the compiled kernel sums such rows term by
+    term, the others product by product)."""
+    _legendre = compiled("_legendre")
+    rng = np.random.default_rng(200 + degree)
+    em = _random_map(rng, degree, "eq5-coupled", flat=-1)
+    q = _poses(rng, 400)
+    q[rng.random(q.shape) < 0.1] = np.nan
+    q[5] = np.nan
+    q[6] = [np.inf, -np.inf, 1e308, -1e308, np.nan]
+    q[7] = [np.inf, -np.inf, 1e308, -1e308, 0.0]  # clamped to the domain's edges
+    with np.errstate(over="ignore", invalid="ignore"):  # the reference's scaling
+        want = legendre.map_rows(em.arrays, q)
+        assert same_bits(want, _by_legvander(em, q))
+        assert same_bits(_legendre.map_rows(em.arrays, q), want)
+        assert same_bits(
+            _legendre.correct_virtual(em.arrays, q), legendre.correct_virtual(em.arrays, q)
+        )
+    assert np.isfinite(want[7]).all()
+
+
 def test_the_chain_corrects_through_the_kernel_as_through_the_map() -> None:
     """chain.correct_virtual hands a fitted map to the kernel's one-pass correction:
     the same bits as the fixed-point steps through the map's own evaluation (any

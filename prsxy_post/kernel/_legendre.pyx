@@ -22,6 +22,11 @@ cdef struct _Map:
     # start: a component with fewer terms is padded in front without a change of
     # bit). Each component's sum is the reference's, term for term; the five run
     # side by side (five chains of additions, not one in turn).
+    # Where no coordinate is NaN, the same sums run product by product instead:
+    # dense_cf[5 i + c] × col[dense_k[i]] for the products i with a term, 0.0 where
+    # the reference has none. A product of Legendre values of u in [−1, 1] is
+    # finite, so 0 · it is ±0.0, and a sum from +0.0 is never −0.0 (x + y is −0.0
+    # only when both are): adding ±0.0 leaves it as it is, bit for bit.
     # tab: 5 × (degree + 1) Legendre values of a row, then 1.0
     const double* lo
     const double* span
@@ -31,6 +36,9 @@ cdef struct _Map:
     const int* ops
     const int* term_k
     const double* term_cf
+    Py_ssize_t nd
+    const int* dense_k
+    const double* dense_cf
     double* tab
     double* col
 
@@ -46,8 +54,12 @@ cdef inline void _row(const _Map* M, const double* q, double* out) noexcept nogi
     cdef const int* op = M.ops
     cdef const int* tk = M.term_k
     cdef const double* tf = M.term_cf
+    cdef const double* df = M.dense_cf
+    cdef double c_i
+    cdef bint nan = False
     for v in range(5):
         u = 2.0 * (q[v] - M.lo[v]) / M.span[v] - 1.0
+        nan = nan or u != u
         # numpy's clip: minimum(maximum(u, −1), 1), NaN kept
         if u < -1.0:
             u = -1.0
@@ -72,6 +84,20 @@ cdef inline void _row(const _Map* M, const double* q, double* out) noexcept nogi
     acc2 = 0.0
     acc3 = 0.0
     acc4 = 0.0
+    if not nan:
+        for i in range(M.nd):
+            c_i = col[M.dense_k[i]]
+            acc0 = acc0 + df[5 * i] * c_i
+            acc1 = acc1 + df[5 * i + 1] * c_i
+            acc2 = acc2 + df[5 * i + 2] * c_i
+            acc3 = acc3 + df[5 * i + 3] * c_i
+            acc4 = acc4 + df[5 * i + 4] * c_i
+        out[0] = acc0
+        out[1] = acc1
+        out[2] = acc2
+        out[3] = acc3
+        out[4] = acc4
+        return
     for i in range(L):
         acc0 = acc0 + tf[i] * col[tk[i]]
         acc1 = acc1 + tf[L + i] * col[tk[L + i]]
@@ -152,13 +178,29 @@ class _Plan:
             for i, (k, cf) in enumerate(t):
                 self.term_k[c * self.L + pad + i] = k
                 self.term_cf[c * self.L + pad + i] = cf
+        # the same terms product by product (rows without NaN)
+        used = []
+        for k in range(nk):
+            for c in range(5):
+                if coef[k, c] != 0.0:
+                    used.append(k)
+                    break
+        self.nd = len(used)
+        self.dense_k = np.zeros(max(len(used), 1), dtype=np.intc)
+        self.dense_cf = np.zeros(5 * max(len(used), 1))
+        for i, k in enumerate(used):
+            self.dense_k[i] = slot[facs[k]]
+            for c in range(5):
+                if coef[k, c] != 0.0:
+                    self.dense_cf[5 * i + c] = coef[k, c]
 
 
 cdef _Map _map(plan):
     """The C view of a :class:`_Plan` (valid while ``plan`` lives)."""
     cdef _Map M
     cdef const double[::1] lo = plan.lo, span = plan.span, tf = plan.term_cf
-    cdef const int[::1] ops = plan.ops, tk = plan.term_k
+    cdef const int[::1] ops = plan.ops, tk = plan.term_k, dk = plan.dense_k
+    cdef const double[::1] dcf = plan.dense_cf
     cdef double[::1] tab = plan.tab, col = plan.col
     M.lo = &lo[0]
     M.span = &span[0]
@@ -166,6 +208,9 @@ cdef _Map _map(plan):
     M.n_ops = plan.n_ops
     M.L = plan.L
     M.ops = &ops[0]
+    M.nd = plan.nd
+    M.dense_k = &dk[0]
+    M.dense_cf = &dcf[0]
     M.term_k = &tk[0]
     M.term_cf = &tf[0]
     M.tab = &tab[0]
