@@ -50,9 +50,10 @@ def run(tree: Path, program: str, prof: str, fmt: str, out: Path) -> dict[str, f
         env=env,
         capture_output=True,
         text=True,
-        check=True,
         cwd=tempfile.gettempdir(),
     )
+    if res.returncode:
+        sys.exit(f"{tree}: the conversion failed:\n{res.stderr}")
     figures: dict[str, float] = json.loads(res.stdout.strip().splitlines()[-1])
     return figures
 
@@ -70,6 +71,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--against", type=Path, help="another tree: its package runs in turn")
     a = ap.parse_args()
+    # the children run elsewhere (not to import this tree's package by its cwd)
+    a.program, a.profile = str(Path(a.program).resolve()), str(Path(a.profile).resolve())
     trees = {"this": ROOT}
     if a.against is not None:
         trees["against"] = a.against.resolve()

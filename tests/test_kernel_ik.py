@@ -247,7 +247,7 @@ QDOT = st.one_of(
     st.sampled_from([1e-6, 1e-4, 0.5]),
     st.one_of(st.none(), hnp.arrays(np.float64, 2, elements=st.floats(-0.05, 0.05))),
     st.booleans(),
-    st.booleans(),
+    st.sampled_from(["", "tilts", "tilts and height"]),
 )
 def test_generated_ik_differences_are_bit_identical(
     rows: list[tuple[tuple[float, ...], tuple[float, ...]]],
@@ -256,18 +256,20 @@ def test_generated_ik_differences_are_bit_identical(
     step: float,
     straight: np.ndarray | None,
     given_P: bool,
-    one_tilt: bool,
+    shared: str,
 ) -> None:
     """Poses inside and outside the workspace (NaN rows), standing rows (q̇ = 0) among
     moving ones, the table's straightness (its fixed-point steps); poses that keep
-    their tilts from row to row (the compiled kernel keeps the tilts' part of the
-    IK from the row before then)."""
+    their tilts, or tilts and height, from row to row (the compiled kernel keeps
+    step 1 of the IK, or its tilts' part, from the row before then)."""
     _ik = _compiled_ik()
     m = _arrays(path)._replace(straightness=straight, squareness=1e-4)
     q = np.array([r[0] for r in rows], dtype=float)
     qdot = np.array([r[1] for r in rows], dtype=float)
-    if one_tilt:
+    if shared:
         q[:, 3:] = q[0, 3:]
+    if shared == "tilts and height":
+        q[:, 2] = q[0, 2]
     tz = ik.tool_z(m, len(q), tool)
     assert same_bits(_ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz))
     P, V = _ik.motion_rows(m, q, qdot, tz, step)

@@ -308,16 +308,24 @@ cdef inline void _legs(
     P[4] = p6
 
 
-cdef inline void _tilt_kept(
-    const _Geo* G, double qa, double qb, _Tilt* T, double* kept
+cdef inline void _platform_kept(
+    const _Geo* G, double qz, double qa, double qb, double tzi, _Tilt* T, double* o,
+    double* kept
 ) noexcept nogil:
-    """:func:`_tilt` into ``T``, unless ``T`` holds it already: ``kept`` the tilts
-    it was made for (NaN: none), the same bits as (qa, qb) (poses along a path keep
-    their tilts from point to point: the same inputs, the same numbers)."""
-    if not (_same(qa, kept[0]) and _same(qb, kept[1])):
+    """Step 1 of the IK into ``T`` (:func:`_tilt`) and ``o`` (:func:`_spin`), each
+    made again only when its inputs are not the ones ``kept`` (A, B; z, the tool)
+    holds, to the bit (NaN: none). Poses along a path keep their tilts, and often
+    their height, from point to point: the same inputs give the same numbers."""
+    if _same(qa, kept[0]) and _same(qb, kept[1]):
+        if _same(qz, kept[2]) and _same(tzi, kept[3]):
+            return
+    else:
         _tilt(G, qa, qb, T)
         kept[0] = qa
         kept[1] = qb
+    _spin(G, T, qz, tzi, o)
+    kept[2] = qz
+    kept[3] = tzi
 
 
 def inverse_rows(m, const double[:, :] q, const double[:] tz):
@@ -334,13 +342,14 @@ def inverse_rows(m, const double[:, :] q, const double[:] tz):
     cdef double[:, ::1] P = out
     cdef double o[10]
     cdef _Tilt T
-    cdef double kept[2]
+    cdef double kept[4]
     kept[0] = NAN
     kept[1] = NAN
+    kept[2] = NAN
+    kept[3] = NAN
     with nogil:
         for i in range(n):
-            _tilt_kept(&G, q[i, 3], q[i, 4], &T, kept)
-            _spin(&G, &T, q[i, 2], tz[i], o)
+            _platform_kept(&G, q[i, 2], q[i, 3], q[i, 4], tz[i], &T, o, kept)
             _legs(&G, o, q[i, 0], q[i, 1], tz[i], &P[i, 0])
     return out
 
@@ -363,16 +372,17 @@ def derivative_rows(m, const double[:, :] q, const double[:, :] dq, const double
     cdef double Ps[5]
     cdef double o[10]
     cdef _Tilt T
-    cdef double kept[2]
+    cdef double kept[4]
     cdef double sa, sb
     kept[0] = NAN
     kept[1] = NAN
+    kept[2] = NAN
+    kept[3] = NAN
     with nogil:
         for i in range(n):
             sa = q[i, 3] + step * dq[i, 3]
             sb = q[i, 4] + step * dq[i, 4]
-            _tilt_kept(&G, sa, sb, &T, kept)
-            _spin(&G, &T, q[i, 2] + step * dq[i, 2], tz[i], o)
+            _platform_kept(&G, q[i, 2] + step * dq[i, 2], sa, sb, tz[i], &T, o, kept)
             _legs(&G, o, q[i, 0] + step * dq[i, 0], q[i, 1] + step * dq[i, 1], tz[i], Ps)
             for k in range(5):
                 D[i, k] = (Ps[k] - P[i, k]) / step
@@ -397,13 +407,14 @@ def motion_rows(m, const double[:, :] q, const double[:, :] qdot, const double[:
     cdef double Ps[5]
     cdef double o[10]
     cdef _Tilt T
-    cdef double kept[2]
+    cdef double kept[4]
     kept[0] = NAN
     kept[1] = NAN
+    kept[2] = NAN
+    kept[3] = NAN
     with nogil:
         for i in range(n):
-            _tilt_kept(&G, q[i, 3], q[i, 4], &T, kept)
-            _spin(&G, &T, q[i, 2], tz[i], o)
+            _platform_kept(&G, q[i, 2], q[i, 3], q[i, 4], tz[i], &T, o, kept)
             _legs(&G, o, q[i, 0], q[i, 1], tz[i], &P[i, 0])
             if (qdot[i, 0] != 0.0 or qdot[i, 1] != 0.0 or qdot[i, 2] != 0.0
                     or qdot[i, 3] != 0.0 or qdot[i, 4] != 0.0):
@@ -444,13 +455,14 @@ def jacobian_rows(m, const double[:, :] q, const double[:] tz, double step, P=No
     cdef double qs[5]
     cdef double o[10]
     cdef _Tilt T
-    cdef double kept[2]
+    cdef double kept[4]
     kept[0] = NAN
     kept[1] = NAN
+    kept[2] = NAN
+    kept[3] = NAN
     with nogil:
         for i in range(n):
-            _tilt_kept(&G, q[i, 3], q[i, 4], &T, kept)
-            _spin(&G, &T, q[i, 2], tz[i], o)
+            _platform_kept(&G, q[i, 2], q[i, 3], q[i, 4], tz[i], &T, o, kept)
             if given:
                 for k in range(5):
                     P0[k] = Pv[i, k]
