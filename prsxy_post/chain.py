@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import axiscomp, kernel, kinematics, reversals
+from . import axiscomp, errormap, kernel, kinematics, reversals
 from . import rules as checks
 from .errors import LimitError, PrsxyError
 from .gcode.rows import ROW_LINE, MotionTable
@@ -175,7 +175,7 @@ def ik_derivative(
     """(N, 5) the motors' derivative along ``dq`` from poses ``q`` (whose IK is
     ``P``): the IK's one-sided difference over ``step`` (VEL_STEP_S along a
     velocity, DIR_STEP_MM along a tangent)."""
-    return (kinematics.inverse(geo, q + step * dq, tool).P - P) / step
+    return kinematics.derivative(geo, q, dq, tool, P, step)
 
 
 def ik_jacobian(
@@ -189,15 +189,7 @@ def ik_jacobian(
     one-sided differences over ``step`` along each coordinate, as
     :func:`ik_derivative`, the pose (unless its IK ``P`` is given) and its five
     steps in one IK call."""
-    m = len(q)
-    base = 0 if P is None else 1
-    q6 = np.tile(q, (6 - base, 1))
-    for j in range(5):
-        q6[(j + 1 - base) * m : (j + 2 - base) * m, j] += step
-    P6 = kinematics.inverse(geo, q6, np.tile(tool, 6 - base)).P
-    if P is not None:
-        P6 = np.concatenate([P, P6])
-    return np.stack([(P6[(j + 1) * m : (j + 2) * m] - P6[:m]) / step for j in range(5)], axis=2)
+    return kinematics.jacobian(geo, q, tool, step, P)
 
 
 @dataclass
@@ -390,24 +382,22 @@ class Planning:
         t0 = time.perf_counter()
         q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
         t1 = time.perf_counter()
-        ik = kinematics.inverse(self.geo, q_t, tool)
+        # the IK and its velocity (ik_derivative over VEL_STEP_S where a point
+        # moves) in one pass. e(Q) changes by µm over mm: its share of the velocity
+        # (1e-4 of it) moves the cubic by far less than the rounding of the
+        # written numbers
+        P, V = kinematics.motion(self.geo, q_t, qdot, tool, VEL_STEP_S)
         pose = [
             *checks.tilt_problems(self.profile, q, line),
-            *checks.reach_problems(self.geo, q_t, tool, ik.P, line),
+            *checks.reach_problems(self.geo, q_t, tool, P, line),
         ]
         problems = [p.error(self.profile) for p in pose]
-        reachable = bool(np.all(ik.reachable))
+        with np.errstate(over="ignore", invalid="ignore"):
+            # a finite sum: every position finite (a NaN or inf would not be)
+            reachable = bool(np.isfinite(P.sum()) or np.isfinite(P).all())
         if problems and not self.collect:  # the first stops the program here
-            return Solved(q_t, ik.P, None, reachable, problems)
-        V = np.zeros_like(ik.P)
-        moving = np.flatnonzero(np.any(qdot != 0.0, axis=1))
-        if moving.size:
-            # e(Q) changes by µm over mm: its share of the velocity (1e-4 of it)
-            # moves the cubic by far less than the rounding of the written numbers
-            V[moving] = ik_derivative(
-                self.geo, q_t[moving], qdot[moving], tool[moving], ik.P[moving], VEL_STEP_S
-            )
-        return Solved(q_t, ik.P, V, reachable, problems, (t1 - t0, time.perf_counter() - t1))
+            return Solved(q_t, P, None, reachable, problems)
+        return Solved(q_t, P, V, reachable, problems, (t1 - t0, time.perf_counter() - t1))
 
     def _directions(self, b: Blocks) -> None:
         """The motors with play: dP/ds at each moving block's ends (the IK's
@@ -1622,6 +1612,9 @@ def correct_virtual(q: np.ndarray, error_map: ErrorFunction, iterations: int = 2
     1e-11 mm (measured on a calibrated map) and a third changes nothing a
     program prints. ``iterations`` = 1 is the paper's formula.
     """
+    if isinstance(error_map, errormap.ErrorMap):
+        # the kernel's: every row's steps in one pass (the same numbers)
+        return kernel.correct_virtual(error_map.arrays, q, iterations)
     qp = q - error_map(q)
     for _ in range(iterations - 1):
         qp = q - error_map(qp)

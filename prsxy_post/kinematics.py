@@ -357,6 +357,51 @@ def inverse(
     return IKResult(P, reachable, q.copy(), tz, geo)
 
 
+def motion(
+    geo: Geometry, q: np.ndarray, qdot: np.ndarray, tool_length_offset: np.ndarray, step: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The motors' positions P (N, 5) [mm] at poses ``q`` (N, 5) [mm, mm, mm, deg,
+    deg] and their velocities V (N, 5) [mm/s] moving at ``qdot`` (N, 5): the IK's
+    one-sided difference over ``step`` [s], (P(q + step q̇) − P) / step, 0 where a
+    row stands (``qdot`` 0). Both in one pass of the kernel
+    (:func:`prsxy_post.kernel.motion_rows`); the same numbers as :func:`inverse` and
+    :func:`derivative`."""
+    m = geo.ik_arrays
+    tz = kik.tool_z(m, q.shape[0], tool_length_offset)
+    return kernel.motion_rows(m, q, qdot, tz, step)
+
+
+def derivative(
+    geo: Geometry,
+    q: np.ndarray,
+    dq: np.ndarray,
+    tool_length_offset: np.ndarray,
+    P: np.ndarray,
+    step: float,
+) -> np.ndarray:
+    """(N, 5) dP along ``dq`` (N, 5) at poses ``q`` (N, 5) whose IK is ``P``: the IK's
+    one-sided difference (P(q + step dq) − P) / step (the kernel's
+    :func:`prsxy_post.kernel.derivative_rows`)."""
+    m = geo.ik_arrays
+    tz = kik.tool_z(m, q.shape[0], tool_length_offset)
+    return kernel.derivative_rows(m, q, dq, tz, P, step)
+
+
+def jacobian(
+    geo: Geometry,
+    q: np.ndarray,
+    tool_length_offset: np.ndarray,
+    step: float,
+    P: np.ndarray | None = None,
+) -> np.ndarray:
+    """(N, 5, 5) ∂P_i/∂q_j at poses ``q`` (N, 5): the IK's one-sided differences
+    over ``step`` along each coordinate from ``P`` (the IK of ``q``; solved too when
+    None), the kernel's :func:`prsxy_post.kernel.jacobian_rows`."""
+    m = geo.ik_arrays
+    tz = kik.tool_z(m, q.shape[0], tool_length_offset)
+    return kernel.jacobian_rows(m, q, tz, step, P)
+
+
 def table_displacement(geo: Geometry, p5: np.ndarray, p6: np.ndarray) -> np.ndarray:
     """D = (P5(1 + s_x) + σ P6, P6(1 + s_y), 0), shape (N, 3) (contract "Table").
 

@@ -30,6 +30,8 @@ KINDS = ("feed", "reach", "tilt", "travel")
 #: a point is beyond a bound when it is beyond by more than this (mm, deg), as in
 #: the chain's own checks: rounding is not a problem
 TOLERANCE = 1e-9
+#: How far below the tilt limit |A| + |B| must stay for a pose to be left unmeasured [deg].
+TILT_SLACK_DEG = 1e-3
 
 
 class Problem(NamedTuple):
@@ -97,11 +99,17 @@ def tilt_problems(profile: Profile, q: np.ndarray, line: np.ndarray) -> list[Pro
     arccos(cos A cos B).
     """
     lim = float(profile.limits.max_tilt_deg)
-    a, b = np.radians(q[:, 3]), np.radians(q[:, 4])
+    # the axis leans by at most |A| + |B| (Rx(A) turns it by |A|, Ry(B) then by at
+    # most |B|): only poses within TILT_SLACK_DEG of the limit by that bound are
+    # measured (the arccos's rounding is below 1e-6°), the same answer
+    near = np.flatnonzero(np.abs(q[:, 3]) + np.abs(q[:, 4]) > lim - TILT_SLACK_DEG)
+    if not near.size:
+        return []
+    a, b = np.radians(q[near, 3]), np.radians(q[near, 4])
     tilt = np.degrees(np.arccos(np.clip(np.cos(a) * np.cos(b), -1.0, 1.0)))
     return [
-        Problem("tilt", int(line[i]), float(tilt[i]), float(tilt[i] - lim))
-        for i in _worst_per_line(tilt - lim, line)
+        Problem("tilt", int(line[near[i]]), float(tilt[i]), float(tilt[i] - lim))
+        for i in _worst_per_line(tilt - lim, line[near])
     ]
 
 
@@ -119,6 +127,10 @@ def reach_problems(
     contract's (d·v)² − |v|² + L²), so the strut lacks that minus L_i; inf where
     no platform pose exists at all.
     """
+    with np.errstate(over="ignore", invalid="ignore"):
+        # a finite sum: every position finite (a NaN or inf would not be)
+        if np.isfinite(P_ideal.sum()):
+            return []
     out = ~np.all(np.isfinite(P_ideal), axis=1)
     if not np.any(out):
         return []

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pytest
@@ -23,7 +24,7 @@ from prsxy_post import kinematics, profile
 from prsxy_post.kernel import ik
 
 from .conftest import ROOT, VECTORS
-from .kernel_cases import compiled, record, same_bits
+from .kernel_cases import compiled, record, record_many, same_bits
 
 PROFILES = [ROOT / "profiles" / "prsxy-shop.toml", VECTORS / "perturbed.toml"]
 
@@ -36,7 +37,10 @@ def _arrays(path: Path) -> ik.IKArrays:
 
 def test_sample_programs_ik_is_bit_identical(tmp_path: Path) -> None:
     _ik = compiled("_ik")
-    calls = record("_inverse_rows", tmp_path)
+    # the points' IK runs with their velocity in one pass (motion_rows): its poses
+    # are solved here too, as the IK alone
+    rec = record_many(["_inverse_rows", "_motion_rows"], tmp_path)
+    calls = rec["_inverse_rows"] + [(m, q, tz) for m, q, _, tz, _ in rec["_motion_rows"]]
     assert len(calls) > 20
     rows = 0
     for m, q, tz in calls:
@@ -172,3 +176,141 @@ def test_read_only_poses_are_taken_as_the_reference_takes_them() -> None:
     tz = np.broadcast_to(np.array(m.tool[2]), (4,))
     assert not q.flags.writeable
     assert same_bits(_ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz))
+
+
+def _old_derivative(
+    m: ik.IKArrays, q: np.ndarray, dq: np.ndarray, tz: np.ndarray, P: np.ndarray, step: float
+) -> np.ndarray:
+    """The chain's IK difference as it was written before the kernel took it (the
+    compiled IK over the stepped poses, then numpy's subtraction and division)."""
+    return (_compiled_ik().inverse_rows(m, q + step * dq, tz) - P) / step
+
+
+def _compiled_ik() -> ModuleType:
+    return compiled("_ik")
+
+
+def test_sample_programs_ik_differences_are_bit_identical(tmp_path: Path) -> None:
+    """The IK's velocity, directional derivatives and Jacobians as the sample
+    programs ask for them (the chain's points, the planner's directions, the
+    crossing windows' levers, the settling's shorts): compiled, reference, and the
+    differences as the chain took them before (IK of the stepped poses, numpy's
+    difference) all the same bits."""
+    _ik = _compiled_ik()
+    calls = record_many(["_motion_rows", "_derivative_rows", "_jacobian_rows"], tmp_path)
+    assert len(calls["_motion_rows"]) >= 7  # every run's chunks
+    rows = 0
+    for m, q, qdot, tz, step in calls["_motion_rows"]:
+        P, V = _ik.motion_rows(m, q, qdot, tz, step)
+        P_ref, V_ref = ik.motion_rows(m, q, qdot, tz, step)
+        assert same_bits(P, P_ref) and same_bits(V, V_ref)
+        assert same_bits(P, _ik.inverse_rows(m, q, tz))
+        moving = np.any(qdot != 0.0, axis=1)
+        assert same_bits(V[moving], _old_derivative(m, q, qdot, tz, P, step)[moving])
+        assert not V[~moving].any()
+        rows += len(q)
+    assert rows > 5_000
+    assert calls["_derivative_rows"] and calls["_jacobian_rows"]
+    for m, q, dq, tz, P, step in calls["_derivative_rows"]:
+        got = _ik.derivative_rows(m, q, dq, tz, P, step)
+        assert same_bits(got, ik.derivative_rows(m, q, dq, tz, P, step))
+        assert same_bits(got, _old_derivative(m, q, dq, tz, P, step))
+    for m, q, tz, step, P in calls["_jacobian_rows"]:
+        got = _ik.jacobian_rows(m, q, tz, step, P)
+        assert same_bits(got, ik.jacobian_rows(m, q, tz, step, P))
+        for j in range(5):
+            e = np.zeros((len(q), 5))
+            e[:, j] = 1.0
+            base = _ik.inverse_rows(m, q, tz) if P is None else P
+            assert same_bits(got[:, :, j], _old_derivative(m, q, e, tz, base, step))
+
+
+#: velocities (directions): standing, any, in the table's plane alone, without
+#: tilting, and so small that a step leaves the pose's bits as they are (the
+#: compiled kernel takes the part of the IK a stepped pose shares with its pose
+#: from the pose's: every case of it)
+QDOT = st.one_of(
+    st.just((0.0,) * 5),
+    POSE,
+    POSE.map(lambda p: (p[0], p[1], 0.0, 0.0, 0.0)),
+    POSE.map(lambda p: (p[0], p[1], p[2], -0.0, 0.0)),
+    POSE.map(lambda p: (p[0], 0.0, 0.0, p[3], 0.0)),
+    POSE.map(lambda p: tuple(x * 1e-300 for x in p)),
+)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.lists(st.tuples(POSE, QDOT), min_size=1, max_size=30),
+    st.sampled_from(PROFILES),
+    st.one_of(st.none(), st.floats(-30, 120)),
+    st.sampled_from([1e-6, 1e-4, 0.5]),
+    st.one_of(st.none(), hnp.arrays(np.float64, 2, elements=st.floats(-0.05, 0.05))),
+    st.booleans(),
+    st.sampled_from(["", "tilts", "tilts and height"]),
+)
+def test_generated_ik_differences_are_bit_identical(
+    rows: list[tuple[tuple[float, ...], tuple[float, ...]]],
+    path: Path,
+    tool: float | None,
+    step: float,
+    straight: np.ndarray | None,
+    given_P: bool,
+    shared: str,
+) -> None:
+    """Poses inside and outside the workspace (NaN rows), standing rows (q̇ = 0) among
+    moving ones, the table's straightness (its fixed-point steps); poses that keep
+    their tilts, or tilts and height, from row to row (the compiled kernel keeps
+    step 1 of the IK, or its tilts' part, from the row before then)."""
+    _ik = _compiled_ik()
+    m = _arrays(path)._replace(straightness=straight, squareness=1e-4)
+    q = np.array([r[0] for r in rows], dtype=float)
+    qdot = np.array([r[1] for r in rows], dtype=float)
+    if shared:
+        q[:, 3:] = q[0, 3:]
+    if shared == "tilts and height":
+        q[:, 2] = q[0, 2]
+    tz = ik.tool_z(m, len(q), tool)
+    assert same_bits(_ik.inverse_rows(m, q, tz), ik.inverse_rows(m, q, tz))
+    P, V = _ik.motion_rows(m, q, qdot, tz, step)
+    P_ref, V_ref = ik.motion_rows(m, q, qdot, tz, step)
+    assert same_bits(P, P_ref) and same_bits(V, V_ref)
+    D = _ik.derivative_rows(m, q, qdot, tz, P, step)
+    assert same_bits(D, ik.derivative_rows(m, q, qdot, tz, P, step))
+    moving = np.any(qdot != 0.0, axis=1)
+    assert same_bits(V[moving], D[moving])
+    Pj = P if given_P else None
+    assert same_bits(_ik.jacobian_rows(m, q, tz, step, Pj), ik.jacobian_rows(m, q, tz, step, Pj))
+
+
+def test_ik_differences_with_bowed_guides_run_the_reference() -> None:
+    _ik = _compiled_ik()
+    m = _arrays(PROFILES[0])._replace(bow=np.array([0.01, -0.02, 0.005]))
+    q = np.array([[10.0, -5.0, -20.0, 12.0, -7.0], [0.0, 1.0, -3.0, 2.0, 1.0]])
+    qdot = np.array([[1.0, 2.0, 0.5, 0.1, -0.2], [0.0, 0.0, 0.0, 0.0, 0.0]])
+    tz = ik.tool_z(m, 2, None)
+    got, want = _ik.motion_rows(m, q, qdot, tz, 1e-6), ik.motion_rows(m, q, qdot, tz, 1e-6)
+    assert same_bits(got[0], want[0]) and same_bits(got[1], want[1])
+    assert same_bits(
+        _ik.derivative_rows(m, q, qdot, tz, got[0], 1e-4),
+        ik.derivative_rows(m, q, qdot, tz, want[0], 1e-4),
+    )
+    assert same_bits(_ik.jacobian_rows(m, q, tz, 1e-4), ik.jacobian_rows(m, q, tz, 1e-4))
+
+
+def test_compiled_ik_differences_refuse_mismatched_rows() -> None:
+    """The twins run without bounds checks: arrays of other lengths are refused."""
+    _ik = _compiled_ik()
+    m = _arrays(PROFILES[0])
+    q = np.zeros((3, 5))
+    tz = ik.tool_z(m, 3, None)
+    with pytest.raises(ValueError, match="qdot"):
+        _ik.motion_rows(m, q, np.zeros((2, 5)), tz, 1e-6)
+    with pytest.raises(ValueError, match="tz"):
+        _ik.motion_rows(m, q, q, tz[:2], 1e-6)
+    with pytest.raises(ValueError, match="dq"):
+        _ik.derivative_rows(m, q, q, tz, np.zeros((2, 5)), 1e-6)
+    with pytest.raises(ValueError, match="P must be"):
+        _ik.jacobian_rows(m, q, tz, 1e-4, np.zeros((3, 4)))
+    with pytest.raises(ValueError, match="tz"):
+        _ik.jacobian_rows(m, q, tz[:1], 1e-4)

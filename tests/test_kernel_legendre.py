@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from numpy.polynomial import legendre as npleg
 
-from prsxy_post import errormap, kernel
+from prsxy_post import chain, errormap, kernel
 from prsxy_post.kernel import legendre
 
 from .kernel_cases import compiled, same_bits
@@ -117,6 +117,55 @@ def test_generated_maps_are_bit_identical(
     want = legendre.map_rows(em.arrays, q)
     assert same_bits(want, _by_legvander(em, q))
     assert same_bits(_legendre.map_rows(em.arrays, q), want)
+    for it in (1, 2, 3):
+        assert same_bits(
+            _legendre.correct_virtual(em.arrays, q, it), legendre.correct_virtual(em.arrays, q, it)
+        )
+
+
+@pytest.mark.parametrize("degree", [0, 1, 3, 8])
+def test_poses_with_nan_are_bit_identical(degree: int) -> None:
+    """A NaN coordinate makes NaN only the products that take it, and the
+    components whose terms use them (the compiled kernel sums such rows term by
+    term, the others product by product)."""
+    _legendre = compiled("_legendre")
+    rng = np.random.default_rng(200 + degree)
+    em = _random_map(rng, degree, "eq5-coupled", flat=-1)
+    q = _poses(rng, 400)
+    q[rng.random(q.shape) < 0.1] = np.nan
+    q[5] = np.nan
+    q[6] = [np.inf, -np.inf, 1e308, -1e308, np.nan]
+    q[7] = [np.inf, -np.inf, 1e308, -1e308, 0.0]  # clamped to the domain's edges
+    with np.errstate(over="ignore", invalid="ignore"):  # the reference's scaling
+        want = legendre.map_rows(em.arrays, q)
+        assert same_bits(want, _by_legvander(em, q))
+        assert same_bits(_legendre.map_rows(em.arrays, q), want)
+        assert same_bits(
+            _legendre.correct_virtual(em.arrays, q), legendre.correct_virtual(em.arrays, q)
+        )
+    assert np.isfinite(want[7]).all()
+
+
+def test_the_chain_corrects_through_the_kernel_as_through_the_map() -> None:
+    """chain.correct_virtual hands a fitted map to the kernel's one-pass correction:
+    the same bits as the fixed-point steps through the map's own evaluation (any
+    error function's way: Q' = Q − e(Q), then Q' = Q − e(Q'))."""
+    em = _random_map(np.random.default_rng(11), 3, "eq5", flat=-1)
+    q = _poses(np.random.default_rng(12), 3000)
+    for it in (1, 2, 3):
+        got = chain.correct_virtual(q, em, it)
+        assert same_bits(got, chain.correct_virtual(q, lambda x: em(x), it))
+        assert same_bits(got, legendre.correct_virtual(em.arrays, q, it))
+    assert chain.correct_virtual(q[:0], em).shape == (0, 5)
+
+
+def test_compiled_correction_refuses_other_shapes() -> None:
+    _legendre = compiled("_legendre")
+    em = _random_map(np.random.default_rng(7), 2, "eq5", flat=-1)
+    with pytest.raises(ValueError, match="q must be"):
+        _legendre.correct_virtual(em.arrays, np.zeros((3, 4)))
+    with pytest.raises(ValueError, match="exps and coef"):
+        _legendre.correct_virtual(em.arrays._replace(coef=em.arrays.coef[:-1]), np.zeros((3, 5)))
 
 
 def test_the_selected_kernel_evaluates_the_map() -> None:

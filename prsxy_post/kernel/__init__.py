@@ -81,6 +81,10 @@ _RUN, NAME, WHY_PURE = _load()
 # the calls the conversions make by replacing one)
 _inverse_rows = _RUN["ik"].inverse_rows
 _platform_cols = _RUN["ik"].platform_cols
+_motion_rows = _RUN["ik"].motion_rows
+_derivative_rows = _RUN["ik"].derivative_rows
+_jacobian_rows = _RUN["ik"].jacobian_rows
+_correct_virtual = _RUN["legendre"].correct_virtual
 _fixed_rows = _RUN["text"].format_fixed_rows
 _pvt_segment = _RUN["text"].pvt_segment_text
 _map_rows = _RUN["legendre"].map_rows
@@ -104,6 +108,33 @@ def inverse_rows(m: ik.IKArrays, q: np.ndarray, tz: np.ndarray) -> np.ndarray:
     """Motor positions (N, 5) [mm] for poses ``q`` (N, 5) and tool heights ``tz``
     (N,): :func:`ik.inverse_rows`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _inverse_rows(m, q, tz)
+    return out
+
+
+def motion_rows(
+    m: ik.IKArrays, q: np.ndarray, qdot: np.ndarray, tz: np.ndarray, step: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The IK (N, 5) [mm] of poses ``q`` (N, 5) and its velocity (N, 5) along
+    ``qdot`` (N, 5), one pass: :func:`ik.motion_rows`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _motion_rows(m, q, qdot, tz, step)
+    return out
+
+
+def derivative_rows(
+    m: ik.IKArrays, q: np.ndarray, dq: np.ndarray, tz: np.ndarray, P: np.ndarray, step: float
+) -> np.ndarray:
+    """The IK's one-sided difference (N, 5) along ``dq`` from poses ``q`` whose IK
+    is ``P``: :func:`ik.derivative_rows`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _derivative_rows(m, q, dq, tz, P, step)
+    return out
+
+
+def jacobian_rows(
+    m: ik.IKArrays, q: np.ndarray, tz: np.ndarray, step: float, P: np.ndarray | None = None
+) -> np.ndarray:
+    """∂P/∂q (N, 5, 5) by the IK's one-sided differences: :func:`ik.jacobian_rows`,
+    compiled when :data:`COMPILED`."""
+    out: np.ndarray = _jacobian_rows(m, q, tz, step, P)
     return out
 
 
@@ -174,6 +205,14 @@ def map_rows(m: legendre.MapArrays, q: np.ndarray) -> np.ndarray:
     """The virtual-axis error e(q) (N, 5) [mm, mm, mm, deg, deg] for poses ``q``
     (N, 5): :func:`legendre.map_rows`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _map_rows(m, q)
+    return out
+
+
+def correct_virtual(m: legendre.MapArrays, q: np.ndarray, iterations: int = 2) -> np.ndarray:
+    """Q' (N, 5) with Q' + e(Q') = Q for poses ``q`` (N, 5), Eq. 6:
+    :func:`legendre.correct_virtual`, compiled (one pass over the rows) when
+    :data:`COMPILED`."""
+    out: np.ndarray = _correct_virtual(m, q, iterations)
     return out
 
 

@@ -209,3 +209,43 @@ def table_motors(m: IKArrays, dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndarra
             p6 = (dy - kx * (p5 / 1000.0) ** 2) / (1.0 + m.scale_y)
             p5 = (dx - m.squareness * p6 - ky * (p6 / 1000.0) ** 2) / (1.0 + m.scale_x)
     return p5, p6
+
+
+def derivative_rows(
+    m: IKArrays, q: np.ndarray, dq: np.ndarray, tz: np.ndarray, P: np.ndarray, step: float
+) -> np.ndarray:
+    """(N, 5) the motors' derivative along ``dq`` (N, 5) from poses ``q`` (N, 5)
+    whose IK is ``P`` (N, 5): the IK's one-sided difference over ``step``,
+    (P(q + step dq) − P) / step."""
+    return (inverse_rows(m, q + step * dq, tz) - P) / step
+
+
+def motion_rows(
+    m: IKArrays, q: np.ndarray, qdot: np.ndarray, tz: np.ndarray, step: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The IK P (N, 5) [mm] of poses ``q`` (N, 5) and its velocity V (N, 5) [mm/s]
+    along ``qdot`` (N, 5): :func:`derivative_rows` over ``step`` [s] where a row
+    moves, 0 where its ``qdot`` is 0."""
+    P = inverse_rows(m, q, tz)
+    V = np.zeros_like(P)
+    moving = np.flatnonzero(np.any(qdot != 0.0, axis=1))
+    if moving.size:
+        V[moving] = derivative_rows(m, q[moving], qdot[moving], tz[moving], P[moving], step)
+    return P, V
+
+
+def jacobian_rows(
+    m: IKArrays, q: np.ndarray, tz: np.ndarray, step: float, P: np.ndarray | None = None
+) -> np.ndarray:
+    """(N, 5, 5) ∂P_i/∂q_j at poses ``q`` (N, 5): the IK's one-sided differences
+    over ``step`` along each coordinate, (P(q + step e_j) − P) / step, from ``P``
+    (the IK of ``q``; solved with the steps when None)."""
+    n = len(q)
+    base = 0 if P is None else 1
+    q6 = np.tile(q, (6 - base, 1))
+    for j in range(5):
+        q6[(j + 1 - base) * n : (j + 2 - base) * n, j] += step
+    P6 = inverse_rows(m, q6, np.tile(tz, 6 - base))
+    if P is not None:
+        P6 = np.concatenate([P, P6])
+    return np.stack([(P6[(j + 1) * n : (j + 2) * n] - P6[:n]) / step for j in range(5)], axis=2)
