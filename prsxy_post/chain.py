@@ -852,9 +852,20 @@ class Pipeline:
             rank = np.concatenate([np.full(n, 2), np.where(e_before, 0, 1)])
             when_all = np.concatenate([when, e_when])
             order = np.lexsort((when_all, rank, step_all))
-            both = PointChunk.concat([pc, extra])
-            both.dt = np.concatenate([dt, extra.dt])
-            pc = both.take(order)
+            # every field's rows in that order, gathered from both at once; not the
+            # clock (_points makes it from dt) nor the commands where the tables make
+            # them again from P_ideal, V_ideal (_points)
+            skip = ("t", "P_cmd", "V_cmd") if self.table_cols else ("t",)
+            fields = {
+                f: _gather(np.concatenate([getattr(pc, f), getattr(extra, f)]), order)
+                for f in PointChunk.FIELDS
+                if f not in skip and f != "dt"
+            }
+            fields["dt"] = np.concatenate([dt, extra.dt])[order]
+            fields["t"] = np.zeros(len(order))
+            if self.table_cols:
+                fields["P_cmd"], fields["V_cmd"] = fields["P_ideal"], fields["V_ideal"]
+            pc = PointChunk(**fields)
             step = step_all[order]
             when = when_all[order]
             before = np.concatenate([before, e_before])[order]
@@ -1328,23 +1339,41 @@ class Pipeline:
         dt = pc.dt.copy()
         if len(ins.stand_k):
             ks_stand, hold = ins.stand_k, ins.stand_t
-            # each stands at the point before it (the chunk's first at the last one made)
-            dup = pc.take(np.maximum(ks_stand - 1, 0))  # fancy indexing: copies
+            c = len(ks_stand)
+            at = np.maximum(ks_stand - 1, 0)
+            last = self.last
             if ks_stand[0] == 0:
-                assert self.last is not None  # a stand needs a point to stand at
-                dup = PointChunk.concat([self.last, dup.take(slice(1, None))])
-            dup.qdot[:] = 0.0
-            dup.V_ideal[:] = 0.0
-            dup.V_cmd[:] = 0.0
-            dup.speed[:] = 0.0
-            dup.dwell[:] = True
-            dup.block_end[:] = False
-            dup.split[:] = 0
-            dup.first[:] = False
-            dup.fn[:] = None
-            dup.dt[:] = hold
-            dup.line[:] = pc.line[ks_stand]
-            parts.append(dup)
+                assert last is not None  # a stand needs a point to stand at
+
+            def where(name: str) -> np.ndarray:
+                """Each stands where the point before it is (the chunk's first
+                where the last one made is)."""
+                x: np.ndarray = np.take(getattr(pc, name), at, axis=0)
+                if ks_stand[0] == 0:
+                    x[0] = getattr(last, name)[0]
+                return x
+
+            parts.append(
+                PointChunk(
+                    q=where("q"),
+                    qdot=np.zeros((c, 5)),
+                    dt=np.array(hold, dtype=float),
+                    t=where("t"),
+                    line=pc.line[ks_stand],
+                    first=np.zeros(c, dtype=bool),
+                    tool_length=where("tool_length"),
+                    speed=np.zeros(c),
+                    dwell=np.ones(c, dtype=bool),
+                    fn=np.empty(c, dtype=object),
+                    block_end=np.zeros(c, dtype=bool),
+                    split=np.zeros(c, dtype=np.int8),
+                    q_target=where("q_target"),
+                    P_ideal=where("P_ideal"),
+                    V_ideal=np.zeros((c, 5)),
+                    P_cmd=where("P_cmd"),
+                    V_cmd=np.zeros((c, 5)),
+                )
+            )
             e_step.append(ks_stand)
             e_when.append(t_end[ks_stand] - pc.dt[ks_stand])
             e_before.append(np.ones(len(ks_stand), dtype=bool))
@@ -1432,6 +1461,14 @@ class Pipeline:
         travel = checks.travel_problems(self.profile, ready.P_cmd, ready.line)
         self._problem([p.error(self.profile) for p in travel])
         return ready
+
+
+def _gather(a: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``a[idx]`` for integer rows ``idx``: np.take along the first axis for a
+    table (several times faster than fancy indexing there), plain indexing for a
+    column."""
+    out: np.ndarray = np.take(a, idx, axis=0) if a.ndim > 1 else a[idx]
+    return out
 
 
 def _windows_over(b: np.ndarray, e: np.ndarray, k: np.ndarray) -> np.ndarray:

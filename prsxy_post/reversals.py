@@ -741,8 +741,9 @@ class _Chunk(NamedTuple):
     t_end : (n,) time of each point since the point before the chunk [s]
     dt : (n,) time of the step that ends at each point [s]
     resting : (n,) bool, the path stands at the point
-    P, V : (off + n, 5) wanted motor positions and velocities [mm, mm/s], the
-        point before the chunk first where there is one
+    P, V : (5, off + n) wanted motor positions and velocities [mm, mm/s], a motor
+        a row (each motor's contiguous: the kernels take them so), the point
+        before the chunk first where there is one
     rest : (off + n,) bool, ``resting`` likewise
     off : 1 where the point before the chunk leads P, V and rest, else 0
     """
@@ -830,11 +831,17 @@ def find_reversals(
         updated in place (a creeping motor's drift is measured from it)
     tol : path error allowed to a crossing [mm]
     """
+    off = 0 if prev is None else 1
+    # a motor a row, transposed once (not a column copied for each motor)
+    P_all = np.empty((P.shape[1], off + len(P)))
+    V_all = np.empty((V.shape[1], off + len(V)))
+    P_all[:, off:] = P.T
+    V_all[:, off:] = V.T
     if prev is None:
-        ch = _Chunk(t_end, dt, resting, P, V, resting, 0)
+        ch = _Chunk(t_end, dt, resting, P_all, V_all, resting, 0)
     else:
-        P_all = np.vstack([prev[0][None, :], P])
-        V_all = np.vstack([prev[1][None, :], V])
+        P_all[:, 0] = prev[0]
+        V_all[:, 0] = prev[1]
         rest_all = np.concatenate([[prev[2]], resting])
         ch = _Chunk(t_end, dt, resting, P_all, V_all, rest_all, 1)
     drift = DRIFT_SHARE * tol
@@ -856,8 +863,8 @@ def roots_search(found: Found, steps: int = ROOT_STEPS) -> RootSearch:
     return root_search(
         np.concatenate([x.sr for x in seen]),
         np.concatenate([x.acc for x in seen]),
-        ch.V[km_all + off - 1, col_all],
-        ch.V[km_all + off, col_all],
+        ch.V[col_all, km_all + off - 1],
+        ch.V[col_all, km_all + off],
         ch.dt[km_all],
         np.concatenate([x.new[x.mid] for x in seen]),
         km_all,
@@ -1032,8 +1039,7 @@ def _turns(
     :func:`.kernel.play.creeps`). ``side`` (5,) the side each motor is on before the chunk;
     ``drift`` [mm] the drift back that makes a creeping motor cross."""
     off, dt = ch.off, ch.dt
-    # the motor's columns made contiguous once (the kernels take them so)
-    p, v = np.ascontiguousarray(ch.P[:, col]), np.ascontiguousarray(ch.V[:, col])
+    p, v = ch.P[col], ch.V[col]
     # creeps back become reversals; the reach is carried to the next chunk
     sg, came, r, kind, reach_ref = kernel.motor_turns(
         v, p, ch.rest, int(side[col]), ref, drift, off, V_EPS
