@@ -857,11 +857,11 @@ class Pipeline:
             # them again from P_ideal, V_ideal (_points)
             skip = ("t", "P_cmd", "V_cmd") if self.table_cols else ("t",)
             fields = {
-                f: _gather(np.concatenate([getattr(pc, f), getattr(extra, f)]), order)
+                f: _gather(np.concatenate([getattr(p, f) for p in (pc, *extra)]), order)
                 for f in PointChunk.FIELDS
                 if f not in skip and f != "dt"
             }
-            fields["dt"] = np.concatenate([dt, extra.dt])[order]
+            fields["dt"] = np.concatenate([dt, *(p.dt for p in extra)])[order]
             fields["t"] = np.zeros(len(order))
             if self.table_cols:
                 fields["P_cmd"], fields["V_cmd"] = fields["P_ideal"], fields["V_ideal"]
@@ -908,9 +908,13 @@ class Pipeline:
                 e0 = np.where((kk >= 1)[:, None], fix[np.maximum(kk - 1, 0)], fix_before)
                 q_t = q - (e0 + ff * (fix[kk] - e0))
                 tool = s.tool_length[kk]
-                P = kinematics.inverse(self.geo, q_t, tool).P
-                V = self._ik_velocity(q_t, qdot, tool, P)
-                out[inside] = V[np.arange(len(kk)), cols[inside]]
+                # the poses and their steps along qdot in one IK call: the IK and
+                # its velocity as _ik_velocity's difference (the same rows)
+                m = len(kk)
+                q2 = np.concatenate([q_t, q_t + VEL_STEP_S * qdot])
+                P2 = kinematics.inverse(self.geo, q2, np.concatenate([tool, tool])).P
+                V = (P2[m:] - P2[:m]) / VEL_STEP_S
+                out[inside] = V[np.arange(m), cols[inside]]
             return out
 
         return velocity
@@ -1329,9 +1333,10 @@ class Pipeline:
         pc: PointChunk,
         t_end: np.ndarray,
         ins: reversals.Insertions,
-    ) -> tuple[PointChunk, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The standing points and the points inside steps that the reversals need,
-        and the chunk's step times cut at them."""
+    ) -> tuple[list[PointChunk], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The standing points and the points inside steps that the reversals need
+        (a record of each kind there is, joined with the chunk's points by the
+        caller), and the chunk's step times cut at them."""
         parts: list[PointChunk] = []
         e_step: list[np.ndarray] = [np.zeros(0, dtype=int)]
         e_when: list[np.ndarray] = [np.zeros(0)]
@@ -1418,7 +1423,7 @@ class Pipeline:
             e_when.append(tt)
             e_before.append(np.zeros(m, dtype=bool))
         return (
-            PointChunk.concat(parts),
+            parts,
             np.concatenate(e_step).astype(int),
             np.concatenate(e_when).astype(float),
             np.concatenate(e_before),

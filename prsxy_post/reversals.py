@@ -1393,6 +1393,8 @@ def sides_and_ends(
     by_col = np.lexsort((e_all, ins.w_col))
     w_cols = ins.w_col[by_col]
     lo, hi = np.searchsorted(w_cols, cols, "left"), np.searchsorted(w_cols, cols, "right")
+    # a motor's velocities contiguous, transposed once (not a column copied a motor)
+    V_cols = np.ascontiguousarray(V.T)
     for i, col in enumerate(cols):
         mine = by_col[lo[i] : hi[i]]
         here = s_col == col
@@ -1401,7 +1403,7 @@ def sides_and_ends(
         # a corner the cubic's root is before the corner, the plan's velocity turns
         # at it (kernel.play.motor_sides)
         out[:, col] = kernel.motor_sides(
-            V[:, col],
+            V_cols[col],
             resting,
             f_all[mine],
             e_all[mine],
