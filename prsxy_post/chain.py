@@ -752,11 +752,12 @@ class Pipeline:
             V_cmd=V,
         )
         t0 = time.perf_counter()
-        side = np.tile(self.side, (len(pc), 1))
         contacts = np.zeros((0, 3), dtype=int)
         plain_last = pc.P_ideal[-1].copy() if len(pc) else self.last_plain
         if self.play_cols and reachable:
             pc, side, contacts = self._reversals(plan, s, pc)
+        else:
+            side = np.tile(self.side, (len(pc), 1))
         # a running sum continued across chunks (not chunk offset + cumsum), so the
         # clock is the same bit for bit however the program was cut
         t = np.cumsum(np.concatenate([[self.t], pc.dt]))[1:]
@@ -765,8 +766,11 @@ class Pipeline:
             self.t = float(t[-1])
         self.n_points += len(pc)
         if reachable and self.table_cols:
-            P_cmd = pc.P_ideal.copy()
-            V_cmd = pc.V_ideal.copy()
+            # a motor without a table is commanded where it must be; where every
+            # motor has one, every column is made below
+            every = len(self.table_cols) == pc.P_ideal.shape[1]
+            P_cmd = np.empty_like(pc.P_ideal) if every else pc.P_ideal.copy()
+            V_cmd = np.empty_like(pc.V_ideal) if every else pc.V_ideal.copy()
             for col, table in self.table_cols:
                 P_cmd[:, col] = axiscomp.compensate_sided(table, pc.P_ideal[:, col], side[:, col])
                 V_cmd[:, col] = pc.V_ideal[:, col] / table.slope(P_cmd[:, col], side[:, col])
