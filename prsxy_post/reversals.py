@@ -598,15 +598,28 @@ def _dip_windows(
     Returns (step, new side, window start, window end) for 2 m windows, the first
     crossing of every dip before the second.
     """
-    tol, longest, chords = rules.tol, rules.longest, rules.chords
-    ta1, tb1 = windows(d.t0, d.tm, d.t0 + d.s1 * d.h, d.A1, tol, longest, w1, chords)
-    ta2, tb2 = windows(d.tm, d.t1, d.t0 + d.s2 * d.h, d.A2, tol, longest, w2, chords)
-    return (
-        np.concatenate([d.k, d.k]),
-        np.concatenate([-d.sg, d.sg]),
-        np.concatenate([ta1, ta2]),
-        np.concatenate([tb1, tb2]),
+    # both halves in one call (the windows are made row by row)
+    ta, tb = windows(
+        np.concatenate([d.t0, d.tm]),
+        np.concatenate([d.tm, d.t1]),
+        np.concatenate([d.t0 + d.s1 * d.h, d.t0 + d.s2 * d.h]),
+        np.concatenate([d.A1, d.A2]),
+        rules.tol,
+        rules.longest,
+        None if w1 is None and w2 is None else _joined_reach(w1, w2, len(d.k)),
+        rules.chords,
     )
+    return np.concatenate([d.k, d.k]), np.concatenate([-d.sg, d.sg]), ta, tb
+
+
+def _joined_reach(
+    w1: tuple[np.ndarray, np.ndarray] | None, w2: tuple[np.ndarray, np.ndarray] | None, m: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The reaches (before, after) of two sets of m windows joined, None an unbound
+    reach (inf, as :func:`windows` takes it)."""
+    free = (np.full(m, np.inf), np.full(m, np.inf))
+    a, b = free if w1 is None else w1, free if w2 is None else w2
+    return np.concatenate([a[0], b[0]]), np.concatenate([a[1], b[1]])
 
 
 def reach(
