@@ -965,13 +965,20 @@ class Pipeline:
                 _gather(pc.P_ideal, rows),
             )
             ok = np.all(np.isfinite(jac), axis=(1, 2))
-            if np.any(ok):
+            # every pose reachable (the rule): no masked copies in and out
+            every = bool(np.all(ok))
+            if every or np.any(ok):
+                sub = jac if every else jac[ok]
                 try:
-                    fwd[ok] = np.linalg.inv(jac[ok])
+                    inv = np.linalg.inv(sub)
                 except np.linalg.LinAlgError:
                     # a singular pose: pinv gives a long lever (the shortest
                     # window), not an error
-                    fwd[ok] = np.linalg.pinv(jac[ok])
+                    inv = np.linalg.pinv(sub)
+                if every:
+                    fwd = inv
+                else:
+                    fwd[ok] = inv
             out: np.ndarray = fwd[which, :3, cols]
             return out
 
