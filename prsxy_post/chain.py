@@ -842,8 +842,10 @@ class Pipeline:
         if ins.blended.size:
             # the blended corners' points onto their parabolas (P_cmd is made from
             # P_ideal after this)
+            at = ins.blended  # distinct rows
+            moved = _gather(shift, np.searchsorted(blends[0], at))
             pc.P_ideal = pc.P_ideal.copy()
-            pc.P_ideal[ins.blended] += shift[np.searchsorted(blends[0], ins.blended)]
+            pc.P_ideal[at] = _gather(pc.P_ideal, at) + moved
         n = len(pc)
         step = np.arange(n)
         when = t_end
@@ -1061,7 +1063,9 @@ class Pipeline:
         period = np.full(len(J), self.limits.period_s)
         accel = KAPPA * self.limits.accel_mm_s2
         blend, tau = reversals.corners(V_in, V_out, self.play_cols, period, accel)
-        shift = reversals.blend_shift(V_in[blend], V_out[blend], tau[blend])
+        shift = reversals.blend_shift(
+            np.compress(blend, V_in, axis=0), np.compress(blend, V_out, axis=0), tau[blend]
+        )
         return (J[blend], tau[blend]), shift
 
     def _bends(self, plan: Plan, s: Samples) -> tuple[np.ndarray, np.ndarray]:
