@@ -788,11 +788,12 @@ class Pipeline:
             V_cmd=V,
         )
         t0 = time.perf_counter()
-        side = np.tile(self.side, (len(pc), 1))
         contacts = np.zeros((0, 3), dtype=int)
         plain_last = pc.P_ideal[-1].copy() if len(pc) else self.last_plain
         if self.play_cols and reachable:
             pc, side, contacts = self._reversals(plan, s, pc)
+        else:
+            side = np.tile(self.side, (len(pc), 1))
         # a running sum continued across chunks (not chunk offset + cumsum), so the
         # clock is the same bit for bit however the program was cut
         t = np.cumsum(np.concatenate([[self.t], pc.dt]))[1:]
@@ -809,7 +810,11 @@ class Pipeline:
                 np.ascontiguousarray(pc.V_ideal.T, dtype=float),
                 np.ascontiguousarray(side.T, dtype=float),
             )
-            P_cmd, V_cmd = by_motor[0].copy(), by_motor[1].copy()
+            # a motor without a table is commanded where it must be; where every
+            # motor has one, every row is made below
+            every = len(self.table_cols) == pc.P_ideal.shape[1]
+            P_cmd = np.empty_like(by_motor[0]) if every else by_motor[0].copy()
+            V_cmd = np.empty_like(by_motor[1]) if every else by_motor[1].copy()
             for col, table in self.table_cols:
                 P_cmd[col] = axiscomp.compensate_sided(table, by_motor[0][col], by_motor[2][col])
                 V_cmd[col] = by_motor[1][col] / table.slope(P_cmd[col], by_motor[2][col])
@@ -881,8 +886,10 @@ class Pipeline:
         if ins.blended.size:
             # the blended corners' points onto their parabolas (P_cmd is made from
             # P_ideal after this)
+            at = ins.blended  # distinct rows
+            moved = _gather(shift, np.searchsorted(blends[0], at))
             pc.P_ideal = pc.P_ideal.copy()
-            pc.P_ideal[ins.blended] += shift[np.searchsorted(blends[0], ins.blended)]
+            pc.P_ideal[at] = _gather(pc.P_ideal, at) + moved
         n = len(pc)
         step = np.arange(n)
         when = t_end
@@ -895,9 +902,20 @@ class Pipeline:
             rank = np.concatenate([np.full(n, 2), np.where(e_before, 0, 1)])
             when_all = np.concatenate([when, e_when])
             order = np.lexsort((when_all, rank, step_all))
-            both = PointChunk.concat([pc, extra])
-            both.dt = np.concatenate([dt, extra.dt])
-            pc = both.take(order)
+            # every field's rows in that order, gathered from both at once; not the
+            # clock (_points makes it from dt) nor the commands where the tables make
+            # them again from P_ideal, V_ideal (_points)
+            skip = ("t", "P_cmd", "V_cmd") if self.table_cols else ("t",)
+            fields = {
+                f: _gather(np.concatenate([getattr(p, f) for p in (pc, *extra)]), order)
+                for f in PointChunk.FIELDS
+                if f not in skip and f != "dt"
+            }
+            fields["dt"] = np.concatenate([dt, *(p.dt for p in extra)])[order]
+            fields["t"] = np.zeros(len(order))
+            if self.table_cols:
+                fields["P_cmd"], fields["V_cmd"] = fields["P_ideal"], fields["V_ideal"]
+            pc = PointChunk(**fields)
             step = step_all[order]
             when = when_all[order]
             before = np.concatenate([before, e_before])[order]
@@ -937,12 +955,16 @@ class Pipeline:
             if np.any(inside):
                 kk, ff = k[inside], frac[inside][:, None]
                 q, qdot = at_times(plan, s.block[kk], tau[inside])
-                e0 = np.where((kk >= 1)[:, None], fix[np.maximum(kk - 1, 0)], fix_before)
-                q_t = q - (e0 + ff * (fix[kk] - e0))
+                e0 = np.where((kk >= 1)[:, None], _gather(fix, np.maximum(kk - 1, 0)), fix_before)
+                q_t = q - (e0 + ff * (_gather(fix, kk) - e0))
                 tool = s.tool_length[kk]
-                P = kinematics.inverse(self.geo, q_t, tool).P
-                V = self._ik_velocity(q_t, qdot, tool, P)
-                out[inside] = V[np.arange(len(kk)), cols[inside]]
+                # the poses and their steps along qdot in one IK call: the IK and
+                # its velocity as _ik_velocity's difference (the same rows)
+                m = len(kk)
+                q2 = np.concatenate([q_t, q_t + VEL_STEP_S * qdot])
+                P2 = kinematics.inverse(self.geo, q2, np.concatenate([tool, tool])).P
+                V = (P2[m:] - P2[:m]) / VEL_STEP_S
+                out[inside] = V[np.arange(m), cols[inside]]
             return out
 
         return velocity
@@ -982,16 +1004,27 @@ class Pipeline:
             fwd = np.full((len(rows), 5, 5), np.nan)
             # P_ideal is the IK of q_target here (blends move it only later)
             jac = ik_jacobian(
-                self.geo, pc.q_target[rows], pc.tool_length[rows], DIR_STEP_MM, pc.P_ideal[rows]
+                self.geo,
+                _gather(pc.q_target, rows),
+                pc.tool_length[rows],
+                DIR_STEP_MM,
+                _gather(pc.P_ideal, rows),
             )
             ok = np.all(np.isfinite(jac), axis=(1, 2))
-            if np.any(ok):
+            # every pose reachable (the rule): no masked copies in and out
+            every = bool(np.all(ok))
+            if every or np.any(ok):
+                sub = jac if every else jac[ok]
                 try:
-                    fwd[ok] = np.linalg.inv(jac[ok])
+                    inv = np.linalg.inv(sub)
                 except np.linalg.LinAlgError:
                     # a singular pose: pinv gives a long lever (the shortest
                     # window), not an error
-                    fwd[ok] = np.linalg.pinv(jac[ok])
+                    inv = np.linalg.pinv(sub)
+                if every:
+                    fwd = inv
+                else:
+                    fwd[ok] = inv
             out: np.ndarray = fwd[which, :3, cols]
             return out
 
@@ -1012,8 +1045,10 @@ class Pipeline:
             r = np.maximum(vmax[k] * (1.0 + reversals.CROSSING_SPEED_SHARE) - v, 0.0)
             # the path's direction at the root: its velocity there, linear between
             # the step's ends (on a tight arc the step turns it by tenths of a rad)
-            q0 = np.where((k >= 1)[:, None], pc.qdot[np.maximum(k - 1, 0), :3], qdot_before)
-            xyz = q0 + frac[:, None] * (pc.qdot[k, :3] - q0)
+            q0 = np.where(
+                (k >= 1)[:, None], _gather(pc.qdot, np.maximum(k - 1, 0))[:, :3], qdot_before
+            )
+            xyz = q0 + frac[:, None] * (_gather(pc.qdot, k)[:, :3] - q0)
             norm = np.linalg.norm(xyz, axis=1)
             with np.errstate(divide="ignore", invalid="ignore"):
                 # no tangent in xyz (a tilt alone): the worst direction, both sides
@@ -1065,12 +1100,16 @@ class Pipeline:
         # the motors' velocities on the far side: the IK's velocity (as _solve) along
         # the next block's tangent; the near side's is then what the mean leaves
         qdot_out = s.speed[J, None] * nxt
-        V_out = self._ik_velocity(pc.q_target[J], qdot_out, s.tool_length[J], pc.P_ideal[J])
-        V_in = 2.0 * pc.V_ideal[J] - V_out
+        V_out = self._ik_velocity(
+            _gather(pc.q_target, J), qdot_out, s.tool_length[J], _gather(pc.P_ideal, J)
+        )
+        V_in = 2.0 * _gather(pc.V_ideal, J) - V_out
         period = np.full(len(J), self.limits.period_s)
         accel = KAPPA * self.limits.accel_mm_s2
         blend, tau = reversals.corners(V_in, V_out, self.play_cols, period, accel)
-        shift = reversals.blend_shift(V_in[blend], V_out[blend], tau[blend])
+        shift = reversals.blend_shift(
+            np.compress(blend, V_in, axis=0), np.compress(blend, V_out, axis=0), tau[blend]
+        )
         return (J[blend], tau[blend]), shift
 
     def _bends(self, plan: Plan, s: Samples) -> tuple[np.ndarray, np.ndarray]:
@@ -1079,7 +1118,7 @@ class Pipeline:
         J = junctions(s)
         # a tangent junction has one velocity on both sides: no corner
         nxt = next_tangent(plan, s.block[J])
-        bent = np.any(nxt != plan.blocks.dq_out[s.block[J]], axis=1)
+        bent = np.any(nxt != _gather(plan.blocks.dq_out, s.block[J]), axis=1)
         return J[bent], nxt[bent]
 
     def _settle(
@@ -1381,9 +1420,10 @@ class Pipeline:
         pc: PointChunk,
         t_end: np.ndarray,
         ins: reversals.Insertions,
-    ) -> tuple[PointChunk, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The standing points and the points inside steps that the reversals need,
-        and the chunk's step times cut at them."""
+    ) -> tuple[list[PointChunk], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The standing points and the points inside steps that the reversals need
+        (a record of each kind there is, joined with the chunk's points by the
+        caller), and the chunk's step times cut at them."""
         parts: list[PointChunk] = []
         e_step: list[np.ndarray] = [np.zeros(0, dtype=int)]
         e_when: list[np.ndarray] = [np.zeros(0)]
@@ -1391,23 +1431,41 @@ class Pipeline:
         dt = pc.dt.copy()
         if len(ins.stand_k):
             ks_stand, hold = ins.stand_k, ins.stand_t
-            # each stands at the point before it (the chunk's first at the last one made)
-            dup = pc.take(np.maximum(ks_stand - 1, 0))  # fancy indexing: copies
+            c = len(ks_stand)
+            at = np.maximum(ks_stand - 1, 0)
+            last = self.last
             if ks_stand[0] == 0:
-                assert self.last is not None  # a stand needs a point to stand at
-                dup = PointChunk.concat([self.last, dup.take(slice(1, None))])
-            dup.qdot[:] = 0.0
-            dup.V_ideal[:] = 0.0
-            dup.V_cmd[:] = 0.0
-            dup.speed[:] = 0.0
-            dup.dwell[:] = True
-            dup.block_end[:] = False
-            dup.split[:] = 0
-            dup.first[:] = False
-            dup.fn[:] = None
-            dup.dt[:] = hold
-            dup.line[:] = pc.line[ks_stand]
-            parts.append(dup)
+                assert last is not None  # a stand needs a point to stand at
+
+            def where(name: str) -> np.ndarray:
+                """Each stands where the point before it is (the chunk's first
+                where the last one made is)."""
+                x: np.ndarray = np.take(getattr(pc, name), at, axis=0)
+                if ks_stand[0] == 0:
+                    x[0] = getattr(last, name)[0]
+                return x
+
+            parts.append(
+                PointChunk(
+                    q=where("q"),
+                    qdot=np.zeros((c, 5)),
+                    dt=np.array(hold, dtype=float),
+                    t=where("t"),
+                    line=pc.line[ks_stand],
+                    first=np.zeros(c, dtype=bool),
+                    tool_length=where("tool_length"),
+                    speed=np.zeros(c),
+                    dwell=np.ones(c, dtype=bool),
+                    fn=np.empty(c, dtype=object),
+                    block_end=np.zeros(c, dtype=bool),
+                    split=np.zeros(c, dtype=np.int8),
+                    q_target=where("q_target"),
+                    P_ideal=where("P_ideal"),
+                    V_ideal=np.zeros((c, 5)),
+                    P_cmd=where("P_cmd"),
+                    V_cmd=np.zeros((c, 5)),
+                )
+            )
             e_step.append(ks_stand)
             e_when.append(t_end[ks_stand] - pc.dt[ks_stand])
             e_before.append(np.ones(len(ks_stand), dtype=bool))
@@ -1452,7 +1510,7 @@ class Pipeline:
             e_when.append(tt)
             e_before.append(np.zeros(m, dtype=bool))
         return (
-            PointChunk.concat(parts),
+            parts,
             np.concatenate(e_step).astype(int),
             np.concatenate(e_when).astype(float),
             np.concatenate(e_before),
@@ -1495,6 +1553,14 @@ class Pipeline:
         travel = checks.travel_problems(self.profile, ready.P_cmd, ready.line)
         self._problem([p.error(self.profile) for p in travel])
         return ready
+
+
+def _gather(a: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``a[idx]`` for integer rows ``idx``: np.take along the first axis for a
+    table (an (n, 5) array's rows over ten times faster than fancy indexing: the
+    same values), plain indexing for a column."""
+    out: np.ndarray = np.take(a, idx, axis=0) if a.ndim > 1 else a[idx]
+    return out
 
 
 def _windows_over(b: np.ndarray, e: np.ndarray, k: np.ndarray) -> np.ndarray:

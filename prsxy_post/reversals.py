@@ -598,15 +598,28 @@ def _dip_windows(
     Returns (step, new side, window start, window end) for 2 m windows, the first
     crossing of every dip before the second.
     """
-    tol, longest, chords = rules.tol, rules.longest, rules.chords
-    ta1, tb1 = windows(d.t0, d.tm, d.t0 + d.s1 * d.h, d.A1, tol, longest, w1, chords)
-    ta2, tb2 = windows(d.tm, d.t1, d.t0 + d.s2 * d.h, d.A2, tol, longest, w2, chords)
-    return (
-        np.concatenate([d.k, d.k]),
-        np.concatenate([-d.sg, d.sg]),
-        np.concatenate([ta1, ta2]),
-        np.concatenate([tb1, tb2]),
+    # both halves in one call (the windows are made row by row)
+    ta, tb = windows(
+        np.concatenate([d.t0, d.tm]),
+        np.concatenate([d.tm, d.t1]),
+        np.concatenate([d.t0 + d.s1 * d.h, d.t0 + d.s2 * d.h]),
+        np.concatenate([d.A1, d.A2]),
+        rules.tol,
+        rules.longest,
+        None if w1 is None and w2 is None else _joined_reach(w1, w2, len(d.k)),
+        rules.chords,
     )
+    return np.concatenate([d.k, d.k]), np.concatenate([-d.sg, d.sg]), ta, tb
+
+
+def _joined_reach(
+    w1: tuple[np.ndarray, np.ndarray] | None, w2: tuple[np.ndarray, np.ndarray] | None, m: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The reaches (before, after) of two sets of m windows joined, None an unbound
+    reach (inf, as :func:`windows` takes it)."""
+    free = (np.full(m, np.inf), np.full(m, np.inf))
+    a, b = free if w1 is None else w1, free if w2 is None else w2
+    return np.concatenate([a[0], b[0]]), np.concatenate([a[1], b[1]])
 
 
 def reach(
@@ -741,8 +754,9 @@ class _Chunk(NamedTuple):
     t_end : (n,) time of each point since the point before the chunk [s]
     dt : (n,) time of the step that ends at each point [s]
     resting : (n,) bool, the path stands at the point
-    P, V : (off + n, 5) wanted motor positions and velocities [mm, mm/s], the
-        point before the chunk first where there is one
+    P, V : (5, off + n) wanted motor positions and velocities [mm, mm/s], a motor
+        a row (each motor's contiguous: the kernels take them so), the point
+        before the chunk first where there is one
     rest : (off + n,) bool, ``resting`` likewise
     off : 1 where the point before the chunk leads P, V and rest, else 0
     """
@@ -830,11 +844,17 @@ def find_reversals(
         updated in place (a creeping motor's drift is measured from it)
     tol : path error allowed to a crossing [mm]
     """
+    off = 0 if prev is None else 1
+    # a motor a row, transposed once (not a column copied for each motor)
+    P_all = np.empty((P.shape[1], off + len(P)))
+    V_all = np.empty((V.shape[1], off + len(V)))
+    P_all[:, off:] = P.T
+    V_all[:, off:] = V.T
     if prev is None:
-        ch = _Chunk(t_end, dt, resting, P, V, resting, 0)
+        ch = _Chunk(t_end, dt, resting, P_all, V_all, resting, 0)
     else:
-        P_all = np.vstack([prev[0][None, :], P])
-        V_all = np.vstack([prev[1][None, :], V])
+        P_all[:, 0] = prev[0]
+        V_all[:, 0] = prev[1]
         rest_all = np.concatenate([[prev[2]], resting])
         ch = _Chunk(t_end, dt, resting, P_all, V_all, rest_all, 1)
     drift = DRIFT_SHARE * tol
@@ -856,8 +876,8 @@ def roots_search(found: Found, steps: int = ROOT_STEPS) -> RootSearch:
     return root_search(
         np.concatenate([x.sr for x in seen]),
         np.concatenate([x.acc for x in seen]),
-        ch.V[km_all + off - 1, col_all],
-        ch.V[km_all + off, col_all],
+        ch.V[col_all, km_all + off - 1],
+        ch.V[col_all, km_all + off],
         ch.dt[km_all],
         np.concatenate([x.new[x.mid] for x in seen]),
         km_all,
@@ -1032,8 +1052,7 @@ def _turns(
     :func:`.kernel.play.creeps`). ``side`` (5,) the side each motor is on before the chunk;
     ``drift`` [mm] the drift back that makes a creeping motor cross."""
     off, dt = ch.off, ch.dt
-    # the motor's columns made contiguous once (the kernels take them so)
-    p, v = np.ascontiguousarray(ch.P[:, col]), np.ascontiguousarray(ch.V[:, col])
+    p, v = ch.P[col], ch.V[col]
     # creeps back become reversals; the reach is carried to the next chunk
     sg, came, r, kind, reach_ref = kernel.motor_turns(
         v, p, ch.rest, int(side[col]), ref, drift, off, V_EPS
@@ -1387,6 +1406,8 @@ def sides_and_ends(
     by_col = np.lexsort((e_all, ins.w_col))
     w_cols = ins.w_col[by_col]
     lo, hi = np.searchsorted(w_cols, cols, "left"), np.searchsorted(w_cols, cols, "right")
+    # a motor's velocities contiguous, transposed once (not a column copied a motor)
+    V_cols = np.ascontiguousarray(V.T)
     for i, col in enumerate(cols):
         mine = by_col[lo[i] : hi[i]]
         here = s_col == col
@@ -1395,7 +1416,7 @@ def sides_and_ends(
         # a corner the cubic's root is before the corner, the plan's velocity turns
         # at it (kernel.play.motor_sides)
         out[:, col] = kernel.motor_sides(
-            V[:, col],
+            V_cols[col],
             resting,
             f_all[mine],
             e_all[mine],
