@@ -235,55 +235,153 @@ def solve6(J_in, r_in):
     return s_a
 
 
+cdef enum:
+    # rows solved side by side: a row's Newton step is a chain of dependent
+    # operations (each elimination needs the one before, the back substitution a
+    # division a row); a lane a row, the same operation on LANES rows at once, in
+    # the same order for each as a row at a time (so the same bits), overlaps them
+    LANES = 4
+
+
+cdef void _solve6_lanes(double A[6][6][LANES], double b[6][LANES], double s[6][LANES]) noexcept nogil:
+    """``_solve6`` on LANES systems at once: A[i][j][lane], b[i][lane], s[i][lane].
+
+    The pivot row is copied out before the rows below subtract it, so the compiler
+    knows they do not overlap and runs the lanes' operations side by side (one
+    vector instruction for two lanes: each lane's own IEEE operations, the same
+    bits; -ffp-contract=off, so never fused)."""
+    cdef int k, i, j, p, l
+    cdef double big, a, t
+    cdef double lk[LANES]
+    cdef double tt[LANES]
+    cdef double bk[LANES]
+    cdef double ak[6][LANES]
+    for k in range(6):
+        for l in range(LANES):
+            p = k
+            big = fabs(A[k][k][l])
+            for i in range(k + 1, 6):
+                a = fabs(A[i][k][l])
+                if a > big:  # never a NaN, nor over a NaN on the diagonal
+                    big = a
+                    p = i
+            if p != k:
+                for j in range(6):
+                    t = A[k][j][l]
+                    A[k][j][l] = A[p][j][l]
+                    A[p][j][l] = t
+                t = b[k][l]
+                b[k][l] = b[p][l]
+                b[p][l] = t
+        for j in range(6):
+            for l in range(LANES):
+                ak[j][l] = A[k][j][l]
+        for l in range(LANES):
+            bk[l] = b[k][l]
+        for i in range(k + 1, 6):
+            for l in range(LANES):
+                lk[l] = A[i][k][l] / ak[k][l]
+            for j in range(k + 1, 6):
+                for l in range(LANES):
+                    A[i][j][l] = A[i][j][l] - lk[l] * ak[j][l]
+            for l in range(LANES):
+                b[i][l] = b[i][l] - lk[l] * bk[l]
+    for i in range(5, -1, -1):
+        for l in range(LANES):
+            tt[l] = b[i][l]
+        for j in range(i + 1, 6):
+            for l in range(LANES):
+                tt[l] = tt[l] - A[i][j][l] * s[j][l]
+        for l in range(LANES):
+            s[i][l] = tt[l] / A[i][i][l]
+
+
+cdef inline bint _step(double* xr, const double* s, double limit, bint* conv) noexcept nogil:
+    """x += s unless s is not finite; True when this row stops (``fk.forward_newton``)."""
+    cdef bint finite = True, done = True
+    cdef int j
+    for j in range(6):
+        if not isfinite(s[j]):
+            finite = False
+        if not fabs(s[j]) < limit:
+            done = False
+    if not finite:
+        for j in range(6):
+            xr[j] = xr[j] + 0.0  # as the reference's step of 0.0 (-0.0 becomes 0.0)
+        return True  # not converged
+    for j in range(6):
+        xr[j] = xr[j] + s[j]
+    if done:
+        conv[0] = True
+    return done
+
+
 def forward_newton(m, off_in, x0_in, double limit, int max_iter, double res_tol):
     """x (N, 6), converged (N,): Newton on the six FK equations (``fk.forward_newton``)."""
     cdef Geo G = _geo(m)
-    cdef Py_ssize_t n = _rows_of(off_in, x0_in), i, j
-    cdef int it
+    cdef Py_ssize_t n = _rows_of(off_in, x0_in), i, j, r
+    cdef int it, l, nl
     cdef const double[:, :, :] off = off_in
     cdef const double[:, :] x0 = x0_in
     x_a = np.empty((n, 6))
     ok_a = np.zeros(n, dtype=bool)
     cdef double[:, ::1] x = x_a
     cdef char[::1] ok = ok_a.view(np.int8)
-    cdef double o[9]
-    cdef double xr[6]
+    cdef double o[LANES][9]
+    cdef double xr[LANES][6]
     cdef double f[6]
-    cdef double J[36]
-    cdef double s[6]
-    cdef bint finite, done, conv
+    cdef double Jr[36]
+    cdef double A[6][6][LANES]
+    cdef double b[6][LANES]
+    cdef double s[6][LANES]
+    cdef double sr[6]
+    cdef bint live[LANES]
+    cdef bint conv[LANES]
+    cdef bint more
     with nogil:
-        for i in range(n):
-            for j in range(9):
-                o[j] = off[i, j // 3, j % 3]
-            for j in range(6):
-                xr[j] = x0[i, j]
-            conv = False
+        i = 0
+        while i < n:
+            nl = <int>min(<Py_ssize_t>LANES, n - i)
+            for l in range(nl):
+                r = i + l
+                for j in range(9):
+                    o[l][j] = off[r, j // 3, j % 3]
+                for j in range(6):
+                    xr[l][j] = x0[r, j]
+                live[l] = True
+                conv[l] = False
+            for l in range(nl, LANES):
+                live[l] = False
             for it in range(max_iter):
-                _pose(&G, o, xr, f, J)
-                for j in range(6):
-                    f[j] = -f[j]
-                _solve6(J, f, s)
-                finite = True
-                done = True
-                for j in range(6):
-                    if not isfinite(s[j]):
-                        finite = False
-                    if not fabs(s[j]) < limit:
-                        done = False
-                if not finite:
-                    for j in range(6):
-                        xr[j] = xr[j] + 0.0  # as the reference's step of 0.0
+                for l in range(LANES):
+                    if live[l]:
+                        _pose(&G, o[l], xr[l], f, Jr)
+                        for j in range(36):
+                            A[j // 6][j % 6][l] = Jr[j]
+                        for j in range(6):
+                            b[j][l] = -f[j]
+                    else:  # no row, or stopped: the identity (no NaN, no denormals)
+                        for j in range(36):
+                            A[j // 6][j % 6][l] = 1.0 if j % 7 == 0 else 0.0
+                        for j in range(6):
+                            b[j][l] = 0.0
+                _solve6_lanes(A, b, s)
+                more = False
+                for l in range(nl):
+                    if live[l]:
+                        for j in range(6):
+                            sr[j] = s[j][l]
+                        live[l] = not _step(xr[l], sr, limit, &conv[l])
+                        more = more or live[l]
+                if not more:
                     break
+            for l in range(nl):
+                r = i + l
+                _pose(&G, o[l], xr[l], f, NULL)
                 for j in range(6):
-                    xr[j] = xr[j] + s[j]
-                if done:
-                    conv = True
-                    break
-            _pose(&G, o, xr, f, NULL)
-            for j in range(6):
-                if not fabs(f[j]) < res_tol:
-                    conv = False
-                x[i, j] = xr[j]
-            ok[i] = conv
+                    if not fabs(f[j]) < res_tol:
+                        conv[l] = False
+                    x[r, j] = xr[l][j]
+                ok[r] = conv[l]
+            i += nl
     return x_a, ok_a
