@@ -74,9 +74,11 @@ cdef Geo _geo(m) except *:
     return G
 
 
-cdef void _pose(const Geo* m, const double* off, const double* x, double* f, double* J) noexcept nogil:
-    """f (6) at x (6), and J (6 × 6, row-major) unless NULL (``fk._pose``,
-    ``fk.fk_system``)."""
+cdef void _pose(
+    const Geo* m, const double* off, const double* x, double* f, double* J, int js
+) noexcept nogil:
+    """f (6) at x (6), and J (6 × 6, row-major, entry e at J[e · js]) unless NULL
+    (``fk._pose``, ``fk.fk_system``)."""
     cdef double ca = cos(x[3]), sa = sin(x[3])
     cdef double cb = cos(x[4]), sb = sin(x[4])
     cdef double cg = cos(x[5]), sg = sin(x[5])
@@ -113,24 +115,24 @@ cdef void _pose(const Geo* m, const double* off, const double* x, double* f, dou
         e0 = w0 / nw
         e1 = w1 / nw
         e2 = w2 / nw
-        J[6 * k] = u0
-        J[6 * k + 1] = u1
-        J[6 * k + 2] = u2
-        J[6 * (3 + k)] = e0
-        J[6 * (3 + k) + 1] = e1
-        J[6 * (3 + k) + 2] = e2
+        J[(6 * k) * js] = u0
+        J[(6 * k + 1) * js] = u1
+        J[(6 * k + 2) * js] = u2
+        J[(6 * (3 + k)) * js] = e0
+        J[(6 * (3 + k) + 1) * js] = e1
+        J[(6 * (3 + k) + 2) * js] = e2
         c0 = r1 * u2 - r2 * u1
         c1 = r2 * u0 - r0 * u2
         c2 = r0 * u1 - r1 * u0
-        J[6 * k + 3] = c0 * cb - c2 * sb
-        J[6 * k + 4] = c1
-        J[6 * k + 5] = c0 * R[2] + c1 * R[5] + c2 * R[8]
+        J[(6 * k + 3) * js] = c0 * cb - c2 * sb
+        J[(6 * k + 4) * js] = c1
+        J[(6 * k + 5) * js] = c0 * R[2] + c1 * R[5] + c2 * R[8]
         c0 = r1 * e2 - r2 * e1
         c1 = r2 * e0 - r0 * e2
         c2 = r0 * e1 - r1 * e0
-        J[6 * (3 + k) + 3] = c0 * cb - c2 * sb
-        J[6 * (3 + k) + 4] = c1
-        J[6 * (3 + k) + 5] = c0 * R[2] + c1 * R[5] + c2 * R[8]
+        J[(6 * (3 + k) + 3) * js] = c0 * cb - c2 * sb
+        J[(6 * (3 + k) + 4) * js] = c1
+        J[(6 * (3 + k) + 5) * js] = c0 * R[2] + c1 * R[5] + c2 * R[8]
 
 
 cdef void _solve6(double* A, double* b, double* s) noexcept nogil:
@@ -188,7 +190,7 @@ def fk_residual(m, off_in, x_in):
                 o[j] = off[i, j // 3, j % 3]
             for j in range(6):
                 xr[j] = x[i, j]
-            _pose(&G, o, xr, &f[i, 0], NULL)
+            _pose(&G, o, xr, &f[i, 0], NULL, 1)
     return f_a
 
 
@@ -210,7 +212,7 @@ def fk_system(m, off_in, x_in):
                 o[j] = off[i, j // 3, j % 3]
             for j in range(6):
                 xr[j] = x[i, j]
-            _pose(&G, o, xr, &f[i, 0], &J[i, 0, 0])
+            _pose(&G, o, xr, &f[i, 0], &J[i, 0, 0], 1)
     return f_a, J_a
 
 
@@ -330,7 +332,6 @@ def forward_newton(m, off_in, x0_in, double limit, int max_iter, double res_tol)
     cdef double o[LANES][9]
     cdef double xr[LANES][6]
     cdef double f[6]
-    cdef double Jr[36]
     cdef double A[6][6][LANES]
     cdef double b[6][LANES]
     cdef double s[6][LANES]
@@ -355,9 +356,7 @@ def forward_newton(m, off_in, x0_in, double limit, int max_iter, double res_tol)
             for it in range(max_iter):
                 for l in range(LANES):
                     if live[l]:
-                        _pose(&G, o[l], xr[l], f, Jr)
-                        for j in range(36):
-                            A[j // 6][j % 6][l] = Jr[j]
+                        _pose(&G, o[l], xr[l], f, &A[0][0][l], LANES)
                         for j in range(6):
                             b[j][l] = -f[j]
                     else:  # no row, or stopped: the identity (no NaN, no denormals)
@@ -377,7 +376,7 @@ def forward_newton(m, off_in, x0_in, double limit, int max_iter, double res_tol)
                     break
             for l in range(nl):
                 r = i + l
-                _pose(&G, o[l], xr[l], f, NULL)
+                _pose(&G, o[l], xr[l], f, NULL, 1)
                 for j in range(6):
                     if not fabs(f[j]) < res_tol:
                         conv[l] = False
