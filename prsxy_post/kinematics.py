@@ -463,13 +463,11 @@ def forward(
     """
     P = np.atleast_2d(np.asarray(P, dtype=float))
     xv, ok = forward_platform(geo, P, guess)
-    R = platform_rotation(xv[:, 3], xv[:, 4], xv[:, 5])
     t = _tool_vectors(geo, len(P), tool_length_offset)
-    T = xv[:, :3] + np.einsum("nij,nj->ni", R, t)
     D = table_displacement(geo, P[:, 3], P[:, 4])
-    w = T - geo.origin + D
-    q = np.column_stack([w, np.degrees(xv[:, 3]), np.degrees(xv[:, 4])])
-    q[~ok] = np.nan
+    # tip c + R t, in the workpiece frame, tilts in degrees: the kernel's
+    # (prsxy_post.kernel.fk.tool_poses, compiled when built)
+    q = kernel.tool_poses(xv, ok, t, np.asarray(geo.origin, dtype=float), D)
     return q, ok
 
 

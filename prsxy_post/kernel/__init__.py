@@ -168,6 +168,15 @@ def forward_newton(
     return out
 
 
+def tool_poses(
+    x: np.ndarray, ok: np.ndarray, t: np.ndarray, origin: np.ndarray, D: np.ndarray
+) -> np.ndarray:
+    """Tool poses (N, 5) [mm, mm, mm, deg, deg] of FK solutions x (N, 6):
+    :func:`fk.tool_poses`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _fk_mod.tool_poses(x, ok, t, origin, D)
+    return out
+
+
 def map_rows(m: legendre.MapArrays, q: np.ndarray) -> np.ndarray:
     """The virtual-axis error e(q) (N, 5) [mm, mm, mm, deg, deg] for poses ``q``
     (N, 5): :func:`legendre.map_rows`, compiled when :data:`COMPILED`."""

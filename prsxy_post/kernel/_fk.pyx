@@ -6,7 +6,7 @@
 
 import numpy as np
 
-from libc.math cimport cos, fabs, isfinite, sin, sqrt
+from libc.math cimport M_PI, NAN, cos, fabs, isfinite, sin, sqrt
 
 from . import fk as _pure
 
@@ -384,3 +384,62 @@ def forward_newton(m, off_in, x0_in, double limit, int max_iter, double res_tol)
                 ok[r] = conv[l]
             i += nl
     return x_a, ok_a
+
+
+def tool_poses(x_in, ok_in, t_in, origin_in, D_in):
+    """q (N, 5): tool poses of FK solutions (``fk.tool_poses``)."""
+    cdef Py_ssize_t n = x_in.shape[0] if x_in.ndim == 2 else -1, i, k
+    if (
+        x_in.shape != (n, 6)
+        or ok_in.shape != (n,)
+        or t_in.shape != (n, 3)
+        or origin_in.shape != (3,)
+        or D_in.shape != (n, 3)
+    ):
+        raise ValueError("x must be (N, 6), ok (N,), t (N, 3), origin (3,), D (N, 3)")
+    cdef const double[:, :] x = x_in
+    cdef const char[:] ok = np.asarray(ok_in, dtype=bool).view(np.int8)
+    cdef const double[:, :] t = t_in
+    cdef const double[:] o = origin_in
+    cdef const double[:, :] D = D_in
+    q_a = np.empty((n, 5))
+    cdef double[:, ::1] q = q_a
+    cdef double ca, sa, cb, sb, cg, sg
+    cdef double R[9]
+    with nogil:
+        for i in range(n):
+            if not ok[i]:
+                for k in range(5):
+                    q[i, k] = NAN
+                continue
+            ca = cos(x[i, 3])
+            sa = sin(x[i, 3])
+            cb = cos(x[i, 4])
+            sb = sin(x[i, 4])
+            cg = cos(x[i, 5])
+            sg = sin(x[i, 5])
+            R[0] = cb * cg + sb * sa * sg
+            R[1] = sb * sa * cg - cb * sg
+            R[2] = sb * ca
+            R[3] = ca * sg
+            R[4] = ca * cg
+            R[5] = -sa
+            R[6] = cb * sa * sg - sb * cg
+            R[7] = sb * sg + cb * sa * cg
+            R[8] = cb * ca
+            for k in range(3):
+                q[i, k] = (
+                    x[i, k]
+                    + (
+                        0.0
+                        + (
+                            ((0.0 + R[3 * k] * t[i, 0]) + R[3 * k + 2] * t[i, 2])
+                            + (0.0 + R[3 * k + 1] * t[i, 1])
+                        )
+                    )
+                    - o[k]
+                    + D[i, k]
+                )
+            q[i, 3] = x[i, 3] * (180.0 / M_PI)
+            q[i, 4] = x[i, 4] * (180.0 / M_PI)
+    return q_a

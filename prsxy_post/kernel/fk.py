@@ -193,3 +193,30 @@ def forward_newton(
         active = active[~(done | bad)]
     converged &= np.all(np.abs(fk_residual(m, off, x)) < res_tol, axis=1)
     return x, converged
+
+
+def tool_poses(
+    x: np.ndarray, ok: np.ndarray, t: np.ndarray, origin: np.ndarray, D: np.ndarray
+) -> np.ndarray:
+    """The tool poses q (N, 5) [mm, mm, mm, deg, deg] of FK solutions x (N, 6)
+    (c [mm], A, B, γ [rad]); NaN rows where not ``ok`` (N,) (contract "Forward
+    kinematics").
+
+    The tip T = c + R t for the tool vectors ``t`` (N, 3) [mm] in the platform frame
+    (R = R_y(B) R_x(A) R_z(γ), :func:`rotation_cs`), in the workpiece frame
+    w = T − o + D (``origin`` o (3,), the table's displacement ``D`` (N, 3) [mm]),
+    A and B in degrees (numpy's ``degrees``: x · (180 / π)). R t is summed as numpy's
+    ``einsum("nij,nj->ni")`` sums it here (two accumulators from 0, the first
+    taking the products of t's components 0 and 2, the second of 1, then added to
+    0): ``0 + ((0 + p0 + p2) + (0 + p1))``, written out so that the order is fixed.
+    """
+    a, b, g = x[:, 3], x[:, 4], x[:, 5]
+    R = rotation_cs(np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(g), np.sin(g))
+    p = R * t[:, None, :]
+    Rt = 0.0 + (((0.0 + p[..., 0]) + p[..., 2]) + (0.0 + p[..., 1]))
+    q = np.empty((len(x), 5))
+    q[:, :3] = x[:, :3] + Rt - origin + D
+    q[:, 3] = np.degrees(x[:, 3])
+    q[:, 4] = np.degrees(x[:, 4])
+    q[~np.asarray(ok, dtype=bool)] = np.nan
+    return q
