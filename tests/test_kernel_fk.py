@@ -49,20 +49,19 @@ def _same(got: tuple[np.ndarray, ...], want: tuple[np.ndarray, ...]) -> bool:
 
 
 @pytest.fixture(scope="module")
-def recorded_calls(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[Any, ...]]]:
-    """The arguments of every FK Newton iteration and every tool pose made of its
-    solutions while the sample programs convert to G-code
+def recorded_calls(tmp_path_factory: pytest.TempPathFactory) -> list[tuple[Any, ...]]:
+    """The arguments of every whole FK (:func:`kernel.forward_poses`: Newton, then
+    the tool poses of its solutions) while the sample programs convert to G-code
     (:data:`kernel_cases.RUNS`), in this process."""
-    calls: dict[str, list[tuple[Any, ...]]] = {"forward_newton": [], "tool_poses": []}
+    calls: list[tuple[Any, ...]] = []
     mp = pytest.MonkeyPatch()
-    for name in calls:
-        inner: Callable[..., Any] = getattr(kernel, name)
+    inner: Callable[..., Any] = kernel.forward_poses
 
-        def call(*args: Any, _inner: Callable[..., Any] = inner, _name: str = name) -> Any:
-            calls[_name].append(tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args))
-            return _inner(*args)
+    def call(*args: Any) -> Any:
+        calls.append(tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args))
+        return inner(*args)
 
-        mp.setattr(kernel, name, call)
+    mp.setattr(kernel, "forward_poses", call)
     tmp = tmp_path_factory.mktemp("fk")
     try:
         for i, (sample, fmt, prof) in enumerate(RUNS):
@@ -75,9 +74,13 @@ def recorded_calls(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[t
 
 
 @pytest.fixture(scope="module")
-def recorded(recorded_calls: dict[str, list[tuple[Any, ...]]]) -> list[tuple[Any, ...]]:
-    """The arguments of every FK Newton iteration (:func:`recorded_calls`)."""
-    return recorded_calls["forward_newton"]
+def recorded(recorded_calls: list[tuple[Any, ...]]) -> list[tuple[Any, ...]]:
+    """The Newton iterations of the recorded FKs: (m, off, x0, limit, max_iter,
+    res_tol), the hinges' offsets as ``Geometry.hinge_offset`` makes them."""
+    return [
+        (m, P[:, :3, None] * d[None], x0, limit, max_iter, res_tol)
+        for m, d, P, x0, _t, _o, _D, limit, max_iter, res_tol in recorded_calls
+    ]
 
 
 def test_sample_programs_fk_is_bit_identical(recorded: list[tuple[Any, ...]]) -> None:
@@ -100,16 +103,21 @@ def test_sample_programs_fk_is_bit_identical(recorded: list[tuple[Any, ...]]) ->
 
 
 def test_sample_programs_tool_poses_are_bit_identical(
-    recorded_calls: dict[str, list[tuple[Any, ...]]],
+    recorded_calls: list[tuple[Any, ...]],
 ) -> None:
-    """Each tool pose of a recorded FK solution (the written G-code's points), the
-    same with either kernel."""
+    """Each recorded FK whole (the written G-code's points: Newton and the tool
+    poses in one call), and the tool poses of its solutions on their own, the same
+    with either kernel; the whole is the reference's parts one after the other."""
     _fk = compiled("_fk")
-    calls = recorded_calls["tool_poses"]
-    assert len(calls) >= 3
-    for x, ok, t, origin, D in calls:
-        assert _same((_fk.tool_poses(x, ok, t, origin, D),), (fk.tool_poses(x, ok, t, origin, D),))
-    assert sum(len(c[0]) for c in calls) > 5_000
+    assert len(recorded_calls) >= 3
+    for m, d, P, x0, t, origin, D, limit, max_iter, res_tol in recorded_calls:
+        want = fk.forward_poses(m, d, P, x0, t, origin, D, limit, max_iter, res_tol)
+        got = _fk.forward_poses(m, d, P, x0, t, origin, D, limit, max_iter, res_tol)
+        assert _same(got, want)
+        x, ok = fk.forward_newton(m, P[:, :3, None] * d[None], x0, limit, max_iter, res_tol)
+        assert _same((fk.tool_poses(x, ok, t, origin, D), ok), want)
+        assert _same((_fk.tool_poses(x, ok, t, origin, D),), (want[0],))
+    assert sum(len(c[2]) for c in recorded_calls) > 5_000
 
 
 VALUES = st.one_of(
@@ -157,6 +165,13 @@ def test_generated_fk_arithmetic_is_bit_identical(data: st.DataObject) -> None:
         assert _same(
             _fk.forward_newton(m, off, x, limit, it, 1e-9),
             fk.forward_newton(m, off, x, limit, it, 1e-9),
+        )
+        # the whole FK: offsets from motors and guide directions, Newton, tool poses
+        d, P = data.draw(_rows(3, 3)), data.draw(_rows(n, 5))
+        t, origin, D = data.draw(_rows(n, 3)), data.draw(_rows(3)), data.draw(_rows(n, 3))
+        assert _same(
+            _fk.forward_poses(m, d, P, x, t, origin, D, limit, it, 1e-9),
+            fk.forward_poses(m, d, P, x, t, origin, D, limit, it, 1e-9),
         )
 
 
@@ -304,3 +319,5 @@ def test_compiled_fk_refuses_wrong_shapes() -> None:
         _fk.solve6(np.zeros((4, 6, 5)), x)
     with pytest.raises(ValueError):
         _fk.tool_poses(x, np.ones(4, bool), x[:, :3], x[0, :3], x[:3, :3])
+    with pytest.raises(ValueError):
+        _fk.forward_poses(m, geo.d, x[:3], x, x[:, :3], x[0, :3], x[:, :3], LIMIT, 30, RES_TOL)

@@ -75,10 +75,10 @@ cdef Geo _geo(m) except *:
 
 
 cdef void _pose(
-    const Geo* m, const double* off, const double* x, double* f, double* J, int js
+    const Geo* m, const double* off, const double* x, double* f, double* J, int js, double* Rout
 ) noexcept nogil:
     """f (6) at x (6), and J (6 × 6, row-major, entry e at J[e · js]) unless NULL
-    (``fk._pose``, ``fk.fk_system``)."""
+    (``fk._pose``, ``fk.fk_system``); R (9, row-major) into Rout unless NULL."""
     cdef double ca = cos(x[3]), sa = sin(x[3])
     cdef double cb = cos(x[4]), sb = sin(x[4])
     cdef double cg = cos(x[5]), sg = sin(x[5])
@@ -94,6 +94,9 @@ cdef void _pose(
     R[6] = cb * sa * sg - sb * cg
     R[7] = sb * sg + cb * sa * cg
     R[8] = cb * ca
+    if Rout != NULL:
+        for k in range(9):
+            Rout[k] = R[k]
     for k in range(3):
         r0 = R[0] * m.b[3 * k] + R[1] * m.b[3 * k + 1] + R[2] * m.b[3 * k + 2]
         r1 = R[3] * m.b[3 * k] + R[4] * m.b[3 * k + 1] + R[5] * m.b[3 * k + 2]
@@ -190,7 +193,7 @@ def fk_residual(m, off_in, x_in):
                 o[j] = off[i, j // 3, j % 3]
             for j in range(6):
                 xr[j] = x[i, j]
-            _pose(&G, o, xr, &f[i, 0], NULL, 1)
+            _pose(&G, o, xr, &f[i, 0], NULL, 1, NULL)
     return f_a
 
 
@@ -212,7 +215,7 @@ def fk_system(m, off_in, x_in):
                 o[j] = off[i, j // 3, j % 3]
             for j in range(6):
                 xr[j] = x[i, j]
-            _pose(&G, o, xr, &f[i, 0], &J[i, 0, 0], 1)
+            _pose(&G, o, xr, &f[i, 0], &J[i, 0, 0], 1, NULL)
     return f_a, J_a
 
 
@@ -318,17 +321,15 @@ cdef inline bint _step(double* xr, const double* s, double limit, bint* conv) no
     return done
 
 
-def forward_newton(m, off_in, x0_in, double limit, int max_iter, double res_tol):
-    """x (N, 6), converged (N,): Newton on the six FK equations (``fk.forward_newton``)."""
-    cdef Geo G = _geo(m)
-    cdef Py_ssize_t n = _rows_of(off_in, x0_in), i, j, r
+cdef void _newton_rows(
+    const Geo* G, const double* offs, const double[:, :] x0, double limit, int max_iter,
+    double res_tol, double[:, ::1] x, char[::1] ok, double* Rs
+) noexcept nogil:
+    """``fk.forward_newton`` of the rows of x0 (N, 6), the hinges' offsets ``offs``
+    (N × 9, a row's legs one after the other), LANES rows side by side; x (N, 6),
+    ok (N,) out, and R at each solution (N × 9) into Rs unless NULL."""
+    cdef Py_ssize_t n = x0.shape[0], i = 0, j, r
     cdef int it, l, nl
-    cdef const double[:, :, :] off = off_in
-    cdef const double[:, :] x0 = x0_in
-    x_a = np.empty((n, 6))
-    ok_a = np.zeros(n, dtype=bool)
-    cdef double[:, ::1] x = x_a
-    cdef char[::1] ok = ok_a.view(np.int8)
     cdef double o[LANES][9]
     cdef double xr[LANES][6]
     cdef double f[6]
@@ -339,51 +340,83 @@ def forward_newton(m, off_in, x0_in, double limit, int max_iter, double res_tol)
     cdef bint live[LANES]
     cdef bint conv[LANES]
     cdef bint more
-    with nogil:
-        i = 0
-        while i < n:
-            nl = <int>min(<Py_ssize_t>LANES, n - i)
+    while i < n:
+        nl = <int>min(<Py_ssize_t>LANES, n - i)
+        for l in range(nl):
+            r = i + l
+            for j in range(9):
+                o[l][j] = offs[9 * r + j]
+            for j in range(6):
+                xr[l][j] = x0[r, j]
+            live[l] = True
+            conv[l] = False
+        for l in range(nl, LANES):
+            live[l] = False
+        for it in range(max_iter):
+            for l in range(LANES):
+                if live[l]:
+                    _pose(G, o[l], xr[l], f, &A[0][0][l], LANES, NULL)
+                    for j in range(6):
+                        b[j][l] = -f[j]
+                else:  # no row, or stopped: the identity (no NaN, no denormals)
+                    for j in range(36):
+                        A[j // 6][j % 6][l] = 1.0 if j % 7 == 0 else 0.0
+                    for j in range(6):
+                        b[j][l] = 0.0
+            _solve6_lanes(A, b, s)
+            more = False
             for l in range(nl):
-                r = i + l
-                for j in range(9):
-                    o[l][j] = off[r, j // 3, j % 3]
-                for j in range(6):
-                    xr[l][j] = x0[r, j]
-                live[l] = True
-                conv[l] = False
-            for l in range(nl, LANES):
-                live[l] = False
-            for it in range(max_iter):
-                for l in range(LANES):
-                    if live[l]:
-                        _pose(&G, o[l], xr[l], f, &A[0][0][l], LANES)
-                        for j in range(6):
-                            b[j][l] = -f[j]
-                    else:  # no row, or stopped: the identity (no NaN, no denormals)
-                        for j in range(36):
-                            A[j // 6][j % 6][l] = 1.0 if j % 7 == 0 else 0.0
-                        for j in range(6):
-                            b[j][l] = 0.0
-                _solve6_lanes(A, b, s)
-                more = False
-                for l in range(nl):
-                    if live[l]:
-                        for j in range(6):
-                            sr[j] = s[j][l]
-                        live[l] = not _step(xr[l], sr, limit, &conv[l])
-                        more = more or live[l]
-                if not more:
-                    break
-            for l in range(nl):
-                r = i + l
-                _pose(&G, o[l], xr[l], f, NULL, 1)
-                for j in range(6):
-                    if not fabs(f[j]) < res_tol:
-                        conv[l] = False
-                    x[r, j] = xr[l][j]
-                ok[r] = conv[l]
-            i += nl
+                if live[l]:
+                    for j in range(6):
+                        sr[j] = s[j][l]
+                    live[l] = not _step(xr[l], sr, limit, &conv[l])
+                    more = more or live[l]
+            if not more:
+                break
+        for l in range(nl):
+            r = i + l
+            _pose(G, o[l], xr[l], f, NULL, 1, &Rs[9 * r] if Rs != NULL else NULL)
+            for j in range(6):
+                if not fabs(f[j]) < res_tol:
+                    conv[l] = False
+                x[r, j] = xr[l][j]
+            ok[r] = conv[l]
+        i += nl
+
+
+def forward_newton(m, off_in, x0_in, double limit, int max_iter, double res_tol):
+    """x (N, 6), converged (N,): Newton on the six FK equations (``fk.forward_newton``)."""
+    cdef Geo G = _geo(m)
+    cdef Py_ssize_t n = _rows_of(off_in, x0_in)
+    cdef const double[:, :, :] off = off_in
+    cdef const double[:, :, ::1] offs = np.ascontiguousarray(off_in)
+    cdef const double[:, :] x0 = x0_in
+    x_a = np.empty((n, 6))
+    ok_a = np.zeros(n, dtype=bool)
+    cdef double[:, ::1] x = x_a
+    cdef char[::1] ok = ok_a.view(np.int8)
+    if n:
+        with nogil:
+            _newton_rows(&G, &offs[0, 0, 0], x0, limit, max_iter, res_tol, x, ok, NULL)
     return x_a, ok_a
+
+
+cdef inline void _tip(
+    const double* xr, const double* R, const double* t, const double* o, const double* D,
+    double* q
+) noexcept nogil:
+    """q (5) of a solution xr (6) with its R (9) (``fk.tool_poses``): R t summed as
+    numpy's einsum sums it, then − o + D; A and B in degrees (numpy's degrees)."""
+    cdef int k
+    for k in range(3):
+        q[k] = (
+            xr[k]
+            + (0.0 + (((0.0 + R[3 * k] * t[0]) + R[3 * k + 2] * t[2]) + (0.0 + R[3 * k + 1] * t[1])))
+            - o[k]
+            + D[k]
+        )
+    q[3] = xr[3] * (180.0 / M_PI)
+    q[4] = xr[4] * (180.0 / M_PI)
 
 
 def tool_poses(x_in, ok_in, t_in, origin_in, D_in):
@@ -397,11 +430,11 @@ def tool_poses(x_in, ok_in, t_in, origin_in, D_in):
         or D_in.shape != (n, 3)
     ):
         raise ValueError("x must be (N, 6), ok (N,), t (N, 3), origin (3,), D (N, 3)")
-    cdef const double[:, :] x = x_in
+    cdef const double[:, ::1] x = np.ascontiguousarray(x_in)
     cdef const char[:] ok = np.asarray(ok_in, dtype=bool).view(np.int8)
-    cdef const double[:, :] t = t_in
-    cdef const double[:] o = origin_in
-    cdef const double[:, :] D = D_in
+    cdef const double[:, ::1] t = np.ascontiguousarray(t_in)
+    cdef const double[::1] o = np.ascontiguousarray(origin_in)
+    cdef const double[:, ::1] D = np.ascontiguousarray(D_in)
     q_a = np.empty((n, 5))
     cdef double[:, ::1] q = q_a
     cdef double ca, sa, cb, sb, cg, sg
@@ -427,19 +460,62 @@ def tool_poses(x_in, ok_in, t_in, origin_in, D_in):
             R[6] = cb * sa * sg - sb * cg
             R[7] = sb * sg + cb * sa * cg
             R[8] = cb * ca
-            for k in range(3):
-                q[i, k] = (
-                    x[i, k]
-                    + (
-                        0.0
-                        + (
-                            ((0.0 + R[3 * k] * t[i, 0]) + R[3 * k + 2] * t[i, 2])
-                            + (0.0 + R[3 * k + 1] * t[i, 1])
-                        )
-                    )
-                    - o[k]
-                    + D[i, k]
-                )
-            q[i, 3] = x[i, 3] * (180.0 / M_PI)
-            q[i, 4] = x[i, 4] * (180.0 / M_PI)
+            _tip(&x[i, 0], R, &t[i, 0], &o[0], &D[i, 0], &q[i, 0])
     return q_a
+
+
+def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int max_iter,
+                  double res_tol):
+    """q (N, 5), converged (N,): the FK of motor positions whose guides are straight
+    (``fk.forward_poses``): Newton and the tool poses in one pass, R taken from the
+    residual check's pose."""
+    cdef Geo G = _geo(m)
+    cdef Py_ssize_t n = x0_in.shape[0] if x0_in.ndim == 2 else -1, i, j, k
+    if (
+        x0_in.shape != (n, 6)
+        or P_in.ndim != 2
+        or P_in.shape[0] != n
+        or P_in.shape[1] < 3
+        or d_in.shape != (3, 3)
+        or t_in.shape != (n, 3)
+        or origin_in.shape != (3,)
+        or D_in.shape != (n, 3)
+    ):
+        raise ValueError(
+            "x0 must be (N, 6), P (N, >= 3), d (3, 3), t (N, 3), origin (3,), D (N, 3)"
+        )
+    cdef const double[:, :] P = P_in
+    cdef const double[:, :] dv = d_in
+    cdef const double[:, :] x0 = x0_in
+    cdef const double[:, ::1] t = np.ascontiguousarray(t_in)
+    cdef const double[::1] o = np.ascontiguousarray(origin_in)
+    cdef const double[:, ::1] D = np.ascontiguousarray(D_in)
+    offs_a = np.empty((n, 9))
+    x_a = np.empty((n, 6))
+    R_a = np.empty((n, 9))
+    ok_a = np.zeros(n, dtype=bool)
+    q_a = np.empty((n, 5))
+    cdef double[:, ::1] offs = offs_a
+    cdef double[:, ::1] x = x_a
+    cdef double[:, ::1] R = R_a
+    cdef char[::1] ok = ok_a.view(np.int8)
+    cdef double[:, ::1] q = q_a
+    cdef double dd[9]
+    for j in range(9):
+        dd[j] = dv[j // 3, j % 3]
+    if n == 0:
+        return q_a, ok_a
+    with nogil:
+        # the hinges' offsets a_k − g_k = P_k d_k (``Geometry.hinge_offset``)
+        for i in range(n):
+            for k in range(3):
+                for j in range(3):
+                    offs[i, 3 * k + j] = P[i, k] * dd[3 * k + j]
+        _newton_rows(&G, &offs[0, 0], x0, limit, max_iter, res_tol, x, ok, &R[0, 0])
+        for i in range(n):
+            if not ok[i]:
+                for k in range(5):
+                    q[i, k] = NAN
+                continue
+            _tip(&x[i, 0], &R[i, 0], &t[i, 0], &o[0], &D[i, 0], &q[i, 0])
+    return q_a, ok_a

@@ -220,3 +220,28 @@ def tool_poses(
     q[:, 4] = np.degrees(x[:, 4])
     q[~np.asarray(ok, dtype=bool)] = np.nan
     return q
+
+
+def forward_poses(
+    m: FKArrays,
+    d: np.ndarray,
+    P: np.ndarray,
+    x0: np.ndarray,
+    t: np.ndarray,
+    origin: np.ndarray,
+    D: np.ndarray,
+    limit: float,
+    max_iter: int,
+    res_tol: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The FK of motor positions on straight guides, whole: the hinges' offsets
+    P_k d_k from the motors ``P`` (N, >= 3) [mm] and the guides' directions ``d``
+    (3, 3), :func:`forward_newton` from x0, then :func:`tool_poses` of its solutions.
+
+    Returns
+    -------
+    q : (N, 5) [mm, mm, mm, deg, deg], NaN rows where not converged; converged : (N,)
+    """
+    off = P[:, :3, None] * d[None]
+    x, ok = forward_newton(m, off, x0, limit, max_iter, res_tol)
+    return tool_poses(x, ok, t, origin, D), ok
