@@ -301,6 +301,96 @@ cdef void _solve6_lanes(double A[6][6][LANES], double b[6][LANES], double s[6][L
             s[i][l] = tt[l] / A[i][i][l]
 
 
+cdef void _pose_lanes(
+    const Geo* m, double os[9][LANES], double xs[6][LANES], double A[6][6][LANES],
+    double b[6][LANES]
+) noexcept nogil:
+    """``_pose`` of LANES rows at once (offsets os[j][lane], x xs[j][lane]): −f into
+    b[i][lane], J into A[i][j][lane]; each lane's operations those of ``_pose``."""
+    cdef double ca[LANES]
+    cdef double sa[LANES]
+    cdef double cb[LANES]
+    cdef double sb[LANES]
+    cdef double cg[LANES]
+    cdef double sg[LANES]
+    cdef double R[9][LANES]
+    cdef double r0[LANES]
+    cdef double r1[LANES]
+    cdef double r2[LANES]
+    cdef double w0[LANES]
+    cdef double w1[LANES]
+    cdef double w2[LANES]
+    cdef double nw[LANES]
+    cdef double v0, v1, v2, e0, e1, e2, c0, c1, c2
+    cdef double b0, b1, b2, g0, g1, g2, u0, u1, u2, Lk
+    cdef int k, l
+    for l in range(LANES):
+        ca[l] = cos(xs[3][l])
+        sa[l] = sin(xs[3][l])
+        cb[l] = cos(xs[4][l])
+        sb[l] = sin(xs[4][l])
+        cg[l] = cos(xs[5][l])
+        sg[l] = sin(xs[5][l])
+    for l in range(LANES):
+        R[0][l] = cb[l] * cg[l] + sb[l] * sa[l] * sg[l]
+        R[1][l] = sb[l] * sa[l] * cg[l] - cb[l] * sg[l]
+        R[2][l] = sb[l] * ca[l]
+        R[3][l] = ca[l] * sg[l]
+        R[4][l] = ca[l] * cg[l]
+        R[5][l] = -sa[l]
+        R[6][l] = cb[l] * sa[l] * sg[l] - sb[l] * cg[l]
+        R[7][l] = sb[l] * sg[l] + cb[l] * sa[l] * cg[l]
+        R[8][l] = cb[l] * ca[l]
+    for k in range(3):
+        b0 = m.b[3 * k]
+        b1 = m.b[3 * k + 1]
+        b2 = m.b[3 * k + 2]
+        g0 = m.g[3 * k]
+        g1 = m.g[3 * k + 1]
+        g2 = m.g[3 * k + 2]
+        u0 = m.u[3 * k]
+        u1 = m.u[3 * k + 1]
+        u2 = m.u[3 * k + 2]
+        Lk = m.L[k]
+        for l in range(LANES):
+            r0[l] = R[0][l] * b0 + R[1][l] * b1 + R[2][l] * b2
+            r1[l] = R[3][l] * b0 + R[4][l] * b1 + R[5][l] * b2
+            r2[l] = R[6][l] * b0 + R[7][l] * b1 + R[8][l] * b2
+            v0 = xs[0][l] + r0[l] - g0
+            v1 = xs[1][l] + r1[l] - g1
+            v2 = xs[2][l] + r2[l] - g2
+            b[k][l] = -(v0 * u0 + v1 * u1 + v2 * u2)
+            w0[l] = v0 - os[3 * k][l]
+            w1[l] = v1 - os[3 * k + 1][l]
+            w2[l] = v2 - os[3 * k + 2][l]
+            nw[l] = w0[l] * w0[l] + w1[l] * w1[l] + w2[l] * w2[l]
+        for l in range(LANES):
+            nw[l] = sqrt(nw[l])
+        for l in range(LANES):
+            b[3 + k][l] = -(nw[l] - Lk)
+            e0 = w0[l] / nw[l]
+            e1 = w1[l] / nw[l]
+            e2 = w2[l] / nw[l]
+            A[k][0][l] = u0
+            A[k][1][l] = u1
+            A[k][2][l] = u2
+            A[3 + k][0][l] = e0
+            A[3 + k][1][l] = e1
+            A[3 + k][2][l] = e2
+            c0 = r1[l] * u2 - r2[l] * u1
+            c1 = r2[l] * u0 - r0[l] * u2
+            c2 = r0[l] * u1 - r1[l] * u0
+            A[k][3][l] = c0 * cb[l] - c2 * sb[l]
+            A[k][4][l] = c1
+            A[k][5][l] = c0 * R[2][l] + c1 * R[5][l] + c2 * R[8][l]
+            c0 = r1[l] * e2 - r2[l] * e1
+            c1 = r2[l] * e0 - r0[l] * e2
+            c2 = r0[l] * e1 - r1[l] * e0
+            A[3 + k][3][l] = c0 * cb[l] - c2 * sb[l]
+            A[3 + k][4][l] = c1
+            A[3 + k][5][l] = c0 * R[2][l] + c1 * R[5][l] + c2 * R[8][l]
+
+
 cdef inline bint _step(double* xr, const double* s, double limit, bint* conv) noexcept nogil:
     """x += s unless s is not finite; True when this row stops (``fk.forward_newton``)."""
     cdef bint finite = True, done = True
@@ -331,7 +421,9 @@ cdef void _newton_rows(
     cdef Py_ssize_t n = x0.shape[0], i = 0, j, r
     cdef int it, l, nl
     cdef double o[LANES][9]
+    cdef double os[9][LANES]
     cdef double xr[LANES][6]
+    cdef double xs[6][LANES]
     cdef double f[6]
     cdef double A[6][6][LANES]
     cdef double b[6][LANES]
@@ -352,13 +444,20 @@ cdef void _newton_rows(
             conv[l] = False
         for l in range(nl, LANES):
             live[l] = False
-        for it in range(max_iter):
+            for j in range(9):
+                o[l][j] = 0.0
+            for j in range(6):
+                xr[l][j] = 0.0
+        for j in range(9):
             for l in range(LANES):
-                if live[l]:
-                    _pose(G, o[l], xr[l], f, &A[0][0][l], LANES, NULL)
-                    for j in range(6):
-                        b[j][l] = -f[j]
-                else:  # no row, or stopped: the identity (no NaN, no denormals)
+                os[j][l] = o[l][j]
+        for it in range(max_iter):
+            for j in range(6):
+                for l in range(LANES):
+                    xs[j][l] = xr[l][j]
+            _pose_lanes(G, os, xs, A, b)
+            for l in range(LANES):
+                if not live[l]:  # no row, or stopped: the identity (no NaN, no denormals)
                     for j in range(36):
                         A[j // 6][j % 6][l] = 1.0 if j % 7 == 0 else 0.0
                     for j in range(6):
