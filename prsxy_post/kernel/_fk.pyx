@@ -1,8 +1,9 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True
 # cython: initializedcheck=False
 """The forward kinematics' Newton iteration compiled: the twin of
-:mod:`prsxy_post.kernel.fk`, operation for operation, a row at a time (built with
--ffp-contract=off: no fused multiply-add), so the same bits."""
+:mod:`prsxy_post.kernel.fk`, operation for operation, each row's own (the Newton
+steps of four rows side by side, ``LANES``; built with -ffp-contract=off: no fused
+multiply-add), so the same bits."""
 
 import numpy as np
 

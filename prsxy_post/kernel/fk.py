@@ -10,11 +10,11 @@ component of a step is below ``limit``, then checks the residual. Every operatio
 an element-wise IEEE operation in a fixed order: the 3 × 3 products written out as
 left-to-right sums, and the 6 × 6 solve Gaussian elimination with partial pivoting
 written out (:func:`solve6`), not BLAS and LAPACK (whose kernels, and so whose last
-bits, depend on the processor). ``_fk.pyx`` does the same arithmetic in C, a row at
-a time, so the two agree to the bit (``tests/test_kernel_fk.py``). The sines and
-cosines are numpy's, as in the IK's reference (``kernel/ik.py``): several times
-cheaper than the C library's through :mod:`math`, and the C library's on the
-machines the tests run on (``tests/test_kernel_ik.py::
+bits, depend on the processor). ``_fk.pyx`` does the same arithmetic in C, each row's
+own (four rows side by side), so the two agree to the bit
+(``tests/test_kernel_fk.py``). The sines and cosines are numpy's, as in the IK's
+reference (``kernel/ik.py``): several times cheaper than the C library's through
+:mod:`math`, and the C library's on the machines the tests run on (``tests/test_kernel_ik.py::
 test_numpy_trig_is_the_c_librarys_here``; where that fails, they would go through
 :mod:`.libm`).
 """
