@@ -463,12 +463,18 @@ def _fk_guess(geo: Geometry, P: np.ndarray) -> np.ndarray:
     return np.column_stack([c, A, B, np.zeros(len(P))])
 
 
+#: the FK's Newton: a step below FK_STEP [mm, rad] in every component ends it (the
+#: step at rounding level: one more after it first gets small would not change the
+#: result), at most FK_MAX_ITER steps, a residual below FK_RESIDUAL [mm] is a solution
+FK_STEP, FK_MAX_ITER, FK_RESIDUAL = 1e-9, 30, 1e-9
+
+
 def forward_platform(
     geo: Geometry,
     P: np.ndarray,
     guess: np.ndarray | None = None,
-    tol: float = 1e-12,
-    max_iter: int = 30,
+    tol: float = FK_STEP / 1e3,
+    max_iter: int = FK_MAX_ITER,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Solve the six constraint equations for (c, A, B, γ) by Newton's method,
     each row on its own: :func:`prsxy_post.kernel.fk.forward_newton` (compiled
@@ -489,7 +495,7 @@ def forward_platform(
     # Newton stops when the step is at rounding level (one more step after the
     # step first gets small would not change the result), then checks the residual
     return kernel.forward_newton(
-        geo.fk_arrays, geo.hinge_offset(P[:, :3]), xv, tol * 1e3, max_iter, 1e-9
+        geo.fk_arrays, geo.hinge_offset(P[:, :3]), xv, tol * 1e3, max_iter, FK_RESIDUAL
     )
 
 
@@ -507,15 +513,20 @@ def forward(
     converged : (N,) bool
     """
     P = np.atleast_2d(np.asarray(P, dtype=float))
-    xv, ok = forward_platform(geo, P, guess)
-    R = platform_rotation(xv[:, 3], xv[:, 4], xv[:, 5])
     t = _tool_vectors(geo, len(P), tool_length_offset)
-    T = xv[:, :3] + np.einsum("nij,nj->ni", R, t)
     D = table_displacement(geo, P[:, 3], P[:, 4])
-    w = T - geo.origin + D
-    q = np.column_stack([w, np.degrees(xv[:, 3]), np.degrees(xv[:, 4])])
-    q[~ok] = np.nan
-    return q, ok
+    origin = np.asarray(geo.origin, dtype=float)
+    if geo.guide_bow is None:
+        # straight guides: Newton (as forward_platform's) and the tool poses in one
+        # kernel call (prsxy_post.kernel.fk.forward_poses, compiled when built)
+        x0 = _fk_guess(geo, P) if guess is None else np.array(guess, dtype=float)
+        return kernel.forward_poses(
+            geo.fk_arrays, geo.d, P, x0, t, origin, D, FK_STEP, FK_MAX_ITER, FK_RESIDUAL
+        )
+    xv, ok = forward_platform(geo, P, guess)
+    # tip c + R t, in the workpiece frame, tilts in degrees: the kernel's
+    # (prsxy_post.kernel.fk.tool_poses, compiled when built)
+    return kernel.tool_poses(xv, ok, t, origin, D), ok
 
 
 def platform_guess(pose: PlatformPose, q: np.ndarray) -> np.ndarray:

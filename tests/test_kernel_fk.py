@@ -49,18 +49,19 @@ def _same(got: tuple[np.ndarray, ...], want: tuple[np.ndarray, ...]) -> bool:
 
 
 @pytest.fixture(scope="module")
-def recorded(tmp_path_factory: pytest.TempPathFactory) -> list[tuple[Any, ...]]:
-    """The arguments of every FK Newton iteration while the sample programs convert
-    to G-code (:data:`kernel_cases.RUNS`), in this process."""
+def recorded_calls(tmp_path_factory: pytest.TempPathFactory) -> list[tuple[Any, ...]]:
+    """The arguments of every whole FK (:func:`kernel.forward_poses`: Newton, then
+    the tool poses of its solutions) while the sample programs convert to G-code
+    (:data:`kernel_cases.RUNS`), in this process."""
     calls: list[tuple[Any, ...]] = []
     mp = pytest.MonkeyPatch()
-    inner: Callable[..., Any] = kernel.forward_newton
+    inner: Callable[..., Any] = kernel.forward_poses
 
     def call(*args: Any) -> Any:
         calls.append(tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args))
         return inner(*args)
 
-    mp.setattr(kernel, "forward_newton", call)
+    mp.setattr(kernel, "forward_poses", call)
     tmp = tmp_path_factory.mktemp("fk")
     try:
         for i, (sample, fmt, prof) in enumerate(RUNS):
@@ -70,6 +71,16 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> list[tuple[Any, ...]]:
     finally:
         mp.undo()
     return calls
+
+
+@pytest.fixture(scope="module")
+def recorded(recorded_calls: list[tuple[Any, ...]]) -> list[tuple[Any, ...]]:
+    """The Newton iterations of the recorded FKs: (m, off, x0, limit, max_iter,
+    res_tol), the hinges' offsets as ``Geometry.hinge_offset`` makes them."""
+    return [
+        (m, P[:, :3, None] * d[None], x0, limit, max_iter, res_tol)
+        for m, d, P, x0, _t, _o, _D, limit, max_iter, res_tol in recorded_calls
+    ]
 
 
 def test_sample_programs_fk_is_bit_identical(recorded: list[tuple[Any, ...]]) -> None:
@@ -89,6 +100,24 @@ def test_sample_programs_fk_is_bit_identical(recorded: list[tuple[Any, ...]]) ->
         assert _same((_fk.solve6(J, -f),), (fk.solve6(J, -f),))
         rows += len(x0)
     assert rows > 5_000
+
+
+def test_sample_programs_tool_poses_are_bit_identical(
+    recorded_calls: list[tuple[Any, ...]],
+) -> None:
+    """Each recorded FK whole (the written G-code's points: Newton and the tool
+    poses in one call), and the tool poses of its solutions on their own, the same
+    with either kernel; the whole is the reference's parts one after the other."""
+    _fk = compiled("_fk")
+    assert len(recorded_calls) >= 3
+    for m, d, P, x0, t, origin, D, limit, max_iter, res_tol in recorded_calls:
+        want = fk.forward_poses(m, d, P, x0, t, origin, D, limit, max_iter, res_tol)
+        got = _fk.forward_poses(m, d, P, x0, t, origin, D, limit, max_iter, res_tol)
+        assert _same(got, want)
+        x, ok = fk.forward_newton(m, P[:, :3, None] * d[None], x0, limit, max_iter, res_tol)
+        assert _same((fk.tool_poses(x, ok, t, origin, D), ok), want)
+        assert _same((_fk.tool_poses(x, ok, t, origin, D),), (want[0],))
+    assert sum(len(c[2]) for c in recorded_calls) > 5_000
 
 
 VALUES = st.one_of(
@@ -137,6 +166,61 @@ def test_generated_fk_arithmetic_is_bit_identical(data: st.DataObject) -> None:
             _fk.forward_newton(m, off, x, limit, it, 1e-9),
             fk.forward_newton(m, off, x, limit, it, 1e-9),
         )
+        # the whole FK: offsets from motors and guide directions, Newton, tool poses
+        d, P = data.draw(_rows(3, 3)), data.draw(_rows(n, 5))
+        t, origin, D = data.draw(_rows(n, 3)), data.draw(_rows(3)), data.draw(_rows(n, 3))
+        assert _same(
+            _fk.forward_poses(m, d, P, x, t, origin, D, limit, it, 1e-9),
+            fk.forward_poses(m, d, P, x, t, origin, D, limit, it, 1e-9),
+        )
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.data())
+def test_generated_tool_poses_are_bit_identical(data: st.DataObject) -> None:
+    """Any solutions, tool vectors, origins and table displacements, NaN and
+    infinities too, rows solved or not: the same poses with either kernel."""
+    _fk = compiled("_fk")
+    n = data.draw(st.integers(0, 8))
+    x = data.draw(_rows(n, 7))[:, 1:]  # a view, as forward_platform's solution may be
+    ok = data.draw(hnp.arrays(np.bool_, (n,)))
+    t, origin, D = data.draw(_rows(n, 3)), data.draw(_rows(3)), data.draw(_rows(n, 3))
+    with np.errstate(all="ignore"):
+        want = fk.tool_poses(x, ok, t, origin, D)
+        assert _same((_fk.tool_poses(x, ok, t, origin, D),), (want,))
+    assert np.all(np.isnan(want[~ok]))
+
+
+@pytest.mark.parametrize("path", PROFILES, ids=lambda p: p.stem)
+def test_tool_poses_sum_as_numpy_einsum(path: Path) -> None:
+    """The tool poses' written-out sum of R t is numpy's ``einsum`` here, bit for
+    bit (it was the einsum before it moved into the kernel: the G-code written and
+    the simulator's poses did not change): tool vectors with all three components
+    and tool lengths, on the rotations of random poses, signed zeros included."""
+    geo = _geometry(path)
+    rng = np.random.default_rng(11)
+    n = 20_000
+    x = np.column_stack([rng.uniform(-200, 200, (n, 3)), rng.uniform(-0.6, 0.6, (n, 3))])
+    x[::97, 3:] = 0.0
+    t = rng.uniform(-200, 200, (n, 3))
+    t[::3] = np.broadcast_to(geo.tool, (n, 3))[::3] - rng.uniform(0, 100, (len(t[::3]), 1)) * [
+        0,
+        0,
+        1,
+    ]
+    t[::5, :2] = [0.0, -0.0]
+    D = rng.uniform(-1, 1, (n, 3))
+    ok = rng.random(n) < 0.99
+    R = kinematics.platform_rotation(x[:, 3], x[:, 4], x[:, 5])
+    q = np.column_stack(
+        [
+            x[:, :3] + np.einsum("nij,nj->ni", R, t) - geo.origin + D,
+            np.degrees(x[:, 3]),
+            np.degrees(x[:, 4]),
+        ]
+    )
+    q[~ok] = np.nan
+    assert same_bits(fk.tool_poses(x, ok, t, geo.origin, D), q)
 
 
 @settings(max_examples=100, deadline=None)
@@ -233,3 +317,7 @@ def test_compiled_fk_refuses_wrong_shapes() -> None:
         _fk.fk_residual(m._replace(L=np.ones(2)), off, x)
     with pytest.raises(ValueError):
         _fk.solve6(np.zeros((4, 6, 5)), x)
+    with pytest.raises(ValueError):
+        _fk.tool_poses(x, np.ones(4, bool), x[:, :3], x[0, :3], x[:3, :3])
+    with pytest.raises(ValueError):
+        _fk.forward_poses(m, geo.d, x[:3], x, x[:, :3], x[0, :3], x[:, :3], LIMIT, 30, RES_TOL)

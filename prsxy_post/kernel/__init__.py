@@ -201,6 +201,35 @@ def forward_newton(
     return out
 
 
+def tool_poses(
+    x: np.ndarray, ok: np.ndarray, t: np.ndarray, origin: np.ndarray, D: np.ndarray
+) -> np.ndarray:
+    """Tool poses (N, 5) [mm, mm, mm, deg, deg] of FK solutions x (N, 6):
+    :func:`fk.tool_poses`, compiled when :data:`COMPILED`."""
+    out: np.ndarray = _fk_mod.tool_poses(x, ok, t, origin, D)
+    return out
+
+
+def forward_poses(
+    m: fk.FKArrays,
+    d: np.ndarray,
+    P: np.ndarray,
+    x0: np.ndarray,
+    t: np.ndarray,
+    origin: np.ndarray,
+    D: np.ndarray,
+    limit: float,
+    max_iter: int,
+    res_tol: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The FK of motor positions on straight guides, Newton and tool poses in one
+    call: :func:`fk.forward_poses`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _fk_mod.forward_poses(
+        m, d, P, x0, t, origin, D, limit, max_iter, res_tol
+    )
+    return out
+
+
 def map_rows(m: legendre.MapArrays, q: np.ndarray) -> np.ndarray:
     """The virtual-axis error e(q) (N, 5) [mm, mm, mm, deg, deg] for poses ``q``
     (N, 5): :func:`legendre.map_rows`, compiled when :data:`COMPILED`."""

@@ -10,11 +10,11 @@ component of a step is below ``limit``, then checks the residual. Every operatio
 an element-wise IEEE operation in a fixed order: the 3 × 3 products written out as
 left-to-right sums, and the 6 × 6 solve Gaussian elimination with partial pivoting
 written out (:func:`solve6`), not BLAS and LAPACK (whose kernels, and so whose last
-bits, depend on the processor). ``_fk.pyx`` does the same arithmetic in C, a row at
-a time, so the two agree to the bit (``tests/test_kernel_fk.py``). The sines and
-cosines are numpy's, as in the IK's reference (``kernel/ik.py``): several times
-cheaper than the C library's through :mod:`math`, and the C library's on the
-machines the tests run on (``tests/test_kernel_ik.py::
+bits, depend on the processor). ``_fk.pyx`` does the same arithmetic in C, each row's
+own (four rows side by side), so the two agree to the bit
+(``tests/test_kernel_fk.py``). The sines and cosines are numpy's, as in the IK's
+reference (``kernel/ik.py``): several times cheaper than the C library's through
+:mod:`math`, and the C library's on the machines the tests run on (``tests/test_kernel_ik.py::
 test_numpy_trig_is_the_c_librarys_here``; where that fails, they would go through
 :mod:`.libm`).
 """
@@ -193,3 +193,55 @@ def forward_newton(
         active = active[~(done | bad)]
     converged &= np.all(np.abs(fk_residual(m, off, x)) < res_tol, axis=1)
     return x, converged
+
+
+def tool_poses(
+    x: np.ndarray, ok: np.ndarray, t: np.ndarray, origin: np.ndarray, D: np.ndarray
+) -> np.ndarray:
+    """The tool poses q (N, 5) [mm, mm, mm, deg, deg] of FK solutions x (N, 6)
+    (c [mm], A, B, γ [rad]); NaN rows where not ``ok`` (N,) (contract "Forward
+    kinematics").
+
+    The tip T = c + R t for the tool vectors ``t`` (N, 3) [mm] in the platform frame
+    (R = R_y(B) R_x(A) R_z(γ), :func:`rotation_cs`), in the workpiece frame
+    w = T − o + D (``origin`` o (3,), the table's displacement ``D`` (N, 3) [mm]),
+    A and B in degrees (numpy's ``degrees``: x · (180 / π)). R t is summed as numpy's
+    ``einsum("nij,nj->ni")`` sums it here (two accumulators from 0, the first
+    taking the products of t's components 0 and 2, the second of 1, then added to
+    0): ``0 + ((0 + p0 + p2) + (0 + p1))``, written out so that the order is fixed.
+    """
+    a, b, g = x[:, 3], x[:, 4], x[:, 5]
+    R = rotation_cs(np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(g), np.sin(g))
+    p = R * t[:, None, :]
+    Rt = 0.0 + (((0.0 + p[..., 0]) + p[..., 2]) + (0.0 + p[..., 1]))
+    q = np.empty((len(x), 5))
+    q[:, :3] = x[:, :3] + Rt - origin + D
+    q[:, 3] = np.degrees(x[:, 3])
+    q[:, 4] = np.degrees(x[:, 4])
+    q[~np.asarray(ok, dtype=bool)] = np.nan
+    return q
+
+
+def forward_poses(
+    m: FKArrays,
+    d: np.ndarray,
+    P: np.ndarray,
+    x0: np.ndarray,
+    t: np.ndarray,
+    origin: np.ndarray,
+    D: np.ndarray,
+    limit: float,
+    max_iter: int,
+    res_tol: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The FK of motor positions on straight guides, whole: the hinges' offsets
+    P_k d_k from the motors ``P`` (N, >= 3) [mm] and the guides' directions ``d``
+    (3, 3), :func:`forward_newton` from x0, then :func:`tool_poses` of its solutions.
+
+    Returns
+    -------
+    q : (N, 5) [mm, mm, mm, deg, deg], NaN rows where not converged; converged : (N,)
+    """
+    off = P[:, :3, None] * d[None]
+    x, ok = forward_newton(m, off, x0, limit, max_iter, res_tol)
+    return tool_poses(x, ok, t, origin, D), ok
