@@ -790,10 +790,12 @@ class Pipeline:
         t0 = time.perf_counter()
         contacts = np.zeros((0, 3), dtype=int)
         plain_last = pc.P_ideal[-1].copy() if len(pc) else self.last_plain
+        V_cols: np.ndarray | None = None
         if self.play_cols and reachable:
-            pc, side, contacts = self._reversals(plan, s, pc)
+            pc, side, contacts, V_cols = self._reversals(plan, s, pc)
         else:
-            side = np.tile(self.side, (len(pc), 1))
+            side = np.empty((5, len(pc)))
+            side[:] = self.side[:, None]
         # a running sum continued across chunks (not chunk offset + cumsum), so the
         # clock is the same bit for bit however the program was cut
         t = np.cumsum(np.concatenate([[self.t], pc.dt]))[1:]
@@ -805,10 +807,11 @@ class Pipeline:
             # every motor's columns as contiguous rows (5, n), made in one pass each
             # (a column read alone reads the whole array): the commands are made
             # motor by motor in these rows and turned back once
+            # (the sides come as such rows, and the velocities too after _reversals)
             by_motor = (
                 np.ascontiguousarray(pc.P_ideal.T, dtype=float),
-                np.ascontiguousarray(pc.V_ideal.T, dtype=float),
-                np.ascontiguousarray(side.T, dtype=float),
+                np.ascontiguousarray(pc.V_ideal.T, dtype=float) if V_cols is None else V_cols,
+                side,
             )
             # a motor without a table is commanded where it must be; where every
             # motor has one, every row is made below
@@ -829,12 +832,13 @@ class Pipeline:
 
     def _reversals(
         self, plan: Plan | None, s: Samples, pc: PointChunk
-    ) -> tuple[PointChunk, np.ndarray, np.ndarray]:
+    ) -> tuple[PointChunk, np.ndarray, np.ndarray, np.ndarray]:
         """Give every reversal of a motor with play its crossing window
         (:mod:`.reversals`), after its corners (:meth:`_corners`). Returns the
-        points, the side every motor is on at each, and the crossings (M, 3) ints:
-        the point where each ends, the point where it began, the motor's column; in
-        that order."""
+        points, the side every motor is on at each (5, n) [a motor a row], the
+        crossings (M, 3) ints: the point where each ends, the point where it began,
+        the motor's column; in that order; and the points' V_ideal as motor rows
+        (5, n) (made once here, for the sides and the tables)."""
         last = self.last
         # the last point as the reversals saw it: a blended corner's before it moved
         # onto its blend (the same positions however the program was cut)
@@ -921,16 +925,17 @@ class Pipeline:
             before = np.concatenate([before, e_before])[order]
             resting = pc.speed == 0.0
         rows = reversals.Rows(step, when, before)
-        side, w_end, s_first = reversals.sides_and_ends(
-            rows, pc.V_ideal, resting, ins, self.play_cols, self.side
+        V_cols = np.ascontiguousarray(pc.V_ideal.T, dtype=float)
+        side, w_end, s_first = reversals.sides_by_motor(
+            rows, V_cols, resting, ins, self.play_cols, self.side
         )
-        self.side = side[-1].copy() if len(side) else self.side
+        self.side = side[:, -1].astype(int) if side.shape[1] else self.side
         # where each crossing ends (the motor meets its part) and where it began
         ends = np.concatenate([w_end, s_first])
         begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
         cols = np.concatenate([ins.w_col, ins.s_col])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
-        return pc, side, contacts[np.lexsort((cols, begs, ends))]
+        return pc, side, contacts[np.lexsort((cols, begs, ends))], V_cols
 
     def _path_velocity(
         self, plan: Plan | None, s: Samples, pc: PointChunk
