@@ -650,7 +650,9 @@ class Pipeline:
         self.last_plain = np.zeros(5)
         self.last_cmd: tuple[np.ndarray, np.ndarray] | None = None
         self.last: PointChunk | None = None  # the last point made (before the lead)
-        self.held: PointChunk | None = None  # points waiting for the servo lead
+        # points waiting for the servo lead, chunk by chunk (not joined: what is
+        # released goes to the writer as the runs it was made in)
+        self.held: list[PointChunk] = []
         self.prev_out: PointChunk | None = None  # the last point released
         self.problems: list[PrsxyError] = []
         self.t = 0.0
@@ -691,9 +693,7 @@ class Pipeline:
             out += self._made(ready.earlier)
             self._problem(ready.problems)
         if ready.start_line is not None:
-            first = self._start_point(ready.start_line)
-            if first is not None:
-                out.append(first)
+            out += self._start_point(ready.start_line)
         out += self._made(ready.pieces)
         self._problem(ready.late)
         if ready.final:
@@ -702,9 +702,7 @@ class Pipeline:
                     "the program moves nothing",
                     expected="at least one move (G0, G1, G2, G3) or dwell",
                 )
-            tail = self._release(final=True)
-            if tail is not None:
-                out.append(tail)
+            out += self._release(final=True)
         return out
 
     def finish(self) -> list[PointChunk]:
@@ -714,13 +712,11 @@ class Pipeline:
         """The points of whole pieces (:mod:`.interpolate.pieces`), as they become final."""
         out = []
         for plan, samples, solved in pieces:
-            pc = self._points(plan, samples, solved)
-            if pc is not None:
-                out.append(pc)
+            out += self._points(plan, samples, solved)
         return out
 
     # -- points
-    def _start_point(self, line0: int) -> PointChunk | None:
+    def _start_point(self, line0: int) -> list[PointChunk]:
         z5 = np.zeros((1, 5))
         s = Samples(
             q=self.start[None, :].copy(),
@@ -764,7 +760,7 @@ class Pipeline:
 
     def _points(
         self, plan: Plan | None, s: Samples, solved: Solved | None = None
-    ) -> PointChunk | None:
+    ) -> list[PointChunk]:
         if solved is None:
             solved = self.planning.solve(s.q, s.qdot, s.tool_length, s.line)
         q_t, P, V, reachable = self._solved(solved)
@@ -790,10 +786,12 @@ class Pipeline:
         t0 = time.perf_counter()
         contacts = np.zeros((0, 3), dtype=int)
         plain_last = pc.P_ideal[-1].copy() if len(pc) else self.last_plain
+        V_cols: np.ndarray | None = None
         if self.play_cols and reachable:
-            pc, side, contacts = self._reversals(plan, s, pc)
+            pc, side, contacts, V_cols = self._reversals(plan, s, pc)
         else:
-            side = np.tile(self.side, (len(pc), 1))
+            side = np.empty((5, len(pc)))
+            side[:] = self.side[:, None]
         # a running sum continued across chunks (not chunk offset + cumsum), so the
         # clock is the same bit for bit however the program was cut
         t = np.cumsum(np.concatenate([[self.t], pc.dt]))[1:]
@@ -805,10 +803,11 @@ class Pipeline:
             # every motor's columns as contiguous rows (5, n), made in one pass each
             # (a column read alone reads the whole array): the commands are made
             # motor by motor in these rows and turned back once
+            # (the sides come as such rows, and the velocities too after _reversals)
             by_motor = (
                 np.ascontiguousarray(pc.P_ideal.T, dtype=float),
-                np.ascontiguousarray(pc.V_ideal.T, dtype=float),
-                np.ascontiguousarray(side.T, dtype=float),
+                np.ascontiguousarray(pc.V_ideal.T, dtype=float) if V_cols is None else V_cols,
+                side,
             )
             # a motor without a table is commanded where it must be; where every
             # motor has one, every row is made below
@@ -824,17 +823,19 @@ class Pipeline:
         self.timings["axis_tables"] += time.perf_counter() - t0
         self.last = pc.take(slice(len(pc) - 1, len(pc)))
         self.last_plain = plain_last
-        self.held = pc if self.held is None else PointChunk.concat([self.held, pc])
+        if len(pc):
+            self.held.append(pc)
         return self._release(final=False)
 
     def _reversals(
         self, plan: Plan | None, s: Samples, pc: PointChunk
-    ) -> tuple[PointChunk, np.ndarray, np.ndarray]:
+    ) -> tuple[PointChunk, np.ndarray, np.ndarray, np.ndarray]:
         """Give every reversal of a motor with play its crossing window
         (:mod:`.reversals`), after its corners (:meth:`_corners`). Returns the
-        points, the side every motor is on at each, and the crossings (M, 3) ints:
-        the point where each ends, the point where it began, the motor's column; in
-        that order."""
+        points, the side every motor is on at each (5, n) [a motor a row], the
+        crossings (M, 3) ints: the point where each ends, the point where it began,
+        the motor's column; in that order; and the points' V_ideal as motor rows
+        (5, n) (made once here, for the sides and the tables)."""
         last = self.last
         # the last point as the reversals saw it: a blended corner's before it moved
         # onto its blend (the same positions however the program was cut)
@@ -921,16 +922,17 @@ class Pipeline:
             before = np.concatenate([before, e_before])[order]
             resting = pc.speed == 0.0
         rows = reversals.Rows(step, when, before)
-        side, w_end, s_first = reversals.sides_and_ends(
-            rows, pc.V_ideal, resting, ins, self.play_cols, self.side
+        V_cols = np.ascontiguousarray(pc.V_ideal.T, dtype=float)
+        side, w_end, s_first = reversals.sides_by_motor(
+            rows, V_cols, resting, ins, self.play_cols, self.side
         )
-        self.side = side[-1].copy() if len(side) else self.side
+        self.side = side[:, -1].astype(int) if side.shape[1] else self.side
         # where each crossing ends (the motor meets its part) and where it began
         ends = np.concatenate([w_end, s_first])
         begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
         cols = np.concatenate([ins.w_col, ins.s_col])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
-        return pc, side, contacts[np.lexsort((cols, begs, ends))]
+        return pc, side, contacts[np.lexsort((cols, begs, ends))], V_cols
 
     def _path_velocity(
         self, plan: Plan | None, s: Samples, pc: PointChunk
@@ -1517,42 +1519,74 @@ class Pipeline:
             dt,
         )
 
-    def _release(self, final: bool) -> PointChunk | None:
-        """Points whose servo lead is final.
+    def _release(self, final: bool) -> list[PointChunk]:
+        """Points whose servo lead is final, as runs of the chunks they were made in
+        (the writers' text does not depend on where a run ends: joining them would
+        only copy every field).
 
         A motor that follows its command with a lag τ (τ ṁ + m = c, profile
         ``effects.servo_lag_ms``) reaches M when commanded c = M + τ M', whose
         velocity is M' + τ M''; M'' is taken as the central difference of the
         planned velocities, so a point is final once the next one exists.
         """
-        h = self.held
-        if h is None or len(h) == 0:
-            return None
+        held = self.held
+        n = sum(len(h) for h in held)
         lagging = bool(np.any(self.lag))
-        k = len(h) if (final or not lagging) else len(h) - 1
+        k = n if (final or not lagging) else n - 1
         if k <= 0:
-            return None
-        ready = h.take(slice(0, k))
-        if lagging:
-            prev = self.prev_out
-            V_all = np.vstack([prev.V_cmd if prev is not None else h.V_cmd[:1], h.V_cmd])
-            t_all = np.concatenate([prev.t if prev is not None else h.t[:1], h.t])
-            if final:
-                V_all = np.vstack([V_all, h.V_cmd[-1:]])
-                t_all = np.concatenate([t_all, h.t[-1:]])
-            span = t_all[2 : k + 2] - t_all[:k]
-            with np.errstate(invalid="ignore", divide="ignore"):
-                acc = np.where(
-                    span[:, None] > 0, (V_all[2 : k + 2] - V_all[:k]) / span[:, None], 0.0
-                )
-            acc[ready.speed == 0.0] = 0.0
-            self.prev_out = h.take(slice(k - 1, k))
-            ready.P_cmd = servo_lead(ready.P_cmd, ready.V_cmd, self.lag)
-            ready.V_cmd = servo_lead(ready.V_cmd, acc, self.lag)
-        self.held = None if k == len(h) else h.take(slice(k, len(h)))
-        travel = checks.travel_problems(self.profile, ready.P_cmd, ready.line)
-        self._problem([p.error(self.profile) for p in travel])
+            return []
+        ready: list[PointChunk] = []
+        rest: list[PointChunk] = []
+        left = k
+        for h in held:
+            if left <= 0:
+                rest.append(h)
+            elif left < len(h):
+                ready.append(h.take(slice(0, left)))
+                rest.append(h.take(slice(left, len(h))))
+            else:
+                ready.append(h.take(slice(0, len(h))))
+            left -= len(h)
+        self.held = rest
+        if not lagging:
+            for r in ready:
+                self._travel(r.P_cmd, r.line)
+            return ready
+        prev = self.prev_out
+        V_all = np.vstack(
+            [prev.V_cmd if prev is not None else held[0].V_cmd[:1]] + [h.V_cmd for h in held]
+        )
+        t_all = np.concatenate(
+            [prev.t if prev is not None else held[0].t[:1]] + [h.t for h in held]
+        )
+        if final:
+            V_all = np.vstack([V_all, held[-1].V_cmd[-1:]])
+            t_all = np.concatenate([t_all, held[-1].t[-1:]])
+        span = t_all[2 : k + 2] - t_all[:k]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            acc = np.where(span[:, None] > 0, (V_all[2 : k + 2] - V_all[:k]) / span[:, None], 0.0)
+        last = ready[-1]
+        self.prev_out = last.take(slice(len(last) - 1, len(last)))
+        # the commands of the points released (the lead makes them anew), joined
+        # to be led and checked as one run
+        P_cmd = ready[0].P_cmd if len(ready) == 1 else np.vstack([r.P_cmd for r in ready])
+        V_cmd = ready[0].V_cmd if len(ready) == 1 else np.vstack([r.V_cmd for r in ready])
+        line = ready[0].line if len(ready) == 1 else np.concatenate([r.line for r in ready])
+        speed = ready[0].speed if len(ready) == 1 else np.concatenate([r.speed for r in ready])
+        acc[speed == 0.0] = 0.0
+        P_led = servo_lead(P_cmd, V_cmd, self.lag)
+        V_led = servo_lead(V_cmd, acc, self.lag)
+        self._travel(P_led, line)
+        at = 0
+        for r in ready:
+            r.P_cmd, r.V_cmd = P_led[at : at + len(r)], V_led[at : at + len(r)]
+            at += len(r)
         return ready
+
+    def _travel(self, P_cmd: np.ndarray, line: np.ndarray) -> None:
+        """The motors' commands beyond their travel, raised (or collected)."""
+        travel = checks.travel_problems(self.profile, P_cmd, line)
+        self._problem([p.error(self.profile) for p in travel])
 
 
 def _gather(a: np.ndarray, idx: np.ndarray) -> np.ndarray:

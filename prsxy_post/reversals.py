@@ -1380,6 +1380,24 @@ def sides_and_ends(
     cols: list[int],
     side: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`sides_by_motor` for velocities and sides a point a row: the sides
+    (m, 5) ints, and the points where the windows end and the standing crossings'
+    steps begin."""
+    # a motor's velocities contiguous, transposed once (not a column copied a motor)
+    by_motor, e_all, s_first = sides_by_motor(
+        rows, np.ascontiguousarray(V.T), resting, ins, cols, side
+    )
+    return np.ascontiguousarray(by_motor.T, dtype=int), e_all, s_first
+
+
+def sides_by_motor(
+    rows: Rows,
+    V_cols: np.ndarray,
+    resting: np.ndarray,
+    ins: Insertions,
+    cols: list[int],
+    side: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The side (+1, −1) every motor is on at every point of a chunk (new points
     included), and so which of lo⁻¹ and hi⁻¹ commands it: the direction of its
     planned velocity, held while it stands, switched inside a crossing window only
@@ -1388,16 +1406,19 @@ def sides_and_ends(
     end the motor has crossed, moving or not.
 
     rows : the chunk's points (:class:`Rows`)
-    V, resting : (m, 5), (m,) planned motor velocities, path at rest
+    V_cols, resting : (5, m), (m,) planned motor velocities (a motor a row), path
+        at rest
     side : (5,) the side before the chunk
 
-    Returns the sides (m, 5), and the points where the windows end
+    Returns the sides (5, m) [float, a motor a row: as the chain's tables take
+    them, not transposed again], and the points where the windows end
     (``rows.at(ins.w_kb, ins.w_tb, ins.w_t0b)``) and where the standing
     crossings' steps begin (``rows.first(ins.s_k)``), which the sides are made
     from: the crossings' ends.
     """
     m = len(rows.step)
-    out = np.tile(np.asarray(side, dtype=int), (m, 1))
+    out = np.empty((len(side), m))
+    out[:] = np.asarray(side, dtype=int)[:, None]
     f_all = rows.first_plain(ins.w_k)
     e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b)
     last_row = np.searchsorted(rows.step, ins.w_kb, "right") - 1  # its end's step's end
@@ -1406,8 +1427,6 @@ def sides_and_ends(
     by_col = np.lexsort((e_all, ins.w_col))
     w_cols = ins.w_col[by_col]
     lo, hi = np.searchsorted(w_cols, cols, "left"), np.searchsorted(w_cols, cols, "right")
-    # a motor's velocities contiguous, transposed once (not a column copied a motor)
-    V_cols = np.ascontiguousarray(V.T)
     for i, col in enumerate(cols):
         mine = by_col[lo[i] : hi[i]]
         here = s_col == col
@@ -1415,7 +1434,7 @@ def sides_and_ends(
         # a blend's point before a corner) are on the new side: where the path turns
         # a corner the cubic's root is before the corner, the plan's velocity turns
         # at it (kernel.play.motor_sides)
-        out[:, col] = kernel.motor_sides(
+        out[col] = kernel.motor_sides(
             V_cols[col],
             resting,
             f_all[mine],

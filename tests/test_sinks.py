@@ -39,9 +39,11 @@ def _program(tmp_path: Path, n: int, tail: list[str]) -> str:
     return str(path)
 
 
-def _run(program: str, prof: str, out: Path, parallel: bool) -> dict[str, bytes] | str:
+def _run(
+    program: str, prof: str, out: Path, parallel: bool, fmt: str = "pmac"
+) -> dict[str, bytes] | str:
     """The files written (name → bytes), or the error's text."""
-    job = ConvertJob(program, prof, "pmac", str(out), None, Stages(), "", 700, parallel)
+    job = ConvertJob(program, prof, fmt, str(out), None, Stages(), "", 700, parallel)
     try:
         written = convert_file(job).written
     except PrsxyError as err:
@@ -164,6 +166,26 @@ def test_the_writer_process_is_sent_only_what_its_writer_reads(tmp_path: Path) -
     assert here == apart
     slim = sinks._chunk(sinks._fields(PointChunk.empty(), PmacWriter.reads))
     assert slim.P_cmd.shape == (0, 5) and slim.q is None
+
+
+def test_the_gcode_writer_process_is_sent_only_what_its_writer_reads(tmp_path: Path) -> None:
+    """The G-code writer declares the point fields it reads too (its FK's warm
+    start, the lead it takes off, the stops, the feeds, the machine functions):
+    the others arrive as None, so one it read undeclared would fail here. With
+    machine functions, dwells and arcs, the bytes are those written in one
+    process."""
+    from prsxy_post.writers.linuxcnc import GcodeWriter
+
+    assert set(GcodeWriter.reads) < set(PointChunk.FIELDS)
+    prof = _profile(tmp_path)
+    arcs = ["G1 X5 Y0"] + [f"G2 X{6 - i % 2} Y0 I{0.5 - i % 2} J0" for i in range(40)]
+    program = _program(tmp_path, 6000, ["S12000 M3", "G4 P0.5", *arcs, "M5"])
+    here = _run(program, prof, tmp_path / "a" / "job.ngc", parallel=False, fmt="gcode")
+    apart = _run(program, prof, tmp_path / "b" / "job.ngc", parallel=True, fmt="gcode")
+    assert isinstance(here, dict) and isinstance(apart, dict)
+    text = here["job.ngc"].decode()
+    assert "M3" in text and "G4" in text and "G2" in text
+    assert here == apart
 
 
 def test_a_channel_carries_arrays_whole_and_says_when_the_other_end_closed() -> None:

@@ -228,6 +228,11 @@ class GcodeWriter:
     makes the lines' text from them.
     """
 
+    #: the point fields :meth:`feed` reads (and :func:`.cartesian.written_points`
+    #: for it): a writer in a process of its own is sent only these
+    #: (:class:`prsxy_post.sinks.WriterProcess`)
+    reads = ("q_target", "P_cmd", "P_ideal", "dt", "dwell", "line", "speed", "block_end", "fn")
+
     def __init__(self, profile: Profile, settings: Mapping[str, Any], prov: Provenance) -> None:
         self.profile = profile
         self.prov = prov
