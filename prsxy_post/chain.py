@@ -427,8 +427,7 @@ class Planning:
             np.negative(b.dq_out[k], out=dq[n:])
             tool = np.tile(b.tool_length[k], 2)
         P = self._ends_ik(q, tool)
-        # ik_derivative's difference, through the kernel's IK rows (the same P)
-        d = (self._ik_rows(q + DIR_STEP_MM * dq, tool) - P) / DIR_STEP_MM
+        d = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
         cols = self.play_cols
         if cols == _ALL_MOTORS:
             d_in, d_out = d[:n], -d[n:]
