@@ -487,7 +487,7 @@ class Planning:
         P[n:] = self._ik_rows(q[n:], tool[n:])
         P[1:n] = P[n : 2 * n - 1]
         fresh = np.flatnonzero(~again)
-        P[fresh] = self._ik_rows(q[fresh], tool[fresh])
+        P[fresh] = self._ik_rows(np.take(q, fresh, axis=0), tool[fresh])
         return P
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:

@@ -158,10 +158,14 @@ def travel_problems(profile: Profile, P_cmd: np.ndarray, line: np.ndarray) -> li
     """
     lo = np.array([profile.motor(m).min for m in MOTORS])
     hi = np.array([profile.motor(m).max for m in MOTORS])
-    ok = np.all(np.isfinite(P_cmd), axis=1)
     with np.errstate(invalid="ignore"):
         excess = np.maximum(P_cmd - hi[None, :], lo[None, :] - P_cmd)
-    excess[~ok] = -np.inf
+    with np.errstate(over="ignore", invalid="ignore"):
+        # a finite sum: every command finite (a NaN or inf would not be), the rule
+        finite = bool(np.isfinite(P_cmd.sum()))
+    if not finite:
+        bad = np.flatnonzero(~np.all(np.isfinite(P_cmd), axis=1))
+        excess[bad] = -np.inf
     return [
         Problem("travel", int(line[i]), float(P_cmd[i, col]), float(excess[i, col]), m)
         for col, m in enumerate(MOTORS)

@@ -323,8 +323,8 @@ def blocks_from_motions(motions: Sequence[Motion] | MotionTable, limits: PlanLim
         curve=m.curve,
         split_after=np.zeros(n, dtype=np.int8),
     )
-    if not keep.all():
-        b = b.take(keep)
+    if not keep.all():  # row numbers: Columns.take gathers them with np.take
+        b = b.take(np.flatnonzero(keep))
     moving = ~b.stops
     k = np.flatnonzero(moving)
     if len(k) == len(b) and len(k):  # every block moves: the tangents are the columns
