@@ -514,7 +514,8 @@ def forward(
     D = table_displacement(geo, P[:, 3], P[:, 4])
     w = T - geo.origin + D
     q = np.column_stack([w, np.degrees(xv[:, 3]), np.degrees(xv[:, 4])])
-    q[~ok] = np.nan
+    if not ok.all():  # (row numbers: a boolean mask's rows are set several times slower)
+        q[np.flatnonzero(~ok)] = np.nan
     return q, ok
 
 
