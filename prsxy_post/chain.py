@@ -1161,7 +1161,9 @@ class Pipeline:
         else:
             # motors often reverse at the same point: the IK's Jacobian once a row
             rows, at = np.unique(contacts[:, 0], return_inverse=True)
-            short = self._shorts(pc.q_target[rows], pc.tool_length[rows], at, contacts[:, 2])
+            short = self._shorts(
+                _gather(pc.q_target, rows), pc.tool_length[rows], at, contacts[:, 2]
+            )
         for col in self.play_cols:
             ours = contacts[:, 2] == col
             self._settle_motor(
