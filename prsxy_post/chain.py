@@ -486,7 +486,7 @@ class Planning:
         P[n:] = self._ik_rows(q[n:], tool[n:])
         P[1:n] = P[n : 2 * n - 1]
         fresh = np.flatnonzero(~again)
-        P[fresh] = self._ik_rows(q[fresh], tool[fresh])
+        P[fresh] = self._ik_rows(np.take(q, fresh, axis=0), tool[fresh])
         return P
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:
@@ -1162,7 +1162,9 @@ class Pipeline:
         else:
             # motors often reverse at the same point: the IK's Jacobian once a row
             rows, at = np.unique(contacts[:, 0], return_inverse=True)
-            short = self._shorts(pc.q_target[rows], pc.tool_length[rows], at, contacts[:, 2])
+            short = self._shorts(
+                _gather(pc.q_target, rows), pc.tool_length[rows], at, contacts[:, 2]
+            )
         for col in self.play_cols:
             ours = contacts[:, 2] == col
             self._settle_motor(

@@ -156,17 +156,25 @@ def travel_problems(profile: Profile, P_cmd: np.ndarray, line: np.ndarray) -> li
     P_cmd : (N, 5) motor commands [mm], columns :data:`MOTORS`; NaN rows (out of
     reach) are left to :func:`reach_problems`.
     """
-    lo = np.array([profile.motor(m).min for m in MOTORS])
-    hi = np.array([profile.motor(m).max for m in MOTORS])
-    ok = np.all(np.isfinite(P_cmd), axis=1)
-    with np.errstate(invalid="ignore"):
-        excess = np.maximum(P_cmd - hi[None, :], lo[None, :] - P_cmd)
-    excess[~ok] = -np.inf
-    return [
-        Problem("travel", int(line[i]), float(P_cmd[i, col]), float(excess[i, col]), m)
-        for col, m in enumerate(MOTORS)
-        for i in _worst_per_line(excess[:, col], line)
-    ]
+    with np.errstate(over="ignore", invalid="ignore"):
+        # a finite sum: every command finite (a NaN or inf would not be), the rule
+        finite = bool(np.isfinite(P_cmd.sum()))
+    bad = None if finite else np.flatnonzero(~np.all(np.isfinite(P_cmd), axis=1))
+    out: list[Problem] = []
+    # a column at a time: an (N, 5) array against (5,) bounds broadcast costs
+    # several times the same subtractions on columns against scalars (the same bits)
+    for col, m in enumerate(MOTORS):
+        mc = profile.motor(m)
+        p = P_cmd[:, col]
+        with np.errstate(invalid="ignore"):
+            excess = np.maximum(p - mc.max, mc.min - p)
+        if bad is not None:
+            excess[bad] = -np.inf
+        out += [
+            Problem("travel", int(line[i]), float(p[i]), float(excess[i]), m)
+            for i in _worst_per_line(excess, line)
+        ]
+    return out
 
 
 def point_problems(profile: Profile, geo: kinematics.Geometry, pc: PointChunk) -> list[Problem]:

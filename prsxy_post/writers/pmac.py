@@ -204,9 +204,16 @@ class PmacWriter:
             return []
         P = round_clean(chunk.P_cmd, self.dec)
         V = round_clean(chunk.V_cmd, 4)
-        prev = np.vstack([self.last_P[None, :] if self.last_P is not None else P[:1], P[:-1]])
-        # the path and the motors stand (a dwell, a function): no PVT segment
-        still = np.all(P == prev, axis=1) & chunk.dwell
+        # the path and the motors stand (a dwell, a function): no PVT segment; the
+        # rows compared only where the path stands (a few), each with the row before
+        # (the chunk's first with the last one written)
+        still = np.array(chunk.dwell, dtype=bool)
+        at = np.flatnonzero(still)
+        if at.size:
+            prev = np.take(P, np.maximum(at - 1, 0), axis=0)
+            if at[0] == 0 and self.last_P is not None:
+                prev[0] = self.last_P
+            still[at] = np.all(np.take(P, at, axis=0) == prev, axis=1)
         # the segment times in PMAC's quanta, rounded up; 1e-6 of one for the
         # rounding of dt itself (10 ms is 40960 quanta, not 40961)
         quanta = np.ceil(chunk.dt * (1000.0 * PVT_QUANTA_PER_MS) - 1e-6).astype(np.int64)
