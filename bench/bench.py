@@ -11,8 +11,9 @@ For each size it generates a five-axis finishing program (short G1 moves at F200
 five-axis passes, small R arcs), converts it with every compensation stage on and PMAC
 output (or ``--format gcode``; a calibrated profile with real-axis tables and an error
 map), in a child process so peak resident memory is that conversion's alone, and
-reports per stage: seconds, lines/s, interpolation points/s, and the CPU time of the
-conversion's processes together (``chain CPU``). Two times: ``chain`` is the
+reports lines/s, interpolation points/s, the CPU time of the conversion's processes
+together (``chain CPU``), and per stage its CPU seconds in the process that runs it
+and its CPU µs per output point. Two times: ``chain`` is the
 conversion inside the process (what ``convert_file`` takes: read, interpret, plan,
 compensate, write), ``command`` is the whole ``prsxy-post convert`` command as a user
 runs it (Python's start and imports included). In the same run and on the same file it
@@ -248,16 +249,27 @@ def report(results: list[dict]) -> str:
             f"{f(rs, '.2f')} | {f(pg, '.1f')} | {f(rs and tot / rs, '.2f')} | "
             f"{f(rs and cmd / rs, '.2f')} | {f(pg and pg / cmd, '.1f')} |"
         )
+    stages = list(results[0]["timings"])
     lines += [
         "",
-        "Per stage (seconds):",
+        "Per stage: CPU seconds, each in the process that runs it, and CPU µs per output point:",
         "",
-        "| lines | " + " | ".join(results[0]["timings"]) + " |",
-        "|---:|" + "---:|" * len(results[0]["timings"]),
+        "| lines | points | "
+        + " | ".join(stages)
+        + " | "
+        + " | ".join(f"{k} µs/pt" for k in stages)
+        + " |",
+        "|---:|---:|" + "---:|" * (2 * len(stages)),
     ]
     for r in results:
+        cpu_s = [r["timings"][k] for k in stages]
+        per_pt = [1e6 * v / max(r["points"], 1) for v in cpu_s]
         lines.append(
-            f"| {r['lines']:,} | " + " | ".join(f"{v:.2f}" for v in r["timings"].values()) + " |"
+            f"| {r['lines']:,} | {r['points']:,} | "
+            + " | ".join(f"{v:.2f}" for v in cpu_s)
+            + " | "
+            + " | ".join(f"{v:.2f}" for v in per_pt)
+            + " |"
         )
     return "\n".join(lines)
 

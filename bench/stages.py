@@ -31,7 +31,7 @@ ROOT = Path(__file__).resolve().parent.parent
 #: run in the child: one conversion, the stages' CPU as JSON on stdout
 CHILD = """
 import json, sys, time
-time.perf_counter = time.process_time  # the stage timers read CPU seconds
+time.perf_counter = time.process_time  # trees before 2026-11-27 timed stages by the wall clock
 from prsxy_post.convert import ConvertJob, convert_file
 program, prof, fmt, out = sys.argv[1:5]
 job = ConvertJob(program=program, profile_path=prof, fmt=fmt, output=out, parallel=False)

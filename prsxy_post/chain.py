@@ -311,7 +311,7 @@ class Planning:
 
     def plan(self, prepared: Prepared, final: bool = False) -> Planned:
         """Plan a prepared chunk (the last one with ``final``)."""
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         out = Planned(prepared.problems, final=final)
         if prepared.problems and not self.collect:
             return out  # its first problem stops the program before anything of it
@@ -346,7 +346,7 @@ class Planning:
             self._guard(plan, n_steps)
             out.plan, out.samples = plan, sample(plan, self.limits, phases)
         out.moves_nothing = final and not self.any_motion
-        out.seconds = time.perf_counter() - t0
+        out.seconds = time.process_time() - t0
         return out
 
     def cut(self, planned: Planned, solve: bool = False) -> Ready:
@@ -379,9 +379,9 @@ class Planning:
         """Virtual-axis map, IK and the IK's velocity for points ``q`` (n, 5) moving
         at ``qdot`` (n, 5) with tool lengths ``tool`` (n,), at G-code lines ``line``
         (n,); their problems returned, not raised."""
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         q_t = correct_virtual(q, self.error_map) if self.error_map is not None else q
-        t1 = time.perf_counter()
+        t1 = time.process_time()
         # the IK and its velocity (ik_derivative over VEL_STEP_S where a point
         # moves) in one pass. e(Q) changes by µm over mm: its share of the velocity
         # (1e-4 of it) moves the cubic by far less than the rounding of the
@@ -397,7 +397,7 @@ class Planning:
             reachable = bool(np.isfinite(P.sum()) or np.isfinite(P).all())
         if problems and not self.collect:  # the first stops the program here
             return Solved(q_t, P, None, reachable, problems)
-        return Solved(q_t, P, V, reachable, problems, (t1 - t0, time.perf_counter() - t1))
+        return Solved(q_t, P, V, reachable, problems, (t1 - t0, time.process_time() - t1))
 
     def _directions(self, b: Blocks) -> None:
         """The motors with play: dP/ds at each moving block's ends (the IK's
@@ -656,7 +656,7 @@ class Pipeline:
         self.problems: list[PrsxyError] = []
         self.t = 0.0
         self.n_points = 0
-        #: seconds spent per stage (for the benchmark and profiling)
+        #: CPU seconds spent per stage in this process (for the benchmark and profiling)
         self.timings = {"interpolate": 0.0, "error_map": 0.0, "kinematics": 0.0, "axis_tables": 0.0}
 
     # -- problems
@@ -668,9 +668,9 @@ class Pipeline:
         self.problems += errs
 
     def feed(self, motions: Sequence[Motion], final: bool = False) -> list[PointChunk]:
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         prepared = prepare(motions, self.profile, self.planning.limits)
-        self.timings["interpolate"] += time.perf_counter() - t0
+        self.timings["interpolate"] += time.process_time() - t0
         return self.feed_prepared(prepared, final)
 
     def feed_prepared(self, prepared: Prepared, final: bool = False) -> list[PointChunk]:
@@ -782,7 +782,7 @@ class Pipeline:
             P_cmd=P,
             V_cmd=V,
         )
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         contacts = np.zeros((0, 3), dtype=int)
         plain_last = pc.P_ideal[-1].copy() if len(pc) else self.last_plain
         V_cols: np.ndarray | None = None
@@ -819,7 +819,7 @@ class Pipeline:
             if self.play_cols:
                 self._settle(pc, by_motor, contacts, P_cmd, V_cmd)
             pc.P_cmd, pc.V_cmd = np.ascontiguousarray(P_cmd.T), np.ascontiguousarray(V_cmd.T)
-        self.timings["axis_tables"] += time.perf_counter() - t0
+        self.timings["axis_tables"] += time.process_time() - t0
         self.last = pc.take(slice(len(pc) - 1, len(pc)))
         self.last_plain = plain_last
         if len(pc):

@@ -336,9 +336,9 @@ class WriterHere:
         self.seconds = 0.0
 
     def _run(self, method: str, *args: Any) -> None:
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         self.parts.emit(getattr(self.writer, method)(*args))
-        self.seconds += time.perf_counter() - t0
+        self.seconds += time.process_time() - t0
 
     def begin(self) -> None:
         self._run("begin")
