@@ -398,6 +398,18 @@ def measure(truth, text: str) -> dict[str, float]:
         # 1.30 x F before, the blend out of a line that turns A and B into one
         # whose end joins tangentially
         (13, "helix", 600.0),
+        # open (issue 33): the compensated tilt along a 40 mm side departs 0.33" from
+        # a straight line, so a side is several lines that turn A and B, each blended
+        # parabolically at half its acceleration (tp.c tcRotaryMotionCheck): 1.33 x
+        # the plan, 1.19 x the uncorrected program (docs/measurements.md)
+        pytest.param(
+            11,
+            "five-axis",
+            10000.0,
+            marks=pytest.mark.xfail(
+                strict=True, reason="LinuxCNC blends lines that turn A and B parabolically"
+            ),
+        ),
     ],
 )
 def test_linuxcnc_runs_corrected_gcode_at_the_planned_speed(
