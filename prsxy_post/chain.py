@@ -1186,8 +1186,18 @@ class Pipeline:
         # path length run by each point since the point before the chunk: the
         # slower end of each step, so that a catch-up never outruns the path
         sp_prev = float(self.last.speed[0]) if self.last is not None else 0.0
-        sp = np.minimum(np.concatenate([[sp_prev], pc.speed[:-1]]), pc.speed)
-        return np.cumsum(np.where(pc.dwell, 0.0, sp * pc.dt))
+        speed = pc.speed
+        n = len(speed)
+        # in one array, worked in place: the same operations as
+        # cumsum(where(dwell, 0, minimum(concat([sp_prev], speed[:-1]), speed) * dt))
+        run = np.empty(n)
+        if n:
+            run[0] = np.minimum(sp_prev, speed[0])
+            np.minimum(speed[:-1], speed[1:], out=run[1:])
+            np.multiply(run, pc.dt, out=run)
+            run[pc.dwell] = 0.0
+            np.cumsum(run, out=run)
+        return run
 
     def _settle_motor(
         self,
