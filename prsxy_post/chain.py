@@ -813,9 +813,15 @@ class Pipeline:
             every = len(self.table_cols) == pc.P_ideal.shape[1]
             P_cmd = np.empty_like(by_motor[0]) if every else by_motor[0].copy()
             V_cmd = np.empty_like(by_motor[1]) if every else by_motor[1].copy()
+            # the kernel on each motor's contiguous rows (what axiscomp.compensate_sided
+            # and MotorTable.slope do, without their conversions and reshapes)
             for col, table in self.table_cols:
-                P_cmd[col] = axiscomp.compensate_sided(table, by_motor[0][col], by_motor[2][col])
-                V_cmd[col] = by_motor[1][col] / table.slope(P_cmd[col], by_motor[2][col])
+                P_cmd[col] = kernel.compensate_sided(table.flat, by_motor[0][col], by_motor[2][col])
+                np.divide(
+                    by_motor[1][col],
+                    kernel.play_slope(table.flat, P_cmd[col], by_motor[2][col]),
+                    out=V_cmd[col],
+                )
             if self.play_cols:
                 self._settle(pc, by_motor, contacts, P_cmd, V_cmd)
             pc.P_cmd, pc.V_cmd = np.ascontiguousarray(P_cmd.T), np.ascontiguousarray(V_cmd.T)
@@ -1180,8 +1186,18 @@ class Pipeline:
         # path length run by each point since the point before the chunk: the
         # slower end of each step, so that a catch-up never outruns the path
         sp_prev = float(self.last.speed[0]) if self.last is not None else 0.0
-        sp = np.minimum(np.concatenate([[sp_prev], pc.speed[:-1]]), pc.speed)
-        return np.cumsum(np.where(pc.dwell, 0.0, sp * pc.dt))
+        speed = pc.speed
+        n = len(speed)
+        # in one array, worked in place: the same operations as
+        # cumsum(where(dwell, 0, minimum(concat([sp_prev], speed[:-1]), speed) * dt))
+        run = np.empty(n)
+        if n:
+            run[0] = np.minimum(sp_prev, speed[0])
+            np.minimum(speed[:-1], speed[1:], out=run[1:])
+            np.multiply(run, pc.dt, out=run)
+            run[pc.dwell] = 0.0
+            np.cumsum(run, out=run)
+        return run
 
     def _settle_motor(
         self,
