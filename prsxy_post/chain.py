@@ -903,28 +903,56 @@ class Pipeline:
         if ins:
             extra, e_step, e_when, e_before, dt = self._new_points(plan, s, pc, t_end, ins)
             # time order: a standing point first in its step, then the points inside
-            # the step by time, then the step's own end point
-            step_all = np.concatenate([step, e_step])
-            rank = np.concatenate([np.full(n, 2), np.where(e_before, 0, 1)])
-            when_all = np.concatenate([when, e_when])
-            order = np.lexsort((when_all, rank, step_all))
-            # every field's rows in that order, gathered from both at once; not the
-            # clock (_points makes it from dt) nor the commands where the tables make
-            # them again from P_ideal, V_ideal (_points)
+            # the step by time, then the step's own end point. The chunk's points keep
+            # their order, so only the new ones are sorted (stably, as one sort of all
+            # would place them): the j-th of them goes after the j before it and the
+            # chunk's points of the steps before its own
+            e_order = np.lexsort((e_when, np.where(e_before, 0, 1), e_step))
+            at = e_step[e_order] + np.arange(len(e_order))
+            kept = np.ones(n + len(at), dtype=bool)
+            kept[at] = False
+            # the chunk's row at each place (a new point's place is written after)
+            src = np.maximum(np.cumsum(kept) - 1, 0)
+
+            def merged(own: np.ndarray, new: np.ndarray) -> np.ndarray:
+                """The chunk's rows ``own`` and the new points' ``new`` in time
+                order (one gather of the chunk's, the few new ones set)."""
+                out = _gather(own, src)
+                put = _gather(new, e_order)
+                if out.ndim > 1:
+                    # a row as one item: numpy sets the rows of an (n, 5) array
+                    # one number at a time, several times slower (the same bytes)
+                    row = np.dtype((np.void, out.itemsize * out.shape[1]))
+                    np.put(out.view(row)[:, 0], at, np.ascontiguousarray(put).view(row)[:, 0])
+                else:
+                    out[at] = put
+                return out
+
+            # every field but the clock (_points makes it from dt), and not the
+            # commands where the tables make them again from P_ideal, V_ideal (_points)
             skip = ("t", "P_cmd", "V_cmd") if self.table_cols else ("t",)
+            parts = extra or [pc.take(slice(0, 0))]
+
+            def new_rows(f: str) -> np.ndarray:
+                """The new points' field ``f``, all kinds joined."""
+                if len(parts) == 1:
+                    one: np.ndarray = getattr(parts[0], f)
+                    return one
+                return np.concatenate([getattr(p, f) for p in parts])
+
             fields = {
-                f: _gather(np.concatenate([getattr(p, f) for p in (pc, *extra)]), order)
+                f: merged(getattr(pc, f), new_rows(f))
                 for f in PointChunk.FIELDS
                 if f not in skip and f != "dt"
             }
-            fields["dt"] = np.concatenate([dt, *(p.dt for p in extra)])[order]
-            fields["t"] = np.zeros(len(order))
+            fields["dt"] = merged(dt, new_rows("dt"))
+            fields["t"] = np.zeros(len(src))
             if self.table_cols:
                 fields["P_cmd"], fields["V_cmd"] = fields["P_ideal"], fields["V_ideal"]
             pc = PointChunk(**fields)
-            step = step_all[order]
-            when = when_all[order]
-            before = np.concatenate([before, e_before])[order]
+            step = merged(step, e_step)
+            when = merged(when, e_when)
+            before = merged(before, e_before)
             resting = pc.speed == 0.0
         rows = reversals.Rows(step, when, before)
         V_cols = np.ascontiguousarray(pc.V_ideal.T, dtype=float)
