@@ -902,57 +902,11 @@ class Pipeline:
         before = np.zeros(n, dtype=bool)
         if ins:
             extra, e_step, e_when, e_before, dt = self._new_points(plan, s, pc, t_end, ins)
-            # time order: a standing point first in its step, then the points inside
-            # the step by time, then the step's own end point. The chunk's points keep
-            # their order, so only the new ones are sorted (stably, as one sort of all
-            # would place them): the j-th of them goes after the j before it and the
-            # chunk's points of the steps before its own
-            e_order = np.lexsort((e_when, np.where(e_before, 0, 1), e_step))
-            at = e_step[e_order] + np.arange(len(e_order))
-            kept = np.ones(n + len(at), dtype=bool)
-            kept[at] = False
-            # the chunk's row at each place (a new point's place is written after)
-            src = np.maximum(np.cumsum(kept) - 1, 0)
-
-            def merged(own: np.ndarray, new: np.ndarray) -> np.ndarray:
-                """The chunk's rows ``own`` and the new points' ``new`` in time
-                order (one gather of the chunk's, the few new ones set)."""
-                out = _gather(own, src)
-                put = _gather(new, e_order)
-                if out.ndim > 1:
-                    # a row as one item: numpy sets the rows of an (n, 5) array
-                    # one number at a time, several times slower (the same bytes)
-                    row = np.dtype((np.void, out.itemsize * out.shape[1]))
-                    np.put(out.view(row)[:, 0], at, np.ascontiguousarray(put).view(row)[:, 0])
-                else:
-                    out[at] = put
-                return out
-
-            # every field but the clock (_points makes it from dt), and not the
-            # commands where the tables make them again from P_ideal, V_ideal (_points)
-            skip = ("t", "P_cmd", "V_cmd") if self.table_cols else ("t",)
-            parts = extra or [pc.take(slice(0, 0))]
-
-            def new_rows(f: str) -> np.ndarray:
-                """The new points' field ``f``, all kinds joined."""
-                if len(parts) == 1:
-                    one: np.ndarray = getattr(parts[0], f)
-                    return one
-                return np.concatenate([getattr(p, f) for p in parts])
-
-            fields = {
-                f: merged(getattr(pc, f), new_rows(f))
-                for f in PointChunk.FIELDS
-                if f not in skip and f != "dt"
-            }
-            fields["dt"] = merged(dt, new_rows("dt"))
-            fields["t"] = np.zeros(len(src))
-            if self.table_cols:
-                fields["P_cmd"], fields["V_cmd"] = fields["P_ideal"], fields["V_ideal"]
-            pc = PointChunk(**fields)
-            step = merged(step, e_step)
-            when = merged(when, e_when)
-            before = merged(before, e_before)
+            places = _merge_places(n, e_step, e_when, e_before)
+            pc = self._joined(pc, dt, extra, places)
+            step = _merged(step, e_step, places)
+            when = _merged(when, e_when, places)
+            before = _merged(before, e_before, places)
             resting = pc.speed == 0.0
         rows = reversals.Rows(step, when, before)
         V_cols = np.ascontiguousarray(pc.V_ideal.T, dtype=float)
@@ -966,6 +920,38 @@ class Pipeline:
         cols = np.concatenate([ins.w_col, ins.s_col])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
         return pc, side, contacts[np.lexsort((cols, begs, ends))], V_cols
+
+    def _joined(
+        self,
+        pc: PointChunk,
+        dt: np.ndarray,
+        extra: list[PointChunk],
+        places: tuple[np.ndarray, np.ndarray, np.ndarray],
+    ) -> PointChunk:
+        """The chunk's points and the new ones (``extra``, their steps' new ``dt``
+        in ``dt``) in time order (:func:`_merge_places`): every field but the clock
+        (``_points`` makes it from dt), and not the commands where the tables make
+        them again from P_ideal, V_ideal (``_points``)."""
+        skip = ("t", "P_cmd", "V_cmd") if self.table_cols else ("t",)
+        parts = extra or [pc.take(slice(0, 0))]
+
+        def new_rows(f: str) -> np.ndarray:
+            """The new points' field ``f``, all kinds joined."""
+            if len(parts) == 1:
+                one: np.ndarray = getattr(parts[0], f)
+                return one
+            return np.concatenate([getattr(p, f) for p in parts])
+
+        fields = {
+            f: _merged(getattr(pc, f), new_rows(f), places)
+            for f in PointChunk.FIELDS
+            if f not in skip and f != "dt"
+        }
+        fields["dt"] = _merged(dt, new_rows("dt"), places)
+        fields["t"] = np.zeros(len(places[2]))
+        if self.table_cols:
+            fields["P_cmd"], fields["V_cmd"] = fields["P_ideal"], fields["V_ideal"]
+        return PointChunk(**fields)
 
     def _path_velocity(
         self, plan: Plan | None, s: Samples, pc: PointChunk
@@ -1036,7 +1022,6 @@ class Pipeline:
             forward Jacobian ∂q/∂P made once a row asked (every motor's and window's
             questions share them: the IK's differences are the cost), only there."""
             rows, which = np.unique(k, return_inverse=True)
-            fwd = np.full((len(rows), 5, 5), np.nan)
             # P_ideal is the IK of q_target here (blends move it only later)
             jac = ik_jacobian(
                 self.geo,
@@ -1045,22 +1030,7 @@ class Pipeline:
                 DIR_STEP_MM,
                 _gather(pc.P_ideal, rows),
             )
-            ok = np.all(np.isfinite(jac), axis=(1, 2))
-            # every pose reachable (the rule): no masked copies in and out
-            every = bool(np.all(ok))
-            if every or np.any(ok):
-                sub = jac if every else jac[ok]
-                try:
-                    inv = np.linalg.inv(sub)
-                except np.linalg.LinAlgError:
-                    # a singular pose: pinv gives a long lever (the shortest
-                    # window), not an error
-                    inv = np.linalg.pinv(sub)
-                if every:
-                    fwd = inv
-                else:
-                    fwd[ok] = inv
-            out: np.ndarray = fwd[which, :3, cols]
+            out: np.ndarray = _inverted(jac)[which, :3, cols]
             return out
 
         def edge_speed(
@@ -1460,6 +1430,45 @@ class Pipeline:
         jac = ik_jacobian(self.geo, q, tool, DIR_STEP_MM)
         return digit * np.abs(jac[at, col, :]).sum(axis=1)
 
+    def _standing_points(
+        self, pc: PointChunk, ks_stand: np.ndarray, hold: np.ndarray
+    ) -> PointChunk:
+        """The points where a motor stands before steps ``ks_stand`` for ``hold``
+        [s]: each where the point before it is (the chunk's first where the last
+        one made is), at rest."""
+        c = len(ks_stand)
+        at = np.maximum(ks_stand - 1, 0)
+        last = self.last
+        if ks_stand[0] == 0:
+            assert last is not None  # a stand needs a point to stand at
+
+        def where(name: str) -> np.ndarray:
+            """Each stands where the point before it is."""
+            x: np.ndarray = np.take(getattr(pc, name), at, axis=0)
+            if ks_stand[0] == 0:
+                x[0] = getattr(last, name)[0]
+            return x
+
+        return PointChunk(
+            q=where("q"),
+            qdot=np.zeros((c, 5)),
+            dt=np.array(hold, dtype=float),
+            t=where("t"),
+            line=pc.line[ks_stand],
+            first=np.zeros(c, dtype=bool),
+            tool_length=where("tool_length"),
+            speed=np.zeros(c),
+            dwell=np.ones(c, dtype=bool),
+            fn=np.empty(c, dtype=object),
+            block_end=np.zeros(c, dtype=bool),
+            split=np.zeros(c, dtype=np.int8),
+            q_target=where("q_target"),
+            P_ideal=where("P_ideal"),
+            V_ideal=np.zeros((c, 5)),
+            P_cmd=where("P_cmd"),
+            V_cmd=np.zeros((c, 5)),
+        )
+
     def _new_points(
         self,
         plan: Plan | None,
@@ -1477,42 +1486,8 @@ class Pipeline:
         e_before: list[np.ndarray] = [np.zeros(0, dtype=bool)]
         dt = pc.dt.copy()
         if len(ins.stand_k):
-            ks_stand, hold = ins.stand_k, ins.stand_t
-            c = len(ks_stand)
-            at = np.maximum(ks_stand - 1, 0)
-            last = self.last
-            if ks_stand[0] == 0:
-                assert last is not None  # a stand needs a point to stand at
-
-            def where(name: str) -> np.ndarray:
-                """Each stands where the point before it is (the chunk's first
-                where the last one made is)."""
-                x: np.ndarray = np.take(getattr(pc, name), at, axis=0)
-                if ks_stand[0] == 0:
-                    x[0] = getattr(last, name)[0]
-                return x
-
-            parts.append(
-                PointChunk(
-                    q=where("q"),
-                    qdot=np.zeros((c, 5)),
-                    dt=np.array(hold, dtype=float),
-                    t=where("t"),
-                    line=pc.line[ks_stand],
-                    first=np.zeros(c, dtype=bool),
-                    tool_length=where("tool_length"),
-                    speed=np.zeros(c),
-                    dwell=np.ones(c, dtype=bool),
-                    fn=np.empty(c, dtype=object),
-                    block_end=np.zeros(c, dtype=bool),
-                    split=np.zeros(c, dtype=np.int8),
-                    q_target=where("q_target"),
-                    P_ideal=where("P_ideal"),
-                    V_ideal=np.zeros((c, 5)),
-                    P_cmd=where("P_cmd"),
-                    V_cmd=np.zeros((c, 5)),
-                )
-            )
+            ks_stand = ins.stand_k
+            parts.append(self._standing_points(pc, ks_stand, ins.stand_t))
             e_step.append(ks_stand)
             e_when.append(t_end[ks_stand] - pc.dt[ks_stand])
             e_before.append(np.ones(len(ks_stand), dtype=bool))
@@ -1639,6 +1614,65 @@ def _gather(a: np.ndarray, idx: np.ndarray) -> np.ndarray:
     table (an (n, 5) array's rows over ten times faster than fancy indexing: the
     same values), plain indexing for a column."""
     out: np.ndarray = np.take(a, idx, axis=0) if a.ndim > 1 else a[idx]
+    return out
+
+
+def _inverted(jac: np.ndarray) -> np.ndarray:
+    """(n, 5, 5) the inverses of IK Jacobians ``jac`` (n, 5, 5): the forward
+    Jacobians ∂q/∂P; NaN where a Jacobian is not finite (an unreachable pose), the
+    pseudo-inverse where one is singular (a long lever: the shortest window, not an
+    error)."""
+    ok = np.all(np.isfinite(jac), axis=(1, 2))
+    # every pose reachable (the rule): no masked copies in and out
+    every = bool(np.all(ok))
+    if not every and not np.any(ok):
+        return np.full(jac.shape, np.nan)
+    sub = jac if every else jac[ok]
+    try:
+        inv = np.linalg.inv(sub)
+    except np.linalg.LinAlgError:
+        inv = np.linalg.pinv(sub)
+    if every:
+        out: np.ndarray = inv
+        return out
+    fwd = np.full(jac.shape, np.nan)
+    fwd[ok] = inv
+    return fwd
+
+
+def _merge_places(
+    n: int, e_step: np.ndarray, e_when: np.ndarray, e_before: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where ``len(e_step)`` new points go among a chunk's ``n``, in time order: a
+    standing point first in its step, then the points inside the step by time, then
+    the step's own end point. The chunk's points keep their order, so only the new
+    ones are sorted (stably, as one sort of all would place them): the j-th of them
+    goes after the j before it and the chunk's points of the steps before its own.
+    Returns (the new points' order, their places in the whole, the chunk's row at
+    each place: a new point's place is written over after)."""
+    e_order = np.lexsort((e_when, np.where(e_before, 0, 1), e_step))
+    at = e_step[e_order] + np.arange(len(e_order))
+    kept = np.ones(n + len(at), dtype=bool)
+    kept[at] = False
+    src = np.maximum(np.cumsum(kept) - 1, 0)
+    return e_order, at, src
+
+
+def _merged(
+    own: np.ndarray, new: np.ndarray, places: tuple[np.ndarray, np.ndarray, np.ndarray]
+) -> np.ndarray:
+    """A chunk's rows ``own`` and the new points' ``new`` in time order
+    (:func:`_merge_places`): one gather of the chunk's, the few new ones set."""
+    e_order, at, src = places
+    out = _gather(own, src)
+    put = _gather(new, e_order)
+    if out.ndim > 1:
+        # a row as one item: numpy sets the rows of an (n, 5) array one number at
+        # a time, several times slower (the same bytes)
+        row = np.dtype((np.void, out.itemsize * out.shape[1]))
+        np.put(out.view(row)[:, 0], at, np.ascontiguousarray(put).view(row)[:, 0])
+    else:
+        out[at] = put
     return out
 
 
