@@ -329,3 +329,39 @@ def test_arcs_decisions_are_bit_identical() -> None:
     # resumes after both kinds of request
     assert sum(r and k == gwrite.REQ_REARC for r, k in zip(resumed, kinds, strict=True)) > 0
     assert sum(r and k == gwrite.REQ_ARC_TO for r, k in zip(resumed, kinds, strict=True)) > 0
+
+
+def test_stops_resumed_in_place_write_the_references_text() -> None:
+    """The twin resumes its own stops in the buffers it stopped in (``st.pend_*``
+    left as views of them, neither copied out nor back): the writer, calling it
+    on its own state from stop to stop as in a conversion, writes the same text
+    as with the reference, and the resumed calls did go on in place."""
+    from .test_tracking import convert, truth_machine
+
+    _gwrite = compiled("_gwrite")
+    in_place: list[bool] = []
+
+    def twin(st: gwrite.GState, *args: Any) -> Ops:
+        before = st.pend_i.base if int(st.i[gwrite.I_NAMES.index("stop_at")]) >= 0 else None
+        out: Ops = _gwrite.gcode_ops(st, *args)
+        if before is not None:
+            # a resumed call: stopped again in the same buffer, or ended
+            stopped = int(st.i[gwrite.I_NAMES.index("stop_at")]) >= 0
+            in_place.append(not stopped or st.pend_i.base is before)
+        return out
+
+    texts = {}
+    for name, fn in (("reference", gwrite.gcode_ops), ("twin", twin)):
+        mp = pytest.MonkeyPatch()
+        mp.setattr(kernel, "_gcode_ops", fn)
+        try:
+            texts[name] = [
+                convert(m, text, "gcode", chunk)[2]
+                for m in (truth_machine("nominal", None), truth_machine("random", 13))
+                for text in _arc_programs()
+                for chunk in (0, 5)
+            ]
+        finally:
+            mp.undo()
+    assert texts["twin"] == texts["reference"]
+    assert len(in_place) > 5 and all(in_place)

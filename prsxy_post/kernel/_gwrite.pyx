@@ -882,10 +882,81 @@ cdef void _store(W* w, double[::1] f, long long[::1] iv, st):
         a[i] = w.corner_q[i]
 
 
+cdef bint _arcs_named(const long long[::1] arc_of, Py_ssize_t n_arcs) noexcept:
+    """Whether every point's arc (-1: none) is a row of arc_i."""
+    cdef Py_ssize_t k
+    for k in range(arc_of.shape[0]):
+        if arc_of[k] >= n_arcs:
+            return False
+    return True
+
+
+cdef bint _ends_inside(const long long[:, ::1] arc_i, Py_ssize_t n) noexcept:
+    """Whether every arc's start and end is a point of the chunk (0 <= j < n)."""
+    cdef Py_ssize_t a, c
+    for a in range(arc_i.shape[0]):
+        for c in range(2):
+            if arc_i[a, c] < 0 or arc_i[a, c] >= n:
+                return False
+    return True
+
+
+cdef object _owner(x, Py_ssize_t rows, Py_ssize_t cols):
+    """The buffer a stopped call left ``x`` a view of (its first entries, as
+    :func:`gcode_ops` stores them), or None: a (rows', cols) float or a (4,
+    rows') int64 array at the same address (``rows``: the entries needed)."""
+    if not isinstance(x, np.ndarray):
+        return None
+    b = x.base
+    if not isinstance(b, np.ndarray) or not b.flags.c_contiguous or b.ndim != 2:
+        return None
+    if b.__array_interface__["data"][0] != x.__array_interface__["data"][0]:
+        return None
+    if cols == 4:  # the int ops (4, capacity): x = b[:, :m].T
+        if b.dtype != np.int64 or b.shape[0] != 4 or b.shape[1] < rows:
+            return None
+        if x.ndim != 2 or x.strides != (8, 8 * b.shape[1]):
+            return None
+    elif b.dtype != np.float64 or b.shape[1] != cols or b.shape[0] < rows:
+        return None
+    return b
+
+
+cdef tuple _buffers(st, bint resume, Py_ssize_t cap, Py_ssize_t cap_t, Py_ssize_t n):
+    """The op buffers of a call: ops (4, cap) int64 (code, arg, ab, aux), val
+    (cap,), tilts (cap_t, 2), holding the ops so far of a resumed call. A call
+    that resumes its own stop (``st.pend_*`` views of the buffers it left) goes on
+    in them, without allocating or copying; others get buffers with room for a
+    chunk's stops (twice the first call's need), the ops so far copied in."""
+    cdef Py_ssize_t m0 = len(st.pend_i) if resume else 0
+    cdef Py_ssize_t nt0 = len(st.pend_t) if resume else 0
+    if resume:
+        ops_i = _owner(st.pend_i, cap, 4)
+        vb = st.pend_v.base if isinstance(st.pend_v, np.ndarray) else None
+        tilts = _owner(st.pend_t, cap_t, 2)
+        if (ops_i is not None and tilts is not None and isinstance(vb, np.ndarray)
+                and vb.dtype == np.float64 and vb.ndim == 1 and vb.shape[0] == ops_i.shape[1]
+                and vb.__array_interface__["data"][0]
+                == st.pend_v.__array_interface__["data"][0]):
+            return ops_i, vb, tilts
+    cap += 14 * n + 16
+    cap_t += n + 1
+    ops_i = np.empty((4, cap), dtype=np.int64)
+    val = np.empty(cap, dtype=np.float64)
+    tilts = np.empty((cap_t, 2), dtype=np.float64)
+    if resume:
+        ops_i[:, :m0] = np.asarray(st.pend_i, dtype=np.int64).reshape(-1, 4).T
+        val[:m0] = st.pend_v
+        tilts[:nt0] = np.asarray(st.pend_t).reshape(-1, 2)
+    return ops_i, val, tilts
+
+
 def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint end,
               arc_of=None, arc_i=None, arc_f=None):
     """:func:`prsxy_post.kernel.gwrite.gcode_ops`, compiled (``st.run_q`` must
-    hold ``len(q)`` more points: :func:`gwrite.reserve`)."""
+    hold ``len(q)`` more points: :func:`gwrite.reserve`). After a stop,
+    ``st.pend_*`` are views of the call's op buffers, which the call resuming it
+    fills on in place: copy the state (``copy.deepcopy``) to keep a stopped one."""
     if np.ndim(q) != 2 or np.shape(q)[1] != 5 or np.ndim(lead) != 2 or np.shape(lead)[1] != 5:
         raise ValueError(f"q and lead need (N, 5), got {np.shape(q)} and {np.shape(lead)}")
     cdef const double[:, ::1] qv = np.ascontiguousarray(q, dtype=np.float64).reshape(-1, 5)
@@ -915,30 +986,19 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
         raise ValueError(f"every input needs one row per point ({n})")
     if has_arcs and aov.shape[0] != n:
         raise ValueError(f"arc_of needs one row per point ({n}), got {aov.shape[0]}")
-    if has_arcs and (np.any(np.asarray(arc_of) >= aiv.shape[0]) or aiv.shape[0] != afv.shape[0]):
+    if has_arcs and (not _arcs_named(aov, aiv.shape[0]) or aiv.shape[0] != afv.shape[0]):
         raise ValueError("arc_of names an arc arc_i and arc_f do not hold")
-    if has_arcs and aiv.shape[0] and (np.any(np.asarray(arc_i)[:, :2] < 0)
-                                      or np.any(np.asarray(arc_i)[:, :2] >= n)):
+    if has_arcs and not _ends_inside(aiv, n):
         raise ValueError("an arc's start or end is no point of the chunk")
     if f.shape[0] != len(F_NAMES) or iv.shape[0] != len(I_NAMES) or run.shape[1] != 5:
         raise ValueError("not a gwrite.GState")
     if iv[4] + n > run.shape[0]:
         raise ValueError(f"st.run_q holds {run.shape[0]} points, {iv[4] + n} may be held")
     resume = iv[17] != NONE
-    pend_i = np.ascontiguousarray(st.pend_i, dtype=np.int64).reshape(-1, 4) if resume else None
-    m0 = pend_i.shape[0] if resume else 0
+    m0 = len(st.pend_i) if resume else 0
     nt0 = len(st.pend_t) if resume else 0
-    cap = m0 + 14 * n + 16
-    code = np.empty(cap, dtype=np.int64)
-    arg = np.empty(cap, dtype=np.int64)
-    ab = np.empty(cap, dtype=np.int64)
-    aux = np.empty(cap, dtype=np.int64)
-    val = np.empty(cap, dtype=np.float64)
-    tilts = np.empty((nt0 + n + 1, 2), dtype=np.float64)
-    if resume:
-        code[:m0], arg[:m0], ab[:m0], aux[:m0] = pend_i[:, 0], pend_i[:, 1], pend_i[:, 2], pend_i[:, 3]
-        val[:m0] = st.pend_v
-        tilts[:nt0] = np.asarray(st.pend_t).reshape(-1, 2)
+    ops_i, val, tilts = _buffers(st, resume, m0 + 14 * n + 16, nt0 + n + 1, n)
+    code, arg, ab, aux = ops_i[0], ops_i[1], ops_i[2], ops_i[3]
     cdef long long[::1] cv = code, av = arg, abv = ab, xv = aux
     cdef double[::1] vv = val
     cdef double[:, ::1] tv = tilts
@@ -993,9 +1053,10 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     _store(&w, f, iv, st)
     m = w.m
     if stopped:
-        st.pend_i = np.stack([code[:m], arg[:m], ab[:m], aux[:m]], axis=1).copy()
-        st.pend_v = val[:m].copy()
-        st.pend_t = tilts[: w.nt].copy()
+        # the ops so far stay in the buffers: the next call resumes them in place
+        st.pend_i = ops_i[:, :m].T
+        st.pend_v = val[:m]
+        st.pend_t = tilts[: w.nt]
         e = np.zeros(0, dtype=np.int64)
         return e, e.copy(), e.copy(), e.copy(), np.zeros(0), np.zeros((0, 2))
     st.pend_i = np.zeros((0, 4), dtype=np.int64)
