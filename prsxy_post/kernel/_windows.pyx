@@ -9,7 +9,7 @@ import numpy as np
 
 from ._play import creeps as _creeps
 
-from libc.math cimport sqrt, fabs, copysign, INFINITY, NAN
+from libc.math cimport sqrt, fabs, copysign, signbit, INFINITY, NAN
 
 
 cdef inline double _max(double a, double b) noexcept nogil:
@@ -354,6 +354,11 @@ cdef inline bint _turns_twice(double P0, double V0, double P1, double V1, double
     disc = b * b - 4.0 * a * c
     if not (disc > 0 and fabs(a) > 0):
         return False  # most steps: the roots need not be made
+    # both roots positive needs qq's sign (that of −b's sign bit: disc > 0, so
+    # b and the root's term it adds share theirs) to be a's and c's, c ≠ 0: the
+    # sign rules of IEEE division, exact, so the test below would fail anyway
+    if c == 0 or (a > 0) != (c > 0) or (signbit(b) != 0) != (c > 0):
+        return False
     qq = -0.5 * (b + copysign(sqrt(_max(disc, 0.0)), b))
     r1 = qq / a
     r2 = c / qq
