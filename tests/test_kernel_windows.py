@@ -25,6 +25,7 @@ from hypothesis import strategies as st
 from prsxy_post import kernel, reversals
 from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.kernel import windows
+from prsxy_post.kernel.play import carried
 
 from .conftest import ROOT
 from .kernel_cases import compiled, record, same_bits
@@ -272,6 +273,40 @@ def test_generated_motor_turns_and_dips_are_bit_identical(
         w_d = windows.motor_dips(*d_args)
         g_d = _windows.motor_dips(*d_args)
         assert all(same_bits(g, w) for g, w in zip(g_d, w_d, strict=True))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_dips_at_signed_zeros_and_velocities_against_the_way_are_bit_identical(
+    seed: int,
+) -> None:
+    """The twin's dip pass skips a step before its roots are made where their
+    signs rule out two inside it (c = V0 zero, a against c, b's sign bit against
+    c): steps at ±0.0 velocities, chords that make b exactly ±0.0, velocities
+    against ``sg`` and dips of either way, compiled against the reference."""
+    _windows = compiled("_windows")
+    rng = np.random.default_rng(seed)
+    n = 4000
+    V = rng.choice([0.0, -0.0, 1e-300, -1e-300, 3.0, -3.0, 1.0, -1.0, 7.5], n)
+    h = rng.choice([0.01, 0.00977, 2.5e-4], n - 1)
+    # chords: none, ±0.0, along the mean velocity, short of it (a dip), against it
+    k = rng.integers(0, 6, n - 1)
+    mean = 0.5 * (V[:-1] + V[1:]) * h
+    step = np.select(
+        [k == 0, k == 1, k == 2, k == 3, k == 4],
+        [np.zeros(n - 1), np.full(n - 1, -0.0), mean, 0.05 * mean, -mean],
+        rng.normal(0.0, 0.01, n - 1),
+    )
+    P = np.concatenate([[0.0], np.cumsum(step)])
+    P[1:][k == 1] = P[:-1][k == 1]  # exactly no chord
+    sg = rng.choice([1, -1], n) * np.where(rng.random(n) < 0.9, 1, 0)
+    sg = np.where(rng.random(n) < 0.8, np.roll(sg, 1), sg)  # runs of one way
+    # the way each row comes from: the last way before it (motor_turns' came)
+    came = np.concatenate([[1], carried(sg, 1)[:-1]])
+    for sets_off in (False, True):
+        args = (P, V, h, sg, came, 1, 1e-6, sets_off)
+        got, want = _windows.motor_dips(*args), windows.motor_dips(*args)
+        assert all(same_bits(g, w) for g, w in zip(got, want, strict=True))
+        assert len(want[0]) > 0
 
 
 def test_compiled_motor_rows_refuse_arrays_of_the_wrong_length() -> None:

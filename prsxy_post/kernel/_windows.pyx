@@ -9,7 +9,7 @@ import numpy as np
 
 from ._play import creeps as _creeps
 
-from libc.math cimport sqrt, fabs, copysign, INFINITY, NAN
+from libc.math cimport sqrt, fabs, copysign, signbit, INFINITY, NAN
 
 
 cdef inline double _max(double a, double b) noexcept nogil:
@@ -344,69 +344,153 @@ def motor_turns(V, P, rest, long side, double ref, double drift, Py_ssize_t off,
     return sg_a, came_a, r_a, kind_a, reach
 
 
-cdef inline bint _turns_twice(double P0, double V0, double P1, double V1,
-                              double h) noexcept nogil:
-    # turning_points' test for one step, its operations as there
-    cdef double a, b, c, disc, qq, r1, r2, lo, hi
+cdef inline bint _turns_twice(double P0, double V0, double P1, double V1, double h,
+                              double* lo, double* hi) noexcept nogil:
+    # turning_points' test for one step, its operations as there; the roots (in
+    # time order) set where it holds
+    cdef double a, b, c, disc, qq, r1, r2
     a = _vq(P0, V0, P1, V1, h, &b)
     c = V0
     disc = b * b - 4.0 * a * c
     if not (disc > 0 and fabs(a) > 0):
         return False  # most steps: the roots need not be made
+    # both roots positive needs qq's sign (that of −b's sign bit: disc > 0, so
+    # b and the root's term it adds share theirs) to be a's and c's, c ≠ 0: the
+    # sign rules of IEEE division, exact, so the test below would fail anyway
+    if c == 0 or (a > 0) != (c > 0) or (signbit(b) != 0) != (c > 0):
+        return False
     qq = -0.5 * (b + copysign(sqrt(_max(disc, 0.0)), b))
     r1 = qq / a
     r2 = c / qq
-    lo = _min(r1, r2)
-    hi = _max(r1, r2)
-    return (lo > 0) and (hi < 1) and (hi > lo)
+    lo[0] = _min(r1, r2)
+    hi[0] = _max(r1, r2)
+    return (lo[0] > 0) and (hi[0] < 1) and (hi[0] > lo[0])
+
+
+cdef inline double _velocity_root(double P0, double V0, double P1, double V1, double h,
+                                  double nw) noexcept nogil:
+    # velocity_roots' s for one step with has_new, its operations as there
+    cdef double a, b, c, disc, qq, r1, r2, best, linear
+    cdef bint lin, ok1, ok2, turn1, turn2
+    a = _vq(P0, V0, P1, V1, h, &b)
+    c = V0
+    disc = b * b - 4.0 * a * c
+    lin = fabs(a) < 1e-12 * (fabs(b) + fabs(c) + 1e-300)
+    qq = -0.5 * (b + copysign(sqrt(_max(disc, 0.0)), b))
+    if lin:
+        r1 = -c / b if b != 0 else NAN
+        r2 = NAN
+    else:
+        r1 = qq / a
+        r2 = c / qq if qq != 0 else -b / (2 * a)
+    if not disc >= 0:
+        r1 = NAN
+        r2 = NAN
+    ok1 = (r1 >= -1e-9) and (r1 <= 1 + 1e-9)
+    ok2 = (r2 >= -1e-9) and (r2 <= 1 + 1e-9)
+    turn1 = ok1 and (nw * (2.0 * a * r1 + b) >= 0)
+    turn2 = ok2 and (nw * (2.0 * a * r2 + b) >= 0)
+    if turn1 or turn2:
+        ok1, ok2 = turn1, turn2
+    if ok1 and ok2:
+        best = _min(r1, r2)
+    elif ok1:
+        best = r1
+    elif ok2:
+        best = r2
+    else:
+        best = NAN
+    linear = V0 / (V0 - V1) if V0 != V1 else 0.5
+    return _clip01(linear if best != best else best)
 
 
 def motor_dips(P, V, h, sg, came, Py_ssize_t off, double tol, bint sets_off):
-    """:func:`prsxy_post.kernel.windows.motor_dips`, compiled: the candidate steps
-    found in one pass (a dip's only where the step's cubic turns twice inside it,
-    :func:`turning_points`' test: :func:`dip_roots` keeps no other), then
-    :func:`dip_roots` over them (the same rows in the same order as the
-    reference's turning rows, so numpy's cubes of the same array)."""
+    """:func:`prsxy_post.kernel.windows.motor_dips`, compiled, :func:`dip_roots`
+    fused in: one pass finds the candidate steps and their roots (a dip's only
+    where the step's cubic turns twice inside it, :func:`turning_points`' test:
+    :func:`dip_roots` keeps no other; a setting-off's root by
+    :func:`velocity_roots`), then the roots' cubes by numpy's power over the
+    array the reference makes (the same rows in the same order), then the
+    depths and accelerations over the candidates."""
     cdef const double[::1] p = np.ascontiguousarray(P, dtype=np.float64)
     cdef const double[::1] v = np.ascontiguousarray(V, dtype=np.float64)
     cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
     cdef const long[::1] s = np.ascontiguousarray(sg, dtype=np.int_)
     cdef const long[::1] c = np.ascontiguousarray(came, dtype=np.int_)
-    cdef Py_ssize_t N = p.shape[0], n = hh.shape[0], j, m = 0, lo_j, hi_j
+    cdef Py_ssize_t N = p.shape[0], n = hh.shape[0], j, i, m = 0, k = 0, lo_j, hi_j
     _lengths("one value a row, as P", N, V=len(v), sg=len(s), came=len(c))
     if n > N - off:
         raise ValueError(f"h must have at most {N - off} values (one a step), got {n}")
-    j_a = np.empty(N, dtype=np.intp)
-    cdef Py_ssize_t[::1] jj = j_a
     lo_j = off if off > 1 else 1
     hi_j = off + n if off + n < N else N
-    for j in range(lo_j, hi_j):
+    cdef Py_ssize_t cap = hi_j - lo_j if hi_j > lo_j else 0
+    j_a = np.empty(cap, dtype=np.intp)
+    # the candidates' roots: (m, 2) turning points as turning_points' rows, or
+    # (m, 1) velocity_roots' s setting off
+    r_a = np.empty((cap, 1 if sets_off else 2))
+    cdef Py_ssize_t[::1] jj = j_a
+    cdef double[:, ::1] rr = r_a
+    cdef double lo, hi
+    with nogil:
         if sets_off:
-            if (s[j] != 0 and s[j - 1] == 0 and c[j] == s[j]
-                    and s[j] * (p[j] - p[j - 1]) < 0.0):
-                jj[m] = j
-                m += 1
-        elif s[j] == s[j - 1] and s[j] != 0:
-            if _turns_twice(p[j - 1], v[j - 1], p[j], v[j], hh[j - off]):
-                jj[m] = j
-                m += 1
-    P0, V0, P1, V1 = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
-    hk, sk = np.empty(m), np.empty(m)
-    cdef double[::1] a0 = P0
-    cdef double[::1] b0 = V0
-    cdef double[::1] a1 = P1
-    cdef double[::1] b1 = V1
-    cdef double[::1] hv = hk
-    cdef double[::1] sv = sk
-    for j in range(m):
-        a0[j] = p[jj[j] - 1]
-        b0[j] = v[jj[j] - 1]
-        a1[j] = p[jj[j]]
-        b1[j] = v[jj[j]]
-        hv[j] = hh[jj[j] - off]
-        sv[j] = s[jj[j]]
-    keep, s1, s2, A1, A2 = dip_roots(P0, V0, P1, V1, hk, sk, tol, sets_off)
-    return j_a[:m][keep], s1, s2, A1, A2
+            for j in range(lo_j, hi_j):
+                if (s[j] != 0 and s[j - 1] == 0 and c[j] == s[j]
+                        and s[j] * (p[j] - p[j - 1]) < 0.0):
+                    jj[m] = j
+                    rr[m, 0] = _velocity_root(p[j - 1], v[j - 1], p[j], v[j], hh[j - off],
+                                              <double>s[j])
+                    m += 1
+        else:
+            for j in range(lo_j, hi_j):
+                if s[j] == s[j - 1] and s[j] != 0:
+                    if _turns_twice(p[j - 1], v[j - 1], p[j], v[j], hh[j - off], &lo, &hi):
+                        jj[m] = j
+                        rr[m, 0] = lo
+                        rr[m, 1] = hi
+                        m += 1
+    cdef const double[:, ::1] S3 = np.ascontiguousarray(r_a[:m] ** 3)
+    keep_a = np.empty(m, dtype=np.intp)
+    cdef Py_ssize_t[::1] kp = keep_a
+    cdef double x1, x2, a, b
+    with nogil:
+        for i in range(m):
+            j = jj[i]
+            if sets_off:
+                x2 = _hermite(rr[i, 0], S3[i, 0], p[j - 1], v[j - 1], p[j], v[j], hh[j - off])
+                if (fabs(x2 - p[j - 1]) > tol) and (rr[i, 0] > 0):
+                    kp[k] = i
+                    k += 1
+            else:
+                x1 = _hermite(rr[i, 0], S3[i, 0], p[j - 1], v[j - 1], p[j], v[j], hh[j - off])
+                x2 = _hermite(rr[i, 1], S3[i, 1], p[j - 1], v[j - 1], p[j], v[j], hh[j - off])
+                if fabs(x2 - x1) > tol:
+                    kp[k] = i
+                    k += 1
+    out_j = np.empty(k, dtype=np.intp)
+    out_s1, out_s2, out_1, out_2 = np.empty(k), np.empty(k), np.empty(k), np.empty(k)
+    cdef Py_ssize_t[::1] oj = out_j
+    cdef double[::1] S1 = out_s1
+    cdef double[::1] S2 = out_s2
+    cdef double[::1] A1 = out_1
+    cdef double[::1] A2 = out_2
+    cdef double k1, k2
+    with nogil:
+        for m in range(k):
+            i = kp[m]
+            j = jj[i]
+            if sets_off:
+                k1 = 0.0
+                k2 = rr[i, 0]
+            else:
+                k1 = rr[i, 0]
+                k2 = rr[i, 1]
+            a = _vq(p[j - 1], v[j - 1], p[j], v[j], hh[j - off], &b)
+            oj[m] = j
+            S1[m] = k1
+            S2[m] = k2
+            A1[m] = (2 * a * k1 + b) / hh[j - off]
+            A2[m] = (2 * a * k2 + b) / hh[j - off]
+    return out_j, out_s1, out_s2, out_1, out_2
 
 
 def corner_blends(V_in, V_out, cols, h, double accel, double v_eps, double turn_mm,
