@@ -71,42 +71,10 @@ def velocity_roots(P0, V0, P1, V1, h, new, bint has_new):
     out_a = np.empty(n)
     cdef double[::1] S = out_s
     cdef double[::1] AC = out_a
-    cdef double a, b, c, disc, qq, r1, r2, best, linear, s
-    cdef bint lin, ok1, ok2, turn1, turn2
+    cdef double a, b, s
     with nogil:
         for i in range(n):
-            a = _vq(p0[i], v0[i], p1[i], v1[i], hh[i], &b)
-            c = v0[i]
-            disc = b * b - 4.0 * a * c
-            lin = fabs(a) < 1e-12 * (fabs(b) + fabs(c) + 1e-300)
-            qq = -0.5 * (b + copysign(sqrt(_max(disc, 0.0)), b))
-            if lin:
-                r1 = -c / b if b != 0 else NAN
-                r2 = NAN
-            else:
-                r1 = qq / a
-                r2 = c / qq if qq != 0 else -b / (2 * a)
-            if not disc >= 0:
-                r1 = NAN
-                r2 = NAN
-            ok1 = (r1 >= -1e-9) and (r1 <= 1 + 1e-9)
-            ok2 = (r2 >= -1e-9) and (r2 <= 1 + 1e-9)
-            if has_new:
-                turn1 = ok1 and (nw[i] * (2.0 * a * r1 + b) >= 0)
-                turn2 = ok2 and (nw[i] * (2.0 * a * r2 + b) >= 0)
-                if turn1 or turn2:
-                    ok1, ok2 = turn1, turn2
-            if ok1 and ok2:
-                best = _min(r1, r2)
-            elif ok1:
-                best = r1
-            elif ok2:
-                best = r2
-            else:
-                best = NAN
-            linear = v0[i] / (v0[i] - v1[i]) if v0[i] != v1[i] else 0.5
-            s = linear if best != best else best
-            s = _clip01(s)
+            s = _root(p0[i], v0[i], p1[i], v1[i], hh[i], nw[i], has_new, &a, &b)
             S[i] = s
             AC[i] = (2.0 * a * s + b) / hh[i]
     return out_s, out_a
@@ -367,12 +335,14 @@ cdef inline bint _turns_twice(double P0, double V0, double P1, double V1, double
     return (lo[0] > 0) and (hi[0] < 1) and (hi[0] > lo[0])
 
 
-cdef inline double _velocity_root(double P0, double V0, double P1, double V1, double h,
-                                  double nw) noexcept nogil:
-    # velocity_roots' s for one step with has_new, its operations as there
+cdef inline double _root(double P0, double V0, double P1, double V1, double h, double nw,
+                         bint has_new, double* a_out, double* b_out) noexcept nogil:
+    # one step of velocity_roots: its s returned, the quadratic's a and b set
     cdef double a, b, c, disc, qq, r1, r2, best, linear
     cdef bint lin, ok1, ok2, turn1, turn2
     a = _vq(P0, V0, P1, V1, h, &b)
+    a_out[0] = a
+    b_out[0] = b
     c = V0
     disc = b * b - 4.0 * a * c
     lin = fabs(a) < 1e-12 * (fabs(b) + fabs(c) + 1e-300)
@@ -388,10 +358,11 @@ cdef inline double _velocity_root(double P0, double V0, double P1, double V1, do
         r2 = NAN
     ok1 = (r1 >= -1e-9) and (r1 <= 1 + 1e-9)
     ok2 = (r2 >= -1e-9) and (r2 <= 1 + 1e-9)
-    turn1 = ok1 and (nw * (2.0 * a * r1 + b) >= 0)
-    turn2 = ok2 and (nw * (2.0 * a * r2 + b) >= 0)
-    if turn1 or turn2:
-        ok1, ok2 = turn1, turn2
+    if has_new:
+        turn1 = ok1 and (nw * (2.0 * a * r1 + b) >= 0)
+        turn2 = ok2 and (nw * (2.0 * a * r2 + b) >= 0)
+        if turn1 or turn2:
+            ok1, ok2 = turn1, turn2
     if ok1 and ok2:
         best = _min(r1, r2)
     elif ok1:
@@ -402,6 +373,13 @@ cdef inline double _velocity_root(double P0, double V0, double P1, double V1, do
         best = NAN
     linear = V0 / (V0 - V1) if V0 != V1 else 0.5
     return _clip01(linear if best != best else best)
+
+
+cdef inline double _velocity_root(double P0, double V0, double P1, double V1, double h,
+                                  double nw) noexcept nogil:
+    # velocity_roots' s for one step with has_new
+    cdef double a, b
+    return _root(P0, V0, P1, V1, h, nw, True, &a, &b)
 
 
 def motor_dips(P, V, h, sg, came, Py_ssize_t off, double tol, bint sets_off):
