@@ -30,6 +30,7 @@ from prsxy_post.kernel import arcs
 
 from .conftest import ROOT
 from .kernel_cases import compiled, same_bits
+from .test_linuxcnc_motion import arc_programs
 
 Rows = tuple[np.ndarray, np.ndarray]
 
@@ -40,22 +41,6 @@ def _same_rows(got: Rows, want: Rows) -> bool:
         and np.array_equal(got[0], want[0])
         and same_bits(got[1], want[1])
     )
-
-
-def _arc_programs() -> list[str]:
-    from .test_linuxcnc_motion import HEAD, PROGRAMS
-
-    out = [PROGRAMS[n](f) for n in ("arcs", "helix") for f in (600.0, 10000.0)]
-    for turn in (0.002, 0.05):
-        out.append(
-            HEAD + f"G0 X10 Y0 Z2 A0 B0\nG1 Z0 F3000\nG2 X10 Y0 Z-3 I-10 J0 P2 A{turn:g} "
-            f"B{-turn / 2:g}\nG0 Z2\nM2\n"
-        )
-    out.append(
-        HEAD + "G0 X3 Y0 Z2\nG1 Z0 F3000\nG18 G2 X-3 Z0 I-3 K0\nG19 G3 Y3 Z0 J1.5 K0\n"
-        "G17\nG0 Z5\nM2\n"
-    )
-    return out
 
 
 def _spying(attrs: list[str]) -> tuple[dict[str, list[tuple[Any, ...]]], pytest.MonkeyPatch]:
@@ -92,7 +77,7 @@ def test_recorded_searches_are_bit_identical(tmp_path: Path) -> None:
             truth_machine("random", 11, play=False),
             truth_machine("random", 13),
         ):
-            for text in _arc_programs():
+            for text in arc_programs():
                 for chunk in (0, 5):
                     convert(m, text, "gcode", chunk)
         convert_file(ConvertJob(str(prog), str(prof), "gcode", str(tmp_path / "out.ngc")))

@@ -31,10 +31,11 @@ from hypothesis import strategies as st
 
 from prsxy_post import kernel
 from prsxy_post.convert import ConvertJob, convert_file
-from prsxy_post.kernel import gwrite
+from prsxy_post.kernel import gwrite, vnorm
 
 from .conftest import ROOT
 from .kernel_cases import compiled, record, same_bits
+from .test_linuxcnc_motion import arc_programs
 
 Ops = gwrite.Ops
 
@@ -104,15 +105,17 @@ _float = st.one_of(
 @given(x=st.lists(_float, min_size=0, max_size=5))
 def test_fsum_and_hypot_are_cpythons(x: list[float]) -> None:
     """The twin's exactly rounded sum is math.fsum's bits (Shewchuk's partials,
-    half-even across them), its hypot CPython's vector_norm (a split square and
-    a corrected root, not libm's hypot): cancelling pairs, subnormals, wide ranges."""
+    half-even across them), its hypot the reference's (CPython 3.11's vector_norm,
+    :mod:`prsxy_post.kernel.vnorm`, not libm's hypot; checked against
+    ``math.hypot`` itself in tests/test_kernel_vnorm.py): cancelling pairs,
+    subnormals, wide ranges."""
     _gwrite = compiled("_gwrite")
     xs = x + [-v for v in x[:1]]  # a pair that cancels exactly
     for v in (x, xs, [a * 1e-3 for a in x]):
         want = math.fsum(v)
         got = _gwrite.fsum(np.array(v, dtype=float))
         assert same_bits(np.array(got), np.array(want))
-    want_h = math.hypot(*x)
+    want_h = vnorm.hypot(*x)
     assert same_bits(np.array(_gwrite.hypot(np.array(x, dtype=float))), np.array(want_h))
 
 
@@ -275,23 +278,6 @@ def test_generated_runs_are_bit_identical(
     assert np.all(np.concatenate([o[4][o[0] == gwrite.G1] for o in ops]) > 0.0)
 
 
-def _arc_programs() -> list[str]:
-    from .test_linuxcnc_motion import HEAD, PROGRAMS
-
-    out = [PROGRAMS[n](f) for n in ("arcs", "helix") for f in (600.0, 10000.0)]
-    for turn in (0.002, 0.05):
-        out.append(
-            HEAD + f"G0 X10 Y0 Z2 A0 B0\nG1 Z0 F3000\nG2 X10 Y0 Z-3 I-10 J0 P2 A{turn:g} "
-            f"B{-turn / 2:g}\nG0 Z2\nM2\n"
-        )
-    # arcs in G18 and G19 (a plane word where it changes)
-    out.append(
-        HEAD + "G0 X3 Y0 Z2\nG1 Z0 F3000\nG18 G2 X-3 Z0 I-3 K0\nG19 G3 Y3 Z0 J1.5 K0\n"
-        "G17\nG0 Z5\nM2\n"
-    )
-    return out
-
-
 def test_arcs_decisions_are_bit_identical() -> None:
     """Every call while arcs, helices and helices that turn A and B a little
     convert (rule 5): the ARC and PLANE ops, the tilts centered before runs of
@@ -315,7 +301,7 @@ def test_arcs_decisions_are_bit_identical() -> None:
     mp.setattr(kernel, "_gcode_ops", spy)
     try:
         for m in machines:
-            for text in _arc_programs():
+            for text in arc_programs():
                 for chunk in (0, 5):
                     convert(m, text, "gcode", chunk)
     finally:
@@ -358,7 +344,7 @@ def test_stops_resumed_in_place_write_the_references_text() -> None:
             texts[name] = [
                 convert(m, text, "gcode", chunk)[2]
                 for m in (truth_machine("nominal", None), truth_machine("random", 13))
-                for text in _arc_programs()
+                for text in arc_programs()
                 for chunk in (0, 5)
             ]
         finally:

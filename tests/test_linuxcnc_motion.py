@@ -344,6 +344,23 @@ PROGRAMS: dict[str, Callable[[float], str]] = {
 }
 
 
+def arc_programs() -> list[str]:
+    """Arcs and helices (F600, F10000), helices that turn A and B a little, and arcs
+    in G18 and G19 (a plane word where it changes): the arc writer's test programs
+    (tests/test_kernel_arcs.py, tests/test_kernel_gwrite.py)."""
+    out = [PROGRAMS[n](f) for n in ("arcs", "helix") for f in (600.0, 10000.0)]
+    for turn in (0.002, 0.05):
+        out.append(
+            HEAD + f"G0 X10 Y0 Z2 A0 B0\nG1 Z0 F3000\nG2 X10 Y0 Z-3 I-10 J0 P2 A{turn:g} "
+            f"B{-turn / 2:g}\nG0 Z2\nM2\n"
+        )
+    out.append(
+        HEAD + "G0 X3 Y0 Z2\nG1 Z0 F3000\nG18 G2 X-3 Z0 I-3 K0\nG19 G3 Y3 Z0 J1.5 K0\n"
+        "G17\nG0 Z5\nM2\n"
+    )
+    return out
+
+
 def uncorrected(text: str, blend_mm: float) -> str:
     """The program under the corrected program's ``G64 P`` (LinuxCNC's G64 without P
     may cut corners by any amount), after a leading ``%`` line if it has one."""

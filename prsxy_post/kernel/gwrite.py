@@ -2,10 +2,11 @@
 each line's time and F, its G61 / G64 P mode, a G4 P0 after it, a line before it
 slowed down or stopped.
 
-The plain-Python reference (Python's floats, ``math.fsum``, ``math.dist`` and
-``math.hypot``); ``_gwrite.pyx`` is its compiled twin, the same operations in the
-same order (the same bits: CPython's exactly rounded ``fsum`` and its ``hypot``,
-which is not libm's, written out there). The rules (why each, with LinuxCNC's
+The plain-Python reference (Python's floats, ``math.fsum``, and CPython 3.11's
+``hypot`` and ``dist`` from :mod:`prsxy_post.kernel.vnorm` on every Python);
+``_gwrite.pyx`` is its compiled twin, the same operations in the same order (the
+same bits: CPython's exactly rounded ``fsum`` and 3.11's ``hypot``, which is not
+libm's, written out there). The rules (why each, with LinuxCNC's
 source) are :mod:`prsxy_post.writers.linuxcnc`'s; this module only decides.
 
 A chunk's points go in as arrays, with a :class:`GState` carried from chunk to
@@ -24,6 +25,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from . import vnorm
 
 #: LinuxCNC's servo period [s]: a parabolic blend's next line leads by one
 SERVO_PERIOD_S = 1e-3
@@ -192,7 +195,7 @@ def corner_cut(
     """
     r_in = [(b - a) / t_in for a, b in zip(q_in, q_at, strict=True)]
     r_out = [(b - a) / t_out for a, b in zip(q_at, q_out, strict=True)]
-    v_in, v_out = math.hypot(*r_in[:3]), math.hypot(*r_out[:3])
+    v_in, v_out = vnorm.hypot(*r_in[:3]), vnorm.hypot(*r_out[:3])
     v = max(v_in, v_out)
     t_blend = min(t_in, t_out, 2.0 * v / accel) if v > 0.0 else min(t_in, t_out)
     if v_in > 0.0 and v_out > 0.0:
@@ -201,7 +204,7 @@ def corner_cut(
         turn = [(o / v_out - i / v_in) * v for i, o in zip(r_in, r_out, strict=True)]
     else:
         turn = [o - i for i, o in zip(r_in, r_out, strict=True)]
-    return math.hypot(*turn[:3]) * t_blend / 8.0, math.hypot(*turn[3:]) * t_blend / 8.0
+    return vnorm.hypot(*turn[:3]) * t_blend / 8.0, vnorm.hypot(*turn[3:]) * t_blend / 8.0
 
 
 def line_accel(d_xyz: list[float], d_ab: list[float], accel: float, accel_deg: float) -> float:
@@ -210,7 +213,7 @@ def line_accel(d_xyz: list[float], d_ab: list[float], accel: float, accel_deg: f
     (``getStraightAcceleration``, emccanon.cc:612-721), up to √3 times the axes'
     limit on a diagonal; ``accel`` [mm/s²] and ``accel_deg`` [deg/s²] the axes'
     limits."""
-    dtot = math.hypot(*d_xyz)
+    dtot = vnorm.hypot(*d_xyz)
     tmax = max(
         max(abs(d) for d in d_xyz) / accel,
         max(abs(d) for d in d_ab) / accel_deg,
@@ -333,7 +336,7 @@ class _Run:
     def piece(self, qk: list[float], dtk: float) -> tuple[float, float]:
         """The piece from the last held-back (or written) point to qk: (length, rate)."""
         prev = self.run[-1] if self.run else self.last_q
-        step = math.dist(prev, qk)
+        step = vnorm.dist(prev, qk)
         return step, (step / dtk if dtk > 0.0 else 0.0)
 
     def dips(self, qk: list[float], dtk: float, lead: list[float]) -> bool:
@@ -360,7 +363,7 @@ class _Run:
             self.len_sum, self.dt_sum = 0.0, 0.0
         self.len_sum += step
         self.dt_sum += dtk
-        xyz_rate = math.dist(prev[:3], qk[:3]) / dtk if dtk > 0.0 else 0.0
+        xyz_rate = vnorm.dist(prev[:3], qk[:3]) / dtk if dtk > 0.0 else 0.0
         if plan > 0.0 and xyz_rate > 0.5 * plan:
             # a piece that moves X Y Z about as planned (not a turn of A or B alone,
             # planned in degrees per second): how far it stretches the planned path
@@ -390,7 +393,7 @@ class _Run:
             # the planned path less than another, the tool ran faster than planned
             # there: no faster than the plan's fastest speed on the piece that
             # stretches least
-            xyz = max(math.dist(self.last_q[:3], self.run[-1][:3]), arc_mm)
+            xyz = max(vnorm.dist(self.last_q[:3], self.run[-1][:3]), arc_mm)
             t = max(t, xyz / (self.plan_peak * self.stretch))
         return t
 
@@ -488,7 +491,7 @@ class _Run:
         exact = exact or bool(self.all_exact)
         ab_src = self.tilt_held(src, q, self.tilt_hold if arc == NONE else self.arc_hold)
         turns = self.held_ab != self.last_ab
-        length = math.dist(self.last_q[:3], q[:3]) if arc == NONE else arc_len
+        length = vnorm.dist(self.last_q[:3], q[:3]) if arc == NONE else arc_len
         ab_now = list(self.held_ab)
         accel = line_accel(
             [b - a for a, b in zip(self.last_q[:3], q[:3], strict=True)],
@@ -630,7 +633,7 @@ class _Run:
         arc's written speed, along its last piece: its corner is judged as if
         LinuxCNC ran the end at the arc's speed."""
         d = [b - x for x, b in zip(q_before, q_end, strict=True)]
-        n = math.hypot(*d[:3])
+        n = vnorm.hypot(*d[:3])
         if n <= 0.0 or t <= 0.0:
             return q_before
         step = self.arc_f[a][A_LEN] / t * dt / n
