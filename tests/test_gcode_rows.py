@@ -18,7 +18,7 @@ import pytest
 
 from prsxy_post import chain, gcode, rules
 from prsxy_post.errors import GCodeError
-from prsxy_post.gcode import rows
+from prsxy_post.gcode import fast, rows
 from prsxy_post.interpolate import geometry
 from prsxy_post.profile import Profile
 
@@ -62,6 +62,14 @@ def _assert_same_columns(a: object, b: object) -> None:
             assert x.tobytes() == y.tobytes(), name  # to the bit: NaNs and -0.0 too
 
 
+def _rows_selected() -> None:
+    """Skip unless the compiled fast path is the one selected: only it makes rows
+    (``PRSXY_KERNEL=pure`` selects the reference, which gives Motions)."""
+    compiled()
+    if fast.SELECTED is not fast.COMPILED:
+        pytest.skip("PRSXY_KERNEL=pure selects the reference fast path (Motions only)")
+
+
 @pytest.mark.parametrize("path", _programs(), ids=lambda p: p.name)
 def test_a_programs_table_gives_the_columns_its_motions_give(path: Path) -> None:
     motions, items = _both(path)
@@ -77,7 +85,7 @@ def test_the_generated_program_comes_as_rows_and_plans_the_same(nominal: Profile
     its prepared chunks the same blocks and problems as its Motions'."""
     from bench.bench import generate
 
-    compiled()
+    _rows_selected()
     lines = gcode.split_lines(generate(3000, seed=5))
     motions = list(gcode.iter_motions(lines, CFG))
     items = list(gcode.iter_motion_items([lines], CFG))
@@ -129,7 +137,7 @@ def test_rows_around_a_motion_the_reference_arc_makes_stay_in_order() -> None:
     in the middle of a run: the rows before it go out before its Motion."""
     lines = ["G21 G90 G94 G17 G1 X0 Y0 F100", "X1", "G2 X2 Y0 I.5 A" + "9" * 200, "G1 X3", "X4"]
     same([*lines, "M2"])
-    compiled()
+    _rows_selected()
     items = list(gcode.iter_motion_items([[*lines, "M2"]], CFG))
     kinds = [type(x).__name__ if isinstance(x, np.ndarray) else x.kind for x in items]
     assert kinds == ["feed", "ndarray", "arc", "ndarray", "function"]
@@ -140,7 +148,7 @@ def test_a_run_cut_short_holds_only_its_own_rows() -> None:
     """A run of rows ended by a line the full path takes (here a comment) is its
     rows alone, not a view of the room left for the rest of the batch, which
     would stay alive until its chunk is planned."""
-    compiled()
+    _rows_selected()
     lines = ["G21 G90 G94 G1 X0 Y0 F100"]
     for j in range(100):
         lines += [f"X{j}.5", f"Y{j}", "(a comment)"]

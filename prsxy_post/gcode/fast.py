@@ -68,26 +68,15 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
     goes the full way, which reports it with its column. The modal state lives
     in locals over the run and is written back at its end.
     """
-    first = matches[i]
-    if first[11] or not (first[1] or first[2] or first[3] or first[4] or first[5]):
-        return i  # not a move the fast path takes: no state to set up
-    st = it.st
-    if (
-        st.ended
-        or st.inverse_time
-        or st.comp_side
-        or st.rotation  # points go out through Interpreter.emit_now's rotation
-        or st.arc_not_allowed  # the full path clears it at the next straight move
-        or it.detached is not None
-        or it.queue
-    ):
+    if not _takes(it, matches[i]):
         return i
+    st = it.st
     x, y, z, a, b = st.pos
     motion = st.motion
     feed = st.feed
     sc = MM_PER_INCH if st.units == "inch" else 1.0
     absolute = st.absolute
-    ox, oy, oz, oa, ob = it.offset()
+    offset = it.offset()
     extra = (st.tool_length, st.tool, st.spindle * st.spindle_dir, False, st.path_tol, (), None)
     append = it.out.append
     new_motion = False
@@ -117,18 +106,7 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
             continue
         if is_ or js or ks or rs:
             break
-        if absolute:
-            ex = float(xs) * sc + ox if xs else x
-            ey = float(ys) * sc + oy if ys else y
-            ez = float(zs) * sc + oz if zs else z
-            ea = float(as_) + oa if as_ else a
-            eb = float(bs) + ob if bs else b
-        else:
-            ex = x + float(xs) * sc if xs else x
-            ey = y + float(ys) * sc if ys else y
-            ez = z + float(zs) * sc if zs else z
-            ea = a + float(as_) if as_ else a
-            eb = b + float(bs) if bs else b
+        ex, ey, ez, ea, eb = _line_end(words, (x, y, z, a, b), absolute, sc, offset)
         if fs:
             feed = f
         if g:
@@ -169,6 +147,54 @@ def fast_run(it: Interpreter, matches: list[tuple[str, ...]], i: int, n0: int) -
             st.cycle_il = None
         it.started = True
     return k
+
+
+def _takes(it: Interpreter, first: tuple[str, ...]) -> bool:
+    """Whether the fast path may start at a line with the groups ``first``: a move
+    with axis words and nothing else, in a state it keeps (no cutter compensation,
+    rotation, inverse time, queued or detached work, pending arc check)."""
+    if first[11] or not (first[1] or first[2] or first[3] or first[4] or first[5]):
+        return False  # not a move the fast path takes: no state to set up
+    st = it.st
+    return not (
+        st.ended
+        or st.inverse_time
+        or st.comp_side
+        or st.rotation  # points go out through Interpreter.emit_now's rotation
+        or st.arc_not_allowed  # the full path clears it at the next straight move
+        or it.detached is not None
+        or it.queue
+    )
+
+
+def _line_end(
+    words: tuple[str, ...],
+    here: tuple[float, float, float, float, float],
+    absolute: bool,
+    sc: float,
+    offset: tuple[float, ...],
+) -> tuple[float, float, float, float, float]:
+    """A straight move's end [mm, mm, mm, deg, deg]: each axis word in the
+    program's units (``sc`` mm per unit) and offsets (``offset``, in G90), or
+    added to ``here`` (G91); an axis without a word stays."""
+    _, xs, ys, zs, as_, bs = words[:6]
+    x, y, z, a, b = here
+    if absolute:
+        ox, oy, oz, oa, ob = offset
+        return (
+            float(xs) * sc + ox if xs else x,
+            float(ys) * sc + oy if ys else y,
+            float(zs) * sc + oz if zs else z,
+            float(as_) + oa if as_ else a,
+            float(bs) + ob if bs else b,
+        )
+    return (
+        x + float(xs) * sc if xs else x,
+        y + float(ys) * sc if ys else y,
+        z + float(zs) * sc if zs else z,
+        a + float(as_) if as_ else a,
+        b + float(bs) if bs else b,
+    )
 
 
 def _motion_of(fields: tuple[object, ...]) -> Motion:
