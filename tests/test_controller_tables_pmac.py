@@ -352,6 +352,65 @@ def test_reading_a_table_of_another_motor_is_an_error() -> None:
         pmac.read(text, "axis-tables.pmc", prof)
 
 
+def _broken(text: str, old: str, new: str) -> str:
+    assert old in text
+    return text.replace(old, new, 1)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "want"),
+    [
+        (
+            "; home offset: motor 1 add +454 to I126",
+            "; home offset: motor 1 add +454 to I226",
+            r"m.pmc:\d+: home offset note names two motors \(expected ; home offset: motor n",
+        ),
+        (
+            "#6 DEFINE COMP 61,#6D,#6,6100000",
+            "#6 DEFINE COMP 61,#6D,#6,x6100000",
+            r"m.pmc:\d+: DEFINE COMP 61,#6D,#6,x6100000 \(expected DEFINE COMP entries,#nD",
+        ),
+        (
+            "#6 DEFINE BLCOMP 61,6100000",
+            "#6 DEFINE BLCOMP 61,#6,6100000",
+            r"m.pmc:\d+: DEFINE BLCOMP 61,#6,6100000 \(expected DEFINE BLCOMP entries,count",
+        ),
+        (
+            "#6 DEFINE BLCOMP 61,6100000",
+            "#6 DEFINE BLCOMP 61,6000000",
+            r"m.pmc: motor 6: BLCOMP and COMP tables differ in spacing",
+        ),
+        (
+            "#6 DEFINE COMP 61,#6D,#6,6100000",
+            "#6 DEFINE COMP 61,#6D,#6,6100001",
+            r"m.pmc: motor 6: 6100001 counts over 61 entries \(expected a whole number",
+        ),
+        ("I185=80 I186=952", "I185=80 I486=952", r"m.pmc: I486=952 without a DEFINE COMP table"),
+    ],
+)
+def test_reading_a_broken_table_file_names_what_is_wrong(old: str, new: str, want: str) -> None:
+    """Each way a hand-edited file can go wrong is an error at its line (where it
+    has one) saying what was expected, and nothing is read."""
+    prof = axis_runs.machine(1, varying_backlash=True)
+    text = _broken(pmac.export(prof).text, old, new)
+    with pytest.raises(MeasurementError, match=want):
+        pmac.read(text, "m.pmc", prof)
+
+
+def test_reading_a_table_cut_short_or_with_words_among_its_entries_is_an_error() -> None:
+    prof = axis_runs.machine(1, varying_backlash=True)
+    lines = pmac.export(prof).text.splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("#6 DEFINE COMP"))
+    words = [*lines[: k + 1], "12 x 4", *lines[k + 1 :]]
+    with pytest.raises(MeasurementError, match=rf"m.pmc:{k + 2}: '12 x 4' among the entries"):
+        pmac.read("\n".join(words), "m.pmc", prof)
+    short = "\n".join(ln for ln in lines if not ln.startswith("#6 DEFINE BLCOMP"))
+    blank = "\n".join(lines[: k + 1])  # the file ends inside motor 6's table
+    with pytest.raises(MeasurementError, match=r"m.pmc: motor 6's table has 0 entries"):
+        pmac.read(blank, "m.pmc", prof)
+    assert pmac.read(short, "m.pmc", prof)  # no BLCOMP for motor 6: read without it
+
+
 def test_cli_export_and_import(tmp_path: Path) -> None:
     prof = axis_runs.machine(2, varying_backlash=True)
     src = tmp_path / "m.toml"

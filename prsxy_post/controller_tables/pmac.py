@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -328,134 +328,10 @@ def read(text: str, source: str, profile: Profile) -> list[AxisComp]:
     Only tables whose source and target are their own motor describe that motor's
     real axis; any other table is an error at its line.
     """
-    motor = 1
-    comp: dict[int, tuple[int, int, list[int]]] = {}
-    blcomp: dict[int, tuple[int, int, list[int]]] = {}
-    ivars: dict[tuple[int, int], int] = {}
-    home: dict[int, int] = {}
-    pending: list[int] | None = None
-    need = 0
-    lines = text.splitlines()
-    for n, raw in enumerate(lines, 1):
-        hm = _HOME.search(raw)
-        if hm:
-            if hm.group(1) != hm.group(3):
-                raise MeasurementError(
-                    "home offset note names two motors",
-                    source=source,
-                    line=n,
-                    expected="; home offset: motor n add v to In26",
-                )
-            home[int(hm.group(1))] = int(hm.group(2))
-        body = raw.split(";", 1)[0].strip()
-        if not body:
-            continue
-        if pending is not None and len(pending) < need:
-            try:
-                pending += [int(v) for v in body.split()]
-            except ValueError:
-                raise MeasurementError(
-                    f"{body!r} among the entries of a table",
-                    source=source,
-                    line=n,
-                    expected=f"{need} whole numbers (1/16 count)",
-                ) from None
-            if len(pending) > need:
-                raise MeasurementError(
-                    f"{len(pending)} entries", source=source, line=n, expected=f"{need} entries"
-                )
-            continue
-        d = _DEFINE.match(body)
-        if d:
-            if d.group(1):
-                motor = int(d.group(1))
-            kind, entries, rest = d.group(2).upper(), int(d.group(3)), d.group(4).replace(" ", "")
-            if kind == "COMP":
-                mm = re.fullmatch(r"(?:#(\d+)D?,(?:#(\d+),)?)?(\d+)", rest, re.I)
-                if not mm:
-                    raise MeasurementError(
-                        f"DEFINE COMP {entries},{rest}",
-                        source=source,
-                        line=n,
-                        expected="DEFINE COMP entries,#nD,#n,count length",
-                    )
-                src, tgt = mm.group(1), mm.group(2)
-                if (src and int(src) != motor) or (tgt and int(tgt) != motor):
-                    raise MeasurementError(
-                        f"motor {motor}'s table acts on motor {tgt or motor} from motor {src}",
-                        source=source,
-                        line=n,
-                        expected="a table of the motor's own position and command",
-                    )
-                length = int(mm.group(3))
-                store = comp
-            else:
-                if not re.fullmatch(r"\d+", rest):
-                    raise MeasurementError(
-                        f"DEFINE BLCOMP {entries},{rest}",
-                        source=source,
-                        line=n,
-                        expected="DEFINE BLCOMP entries,count length",
-                    )
-                length = int(rest)
-                store = blcomp
-            pending, need = [], entries
-            store[motor] = (entries, length, pending)
-            continue
-        for tok in re.findall(r"#\d+|I\d+\s*=\s*-?\d+", body, re.I):
-            if tok.startswith("#"):
-                motor = int(tok[1:])
-            else:
-                num, val = (x.strip() for x in tok[1:].split("="))
-                if len(num) >= 3 and num[-2:] in ("85", "86"):
-                    ivars[(int(num[:-2]), int(num[-2:]))] = int(val)
-    for m, (entries, _, vals) in {**comp, **blcomp}.items():
-        if len(vals) != entries:
-            raise MeasurementError(
-                f"motor {m}'s table has {len(vals)} entries",
-                source=source,
-                expected=f"{entries} entries",
-            )
-    out = []
-    for m in sorted(comp):
-        if m not in MOTORS:
-            raise MeasurementError(
-                f"a table of motor {m}", source=source, expected="motors 1, 2, 3, 5, 6"
-            )
-        mc = profile.motor(m)
-        cpm = mc.counts_per_mm
-        entries, length, vals = comp[m]
-        if length % entries:
-            raise MeasurementError(
-                f"motor {m}: {length} counts over {entries} entries",
-                source=source,
-                expected="a whole number of counts per entry",
-            )
-        lay = _layout(length // entries, (mc.min, mc.max), cpm)
-        if lay.n != entries:
-            raise MeasurementError(
-                f"motor {m}: {entries} entries of {length // entries} counts do not cover the "
-                f"travel {mc.min:g} … {mc.max:g} mm of the profile as prsxy-post lays them out",
-                source=source,
-                expected=f"{lay.n} entries",
-            )
-        ixx86 = ivars.get((m, 86), 0)
-        bl = blcomp.get(m)
-        if bl is not None and (bl[0], bl[1]) != (entries, length):
-            raise MeasurementError(
-                f"motor {m}: BLCOMP and COMP tables differ in spacing",
-                source=source,
-                expected="the same entries and count length",
-            )
-        total = ixx86 + (np.array(bl[2]) if bl is not None else np.zeros(entries))
-        # entry 0 is zero at zero; the last entry stands for zero too (rollover) and goes
-        p = np.concatenate([[0.0], lay.positions(cpm)[:-1]])
-        c_f = (np.concatenate([[0], vals[:-1]]) + home.get(m, 0)) / 16 / cpm
-        c_r = c_f - np.concatenate([[ixx86], total[:-1]]) / 16 / cpm
-        order = np.argsort(p)
-        out.append(comp_from_corrections(m, p[order], c_f[order], c_r[order]))
-    for (m, v), val in ivars.items():
-        if v == 86 and val and m not in comp:
+    tables = _scan(text, source)
+    out = [_motor_comp(m, tables, profile, source) for m in sorted(tables.comp)]
+    for (m, v), val in tables.ivars.items():
+        if v == 86 and val and m not in tables.comp:
             raise MeasurementError(
                 f"I{m}86={val} without a DEFINE COMP table of motor {m}",
                 source=source,
@@ -468,3 +344,156 @@ def read(text: str, source: str, profile: Profile) -> list[AxisComp]:
             expected="#n DEFINE COMP entries,#nD,#n,count length and its entries",
         )
     return out
+
+
+#: a motor's table as read: (entries, counts it spans, the entries [1/16 count])
+_Table = tuple[int, int, list[int]]
+
+
+@dataclass
+class _Scanned:
+    """What a PMAC file sets: COMP and BLCOMP tables by motor, Ixx85/Ixx86 by
+    (motor, number), home offsets by motor [1/16 count]."""
+
+    comp: dict[int, _Table] = field(default_factory=dict)
+    blcomp: dict[int, _Table] = field(default_factory=dict)
+    ivars: dict[tuple[int, int], int] = field(default_factory=dict)
+    home: dict[int, int] = field(default_factory=dict)
+
+
+def _scan(text: str, source: str) -> _Scanned:
+    """The file's tables, I-variables and home notes, line by line as PMAC reads
+    them (the motor addressed last owns a table defined; entries follow it)."""
+    got = _Scanned()
+    motor = 1
+    pending: list[int] | None = None
+    need = 0
+    for n, raw in enumerate(text.splitlines(), 1):
+        hm = _HOME.search(raw)
+        if hm:
+            if hm.group(1) != hm.group(3):
+                raise MeasurementError(
+                    "home offset note names two motors",
+                    source=source,
+                    line=n,
+                    expected="; home offset: motor n add v to In26",
+                )
+            got.home[int(hm.group(1))] = int(hm.group(2))
+        body = raw.split(";", 1)[0].strip()
+        if not body:
+            continue
+        if pending is not None and len(pending) < need:
+            _entries(pending, need, body, source, n)
+            continue
+        d = _DEFINE.match(body)
+        if d:
+            if d.group(1):
+                motor = int(d.group(1))
+            pending, need = [], int(d.group(3))
+            is_comp, length = _define(d, motor, source, n)
+            (got.comp if is_comp else got.blcomp)[motor] = (need, length, pending)
+            continue
+        for tok in re.findall(r"#\d+|I\d+\s*=\s*-?\d+", body, re.I):
+            if tok.startswith("#"):
+                motor = int(tok[1:])
+            else:
+                num, val = (x.strip() for x in tok[1:].split("="))
+                if len(num) >= 3 and num[-2:] in ("85", "86"):
+                    got.ivars[(int(num[:-2]), int(num[-2:]))] = int(val)
+    for m, (entries, _, vals) in {**got.comp, **got.blcomp}.items():
+        if len(vals) != entries:
+            raise MeasurementError(
+                f"motor {m}'s table has {len(vals)} entries",
+                source=source,
+                expected=f"{entries} entries",
+            )
+    return got
+
+
+def _entries(pending: list[int], need: int, body: str, source: str, n: int) -> None:
+    """A line of a table's entries, added to ``pending`` (``need`` in all)."""
+    try:
+        pending += [int(v) for v in body.split()]
+    except ValueError:
+        raise MeasurementError(
+            f"{body!r} among the entries of a table",
+            source=source,
+            line=n,
+            expected=f"{need} whole numbers (1/16 count)",
+        ) from None
+    if len(pending) > need:
+        raise MeasurementError(
+            f"{len(pending)} entries", source=source, line=n, expected=f"{need} entries"
+        )
+
+
+def _define(d: re.Match[str], motor: int, source: str, n: int) -> tuple[bool, int]:
+    """A DEFINE COMP or DEFINE BLCOMP line: (whether COMP, the counts it spans)."""
+    kind, entries, rest = d.group(2).upper(), int(d.group(3)), d.group(4).replace(" ", "")
+    if kind != "COMP":
+        if not re.fullmatch(r"\d+", rest):
+            raise MeasurementError(
+                f"DEFINE BLCOMP {entries},{rest}",
+                source=source,
+                line=n,
+                expected="DEFINE BLCOMP entries,count length",
+            )
+        return False, int(rest)
+    mm = re.fullmatch(r"(?:#(\d+)D?,(?:#(\d+),)?)?(\d+)", rest, re.I)
+    if not mm:
+        raise MeasurementError(
+            f"DEFINE COMP {entries},{rest}",
+            source=source,
+            line=n,
+            expected="DEFINE COMP entries,#nD,#n,count length",
+        )
+    src, tgt = mm.group(1), mm.group(2)
+    if (src and int(src) != motor) or (tgt and int(tgt) != motor):
+        raise MeasurementError(
+            f"motor {motor}'s table acts on motor {tgt or motor} from motor {src}",
+            source=source,
+            line=n,
+            expected="a table of the motor's own position and command",
+        )
+    return True, int(mm.group(3))
+
+
+def _motor_comp(m: int, tables: _Scanned, profile: Profile, source: str) -> AxisComp:
+    """Motor m's ``[[axis_comp]]`` from its COMP table, its BLCOMP table and Ixx86
+    (backlash), laid out over the profile's travel."""
+    if m not in MOTORS:
+        raise MeasurementError(
+            f"a table of motor {m}", source=source, expected="motors 1, 2, 3, 5, 6"
+        )
+    mc = profile.motor(m)
+    cpm = mc.counts_per_mm
+    entries, length, vals = tables.comp[m]
+    if length % entries:
+        raise MeasurementError(
+            f"motor {m}: {length} counts over {entries} entries",
+            source=source,
+            expected="a whole number of counts per entry",
+        )
+    lay = _layout(length // entries, (mc.min, mc.max), cpm)
+    if lay.n != entries:
+        raise MeasurementError(
+            f"motor {m}: {entries} entries of {length // entries} counts do not cover the "
+            f"travel {mc.min:g} … {mc.max:g} mm of the profile as prsxy-post lays them out",
+            source=source,
+            expected=f"{lay.n} entries",
+        )
+    ixx86 = tables.ivars.get((m, 86), 0)
+    bl = tables.blcomp.get(m)
+    if bl is not None and (bl[0], bl[1]) != (entries, length):
+        raise MeasurementError(
+            f"motor {m}: BLCOMP and COMP tables differ in spacing",
+            source=source,
+            expected="the same entries and count length",
+        )
+    total = ixx86 + (np.array(bl[2]) if bl is not None else np.zeros(entries))
+    # entry 0 is zero at zero; the last entry stands for zero too (rollover) and goes
+    p = np.concatenate([[0.0], lay.positions(cpm)[:-1]])
+    c_f = (np.concatenate([[0], vals[:-1]]) + tables.home.get(m, 0)) / 16 / cpm
+    c_r = c_f - np.concatenate([[ixx86], total[:-1]]) / 16 / cpm
+    order = np.argsort(p)
+    return comp_from_corrections(m, p[order], c_f[order], c_r[order])
