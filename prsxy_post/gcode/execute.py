@@ -325,23 +325,14 @@ class Interpreter:
 
     # -- one block
     def run(self, blk: Block) -> None:
+        """Execute a block as LinuxCNC's execute_block does: feed mode and F, the
+        machine functions (S, T, M), the modal G codes, the non-modal group, the
+        motion, then a stop or end."""
         st = self.st
         if st.ended:
             return
         if blk.percent:
-            if self.percent_seen:
-                st.ended = True
-                return
-            if self.started:
-                raise fail(
-                    "'%' after the start of the program",
-                    self.source,
-                    blk.line,
-                    1,
-                    "'%' only on the first line and to end the program",
-                )
-            self.percent_seen = True
-            self.started = True
+            self._percent(blk)
             return
         if blk.words or blk.has_text:
             self.started = True
@@ -356,8 +347,37 @@ class Interpreter:
         w = classify(
             blk.words, st.motion, not st.absolute, st.plane, self.user_m, self.source, line
         )
-        seen, groups, mgroups = w.seen, w.g, w.m
-        # LinuxCNC's execute_block: feed mode, F, S, T, M codes, G codes, stops
+        self._feed_words(w.seen, w.g)
+        pre = self._functions(w.seen, w.g, w.m, line)
+        if pre:
+            p = tuple(st.pos)
+            self.emit(line=line, kind="function", start=p, end=p, words=tuple(pre))
+        mode0 = w.g[0][0] if 0 in w.g else None
+        self._modes(w.seen, w.g, mode0, line)
+        self._non_modal(w.seen, w.g, w.axis, mode0, line)
+        self._move(w.seen, w.g, w.axis, w.motion, mode0, line)
+        self._stop(w.m, line)
+
+    def _percent(self, blk: Block) -> None:
+        """A '%' line: the first starts the program, the second ends it."""
+        st = self.st
+        if self.percent_seen:
+            st.ended = True
+            return
+        if self.started:
+            raise fail(
+                "'%' after the start of the program",
+                self.source,
+                blk.line,
+                1,
+                "'%' only on the first line and to end the program",
+            )
+        self.percent_seen = True
+        self.started = True
+
+    def _feed_words(self, seen: dict[str, Word], groups: dict[int, tuple[float, Word]]) -> None:
+        """G93/G94 and the F word (convert_feed_mode, convert_feed_rate)."""
+        st = self.st
         if 5 in groups:
             # convert_feed_mode: G94 sets the feed rate to 0 (in effect already or
             # not; an F in the block comes after it), G93 leaves it
@@ -368,8 +388,18 @@ class Interpreter:
             # convert_feed_rate runs in G94 only: in G93 the F word is the block's
             # own, and the feed rate is the rate of the last move (moves.feed_rate)
             st.feed = seen["F"].value
-        # machine functions before the motion, in LinuxCNC's order of execution
-        # (functions.py): an S or T that changes nothing is no function
+
+    def _functions(
+        self,
+        seen: dict[str, Word],
+        groups: dict[int, tuple[float, Word]],
+        mgroups: dict[int, tuple[int, Word]],
+        line: int,
+    ) -> list[tuple[str, float]]:
+        """The machine functions before the motion (S, T, M), in LinuxCNC's order of
+        execution (functions.py), as the words of the function motion they make;
+        an S or T that changes nothing is no function."""
+        st = self.st
         pre: list[tuple[str, float]] = []
         if 14 in groups:
             spindle_mode(self, groups[14][0], seen, pre)
@@ -411,11 +441,19 @@ class Interpreter:
             for letter in ("P", "Q"):
                 if letter in seen:
                     pre.append((letter, seen[letter].value))
-        if pre:
-            p = tuple(st.pos)
-            self.emit(line=line, kind="function", start=p, end=p, words=tuple(pre))
-        # G codes, in convert_g's order
-        mode0 = groups[0][0] if 0 in groups else None
+        return pre
+
+    def _modes(
+        self,
+        seen: dict[str, Word],
+        groups: dict[int, tuple[float, Word]],
+        mode0: float | None,
+        line: int,
+    ) -> None:
+        """G4 and the modal G codes, in convert_g's order: plane, units, cutter
+        compensation, tool length, coordinate system, path control, distance modes,
+        retract mode."""
+        st = self.st
         if mode0 == 4:
             p = tuple(st.pos)
             self.emit(line=line, kind="dwell", start=p, end=p, duration=seen["P"].value)
@@ -453,7 +491,17 @@ class Interpreter:
         if 10 in groups:
             self.no_comp("a change of retract mode", line, groups[10][1])
             st.retract_r = groups[10][0] == 99
-        axis_words = w.axis
+
+    def _non_modal(
+        self,
+        seen: dict[str, Word],
+        groups: dict[int, tuple[float, Word]],
+        axis_words: dict[str, Word],
+        mode0: float | None,
+        line: int,
+    ) -> None:
+        """The non-modal group 0 (G10, G28/G30, G28.1/G30.1, G52/G92, G5.3) and
+        G92.1-G92.3."""
         if mode0 == 10:
             g10(self, seen, groups[0][1], line)
         elif mode0 in (28, 30):
@@ -470,24 +518,40 @@ class Interpreter:
         if 16 in groups:
             self.no_comp(f"G{groups[16][0]:g}", line, groups[16][1])
             axis_offsets(self, groups[16][0], seen)
-        motion = w.motion
-        if motion is not None:
-            if mode0 == 53:
-                self.no_comp("G53", line, groups[0][1])
-                st.motion = motion
-                # a move that is no cycle forgets the cycles' first level
-                # (convert_motion, interp_convert.cc:3778-3779), G53's too
+
+    def _move(
+        self,
+        seen: dict[str, Word],
+        groups: dict[int, tuple[float, Word]],
+        axis_words: dict[str, Word],
+        motion: float | None,
+        mode0: float | None,
+        line: int,
+    ) -> None:
+        """The block's motion: G53's, G80, a move or a cycle."""
+        st = self.st
+        if motion is None:
+            return
+        if mode0 == 53:
+            self.no_comp("G53", line, groups[0][1])
+            st.motion = motion
+            # a move that is no cycle forgets the cycles' first level
+            # (convert_motion, interp_convert.cc:3778-3779), G53's too
+            st.cycle_il = None
+            linear(self, int(motion), axis_words, seen, line, machine=True)
+        elif motion == 80:
+            st.motion = None
+            st.cycle_il = None
+        else:
+            if motion not in CYCLES:
                 st.cycle_il = None
-                linear(self, int(motion), axis_words, seen, line, machine=True)
-            elif motion == 80:
-                st.motion = None
-                st.cycle_il = None
-            else:
-                if motion not in CYCLES:
-                    st.cycle_il = None
-                self._motion(motion, axis_words, seen, line, new=1 in groups)
-        # program stop / end, after the motion: the move compensation holds goes
-        # out first (LinuxCNC's convert_stop)
+            self._motion(motion, axis_words, seen, line, new=1 in groups)
+
+    def _stop(self, mgroups: dict[int, tuple[int, Word]], line: int) -> None:
+        """Program stop or end, after the motion: the move compensation holds goes
+        out first (LinuxCNC's convert_stop); after a tool change the position read
+        back."""
+        st = self.st
         if 4 in mgroups:
             if self.queue:
                 iu, iv = (0, 1) if st.plane == 17 else (2, 0)
