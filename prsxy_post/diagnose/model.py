@@ -239,30 +239,69 @@ def predict(
         hat functions of the table's linear interpolation, forward values where the
         part last moved up (poses: approached from +), reverse where it moved down
     """
-    keys = column_keys() if keys is None else list(keys)
-    knots = dict(table_knots or {})
-    geo_names = [k for k in keys if registry.family(split_key(k)[0]).stage == "geometry"]
-    motor_keys = [k for k in keys if k not in set(geo_names)]
-    motor_fams = {k: registry.family(split_key(k)[0]) for k in motor_keys}
-    basis_keys = table_error_keys(knots)
-    want = bool(keys) or bool(basis_keys)
-    theta = registry.theta_of(model, geo_names)
-    steps = registry.fd_steps(geo_names, theta)
+    pr = _Predictor(model, keys, with_map, tables_measured, table_knots)
+    for n_pose, P_cmd in enumerate(data.P_pose):
+        pr.poses(data, n_pose, P_cmd)
+    for n_run, (r, P_cmd, vel, direction) in enumerate(
+        zip(data.runs, data.P_run, data.v_run, data.dir_run, strict=True)
+    ):
+        pr.run(data, n_run, r, P_cmd, vel, direction)
+    for a in data.axis:
+        pr.axis_run(a)
+    _, segs = data.measured()
+    columns = {k: np.concatenate(v) for k, v in pr.cols.items()} if pr.want else {}
+    return Linearised(np.concatenate(pr.preds) if pr.preds else np.zeros(0), columns, segs)
 
-    def make_geo(t: np.ndarray) -> kinematics.Geometry:
-        return registry.geometry_at(model, geo_names, t)
 
-    emap = errormap.from_profile(model) if with_map else None
-    tables = axiscomp.profile_tables(model)
-    points = {
-        c.motor: np.asarray(c.positions, dtype=float)
-        for c in model.axis_comp
-        if c.motor in tables_measured
-    }
-    preds: list[np.ndarray] = []
-    cols: dict[str, list[np.ndarray]] = {k: [] for k in [*keys, *basis_keys]}
+def _stacked(a: np.ndarray) -> np.ndarray:
+    """(N, 5, d) per pose -> (3N + 2N, d): positions, then angles (as predicted)."""
+    d = a.shape[2]
+    return np.concatenate([a[:, :3, :].reshape(-1, d), a[:, 3:, :].reshape(-1, d)])
+
+
+class _Predictor:
+    """:func:`predict`'s work: the model's pieces, and the predictions and columns
+    gathered measurement set by measurement set."""
+
+    def __init__(
+        self,
+        model: Profile,
+        keys: Sequence[str] | None,
+        with_map: bool,
+        tables_measured: Collection[int],
+        table_knots: Mapping[int, np.ndarray] | None,
+    ) -> None:
+        keys = column_keys() if keys is None else list(keys)
+        self.model = model
+        self.knots = dict(table_knots or {})
+        self.geo_names = [k for k in keys if registry.family(split_key(k)[0]).stage == "geometry"]
+        self.motor_keys = [k for k in keys if k not in set(self.geo_names)]
+        self.motor_fams = {k: registry.family(split_key(k)[0]) for k in self.motor_keys}
+        self.basis_keys = table_error_keys(self.knots)
+        self.want = bool(keys) or bool(self.basis_keys)
+        self.theta = registry.theta_of(model, self.geo_names)
+        self.steps = registry.fd_steps(self.geo_names, self.theta)
+        self.emap = errormap.from_profile(model) if with_map else None
+        self.tables = axiscomp.profile_tables(model)
+        self.points = {
+            c.motor: np.asarray(c.positions, dtype=float)
+            for c in model.axis_comp
+            if c.motor in tables_measured
+        }
+        self.preds: list[np.ndarray] = []
+        self.cols: dict[str, list[np.ndarray]] = {k: [] for k in [*keys, *self.basis_keys]}
+        self.motors = bool(self.motor_keys) or bool(self.knots)
+
+    def make_geo(self, t: np.ndarray) -> kinematics.Geometry:
+        return registry.geometry_at(self.model, self.geo_names, t)
+
+    def _family(self, k: str) -> registry.MotorFamily:
+        fam = self.motor_fams[k]
+        assert isinstance(fam, registry.MotorFamily)
+        return fam
 
     def motor_columns(
+        self,
         sens: np.ndarray,
         P: np.ndarray,
         P_cmd: np.ndarray,
@@ -272,17 +311,17 @@ def predict(
     ) -> dict[str, np.ndarray]:
         """(N, r, d) per key: sensitivities (N, r, 5) times each motor term (N, d)."""
         out = {}
-        for k in motor_keys:
+        tables, points = self.tables, self.points
+        for k in self.motor_keys:
             name, period = split_key(k)
-            fam = motor_fams[k]
-            assert isinstance(fam, registry.MotorFamily)
+            fam = self._family(k)
             i = MOTORS.index(fam.motor(name))
             ctx = registry.MotorContext(
                 P_cmd[:, i], tables.get(MOTORS[i]), approach, points.get(MOTORS[i])
             )
             term = fam.motor_term(P[:, i], direction[:, i], velocity[:, i], period, ctx)
             out[k] = sens[:, :, i, None] * term[:, None, :]
-        for m, at in knots.items():
+        for m, at in self.knots.items():
             i = MOTORS.index(m)
             hats = _hats(P[:, i], at)
             held = _held_side(P_cmd[:, i], direction[:, i], tables.get(m), approach)
@@ -294,83 +333,92 @@ def predict(
                     )
         return out
 
-    for n_pose, P_cmd in enumerate(data.P_pose):
-        Pm = simulate.actual_motors(model, P_cmd, approach=+1)
+    def poses(self, data: Data, n_pose: int, P_cmd: np.ndarray) -> None:
+        """A pose set: the poses (approached from +) and their signatures."""
+        Pm = simulate.actual_motors(self.model, P_cmd, approach=+1)
         y, J, xv, JP = fk_with_jacobian(
-            make_geo, theta, Pm, data.guess.get(("pose", n_pose)), want, steps,
-            motors=bool(motor_keys) or bool(knots),
+            self.make_geo, self.theta, Pm, data.guess.get(("pose", n_pose)), self.want,
+            self.steps, motors=self.motors,
         )  # fmt: skip
         data.guess[("pose", n_pose)] = xv
-        if emap is not None:
-            y = y + emap(y)
-        preds += [y[:, :3].ravel(), y[:, 3:].ravel()]
-        if not want:
-            continue
-
-        def red(a: np.ndarray) -> np.ndarray:  # (N, 5, d) -> (3N + 2N, d)
-            d = a.shape[2]
-            return np.concatenate([a[:, :3, :].reshape(-1, d), a[:, 3:, :].reshape(-1, d)])
-
+        if self.emap is not None:
+            y = y + self.emap(y)
+        self.preds += [y[:, :3].ravel(), y[:, 3:].ravel()]
+        if not self.want:
+            return
         assert J is not None
-        for j, nm in enumerate(geo_names):
-            cols[nm].append(red(J[:, :, j : j + 1]))
-        if motor_keys or knots:
+        for j, nm in enumerate(self.geo_names):
+            self.cols[nm].append(_stacked(J[:, :, j : j + 1]))
+        if self.motors:
             assert JP is not None
             ones = np.ones_like(Pm)
-            for k, c in motor_columns(JP, Pm, P_cmd, ones, np.zeros_like(Pm), +1).items():
-                cols[k].append(red(c))
-    for n_run, (r, P_cmd, vel, direction) in enumerate(
-        zip(data.runs, data.P_run, data.v_run, data.dir_run, strict=True)
-    ):
+            for k, c in self.motor_columns(JP, Pm, P_cmd, ones, np.zeros_like(Pm), +1).items():
+                self.cols[k].append(_stacked(c))
+
+    def run(
+        self,
+        data: Data,
+        n_run: int,
+        r: BallbarRun,
+        P_cmd: np.ndarray,
+        vel: np.ndarray,
+        direction: np.ndarray,
+    ) -> None:
+        """A ballbar run: the bar's length less its nominal, and its signatures
+        (the FK sensitivities on a thinned set of points, interpolated between)."""
+        model, make_geo, theta, steps = self.model, self.make_geo, self.theta, self.steps
         Pm = simulate.actual_motors(model, P_cmd, t=r.t)
         followed = registry.SERVO_LAG.follow(model, P_cmd, r.t)  # what the play model sees
         y, _, xv, _ = fk_with_jacobian(
             make_geo, theta, Pm, data.guess.get(("run", n_run)), False, steps
         )
         data.guess[("run", n_run)] = xv
-        tip = y[:, :3] + (emap(y)[:, :3] if emap is not None else 0.0)
+        tip = y[:, :3] + (self.emap(y)[:, :3] if self.emap is not None else 0.0)
         vec = tip - r.pivot
         dist = np.linalg.norm(vec, axis=1)
-        preds.append(dist - r.length)
-        if not want:
-            continue
+        self.preds.append(dist - r.length)
+        if not self.want:
+            return
         idx = _thin(len(Pm))
         _, J, _, JP = fk_with_jacobian(
-            make_geo, theta, Pm[idx], xv[idx], True, steps, motors=bool(motor_keys) or bool(knots)
+            make_geo, theta, Pm[idx], xv[idx], True, steps, motors=self.motors
         )
         unit = vec[idx] / dist[idx, None]
         assert J is not None
-        if geo_names:
+        if self.geo_names:
             Jr = _interp_rows(idx, np.einsum("ni,nim->nm", unit, J[:, :3, :]), len(Pm))
-            for j, nm in enumerate(geo_names):
-                cols[nm].append(Jr[:, j : j + 1])
-        if motor_keys or knots:
+            for j, nm in enumerate(self.geo_names):
+                self.cols[nm].append(Jr[:, j : j + 1])
+        if self.motors:
             assert JP is not None
             JPr = _interp_rows(idx, np.einsum("ni,nim->nm", unit, JP[:, :3, :]), len(Pm))
             sens = JPr[:, None, :]
-            for k, c in motor_columns(sens, Pm, followed, direction, vel, None).items():
-                cols[k].append(c[:, 0, :])
-    for a in data.axis:
+            for k, c in self.motor_columns(sens, Pm, followed, direction, vel, None).items():
+                self.cols[k].append(c[:, 0, :])
+
+    def axis_run(self, a: AxisData) -> None:
+        """A laser run along one motor: each target approached from its side, and the
+        motor members' terms there (geometry and table errors do not enter)."""
+        tables = self.tables
         pa = np.empty(len(a.target))
         for m in np.unique(a.motor):
             for d in (1, -1):
                 sel = (a.motor == m) & (a.direction == d)
                 pa[sel] = axiscomp.approach(tables.get(int(m)), a.target[sel], d)
-        preds.append(pa)
-        if not want:
-            continue
-        for nm in [*geo_names, *basis_keys]:
-            cols[nm].append(np.zeros((len(pa), 1)))
-        for k in motor_keys:
+        self.preds.append(pa)
+        if not self.want:
+            return
+        for nm in [*self.geo_names, *self.basis_keys]:
+            self.cols[nm].append(np.zeros((len(pa), 1)))
+        for k in self.motor_keys:
             name, period = split_key(k)
-            fam = motor_fams[k]
-            assert isinstance(fam, registry.MotorFamily)
+            fam = self._family(k)
             m = fam.motor(name)
             c = np.zeros((len(pa), fam.columns()))
             for d in (1, -1):
                 sel = (a.motor == m) & (a.direction == d)
                 if np.any(sel):
-                    ctx = registry.MotorContext(a.target[sel], tables.get(m), d, points.get(m))
+                    ctx = registry.MotorContext(a.target[sel], tables.get(m), d, self.points.get(m))
                     c[sel] = fam.motor_term(
                         a.target[sel],
                         np.full(int(sel.sum()), float(d)),
@@ -378,7 +426,4 @@ def predict(
                         period,
                         ctx,
                     )
-            cols[k].append(c)
-    _, segs = data.measured()
-    columns = {k: np.concatenate(v) for k, v in cols.items()} if want else {}
-    return Linearised(np.concatenate(preds) if preds else np.zeros(0), columns, segs)
+            self.cols[k].append(c)
