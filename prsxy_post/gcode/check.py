@@ -12,6 +12,7 @@ needs which code to use it.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from ..errors import GCodeError
 from .codes import (
@@ -66,84 +67,15 @@ def classify(
         return fail(text, source, line, w.column if w is not None else None, expected)
 
     out = Words()
-    seen = out.seen
     m_count = 0
     for w in words:
-        letter = w.letter
-        if letter == "G":
-            c10 = g_code10(w.value)
-            if c10 is None or c10 > 999:
-                raise err("G code out of range", w, "a G code like G1 or G43.1")
-            if c10 < 0:
-                raise err("negative G code", w, "a G code like G1 or G43.1")
-            grp = G_GROUPS.get(c10)
-            if grp is None:
-                raise err("unknown G code", w, "a G code LinuxCNC knows")
-            if c10 in G_OUT_OF_SCOPE:
-                raise err(G_OUT_OF_SCOPE[c10], w, "the milling codes this machine runs")
-            if c10 in G_NOT_YET:
-                raise err(G_NOT_YET[c10], w, "the milling subset (see README)")
-            code = code_of(c10)
-            if grp in out.g:
-                # LinuxCNC lets G80 stand beside another motion code; the other wins
-                if c10 == 800:
-                    continue
-                if out.g[grp][0] != 80:
-                    raise err(
-                        "two G codes of the same modal group",
-                        w,
-                        f"one of them (already {out.g[grp][1].text})",
-                    )
-            out.g[grp] = (code, w)
-        elif letter == "M":
-            v = w.value
-            n = math.floor(v)
-            if v - n > 0.9999:
-                n = math.ceil(v)
-            elif v - n > 0.0001:
-                raise err("M code not an integer", w, "M followed by a whole number")
-            if n < 0:
-                raise err("negative M code", w, "M0 to M199")
-            if n > 199:
-                raise err("M code above 199", w, "M0 to M199")
-            grp = M_GROUPS.get(n)
-            if grp is None or (grp == 10 and n not in user_m):
-                expected = (
-                    "an M1nn the profile lists in [gcode] user_m_codes"
-                    if grp == 10
-                    else "an M code LinuxCNC knows"
-                )
-                raise err(f"unknown M code M{n}", w, expected)
-            if n in M_OUT_OF_SCOPE:
-                raise err(M_OUT_OF_SCOPE[n], w, "the M codes this machine runs")
-            if n in M_NOT_YET:
-                raise err(M_NOT_YET[n], w, "the supported M codes (see README)")
-            if grp in out.m:
-                raise err(
-                    "two M codes of the same modal group",
-                    w,
-                    f"one of them (already {out.m[grp][1].text})",
-                )
-            out.m[grp] = (n, w)
+        if w.letter == "G":
+            _g_word(out, w, err)
+        elif w.letter == "M":
+            _m_word(out, w, user_m, err)
             m_count += 1
         else:
-            if letter in seen:
-                raise err(f"{letter} word repeated", w, f"one {letter} word per block")
-            if letter in ("F", "S") and w.value < 0.0:
-                raise err(f"negative {letter} word", w, f"{letter} >= 0")
-            if letter in ("T", "L", "H"):
-                v = w.value
-                n = math.floor(v)
-                if v - n > 0.9999:
-                    n = math.ceil(v)
-                elif v - n > 0.0001:
-                    raise err(
-                        f"{letter} word not an integer", w, f"{letter} followed by a whole number"
-                    )
-                if n < (-1 if letter == "H" else 0):
-                    raise err(f"negative {letter} word", w, f"{letter} >= 0")
-                w = w._replace(value=float(n))
-            seen[letter] = w
+            _other_word(out.seen, w, err)
     if m_count > 4:
         raise err("more than four M codes in one block", None, "at most four")
     _enhance(out, motion_mode, plane, err)
@@ -152,9 +84,93 @@ def classify(
     return out
 
 
-def _enhance(out: Words, motion_mode: float | None, plane: int, err: object) -> None:
+#: a located error from a message, the word and what was expected (``classify``'s)
+_Err = Callable[[str, Word | None, str | None], GCodeError]
+
+
+def _g_word(out: Words, w: Word, err: _Err) -> None:
+    """A G word into its modal group (read_g, and check_g_codes' one-per-group)."""
+    c10 = g_code10(w.value)
+    if c10 is None or c10 > 999:
+        raise err("G code out of range", w, "a G code like G1 or G43.1")
+    if c10 < 0:
+        raise err("negative G code", w, "a G code like G1 or G43.1")
+    grp = G_GROUPS.get(c10)
+    if grp is None:
+        raise err("unknown G code", w, "a G code LinuxCNC knows")
+    if c10 in G_OUT_OF_SCOPE:
+        raise err(G_OUT_OF_SCOPE[c10], w, "the milling codes this machine runs")
+    if c10 in G_NOT_YET:
+        raise err(G_NOT_YET[c10], w, "the milling subset (see README)")
+    code = code_of(c10)
+    if grp in out.g:
+        # LinuxCNC lets G80 stand beside another motion code; the other wins
+        if c10 == 800:
+            return
+        if out.g[grp][0] != 80:
+            raise err(
+                "two G codes of the same modal group",
+                w,
+                f"one of them (already {out.g[grp][1].text})",
+            )
+    out.g[grp] = (code, w)
+
+
+def _m_word(out: Words, w: Word, user_m: frozenset[int], err: _Err) -> None:
+    """An M word into its modal group (read_m): a whole number the machine knows."""
+    v = w.value
+    n = math.floor(v)
+    if v - n > 0.9999:
+        n = math.ceil(v)
+    elif v - n > 0.0001:
+        raise err("M code not an integer", w, "M followed by a whole number")
+    if n < 0:
+        raise err("negative M code", w, "M0 to M199")
+    if n > 199:
+        raise err("M code above 199", w, "M0 to M199")
+    grp = M_GROUPS.get(n)
+    if grp is None or (grp == 10 and n not in user_m):
+        expected = (
+            "an M1nn the profile lists in [gcode] user_m_codes"
+            if grp == 10
+            else "an M code LinuxCNC knows"
+        )
+        raise err(f"unknown M code M{n}", w, expected)
+    if n in M_OUT_OF_SCOPE:
+        raise err(M_OUT_OF_SCOPE[n], w, "the M codes this machine runs")
+    if n in M_NOT_YET:
+        raise err(M_NOT_YET[n], w, "the supported M codes (see README)")
+    if grp in out.m:
+        raise err(
+            "two M codes of the same modal group",
+            w,
+            f"one of them (already {out.m[grp][1].text})",
+        )
+    out.m[grp] = (n, w)
+
+
+def _other_word(seen: dict[str, Word], w: Word, err: _Err) -> None:
+    """Any other word, once a block; F and S not negative; T, L and H whole numbers."""
+    letter = w.letter
+    if letter in seen:
+        raise err(f"{letter} word repeated", w, f"one {letter} word per block")
+    if letter in ("F", "S") and w.value < 0.0:
+        raise err(f"negative {letter} word", w, f"{letter} >= 0")
+    if letter in ("T", "L", "H"):
+        v = w.value
+        n = math.floor(v)
+        if v - n > 0.9999:
+            n = math.ceil(v)
+        elif v - n > 0.0001:
+            raise err(f"{letter} word not an integer", w, f"{letter} followed by a whole number")
+        if n < (-1 if letter == "H" else 0):
+            raise err(f"negative {letter} word", w, f"{letter} >= 0")
+        w = w._replace(value=float(n))
+    seen[letter] = w
+
+
+def _enhance(out: Words, motion_mode: float | None, plane: int, err: _Err) -> None:
     """LinuxCNC's enhance_block: the block's motion, and where axis words go."""
-    assert callable(err)
     seen = out.seen
     axis = {a: seen[a] for a in _AXIS_LETTERS if a in seen}
     out.axis = axis
@@ -218,9 +234,8 @@ def _enhance(out: Words, motion_mode: float | None, plane: int, err: object) -> 
         )
 
 
-def _check_g(out: Words, incremental: bool, err: object) -> None:
+def _check_g(out: Words, incremental: bool, err: _Err) -> None:
     """LinuxCNC's check_g_codes (modal group 0)."""
-    assert callable(err)
     if 0 not in out.g:
         return
     mode0, w0 = out.g[0]
@@ -256,9 +271,8 @@ def _check_g(out: Words, incremental: bool, err: object) -> None:
             raise err("G53 in incremental mode", w0, "G90 with G53")
 
 
-def _check_other(out: Words, err: object) -> None:
+def _check_other(out: Words, err: _Err) -> None:
     """LinuxCNC's check_other_codes: each word needs a code that uses it."""
-    assert callable(err)
     seen = out.seen
     motion = out.motion
     g = out.g

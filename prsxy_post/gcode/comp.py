@@ -207,49 +207,70 @@ def straight(
     seen: dict[str, Word],
     line: int,
 ) -> None:
-    """A G0/G1 with compensation on (convert_straight_comp1/2)."""
+    """A G0/G1 with compensation on: the entry move (convert_straight_comp1) or a
+    move after it (convert_straight_comp2)."""
     st = it.st
     it._seen = seen
     base = None if st.comp_first else _programmed_base(it)
     p = target(it, axis_words, seen=seen, base=base)
     w = next(iter(axis_words.values()), None)
-    iu, iv, iw = _AXES[st.plane]
-    px, py = p[iu], p[iv]
-    cx, cy = st.pos[iu], st.pos[iv]
-    radius = st.comp_radius
-    side = st.comp_side
     # the inverse-time rate of a move after the first is that of the programmed
     # path (inverse_time_rate_straight starts it at program_x, not current_x)
     feed = _straight_feed(it, motion, st.pos if st.comp_first else st.program, p, line, w)
-    q = it.queue
     if st.comp_first:
-        q.cursor = it.take_position()
-        if math.hypot(px - cx, py - cy) <= radius:
-            raise it.err(
-                "a cutter compensation entry move no longer than the tool radius",
-                line,
-                w,
-                "an entry move longer than the radius",
-            )
-        alpha = math.atan2(py - cy, px - cx) + (_HALF_PI if side == LEFT else -_HALF_PI)
-        end = list(p)
-        end[iu] = px + radius * math.cos(alpha)
-        end[iv] = py + radius * math.sin(alpha)
-        q.set_endpoint(cx, cy)
-        _hold_straight(it, motion, line, end, feed, (math.cos(alpha), math.sin(alpha)))
+        end = _straight_entry(it, motion, p, feed, line, w)
         st.comp_first = False
-        st.pos = end
-        st.program = p
-        return
+    else:
+        end = _straight_next(it, motion, p, feed, line, w)
+    st.pos = end
+    st.program = p
+
+
+def _straight_entry(
+    it: Interpreter, motion: int, p: list[float], feed: float, line: int, w: Word | None
+) -> list[float]:
+    """The entry move (convert_straight_comp1): it ends a radius beside its
+    programmed end, square to the move; its end."""
+    st = it.st
+    iu, iv, _ = _AXES[st.plane]
+    px, py = p[iu], p[iv]
+    cx, cy = st.pos[iu], st.pos[iv]
+    radius = st.comp_radius
+    q = it.queue
+    q.cursor = it.take_position()
+    if math.hypot(px - cx, py - cy) <= radius:
+        raise it.err(
+            "a cutter compensation entry move no longer than the tool radius",
+            line,
+            w,
+            "an entry move longer than the radius",
+        )
+    alpha = math.atan2(py - cy, px - cx) + (_HALF_PI if st.comp_side == LEFT else -_HALF_PI)
+    end = list(p)
+    end[iu] = px + radius * math.cos(alpha)
+    end[iv] = py + radius * math.sin(alpha)
+    q.set_endpoint(cx, cy)
+    _hold_straight(it, motion, line, end, feed, (math.cos(alpha), math.sin(alpha)))
+    return end
+
+
+def _straight_next(
+    it: Interpreter, motion: int, p: list[float], feed: float, line: int, w: Word | None
+) -> list[float]:
+    """A move after the entry (convert_straight_comp2): the corner from the move
+    before, convex (an arc round it) or concave (the move before cut back); its end."""
+    st = it.st
+    iu, iv, _ = _AXES[st.plane]
+    px, py = p[iu], p[iv]
+    cx, cy = st.pos[iu], st.pos[iv]
+    radius, side, q = st.comp_radius, st.comp_side, it.queue
     op = st.program
     opx, opy = op[iu], op[iv]
     if px == opx and py == opy:  # no motion in the plane
         end = list(p)
         end[iu], end[iv] = cx, cy
         _hold_straight(it, motion, line, end, feed, (0.0, 0.0))
-        st.pos = end
-        st.program = p
-        return
+        return end
     theta = math.atan2(cy - opy, cx - opx)
     alpha = math.atan2(py - opy, px - opx)
     if side == LEFT:
@@ -265,45 +286,23 @@ def straight(
     end = list(p)
     end[iu] = px + radius * math.cos(alpha + gamma)
     end[iv] = py + radius * math.sin(alpha + gamma)
-    mid_x = opx + radius * math.cos(alpha + gamma)
-    mid_y = opy + radius * math.sin(alpha + gamma)
     small = TOLERANCE_CONCAVE_CORNER
     front = q.items[0] if q.items else None
     if beta < -small or beta > math.pi + small:
         concave = True
-    elif (
-        beta > math.pi - small
-        and front is not None
-        and front["kind"] == "arc"
-        and ((side == RIGHT and front["rotation"] > 0) or (side == LEFT and front["rotation"] < 0))
-    ):
-        concave = True
     else:
-        concave = False
-    if not concave and beta > small:  # convex: an arc round the corner
-        q.move_endpoint_and_flush(cx, cy, line)
-        corner = list(st.pos)
-        corner[iu], corner[iv] = mid_x, mid_y
-        corner[3], corner[4] = p[3], p[4]  # the rotary axes move on the added arc
-        if motion == 1:
-            center = [0.0, 0.0, 0.0]
-            center[iu], center[iv], center[iw] = opx, opy, st.pos[iw]
-            corner[iw] = st.pos[iw]
-            q.hold(
-                line=line,
-                kind="arc",
-                end=tuple(corner),
-                feed=it.feed_now(),
-                plane=st.plane,
-                center=tuple(center),
-                rotation=-1 if side == LEFT else 1,
-                **it.extras(),
+        concave = (
+            beta > math.pi - small
+            and front is not None
+            and front["kind"] == "arc"
+            and (
+                (side == RIGHT and front["rotation"] > 0)
+                or (side == LEFT and front["rotation"] < 0)
             )
-        else:
-            corner[iw] = st.pos[iw]
-            q.hold(line=line, kind="rapid", end=tuple(corner), **it.extras())
-        q.flush()
-        q.set_endpoint(mid_x, mid_y)
+        )
+    if not concave and beta > small:  # convex: an arc round the corner
+        mid = (opx + radius * math.cos(alpha + gamma), opy + radius * math.sin(alpha + gamma))
+        _corner_arc(it, motion, line, p, mid)
     elif concave:
         if front is None or front["kind"] != "arc":
             halfcorner = (beta + math.pi) / 2.0
@@ -312,106 +311,186 @@ def straight(
             retreat = radius / math.tan(halfcorner)
             mx = cx + retreat * math.cos(theta + gamma)
             my = cy + retreat * math.sin(theta + gamma)
-            q.move_endpoint_and_flush(mx, my, line)
         else:
-            cu, cv = front["_center2"]
-            pe = front["end"]
-            oldrad = math.hypot(cv - pe[iv], cu - pe[iu])
-            base_dir = math.atan2(py - opy, px - opx)
-            turn = front["rotation"]
-            th = base_dir + _HALF_PI if turn > 0 else base_dir - _HALF_PI
-            phi = math.atan2(cv - opy, cu - opx)
-            inside = _inside(side, turn)
-            oldrad_uncomp = oldrad + radius if inside else oldrad - radius
-            d = oldrad_uncomp * math.cos(th - phi)
-            d2 = d - radius if inside else d + radius
-            ratio = d2 / oldrad
-            if ratio > 1.0 or ratio < -1.0:
-                raise it.err(
-                    "an arc to straight corner the compensated tool cannot enter without gouging",
-                    line,
-                    w,
-                    "a tool smaller than the corner",
-                )
-            if inside:
-                ang = (-math.acos(ratio) if turn > 0 else math.acos(ratio)) + th + math.pi
-            else:
-                ang = (math.acos(ratio) if turn > 0 else -math.acos(ratio)) + th + math.pi
-            mx = cu + oldrad * math.cos(ang)
-            my = cv + oldrad * math.sin(ang)
-            q.move_endpoint_and_flush(mx, my, line)
+            mx, my = _arc_cut_back(it, front, p, line, w)
+        q.move_endpoint_and_flush(mx, my, line)
     else:
         q.flush()
         q.set_endpoint(cx, cy)
     _hold_straight(it, motion, line, end, feed, (px - opx, py - opy))
-    st.pos = end
-    st.program = p
+    return end
+
+
+def _corner_arc(
+    it: Interpreter, motion: int, line: int, p: list[float], mid: tuple[float, float]
+) -> None:
+    """A convex corner before a straight move: the move before goes out as it is,
+    then an arc (a rapid in G0) round the programmed corner to ``mid``, a radius
+    from it square to the new move."""
+    st = it.st
+    iu, iv, iw = _AXES[st.plane]
+    q = it.queue
+    cx, cy = st.pos[iu], st.pos[iv]
+    q.move_endpoint_and_flush(cx, cy, line)
+    corner = list(st.pos)
+    corner[iu], corner[iv] = mid
+    corner[3], corner[4] = p[3], p[4]  # the rotary axes move on the added arc
+    corner[iw] = st.pos[iw]
+    if motion == 1:
+        op = st.program
+        center = [0.0, 0.0, 0.0]
+        center[iu], center[iv], center[iw] = op[iu], op[iv], st.pos[iw]
+        q.hold(
+            line=line,
+            kind="arc",
+            end=tuple(corner),
+            feed=it.feed_now(),
+            plane=st.plane,
+            center=tuple(center),
+            rotation=-1 if st.comp_side == LEFT else 1,
+            **it.extras(),
+        )
+    else:
+        q.hold(line=line, kind="rapid", end=tuple(corner), **it.extras())
+    q.flush()
+    q.set_endpoint(*mid)
+
+
+def _arc_cut_back(
+    it: Interpreter, front: dict[str, Any], p: list[float], line: int, w: Word | None
+) -> tuple[float, float]:
+    """A concave corner from an arc into a straight move: where on the arc before
+    the compensated tool meets the new move's offset line."""
+    st = it.st
+    iu, iv, _ = _AXES[st.plane]
+    radius, side = st.comp_radius, st.comp_side
+    opx, opy = st.program[iu], st.program[iv]
+    px, py = p[iu], p[iv]
+    cu, cv = front["_center2"]
+    pe = front["end"]
+    oldrad = math.hypot(cv - pe[iv], cu - pe[iu])
+    base_dir = math.atan2(py - opy, px - opx)
+    turn = front["rotation"]
+    th = base_dir + _HALF_PI if turn > 0 else base_dir - _HALF_PI
+    phi = math.atan2(cv - opy, cu - opx)
+    inside = _inside(side, turn)
+    oldrad_uncomp = oldrad + radius if inside else oldrad - radius
+    d = oldrad_uncomp * math.cos(th - phi)
+    d2 = d - radius if inside else d + radius
+    ratio = d2 / oldrad
+    if ratio > 1.0 or ratio < -1.0:
+        raise it.err(
+            "an arc to straight corner the compensated tool cannot enter without gouging",
+            line,
+            w,
+            "a tool smaller than the corner",
+        )
+    if inside:
+        ang = (-math.acos(ratio) if turn > 0 else math.acos(ratio)) + th + math.pi
+    else:
+        ang = (math.acos(ratio) if turn > 0 else -math.acos(ratio)) + th + math.pi
+    return cu + oldrad * math.cos(ang), cv + oldrad * math.sin(ang)
 
 
 def arc(
     it: Interpreter, motion: int, axis_words: dict[str, Word], seen: dict[str, Word], line: int
 ) -> None:
-    """A G2/G3 with compensation on (convert_arc_comp1/2), XY or XZ."""
+    """A G2/G3 with compensation on, XY or XZ: the entry arc (convert_arc_comp1)
+    or an arc after it (convert_arc_comp2)."""
     st = it.st
     it._seen = seen
     gw = next(iter(axis_words.values()), None)
-    iu, iv, iw = _AXES[st.plane]
-    sc = it.scale()
     first = st.comp_first
     base = None if first else _programmed_base(it)
     p = target(it, axis_words, seen=seen, base=base)
-    ex, ey = p[iu], p[iv]
-    cx, cy = st.pos[iu], st.pos[iv]
-    side = st.comp_side
-    radius = st.comp_radius
     turns = math.floor(seen["P"].value + 0.5) if "P" in seen else 1
     turn = turns if motion == 3 else -turns
-    q = it.queue
     if first:
-        q.cursor = it.take_position()
-        if math.hypot(ex - cx, ey - cy) <= radius:
-            raise it.err(
-                "a cutter compensation entry arc whose radius is not above the tool radius",
-                line,
-                gw,
-                "a larger entry arc",
-            )
-        cu, cv = arc_center(it, motion, cx / sc, cy / sc, ex / sc, ey / sc, seen, line, gw)
-        center_x, center_y = cu * sc, cv * sc
-        _check_arc_radius(it, motion, side, radius, center_x, center_y, cx, cy, seen, line, gw)
-        length = arc_length(
-            math.hypot(cx - center_x, cy - center_y),
-            sweep_of(cx, cy, center_x, center_y, turn, ex, ey),
-            p[iw] - st.pos[iw],
+        end = _arc_entry(it, motion, p, turn, seen, line, gw)
+    else:
+        end = _arc_next(it, motion, p, turn, seen, line, gw)
+    st.program = list(p)
+    st.pos = end
+
+
+def _arc_entry(
+    it: Interpreter,
+    motion: int,
+    p: list[float],
+    turn: int,
+    seen: dict[str, Word],
+    line: int,
+    gw: Word | None,
+) -> list[float]:
+    """The entry arc (convert_arc_comp1): it ends a radius beside its programmed
+    end, on a circle through its start; its end."""
+    st = it.st
+    iu, iv, iw = _AXES[st.plane]
+    sc = it.scale()
+    ex, ey = p[iu], p[iv]
+    cx, cy = st.pos[iu], st.pos[iv]
+    side, radius = st.comp_side, st.comp_radius
+    it.queue.cursor = it.take_position()
+    if math.hypot(ex - cx, ey - cy) <= radius:
+        raise it.err(
+            "a cutter compensation entry arc whose radius is not above the tool radius",
+            line,
+            gw,
+            "a larger entry arc",
         )
-        feed = feed_rate(it, st.pos, p, length, line, gw)
-        if _inside(side, turn):
-            gamma = math.atan2(center_y - ey, center_x - ex)
-        else:
-            gamma = math.atan2(ey - center_y, ex - center_x)
-        st.comp_first = False
-        st.program = list(p)
-        end_x = ex + radius * math.cos(gamma)
-        end_y = ey + radius * math.sin(gamma)
-        b_len = math.hypot(cy - end_y, cx - end_x) / 2.0
-        ab_ang = math.atan2(center_y - end_y, center_x - end_x)
-        a_ang = math.atan2(cy - end_y, cx - end_x) - ab_ang
-        if abs(math.cos(a_ang)) < 0.0001:
-            raise it.err(
-                "a tool radius not below the arc's radius with cutter compensation",
-                line,
-                gw,
-                "a larger arc",
-            )
-        c_len = b_len / math.cos(a_ang)
-        center_x = end_x + c_len * math.cos(ab_ang)
-        center_y = end_y + c_len * math.sin(ab_ang)
-        end = list(p)
-        end[iu], end[iv] = end_x, end_y
-        sweep = sweep_of(cx, cy, center_x, center_y, turn, end_x, end_y)
-        _hold_arc(it, line, end, (center_x, center_y), turn, feed, sweep)
-        st.pos = end
-        return
+    cu, cv = arc_center(it, motion, cx / sc, cy / sc, ex / sc, ey / sc, seen, line, gw)
+    center_x, center_y = cu * sc, cv * sc
+    _check_arc_radius(it, motion, side, radius, center_x, center_y, cx, cy, seen, line, gw)
+    length = arc_length(
+        math.hypot(cx - center_x, cy - center_y),
+        sweep_of(cx, cy, center_x, center_y, turn, ex, ey),
+        p[iw] - st.pos[iw],
+    )
+    feed = feed_rate(it, st.pos, p, length, line, gw)
+    if _inside(side, turn):
+        gamma = math.atan2(center_y - ey, center_x - ex)
+    else:
+        gamma = math.atan2(ey - center_y, ex - center_x)
+    st.comp_first = False
+    end_x = ex + radius * math.cos(gamma)
+    end_y = ey + radius * math.sin(gamma)
+    b_len = math.hypot(cy - end_y, cx - end_x) / 2.0
+    ab_ang = math.atan2(center_y - end_y, center_x - end_x)
+    a_ang = math.atan2(cy - end_y, cx - end_x) - ab_ang
+    if abs(math.cos(a_ang)) < 0.0001:
+        raise it.err(
+            "a tool radius not below the arc's radius with cutter compensation",
+            line,
+            gw,
+            "a larger arc",
+        )
+    c_len = b_len / math.cos(a_ang)
+    center_x = end_x + c_len * math.cos(ab_ang)
+    center_y = end_y + c_len * math.sin(ab_ang)
+    end = list(p)
+    end[iu], end[iv] = end_x, end_y
+    sweep = sweep_of(cx, cy, center_x, center_y, turn, end_x, end_y)
+    _hold_arc(it, line, end, (center_x, center_y), turn, feed, sweep)
+    return end
+
+
+def _arc_next(
+    it: Interpreter,
+    motion: int,
+    p: list[float],
+    turn: int,
+    seen: dict[str, Word],
+    line: int,
+    gw: Word | None,
+) -> list[float]:
+    """An arc after the entry (convert_arc_comp2): the corner from the move before,
+    concave (the move before cut back), convex (an arc round it) or smooth; its end."""
+    st = it.st
+    iu, iv, iw = _AXES[st.plane]
+    sc = it.scale()
+    ex, ey = p[iu], p[iv]
+    cx, cy = st.pos[iu], st.pos[iv]
+    side, radius, q = st.comp_side, st.comp_radius, it.queue
     op = st.program
     opx, opy = op[iu], op[iv]
     cu, cv = arc_center(it, motion, opx / sc, opy / sc, ex / sc, ey / sc, seen, line, gw)
@@ -444,62 +523,21 @@ def arc(
     else:
         gamma = math.atan2(ey - centery, ex - centerx)
         delta = delta + math.pi
-    new_end_x = ex + radius * math.cos(gamma)
-    new_end_y = ey + radius * math.sin(gamma)
     small = TOLERANCE_CONCAVE_CORNER
-    front = q.items[0] if q.items else None
     end = list(p)
-    end[iu], end[iv] = new_end_x, new_end_y
+    end[iu], end[iv] = ex + radius * math.cos(gamma), ey + radius * math.sin(gamma)
     sweep = sweep_of(opx, opy, centerx, centery, turn, ex, ey)
     if (
         beta < -small
         or beta > math.pi + small
         or (abs(beta - math.pi) < small and not _inside(side, turn))
     ):
+        front = q.items[0] if q.items else None
         if front is None or front["kind"] != "arc":
-            cyy = arc_radius * math.sin(beta - _HALF_PI)
-            if _inside(side, turn):
-                dist = arc_radius - radius
-                toward = cyy + radius
-                ratio = toward / dist
-                _reach(it, ratio, line, gw)
-                ang = theta + math.asin(ratio) if turn > 0 else theta - math.asin(ratio)
-            else:
-                dist = arc_radius + radius
-                toward = cyy - radius
-                ratio = toward / dist
-                _reach(it, ratio, line, gw)
-                if turn > 0:
-                    ang = theta + math.pi - math.asin(ratio)
-                else:
-                    ang = theta + math.pi + math.asin(ratio)
-            midx = centerx + dist * math.cos(ang)
-            midy = centery + dist * math.sin(ang)
-            q.move_endpoint_and_flush(midx, midy, line)
+            mx, my = _line_cut_back(it, (centerx, centery), arc_radius, theta, beta, turn, line, gw)
         else:
-            pcu, pcv = front["_center2"]
-            pe = front["end"]
-            oldrad = math.hypot(pcv - pe[iv], pcu - pe[iu])
-            newrad = arc_radius - radius if _inside(side, turn) else arc_radius + radius
-            arc_cc = math.hypot(pcv - centery, pcu - centerx)
-            if oldrad == 0 or arc_cc == 0:
-                raise it.err("an arc to arc corner about the same centre", line, gw)
-            a = (oldrad**2 + arc_cc**2 - newrad**2) / (2 * oldrad * arc_cc)
-            if a > 1.0 or a < -1.0:
-                raise it.err(
-                    "an arc to arc corner the compensated tool cannot enter without gouging",
-                    line,
-                    gw,
-                    "a tool smaller than the corner",
-                )
-            pullback = math.acos(a)
-            cc_dir = math.atan2(centery - pcv, centerx - pcu)
-            if _inside(side, front["rotation"]):
-                d = cc_dir + pullback if turn > 0 else cc_dir - pullback
-            else:
-                d = cc_dir - pullback if turn > 0 else cc_dir + pullback
-            q.move_endpoint_and_flush(pcu + oldrad * math.cos(d), pcv + oldrad * math.sin(d), line)
-        _hold_arc(it, line, end, (centerx, centery), turn, feed, sweep)
+            mx, my = _arcs_cut_back(it, front, (centerx, centery), arc_radius, turn, line, gw)
+        q.move_endpoint_and_flush(mx, my, line)
     elif beta > small:  # convex: an arc round the corner, then the arc
         midx = opx + radius * math.cos(delta)
         midy = opy + radius * math.sin(delta)
@@ -521,13 +559,81 @@ def arc(
         )
         q.flush()
         q.set_endpoint(midx, midy)
-        _hold_arc(it, line, end, (centerx, centery), turn, feed, sweep)
     else:  # convex, smooth: the arc alone
         q.flush()
         q.set_endpoint(cx, cy)
-        _hold_arc(it, line, end, (centerx, centery), turn, feed, sweep)
-    st.program = list(p)
-    st.pos = end
+    _hold_arc(it, line, end, (centerx, centery), turn, feed, sweep)
+    return end
+
+
+def _line_cut_back(
+    it: Interpreter,
+    center: tuple[float, float],
+    arc_radius: float,
+    theta: float,
+    beta: float,
+    turn: int,
+    line: int,
+    gw: Word | None,
+) -> tuple[float, float]:
+    """A concave corner from a straight move into an arc: where on the move before
+    the compensated tool meets the arc's offset circle."""
+    st = it.st
+    radius, side = st.comp_radius, st.comp_side
+    cyy = arc_radius * math.sin(beta - _HALF_PI)
+    if _inside(side, turn):
+        dist = arc_radius - radius
+        ratio = (cyy + radius) / dist
+        _reach(it, ratio, line, gw)
+        ang = theta + math.asin(ratio) if turn > 0 else theta - math.asin(ratio)
+    else:
+        dist = arc_radius + radius
+        ratio = (cyy - radius) / dist
+        _reach(it, ratio, line, gw)
+        if turn > 0:
+            ang = theta + math.pi - math.asin(ratio)
+        else:
+            ang = theta + math.pi + math.asin(ratio)
+    return center[0] + dist * math.cos(ang), center[1] + dist * math.sin(ang)
+
+
+def _arcs_cut_back(
+    it: Interpreter,
+    front: dict[str, Any],
+    center: tuple[float, float],
+    arc_radius: float,
+    turn: int,
+    line: int,
+    gw: Word | None,
+) -> tuple[float, float]:
+    """A concave corner from an arc into an arc: where on the arc before the
+    compensated tool meets the new arc's offset circle."""
+    st = it.st
+    iu, iv, _ = _AXES[st.plane]
+    radius, side = st.comp_radius, st.comp_side
+    centerx, centery = center
+    pcu, pcv = front["_center2"]
+    pe = front["end"]
+    oldrad = math.hypot(pcv - pe[iv], pcu - pe[iu])
+    newrad = arc_radius - radius if _inside(side, turn) else arc_radius + radius
+    arc_cc = math.hypot(pcv - centery, pcu - centerx)
+    if oldrad == 0 or arc_cc == 0:
+        raise it.err("an arc to arc corner about the same centre", line, gw)
+    a = (oldrad**2 + arc_cc**2 - newrad**2) / (2 * oldrad * arc_cc)
+    if a > 1.0 or a < -1.0:
+        raise it.err(
+            "an arc to arc corner the compensated tool cannot enter without gouging",
+            line,
+            gw,
+            "a tool smaller than the corner",
+        )
+    pullback = math.acos(a)
+    cc_dir = math.atan2(centery - pcv, centerx - pcu)
+    if _inside(side, front["rotation"]):
+        d = cc_dir + pullback if turn > 0 else cc_dir - pullback
+    else:
+        d = cc_dir - pullback if turn > 0 else cc_dir + pullback
+    return pcu + oldrad * math.cos(d), pcv + oldrad * math.sin(d)
 
 
 # ---------------------------------------------------------------- pieces

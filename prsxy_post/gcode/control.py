@@ -32,6 +32,8 @@ Labels of ``if``, loops and their ends are local to the subroutine they are in
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from ..errors import GCodeError
 from .execute import Interpreter
@@ -155,207 +157,229 @@ class Control:
         line: int,
         source: str,
     ) -> None:
-        """One O-word line at ``here`` (line number ``line``, for messages)."""
+        """One O-word line at ``here`` (line number ``line``, for messages): what
+        is read and evaluated (read_o), then what it does (convert_control_functions)."""
         name = self.name_of(o, source, line)
+        values = self._read(o, name, source, line)
+        if values is None:
+            return
+        if self.skipping_o is not None and self.skipping_o != name:
+            return
+        if self.skipping_to_sub is not None and o.kind not in ("sub", "bare"):
+            return
+        at = _At(o, name, values, m98_words, here, line, source)
+        if o.kind in _OPENED_BY:
+            self._check_opened(at)
+        handler = _BY_KIND.get(o.kind)
+        if handler is not None:
+            handler(self, at)
+
+    def _read(self, o: OWord, name: str, source: str, line: int) -> list[float] | None:
+        """The values an O-word line evaluates (a call's arguments, a condition,
+        a return value); None where it is skipped unread (read_o)."""
         kind = o.kind
         values: list[float] = []
-
-        def err(msg: str, expected: str | None = None) -> GCodeError:
-            return fail(msg, source, line, o.column, expected)
-
-        # read_o: what is read, and evaluated, depends on the skipping state
         if kind in ("sub", "bare"):
             if self.defining_sub:
-                raise err(
+                raise fail(
                     "a subroutine defined inside another",
+                    source,
+                    line,
+                    o.column,
                     "'endsub' of the one before",
                 )
         elif kind in ("endsub", "return", "m99"):
             if self.skipping_o is not None and self.skipping_o != name:
-                return
+                return None
             if kind != "m99":
-                # read while defining: an undefined named parameter is no error
-                # there (read_named_parameter), its value is none (here 0)
-                self.params.lenient_named = self.defining_sub
-                try:
-                    values = self._values(o, source, line)
-                finally:
-                    self.params.lenient_named = False
-                if values:
-                    self.return_value = values[0]
-                    self.value_returned = True
-                else:
-                    self.return_value = 0.0
-                    self.value_returned = False
+                self._read_return(o, source, line)
         elif self.defining_sub:
-            return
+            return None
         elif kind == "call":
             if self.skipping_o is not None:
-                return
+                return None
             values = self._values(o, source, line)
         elif kind in ("while", "repeat", "if", "elseif"):
             if self.skipping_o is not None and self.skipping_o != name:
-                return
+                return None
             values = self._values(o, source, line)
         elif o.problem is not None and self.skipping_o is None:
             self._raise_problem(o, source, line)
-        # convert_control_functions
-        if self.skipping_o is not None and self.skipping_o != name:
-            return
-        if self.skipping_to_sub is not None and kind not in ("sub", "bare"):
-            return
-        if kind in ("sub", "bare"):
-            frame = self.frames[-1]
-            if kind == "bare" and frame.call_type not in ("m98", "none"):
-                raise err("a Fanuc-style 'O....' subprogram called with 'O.. call'", "M98 P..")
-            if kind == "sub" and frame.call_type not in ("o", "none"):
-                raise err("an 'O.. sub' subroutine called with M98", "o<name> call")
-            if self.skipping_o is not None:
-                self._save_offset(name, kind, here, line, source, o)
-                self.skipping_o = None
-            self.skipping_to_sub = None
-            if kind == "bare":
-                return
-            if self.call_level == 0:
-                self._save_offset(name, kind, here, line, source, o)
-                self.skipping_o = name
-                self.skipping_start = line
-                self.defining_sub = True
-                self.sub_name = name
-            return
-        if kind in ("endsub", "return", "m99"):
-            if self.call_level == 0 and self.sub_name is None:
-                raise err(f"'{kind}' outside a subroutine", "o<name> sub before it")
-            frame = self.frames[-1]
-            if frame.call_type == "m98" and kind != "m99":
-                raise err("a Fanuc-style subprogram ended without M99", "M99")
-            if frame.call_type == "o" and kind == "m99":
-                raise err("an 'O.. sub' subroutine ended with M99", "o<name> endsub")
-            self._return(kind)
-            return
-        if kind in ("call", "m98"):
-            self._call(o, name, kind, values, m98_words, here, line, source)
-            return
-        if kind == "do":
+        return values
+
+    def _read_return(self, o: OWord, source: str, line: int) -> None:
+        """An endsub's or return's value. Read while defining, an undefined named
+        parameter is no error (read_named_parameter), its value is none (here 0)."""
+        self.params.lenient_named = self.defining_sub
+        try:
+            values = self._values(o, source, line)
+        finally:
+            self.params.lenient_named = False
+        if values:
+            self.return_value = values[0]
+            self.value_returned = True
+        else:
+            self.return_value = 0.0
+            self.value_returned = False
+
+    def _check_opened(self, at: _At) -> None:
+        """An elseif, else, endif, break, continue or loop end names a label
+        opened by the right kind of line."""
+        kind = at.o.kind
+        op = self.offsets.get(at.name)
+        if op is None:
+            raise at.err(f"'{kind}' without its opening label", "the same label on an if or loop")
+        want = _OPENED_BY[kind]
+        if op.kind not in want:
+            raise at.err(
+                f"'{kind}' with the label of a '{op.kind}'",
+                f"the label of a {' or '.join(want)}",
+            )
+
+    def _sub(self, at: _At) -> None:
+        """``sub`` or a Fanuc ``O….`` line: a definition skipped and remembered."""
+        kind, name = at.o.kind, at.name
+        frame = self.frames[-1]
+        if kind == "bare" and frame.call_type not in ("m98", "none"):
+            raise at.err("a Fanuc-style 'O....' subprogram called with 'O.. call'", "M98 P..")
+        if kind == "sub" and frame.call_type not in ("o", "none"):
+            raise at.err("an 'O.. sub' subroutine called with M98", "o<name> call")
+        if self.skipping_o is not None:
+            self._save_offset(name, kind, at.here, at.line, at.source, at.o)
             self.skipping_o = None
-            if name not in self.offsets:
-                self._save_offset(name, kind, here, line, source, o)
+        self.skipping_to_sub = None
+        if kind == "bare":
             return
-        if kind == "repeat":
-            op = self.offsets.get(name)
-            if op is not None and op.index != here[1]:
-                raise err(f"label '{o.name or name}' used twice", "a label of its own per repeat")
-            if op is None:
-                op = self._save_offset(name, kind, here, line, source, o)
-            self.skipping_o = None
-            if op.kind == kind:
-                if op.repeat_count == -1:
-                    op.repeat_count = _round_to_int(values[0])
-                if op.repeat_count > 0:
-                    op.repeat_count -= 1
-                else:
-                    self.skipping_o = name
-                    self.skipping_start = line
-                    op.repeat_count = -1
-            return
-        if kind == "while":
-            op = self.offsets.get(name)
-            if op is not None:
-                if op.kind != "do" and op.index != here[1]:
-                    raise err(f"label '{o.name or name}' used twice", "a label of its own per loop")
+        if self.call_level == 0:
+            self._save_offset(name, kind, at.here, at.line, at.source, at.o)
+            self.skipping_o = name
+            self.skipping_start = at.line
+            self.defining_sub = True
+            self.sub_name = name
+
+    def _end(self, at: _At) -> None:
+        """``endsub``, ``return`` or ``M99``: back to the caller."""
+        kind = at.o.kind
+        if self.call_level == 0 and self.sub_name is None:
+            raise at.err(f"'{kind}' outside a subroutine", "o<name> sub before it")
+        frame = self.frames[-1]
+        if frame.call_type == "m98" and kind != "m99":
+            raise at.err("a Fanuc-style subprogram ended without M99", "M99")
+        if frame.call_type == "o" and kind == "m99":
+            raise at.err("an 'O.. sub' subroutine ended with M99", "o<name> endsub")
+        self._return(kind)
+
+    def _call_at(self, at: _At) -> None:
+        self._call(at.o, at.name, at.o.kind, at.values, at.m98_words, at.here, at.line, at.source)
+
+    def _do(self, at: _At) -> None:
+        self.skipping_o = None
+        if at.name not in self.offsets:
+            self._save_offset(at.name, "do", at.here, at.line, at.source, at.o)
+
+    def _repeat(self, at: _At) -> None:
+        """``repeat``: count down the passes, skip to the end after the last."""
+        name = at.name
+        op = self.offsets.get(name)
+        if op is not None and op.index != at.here[1]:
+            raise at.err(f"label '{at.o.name or name}' used twice", "a label of its own per repeat")
+        if op is None:
+            op = self._save_offset(name, "repeat", at.here, at.line, at.source, at.o)
+        self.skipping_o = None
+        if op.kind == "repeat":
+            if op.repeat_count == -1:
+                op.repeat_count = _round_to_int(at.values[0])
+            if op.repeat_count > 0:
+                op.repeat_count -= 1
             else:
-                op = self._save_offset(name, kind, here, line, source, o)
-            self.skipping_o = None
-            if op.kind == kind:
-                if values[0] == 0.0:
-                    self.skipping_o = name
-                    self.skipping_start = line
-            else:  # the end of a do-while
-                if values[0] != 0.0 and not self.doing_break:
-                    self._count(o, source, line)
-                    raise Jump((op.file, op.index))
-                self.doing_break = False
-            return
-        if kind == "if":
-            op = self.offsets.get(name)
-            if op is not None and op.index != here[1]:
-                raise err(f"label '{o.name or name}' used twice", "a label of its own per if")
-            if op is None:
-                self._save_offset(name, kind, here, line, source, o)
-            if values[0] != 0.0:
-                self.skipping_o = None
-                self.executed_if = True
-            else:
-                self.skipping_o = name
-                self.skipping_start = line
-                self.executed_if = False
-            return
-        if kind in ("elseif", "else", "endif", "break", "continue", "endwhile", "endrepeat"):
-            op = self.offsets.get(name)
-            if op is None:
-                raise err(f"'{kind}' without its opening label", "the same label on an if or loop")
-            want = {
-                "elseif": ("if",),
-                "else": ("if",),
-                "endif": ("if",),
-                "break": ("while", "do"),
-                "continue": ("while", "do"),
-                "endwhile": ("while",),
-                "endrepeat": ("repeat",),
-            }[kind]
-            if op.kind not in want:
-                raise err(
-                    f"'{kind}' with the label of a '{op.kind}'",
-                    f"the label of a {' or '.join(want)}",
+                self._skip(name, at.line)
+                op.repeat_count = -1
+
+    def _while(self, at: _At) -> None:
+        """``while``: a loop's head (skip to its end when false) or a do-while's
+        end (back to its ``do`` when true)."""
+        name = at.name
+        op = self.offsets.get(name)
+        if op is not None:
+            if op.kind != "do" and op.index != at.here[1]:
+                raise at.err(
+                    f"label '{at.o.name or name}' used twice", "a label of its own per loop"
                 )
-        if kind == "elseif":
-            if self.skipping_o is not None and self.skipping_o != name:
-                return
-            if self.executed_if:
-                self.skipping_o = name
-                self.skipping_start = line
-                return
-            if values[0] != 0.0:
-                self.skipping_o = None
-                self.executed_if = True
-            return
-        if kind == "else":
-            if self.executed_if:
-                self.skipping_o = name
-                self.skipping_start = line
-                return
-            if self.skipping_o == name:
-                self.executed_if = True
-                self.skipping_o = None
-            return
-        if kind == "endif":
+        else:
+            op = self._save_offset(name, "while", at.here, at.line, at.source, at.o)
+        self.skipping_o = None
+        if op.kind == "while":
+            if at.values[0] == 0.0:
+                self._skip(name, at.line)
+        else:  # the end of a do-while
+            if at.values[0] != 0.0 and not self.doing_break:
+                self._count(at.o, at.source, at.line)
+                raise Jump((op.file, op.index))
+            self.doing_break = False
+
+    def _if(self, at: _At) -> None:
+        name = at.name
+        op = self.offsets.get(name)
+        if op is not None and op.index != at.here[1]:
+            raise at.err(f"label '{at.o.name or name}' used twice", "a label of its own per if")
+        if op is None:
+            self._save_offset(name, "if", at.here, at.line, at.source, at.o)
+        if at.values[0] != 0.0:
             self.skipping_o = None
             self.executed_if = True
+        else:
+            self._skip(name, at.line)
+            self.executed_if = False
+
+    def _elseif(self, at: _At) -> None:
+        if self.executed_if:
+            self._skip(at.name, at.line)
             return
-        if kind == "break":
-            self.skipping_o = name
-            self.skipping_start = line
-            self.doing_break = True
+        if at.values[0] != 0.0:
+            self.skipping_o = None
+            self.executed_if = True
+
+    def _else(self, at: _At) -> None:
+        if self.executed_if:
+            self._skip(at.name, at.line)
             return
-        if kind == "continue":
-            if self.skipping_o == name:
-                return
-            self.skipping_o = name
-            self.skipping_start = line
-            self.doing_continue = True
+        if self.skipping_o == at.name:
+            self.executed_if = True
+            self.skipping_o = None
+
+    def _endif(self, at: _At) -> None:
+        self.skipping_o = None
+        self.executed_if = True
+
+    def _break(self, at: _At) -> None:
+        self._skip(at.name, at.line)
+        self.doing_break = True
+
+    def _continue(self, at: _At) -> None:
+        if self.skipping_o == at.name:
             return
-        if kind in ("endwhile", "endrepeat"):
-            op = self.offsets[name]
-            if self.skipping_o == name:
-                self.skipping_o = None
-                if self.doing_continue:
-                    self.doing_continue = False
-                    self._count(o, source, line)
-                    raise Jump((op.file, op.index))
-                # LinuxCNC leaves doing_break set here (a later do-while sees it)
-                return
-            self._count(o, source, line)
-            raise Jump((op.file, op.index))
+        self._skip(at.name, at.line)
+        self.doing_continue = True
+
+    def _loop_end(self, at: _At) -> None:
+        """``endwhile`` or ``endrepeat``: back to the loop's head, unless a break
+        skipped here."""
+        op = self.offsets[at.name]
+        if self.skipping_o == at.name:
+            self.skipping_o = None
+            if self.doing_continue:
+                self.doing_continue = False
+                self._count(at.o, at.source, at.line)
+                raise Jump((op.file, op.index))
+            # LinuxCNC leaves doing_break set here (a later do-while sees it)
+            return
+        self._count(at.o, at.source, at.line)
+        raise Jump((op.file, op.index))
+
+    def _skip(self, name: str, line: int) -> None:
+        """Skip lines up to the next with label ``name`` (from line ``line``)."""
+        self.skipping_o = name
+        self.skipping_start = line
 
     # -- pieces
     def _values(self, o: OWord, source: str, line: int) -> list[float]:
@@ -494,3 +518,54 @@ class Control:
 
 def _round_to_int(v: float) -> int:
     return math.floor(v + 0.5)
+
+
+@dataclass(frozen=True)
+class _At:
+    """One O-word line being run: its word, label, values and place."""
+
+    o: OWord
+    name: str
+    values: list[float]
+    m98_words: dict[str, float]
+    here: Position
+    line: int
+    source: str
+
+    def err(self, msg: str, expected: str | None = None) -> GCodeError:
+        return fail(msg, self.source, self.line, self.o.column, expected)
+
+
+#: the kinds of line whose label an elseif, else, endif, break, continue or loop
+#: end must carry
+_OPENED_BY: dict[str, tuple[str, ...]] = {
+    "elseif": ("if",),
+    "else": ("if",),
+    "endif": ("if",),
+    "break": ("while", "do"),
+    "continue": ("while", "do"),
+    "endwhile": ("while",),
+    "endrepeat": ("repeat",),
+}
+
+#: what each kind of O-word line does (convert_control_functions)
+_BY_KIND: dict[str, Callable[[Control, _At], None]] = {
+    "sub": Control._sub,
+    "bare": Control._sub,
+    "endsub": Control._end,
+    "return": Control._end,
+    "m99": Control._end,
+    "call": Control._call_at,
+    "m98": Control._call_at,
+    "do": Control._do,
+    "repeat": Control._repeat,
+    "while": Control._while,
+    "if": Control._if,
+    "elseif": Control._elseif,
+    "else": Control._else,
+    "endif": Control._endif,
+    "break": Control._break,
+    "continue": Control._continue,
+    "endwhile": Control._loop_end,
+    "endrepeat": Control._loop_end,
+}

@@ -243,102 +243,133 @@ def arc_center(
     """The centre of an arc from (u0, v0) to (u1, v1) in the plane's axes, program
     units, from R or the centre words, with LinuxCNC's checks and tolerances
     (arc_data_r, arc_data_ijk)."""
+    if "R" in seen:
+        return _center_of_r(it, motion, (u0, v0), (u1, v1), seen, line)
+    return _center_of_ijk(it, motion, (u0, v0), (u1, v1), seen, line, gw)
+
+
+def _center_of_r(
+    it: Interpreter,
+    motion: int,
+    start: tuple[float, float],
+    end: tuple[float, float],
+    seen: dict[str, Word],
+    line: int,
+) -> tuple[float, float]:
+    """The centre from R (arc_data_r): on the chord's bisector, on the side G2/G3
+    and R's sign choose; a radius short of half the chord by the tolerance is
+    taken as that half."""
+    u0, v0 = start
+    u1, v1 = end
+    for letter in ("I", "J", "K"):
+        if letter in seen:
+            raise it.err(
+                "R and I/J/K in one arc",
+                line,
+                seen[letter],
+                "either R or the centre offsets",
+            )
+    r = seen["R"].value
+    if u0 == u1 and v0 == v1:
+        raise it.err(
+            "R arc whose end point is its start point",
+            line,
+            seen["R"],
+            "a different end point (a full circle needs I/J/K)",
+        )
+    mu, mv = (u0 + u1) / 2.0, (v0 + v1) / 2.0
+    half = math.hypot(mu - u1, mv - v1)
+    ar = abs(r)
+    if half - ar > RADIUS_TOLERANCE[it.st.units]:
+        raise it.err(
+            "arc radius too small to reach the end point",
+            line,
+            seen["R"],
+            f"|R| >= {half:.4f} (half the chord)",
+        )
+    if ar == 0 or half / ar > 1 - 1e-12:
+        half = ar
+    if (motion == 2 and r > 0) or (motion == 3 and r < 0):
+        theta = math.atan2(v1 - v0, u1 - u0) - math.pi / 2
+    else:
+        theta = math.atan2(v1 - v0, u1 - u0) + math.pi / 2
+    turn2 = math.asin(half / ar) if ar > 0 else 0.0
+    d = ar * math.cos(turn2)
+    return mu + d * math.cos(theta), mv + d * math.sin(theta)
+
+
+def _center_of_ijk(
+    it: Interpreter,
+    motion: int,
+    start: tuple[float, float],
+    end: tuple[float, float],
+    seen: dict[str, Word],
+    line: int,
+    gw: Word | None,
+) -> tuple[float, float]:
+    """The centre from the plane's two centre words (arc_data_ijk): offsets from the
+    start (G91.1) or a point (G90.1); the start and end must lie on one circle
+    about it within LinuxCNC's spiral tolerances."""
+    u0, v0 = start
+    u1, v1 = end
     st = it.st
     iu, iv, _ = PLANE_AXES[st.plane]
     la, lb = PLANE_OFFSETS[st.plane]
-    sc = it.scale()
     unit = st.units
-    if "R" in seen:
-        for letter in ("I", "J", "K"):
-            if letter in seen:
+    if la not in seen and lb not in seen:
+        raise it.err(
+            "arc with neither R nor centre offsets",
+            line,
+            gw,
+            f"{la} and/or {lb} (or R) with G{motion} in G{st.plane}",
+        )
+    for letter in {"I", "J", "K"} - {la, lb}:
+        if letter in seen:
+            raise it.err(
+                f"{letter} word in a G{st.plane} arc",
+                line,
+                seen[letter],
+                f"{la} and {lb} in G{st.plane}",
+            )
+    if st.arc_absolute:
+        for letter in (la, lb):
+            if letter not in seen:
                 raise it.err(
-                    "R and I/J/K in one arc",
+                    f"{letter} word missing in an absolute-centre arc (G90.1)",
                     line,
-                    seen[letter],
-                    "either R or the centre offsets",
+                    gw,
+                    f"both {la} and {lb} in G90.1",
                 )
-        r = seen["R"].value
-        if u0 == u1 and v0 == v1:
-            raise it.err(
-                "R arc whose end point is its start point",
-                line,
-                seen["R"],
-                "a different end point (a full circle needs I/J/K)",
-            )
-        mu, mv = (u0 + u1) / 2.0, (v0 + v1) / 2.0
-        half = math.hypot(mu - u1, mv - v1)
-        ar = abs(r)
-        if half - ar > RADIUS_TOLERANCE[unit]:
-            raise it.err(
-                "arc radius too small to reach the end point",
-                line,
-                seen["R"],
-                f"|R| >= {half:.4f} (half the chord)",
-            )
-        if ar == 0 or half / ar > 1 - 1e-12:
-            half = ar
-        if (motion == 2 and r > 0) or (motion == 3 and r < 0):
-            theta = math.atan2(v1 - v0, u1 - u0) - math.pi / 2
-        else:
-            theta = math.atan2(v1 - v0, u1 - u0) + math.pi / 2
-        turn2 = math.asin(half / ar) if ar > 0 else 0.0
-        d = ar * math.cos(turn2)
-        cu, cv = mu + d * math.cos(theta), mv + d * math.sin(theta)
+    a = seen[la].value if la in seen else 0.0
+    b = seen[lb].value if lb in seen else 0.0
+    if st.arc_absolute:
+        off = it.offset()
+        sc = it.scale()
+        cu = a + off[iu] / sc
+        cv = b + off[iv] / sc
     else:
-        if la not in seen and lb not in seen:
-            raise it.err(
-                "arc with neither R nor centre offsets",
-                line,
-                gw,
-                f"{la} and/or {lb} (or R) with G{motion} in G{st.plane}",
-            )
-        third = {"I", "J", "K"} - {la, lb}
-        for letter in third:
-            if letter in seen:
-                raise it.err(
-                    f"{letter} word in a G{st.plane} arc",
-                    line,
-                    seen[letter],
-                    f"{la} and {lb} in G{st.plane}",
-                )
-        if st.arc_absolute:
-            for letter in (la, lb):
-                if letter not in seen:
-                    raise it.err(
-                        f"{letter} word missing in an absolute-centre arc (G90.1)",
-                        line,
-                        gw,
-                        f"both {la} and {lb} in G90.1",
-                    )
-        a = seen[la].value if la in seen else 0.0
-        b = seen[lb].value if lb in seen else 0.0
-        if st.arc_absolute:
-            off = it.offset()
-            cu = a + off[iu] / sc
-            cv = b + off[iv] / sc
-        else:
-            cu, cv = u0 + a, v0 + b
-        r1 = math.hypot(cu - u0, cv - v0)
-        r2 = math.hypot(cu - u1, cv - v1)
-        rt = RADIUS_TOLERANCE[unit]
-        if r1 < rt or r2 < rt:
-            raise it.err(
-                "zero-radius arc",
-                line,
-                seen.get(la) or seen.get(lb),
-                "a centre away from the start and end points",
-            )
-        ae = abs(r1 - r2)
-        re_ = ae / max(r1, r2)
-        sa = SPIRAL_ABS_TOLERANCE[unit]
-        if ae > sa * 100.0 or (re_ > SPIRAL_REL_TOLERANCE and ae > sa):
-            raise it.err(
-                f"the end point is not on the arc's circle (radius {r1:.4f} at the start, "
-                f"{r2:.4f} at the end)",
-                line,
-                seen.get(la) or seen.get(lb),
-                f"radii equal within {sa:.4f} {'mm' if unit == 'mm' else 'in'}",
-            )
+        cu, cv = u0 + a, v0 + b
+    r1 = math.hypot(cu - u0, cv - v0)
+    r2 = math.hypot(cu - u1, cv - v1)
+    rt = RADIUS_TOLERANCE[unit]
+    if r1 < rt or r2 < rt:
+        raise it.err(
+            "zero-radius arc",
+            line,
+            seen.get(la) or seen.get(lb),
+            "a centre away from the start and end points",
+        )
+    ae = abs(r1 - r2)
+    re_ = ae / max(r1, r2)
+    sa = SPIRAL_ABS_TOLERANCE[unit]
+    if ae > sa * 100.0 or (re_ > SPIRAL_REL_TOLERANCE and ae > sa):
+        raise it.err(
+            f"the end point is not on the arc's circle (radius {r1:.4f} at the start, "
+            f"{r2:.4f} at the end)",
+            line,
+            seen.get(la) or seen.get(lb),
+            f"radii equal within {sa:.4f} {'mm' if unit == 'mm' else 'in'}",
+        )
     return cu, cv
 
 
