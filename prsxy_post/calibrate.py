@@ -326,19 +326,8 @@ def fit_kinematics(
         assert ev.J is not None
         A = (-ev.J * s[None, :]) @ V
         dz, *_ = np.linalg.lstsq(A, -ev.r, rcond=None)
-        step = s * (V @ dz)
-        lam = 1.0
-        while True:
-            trial = theta + lam * step
-            try:
-                ev_t = evaluate(profile, trial, obs, True, dict(guesses))
-                cost_t = float(ev_t.r @ ev_t.r)
-            except FitError:
-                cost_t = np.inf
-            if cost_t <= cost or lam < 1e-3:
-                break
-            lam /= 4
-        if cost_t > cost:
+        lam, trial, ev_t, cost_t = _line_search(profile, obs, guesses, theta, s * (V @ dz), cost)
+        if ev_t is None or cost_t > cost:
             break
         theta, ev = trial, ev_t
         done = abs(cost - cost_t) <= 1e-10 * max(cost, 1e-30) or np.max(np.abs(dz * lam)) < 1e-9
@@ -362,11 +351,7 @@ def fit_kinematics(
     dropped = Vt[~keep]
     open_part = np.sqrt(np.sum(dropped**2, axis=0)) if len(dropped) else np.zeros(len(s))
     identified = mask & (se < max_rel_stderr * PRIOR) & (open_part < 0.1)
-    groups = []
-    for v in Vt[~keep]:
-        big = np.nonzero(np.abs(v) >= 0.3 * np.max(np.abs(v)))[0]
-        if big.size and np.any(mask[big]):
-            groups.append([(PARAMS[j], float(v[j])) for j in big if mask[j]])
+    groups = _open_groups(Vt[~keep], mask)
     smax = S[0] if S.size else 0.0
     smin = S[-1] if S.size else 0.0
     return KinematicFit(
@@ -384,6 +369,42 @@ def fit_kinematics(
         iterations,
         noise_scale,
     )
+
+
+def _line_search(
+    profile: Profile,
+    obs: Observations,
+    guesses: dict[str, np.ndarray],
+    theta: np.ndarray,
+    step: np.ndarray,
+    cost: float,
+) -> tuple[float, np.ndarray, ModelEval | None, float]:
+    """θ + λ·step for λ = 1, 1/4, 1/16, ... down to 1e-3 until the cost is no more
+    than ``cost``: (λ, θ there, its evaluation or None where the model cannot be
+    evaluated there, its cost)."""
+    lam = 1.0
+    while True:
+        trial = theta + lam * step
+        ev_t: ModelEval | None
+        try:
+            ev_t = evaluate(profile, trial, obs, True, dict(guesses))
+            cost_t = float(ev_t.r @ ev_t.r)
+        except FitError:
+            ev_t, cost_t = None, np.inf
+        if cost_t <= cost or lam < 1e-3:
+            return lam, trial, ev_t, cost_t
+        lam /= 4
+
+
+def _open_groups(open_dirs: np.ndarray, mask: np.ndarray) -> list[list[tuple[str, float]]]:
+    """The fitted parameters of each combination the data leave open (the rows of
+    ``open_dirs``, scaled space) that take a part of at least 0.3 of its largest."""
+    groups = []
+    for v in open_dirs:
+        big = np.nonzero(np.abs(v) >= 0.3 * np.max(np.abs(v)))[0]
+        if big.size and np.any(mask[big]):
+            groups.append([(PARAMS[j], float(v[j])) for j in big if mask[j]])
+    return groups
 
 
 def apply_theta(profile_doc: dict[str, Any], theta: np.ndarray) -> dict[str, Any]:

@@ -39,6 +39,7 @@ every motor.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Callable, Collection, Mapping, Sequence
@@ -293,52 +294,21 @@ def refine(
     free = list(free)
     keys = list(keys)
     dims = [2 if split_key(k)[1] is not None else 1 for k in keys]
-    lo = np.full(len(free) + sum(dims), -np.inf)
-    j = len(free)
-    for k, d in zip(keys, dims, strict=True):
-        if d == 1:
-            lo[j] = (lower or {}).get(k, -np.inf)
-        j += d
+    lo = _lower_bounds(free, keys, dims, lower or {})
     x = np.maximum(np.array(x0, dtype=float), lo)
     s = _priors(free, keys, dims)
-    all_keys = free + keys
-
     measured_motors = tuple(sorted(tables_measured))
-
-    def model_at(x: np.ndarray, columns: bool) -> tuple[Profile, Linearised]:
-        doc = registry.apply(current.raw, current, _changes(free, keys, dims, x), measured_motors)
-        prof = profile_from_dict(doc, current.source)
-        lin = predict(
-            prof,
-            data,
-            all_keys if columns else [],
-            with_map=with_map,
-            tables_measured=measured_motors,
-        )
-        return prof, lin
+    sizes = _Sizes(current, data, free, keys, dims, with_map, measured_motors, lo)
 
     def solve(X: np.ndarray, rw: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-        """Step, covariance and σ̂² of the linear model X at residual rw."""
-        Xs = X * s
-        U, S, Vt = np.linalg.svd(Xs, full_matrices=False)
-        # directions mostly of free members that the data determine worse than
-        # max_rel_stderr of their prior stay put; the chosen terms passed their
-        # tests, so every direction of theirs is kept
-        free_part = np.sum(Vt[:, : len(free)] ** 2, axis=1)
-        weak = 1.0 / np.maximum(S, 1e-300) >= max_rel_stderr
-        keep = (S > 1e-12 * (S[0] if S.size else 1.0)) & ~(weak & (free_part > 0.5))
-        dx = s * (Vt[keep].T @ ((U[:, keep].T @ rw) / S[keep]))
-        res = rw - X @ dx
-        sigma2 = float(res @ res) / max(len(rw) - int(keep.sum()), 1)
-        cov = (s[:, None] * ((Vt[keep].T / S[keep] ** 2) @ Vt[keep]) * s[None, :]) * sigma2
-        return dx, cov, sigma2
+        return _svd_step(X, rw, s, len(free), max_rel_stderr)
 
     # Gauss-Newton with the Jacobian of the start (the model is close to linear in
     # sizes of micrometres), evaluated again where it converged for the covariance
-    prof, lin = model_at(x, True)
+    prof, lin = sizes.model_at(x, True)
     r = measured - lin.pred
     ok = np.isfinite(r)
-    X = _design(lin, all_keys, w, ok)
+    X = _design(lin, sizes.all_keys, w, ok)
     if not X.shape[1]:
         rw = (r * w)[ok]
         return _Fit(
@@ -357,28 +327,10 @@ def refine(
         rw = ((measured - lin.pred) * w)[ok]
         return float(rw @ rw)
 
-    def step(
-        x: np.ndarray, dx: np.ndarray, c0: float, columns: bool
-    ) -> tuple[np.ndarray, Profile, Linearised] | None:
-        """x + dx, halved while the model cannot be evaluated there (a geometry
-        whose forward kinematics misses measured poses, a size a profile cannot
-        hold) or the residual grows; None when no share of the step helps."""
-        for _ in range(8):
-            x_new = np.maximum(x + dx, lo)  # halving a projected step stays inside
-            try:
-                prof, lin = model_at(x_new, columns)
-            except (ProfileError, FitError):
-                dx = dx / 2
-                continue
-            if cost(lin) <= c0 * (1 + 1e-9):
-                return x_new, prof, lin
-            dx = dx / 2
-        return None
-
     for _ in range(iterations):
         dx, cov, sigma2 = solve(X, (r * w)[ok])
         dx = np.maximum(x + dx, lo) - x  # a size at its bound stays there
-        moved = step(x, dx, cost(lin), False)
+        moved = sizes.step(x, dx, cost, cost(lin), False)
         if moved is None:
             break
         x, prof, lin = moved
@@ -389,21 +341,113 @@ def refine(
     # linearised again where it converged, for the covariance; while the new
     # Jacobian still moves the sizes by more than a tenth of their standard error
     # (large or strongly coupled effects), more steps with it
-    prof, lin = model_at(x, True)
+    prof, lin = sizes.model_at(x, True)
     for _ in range(4):
         r = measured - lin.pred
-        dx, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
+        dx, cov, sigma2 = solve(_design(lin, sizes.all_keys, w, ok), (r * w)[ok])
         dx = np.maximum(x + dx, lo) - x
         if np.max(np.abs(dx) / np.sqrt(np.maximum(np.diag(cov), 1e-300)), initial=0.0) <= 0.1:
             break
-        moved = step(x, dx, cost(lin), True)
+        moved = sizes.step(x, dx, cost, cost(lin), True)
         if moved is None:
             break
         x, prof, lin = moved
     else:  # every pass moved x: the covariance where it ended
         r = measured - lin.pred
-        _, cov, sigma2 = solve(_design(lin, all_keys, w, ok), (r * w)[ok])
+        _, cov, sigma2 = solve(_design(lin, sizes.all_keys, w, ok), (r * w)[ok])
     return _Fit(free, keys, x, dims, prof, lin, cov, sigma2, measured_motors)
+
+
+def _lower_bounds(
+    free: list[str], keys: list[str], dims: list[int], lower: Mapping[str, float]
+) -> np.ndarray:
+    """The least value of each size: free members and periodic parts unbounded, a
+    term's model size at ``lower[key]``."""
+    lo = np.full(len(free) + sum(dims), -np.inf)
+    j = len(free)
+    for k, d in zip(keys, dims, strict=True):
+        if d == 1:
+            lo[j] = lower.get(k, -np.inf)
+        j += d
+    return lo
+
+
+def _svd_step(
+    X: np.ndarray, rw: np.ndarray, s: np.ndarray, n_free: int, max_rel_stderr: float
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Step, covariance and σ̂² of the linear model X at the weighted residual rw,
+    the sizes scaled by their priors ``s`` (the first ``n_free`` free members)."""
+    Xs = X * s
+    U, S, Vt = np.linalg.svd(Xs, full_matrices=False)
+    # directions mostly of free members that the data determine worse than
+    # max_rel_stderr of their prior stay put; the chosen terms passed their
+    # tests, so every direction of theirs is kept
+    free_part = np.sum(Vt[:, :n_free] ** 2, axis=1)
+    weak = 1.0 / np.maximum(S, 1e-300) >= max_rel_stderr
+    keep = (S > 1e-12 * (S[0] if S.size else 1.0)) & ~(weak & (free_part > 0.5))
+    dx = s * (Vt[keep].T @ ((U[:, keep].T @ rw) / S[keep]))
+    res = rw - X @ dx
+    sigma2 = float(res @ res) / max(len(rw) - int(keep.sum()), 1)
+    cov = (s[:, None] * ((Vt[keep].T / S[keep] ** 2) @ Vt[keep]) * s[None, :]) * sigma2
+    return dx, cov, sigma2
+
+
+class _Sizes:
+    """The model of :func:`refine` at given sizes: the profile they make, its
+    predictions, a step that lowers the cost of their residual."""
+
+    def __init__(
+        self,
+        current: Profile,
+        data: Data,
+        free: list[str],
+        keys: list[str],
+        dims: list[int],
+        with_map: bool,
+        measured_motors: tuple[int, ...],
+        lo: np.ndarray,
+    ) -> None:
+        self.current, self.data = current, data
+        self.free, self.keys, self.dims = free, keys, dims
+        self.all_keys = free + keys
+        self.with_map, self.measured_motors, self.lo = with_map, measured_motors, lo
+
+    def model_at(self, x: np.ndarray, columns: bool) -> tuple[Profile, Linearised]:
+        current = self.current
+        changes = _changes(self.free, self.keys, self.dims, x)
+        doc = registry.apply(current.raw, current, changes, self.measured_motors)
+        prof = profile_from_dict(doc, current.source)
+        lin = predict(
+            prof,
+            self.data,
+            self.all_keys if columns else [],
+            with_map=self.with_map,
+            tables_measured=self.measured_motors,
+        )
+        return prof, lin
+
+    def step(
+        self,
+        x: np.ndarray,
+        dx: np.ndarray,
+        cost: Callable[[Linearised], float],
+        c0: float,
+        columns: bool,
+    ) -> tuple[np.ndarray, Profile, Linearised] | None:
+        """x + dx, halved while the model cannot be evaluated there (a geometry
+        whose forward kinematics misses measured poses, a size a profile cannot
+        hold) or ``cost`` grows beyond ``c0``; None when no share of the step helps."""
+        for _ in range(8):
+            x_new = np.maximum(x + dx, self.lo)  # halving a projected step stays inside
+            try:
+                prof, lin = self.model_at(x_new, columns)
+            except (ProfileError, FitError):
+                dx = dx / 2
+                continue
+            if cost(lin) <= c0 * (1 + 1e-9):
+                return x_new, prof, lin
+            dx = dx / 2
+        return None
 
 
 def _select(
@@ -722,6 +766,7 @@ def find_effects(
         k: registry.lower_bound(split_key(k)[0], current) for k in keys if split_key(k)[1] is None
     }
     lower = {k: v for k, v in lower.items() if np.isfinite(v)}
+
     lin0 = predict(
         current,
         data,
@@ -752,57 +797,25 @@ def find_effects(
             normal, noise, free, keys, alpha, max_rel_stderr, lower, nuis, lin0.columns
         )
         same = chosen is not None and {g.keys[i] for i in sel} == set(chosen)
-        while True:
-            picked = [g.keys[i] for i in sel]
-            if same:
-                picked = list(fit.keys)  # the same members: start where they are
-                x0 = fit.x
-            else:
-                # starting sizes: the free ones where they are, the chosen at the
-                # selection's linear estimates (relative to ``current``, as z is)
-                beta, C, _ = g.fit(sel)
-                b_u, _ = g.unscaled(sel, beta, C)
-                x0 = np.concatenate([fit.x[: len(free)], b_u])
-            try:
-                fit = refine(
-                    current,
-                    data,
-                    measured,
-                    w,
-                    picked,
-                    x0,
-                    free=free,
-                    with_map=with_map,
-                    max_rel_stderr=max_rel_stderr,
-                    lower=lower,
-                    tables_measured=tables_measured,
-                )
-                break
-            except ProfileError:
-                # through the full model a size ran beyond anything a profile holds:
-                # its linear signature fitted something else; the weakest leaves
-                if not sel or same:
-                    raise
-                sel.pop(_weakest(g, sel))
+        fit_sizes = functools.partial(
+            refine,
+            current,
+            data,
+            measured,
+            w,
+            free=free,
+            with_map=with_map,
+            max_rel_stderr=max_rel_stderr,
+            lower=lower,
+            tables_measured=tables_measured,
+        )
+        fit = _refit(fit_sizes, g, sel, same, fit)
         if same:
             break
         chosen = [g.keys[i] for i in sel]
-        # the working response at the new model: the data as its linearisation sees
-        # them, relative to ``current`` (the sizes found are added back)
-        lin = predict(
-            fit.profile,
-            data,
-            free + keys,
-            with_map=with_map,
-            tables_measured=tables_measured,
-            table_knots=nuis.table_knots,
+        lin, z = _working_response(
+            fit, data, measured, free + keys, with_map, tables_measured, nuis
         )
-        nuis.add_columns(lin.columns)
-        z = measured - lin.pred
-        j = 0
-        for k, d in zip(free + fit.keys, [1] * len(free) + fit.dims, strict=True):
-            z = z + lin.columns[k] @ fit.x[j : j + d]
-            j += d
         normal = selection.Normal.of(lin.columns, z, rows)
     assert test is not None and g is not None
     found = _effects_of(fit, g, sel, test)
@@ -810,6 +823,68 @@ def find_effects(
         _widen_by_nuisance(found, g, sel, test)
     _intervals(found, fit, current, data, measured, w, with_map)
     return found, fit, noise, w
+
+
+def _refit(
+    fit_sizes: Callable[[list[str], np.ndarray], _Fit],
+    g: selection.Gram,
+    sel: list[int],
+    same: bool,
+    fit: _Fit,
+) -> _Fit:
+    """The chosen members ``sel`` of ``g`` fitted through the full model
+    (``fit_sizes``: :func:`refine` but for the keys and start): from where ``fit``
+    left them when they are the same as last round, else from the selection's
+    linear estimates. Where a size runs beyond anything a profile holds, its linear
+    signature fitted something else: the weakest member leaves (``sel`` shrinks)."""
+    n_free = len(fit.free)
+    while True:
+        picked = [g.keys[i] for i in sel]
+        if same:
+            picked = list(fit.keys)  # the same members: start where they are
+            x0 = fit.x
+        else:
+            # starting sizes: the free ones where they are, the chosen at the
+            # selection's linear estimates (relative to ``current``, as z is)
+            beta, C, _ = g.fit(sel)
+            b_u, _ = g.unscaled(sel, beta, C)
+            x0 = np.concatenate([fit.x[:n_free], b_u])
+        try:
+            return fit_sizes(picked, x0)
+        except ProfileError:
+            if not sel or same:
+                raise
+            sel.pop(_weakest(g, sel))
+
+
+def _working_response(
+    fit: _Fit,
+    data: Data,
+    measured: np.ndarray,
+    keys: list[str],
+    with_map: bool,
+    tables_measured: Collection[int],
+    nuis: Nuisance,
+) -> tuple[Linearised, np.ndarray]:
+    """The model ``fit`` found linearised again (its columns added to the
+    nuisance's), and the working response there: the data as that linearisation
+    sees them, relative to the profile the fit started from (the sizes found
+    are added back)."""
+    lin = predict(
+        fit.profile,
+        data,
+        keys,
+        with_map=with_map,
+        tables_measured=tables_measured,
+        table_knots=nuis.table_knots,
+    )
+    nuis.add_columns(lin.columns)
+    z = measured - lin.pred
+    j = 0
+    for k, d in zip(fit.free + fit.keys, [1] * len(fit.free) + fit.dims, strict=True):
+        z = z + lin.columns[k] @ fit.x[j : j + d]
+        j += d
+    return lin, z
 
 
 def _widen_by_nuisance(

@@ -187,32 +187,10 @@ class Gram:
         p = Mw.shape[0] - 1
         cand = [k for k in candidates if k in set(normal.keys)]
         ia = normal.columns(cand)
-        iF = normal.columns(list(free))
-        G = Mw[np.ix_(ia, ia)]
-        b = Mw[ia, p]
-        rr = float(Mw[p, p])
-        n_free = 0
-        if iF.size:
-            GFF = Mw[np.ix_(iF, iF)].copy()
-            for key, sd in (known or {}).items():
-                if key in set(free):
-                    j = int(normal.columns([key])[0])
-                    pos = int(np.nonzero(iF == j)[0][0])
-                    GFF[pos, pos] += 1.0 / max(sd, 1e-300) ** 2
-            GFA = Mw[np.ix_(iF, ia)]
-            bF = Mw[iF, p]
-            d = np.sqrt(np.maximum(np.diag(GFF), 1e-300))
-            w, V = np.linalg.eigh(GFF / np.outer(d, d))
-            keep = w > 1e-10 * max(float(w[-1]), 1e-300)
-            n_free = int(keep.sum())
-            # pseudo-inverse of GFF on its identified subspace
-            P = (V[:, keep] / w[keep]) @ V[:, keep].T / np.outer(d, d)
-            G_before = np.diag(G).copy()
-            G = G - GFA.T @ P @ GFA
-            b = b - GFA.T @ P @ bF
-            rr = rr - float(bF @ P @ bF)
-        else:
-            G_before = np.diag(G).copy()
+        known_at = {
+            int(normal.columns([key])[0]): sd for key, sd in (known or {}).items() if key in free
+        }
+        G, b, rr, n_free, G_before = _schur(Mw, ia, normal.columns(list(free)), known_at)
         diag = np.maximum(np.diag(G), 0.0)
         start_all = np.concatenate(
             [[0], np.cumsum([normal.dims[normal.keys.index(k)] for k in cand])]
@@ -628,3 +606,34 @@ def undetermined(g: Gram, sigma2: float = 1.0) -> dict[int, set[int]]:
         if tied:
             out[int(i)] = tied
     return out
+
+
+def _schur(
+    Mw: np.ndarray, ia: np.ndarray, iF: np.ndarray, known_at: Mapping[int, float]
+) -> tuple[np.ndarray, np.ndarray, float, int, np.ndarray]:
+    """The whitened normal equations ``Mw`` (last row and column the residual) of
+    the columns ``ia`` with the columns ``iF`` projected out: (G, b, r·r, how many
+    free directions the data identify, G's diagonal before). ``known_at``: free
+    column -> the standard deviation of its prior (1/s² added on its diagonal)."""
+    p = Mw.shape[0] - 1
+    G = Mw[np.ix_(ia, ia)]
+    b = Mw[ia, p]
+    rr = float(Mw[p, p])
+    G_before = np.diag(G).copy()
+    if not iF.size:
+        return G, b, rr, 0, G_before
+    GFF = Mw[np.ix_(iF, iF)].copy()
+    for j, sd in known_at.items():
+        pos = int(np.nonzero(iF == j)[0][0])
+        GFF[pos, pos] += 1.0 / max(sd, 1e-300) ** 2
+    GFA = Mw[np.ix_(iF, ia)]
+    bF = Mw[iF, p]
+    d = np.sqrt(np.maximum(np.diag(GFF), 1e-300))
+    w, V = np.linalg.eigh(GFF / np.outer(d, d))
+    keep = w > 1e-10 * max(float(w[-1]), 1e-300)
+    # pseudo-inverse of GFF on its identified subspace
+    P = (V[:, keep] / w[keep]) @ V[:, keep].T / np.outer(d, d)
+    G = G - GFA.T @ P @ GFA
+    b = b - GFA.T @ P @ bF
+    rr = rr - float(bF @ P @ bF)
+    return G, b, rr, int(keep.sum()), G_before

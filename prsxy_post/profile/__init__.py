@@ -412,17 +412,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     machine = c.table(doc, "machine", "", False) or {}
     name = c.string(machine, "name", "machine", "unnamed machine")
     c.unknown(machine, {"name", "note"}, "machine")
-    work = c.table(doc, "work", "", True) or {}
-    c.unknown(work, {"origin", "offsets"}, "work")
-    origin = c.vector(work, "origin", "work", 3)
-    offsets: dict[int, tuple[float, float, float, float, float]] = {}
-    off_sec = c.table(work, "offsets", "work", False) or {}
-    for k in off_sec:
-        if k not in {f"G{n}" for n in range(54, 60)}:
-            raise c.fail(f"work.offsets.{k}", "unknown work offset", "G54 ... G59")
-        v = c.vector(off_sec, k, "work.offsets", 5)
-        offsets[int(k[1:])] = (v[0], v[1], v[2], v[3], v[4])
-
+    origin, offsets = _work(c, doc)
     kin = _kinematics(c, c.table(doc, "kinematics", "", True) or {}, "kinematics")
     ck_sec = c.table(doc, "controller_kinematics", "", False)
     ckin = _kinematics(c, ck_sec, "controller_kinematics") if ck_sec is not None else None
@@ -434,42 +424,11 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
     motors = _motors(c, doc.get("motors"))
 
     sections = {name_: _section_with_defaults(c, doc, name_) for name_ in DEFAULTS}
-    limits = MachineLimits(**sections["limits"])
-    for k in (
-        "max_feed_mm_min",
-        "rapid_mm_min",
-        "rapid_deg_min",
-        "max_accel_mm_s2",
-        "max_accel_deg_s2",
-        "max_time_s",
-    ):
-        if getattr(limits, k) <= 0:
-            raise c.fail(f"limits.{k}", f"is {getattr(limits, k):g}", "a number > 0")
-    interp = sections["interpolation"]
-    period = interp["period_ms"]
-    if not 0.1 <= period <= 1000.0:
-        raise c.fail("interpolation.period_ms", f"is {period:g}", "0.1 to 1000 ms")
-    for key, lo, hi, unit in (
-        ("path_tolerance_mm", 1e-6, 10.0, "mm"),
-        ("path_tolerance_arcsec", 0.001, 36000.0, "arcsec"),
-        ("reversal_ms", 0.05, 100.0, "ms"),
-    ):
-        if not lo <= interp[key] <= hi:
-            raise c.fail(f"interpolation.{key}", f"is {interp[key]:g}", f"{lo:g} to {hi:g} {unit}")
+    limits = _limits(c, sections["limits"])
+    interp = _interpolation(c, sections["interpolation"])
     out_sec, notes = _output(c, doc)
 
-    tools: dict[int, Tool] = {}
-    tools_raw = doc.get("tools", [])
-    if not isinstance(tools_raw, list) or not all(isinstance(x, dict) for x in tools_raw):
-        raise c.fail("tools", "is not an array of tables", "[[tools]] tables")
-    for i, t in enumerate(tools_raw):
-        p = f"tools[{i + 1}]"
-        c.unknown(t, {"number", "length", "diameter", "note"}, p)
-        n = c.integer(t, "number", p, lo=1)
-        if n in tools:
-            raise c.fail(f"{p}.number", f"tool {n} given twice", "each tool once")
-        tools[n] = Tool(c.number(t, "length", p), c.number(t, "diameter", p, 0.0, lo=0.0))
-
+    tools = _tools(c, doc.get("tools", []))
     if "error_map" in doc and not isinstance(doc["error_map"], dict):
         raise c.fail("error_map", "is not a table", "an [error_map] table")
 
@@ -485,7 +444,7 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         effects=effects,
         motors=motors,
         limits=limits,
-        period_ms=period,
+        period_ms=interp["period_ms"],
         start=np.array(sections["start"]["pose"], dtype=float),
         work_offsets=offsets,
         g28=tuple(g["g28"]),
@@ -501,6 +460,69 @@ def profile_from_dict(doc: Mapping[str, Any], source: str = "<profile>") -> Prof
         gcode=g,
     )
     return prof
+
+
+def _work(
+    c: _Checker, doc: Mapping[str, Any]
+) -> tuple[np.ndarray, dict[int, tuple[float, float, float, float, float]]]:
+    """``[work]``: the work origin [mm] and the G54-G59 offsets [mm, mm, mm, deg, deg]."""
+    work = c.table(doc, "work", "", True) or {}
+    c.unknown(work, {"origin", "offsets"}, "work")
+    origin = c.vector(work, "origin", "work", 3)
+    offsets: dict[int, tuple[float, float, float, float, float]] = {}
+    off_sec = c.table(work, "offsets", "work", False) or {}
+    for k in off_sec:
+        if k not in {f"G{n}" for n in range(54, 60)}:
+            raise c.fail(f"work.offsets.{k}", "unknown work offset", "G54 ... G59")
+        v = c.vector(off_sec, k, "work.offsets", 5)
+        offsets[int(k[1:])] = (v[0], v[1], v[2], v[3], v[4])
+    return origin, offsets
+
+
+def _limits(c: _Checker, section: dict[str, Any]) -> MachineLimits:
+    """``[limits]`` (defaults filled in): every rate, acceleration and time > 0."""
+    limits = MachineLimits(**section)
+    for k in (
+        "max_feed_mm_min",
+        "rapid_mm_min",
+        "rapid_deg_min",
+        "max_accel_mm_s2",
+        "max_accel_deg_s2",
+        "max_time_s",
+    ):
+        if getattr(limits, k) <= 0:
+            raise c.fail(f"limits.{k}", f"is {getattr(limits, k):g}", "a number > 0")
+    return limits
+
+
+def _interpolation(c: _Checker, interp: dict[str, Any]) -> dict[str, Any]:
+    """``[interpolation]`` (defaults filled in), each value within its range."""
+    period = interp["period_ms"]
+    if not 0.1 <= period <= 1000.0:
+        raise c.fail("interpolation.period_ms", f"is {period:g}", "0.1 to 1000 ms")
+    for key, lo, hi, unit in (
+        ("path_tolerance_mm", 1e-6, 10.0, "mm"),
+        ("path_tolerance_arcsec", 0.001, 36000.0, "arcsec"),
+        ("reversal_ms", 0.05, 100.0, "ms"),
+    ):
+        if not lo <= interp[key] <= hi:
+            raise c.fail(f"interpolation.{key}", f"is {interp[key]:g}", f"{lo:g} to {hi:g} {unit}")
+    return interp
+
+
+def _tools(c: _Checker, tools_raw: Any) -> dict[int, Tool]:
+    """``[[tools]]``: each tool's length and diameter by its number (each once)."""
+    tools: dict[int, Tool] = {}
+    if not isinstance(tools_raw, list) or not all(isinstance(x, dict) for x in tools_raw):
+        raise c.fail("tools", "is not an array of tables", "[[tools]] tables")
+    for i, t in enumerate(tools_raw):
+        p = f"tools[{i + 1}]"
+        c.unknown(t, {"number", "length", "diameter", "note"}, p)
+        n = c.integer(t, "number", p, lo=1)
+        if n in tools:
+            raise c.fail(f"{p}.number", f"tool {n} given twice", "each tool once")
+        tools[n] = Tool(c.number(t, "length", p), c.number(t, "diameter", p, 0.0, lo=0.0))
+    return tools
 
 
 def loads(text: str, source: str = "<profile>") -> Profile:
