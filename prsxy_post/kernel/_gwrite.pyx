@@ -14,6 +14,8 @@ import numpy as np
 from libc.math cimport sqrt, fabs, frexp, ldexp, rint, INFINITY, NAN
 from libc.string cimport memmove
 
+from . import _arcs
+
 #: the reference's names of the state's scalars, in this module's order
 F_NAMES = (
     "tol", "blend", "tilt_cut", "tilt_hold", "tilt_chord", "accel", "accel_deg",
@@ -952,9 +954,10 @@ cdef tuple _buffers(st, bint resume, Py_ssize_t cap, Py_ssize_t cap_t, Py_ssize_
 
 
 def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint end,
-              arc_of=None, arc_i=None, arc_f=None):
+              arc_of=None, arc_i=None, arc_f=None, fit=None):
     """:func:`prsxy_post.kernel.gwrite.gcode_ops`, compiled (``st.run_q`` must
-    hold ``len(q)`` more points: :func:`gwrite.reserve`). After a stop,
+    hold ``len(q)`` more points: :func:`gwrite.reserve`). With ``fit`` the call
+    answers its stops itself (:func:`_refit`) and goes on. After a stop,
     ``st.pend_*`` are views of the call's op buffers, which the call resuming it
     fills on in place: copy the state (``copy.deepcopy``) to keep a stopped one."""
     if np.ndim(q) != 2 or np.shape(q)[1] != 5 or np.ndim(lead) != 2 or np.shape(lead)[1] != 5:
@@ -978,6 +981,11 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     has_arcs = arc_of is not None
     if not has_arcs:
         arc_of, arc_i, arc_f = np.zeros(0, np.int64), np.zeros((0, 4), np.int64), np.zeros((0, 2))
+    elif fit is not None:  # refitted here: arc_of changes, the caller's stays
+        arc_of = np.array(arc_of, dtype=np.int64)
+        arc_i = np.ascontiguousarray(arc_i, dtype=np.int64).reshape(-1, 4)
+        arc_f = np.ascontiguousarray(arc_f, dtype=np.float64).reshape(-1, 2)
+    new = []
     cdef const long long[::1] aov = np.ascontiguousarray(arc_of, dtype=np.int64)
     cdef const long long[:, ::1] aiv = np.ascontiguousarray(arc_i, dtype=np.int64).reshape(-1, 4)
     cdef const double[:, ::1] afv = np.ascontiguousarray(arc_f, dtype=np.float64).reshape(-1, 2)
@@ -1014,21 +1022,30 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     w.arc_f = &afv[0, 0] if afv.shape[0] else NULL
     w.tilts = &tv[0, 0]
     w.nt = nt0
+    k0 = w.stop_at if resume else 0
+    if not resume:
+        w.speed0 = w.last_speed
+        if n:
+            w.last_speed = sv[n - 1]
+    while True:
+        with nogil:
+            prev_speed = w.speed0 if k0 == 0 else sv[k0 - 1]
+            for k in range(k0, n):
+                # the plan's mean speed over the piece (it ramps linearly over a period)
+                plan = 0.5 * (prev_speed + sv[k])
+                prev_speed = sv[k]
+                if _point(&w, k, &qv[k, 0], dtv[k], lv[k], sv[k], bv[k], fv[k], ev[k], wv[k],
+                          &ld[k, 0], plan, resume and k == k0):
+                    stopped = True
+                    break
+        if not stopped or fit is None:
+            break
+        # answered here, and on from the stop with the arcs refitted
+        arc_i, arc_f = _refit(&w, q, fit, arc_of, arc_i, arc_f, new)
+        aov, aiv, afv = arc_of, arc_i, arc_f
+        w.arc_of, w.arc_i, w.arc_f = &aov[0], &aiv[0, 0], &afv[0, 0]
+        k0, resume, stopped = w.stop_at, True, False
     with nogil:
-        k0 = w.stop_at if resume else 0
-        if not resume:
-            w.speed0 = w.last_speed
-            if n:
-                w.last_speed = sv[n - 1]
-        prev_speed = w.speed0 if k0 == 0 else sv[k0 - 1]
-        for k in range(k0, n):
-            # the plan's mean speed over the piece (it ramps linearly over a period)
-            plan = 0.5 * (prev_speed + sv[k])
-            prev_speed = sv[k]
-            if _point(&w, k, &qv[k, 0], dtv[k], lv[k], sv[k], bv[k], fv[k], ev[k], wv[k],
-                      &ld[k, 0], plan, resume and k == k0):
-                stopped = True
-                break
         if not stopped:
             if end:
                 _resolve_corner(&w, NULL, 0.0)
@@ -1051,6 +1068,7 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
             if w.held_src != NONE:
                 w.held_src = -3
     _store(&w, f, iv, st)
+    st.fit_i, st.fit_f = _fitted(new)
     m = w.m
     if stopped:
         # the ops so far stay in the buffers: the next call resumes them in place
@@ -1063,3 +1081,44 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     st.pend_v, st.pend_t = np.zeros(0), np.zeros((0, 2))
     return (code[:m].copy(), arg[:m].copy(), ab[:m].copy(), aux[:m].copy(), val[:m].copy(),
             tilts[: w.nt].copy())
+
+
+cdef tuple _refit(W* w, q, fit, long long[::1] arc_of, arc_i, arc_f, list new):
+    """The answer to the stop at ``w.stop_at`` (``gwrite.refit``): the arc's points
+    from there on as arcs again, and for ARC_TO first the arc from its start to
+    the point before as one arc where one fits (``w.req_answer``); ``arc_of``
+    updated in place, the grown (arc_i, arc_f) returned, the new rows in ``new``."""
+    cdef long long k = w.stop_at, a = w.req_arc
+    cdef long long start = w.arc_i[4 * a], end = w.arc_i[4 * a + 1], plane = w.arc_i[4 * a + 2]
+    cdef long long first = len(arc_i), j, p, e
+    parts = []
+    if w.req_kind == REQ_ARC_TO:
+        ai, af = _arcs.refit_arcs(q[start:k], plane, 0, k - 1 - start, *fit)
+        w.req_answer = -1
+        if len(ai) == 1 and ai[0, 1] == k - 1 - start:
+            ai[:, :2] += start
+            parts.append((ai, af))
+            w.req_answer = first
+    first += sum(len(p[0]) for p in parts)
+    for j in range(k, end + 1):
+        arc_of[j] = -1
+    ai, af = _arcs.refit_arcs(q[k : end + 1], plane, 0, end - k, *fit)
+    ai[:, :2] += k
+    parts.append((ai, af))
+    for j in range(len(ai)):
+        e = ai[j, 1]
+        for p in range(ai[j, 0] + 1, e + 1):
+            arc_of[p] = first + j
+    new += parts
+    grow_i = [arc_i] + [np.column_stack([r[:, :3], np.ones(len(r), np.int64)]) for r, _ in parts]
+    grow_f = [arc_f] + [r[:, 3::2] for _, r in parts]
+    return (np.ascontiguousarray(np.concatenate(grow_i), dtype=np.int64),
+            np.ascontiguousarray(np.concatenate(grow_f), dtype=np.float64))
+
+
+def _fitted(list new):
+    """The rows of the arcs a call refitted, joined: (K, 4) int64, (K, 6)."""
+    if not new:
+        return np.zeros((0, 4), dtype=np.int64), np.zeros((0, 6))
+    return (np.concatenate([a for a, _ in new]).astype(np.int64),
+            np.concatenate([f for _, f in new]).astype(np.float64))

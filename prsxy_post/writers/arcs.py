@@ -197,9 +197,11 @@ class ArcTable:
         self.arc_of = np.full(n, -1, dtype=np.int64)
         self.add((ai, af), refit=False)
 
-    def add(self, rows: tuple[np.ndarray, np.ndarray], refit: bool = True) -> int:
+    def add(
+        self, rows: tuple[np.ndarray, np.ndarray], refit: bool = True, arc_of: bool = True
+    ) -> int:
         """Append the kernel's rows (arc_i, arc_f), each arc named on its points
-        after its start in ``arc_of``; the index of the first."""
+        after its start in ``arc_of`` (unless not ``arc_of``); the index of the first."""
         ai, af = rows
         first, m = self.m, self.m + len(ai)
         if m > len(self._ai):
@@ -213,12 +215,17 @@ class ArcTable:
         self._af[first:m] = af
         self._ki[first:m, :3] = ai[:, :3]
         self._ki[first:m, 3] = int(refit)
-        self._kf[first:m, 0] = af[:, 3]
-        self._kf[first:m, 1] = af[:, 5]
+        self._kf[first:m] = af[:, 3::2]  # length, radius
         self.m = m
+        if not arc_of:
+            return first
         # each arc's points after its start (the arcs do not overlap)
+        if len(ai) < 8:  # a refit's few: slices cost less than the index arrays
+            for j, (s, e) in enumerate(ai[:, :2].tolist()):
+                self.arc_of[s + 1 : e + 1] = first + j
+            return first
         span = ai[:, 1] - ai[:, 0]
-        if span.size and span.sum():
+        if span.sum():
             at = np.arange(int(span.sum())) - np.repeat(np.cumsum(span) - span, span)
             self.arc_of[at + np.repeat(ai[:, 0] + 1, span)] = np.repeat(
                 np.arange(first, m, dtype=np.int64), span

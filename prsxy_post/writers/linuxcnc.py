@@ -335,51 +335,32 @@ class GcodeWriter:
         # what the real-axis tables add to each motor [mm]: it ramps where a motor
         # crosses its play
         lead = chunk.P_cmd - chunk.P_ideal
-        # arcs kept as arcs (rule 5): found before the kernel decides, refitted where
-        # it asks (a later start, known only as it goes: after a stop, or where A or
-        # B leave the held tilt)
+        # arcs kept as arcs (rule 5): found before the kernel decides, refitted by it
+        # where it must (a later start, known only as it goes: after a stop, or where
+        # A or B leave the held tilt)
         arcs = self._arcs(q_arr, chunk, fn)
         start_q = self.state.last_q.copy()  # where the chunk's first move starts
-        while True:
-            ops = kernel.gcode_ops(
-                self.state,
-                q_arr,
-                chunk.dt,
-                chunk.line,
-                chunk.speed,
-                chunk.block_end,
-                fn,
-                fn_end,
-                chunk.dwell,
-                lead,
-                False,
-                arcs.arc_of,
-                arcs.k_i,
-                arcs.k_f,
-            )
-            k = int(self.state.i[_I["stop_at"]])
-            if k < 0:
-                break
-            self._answer(q_arr, arcs, k)
+        ops = kernel.gcode_ops(
+            self.state,
+            q_arr,
+            chunk.dt,
+            chunk.line,
+            chunk.speed,
+            chunk.block_end,
+            fn,
+            fn_end,
+            chunk.dwell,
+            lead,
+            False,
+            arcs.arc_of,
+            arcs.k_i,
+            arcs.k_f,
+            (self.tol, self.tilt_chord, self.dec),
+        )
+        # the arcs it refitted, numbered on from the chunk's
+        arcs.add((self.state.fit_i, self.state.fit_f), arc_of=False)
         self._lines(ops, q_arr, chunk, arcs, start_q)
         return self._hand_out()
-
-    def _answer(self, q: np.ndarray, arcs: ArcTable, k: int) -> None:
-        """The kernel's request at the point k (:data:`gwrite.REQ_REARC`,
-        :data:`gwrite.REQ_ARC_TO`): the arc's points from k as arcs again
-        (:func:`.arcs.refit_arcs`, those no arc fits left to lines), and for
-        ARC_TO first the arc from its start to k - 1 as one arc, where one fits.
-        The new arcs are appended to ``arcs`` (the kernel takes them as refitted)."""
-        st = self.state
-        start, end, plane, _ = arcs.ai[int(st.i[_I["req_arc"]])].tolist()
-        fit = (self.tol, self.tilt_chord, self.dec)
-        if int(st.i[_I["req_kind"]]) == gwrite.REQ_ARC_TO:
-            parts = kernel.refit_arcs(q, plane, start, k - 1, *fit)
-            st.i[_I["req_answer"]] = -1
-            if len(parts[0]) == 1 and int(parts[0][0, 1]) == k - 1:
-                st.i[_I["req_answer"]] = arcs.add(parts)
-        arcs.arc_of[k : end + 1] = -1
-        arcs.add(kernel.refit_arcs(q, plane, k, end, *fit))
 
     def _arcs(self, q: np.ndarray, chunk: PointChunk, fn: np.ndarray) -> ArcTable:
         """The arcs among the chunk's points (:func:`.arcs.find_arcs`, rule 5) and,
