@@ -971,20 +971,17 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     cdef const unsigned char[::1] ev = np.ascontiguousarray(fn_end, dtype=bool).view(np.uint8)
     cdef const unsigned char[::1] wv = np.ascontiguousarray(dwell, dtype=bool).view(np.uint8)
     cdef const double[:, ::1] ld = np.ascontiguousarray(lead, dtype=np.float64).reshape(-1, 5)
-    cdef Py_ssize_t n = qv.shape[0], k, k0, m0, nt0
+    cdef Py_ssize_t n = qv.shape[0], k0, m0, nt0
     cdef double[::1] f = st.f
     cdef long long[::1] iv = st.i
     cdef double[:, ::1] run = st.run_q
     cdef W w
-    cdef double prev_speed, plan
     cdef bint resume, stopped = False
     has_arcs = arc_of is not None
     if not has_arcs:
         arc_of, arc_i, arc_f = np.zeros(0, np.int64), np.zeros((0, 4), np.int64), np.zeros((0, 2))
     elif fit is not None:  # refitted here: arc_of changes, the caller's stays
         arc_of = np.array(arc_of, dtype=np.int64)
-        arc_i = np.ascontiguousarray(arc_i, dtype=np.int64).reshape(-1, 4)
-        arc_f = np.ascontiguousarray(arc_f, dtype=np.float64).reshape(-1, 2)
     new = []
     cdef const long long[::1] aov = np.ascontiguousarray(arc_of, dtype=np.int64)
     cdef const long long[:, ::1] aiv = np.ascontiguousarray(arc_i, dtype=np.int64).reshape(-1, 4)
@@ -1003,8 +1000,7 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     if iv[4] + n > run.shape[0]:
         raise ValueError(f"st.run_q holds {run.shape[0]} points, {iv[4] + n} may be held")
     resume = iv[17] != NONE
-    m0 = len(st.pend_i) if resume else 0
-    nt0 = len(st.pend_t) if resume else 0
+    m0, nt0 = (len(st.pend_i), len(st.pend_t)) if resume else (0, 0)
     ops_i, val, tilts = _buffers(st, resume, m0 + 14 * n + 16, nt0 + n + 1, n)
     code, arg, ab, aux = ops_i[0], ops_i[1], ops_i[2], ops_i[3]
     cdef long long[::1] cv = code, av = arg, abv = ab, xv = aux
@@ -1029,44 +1025,19 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
             w.last_speed = sv[n - 1]
     while True:
         with nogil:
-            prev_speed = w.speed0 if k0 == 0 else sv[k0 - 1]
-            for k in range(k0, n):
-                # the plan's mean speed over the piece (it ramps linearly over a period)
-                plan = 0.5 * (prev_speed + sv[k])
-                prev_speed = sv[k]
-                if _point(&w, k, &qv[k, 0], dtv[k], lv[k], sv[k], bv[k], fv[k], ev[k], wv[k],
-                          &ld[k, 0], plan, resume and k == k0):
-                    stopped = True
-                    break
+            stopped = _decide(&w, k0, resume, qv, dtv, lv, sv, bv, fv, ev, wv, ld)
         if not stopped or fit is None:
-            break
-        # answered here, and on from the stop with the arcs refitted
+            break  # else answered here, and on from the stop with the arcs refitted
         arc_i, arc_f = _refit(&w, q, fit, arc_of, arc_i, arc_f, new)
         aov, aiv, afv = arc_of, arc_i, arc_f
         w.arc_of, w.arc_i, w.arc_f = &aov[0], &aiv[0, 0], &afv[0, 0]
         k0, resume, stopped = w.stop_at, True, False
-    with nogil:
-        if not stopped:
+    if not stopped:
+        with nogil:
             if end:
                 _resolve_corner(&w, NULL, 0.0)
                 _write_held(&w)
-            # the line that waits for the next chunk (_Run.hand_out)
-            if w.has_prev and w.prev_blend and w.prev_idx != NONE:
-                w.keep = w.prev_idx
-                w.prev_idx = CARRIED
-            else:
-                w.keep = NONE
-                w.prev_idx = NONE
-            if w.run_src >= 0:
-                w.run_src = -1
-            if w.corner_src >= 0:
-                w.corner_src = CORNER_SRC
-            w.ca_from = NONE
-            if w.corner_arc >= 0:
-                w.ca_from = w.corner_arc
-                w.corner_arc = CORNER_SRC
-            if w.held_src != NONE:
-                w.held_src = -3
+            _hand_out(&w)
     _store(&w, f, iv, st)
     st.fit_i, st.fit_f = _fitted(new)
     m = w.m
@@ -1081,6 +1052,47 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     st.pend_v, st.pend_t = np.zeros(0), np.zeros((0, 2))
     return (code[:m].copy(), arg[:m].copy(), ab[:m].copy(), aux[:m].copy(), val[:m].copy(),
             tilts[: w.nt].copy())
+
+
+cdef bint _decide(
+    W* w, Py_ssize_t k0, bint resume, const double[:, ::1] qv, const double[::1] dtv,
+    const long long[::1] lv, const double[::1] sv, const unsigned char[::1] bv,
+    const unsigned char[::1] fv, const unsigned char[::1] ev, const unsigned char[::1] wv,
+    const double[:, ::1] ld
+) noexcept nogil:
+    """The chunk's points from k0 (``_point`` each; with ``resume`` k0 goes on from
+    a stop): True where it stops for a refit (``gwrite._decide`` without fit)."""
+    cdef double prev_speed = w.speed0 if k0 == 0 else sv[k0 - 1], plan
+    cdef Py_ssize_t k
+    for k in range(k0, qv.shape[0]):
+        # the plan's mean speed over the piece (it ramps linearly over a period)
+        plan = 0.5 * (prev_speed + sv[k])
+        prev_speed = sv[k]
+        if _point(w, k, &qv[k, 0], dtv[k], lv[k], sv[k], bv[k], fv[k], ev[k], wv[k],
+                  &ld[k, 0], plan, resume and k == k0):
+            return True
+    return False
+
+
+cdef void _hand_out(W* w) noexcept nogil:
+    """The call's end (``_Run.hand_out``): the line that waits for the next chunk,
+    and the points and the arc the next chunk may name as the writer keeps them."""
+    if w.has_prev and w.prev_blend and w.prev_idx != NONE:
+        w.keep = w.prev_idx
+        w.prev_idx = CARRIED
+    else:
+        w.keep = NONE
+        w.prev_idx = NONE
+    if w.run_src >= 0:
+        w.run_src = -1
+    if w.corner_src >= 0:
+        w.corner_src = CORNER_SRC
+    w.ca_from = NONE
+    if w.corner_arc >= 0:
+        w.ca_from = w.corner_arc
+        w.corner_arc = CORNER_SRC
+    if w.held_src != NONE:
+        w.held_src = -3
 
 
 cdef tuple _refit(W* w, q, fit, long long[::1] arc_of, arc_i, arc_f, list new):
@@ -1112,8 +1124,8 @@ cdef tuple _refit(W* w, q, fit, long long[::1] arc_of, arc_i, arc_f, list new):
     new += parts
     grow_i = [arc_i] + [np.column_stack([r[:, :3], np.ones(len(r), np.int64)]) for r, _ in parts]
     grow_f = [arc_f] + [r[:, 3::2] for _, r in parts]
-    return (np.ascontiguousarray(np.concatenate(grow_i), dtype=np.int64),
-            np.ascontiguousarray(np.concatenate(grow_f), dtype=np.float64))
+    return (np.ascontiguousarray(np.concatenate(grow_i), dtype=np.int64).reshape(-1, 4),
+            np.ascontiguousarray(np.concatenate(grow_f), dtype=np.float64).reshape(-1, 2))
 
 
 def _fitted(list new):

@@ -849,9 +849,8 @@ def gcode_ops(
     ...); arc_f (M, 2) its X Y Z length [mm] and least radius [mm]. Where the
     writer must refit (``i[stop_at]`` ≥ 0: :data:`REQ_REARC`, :data:`REQ_ARC_TO`)
     the call returns no ops; the writer answers (changing arc_of, adding arcs) and
-    calls again with the same points: the chunk goes on from there. With ``fit``
-    (the refit's tol_mm, tol_deg, decimals) the call answers itself (:func:`refit`)
-    and goes on, and ``st.fit_i``, ``st.fit_f`` hold the arcs it refitted.
+    calls again with the same points: the chunk goes on from there. With ``fit`` (tol_mm,
+    tol_deg, decimals) it refits itself (:func:`refit`; the arcs in ``st.fit_i``, ``fit_f``).
 
     Returns
     -------
@@ -880,40 +879,21 @@ def gcode_ops(
     r.q, r.dt = q.tolist(), dt.tolist()
     if arc_of is not None and arc_i is not None and arc_f is not None:
         r.arc_of, r.arc_i, r.arc_f = arc_of.tolist(), arc_i.tolist(), arc_f.tolist()
-    rows = list(
-        zip(
-            r.q,
-            r.dt,
-            line.tolist(),
-            spd,
-            block_end.tolist(),
-            fn.tolist(),
-            fn_end.tolist(),
-            dwell.tolist(),
-            lead.tolist(),
-            plan,
-            strict=True,
-        )
-    )
+    cols = [x.tolist() for x in (line, speed, block_end, fn, fn_end, dwell, lead)]
+    rows = list(zip(r.q, r.dt, *cols, plan, strict=True))
     new: list[tuple[np.ndarray, np.ndarray]] = []
-    for k in range(k0, len(rows)):
-        if r.point(k, rows[k], resume and k == k0):
-            if fit is not None:
-                refit(r, q, fit, new)
-                r.point(k, rows[k], True)
-                continue
-            reserve(st, len(r.run) - int(st.i[I_NAMES.index("run_n")]))
-            r.store(st)
-            st.fit_i, st.fit_f = _fitted([])
-            empty = np.zeros(0, dtype=np.int64)
-            return empty, empty, empty, empty, np.zeros(0), np.zeros((0, 2))
-    if end:
-        r.resolve_corner(None, 0.0)
-        r.write_held()
-    r.hand_out()
+    stopped = _decide(r, rows, k0, resume, q, fit, new)
+    if not stopped:
+        if end:
+            r.resolve_corner(None, 0.0)
+            r.write_held()
+        r.hand_out()
     reserve(st, len(r.run) - int(st.i[I_NAMES.index("run_n")]))
     r.store(st)
     st.fit_i, st.fit_f = _fitted(new)
+    if stopped:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty, empty, np.zeros(0), np.zeros((0, 2))
     return (
         np.array(r.code, dtype=np.int64),
         np.array(r.arg, dtype=np.int64),
@@ -922,6 +902,27 @@ def gcode_ops(
         np.array(r.val, dtype=np.float64),
         np.array(r.tilts, dtype=np.float64).reshape(-1, 2),
     )
+
+
+def _decide(
+    r: _Run,
+    rows: list[tuple],
+    k0: int,
+    resume: bool,
+    q: np.ndarray,
+    fit: tuple[float, float, int] | None,
+    new: list[tuple[np.ndarray, np.ndarray]],
+) -> bool:
+    """The chunk's points from k0 (``_Run.point`` each; with ``resume`` k0 goes on
+    from a stop). Without ``fit``, True where it stops for a refit (the caller
+    answers); with it, each stop answered here (:func:`refit`) and gone on from."""
+    for k in range(k0, len(rows)):
+        if r.point(k, rows[k], resume and k == k0):
+            if fit is None:
+                return True
+            refit(r, q, fit, new)
+            r.point(k, rows[k], True)
+    return False
 
 
 def refit(
