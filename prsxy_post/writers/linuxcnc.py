@@ -338,7 +338,7 @@ class GcodeWriter:
         # arcs kept as arcs (rule 5): found before the kernel decides, refitted by it
         # where it must (a later start, known only as it goes: after a stop, or where
         # A or B leave the held tilt)
-        arcs = self._arcs(q_arr, chunk, fn)
+        arcs = self._arcs(q_arr, chunk, fn, lead)
         start_q = self.state.last_q.copy()  # where the chunk's first move starts
         ops = kernel.gcode_ops(
             self.state,
@@ -362,9 +362,10 @@ class GcodeWriter:
         self._lines(ops, q_arr, chunk, arcs, start_q)
         return self._hand_out()
 
-    def _arcs(self, q: np.ndarray, chunk: PointChunk, fn: np.ndarray) -> ArcTable:
+    def _arcs(self, q: np.ndarray, chunk: PointChunk, fn: np.ndarray, lead: np.ndarray) -> ArcTable:
         """The arcs among the chunk's points (:func:`.arcs.find_arcs`, rule 5) and,
-        for each point, the arc it lies on after its start (-1: none)."""
+        for each point, the arc it lies on after its start (-1: none); ``lead``
+        (n, 5) [mm] what the real-axis tables add to each motor."""
         n = len(q)
         if self.tol <= 0.0 or n < 2:
             return ArcTable((np.zeros((0, 4), dtype=np.int64), np.zeros((0, 6))), n)
@@ -376,7 +377,7 @@ class GcodeWriter:
             moving & ~chunk.block_end,
             moving & chunk.block_end,
             rate,
-            chunk.P_cmd - chunk.P_ideal,
+            lead,
             self.tol,
             self.tilt_chord,
             self.dec,
