@@ -5,8 +5,9 @@ Usage::
 
     python bench/gwrite_stops.py --program P.ngc --profile P.toml --runs 3
 
-The writer calls the kernel once per chunk and again after each stop where it
-refits an arc (``gwrite.REQ_REARC``, ``REQ_ARC_TO``). Each call is timed (wall
+The writer calls the kernel once per chunk; trees before the kernel refitted arcs
+itself (``gcode_ops``' ``fit``) called it again after each stop where the writer
+refitted an arc (``gwrite.REQ_REARC``, ``REQ_ARC_TO``). Each call is timed (wall
 clock, ``time.perf_counter``: run it side by side with another tree, e.g.
 ``PYTHONPATH=/other/tree python bench/gwrite_stops.py ...``, alternated) with the
 points it decided (from where it started to where it stopped, or the chunk's

@@ -519,7 +519,8 @@ def forward(
     if geo.guide_bow is None:
         # straight guides: Newton (as forward_platform's) and the tool poses in one
         # kernel call (prsxy_post.kernel.fk.forward_poses, compiled when built)
-        x0 = _fk_guess(geo, P) if guess is None else np.array(guess, dtype=float)
+        # the kernel reads the start, never writes it: no copy
+        x0 = _fk_guess(geo, P) if guess is None else np.asarray(guess, dtype=float)
         return kernel.forward_poses(
             geo.fk_arrays, geo.d, P, x0, t, origin, D, FK_STEP, FK_MAX_ITER, FK_RESIDUAL
         )
@@ -532,6 +533,21 @@ def forward(
 def platform_guess(pose: PlatformPose, q: np.ndarray) -> np.ndarray:
     """An FK start (c, A, B, γ) from an IK solution, for warm-started FK."""
     return np.column_stack([pose.c, np.radians(q[:, 3]), np.radians(q[:, 4]), pose.gamma])
+
+
+def fk_start(geo: Geometry, q: np.ndarray) -> np.ndarray:
+    """(N, 6) the FK start (c [mm], A, B, γ [rad]) at tool poses ``q`` (N, 5) [mm,
+    mm, mm, deg, deg] (no tool length offset): :func:`platform_guess` of
+    :func:`solve_platform`, the same numbers, without the rotations (the start
+    needs only the centre and the spin) and made in one array."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    p = _solve(geo, q, None)
+    x0 = np.empty((len(q), 6))
+    x0[:, :3] = p.c
+    np.radians(q[:, 3], out=x0[:, 3])
+    np.radians(q[:, 4], out=x0[:, 4])
+    x0[:, 5] = p.gamma
+    return x0
 
 
 def check_reach(prof: Profile) -> None:

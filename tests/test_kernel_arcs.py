@@ -43,27 +43,33 @@ def _same_rows(got: Rows, want: Rows) -> bool:
     )
 
 
-def _spying(attrs: list[str]) -> tuple[dict[str, list[tuple[Any, ...]]], pytest.MonkeyPatch]:
+def _spying(
+    attrs: list[str], where: Any = kernel
+) -> tuple[dict[str, list[tuple[Any, ...]]], pytest.MonkeyPatch]:
     calls: dict[str, list[tuple[Any, ...]]] = {a: [] for a in attrs}
     mp = pytest.MonkeyPatch()
     for attr in attrs:
-        inner: Callable[..., Any] = getattr(kernel, attr)
+        inner: Callable[..., Any] = getattr(where, attr)
 
         def spy(*args: Any, _a: str = attr, _f: Callable[..., Any] = inner) -> Any:
             calls[_a].append(tuple(copy.deepcopy(x) for x in args))
             return _f(*args)
 
-        mp.setattr(kernel, attr, spy)
+        mp.setattr(where, attr, spy)
     return calls, mp
 
 
 def test_recorded_searches_are_bit_identical(tmp_path: Path) -> None:
     """Every find and refit the arc programs and the bench program make: the same
-    rows from both, arcs found in every plane, refits after the kernel's stops."""
+    rows from both, arcs found in every plane, refits where the G-code writer's
+    kernel stops (it calls the arc kernel's refit_arcs itself, the twin's or, with
+    PRSXY_KERNEL=pure, the reference's)."""
     _arcs = compiled("_arcs")
     from .test_tracking import convert, truth_machine
 
-    calls, mp = _spying(["_find_arcs", "_refit_arcs"])
+    calls, mp = _spying(["_find_arcs"])
+    refit_calls, mp_refit = _spying(["refit_arcs"], kernel._RUN["gwrite"]._arcs)
+    calls.update(_refit_arcs=refit_calls["refit_arcs"])
     spec = importlib.util.spec_from_file_location("prsxy_bench", ROOT / "bench" / "bench.py")
     assert spec is not None and spec.loader is not None
     bench = importlib.util.module_from_spec(spec)
@@ -83,6 +89,7 @@ def test_recorded_searches_are_bit_identical(tmp_path: Path) -> None:
         convert_file(ConvertJob(str(prog), str(prof), "gcode", str(tmp_path / "out.ngc")))
     finally:
         mp.undo()
+        mp_refit.undo()
     found = []
     for args in calls["_find_arcs"]:
         want = arcs.find_arcs(*args)

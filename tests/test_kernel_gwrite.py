@@ -31,6 +31,7 @@ from hypothesis import strategies as st
 
 from prsxy_post import kernel
 from prsxy_post.convert import ConvertJob, convert_file
+from prsxy_post.kernel import arcs as karcs
 from prsxy_post.kernel import gwrite, vnorm
 
 from .conftest import ROOT
@@ -72,6 +73,9 @@ def _same_state(a: gwrite.GState, b: gwrite.GState) -> bool:
             )
         )
         and np.array_equal(a.pend_i, b.pend_i)
+        and np.array_equal(a.fit_i, b.fit_i)
+        and a.fit_i.dtype == b.fit_i.dtype
+        and same_bits(a.fit_f, b.fit_f)
     )
 
 
@@ -86,6 +90,56 @@ def _both(args: tuple[Any, ...]) -> Ops:
     assert _same_ops(got, want)
     assert _same_state(st_c, st_r)
     return want
+
+
+REQ = {n: gwrite.I_NAMES.index(n) for n in ("stop_at", "req_kind", "req_arc", "req_answer")}
+
+
+def _answering(
+    fn: Callable[..., Ops], st: gwrite.GState, args: tuple[Any, ...], kinds: list[int]
+) -> Ops:
+    """``fn`` (a gcode_ops) on ``st`` with ``args`` (those after the state, ``fit``
+    last) as the writer called it before the kernel refitted itself: without
+    ``fit``, stopping where an arc must be refitted, answered here as the writer
+    answered (``kernel.arcs.refit_arcs`` over the chunk's points, from the stop on,
+    and for ARC_TO first from the arc's start to the point before), called again
+    from the stop. ``st.fit_i``, ``st.fit_f``: the arcs refitted; each stop's kind
+    appended to ``kinds``."""
+    *head, arc_of, arc_i, arc_f, fit = args
+    q = head[0]
+    arc_of = np.array(arc_of, dtype=np.int64)
+    arc_i = np.array(arc_i, dtype=np.int64).reshape(-1, 4)
+    arc_f = np.array(arc_f, dtype=float).reshape(-1, 2)
+    new: list[tuple[np.ndarray, np.ndarray]] = []
+    while True:
+        gwrite.reserve(st, len(q))  # as kernel.gcode_ops does before each call
+        ops = fn(st, *head, arc_of, arc_i, arc_f)
+        k = int(st.i[REQ["stop_at"]])
+        if k < 0:
+            break
+        kind, a = int(st.i[REQ["req_kind"]]), int(st.i[REQ["req_arc"]])
+        kinds.append(kind)
+        start, end, plane = (int(x) for x in arc_i[a, :3])
+        rows = []
+        if kind == gwrite.REQ_ARC_TO:
+            part = karcs.refit_arcs(q, plane, start, k - 1, *fit)
+            st.i[REQ["req_answer"]] = -1
+            if len(part[0]) == 1 and int(part[0][0, 1]) == k - 1:
+                st.i[REQ["req_answer"]] = len(arc_i)
+                rows.append(part)
+        arc_of[k : end + 1] = -1
+        part = karcs.refit_arcs(q, plane, k, end, *fit)
+        first = len(arc_i) + sum(len(r[0]) for r in rows)
+        for j, (s, e) in enumerate(part[0][:, :2].tolist()):
+            arc_of[s + 1 : e + 1] = first + j
+        rows.append(part)
+        for ai, af in rows:
+            new.append((ai, af))
+            arc_i = np.concatenate([arc_i, np.column_stack([ai[:, :3], np.ones(len(ai), int)])])
+            arc_f = np.concatenate([arc_f, af[:, 3::2]])
+    st.fit_i = np.concatenate([np.zeros((0, 4), np.int64)] + [a for a, _ in new])
+    st.fit_f = np.concatenate([np.zeros((0, 6))] + [f for _, f in new])
+    return ops
 
 
 def test_the_twin_names_the_state_as_the_reference() -> None:
@@ -306,15 +360,24 @@ def test_arcs_decisions_are_bit_identical() -> None:
                     convert(m, text, "gcode", chunk)
     finally:
         mp.undo()
-    kinds = [int(c[0].i[gwrite.I_NAMES.index("req_kind")]) for c in calls]
-    resumed = [int(c[0].i[gwrite.I_NAMES.index("stop_at")]) >= 0 for c in calls]
     ops = [_both(args) for args in calls]
     code = np.concatenate([o[0] for o in ops])
     assert np.sum(code == gwrite.ARC) > 100 and np.sum(code == gwrite.PLANE) > 0
     assert sum(len(o[5]) for o in ops) > 0  # tilts centered
-    # resumes after both kinds of request
-    assert sum(r and k == gwrite.REQ_REARC for r, k in zip(resumed, kinds, strict=True)) > 0
-    assert sum(r and k == gwrite.REQ_ARC_TO for r, k in zip(resumed, kinds, strict=True)) > 0
+    # each call made again as the writer made it before the kernel refitted itself:
+    # stopping for every refit, answered outside, resumed (the reference and the
+    # twin): the same ops, state and refitted arcs as the call that refits itself
+    _gwrite = compiled("_gwrite")
+    kinds: list[int] = []
+    for args, want in zip(calls, ops, strict=True):
+        st_fit = copy.deepcopy(args[0])
+        gwrite.gcode_ops(st_fit, *args[1:])
+        for fn in (gwrite.gcode_ops, _gwrite.gcode_ops):
+            st_s = copy.deepcopy(args[0])
+            assert _same_ops(_answering(fn, st_s, args[1:], kinds), want)
+            assert _same_state(st_s, st_fit)
+    # stops for both kinds of request, resumed
+    assert kinds.count(gwrite.REQ_REARC) > 0 and kinds.count(gwrite.REQ_ARC_TO) > 0
 
 
 def test_stops_resumed_in_place_write_the_references_text() -> None:
@@ -327,7 +390,7 @@ def test_stops_resumed_in_place_write_the_references_text() -> None:
     _gwrite = compiled("_gwrite")
     in_place: list[bool] = []
 
-    def twin(st: gwrite.GState, *args: Any) -> Ops:
+    def stopping(st: gwrite.GState, *args: Any) -> Ops:
         before = st.pend_i.base if int(st.i[gwrite.I_NAMES.index("stop_at")]) >= 0 else None
         out: Ops = _gwrite.gcode_ops(st, *args)
         if before is not None:
@@ -335,6 +398,10 @@ def test_stops_resumed_in_place_write_the_references_text() -> None:
             stopped = int(st.i[gwrite.I_NAMES.index("stop_at")]) >= 0
             in_place.append(not stopped or st.pend_i.base is before)
         return out
+
+    def twin(st: gwrite.GState, *args: Any) -> Ops:
+        # the writer's call, which refits itself, made stop by stop on its state
+        return _answering(stopping, st, args, [])
 
     texts = {}
     for name, fn in (("reference", gwrite.gcode_ops), ("twin", twin)):

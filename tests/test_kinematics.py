@@ -125,6 +125,25 @@ def test_forward_matches_independent_solver(perturbed: profile_mod.Profile) -> N
     np.testing.assert_allclose(q_fk, q, atol=1e-9)
 
 
+def test_fk_start_is_the_ik_pose(perturbed: profile_mod.Profile) -> None:
+    """The writer's FK start (:func:`fk_start`) is the platform of the IK's pose,
+    bit for bit (platform_guess of solve_platform); Newton from it and from a
+    start parallel to the table lands on the same tool poses (0.1 nm), so the start
+    changes only how far Newton has to go."""
+    rng = np.random.default_rng(5)
+    q = np.column_stack(
+        [rng.uniform(-150, 150, (50, 2)), rng.uniform(-60, 40, 50), rng.uniform(-25, 25, (50, 2))]
+    )
+    geo = _geo(perturbed)
+    x0 = K.fk_start(geo, q)
+    assert np.array_equal(x0, K.platform_guess(K.solve_platform(geo, q), q))
+    P = K.inverse(geo, q).P + rng.normal(0.0, 1e-3, (50, 5))
+    warm, ok_w = K.forward(geo, P, guess=x0)
+    cold, ok_c = K.forward(geo, P)
+    assert ok_w.all() and ok_c.all()
+    np.testing.assert_allclose(warm, cold, atol=1e-10)
+
+
 pose = st.tuples(
     st.floats(-200, 200),
     st.floats(-200, 200),

@@ -249,3 +249,40 @@ def test_linuxcnc_reads_the_words_as_the_arc(plane: int, sweep: float) -> None:
     iu, iv, _ = arcs.PLANES[plane]
     for i in (iu, iv):  # rs274 prints 4 decimals
         assert abs(m.center[i] - arc.center[i]) < 1e-4
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from([3, 4, 7]))
+def test_arc_lines_write_what_arc_words_write(seed: int, dec: int) -> None:
+    """The writer's G2/G3 lines made for many arcs at once (``arcs.arc_lines``) are,
+    row for row, the motion word and center words of ``arc_words`` around the
+    end's words (``%.{d}f``) and F: on every plane and turn, with center offsets
+    that round to zero either side of it (``arc_words`` writes ``0.000`` where
+    ``%.3f`` writes ``-0.000``), exact zeros and ties of the last decimal."""
+    rng = np.random.default_rng(seed)
+    n = 40
+    start = np.round(rng.uniform(-300.0, 300.0, (n, 5)), dec) + 0.0
+    end = np.round(rng.uniform(-300.0, 300.0, (n, 5)), dec) + 0.0
+    off = rng.uniform(-50.0, 50.0, (n, 3))
+    # offsets at and about zero, and halves of the last decimal (binary ties)
+    small = rng.choice([0.0, -0.0, 1e-12, -1e-12, 0.4, -0.4, 0.5, -0.5, -0.6], (n, 3))
+    pick = rng.random((n, 3)) < 0.4
+    off[pick] = small[pick] * 10.0**-dec
+    # exact binary ties of the last decimal, from a start at 0 (the offset exact)
+    tie = rng.random(n) < 0.2
+    start[tie, :3] = 0.0
+    off[tie] = rng.choice([-1.0, 1.0], (int(tie.sum()), 3)) * {3: 0.0625, 4: 0.03125, 7: 2**-8}[dec]
+    center = start[:, :3] + off
+    ai = np.column_stack(
+        [np.zeros(n), np.ones(n), rng.choice([17, 18, 19], n), rng.integers(0, 2, n)]
+    ).astype(np.int64)
+    af = np.column_stack([center, rng.uniform(0, 9, (n, 3))])
+    f = rng.uniform(0.0, 1e5, n)
+    got = arcs.arc_lines(end, f, start, ai, af, dec)
+    for j in range(n):
+        arc = arcs.Arc(
+            0, 1, int(ai[j, 2]), bool(ai[j, 3]), tuple(center[j].tolist()), 1.0, 0.0, 1.0
+        )
+        head, tail = arcs.arc_words(arc, start[j].tolist(), dec)
+        words = "".join(f" {a}{v:.{dec}f}" for a, v in zip("XYZAB", end[j].tolist(), strict=True))
+        assert got[j] == f"{head}{words}{tail} F{f[j]:.3f}\n"

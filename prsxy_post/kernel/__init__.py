@@ -657,12 +657,14 @@ def gcode_ops(
     arc_of: np.ndarray,
     arc_i: np.ndarray,
     arc_f: np.ndarray,
+    fit: tuple[float, float, int] | None = None,
 ) -> gwrite.Ops:
-    """A chunk's points decided, one op per output line (``st`` updated in place):
+    """A chunk's points decided, one op per output line (``st`` updated in place;
+    with ``fit``, its arcs refitted where it stops, ``st.fit_i``, ``st.fit_f``):
     :func:`gwrite.gcode_ops`, compiled when :data:`COMPILED`."""
     gwrite.reserve(st, len(q))
     out: gwrite.Ops = _gcode_ops(
-        st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, end, arc_of, arc_i, arc_f
+        st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, end, arc_of, arc_i, arc_f, fit
     )
     return out
 

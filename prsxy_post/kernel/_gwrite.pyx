@@ -14,6 +14,8 @@ import numpy as np
 from libc.math cimport sqrt, fabs, frexp, ldexp, rint, INFINITY, NAN
 from libc.string cimport memmove
 
+from . import _arcs
+
 #: the reference's names of the state's scalars, in this module's order
 F_NAMES = (
     "tol", "blend", "tilt_cut", "tilt_hold", "tilt_chord", "accel", "accel_deg",
@@ -952,9 +954,10 @@ cdef tuple _buffers(st, bint resume, Py_ssize_t cap, Py_ssize_t cap_t, Py_ssize_
 
 
 def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint end,
-              arc_of=None, arc_i=None, arc_f=None):
+              arc_of=None, arc_i=None, arc_f=None, fit=None):
     """:func:`prsxy_post.kernel.gwrite.gcode_ops`, compiled (``st.run_q`` must
-    hold ``len(q)`` more points: :func:`gwrite.reserve`). After a stop,
+    hold ``len(q)`` more points: :func:`gwrite.reserve`). With ``fit`` the call
+    answers its stops itself (:func:`_refit`) and goes on. After a stop,
     ``st.pend_*`` are views of the call's op buffers, which the call resuming it
     fills on in place: copy the state (``copy.deepcopy``) to keep a stopped one."""
     if np.ndim(q) != 2 or np.shape(q)[1] != 5 or np.ndim(lead) != 2 or np.shape(lead)[1] != 5:
@@ -968,16 +971,18 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     cdef const unsigned char[::1] ev = np.ascontiguousarray(fn_end, dtype=bool).view(np.uint8)
     cdef const unsigned char[::1] wv = np.ascontiguousarray(dwell, dtype=bool).view(np.uint8)
     cdef const double[:, ::1] ld = np.ascontiguousarray(lead, dtype=np.float64).reshape(-1, 5)
-    cdef Py_ssize_t n = qv.shape[0], k, k0, m0, nt0
+    cdef Py_ssize_t n = qv.shape[0], k0, m0, nt0
     cdef double[::1] f = st.f
     cdef long long[::1] iv = st.i
     cdef double[:, ::1] run = st.run_q
     cdef W w
-    cdef double prev_speed, plan
     cdef bint resume, stopped = False
     has_arcs = arc_of is not None
     if not has_arcs:
         arc_of, arc_i, arc_f = np.zeros(0, np.int64), np.zeros((0, 4), np.int64), np.zeros((0, 2))
+    elif fit is not None:  # refitted here: arc_of changes, the caller's stays
+        arc_of = np.array(arc_of, dtype=np.int64)
+    new = []
     cdef const long long[::1] aov = np.ascontiguousarray(arc_of, dtype=np.int64)
     cdef const long long[:, ::1] aiv = np.ascontiguousarray(arc_i, dtype=np.int64).reshape(-1, 4)
     cdef const double[:, ::1] afv = np.ascontiguousarray(arc_f, dtype=np.float64).reshape(-1, 2)
@@ -995,8 +1000,7 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     if iv[4] + n > run.shape[0]:
         raise ValueError(f"st.run_q holds {run.shape[0]} points, {iv[4] + n} may be held")
     resume = iv[17] != NONE
-    m0 = len(st.pend_i) if resume else 0
-    nt0 = len(st.pend_t) if resume else 0
+    m0, nt0 = (len(st.pend_i), len(st.pend_t)) if resume else (0, 0)
     ops_i, val, tilts = _buffers(st, resume, m0 + 14 * n + 16, nt0 + n + 1, n)
     code, arg, ab, aux = ops_i[0], ops_i[1], ops_i[2], ops_i[3]
     cdef long long[::1] cv = code, av = arg, abv = ab, xv = aux
@@ -1014,43 +1018,28 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     w.arc_f = &afv[0, 0] if afv.shape[0] else NULL
     w.tilts = &tv[0, 0]
     w.nt = nt0
-    with nogil:
-        k0 = w.stop_at if resume else 0
-        if not resume:
-            w.speed0 = w.last_speed
-            if n:
-                w.last_speed = sv[n - 1]
-        prev_speed = w.speed0 if k0 == 0 else sv[k0 - 1]
-        for k in range(k0, n):
-            # the plan's mean speed over the piece (it ramps linearly over a period)
-            plan = 0.5 * (prev_speed + sv[k])
-            prev_speed = sv[k]
-            if _point(&w, k, &qv[k, 0], dtv[k], lv[k], sv[k], bv[k], fv[k], ev[k], wv[k],
-                      &ld[k, 0], plan, resume and k == k0):
-                stopped = True
-                break
-        if not stopped:
+    k0 = w.stop_at if resume else 0
+    if not resume:
+        w.speed0 = w.last_speed
+        if n:
+            w.last_speed = sv[n - 1]
+    while True:
+        with nogil:
+            stopped = _decide(&w, k0, resume, qv, dtv, lv, sv, bv, fv, ev, wv, ld)
+        if not stopped or fit is None:
+            break  # else answered here, and on from the stop with the arcs refitted
+        arc_i, arc_f = _refit(&w, q, fit, arc_of, arc_i, arc_f, new)
+        aov, aiv, afv = arc_of, arc_i, arc_f
+        w.arc_of, w.arc_i, w.arc_f = &aov[0], &aiv[0, 0], &afv[0, 0]
+        k0, resume, stopped = w.stop_at, True, False
+    if not stopped:
+        with nogil:
             if end:
                 _resolve_corner(&w, NULL, 0.0)
                 _write_held(&w)
-            # the line that waits for the next chunk (_Run.hand_out)
-            if w.has_prev and w.prev_blend and w.prev_idx != NONE:
-                w.keep = w.prev_idx
-                w.prev_idx = CARRIED
-            else:
-                w.keep = NONE
-                w.prev_idx = NONE
-            if w.run_src >= 0:
-                w.run_src = -1
-            if w.corner_src >= 0:
-                w.corner_src = CORNER_SRC
-            w.ca_from = NONE
-            if w.corner_arc >= 0:
-                w.ca_from = w.corner_arc
-                w.corner_arc = CORNER_SRC
-            if w.held_src != NONE:
-                w.held_src = -3
+            _hand_out(&w)
     _store(&w, f, iv, st)
+    st.fit_i, st.fit_f = _fitted(new)
     m = w.m
     if stopped:
         # the ops so far stay in the buffers: the next call resumes them in place
@@ -1063,3 +1052,85 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     st.pend_v, st.pend_t = np.zeros(0), np.zeros((0, 2))
     return (code[:m].copy(), arg[:m].copy(), ab[:m].copy(), aux[:m].copy(), val[:m].copy(),
             tilts[: w.nt].copy())
+
+
+cdef bint _decide(
+    W* w, Py_ssize_t k0, bint resume, const double[:, ::1] qv, const double[::1] dtv,
+    const long long[::1] lv, const double[::1] sv, const unsigned char[::1] bv,
+    const unsigned char[::1] fv, const unsigned char[::1] ev, const unsigned char[::1] wv,
+    const double[:, ::1] ld
+) noexcept nogil:
+    """The chunk's points from k0 (``_point`` each; with ``resume`` k0 goes on from
+    a stop): True where it stops for a refit (``gwrite._decide`` without fit)."""
+    cdef double prev_speed = w.speed0 if k0 == 0 else sv[k0 - 1], plan
+    cdef Py_ssize_t k
+    for k in range(k0, qv.shape[0]):
+        # the plan's mean speed over the piece (it ramps linearly over a period)
+        plan = 0.5 * (prev_speed + sv[k])
+        prev_speed = sv[k]
+        if _point(w, k, &qv[k, 0], dtv[k], lv[k], sv[k], bv[k], fv[k], ev[k], wv[k],
+                  &ld[k, 0], plan, resume and k == k0):
+            return True
+    return False
+
+
+cdef void _hand_out(W* w) noexcept nogil:
+    """The call's end (``_Run.hand_out``): the line that waits for the next chunk,
+    and the points and the arc the next chunk may name as the writer keeps them."""
+    if w.has_prev and w.prev_blend and w.prev_idx != NONE:
+        w.keep = w.prev_idx
+        w.prev_idx = CARRIED
+    else:
+        w.keep = NONE
+        w.prev_idx = NONE
+    if w.run_src >= 0:
+        w.run_src = -1
+    if w.corner_src >= 0:
+        w.corner_src = CORNER_SRC
+    w.ca_from = NONE
+    if w.corner_arc >= 0:
+        w.ca_from = w.corner_arc
+        w.corner_arc = CORNER_SRC
+    if w.held_src != NONE:
+        w.held_src = -3
+
+
+cdef tuple _refit(W* w, q, fit, long long[::1] arc_of, arc_i, arc_f, list new):
+    """The answer to the stop at ``w.stop_at`` (``gwrite.refit``): the arc's points
+    from there on as arcs again, and for ARC_TO first the arc from its start to
+    the point before as one arc where one fits (``w.req_answer``); ``arc_of``
+    updated in place, the grown (arc_i, arc_f) returned, the new rows in ``new``."""
+    cdef long long k = w.stop_at, a = w.req_arc
+    cdef long long start = w.arc_i[4 * a], end = w.arc_i[4 * a + 1], plane = w.arc_i[4 * a + 2]
+    cdef long long first = len(arc_i), j, p, e
+    parts = []
+    if w.req_kind == REQ_ARC_TO:
+        ai, af = _arcs.refit_arcs(q[start:k], plane, 0, k - 1 - start, *fit)
+        w.req_answer = -1
+        if len(ai) == 1 and ai[0, 1] == k - 1 - start:
+            ai[:, :2] += start
+            parts.append((ai, af))
+            w.req_answer = first
+    first += sum(len(p[0]) for p in parts)
+    for j in range(k, end + 1):
+        arc_of[j] = -1
+    ai, af = _arcs.refit_arcs(q[k : end + 1], plane, 0, end - k, *fit)
+    ai[:, :2] += k
+    parts.append((ai, af))
+    for j in range(len(ai)):
+        e = ai[j, 1]
+        for p in range(ai[j, 0] + 1, e + 1):
+            arc_of[p] = first + j
+    new += parts
+    grow_i = [arc_i] + [np.column_stack([r[:, :3], np.ones(len(r), np.int64)]) for r, _ in parts]
+    grow_f = [arc_f] + [r[:, 3::2] for _, r in parts]
+    return (np.ascontiguousarray(np.concatenate(grow_i), dtype=np.int64).reshape(-1, 4),
+            np.ascontiguousarray(np.concatenate(grow_f), dtype=np.float64).reshape(-1, 2))
+
+
+def _fitted(list new):
+    """The rows of the arcs a call refitted, joined: (K, 4) int64, (K, 6)."""
+    if not new:
+        return np.zeros((0, 4), dtype=np.int64), np.zeros((0, 6))
+    return (np.concatenate([a for a, _ in new]).astype(np.int64),
+            np.concatenate([f for _, f in new]).astype(np.float64))

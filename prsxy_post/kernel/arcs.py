@@ -3,9 +3,10 @@
 The reference (numpy over each candidate run, the C library's ``atan2`` through
 :mod:`math`) of the compiled twin ``_arcs.pyx``, which gives the same bits. The
 writer (``writers.arcs``, ``writers.linuxcnc`` rule 5) calls :func:`find_arcs` once a
-chunk and :func:`refit_arcs` where the G-code kernel asks for an arc from a later
-start; the geometry (the arc LinuxCNC runs from the written words, the fit, the
-search) is described in ``writers/arcs.py``.
+chunk, and the G-code kernel (``gwrite.refit``; its twin the twin's)
+:func:`refit_arcs` where it needs an arc from a later start; the geometry (the arc
+LinuxCNC runs from the written words, the fit, the search) is described in
+``writers/arcs.py``.
 
 The fit, per plane (G17: X Y, axis Z; G18: Z X, axis Y; G19: Y Z, axis X): the
 center lies on the perpendicular bisector of start and end, m + t n; t minimises

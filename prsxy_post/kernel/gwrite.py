@@ -22,10 +22,11 @@ keeps.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import arcs as _arcs
 from . import vnorm
 
 #: LinuxCNC's servo period [s]: a parabolic blend's next line leads by one
@@ -98,6 +99,10 @@ class GState:
     pend_i: np.ndarray
     pend_v: np.ndarray
     pend_t: np.ndarray
+    #: the arcs a call with ``fit`` refitted itself (:func:`gcode_ops`), rows as
+    #: :func:`.arcs.refit_arcs` gives them, numbered on from the call's arc_i
+    fit_i: np.ndarray = field(default_factory=lambda: np.zeros((0, 4), dtype=np.int64))
+    fit_f: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
 
 
 def new_state(
@@ -825,6 +830,7 @@ def gcode_ops(
     arc_of: np.ndarray | None = None,
     arc_i: np.ndarray | None = None,
     arc_f: np.ndarray | None = None,
+    fit: tuple[float, float, int] | None = None,
 ) -> Ops:
     """A chunk's points decided: one op per output line.
 
@@ -845,7 +851,8 @@ def gcode_ops(
     ...); arc_f (M, 2) its X Y Z length [mm] and least radius [mm]. Where the
     writer must refit (``i[stop_at]`` ≥ 0: :data:`REQ_REARC`, :data:`REQ_ARC_TO`)
     the call returns no ops; the writer answers (changing arc_of, adding arcs) and
-    calls again with the same points: the chunk goes on from there.
+    calls again with the same points: the chunk goes on from there. With ``fit`` (tol_mm,
+    tol_deg, decimals) it refits itself (:func:`refit`; the arcs in ``st.fit_i``, ``fit_f``).
 
     Returns
     -------
@@ -874,33 +881,21 @@ def gcode_ops(
     r.q, r.dt = q.tolist(), dt.tolist()
     if arc_of is not None and arc_i is not None and arc_f is not None:
         r.arc_of, r.arc_i, r.arc_f = arc_of.tolist(), arc_i.tolist(), arc_f.tolist()
-    rows = list(
-        zip(
-            r.q,
-            r.dt,
-            line.tolist(),
-            spd,
-            block_end.tolist(),
-            fn.tolist(),
-            fn_end.tolist(),
-            dwell.tolist(),
-            lead.tolist(),
-            plan,
-            strict=True,
-        )
-    )
-    for k in range(k0, len(rows)):
-        if r.point(k, rows[k], resume and k == k0):
-            reserve(st, len(r.run) - int(st.i[I_NAMES.index("run_n")]))
-            r.store(st)
-            empty = np.zeros(0, dtype=np.int64)
-            return empty, empty, empty, empty, np.zeros(0), np.zeros((0, 2))
-    if end:
-        r.resolve_corner(None, 0.0)
-        r.write_held()
-    r.hand_out()
+    cols = [x.tolist() for x in (line, speed, block_end, fn, fn_end, dwell, lead)]
+    rows = list(zip(r.q, r.dt, *cols, plan, strict=True))
+    new: list[tuple[np.ndarray, np.ndarray]] = []
+    stopped = _decide(r, rows, k0, resume, q, fit, new)
+    if not stopped:
+        if end:
+            r.resolve_corner(None, 0.0)
+            r.write_held()
+        r.hand_out()
     reserve(st, len(r.run) - int(st.i[I_NAMES.index("run_n")]))
     r.store(st)
+    st.fit_i, st.fit_f = _fitted(new)
+    if stopped:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty, empty, np.zeros(0), np.zeros((0, 2))
     return (
         np.array(r.code, dtype=np.int64),
         np.array(r.arg, dtype=np.int64),
@@ -908,4 +903,71 @@ def gcode_ops(
         np.array(r.aux, dtype=np.int64),
         np.array(r.val, dtype=np.float64),
         np.array(r.tilts, dtype=np.float64).reshape(-1, 2),
+    )
+
+
+def _decide(
+    r: _Run,
+    rows: list[tuple],
+    k0: int,
+    resume: bool,
+    q: np.ndarray,
+    fit: tuple[float, float, int] | None,
+    new: list[tuple[np.ndarray, np.ndarray]],
+) -> bool:
+    """The chunk's points from k0 (``_Run.point`` each; with ``resume`` k0 goes on
+    from a stop). Without ``fit``, True where it stops for a refit (the caller
+    answers); with it, each stop answered here (:func:`refit`) and gone on from."""
+    for k in range(k0, len(rows)):
+        if r.point(k, rows[k], resume and k == k0):
+            if fit is None:
+                return True
+            refit(r, q, fit, new)
+            r.point(k, rows[k], True)
+    return False
+
+
+def refit(
+    r: _Run, q: np.ndarray, fit: tuple[float, float, int], new: list[tuple[np.ndarray, np.ndarray]]
+) -> None:
+    """The answer to a stop (``r.stop_at``, ``r.req_kind``, ``r.req_arc``), as the
+    writer gave it: the arc's points from the stop k on as arcs again
+    (:func:`.arcs.refit_arcs`, in its plane; those no arc fits left to lines), and
+    for ARC_TO first the arc from its start to k - 1 as one arc where one fits
+    (``r.req_answer``: its index, else -1). The arcs are appended to the call's
+    (refitted) and their rows to ``new``; ``fit``: tol_mm, tol_deg, decimals.
+    Each refit gets the points it fits alone (the fits read nothing else)."""
+    k, a = r.stop_at, r.req_arc
+    start, end, plane = r.arc_i[a][A_START], r.arc_i[a][A_END], r.arc_i[a][A_PLANE]
+    first = len(r.arc_i)
+
+    def add(lo: int, rows: tuple[np.ndarray, np.ndarray]) -> None:
+        ai, af = rows
+        ai[:, :2] += lo  # the slice's indices, the chunk's again
+        new.append((ai, af))
+        for row_i, row_f in zip(ai.tolist(), af.tolist(), strict=True):
+            r.arc_i.append([row_i[0], row_i[1], row_i[2], 1])
+            r.arc_f.append([row_f[3], row_f[5]])
+
+    if r.req_kind == REQ_ARC_TO:
+        part = _arcs.refit_arcs(q[start:k], plane, 0, k - 1 - start, *fit)
+        r.req_answer = -1
+        if len(part[0]) == 1 and int(part[0][0, A_END]) == k - 1 - start:
+            add(start, part)
+            r.req_answer = first
+    first = len(r.arc_i)
+    r.arc_of[k : end + 1] = [-1] * (end + 1 - k)
+    add(k, _arcs.refit_arcs(q[k : end + 1], plane, 0, end - k, *fit))
+    for j in range(first, len(r.arc_i)):
+        s, e = r.arc_i[j][A_START], r.arc_i[j][A_END]
+        r.arc_of[s + 1 : e + 1] = [j] * (e - s)
+
+
+def _fitted(new: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """The rows of the arcs a call refitted, joined: (K, 4) int64, (K, 6)."""
+    if not new:
+        return np.zeros((0, 4), dtype=np.int64), np.zeros((0, 6))
+    return (
+        np.concatenate([a for a, _ in new]).astype(np.int64),
+        np.concatenate([f for _, f in new]).astype(np.float64),
     )

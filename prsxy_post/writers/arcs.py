@@ -42,9 +42,10 @@ import numpy as np
 
 from .. import kernel
 from ..kernel.arcs import MAX_SWEEP, MIN_POINTS, PLANES, WINDOW
+from .numbers import format_fixed_rows
 
-__all__ = ["MAX_SWEEP", "MIN_POINTS", "PLANES", "WINDOW", "Arc", "arc_words"]
-__all__ += ["find_arcs", "fit_arc", "refit_arcs"]
+__all__ = ["MAX_SWEEP", "MIN_POINTS", "PLANES", "WINDOW", "Arc", "ArcTable", "arc_words"]
+__all__ += ["arc_lines", "find_arcs", "fit_arc", "refit_arcs"]
 
 
 @dataclass(frozen=True)
@@ -171,3 +172,121 @@ def arc_words(arc: Arc, start: list[float], decimals: int) -> tuple[str, str]:
     ou = round(arc.center[iu] - start[iu], decimals) + 0.0
     ov = round(arc.center[iv] - start[iv], decimals) + 0.0
     return ("G3" if arc.ccw else "G2"), f" {wu}{ou:.{decimals}f} {wv}{ov:.{decimals}f}"
+
+
+class ArcTable:
+    """A chunk's arcs as the arc kernel gives them (:func:`prsxy_post.kernel.find_arcs`,
+    :func:`prsxy_post.kernel.refit_arcs`), kept as arrays: no :class:`Arc` record a
+    row, and rows appended where the writer refits, in place.
+
+    ``ai`` (M, 4) int64: start, end, plane, ccw; ``af`` (M, 6): the center X Y Z as
+    written [mm], length [mm], error [mm], the least radius [mm]; ``arc_of`` (n,)
+    int64: the arc each of the chunk's n points lies on after its start (-1: none).
+    The rows the G-code writer's kernel takes (:func:`prsxy_post.kernel.gcode_ops`):
+    ``k_i`` (M, 4) start, end, plane, refitted; ``k_f`` (M, 2) length, radius.
+    """
+
+    def __init__(self, rows: tuple[np.ndarray, np.ndarray], n: int) -> None:
+        ai, af = rows
+        cap = 2 * len(ai) + 16
+        self.m = 0
+        self._ai = np.zeros((cap, 4), dtype=np.int64)
+        self._af = np.zeros((cap, 6))
+        self._ki = np.zeros((cap, 4), dtype=np.int64)
+        self._kf = np.zeros((cap, 2))
+        self.arc_of = np.full(n, -1, dtype=np.int64)
+        self.add((ai, af), refit=False)
+
+    def add(
+        self, rows: tuple[np.ndarray, np.ndarray], refit: bool = True, arc_of: bool = True
+    ) -> int:
+        """Append the kernel's rows (arc_i, arc_f), each arc named on its points
+        after its start in ``arc_of`` (unless not ``arc_of``); the index of the first."""
+        ai, af = rows
+        first, m = self.m, self.m + len(ai)
+        if m > len(self._ai):
+            cap = 2 * m
+            for name in ("_ai", "_af", "_ki", "_kf"):
+                old = getattr(self, name)
+                new = np.zeros((cap, old.shape[1]), dtype=old.dtype)
+                new[:first] = old[:first]
+                setattr(self, name, new)
+        self._ai[first:m] = ai
+        self._af[first:m] = af
+        self._ki[first:m, :3] = ai[:, :3]
+        self._ki[first:m, 3] = int(refit)
+        self._kf[first:m] = af[:, 3::2]  # length, radius
+        self.m = m
+        if not arc_of:
+            return first
+        # each arc's points after its start (the arcs do not overlap)
+        if len(ai) < 8:  # a refit's few: slices cost less than the index arrays
+            for j, (s, e) in enumerate(ai[:, :2].tolist()):
+                self.arc_of[s + 1 : e + 1] = first + j
+            return first
+        span = ai[:, 1] - ai[:, 0]
+        if span.sum():
+            at = np.arange(int(span.sum())) - np.repeat(np.cumsum(span) - span, span)
+            self.arc_of[at + np.repeat(ai[:, 0] + 1, span)] = np.repeat(
+                np.arange(first, m, dtype=np.int64), span
+            )
+        return first
+
+    @property
+    def ai(self) -> np.ndarray:
+        return self._ai[: self.m]
+
+    @property
+    def af(self) -> np.ndarray:
+        return self._af[: self.m]
+
+    @property
+    def k_i(self) -> np.ndarray:
+        return self._ki[: self.m]
+
+    @property
+    def k_f(self) -> np.ndarray:
+        return self._kf[: self.m]
+
+    def row(self, a: int) -> tuple[np.ndarray, np.ndarray]:
+        """The arc ``a``'s rows (ai (4,), af (6,)), copies."""
+        return self._ai[a].copy(), self._af[a].copy()
+
+
+def arc_lines(
+    end: np.ndarray,
+    f: np.ndarray,
+    start: np.ndarray,
+    ai: np.ndarray,
+    af: np.ndarray,
+    decimals: int,
+) -> list[str]:
+    """The G2/G3 lines of arcs whose rows are ``ai`` (P, 4), ``af`` (P, 6)
+    (:class:`ArcTable`'s), each from the written point ``start`` (P, 5) to ``end``
+    (P, 5) (its A B as written) with the inverse time ``f`` (P,): ``G3 X.. Y.. Z..
+    A.. B.. I.. J.. F..`` (:func:`arc_words`' motion and center words around the
+    end's, F with three decimals), the same text row for row, made for all rows
+    at once (:func:`.numbers.format_fixed_rows`). ``%.{d}f`` of a center offset
+    prints what :func:`arc_words` prints of it rounded (both the value's exactly
+    rounded decimals), but for a negative offset that rounds to zero, which
+    :func:`arc_words` writes without its sign."""
+    out = np.empty(len(ai), dtype=object)
+    plane, ccw = ai[:, 2], ai[:, 3] != 0
+    zero = "0." + "0" * decimals if decimals else "0"
+    for p, (iu, iv, _) in PLANES.items():
+        wu, wv = CENTER_WORDS[p]
+        for turn in (False, True):
+            at = np.flatnonzero((plane == p) & (ccw == turn))
+            if not at.size:
+                continue
+            e, s, c = end[at], start[at], af[at]
+            cols = [("G3 X" if turn else "G2 X", e[:, 0]), (" Y", e[:, 1]), (" Z", e[:, 2])]
+            cols += [(" A", e[:, 3]), (" B", e[:, 4])]
+            cols += [(f" {wu}", c[:, iu] - s[:, iu]), (f" {wv}", c[:, iv] - s[:, iv])]
+            rows = format_fixed_rows([(pre, v, decimals) for pre, v in cols] + [(" F", f[at], 3)])
+            for word in (wu, wv):
+                neg = f" {word}-{zero} "
+                rows = [r.replace(neg, f" {word}{zero} ") if neg in r else r for r in rows]
+            out[at] = rows
+    lines: list[str] = out.tolist()
+    return lines

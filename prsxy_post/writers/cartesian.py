@@ -24,10 +24,7 @@ if TYPE_CHECKING:
 def written_points(cgeo: kinematics.Geometry, chunk: PointChunk) -> np.ndarray:
     """FK of the controller's geometry at the motor commands, warm-started at the
     pose the chain aimed for; (n, 5) [mm, mm, mm, deg, deg]."""
-    guess = kinematics.platform_guess(
-        kinematics.solve_platform(cgeo, chunk.q_target), chunk.q_target
-    )
-    q, ok = kinematics.forward(cgeo, chunk.P_cmd, guess=guess)
+    q, ok = kinematics.forward(cgeo, chunk.P_cmd, guess=kinematics.fk_start(cgeo, chunk.q_target))
     if not np.all(ok):
         k = int(np.argmin(ok))
         raise ReachError(

@@ -195,7 +195,7 @@ from .. import kernel, kinematics
 from ..interpolate.geometry import CORNER_SHARE
 from ..kernel import gwrite
 from ..profile.output import OUTPUT_SETTINGS
-from .arcs import Arc, arc_words, find_arcs, refit_arcs
+from .arcs import ArcTable, arc_lines
 from .base import Dialect, Piece, Provenance, header, words_text
 from .cartesian import written_points
 from .numbers import format_fixed_rows, round_clean
@@ -287,8 +287,9 @@ class GcodeWriter:
         self.buf: list[str] = []
         #: where in ``buf`` the line that waits for the next chunk stands (None: none)
         self.keep: int | None = None
-        #: the arc the corner held over a chunk's end closes (the kernel's CORNER_SRC)
-        self.kept_arc: Arc | None = None
+        #: the arc the corner held over a chunk's end closes (the kernel's CORNER_SRC):
+        #: its rows (:class:`.arcs.ArcTable`'s ai, af)
+        self.kept_arc: tuple[np.ndarray, np.ndarray] | None = None
 
     def begin(self) -> list[Piece]:
         ck = (
@@ -334,83 +335,49 @@ class GcodeWriter:
         # what the real-axis tables add to each motor [mm]: it ramps where a motor
         # crosses its play
         lead = chunk.P_cmd - chunk.P_ideal
-        # arcs kept as arcs (rule 5): found before the kernel decides, refitted where
-        # it asks (a later start, known only as it goes: after a stop, or where A or
-        # B leave the held tilt)
-        arcs, arc_of = self._arcs(q_arr, chunk, fn)
-        # the arcs as the kernel takes them: start, end, plane, refitted; length, radius
-        arc_i = np.array([[a.start, a.end, a.plane, 0] for a in arcs], dtype=np.int64)
-        arc_i = arc_i.reshape(-1, 4)
-        arc_f = np.array([[a.length, a.radius] for a in arcs], dtype=float).reshape(-1, 2)
+        # arcs kept as arcs (rule 5): found before the kernel decides, refitted by it
+        # where it must (a later start, known only as it goes: after a stop, or where
+        # A or B leave the held tilt)
+        arcs = self._arcs(q_arr, chunk, fn, lead)
         start_q = self.state.last_q.copy()  # where the chunk's first move starts
-        while True:
-            ops = kernel.gcode_ops(
-                self.state,
-                q_arr,
-                chunk.dt,
-                chunk.line,
-                chunk.speed,
-                chunk.block_end,
-                fn,
-                fn_end,
-                chunk.dwell,
-                lead,
-                False,
-                arc_of,
-                arc_i,
-                arc_f,
-            )
-            k = int(self.state.i[_I["stop_at"]])
-            if k < 0:
-                break
-            new = self._answer(q_arr, arcs, arc_of, k)
-            if new:
-                rows = [[a.start, a.end, a.plane, 1] for a in new]
-                arc_i = np.concatenate([arc_i, np.array(rows, dtype=np.int64)])
-                arc_f = np.concatenate([arc_f, [[a.length, a.radius] for a in new]])
+        ops = kernel.gcode_ops(
+            self.state,
+            q_arr,
+            chunk.dt,
+            chunk.line,
+            chunk.speed,
+            chunk.block_end,
+            fn,
+            fn_end,
+            chunk.dwell,
+            lead,
+            False,
+            arcs.arc_of,
+            arcs.k_i,
+            arcs.k_f,
+            (self.tol, self.tilt_chord, self.dec),
+        )
+        # the arcs it refitted, numbered on from the chunk's
+        arcs.add((self.state.fit_i, self.state.fit_f), arc_of=False)
         self._lines(ops, q_arr, chunk, arcs, start_q)
         return self._hand_out()
 
-    def _answer(self, q: np.ndarray, arcs: list[Arc], arc_of: np.ndarray, k: int) -> list[Arc]:
-        """The kernel's request at the point k (:data:`gwrite.REQ_REARC`,
-        :data:`gwrite.REQ_ARC_TO`): the arc's points from k as arcs again
-        (:func:`.arcs.refit_arcs`, those no arc fits left to lines), and for
-        ARC_TO first the arc from its start to k - 1 as one arc, where one fits.
-        The new arcs are appended to ``arcs`` and returned (the kernel takes them
-        as refitted)."""
-        st = self.state
-        n0 = len(arcs)
-        arc = arcs[int(st.i[_I["req_arc"]])]
-        if int(st.i[_I["req_kind"]]) == gwrite.REQ_ARC_TO:
-            parts = refit_arcs(q, arc, arc.start, self.tol, self.tilt_chord, self.dec, k - 1)
-            st.i[_I["req_answer"]] = -1
-            if len(parts) == 1 and parts[0].end == k - 1:
-                arcs.append(parts[0])
-                st.i[_I["req_answer"]] = len(arcs) - 1
-        arc_of[k : arc.end + 1] = -1
-        for part in refit_arcs(q, arc, k, self.tol, self.tilt_chord, self.dec):
-            arcs.append(part)
-            arc_of[part.start + 1 : part.end + 1] = len(arcs) - 1
-        return arcs[n0:]
-
-    def _arcs(
-        self, q: np.ndarray, chunk: PointChunk, fn: np.ndarray
-    ) -> tuple[list[Arc], np.ndarray]:
+    def _arcs(self, q: np.ndarray, chunk: PointChunk, fn: np.ndarray, lead: np.ndarray) -> ArcTable:
         """The arcs among the chunk's points (:func:`.arcs.find_arcs`, rule 5) and,
-        for each point, the arc it lies on after its start (-1: none)."""
+        for each point, the arc it lies on after its start (-1: none); ``lead``
+        (n, 5) [mm] what the real-axis tables add to each motor."""
         n = len(q)
-        arc_of = np.full(n, -1, dtype=np.int64)
         if self.tol <= 0.0 or n < 2:
-            return [], arc_of
+            return ArcTable((np.zeros((0, 4), dtype=np.int64), np.zeros((0, 6))), n)
         moving = (chunk.speed > 0.0) & ~chunk.dwell & ~fn
         step = _step_lengths(q)
         rate = np.divide(step, chunk.dt, out=np.zeros(n), where=chunk.dt > 0.0)
-        found = find_arcs(
+        found = kernel.find_arcs(
             q,
             moving & ~chunk.block_end,
             moving & chunk.block_end,
             rate,
-            chunk.P_cmd - chunk.P_ideal,
+            lead,
             self.tol,
             self.tilt_chord,
             self.dec,
@@ -418,22 +385,20 @@ class GcodeWriter:
             # where the tilt is held, an arc is split where it changes (rule 5)
             2.0 * self.arc_hold if self.arc_hold > 0.0 else math.inf,
         )
-        for i, arc in enumerate(found):
-            arc_of[arc.start + 1 : arc.end + 1] = i
-        return found, arc_of
+        return ArcTable(found, n)
 
     def _lines(
         self,
         ops: gwrite.Ops,
         q_arr: np.ndarray,
         chunk: PointChunk | None,
-        arcs: list[Arc],
+        arcs: ArcTable | None,
         start_q: np.ndarray,
     ) -> None:
         """Append the lines of the kernel's ops (each with its line end) to ``buf``,
         after what they did to the line carried in it, and keep the points (and the
         arc) the next chunk may name. ``start_q``: the last point written before."""
-        code, arg, abi, aux, val, tilts = ops
+        code, arg, abi, _, val, tilts = ops
         st = self.state
         patch = int(st.i[_I["patch"]])
         if patch == gwrite.PATCH_F:
@@ -449,7 +414,7 @@ class GcodeWriter:
         tilt_rows[:, 3:] = tilts
         q_all = np.concatenate([q_arr, tilt_rows, self.kept])
         lines = self._const[code]
-        g1 = np.flatnonzero((code == gwrite.G1) | (code == gwrite.ARC))
+        g1 = np.flatnonzero(code == gwrite.G1)
         if g1.size:
             # each G1's text in one call: X Y Z of its point, A B of the tilt it writes
             # (np.take: an (n, 5) array's rows gathered faster than fancy indexing)
@@ -459,7 +424,7 @@ class GcodeWriter:
             lines[g1] = format_fixed_rows(
                 [(p, v, self.dec) for p, v in cols] + [(" F", val[g1], 3)]
             )
-        self._arc_lines(lines, code, arg, aux, q_all, arcs, start_q)
+        self._arc_lines(lines, ops, q_all, arcs, start_q)
         if chunk is not None:
             self._point_lines(lines, code, arg, q_arr, chunk)
         self.buf += lines.tolist()
@@ -472,7 +437,8 @@ class GcodeWriter:
             self.kept[gwrite.RUN_SRC] = st.run_q[run_n - 1]
         ca_from = int(i_of[_I["ca_from"]])
         if ca_from >= 0:
-            self.kept_arc = arcs[ca_from]
+            assert arcs is not None
+            self.kept_arc = arcs.row(ca_from)
         keep = int(i_of[_I["keep"]])
         self.keep = base + keep if keep >= 0 else (0 if keep == gwrite.CARRIED else None)
 
@@ -508,15 +474,15 @@ class GcodeWriter:
     def _arc_lines(
         self,
         lines: np.ndarray,
-        code: np.ndarray,
-        arg: np.ndarray,
-        aux: np.ndarray,
+        ops: gwrite.Ops,
         q_all: np.ndarray,
-        arcs: list[Arc],
+        arcs: ArcTable | None,
         start_q: np.ndarray,
     ) -> None:
-        """The G2/G3 lines (their G1 text made the arc's: its motion word and center
-        words, offsets from the point written before) and the plane words."""
+        """The G2/G3 lines (:func:`.arcs.arc_lines`: the end's X Y Z, the A B the
+        op names, the center words as offsets from the point written before) and
+        the plane words."""
+        code, arg, abi, aux, val, _ = ops
         for i in np.flatnonzero(code == gwrite.PLANE).tolist():
             lines[i] = f"G{int(aux[i])}\n"
         # each arc's start: the point of the move written before it (G0, G1 or an
@@ -525,17 +491,22 @@ class GcodeWriter:
         pos = np.flatnonzero(code[moves] == gwrite.ARC)
         if not pos.size:
             return
-        before = np.take(q_all, arg[moves[np.maximum(pos - 1, 0)]], axis=0)
-        starts = before.tolist()
+        at = moves[pos]
+        start = np.take(q_all, arg[moves[np.maximum(pos - 1, 0)]], axis=0)
         if pos[0] == 0:
-            starts[0] = start_q.tolist()
-        for i, a, start in zip(moves[pos].tolist(), aux[moves[pos]].tolist(), starts, strict=True):
-            arc = self.kept_arc if a == gwrite.CORNER_SRC else arcs[a]
-            assert arc is not None
-            head, tail = arc_words(arc, start, self.dec)
-            row = lines[i]
-            cut = row.rindex(" F")
-            lines[i] = head + row[2:cut] + tail + row[cut:]
+            start[0] = start_q
+        end = np.take(q_all, arg[at], axis=0)
+        end[:, 3:] = np.take(q_all, abi[at], axis=0)[:, 3:]
+        a = aux[at]
+        kept = a == gwrite.CORNER_SRC
+        ai = np.zeros((len(at), 4), dtype=np.int64)
+        af = np.zeros((len(at), 6))
+        if arcs is not None:
+            ai[~kept], af[~kept] = arcs.ai[a[~kept]], arcs.af[a[~kept]]
+        if kept.any():
+            assert self.kept_arc is not None
+            ai[kept], af[kept] = self.kept_arc
+        lines[at] = arc_lines(end, val[at], start, ai, af, self.dec)
 
     @property
     def _const(self) -> np.ndarray:
@@ -581,7 +552,7 @@ class GcodeWriter:
             np.zeros((0, 4), dtype=np.int64),
             np.zeros((0, 2)),
         )
-        self._lines(ops, np.zeros((0, 5)), None, [], self.state.last_q.copy())
+        self._lines(ops, np.zeros((0, 5)), None, None, self.state.last_q.copy())
         lines = self.buf
         self.buf = []
         if self.ended_by is None:
