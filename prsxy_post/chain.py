@@ -978,14 +978,14 @@ class Pipeline:
                 q, qdot = at_times(plan, s.block[kk], tau[inside])
                 e0 = np.where((kk >= 1)[:, None], _gather(fix, np.maximum(kk - 1, 0)), fix_before)
                 q_t = q - (e0 + ff * (_gather(fix, kk) - e0))
-                tool = s.tool_length[kk]
-                # the poses and their steps along qdot in one IK call: the IK and
-                # its velocity as _ik_velocity's difference (the same rows)
-                m = len(kk)
-                q2 = np.concatenate([q_t, q_t + VEL_STEP_S * qdot])
-                P2 = kinematics.inverse(self.geo, q2, np.concatenate([tool, tool])).P
-                V = (P2[m:] - P2[:m]) / VEL_STEP_S
-                out[inside] = V[np.arange(m), cols[inside]]
+                # the IK and its velocity in one pass of the kernel (the rows of
+                # _ik_velocity's difference); a standing row's is P − P there (0, or
+                # NaN where the pose is out of reach), as the difference has it
+                P, V = kinematics.motion(self.geo, q_t, qdot, s.tool_length[kk], VEL_STEP_S)
+                row, col = np.arange(len(kk)), cols[inside]
+                Pc, Vc = P[row, col], V[row, col]
+                standing = ~np.any(qdot != 0.0, axis=1)
+                out[inside] = np.where(standing, Pc - Pc, Vc)
             return out
 
         return velocity

@@ -1418,7 +1418,9 @@ def sides_by_motor(
     """
     m = len(rows.step)
     out = np.empty((len(side), m))
-    out[:] = np.asarray(side, dtype=int)[:, None]
+    # the motors with play get their rows below; the others keep their side
+    held = [c for c in range(len(side)) if c not in cols]
+    out[held] = np.asarray(side, dtype=int)[held, None]
     f_all = rows.first_plain(ins.w_k)
     e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b)
     last_row = np.searchsorted(rows.step, ins.w_kb, "right") - 1  # its end's step's end
