@@ -390,23 +390,13 @@ def root_answer(st: RootSearch, v: np.ndarray) -> RootSearch:
         return st._replace(phase=DONE, slope=slope)
     if st.phase != SEEK:
         return st
-    n = len(st.s)
-    going, ok, br, x, moved = st.going.copy(), st.ok.copy(), st.br, st.x, st.moved.copy()
-    known = np.zeros(n, dtype=bool)
-    known[going] = np.isfinite(v)
-    vm = np.zeros(n)
-    vm[going] = np.where(np.isfinite(v), v, 0.0)
-    ok &= known | ~going
-    new_way = st.new * vm > 0
-    found = going & known & _root_found(x, vm, new_way, br, st.accel, st.h)
-    going &= known & ~found
+    br = st.br
+    x, going, ok, moved, s_a, v_a, s_b, v_b, last = kernel.seek_step(
+        st.x, v, st.going, st.ok, st.moved, st.new, st.accel, st.h,
+        br.s_a, br.v_a, br.s_b, br.v_b, br.last, ROOT_SLOPE_MARGIN, ROOT_TIME_S,
+    )  # fmt: skip
+    br = _Bracket(s_a, v_a, s_b, v_b, last)
     left = st.left - 1
-    if np.any(going):
-        moved |= going
-        br = _illinois(br, x, vm, going & new_way, going & ~new_way)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x_new = br.s_a - br.v_a * (br.s_b - br.s_a) / (br.v_b - br.v_a)
-        x = np.where(going & np.isfinite(x_new), np.clip(x_new, br.s_a, br.s_b), x)
     if np.any(going) and left > 0:
         return st._replace(ok=ok, going=going, moved=moved, x=x, br=br, left=left)
     moved &= ok
@@ -421,42 +411,6 @@ def root_result(st: RootSearch) -> tuple[np.ndarray, np.ndarray]:
         return st.s, st.accel
     moved = st.moved & np.isfinite(st.slope)
     return np.where(moved, st.x, st.s), np.where(moved, st.slope, st.accel)
-
-
-def _root_found(
-    x: np.ndarray,
-    vm: np.ndarray,
-    new_way: np.ndarray,
-    br: _Bracket,
-    accel: np.ndarray,
-    h: np.ndarray,
-) -> np.ndarray:
-    """(m,) bool, the path's velocity ``vm`` [mm/s] at the fractions ``x`` is what
-    the acceleration makes in ROOT_TIME_S: the root is found."""
-    # found: the path's velocity there is what the acceleration makes in
-    # ROOT_TIME_S (on fast turns the cubic's root already is), the acceleration
-    # the cubic's or the secant to the bracket's other end, whichever is less
-    s_o, v_o = np.where(new_way, br.s_a, br.s_b), np.where(new_way, br.v_a, br.v_b)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        secant = np.abs(vm - v_o) / (np.abs(x - s_o) * h)
-    slow = np.fmin(np.abs(accel), secant)
-    return np.abs(vm) * ROOT_SLOPE_MARGIN <= slow * ROOT_TIME_S
-
-
-def _illinois(
-    br: _Bracket, x: np.ndarray, vm: np.ndarray, turned: np.ndarray, old: np.ndarray
-) -> _Bracket:
-    """The bracket with its new-way end moved to ``x`` where the path's velocity
-    ``vm`` there has ``turned``, its old-way end where it is still ``old``."""
-    s_a, v_a, s_b, v_b, last = br
-    # Illinois: an end kept twice running has its velocity halved, so that
-    # false position closes in from both sides
-    v_a = np.where(turned & (last == 1), 0.5 * v_a, v_a)
-    v_b = np.where(old & (last == -1), 0.5 * v_b, v_b)
-    last = np.where(turned, 1, np.where(old, -1, last))
-    s_b, v_b = np.where(turned, x, s_b), np.where(turned, vm, v_b)
-    s_a, v_a = np.where(old, x, s_a), np.where(old, vm, v_a)
-    return _Bracket(s_a, v_a, s_b, v_b, last)
 
 
 def windows(
