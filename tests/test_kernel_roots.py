@@ -5,7 +5,8 @@ golden files are converted: the reversals in motion moved onto the path) and
 generated ones (hypothesis: roots anywhere in their brackets, ±0.0 at their
 ends, velocities either way, NaN, ±inf, ±0.0, accelerations of any size, none or
 NaN, steps of no time, brackets whose ends were moved last or not, roots already
-found or left); a velocity exactly at the found threshold. The rules are :func:`prsxy_post.reversals.root_search`'.
+found or left); a velocity exactly at the found threshold. The rules are
+:func:`prsxy_post.reversals.root_search`'.
 """
 
 from __future__ import annotations
