@@ -1292,15 +1292,23 @@ class Rows:
         """The first point of each step k (its standing point, if it has one)."""
         return np.searchsorted(self.step, k, "left")
 
+    def last(self, k: np.ndarray) -> np.ndarray:
+        """The last point of each step k (its end)."""
+        out: np.ndarray = np.searchsorted(self.step, k, "right") - 1
+        return out
+
     def first_plain(self, k: np.ndarray) -> np.ndarray:
         """The first point of each step k that is not a standing point."""
         f = self.first(k)
         return f + self.before[np.minimum(f, len(self.before) - 1)]
 
-    def at(self, k: np.ndarray, t: np.ndarray, t0: np.ndarray) -> np.ndarray:
+    def at(
+        self, k: np.ndarray, t: np.ndarray, t0: np.ndarray, last: np.ndarray | None = None
+    ) -> np.ndarray:
         """The point of each step k at time t: a point put inside the step or its
         end; for t at the step's start t0, the point before the step's first plain
-        point (−1 before the chunk).
+        point (−1 before the chunk). ``last``: the steps' last points
+        (:meth:`last`), where the caller has them.
 
         Window edges are either a step's ends or at least SNAP_S inside it
         (:func:`_snap`), so the step's start is told by time, not by an equality
@@ -1308,7 +1316,8 @@ class Rows:
         break; the search is kept inside the step for the same reason.
         """
         fp = self.first_plain(k)
-        last = np.searchsorted(self.step, k, "right") - 1
+        if last is None:
+            last = self.last(k)
         idx = np.clip(np.searchsorted(self.when, t - 0.5 * SNAP_S, "left"), fp, last)
         return np.where(t - t0 < 0.5 * SNAP_S, fp - 1, idx)
 
@@ -1376,16 +1385,21 @@ def sides_by_motor(
     held = [c for c in range(len(side)) if c not in cols]
     out[held] = np.asarray(side, dtype=int)[held, None]
     f_all = rows.first_plain(ins.w_k)
-    e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b)
-    last_row = np.searchsorted(rows.step, ins.w_kb, "right") - 1  # its end's step's end
+    last_row = rows.last(ins.w_kb)  # its end's step's end
+    e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b, last_row)
     s_first, s_col, s_new = rows.first(ins.s_k), ins.s_col, ins.s_new
-    # every motor's windows by their ends, in one sort (stable: as each motor's own)
+    # every motor's windows by their ends, in one sort (stable: as each motor's own),
+    # and its standing crossings in their order: each motor's a slice of arrays
+    # gathered once (not gathered again for each motor)
     by_col = np.lexsort((e_all, ins.w_col))
     w_cols = ins.w_col[by_col]
+    w_f, w_e, w_new, w_last = f_all[by_col], e_all[by_col], ins.w_new[by_col], last_row[by_col]
+    by_s = np.argsort(s_col, kind="stable")
+    s_cols, s_at, s_way = s_col[by_s], s_first[by_s], s_new[by_s]
     lo, hi = np.searchsorted(w_cols, cols, "left"), np.searchsorted(w_cols, cols, "right")
+    s_lo, s_hi = np.searchsorted(s_cols, cols, "left"), np.searchsorted(s_cols, cols, "right")
     for i, col in enumerate(cols):
-        mine = by_col[lo[i] : hi[i]]
-        here = s_col == col
+        w, c = slice(lo[i], hi[i]), slice(s_lo[i], s_hi[i])
         # the points after a window's end inside its step (another motor's window,
         # a blend's point before a corner) are on the new side: where the path turns
         # a corner the cubic's root is before the corner, the plan's velocity turns
@@ -1393,12 +1407,12 @@ def sides_by_motor(
         out[col] = kernel.motor_sides(
             V_cols[col],
             resting,
-            f_all[mine],
-            e_all[mine],
-            ins.w_new[mine],
-            last_row[mine],
-            s_first[here],
-            s_new[here],
+            w_f[w],
+            w_e[w],
+            w_new[w],
+            w_last[w],
+            s_at[c],
+            s_way[c],
             int(side[col]),
             V_EPS,
         )
