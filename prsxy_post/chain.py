@@ -1658,7 +1658,12 @@ def _merge_places(
     goes after the j before it and the chunk's points of the steps before its own.
     Returns (the new points' order, their places in the whole, the chunk's row at
     each place: a new point's place is written over after)."""
-    e_order = np.lexsort((e_when, np.where(e_before, 0, 1), e_step))
+    # lexsort((e_when, before-first, e_step))'s order, in two stable sorts: by
+    # time, then by step and kind as one int key (about a third of its time: the
+    # times come in two sorted runs)
+    by_time = np.argsort(e_when, kind="stable")
+    key = 2 * e_step + np.where(e_before, 0, 1)
+    e_order = by_time[np.argsort(key[by_time], kind="stable")]
     at = e_step[e_order] + np.arange(len(e_order))
     kept = np.ones(n + len(at), dtype=bool)
     kept[at] = False
