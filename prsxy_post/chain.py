@@ -919,7 +919,11 @@ class Pipeline:
         begs = np.concatenate([rows.at(ins.w_k, ins.w_ta, ins.w_t0), ends[len(ins.w_tb) :] - 1])
         cols = np.concatenate([ins.w_col, ins.s_col])
         contacts = np.column_stack([ends, begs, cols]).astype(int)
-        return pc, side, contacts[np.lexsort((cols, begs, ends))], V_cols
+        # by end, then start, then motor: lexsort((cols, begs, ends))'s order as one
+        # stable sort of an int key (the points from −1, the motors below the width)
+        m, width = len(pc) + 1, pc.P_ideal.shape[1]
+        key = ((contacts[:, 0] + 1) * m + (contacts[:, 1] + 1)) * width + contacts[:, 2]
+        return pc, side, contacts[np.argsort(key, kind="stable")], V_cols
 
     def _joined(
         self,

@@ -1388,10 +1388,11 @@ def sides_by_motor(
     last_row = rows.last(ins.w_kb)  # its end's step's end
     e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b, last_row)
     s_first, s_col, s_new = rows.first(ins.s_k), ins.s_col, ins.s_new
-    # every motor's windows by their ends, in one sort (stable: as each motor's own),
-    # and its standing crossings in their order: each motor's a slice of arrays
+    # every motor's windows by their ends, in one sort (stable: as each motor's own;
+    # lexsort((e_all, w_col))'s order as one int key, the ends points from −1), and
+    # its standing crossings in their order: each motor's a slice of arrays
     # gathered once (not gathered again for each motor)
-    by_col = np.lexsort((e_all, ins.w_col))
+    by_col = np.argsort(ins.w_col * (m + 1) + (e_all + 1), kind="stable")
     w_cols = ins.w_col[by_col]
     w_f, w_e, w_new, w_last = f_all[by_col], e_all[by_col], ins.w_new[by_col], last_row[by_col]
     by_s = np.argsort(s_col, kind="stable")
