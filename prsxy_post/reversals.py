@@ -390,23 +390,13 @@ def root_answer(st: RootSearch, v: np.ndarray) -> RootSearch:
         return st._replace(phase=DONE, slope=slope)
     if st.phase != SEEK:
         return st
-    n = len(st.s)
-    going, ok, br, x, moved = st.going.copy(), st.ok.copy(), st.br, st.x, st.moved.copy()
-    known = np.zeros(n, dtype=bool)
-    known[going] = np.isfinite(v)
-    vm = np.zeros(n)
-    vm[going] = np.where(np.isfinite(v), v, 0.0)
-    ok &= known | ~going
-    new_way = st.new * vm > 0
-    found = going & known & _root_found(x, vm, new_way, br, st.accel, st.h)
-    going &= known & ~found
+    br = st.br
+    x, going, ok, moved, s_a, v_a, s_b, v_b, last = kernel.seek_step(
+        st.x, v, st.going, st.ok, st.moved, st.new, st.accel, st.h,
+        br.s_a, br.v_a, br.s_b, br.v_b, br.last, ROOT_SLOPE_MARGIN, ROOT_TIME_S,
+    )  # fmt: skip
+    br = _Bracket(s_a, v_a, s_b, v_b, last)
     left = st.left - 1
-    if np.any(going):
-        moved |= going
-        br = _illinois(br, x, vm, going & new_way, going & ~new_way)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x_new = br.s_a - br.v_a * (br.s_b - br.s_a) / (br.v_b - br.v_a)
-        x = np.where(going & np.isfinite(x_new), np.clip(x_new, br.s_a, br.s_b), x)
     if np.any(going) and left > 0:
         return st._replace(ok=ok, going=going, moved=moved, x=x, br=br, left=left)
     moved &= ok
@@ -421,42 +411,6 @@ def root_result(st: RootSearch) -> tuple[np.ndarray, np.ndarray]:
         return st.s, st.accel
     moved = st.moved & np.isfinite(st.slope)
     return np.where(moved, st.x, st.s), np.where(moved, st.slope, st.accel)
-
-
-def _root_found(
-    x: np.ndarray,
-    vm: np.ndarray,
-    new_way: np.ndarray,
-    br: _Bracket,
-    accel: np.ndarray,
-    h: np.ndarray,
-) -> np.ndarray:
-    """(m,) bool, the path's velocity ``vm`` [mm/s] at the fractions ``x`` is what
-    the acceleration makes in ROOT_TIME_S: the root is found."""
-    # found: the path's velocity there is what the acceleration makes in
-    # ROOT_TIME_S (on fast turns the cubic's root already is), the acceleration
-    # the cubic's or the secant to the bracket's other end, whichever is less
-    s_o, v_o = np.where(new_way, br.s_a, br.s_b), np.where(new_way, br.v_a, br.v_b)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        secant = np.abs(vm - v_o) / (np.abs(x - s_o) * h)
-    slow = np.fmin(np.abs(accel), secant)
-    return np.abs(vm) * ROOT_SLOPE_MARGIN <= slow * ROOT_TIME_S
-
-
-def _illinois(
-    br: _Bracket, x: np.ndarray, vm: np.ndarray, turned: np.ndarray, old: np.ndarray
-) -> _Bracket:
-    """The bracket with its new-way end moved to ``x`` where the path's velocity
-    ``vm`` there has ``turned``, its old-way end where it is still ``old``."""
-    s_a, v_a, s_b, v_b, last = br
-    # Illinois: an end kept twice running has its velocity halved, so that
-    # false position closes in from both sides
-    v_a = np.where(turned & (last == 1), 0.5 * v_a, v_a)
-    v_b = np.where(old & (last == -1), 0.5 * v_b, v_b)
-    last = np.where(turned, 1, np.where(old, -1, last))
-    s_b, v_b = np.where(turned, x, s_b), np.where(turned, vm, v_b)
-    s_a, v_a = np.where(old, x, s_a), np.where(old, vm, v_a)
-    return _Bracket(s_a, v_a, s_b, v_b, last)
 
 
 def windows(
@@ -1338,15 +1292,23 @@ class Rows:
         """The first point of each step k (its standing point, if it has one)."""
         return np.searchsorted(self.step, k, "left")
 
+    def last(self, k: np.ndarray) -> np.ndarray:
+        """The last point of each step k (its end)."""
+        out: np.ndarray = np.searchsorted(self.step, k, "right") - 1
+        return out
+
     def first_plain(self, k: np.ndarray) -> np.ndarray:
         """The first point of each step k that is not a standing point."""
         f = self.first(k)
         return f + self.before[np.minimum(f, len(self.before) - 1)]
 
-    def at(self, k: np.ndarray, t: np.ndarray, t0: np.ndarray) -> np.ndarray:
+    def at(
+        self, k: np.ndarray, t: np.ndarray, t0: np.ndarray, last: np.ndarray | None = None
+    ) -> np.ndarray:
         """The point of each step k at time t: a point put inside the step or its
         end; for t at the step's start t0, the point before the step's first plain
-        point (−1 before the chunk).
+        point (−1 before the chunk). ``last``: the steps' last points
+        (:meth:`last`), where the caller has them.
 
         Window edges are either a step's ends or at least SNAP_S inside it
         (:func:`_snap`), so the step's start is told by time, not by an equality
@@ -1354,7 +1316,8 @@ class Rows:
         break; the search is kept inside the step for the same reason.
         """
         fp = self.first_plain(k)
-        last = np.searchsorted(self.step, k, "right") - 1
+        if last is None:
+            last = self.last(k)
         idx = np.clip(np.searchsorted(self.when, t - 0.5 * SNAP_S, "left"), fp, last)
         return np.where(t - t0 < 0.5 * SNAP_S, fp - 1, idx)
 
@@ -1418,18 +1381,26 @@ def sides_by_motor(
     """
     m = len(rows.step)
     out = np.empty((len(side), m))
-    out[:] = np.asarray(side, dtype=int)[:, None]
+    # the motors with play get their rows below; the others keep their side
+    held = [c for c in range(len(side)) if c not in cols]
+    out[held] = np.asarray(side, dtype=int)[held, None]
     f_all = rows.first_plain(ins.w_k)
-    e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b)
-    last_row = np.searchsorted(rows.step, ins.w_kb, "right") - 1  # its end's step's end
+    last_row = rows.last(ins.w_kb)  # its end's step's end
+    e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b, last_row)
     s_first, s_col, s_new = rows.first(ins.s_k), ins.s_col, ins.s_new
-    # every motor's windows by their ends, in one sort (stable: as each motor's own)
-    by_col = np.lexsort((e_all, ins.w_col))
+    # every motor's windows by their ends, in one sort (stable: as each motor's own;
+    # lexsort((e_all, w_col))'s order as one int key, the ends points from −1), and
+    # its standing crossings in their order: each motor's a slice of arrays
+    # gathered once (not gathered again for each motor)
+    by_col = np.argsort(ins.w_col * (m + 1) + (e_all + 1), kind="stable")
     w_cols = ins.w_col[by_col]
+    w_f, w_e, w_new, w_last = f_all[by_col], e_all[by_col], ins.w_new[by_col], last_row[by_col]
+    by_s = np.argsort(s_col, kind="stable")
+    s_cols, s_at, s_way = s_col[by_s], s_first[by_s], s_new[by_s]
     lo, hi = np.searchsorted(w_cols, cols, "left"), np.searchsorted(w_cols, cols, "right")
+    s_lo, s_hi = np.searchsorted(s_cols, cols, "left"), np.searchsorted(s_cols, cols, "right")
     for i, col in enumerate(cols):
-        mine = by_col[lo[i] : hi[i]]
-        here = s_col == col
+        w, c = slice(lo[i], hi[i]), slice(s_lo[i], s_hi[i])
         # the points after a window's end inside its step (another motor's window,
         # a blend's point before a corner) are on the new side: where the path turns
         # a corner the cubic's root is before the corner, the plan's velocity turns
@@ -1437,12 +1408,12 @@ def sides_by_motor(
         out[col] = kernel.motor_sides(
             V_cols[col],
             resting,
-            f_all[mine],
-            e_all[mine],
-            ins.w_new[mine],
-            last_row[mine],
-            s_first[here],
-            s_new[here],
+            w_f[w],
+            w_e[w],
+            w_new[w],
+            w_last[w],
+            s_at[c],
+            s_way[c],
             int(side[col]),
             V_EPS,
         )

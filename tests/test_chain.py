@@ -78,3 +78,40 @@ def test_directions_are_the_ik_difference_along_each_moving_blocks_tangents(
         assert np.array_equal(got[k][:, cols], want[:, cols])
         assert not np.any(got[k][:, others]) and not np.any(got[b.stops])
         assert np.any(got[k][:, cols])
+
+
+@st.composite
+def _new_points(draw: st.DrawFn) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    n = draw(st.integers(0, 12))
+    e = draw(st.integers(0, 15))
+    step = draw(hnp.arrays(int, e, elements=st.integers(0, n)))
+    when = draw(
+        hnp.arrays(
+            float, e, elements=st.sampled_from([0.0, -0.0, 0.5, 1.0, np.nan]) | st.floats(0, 2)
+        )
+    )
+    before = draw(hnp.arrays(bool, e))
+    return n, step, when, before
+
+
+@settings(max_examples=300, deadline=None)
+@given(_new_points())
+def test_merge_places_orders_new_points_as_one_sort_of_all(
+    case: tuple[int, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """The new points go by step, a standing point first, then by time (ties,
+    NaN and ±0.0 as one stable lexsort of them all would leave them), each
+    after the chunk's points of the steps before its own; every chunk row keeps
+    its order."""
+    n, step, when, before = case
+    order, at, src = chain._merge_places(n, step, when, before)
+    assert np.array_equal(order, np.lexsort((when, np.where(before, 0, 1), step)))
+    # merged: the chunk's rows 0..n-1 and the new ones; a chunk row's place is
+    # after every new point of its own step and the steps before
+    kept = np.ones(n + len(step), dtype=bool)
+    kept[at] = False
+    assert np.array_equal(src[kept], np.arange(n))
+    rows = np.arange(n)
+    assert np.array_equal(
+        np.flatnonzero(kept), rows + np.searchsorted(np.sort(step), rows, "right")
+    )

@@ -2,7 +2,8 @@
 
 Each kernel has a numpy reference (``ik.py``, ``text.py``, ``legendre.py``, ``fk.py``,
 the planner's ``timelaw.py`` and ``path.py``, the play model's ``play.py``, the
-crossing windows' ``windows.py``, the corrected G-code writer's decisions'
+crossing windows' ``windows.py``, the root search's ``roots.py``, the corrected G-code
+writer's decisions'
 ``gwrite.py`` in plain Python floats, its arc search's ``arcs.py``: :data:`TWINS`) and a
 compiled twin in Cython
 (``_ik.pyx``, ...; built when the package is installed) that gives the same bits.
@@ -53,6 +54,7 @@ TWINS = {
     "windows": "_windows",
     "gwrite": "_gwrite",
     "arcs": "_arcs",
+    "roots": "_roots",
 }
 
 
@@ -715,5 +717,34 @@ def refit_arcs(
     :func:`arcs.refit_arcs`, compiled when :data:`COMPILED`."""
     out: tuple[np.ndarray, np.ndarray] = _refit_arcs(
         q, plane, start, end, tol_mm, tol_deg, decimals
+    )
+    return out
+
+
+# the root search (kernel/roots.py and its twin _roots.pyx)
+_seek_step = _RUN["roots"].seek_step
+
+
+def seek_step(
+    x: np.ndarray,
+    v: np.ndarray,
+    going: np.ndarray,
+    ok: np.ndarray,
+    moved: np.ndarray,
+    new: np.ndarray,
+    accel: np.ndarray,
+    h: np.ndarray,
+    s_a: np.ndarray,
+    v_a: np.ndarray,
+    s_b: np.ndarray,
+    v_b: np.ndarray,
+    last: np.ndarray,
+    margin: float,
+    time_s: float,
+) -> tuple[np.ndarray, ...]:
+    """One false-position step of the reversals' roots: :func:`roots.seek_step`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, ...] = _seek_step(
+        x, v, going, ok, moved, new, accel, h, s_a, v_a, s_b, v_b, last, margin, time_s
     )
     return out
