@@ -1000,7 +1000,8 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     if iv[4] + n > run.shape[0]:
         raise ValueError(f"st.run_q holds {run.shape[0]} points, {iv[4] + n} may be held")
     resume = iv[17] != NONE
-    m0, nt0 = (len(st.pend_i), len(st.pend_t)) if resume else (0, 0)
+    m0 = len(st.pend_i) if resume else 0
+    nt0 = len(st.pend_t) if resume else 0
     ops_i, val, tilts = _buffers(st, resume, m0 + 14 * n + 16, nt0 + n + 1, n)
     code, arg, ab, aux = ops_i[0], ops_i[1], ops_i[2], ops_i[3]
     cdef long long[::1] cv = code, av = arg, abv = ab, xv = aux
