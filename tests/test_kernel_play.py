@@ -32,7 +32,7 @@ ENTRIES: dict[str, Any] = {
     "_play_lo": play.lo,
     "_play_slope": play.slope,
     "_compensate_sided": play.compensate_sided,
-    "_settle_crossings": play.settle_crossings,
+    "_settle_motors": play.settle_motors,
     "_motor_sides": play.motor_sides,
 }
 
@@ -43,6 +43,13 @@ def _same(got: Any, want: Any) -> bool:
     return same_bits(got, want)
 
 
+def _settled(f: Any, args: tuple[Any, ...]) -> tuple[Any, ...]:
+    """settle_motors' answer by ``f`` on a copy of ``args``, and the commands it
+    updated in place (its 7th and 8th arguments)."""
+    mine = copy.deepcopy(args)
+    return (*f(*mine), mine[6], mine[7])
+
+
 #: what the chain calls through the kernel's names, and how often at least while
 #: the samples convert (the envelopes alone at the start). carried and creeps run
 #: inside windows.motor_turns on both paths (its recorded and generated inputs:
@@ -51,12 +58,13 @@ RECORDED = {
     "_play_lo": 1,
     "_play_slope": 10,
     "_compensate_sided": 10,
-    "_settle_crossings": 3,
+    "_settle_motors": 2,  # one call a chunk, every motor
     "_motor_sides": 10,
 }
 #: what the settle calls inside the kernel (recorded from the reference settle on
 #: the recorded settles' inputs), and how often at least
 INNER = {
+    "settle_crossings": 3,
     "follow_stretches": 3,
     "catch_up": 3,
     "lo_inv": 3,
@@ -72,8 +80,13 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
     calls = record(attr, tmp_path)
     assert len(calls) >= RECORDED[attr]
     for args in calls:
+        name = attr.removeprefix("_play_").removeprefix("_")
+        if attr == "_settle_motors":
+            # the commands are updated in place: compared with the answers
+            assert _same(_settled(getattr(_play, name), args), _settled(ENTRIES[attr], args))
+            continue
         want = ENTRIES[attr](*args)
-        got = getattr(_play, attr.removeprefix("_play_").removeprefix("_"))(*args)
+        got = getattr(_play, name)(*args)
         assert _same(tuple(got) if attr == "_settle_crossings" else got, want), attr
         if attr == "_motor_sides":
             assert got.dtype == want.dtype
@@ -83,7 +96,7 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
 def inner_calls(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[Any, ...]]]:
     """The calls the reference settle makes of the pieces, on the settles the
     sample programs make."""
-    settles = record("_settle_crossings", tmp_path_factory.mktemp("settle"))
+    settles = record("_settle_motors", tmp_path_factory.mktemp("settle"))
     calls: dict[str, list[tuple[Any, ...]]] = {k: [] for k in INNER}
     mp = pytest.MonkeyPatch()
     for name in INNER:
@@ -96,7 +109,7 @@ def inner_calls(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tupl
         mp.setattr(play, name, spy)
     try:
         for args in settles:
-            play.settle_crossings(*args)
+            play.settle_motors(*copy.deepcopy(args))
     finally:
         mp.undo()
     return calls
@@ -112,7 +125,7 @@ def test_sample_programs_settle_pieces_are_bit_identical(
     for args in calls:
         want = getattr(play, name)(*copy.deepcopy(args))
         got = getattr(_play, name)(*copy.deepcopy(args))
-        assert _same(got, want), name
+        assert _same(tuple(got) if name == "settle_crossings" else got, want), name
 
 
 def test_sample_programs_follow_their_parts_through_turning_points(
@@ -321,6 +334,90 @@ def test_generated_settles_reckon_crossings_again(monkeypatch: pytest.MonkeyPatc
     assert rounds > 10
 
 
+def _settle_motors_case(
+    tabs: list[play.PlayTable], seed: int, n: int, cubic: bool
+) -> tuple[Any, ...]:
+    """settle_motors' arguments: motors 0 and 2 of three (one table each) with up to
+    four crossings each in n points (interleaved by their ends, as the chain sorts
+    them), offsets carried from the chunk before or none."""
+    rng = np.random.default_rng(seed)
+    cols = np.array([0, 2])
+    mids = [0.5 * (t.breaks[0] + t.breaks[-1]) for t in tabs]
+    P_ideal = (
+        np.cumsum(rng.normal(0, 0.02, (3, n)), axis=1) + np.array([mids[0], 0, mids[1]])[:, None]
+    )
+    s_path = np.cumsum(np.where(rng.random(n) < 0.1, 0.0, rng.uniform(0, 0.3, n)))
+    dt = np.where(rng.random(n) < 0.05, 0.0, rng.uniform(0.001, 0.01, n))
+    ch = play.Chunk(
+        P_ideal,
+        rng.normal(0, 5, (3, n)),
+        rng.choice([-1.0, 1.0], (3, n)),
+        np.abs(rng.normal(0, 10, n)),
+        dt,
+        s_path,
+        np.cumsum(dt),
+        P_ideal[:, 0] + rng.normal(0, 0.01, 3),
+    )
+    rows = []
+    for col in cols:
+        k = min(n + 1, 2 * int(rng.integers(0, 5)))
+        cuts = np.sort(rng.choice(np.arange(-1, n), size=k, replace=False))
+        for b, e in zip(cuts[0::2], cuts[1::2], strict=False):
+            rows.append((e, b, col))
+    x = np.array(rows, dtype=int).reshape(-1, 3)
+    x = x[np.lexsort((x[:, 2], x[:, 1], x[:, 0]))]
+    contacts = play.Contacts(x[:, 0], x[:, 1], x[:, 2], np.abs(rng.normal(0, 1e-7, len(x))))
+    before = np.column_stack(
+        [mids + rng.normal(0, 1e-3, 2), mids + rng.normal(0, 1e-3, 2), rng.normal(0, 5, 2)]
+    )
+    carried_off = rng.normal(0, 2e-4, 2) * (rng.random(2) < 0.5)
+    P = P_ideal + rng.normal(0, 2e-3, (3, n))
+    V = ch.V_ideal + rng.normal(0, 0.1, (3, n))
+    share = float(rng.choice([5e-5, 5e-3]))
+    return (tuple(tabs), cols, ch, before, carried_off, contacts, P, V, cubic, share, 2.0)
+
+
+@settings(max_examples=150, deadline=None)
+@given(tables(), tables(), st.integers(0, 2**32 - 1), st.integers(1, 60), st.booleans())
+def test_generated_settle_motors_are_bit_identical(
+    t0: axiscomp.MotorTable, t2: axiscomp.MotorTable, seed: int, n: int, cubic: bool
+) -> None:
+    """Two motors through a chunk in one call: offsets carried in from the chunk
+    before, chains of crossings, none at all (the part followed through the
+    whole chunk), straight lines' windows put on their chords: the commands
+    (updated in place), the parts and the offsets carried on, to the bit."""
+    _play = compiled("_play")
+    args = _settle_motors_case([t0.flat, t2.flat], seed, n, cubic)
+    got, want = _settled(_play.settle_motors, args), _settled(play.settle_motors, args)
+    assert _same(got, want)
+    # the motor without play is left as it was
+    assert same_bits(got[2][1], args[6][1]) and same_bits(got[3][1], args[7][1])
+
+
+def test_generated_settle_motors_move_points_onto_chords() -> None:
+    """Straight lines: the settle of every motor puts points inside windows on the
+    window's chord (play.across, with V the chord's rate), the same in both."""
+    _play = compiled("_play")
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-50.0, 0.0, 50.0]), np.zeros(3), np.array([0.004, 0.002, 0.004]))
+    ).flat
+    moved = 0
+    for seed in range(30):
+        args = _settle_motors_case([t, t], seed, 40, False)
+        got, want = _settled(_play.settle_motors, args), _settled(play.settle_motors, args)
+        assert _same(got, want)
+        x = args[5]
+        inner = x.e - x.b - 1 > 0
+        for e, b, col in zip(x.e[inner], x.b[inner], x.col[inner], strict=True):
+            if b < 0:
+                continue
+            P, V, tt = got[2][col], got[3][col], args[2].t
+            # one rate, and the points on the line from the window's first command
+            on = np.allclose(P[b + 1 : e], P[b] + V[b + 1 : e] * (tt[b + 1 : e] - tt[b]), 0, 1e-9)
+            moved += int(np.all(V[b + 1 : e] == V[b + 1]) and on)
+    assert moved > 10
+
+
 @settings(max_examples=100, deadline=None)
 @given(tables(), st.integers(0, 2**32 - 1), st.integers(1, 60))
 def test_generated_catch_up_commands_are_bit_identical(
@@ -495,4 +592,40 @@ def test_compiled_play_refuses_arrays_of_the_wrong_length() -> None:
     with pytest.raises(ValueError, match=r"V must have one value a point, as P .* got 5"):
         _play.settle_crossings(
             t, mo, (0.0, 0.0, 0.0), e, e - 1, np.zeros(1), P, _short(V), True, 5e-5, 2.0
+        )
+
+
+def test_compiled_settle_motors_refuses_arrays_of_the_wrong_shape() -> None:
+    """settle_motors runs on pointers into its rows: commands it cannot update in
+    place, rows or columns of other lengths, a motor outside the rows are refused
+    with a ValueError saying what was expected."""
+    _play = compiled("_play")
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-50.0, 0.0, 50.0]), np.zeros(3), np.array([0.004, 0.002, 0.004]))
+    ).flat
+    args = list(_settle_motors_case([t, t], 3, 12, True))
+
+    def refused(i: int, value: Any, match: str) -> None:
+        bad = copy.deepcopy(args)
+        bad[i] = value
+        with pytest.raises(ValueError, match=match):
+            _play.settle_motors(*bad)
+
+    P, ch, x = args[6], args[2], args[5]
+    refused(6, np.asfortranarray(P), r"P must be a writeable C-ordered float array")
+    refused(7, args[7].astype(np.float32), r"V must be a writeable C-ordered float array")
+    refused(7, args[7][:, :-1].copy(), r"V must have one row a motor .* \(3, 12\), got \(3, 11\)")
+    refused(2, ch._replace(side=ch.side[:2]), r"side must have one row a motor")
+    refused(2, ch._replace(dt=ch.dt[:-1]), r"dt must have one value a point, as P \(12 values\)")
+    refused(2, ch._replace(P_before=ch.P_before[:2]), r"P_before must have one value a motor")
+    refused(1, np.array([0, 3]), r"cols must be rows of P \(0 to 2\), got 3")
+    refused(0, (t,), r"tables must have one value a motor, as cols \(2 values\), got 1")
+    refused(4, np.zeros(1), r"carried_off must have one value a motor")
+    refused(5, x._replace(short=x.short[:-1]), r"short must have one value a crossing")
+    # no crossing: the reference's e.max() has no answer, the twin says so
+    mo = _motion(np.random.default_rng(1), 6)
+    none = np.zeros(0, dtype=int)
+    with pytest.raises(ValueError, match=r"e must have a crossing at least"):
+        _play.settle_crossings(
+            t, mo, (0.0, 0.0, 0.0), none, none, np.zeros(0), mo.P_ideal, mo.V_ideal, True, 5e-5, 2.0
         )

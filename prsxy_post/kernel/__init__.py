@@ -467,6 +467,31 @@ def settle_crossings(
     return out
 
 
+_settle_motors = _play_kernel.settle_motors
+
+
+def settle_motors(
+    tables: tuple[play.PlayTable, ...],
+    cols: np.ndarray,
+    ch: play.Chunk,
+    before: np.ndarray,
+    carried_off: np.ndarray,
+    x: play.Contacts,
+    P: np.ndarray,
+    V: np.ndarray,
+    cubic: bool,
+    share: float,
+    hurry: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every motor with play settled through a chunk in one call, the commands ``P``,
+    ``V`` (R, n) (C order, float) updated in place: :func:`play.settle_motors`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _settle_motors(
+        tables, cols, ch, before, carried_off, x, P, V, cubic, share, hurry
+    )
+    return out
+
+
 _carried = _play_kernel.carried
 
 

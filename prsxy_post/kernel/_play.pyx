@@ -1067,24 +1067,15 @@ cdef struct Crossings:
     Py_ssize_t c
 
 
-def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double share,
-                     double hurry):
-    """The crossings ended where the parts stand: :func:`play.settle_crossings`."""
-    cdef _Table tb = _table(t)
-    cdef const Tab* T = &tb.tab
-    cdef _Motion mv = _Motion(mo)
-    cdef const double[::1] shv = _vec(shortfall)
-    P_a = np.array(P, dtype=np.float64)
-    V_a = np.array(V, dtype=np.float64)
-    cdef double[::1] Pv = P_a
-    cdef double[::1] Vv = V_a
-    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
-    cdef const long[::1] bv = np.ascontiguousarray(b, dtype=np.int_)
-    cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0], i, k, upto = 0, w
-    cdef double y0 = before[0], P0 = before[1], V0 = before[2], carry = NAN, cr
-    _motion_lengths(mo, n)
-    _lengths("one value a point, as P", n, V=len(Vv))
-    _lengths("one value a crossing, as e", c, b=len(bv), shortfall=len(shv))
+cdef int _settle_core(const Tab* T, const Mo* mo, double y0, double P0, double V0,
+                      const long* ev, const long* bv, const double* shv, Py_ssize_t c,
+                      double* Pv, double* Vv, bint cubic, double share, double hurry,
+                      double* res) except -1:
+    """:func:`play.settle_crossings` for c >= 1 crossings, the commands ``Pv``, ``Vv``
+    (mo.n,) updated in place: ``res`` the part, the command's position and
+    velocity at the last contact and the offset carried (NaN: none)."""
+    cdef Py_ssize_t n = mo.n, i, k, upto = 0, w
+    cdef double carry = NAN, cr
     for i in range(c):
         if ev[i] + 1 > upto:
             upto = ev[i] + 1
@@ -1115,24 +1106,23 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
     cdef long one_step = upto
     cdef Crossings X
     try:
-        _follow_core(T, &y0, &P0, &V0, &one_step, 1, &Pv[0], &Vv[0], mv.mo.dt, upto, cubic,
-                     y_pt, lo_, hi_)
+        _follow_core(T, &y0, &P0, &V0, &one_step, 1, Pv, Vv, mo.dt, upto, cubic, y_pt, lo_,
+                     hi_)
         for i in range(c):
             at_beg[i] = y_pt[bv[i] if bv[i] > 0 else 0] if bv[i] >= 0 else y0
             cuts[2 * i] = bv[i] + 1 if bv[i] + 1 > 0 else 0
             cuts[2 * i + 1] = ev[i] + 1
-            u[i] = mv.mo.side[ev[i]] > 0
+            u[i] = mo.side[ev[i]] > 0
             stops[i] = bv[i + 1] if i + 1 < c else n
             made[i] = Pv[ev[i]]
         _extreme(lo_, hi_, upto, cuts, at_beg, u, y_s, c)
-        _contact_core(T, y_s, u, &shv[0], c, ct)
+        _contact_core(T, y_s, u, shv, c, ct)
         for i in range(c):
             Pv[ev[i]] = ct[i]
-            off[i] = y_s[i] - mv.mo.P_ideal[ev[i]]
-        memcpy(P_made, &Pv[0], n * sizeof(double))
-        memcpy(V_made, &Vv[0], n * sizeof(double))
-        _commands_core(T, &mv.mo, off, &ev[0], stops, c, &Pv[0], &Vv[0], share, hurry, left,
-                       &cr)
+            off[i] = y_s[i] - mo.P_ideal[ev[i]]
+        memcpy(P_made, Pv, n * sizeof(double))
+        memcpy(V_made, Vv, n * sizeof(double))
+        _commands_core(T, mo, off, ev, stops, c, Pv, Vv, share, hurry, left, &cr)
         if cr == cr:
             carry = cr
         # a part still off where the next crossing begins takes that offset into it
@@ -1141,11 +1131,11 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
             if left[i - 1] != 0.0:
                 todo[w] = i
                 w += 1
-        X.e, X.b, X.u, X.shortfall, X.stops = &ev[0], &bv[0], u, &shv[0], stops
+        X.e, X.b, X.u, X.shortfall, X.stops = ev, bv, u, shv, stops
         X.made, X.P_made, X.V_made, X.c = made, P_made, V_made, c
         while w:
-            w = _reckon_again(T, &mv.mo, &X, todo, w, y_s, left, &Pv[0], &Vv[0], cubic, share,
-                              hurry, &cr, nxt)
+            w = _reckon_again(T, mo, &X, todo, w, y_s, left, Pv, Vv, cubic, share, hurry, &cr,
+                              nxt)
             if cr == cr:
                 carry = cr
             todo, nxt = nxt, todo
@@ -1153,11 +1143,39 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
         for i in range(c):
             if ev[i] > ev[k]:
                 k = i
-        return _pure.Settled(P_a, V_a, y_s[k], Pv[upto - 1], Vv[upto - 1], carry)
+        res[0] = y_s[k]
+        res[1] = Pv[upto - 1]
+        res[2] = Vv[upto - 1]
+        res[3] = carry
+        return 0
     finally:
         PyMem_Free(buf)
         PyMem_Free(ibuf)
         PyMem_Free(u)
+
+
+def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double share,
+                     double hurry):
+    """The crossings ended where the parts stand: :func:`play.settle_crossings`."""
+    cdef _Table tb = _table(t)
+    cdef _Motion mv = _Motion(mo)
+    cdef const double[::1] shv = _vec(shortfall)
+    P_a = np.array(P, dtype=np.float64)
+    V_a = np.array(V, dtype=np.float64)
+    cdef double[::1] Pv = P_a
+    cdef double[::1] Vv = V_a
+    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
+    cdef const long[::1] bv = np.ascontiguousarray(b, dtype=np.int_)
+    cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0]
+    cdef double res[4]
+    _motion_lengths(mo, n)
+    _lengths("one value a point, as P", n, V=len(Vv))
+    _lengths("one value a crossing, as e", c, b=len(bv), shortfall=len(shv))
+    if c == 0:
+        raise ValueError("e must have a crossing at least (the reference's e.max()), got none")
+    _settle_core(&tb.tab, &mv.mo, before[0], before[1], before[2], &ev[0], &bv[0], &shv[0], c,
+                 &Pv[0], &Vv[0], cubic, share, hurry, res)
+    return _pure.Settled(P_a, V_a, res[0], res[1], res[2], res[3])
 
 
 cdef Py_ssize_t _reckon_again(const Tab* T, const Mo* mo, const Crossings* X, const long* todo,
@@ -1261,6 +1279,180 @@ cdef Py_ssize_t _reckon_again(const Tab* T, const Mo* mo, const Crossings* X, co
         PyMem_Free(span)
         PyMem_Free(buf)
         PyMem_Free(uu)
+
+
+cdef int _across(const double* t, const long* e, const long* b, Py_ssize_t c, double P0,
+                 double* P, double* V) except -1:
+    """:func:`play.across` on :func:`play.across_rows`' rows of the crossings (c,):
+    every window's first and last command taken before any point inside is moved
+    (numpy's gather, then its scatter, in the rows' order)."""
+    cdef Py_ssize_t i, j, b0
+    cdef double* buf = <double*>PyMem_Malloc((3 * c + 1) * sizeof(double))
+    if buf == NULL:
+        raise MemoryError()
+    cdef double* P_b = buf
+    cdef double* rate = buf + c
+    cdef double* t_b = buf + 2 * c
+    for i in range(c):
+        if e[i] - b[i] - 1 > 0:
+            b0 = b[i] if b[i] > 0 else 0
+            t_b[i] = t[b0] if b[i] >= 0 else 0.0
+            P_b[i] = P[b0] if b[i] >= 0 else P0
+            rate[i] = (P[e[i]] - P_b[i]) / (t[e[i]] - t_b[i])
+    for i in range(c):
+        if e[i] - b[i] - 1 > 0:
+            for j in range(b[i] + 1, e[i]):
+                P[j] = P_b[i] + rate[i] * (t[j] - t_b[i])
+                V[j] = rate[i]
+    PyMem_Free(buf)
+    return 0
+
+
+cdef struct Chunk:
+    # a chunk's columns (play.Chunk), the motors' as rows of n
+    const double* P_ideal
+    const double* V_ideal
+    const double* side
+    const double* speed
+    const double* dt
+    const double* s_path
+    const double* t
+    const double* P_before
+    Py_ssize_t n
+
+
+cdef int _settle_one(const Tab* T, const Chunk* ch, long col, const double* before,
+                     double carried_off, const long* e, const long* b, const double* sh,
+                     Py_ssize_t c, double* Pv, double* Vv, bint cubic, double share,
+                     double hurry, double* dP, double* out) except -1:
+    """:func:`play._settle_motor` for motor ``col`` (its c crossings ``e``, ``b``,
+    ``sh``; its commands ``Pv``, ``Vv`` (n,) in place; ``dP`` (n,) work space):
+    ``out`` the part at the chunk's end and the offset carried (NaN: none)."""
+    cdef Py_ssize_t n = ch.n, j, start = 0
+    cdef Mo mo
+    cdef double carry = NAN, cr, off0 = carried_off, left, y0, P0, V0
+    cdef long st = -1, sp, length
+    cdef double res[4]
+    mo.P_ideal = ch.P_ideal + col * n
+    mo.V_ideal = ch.V_ideal + col * n
+    mo.side = ch.side + col * n
+    mo.speed, mo.dt, mo.s_path, mo.dP, mo.n = ch.speed, ch.dt, ch.s_path, dP, n
+    if n:
+        dP[0] = mo.P_ideal[0] - ch.P_before[col]
+    for j in range(1, n):
+        dP[j] = mo.P_ideal[j] - mo.P_ideal[j - 1]
+    if off0 != 0.0:
+        # what it leaves where the first crossing begins, the follow below sees
+        sp = b[0] if c else n
+        _commands_core(T, &mo, &off0, &st, &sp, 1, Pv, Vv, share, hurry, &left, &cr)
+        carry = cr
+    y0, P0, V0 = before[0], before[1], before[2]
+    if c:
+        if not cubic:
+            _across(ch.t, e, b, c, P0, Pv, Vv)
+        _settle_core(T, &mo, y0, P0, V0, e, b, sh, c, Pv, Vv, cubic, share, hurry, res)
+        if res[3] == res[3]:
+            carry = res[3]
+        if not cubic:
+            _across(ch.t, e, b, c, P0, Pv, Vv)
+        y0, P0, V0 = res[0], res[1], res[2]
+        # from the last contact on, the corrected commands carry the part
+        for j in range(c):
+            if e[j] + 1 > start:
+                start = e[j] + 1
+    if start < n:
+        length = n - start
+        buf = <double*>PyMem_Malloc((3 * length + 1) * sizeof(double))
+        if buf == NULL:
+            raise MemoryError()
+        try:
+            _follow_core(T, &y0, &P0, &V0, &length, 1, Pv + start, Vv + start, ch.dt + start,
+                         length, cubic, buf, buf + length, buf + 2 * length)
+            y0 = buf[length - 1]
+        finally:
+            PyMem_Free(buf)
+    out[0] = y0
+    out[1] = carry
+    return 0
+
+
+def _rows(a, str name, Py_ssize_t r, Py_ssize_t n):
+    """``a`` as a C-ordered (r, n) float array (refused otherwise)."""
+    out = np.ascontiguousarray(a, dtype=np.float64)
+    if out.shape != (r, n):
+        raise ValueError(f"{name} must have one row a motor of one value a point ({r}, {n}), "
+                         f"got {out.shape}")
+    return out
+
+
+def settle_motors(tables, cols, ch, before, carried_off, x, P, V, bint cubic, double share,
+                  double hurry):
+    """Every motor with play through a chunk: :func:`play.settle_motors` (``P``,
+    ``V`` C-ordered float arrays (R, n), updated in place)."""
+    for name, a in (("P", P), ("V", V)):
+        if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 2
+                and a.flags.c_contiguous and a.flags.writeable):
+            raise ValueError(f"{name} must be a writeable C-ordered float array (motors, "
+                             f"points), updated in place; got {type(a).__name__}")
+    cdef double[:, ::1] Pm = P
+    cdef double[:, ::1] Vm = V
+    cdef Py_ssize_t R = Pm.shape[0], n = Pm.shape[1], nc, m, i, k, c
+    _rows(V, "V", R, n)
+    keep = [_rows(a, f, R, n) for f, a in zip(("P_ideal", "V_ideal", "side"), ch[:3])]
+    keep += [_vec(a) for a in ch[3:]]
+    for f, a in zip(ch._fields[3:7], keep[3:7]):
+        _lengths("one value a point, as P", n, **{f: len(a)})
+    _lengths("one value a motor, as P's rows", R, P_before=len(keep[7]))
+    cdef const long[::1] cv = np.ascontiguousarray(cols, dtype=np.int_)
+    nc = cv.shape[0]
+    cdef const double[:, ::1] bf = np.ascontiguousarray(before, dtype=np.float64).reshape(-1, 3)
+    cdef const double[::1] co = _vec(carried_off)
+    _lengths("one value a motor, as cols", nc, tables=len(tables), before=bf.shape[0],
+             carried_off=len(co))
+    for i in range(nc):
+        if not 0 <= cv[i] < R:
+            raise ValueError(f"cols must be rows of P (0 to {R - 1}), got {cv[i]}")
+    cdef const long[::1] ev = np.ascontiguousarray(x.e, dtype=np.int_)
+    cdef const long[::1] bv = np.ascontiguousarray(x.b, dtype=np.int_)
+    cdef const long[::1] xc = np.ascontiguousarray(x.col, dtype=np.int_)
+    cdef const double[::1] sh = _vec(x.short)
+    m = ev.shape[0]
+    _lengths("one value a crossing, as e", m, b=len(bv), col=len(xc), short=len(sh))
+    cdef Chunk C
+    cdef const double* ptr[8]
+    cdef const double[::1] flat
+    for k in range(8):
+        flat = keep[k].reshape(-1)
+        ptr[k] = &flat[0] if flat.shape[0] else NULL
+    C.P_ideal, C.V_ideal, C.side, C.speed = ptr[0], ptr[1], ptr[2], ptr[3]
+    C.dt, C.s_path, C.t, C.P_before, C.n = ptr[4], ptr[5], ptr[6], ptr[7], n
+    y_a, carry_a = np.empty(nc), np.empty(nc)
+    cdef double[::1] ya = y_a
+    cdef double[::1] ca = carry_a
+    cdef double out[2]
+    cdef _Table tb
+    cdef char* mem = <char*>PyMem_Malloc((n + m + 1) * sizeof(double) + (2 * m + 1) * sizeof(long))
+    if mem == NULL:
+        raise MemoryError()
+    cdef double* dP = <double*>mem
+    cdef double* ms = dP + n
+    cdef long* me = <long*>(ms + m + 1)
+    cdef long* mb = me + m
+    try:
+        for i in range(nc):
+            tb = _table(tables[i])
+            c = 0
+            for k in range(m):  # the motor's own crossings, in their order
+                if xc[k] == cv[i]:
+                    me[c], mb[c], ms[c] = ev[k], bv[k], sh[k]
+                    c += 1
+            _settle_one(&tb.tab, &C, cv[i], &bf[i, 0], co[i], me, mb, ms, c,
+                        &Pm[cv[i], 0] if n else NULL, &Vm[cv[i], 0] if n else NULL, cubic,
+                        share, hurry, dP, out)
+            ya[i], ca[i] = out[0], out[1]
+    finally:
+        PyMem_Free(mem)
+    return y_a, carry_a
 
 
 def carried(sg, side):
