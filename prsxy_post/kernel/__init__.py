@@ -34,7 +34,7 @@ from types import ModuleType
 
 import numpy as np
 
-from . import fk, gwrite, ik, legendre, path, play, timelaw
+from . import fk, gwrite, ik, legendre, path, play, timelaw, windows
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
@@ -540,7 +540,6 @@ _crossing_windows = _RUN["windows"].crossing_windows
 _velocity_roots = _RUN["windows"].velocity_roots
 _turning_points = _RUN["windows"].turning_points
 _dip_roots = _RUN["windows"].dip_roots
-_motor_turns = _RUN["windows"].motor_turns
 _corner_blends = _RUN["windows"].corner_blends
 
 
@@ -562,42 +561,26 @@ def corner_blends(
     return out
 
 
-_motor_dips = _RUN["windows"].motor_dips
+_motor_reversals = _RUN["windows"].motor_reversals
 
 
-def motor_turns(
+def motor_reversals(
     V: np.ndarray,
     P: np.ndarray,
     rest: np.ndarray,
-    side: int,
-    ref: float,
+    cols: np.ndarray,
+    side: np.ndarray,
+    ref: np.ndarray,
     drift: float,
     off: int,
     eps: float,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
-    """A motor's reversals in a chunk and their kinds: :func:`windows.motor_turns`,
-    compiled when :data:`COMPILED`."""
-    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float] = _motor_turns(
-        V, P, rest, side, ref, drift, off, eps
-    )
-    return out
-
-
-def motor_dips(
-    P: np.ndarray,
-    V: np.ndarray,
     h: np.ndarray,
-    sg: np.ndarray,
-    came: np.ndarray,
-    off: int,
     tol: float,
-    sets_off: bool,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """A motor's dips or settings-off back in a chunk: :func:`windows.motor_dips`,
-    compiled when :data:`COMPILED`."""
-    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _motor_dips(
-        P, V, h, sg, came, off, tol, sets_off
-    )
+) -> windows.Reversals:
+    """Every motor's reversals and their kinds, its dips and settings-off back in a
+    chunk, in one call: :func:`windows.motor_reversals`, compiled when
+    :data:`COMPILED`."""
+    out: windows.Reversals = _motor_reversals(V, P, rest, cols, side, ref, drift, off, eps, h, tol)
     return out
 
 
