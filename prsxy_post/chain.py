@@ -813,15 +813,16 @@ class Pipeline:
             every = len(self.table_cols) == pc.P_ideal.shape[1]
             P_cmd = np.empty_like(by_motor[0]) if every else by_motor[0].copy()
             V_cmd = np.empty_like(by_motor[1]) if every else by_motor[1].copy()
-            # the kernel on each motor's contiguous rows (what axiscomp.compensate_sided
-            # and MotorTable.slope do, without their conversions and reshapes)
-            for col, table in self.table_cols:
-                P_cmd[col] = kernel.compensate_sided(table.flat, by_motor[0][col], by_motor[2][col])
-                np.divide(
-                    by_motor[1][col],
-                    kernel.play_slope(table.flat, P_cmd[col], by_motor[2][col]),
-                    out=V_cmd[col],
-                )
+            # the kernel on the motors' contiguous rows, every motor in one call (what
+            # axiscomp.compensate_sided and MotorTable.slope do, without their
+            # conversions and reshapes)
+            kernel.table_commands(
+                tuple(table.flat for _, table in self.table_cols),
+                np.array([col for col, _ in self.table_cols], dtype=int),
+                *by_motor,
+                P_cmd,
+                V_cmd,
+            )
             if self.play_cols:
                 self._settle(pc, by_motor, contacts, P_cmd, V_cmd)
             pc.P_cmd, pc.V_cmd = np.ascontiguousarray(P_cmd.T), np.ascontiguousarray(V_cmd.T)

@@ -30,9 +30,8 @@ from .kernel_cases import compiled, record, same_bits
 #: the kernel's entry points (prsxy_post.kernel's names) and their reference
 ENTRIES: dict[str, Any] = {
     "_play_lo": play.lo,
-    "_play_slope": play.slope,
-    "_compensate_sided": play.compensate_sided,
     "_settle_motors": play.settle_motors,
+    "_table_commands": play.table_commands,
     "_motor_sides": play.motor_sides,
 }
 
@@ -45,20 +44,24 @@ def _same(got: Any, want: Any) -> bool:
 
 def _settled(f: Any, args: tuple[Any, ...]) -> tuple[Any, ...]:
     """settle_motors' answer by ``f`` on a copy of ``args``, and the commands it
-    updated in place (its 7th and 8th arguments)."""
+    updated in place (its 7th and 8th arguments); table_commands' commands (its
+    last two)."""
     mine = copy.deepcopy(args)
-    return (*f(*mine), mine[6], mine[7])
+    got = f(*mine)
+    return (mine[5], mine[6]) if got is None else (*got, mine[6], mine[7])
 
 
 #: what the chain calls through the kernel's names, and how often at least while
-#: the samples convert (the envelopes alone at the start). carried and creeps run
-#: inside windows.motor_turns on both paths (its recorded and generated inputs:
-#: tests/test_kernel_windows.py), and on generated inputs here
+#: the samples convert (the envelopes alone at the start; the commands through the
+#: tables, table_commands, are compensate_sided and slope motor by motor in the
+#: reference: the settle's pieces below and the generated inputs test those).
+#: carried and creeps run inside windows.motor_reversals on both paths (its
+#: recorded and generated inputs: tests/test_kernel_windows.py), and on generated
+#: inputs here
 RECORDED = {
     "_play_lo": 1,
-    "_play_slope": 10,
-    "_compensate_sided": 10,
     "_settle_motors": 2,  # one call a chunk, every motor
+    "_table_commands": 2,
     "_motor_sides": 10,
 }
 #: what the settle calls inside the kernel (recorded from the reference settle on
@@ -81,7 +84,7 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
     assert len(calls) >= RECORDED[attr]
     for args in calls:
         name = attr.removeprefix("_play_").removeprefix("_")
-        if attr == "_settle_motors":
+        if attr in ("_settle_motors", "_table_commands"):
             # the commands are updated in place: compared with the answers
             assert _same(_settled(getattr(_play, name), args), _settled(ENTRIES[attr], args))
             continue
@@ -629,3 +632,46 @@ def test_compiled_settle_motors_refuses_arrays_of_the_wrong_shape() -> None:
         _play.settle_crossings(
             t, mo, (0.0, 0.0, 0.0), none, none, np.zeros(0), mo.P_ideal, mo.V_ideal, True, 5e-5, 2.0
         )
+
+
+@settings(max_examples=150, deadline=None)
+@given(tables(), tables(), st.integers(0, 2**32 - 1), st.integers(0, 80))
+def test_generated_table_commands_are_bit_identical(
+    t0: axiscomp.MotorTable, t2: axiscomp.MotorTable, seed: int, n: int
+) -> None:
+    """Motors 0 and 2 of three through their tables in one call (periodic terms or
+    none, positions inside and outside the tables, at their breaks, both sides):
+    the commands and their rates to the bit, the other motor's rows untouched."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    P_ideal = np.empty((3, n))
+    for row, t in ((0, t0.flat), (1, t0.flat), (2, t2.flat)):
+        P_ideal[row] = rng.uniform(t.breaks[0] - 5, t.breaks[-1] + 5, n)
+        k = rng.random(n) < 0.1
+        P_ideal[row, k] = rng.choice(t.breaks, int(k.sum()))
+    V_ideal = rng.normal(0, 20, (3, n))
+    side = rng.choice([-1.0, 1.0], (3, n))
+    P, V = rng.normal(0, 1, (3, n)), rng.normal(0, 1, (3, n))
+    args = ((t0.flat, t2.flat), np.array([0, 2]), P_ideal, V_ideal, side, P, V)
+    got, want = _settled(_play.table_commands, args), _settled(play.table_commands, args)
+    assert _same(got, want)
+    assert same_bits(got[0][1], P[1]) and same_bits(got[1][1], V[1])
+    # the rows are the per-motor kernels' (compensate_sided, then V over the slope)
+    assert same_bits(got[0][2], _play.compensate_sided(t2.flat, P_ideal[2], side[2]))
+
+
+def test_compiled_table_commands_refuses_arrays_of_the_wrong_shape() -> None:
+    _play = compiled("_play")
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-50.0, 0.0, 50.0]), np.zeros(3), np.array([0.004, 0.002, 0.004]))
+    ).flat
+    rows = np.zeros((3, 6))
+    cols = np.array([0, 2])
+    with pytest.raises(ValueError, match=r"P must be a writeable C-ordered float array"):
+        _play.table_commands((t, t), cols, rows, rows, rows, rows.T.copy().T, rows.copy())
+    with pytest.raises(ValueError, match=r"side must have one row a motor .* got \(3, 5\)"):
+        _play.table_commands((t, t), cols, rows, rows, rows[:, :5], rows.copy(), rows.copy())
+    with pytest.raises(ValueError, match=r"tables must have one value a motor, as cols"):
+        _play.table_commands((t,), cols, rows, rows, rows, rows.copy(), rows.copy())
+    with pytest.raises(ValueError, match=r"cols must be rows of P \(0 to 2\), got 5"):
+        _play.table_commands((t, t), np.array([0, 5]), rows, rows, rows, rows.copy(), rows.copy())

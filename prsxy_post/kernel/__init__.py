@@ -381,6 +381,24 @@ def compensate_sided(t: play.PlayTable, target: np.ndarray, side: np.ndarray) ->
     return out
 
 
+_table_commands = _play_kernel.table_commands
+
+
+def table_commands(
+    tables: tuple[play.PlayTable, ...],
+    cols: np.ndarray,
+    P_ideal: np.ndarray,
+    V_ideal: np.ndarray,
+    side: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+) -> None:
+    """Every motor's commands through its table in one call, into the rows of ``P``,
+    ``V`` (R, n) (C order, float): :func:`play.table_commands`, compiled when
+    :data:`COMPILED`."""
+    _table_commands(tables, cols, P_ideal, V_ideal, side, P, V)
+
+
 def clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The play model's scan (n,): :func:`play.clamp_scan`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _clamp_scan(lo, hi)

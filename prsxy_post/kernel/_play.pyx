@@ -348,26 +348,32 @@ def hi_inv(t, target):
     return _inv(t, target, False)
 
 
+cdef inline double _slope1(const Tab* T, double pi_, double sdi,
+                           Py_ssize_t* lo_i) noexcept nogil:
+    """:func:`play.slope` at one position ``pi_`` on side ``sdi``, its interval
+    searched from ``lo_i`` (the row before's) and left there."""
+    cdef Py_ssize_t k
+    cdef double v = 1.0, w
+    if T.nb > 1:
+        if pi_ >= T.breaks[0] and pi_ < T.breaks[T.nb - 1]:
+            # breaks[lo_i] <= p < breaks[lo_i + 1], unique: searched from the
+            # row before's
+            lo_i[0] = _find(pi_, T.breaks, T.nb, lo_i[0])
+            v = v + (T.s_lo[lo_i[0]] if sdi > 0 else T.s_hi[lo_i[0]])
+        else:
+            v = v + 0.0
+    for k in range(T.nc):
+        w = TWO_PI / T.period[k]
+        v = v + T.amp[k] * w * cos(w * pi_ + T.phase[k])
+    return v
+
+
 cdef void _slope_core(const Tab* T, const double* x, const double* sd, Py_ssize_t n,
                       double* o) noexcept nogil:
     """:func:`play.slope` of ``x`` (n,) on sides ``sd`` (n,) into ``o``."""
-    cdef Py_ssize_t i, k, lo_i = -1
-    cdef double v, pi_, w
+    cdef Py_ssize_t i, lo_i = -1
     for i in range(n):
-        v = 1.0
-        pi_ = x[i]
-        if T.nb > 1:
-            if pi_ >= T.breaks[0] and pi_ < T.breaks[T.nb - 1]:
-                # breaks[lo_i] <= p < breaks[lo_i + 1], unique: searched from the
-                # row before's
-                lo_i = _find(pi_, T.breaks, T.nb, lo_i)
-                v = v + (T.s_lo[lo_i] if sd[i] > 0 else T.s_hi[lo_i])
-            else:
-                v = v + 0.0
-        for k in range(T.nc):
-            w = TWO_PI / T.period[k]
-            v = v + T.amp[k] * w * cos(w * pi_ + T.phase[k])
-        o[i] = v
+        o[i] = _slope1(T, x[i], sd[i], &lo_i)
 
 
 def slope(t, p, side):
@@ -443,6 +449,63 @@ def compensate_sided(t, target, side):
     if n:
         _sided_core(&tb.tab, &x[0], &sd[0], n, &o[0])
     return out
+
+
+cdef int _commands_row(const Tab* T, const double* x, const double* vi, const double* sd,
+                       Py_ssize_t n, double* Po, double* Vo) except -1:
+    """:func:`play.table_commands` for one motor: ``Po`` = compensate_sided of ``x``
+    (n,) on sides ``sd``, ``Vo`` = ``vi`` / the slope there. Without periodic terms
+    in one pass (each value is its own); with them the inversion first, over the
+    whole row (the reference's iteration runs over the array)."""
+    cdef Py_ssize_t i, g_up = -1, g_dn = -1, lo_i = -1
+    if T.nc == 0:
+        for i in range(n):
+            if sd[i] > 0:
+                Po[i] = _invert_g(x[i], T.lo_vals, T.breaks, T.lo_err, T.si_lo, T.nb, &g_up)
+            else:
+                Po[i] = _invert_g(x[i], T.hi_vals, T.breaks, T.hi_err, T.si_hi, T.nb, &g_dn)
+            Vo[i] = vi[i] / _slope1(T, Po[i], sd[i], &lo_i)
+        return 0
+    _sided_core(T, x, sd, n, Po)
+    for i in range(n):
+        Vo[i] = vi[i] / _slope1(T, Po[i], sd[i], &lo_i)
+    return 0
+
+
+def _in_place(a, str name):
+    """Refuse an array the kernel cannot update in place as (motors, points)."""
+    if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 2
+            and a.flags.c_contiguous and a.flags.writeable):
+        raise ValueError(f"{name} must be a writeable C-ordered float array (motors, "
+                         f"points), updated in place; got {type(a).__name__}")
+
+
+def table_commands(tables, cols, P_ideal, V_ideal, side, P, V):
+    """The commands of the motors ``cols`` through their tables:
+    :func:`play.table_commands` (``P``, ``V`` C-ordered float arrays (R, n), their
+    rows ``cols`` written in place)."""
+    _in_place(P, "P")
+    _in_place(V, "V")
+    cdef double[:, ::1] Pm = P
+    cdef double[:, ::1] Vm = V
+    cdef Py_ssize_t R = Pm.shape[0], n = Pm.shape[1], i, nc
+    _rows(V, "V", R, n)
+    cdef const double[:, ::1] x = _rows(P_ideal, "P_ideal", R, n)
+    cdef const double[:, ::1] vi = _rows(V_ideal, "V_ideal", R, n)
+    cdef const double[:, ::1] sd = _rows(side, "side", R, n)
+    cdef const long[::1] cv = np.ascontiguousarray(cols, dtype=np.int_)
+    nc = cv.shape[0]
+    _lengths("one value a motor, as cols", nc, tables=len(tables))
+    for i in range(nc):
+        if not 0 <= cv[i] < R:
+            raise ValueError(f"cols must be rows of P (0 to {R - 1}), got {cv[i]}")
+    cdef _Table tb
+    if n == 0:
+        return
+    for i in range(nc):
+        tb = _table(tables[i])
+        _commands_row(&tb.tab, &x[cv[i], 0], &vi[cv[i], 0], &sd[cv[i], 0], n, &Pm[cv[i], 0],
+                      &Vm[cv[i], 0])
 
 
 def clamp_scan(lo, hi):
@@ -1389,11 +1452,8 @@ def settle_motors(tables, cols, ch, before, carried_off, x, P, V, bint cubic, do
                   double hurry):
     """Every motor with play through a chunk: :func:`play.settle_motors` (``P``,
     ``V`` C-ordered float arrays (R, n), updated in place)."""
-    for name, a in (("P", P), ("V", V)):
-        if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 2
-                and a.flags.c_contiguous and a.flags.writeable):
-            raise ValueError(f"{name} must be a writeable C-ordered float array (motors, "
-                             f"points), updated in place; got {type(a).__name__}")
+    _in_place(P, "P")
+    _in_place(V, "V")
     cdef double[:, ::1] Pm = P
     cdef double[:, ::1] Vm = V
     cdef Py_ssize_t R = Pm.shape[0], n = Pm.shape[1], nc, m, i, k, c

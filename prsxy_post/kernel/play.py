@@ -160,6 +160,26 @@ def compensate_sided(t: PlayTable, target: np.ndarray, side: np.ndarray) -> np.n
     return out
 
 
+def table_commands(
+    tables: tuple[PlayTable, ...],
+    cols: np.ndarray,
+    P_ideal: np.ndarray,
+    V_ideal: np.ndarray,
+    side: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+) -> None:
+    """The commands of the motors ``cols`` (c,) through their tables (``tables``,
+    one a motor), a motor a row: P[col] = :func:`compensate_sided` of its wanted
+    positions ``P_ideal[col]`` on its sides ``side[col]``, V[col] = its wanted
+    velocities ``V_ideal[col]`` over the :func:`slope` there (the tables' dP/dp,
+    the commands' rate). ``P``, ``V`` (R, n) [mm, mm/s] are written in place, the
+    rows of ``cols`` only."""
+    for t, col in zip(tables, cols.tolist(), strict=True):
+        P[col] = compensate_sided(t, P_ideal[col], side[col])
+        np.divide(V_ideal[col], slope(t, P[col], side[col]), out=V[col])
+
+
 def clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The play model y_0 = lo_0, y_k = min(max(y_(k−1), lo_k), hi_k) for (n,)
     envelopes.
