@@ -1427,25 +1427,27 @@ def sides_by_motor(
     by_col = np.lexsort((e_all, ins.w_col))
     w_cols = ins.w_col[by_col]
     lo, hi = np.searchsorted(w_cols, cols, "left"), np.searchsorted(w_cols, cols, "right")
-    for i, col in enumerate(cols):
-        mine = by_col[lo[i] : hi[i]]
-        here = s_col == col
-        # the points after a window's end inside its step (another motor's window,
-        # a blend's point before a corner) are on the new side: where the path turns
-        # a corner the cubic's root is before the corner, the plan's velocity turns
-        # at it (kernel.play.motor_sides)
-        out[col] = kernel.motor_sides(
-            V_cols[col],
-            resting,
-            f_all[mine],
-            e_all[mine],
-            ins.w_new[mine],
-            last_row[mine],
-            s_first[here],
-            s_new[here],
-            int(side[col]),
-            V_EPS,
-        )
+    # the points after a window's end inside its step (another motor's window, a
+    # blend's point before a corner) are on the new side: where the path turns a
+    # corner the cubic's root is before the corner, the plan's velocity turns at
+    # it (kernel.play.motor_sides); every motor in one call
+    kernel.motors_sides(
+        V_cols,
+        resting,
+        np.array(cols, dtype=int),
+        side,
+        f_all[by_col],
+        e_all[by_col],
+        ins.w_new[by_col],
+        last_row[by_col],
+        lo,
+        hi,
+        s_first,
+        s_new,
+        s_col,
+        V_EPS,
+        out,
+    )
     return out, e_all, s_first
 
 

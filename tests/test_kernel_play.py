@@ -32,7 +32,7 @@ ENTRIES: dict[str, Any] = {
     "_play_lo": play.lo,
     "_settle_motors": play.settle_motors,
     "_table_commands": play.table_commands,
-    "_motor_sides": play.motor_sides,
+    "_motors_sides": play.motors_sides,
 }
 
 
@@ -42,13 +42,16 @@ def _same(got: Any, want: Any) -> bool:
     return same_bits(got, want)
 
 
-def _settled(f: Any, args: tuple[Any, ...]) -> tuple[Any, ...]:
-    """settle_motors' answer by ``f`` on a copy of ``args``, and the commands it
-    updated in place (its 7th and 8th arguments); table_commands' commands (its
-    last two)."""
+#: the arguments each kernel updates in place
+IN_PLACE = {"_settle_motors": (6, 7), "_table_commands": (5, 6), "_motors_sides": (14,)}
+
+
+def _settled(f: Any, args: tuple[Any, ...], attr: str = "_settle_motors") -> tuple[Any, ...]:
+    """The answer of ``f`` (one of :data:`IN_PLACE`) on a copy of ``args``, and the
+    arguments it updated in place."""
     mine = copy.deepcopy(args)
     got = f(*mine)
-    return (mine[5], mine[6]) if got is None else (*got, mine[6], mine[7])
+    return (*(() if got is None else got), *(mine[i] for i in IN_PLACE[attr]))
 
 
 #: what the chain calls through the kernel's names, and how often at least while
@@ -62,7 +65,7 @@ RECORDED = {
     "_play_lo": 1,
     "_settle_motors": 2,  # one call a chunk, every motor
     "_table_commands": 2,
-    "_motor_sides": 10,
+    "_motors_sides": 2,
 }
 #: what the settle calls inside the kernel (recorded from the reference settle on
 #: the recorded settles' inputs), and how often at least
@@ -84,15 +87,17 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
     assert len(calls) >= RECORDED[attr]
     for args in calls:
         name = attr.removeprefix("_play_").removeprefix("_")
-        if attr in ("_settle_motors", "_table_commands"):
-            # the commands are updated in place: compared with the answers
-            assert _same(_settled(getattr(_play, name), args), _settled(ENTRIES[attr], args))
+        if attr in IN_PLACE:
+            # the commands (sides) are updated in place: compared with the answers
+            got_, want_ = (
+                _settled(getattr(_play, name), args, attr),
+                _settled(ENTRIES[attr], args, attr),
+            )
+            assert _same(got_, want_), attr
             continue
         want = ENTRIES[attr](*args)
         got = getattr(_play, name)(*args)
         assert _same(tuple(got) if attr == "_settle_crossings" else got, want), attr
-        if attr == "_motor_sides":
-            assert got.dtype == want.dtype
 
 
 @pytest.fixture(scope="module")
@@ -503,6 +508,60 @@ def test_generated_motor_sides_are_identical(n: int, seed: int, w: int, s: int) 
     assert got.dtype == want.dtype and np.array_equal(got, want)
 
 
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 40), st.integers(0, 2**32 - 1), st.integers(0, 6), st.integers(0, 4))
+def test_generated_motors_sides_are_identical(n: int, seed: int, w: int, s: int) -> None:
+    """Motors 0, 2 and 3 of four in one call: each motor's windows a slice of the
+    flat arrays (some none), its standing crossings picked by their motor, the
+    other motor's row left as it was: the same sides as the reference's
+    motor_sides motor by motor."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    cols = np.array([0, 2, 3])
+    V = rng.normal(0, 1e-3, (4, n)) * np.where(rng.random((4, n)) < 0.5, 1.0, 1e4)
+    resting = rng.random(n) < 0.2
+    w_col = np.sort(rng.choice(cols, w)) if n else np.zeros(0, dtype=int)
+    e = rng.integers(-1, n, len(w_col))
+    e = e[np.lexsort((e, w_col))]
+    f = np.maximum(e - rng.integers(0, 4, len(e)), 0)
+    last_row = np.minimum(e + rng.integers(0, 4, len(e)), n - 1)
+    new = rng.choice([-1, 1], len(e))
+    lo, hi = np.searchsorted(w_col, cols, "left"), np.searchsorted(w_col, cols, "right")
+    k = s if n else 0
+    s_first, s_new, s_col = (
+        rng.integers(0, max(n, 1), k),
+        rng.choice([-1, 1], k),
+        rng.choice(cols, k),
+    )
+    side = rng.choice([-1, 1], 4)
+    out = rng.normal(0, 1, (4, n))
+    args = (V, resting, cols, side, f, e, new, last_row, lo, hi, s_first, s_new, s_col, 5e-4, out)
+    got = _settled(_play.motors_sides, args, "_motors_sides")[0]
+    want = _settled(play.motors_sides, args, "_motors_sides")[0]
+    assert got.dtype == want.dtype and np.array_equal(got, want)
+    assert same_bits(got[1], out[1])
+
+
+def test_compiled_motors_sides_refuses_arrays_of_the_wrong_shape() -> None:
+    _play = compiled("_play")
+    n = 6
+    V, out, rest = np.zeros((3, n)), np.zeros((3, n)), np.zeros(n, bool)
+    cols, side, e = np.array([0, 2]), np.ones(3, dtype=int), np.array([1, 3])
+    lo, hi, none = np.array([0, 1]), np.array([1, 2]), np.zeros(0, dtype=int)
+    rows = (e, e, e, e, lo, hi, none, none, none, 5e-4)
+    _play.motors_sides(V, rest, cols, side, *rows, out.copy())  # the right shapes pass
+    with pytest.raises(ValueError, match=r"out must be a writeable C-ordered float array"):
+        _play.motors_sides(V, rest, cols, side, *rows, out.astype(int))
+    with pytest.raises(ValueError, match=r"resting must have one value a point.* got 5"):
+        _play.motors_sides(V, rest[:-1], cols, side, *rows, out.copy())
+    with pytest.raises(ValueError, match=r"new must have one value a window, as e .* got 1"):
+        _play.motors_sides(V, rest, cols, side, e, e, e[:1], *rows[3:], out.copy())
+    with pytest.raises(ValueError, match=r"lo, hi must cut the windows \(0 to 2\), got 1, 3"):
+        _play.motors_sides(V, rest, cols, side, *rows[:5], hi + 1, *rows[6:], out.copy())
+    with pytest.raises(ValueError, match=r"s_col must have one value a standing crossing"):
+        _play.motors_sides(V, rest, cols, side, *rows[:8], e, 5e-4, out.copy())
+
+
 def test_the_twin_turns_where_the_reference_does() -> None:
     """A step whose cubic turns twice (leaves, turns back, turns on again): both
     kernels sample both turning points and find the same extremes of the part."""
@@ -653,7 +712,8 @@ def test_generated_table_commands_are_bit_identical(
     side = rng.choice([-1.0, 1.0], (3, n))
     P, V = rng.normal(0, 1, (3, n)), rng.normal(0, 1, (3, n))
     args = ((t0.flat, t2.flat), np.array([0, 2]), P_ideal, V_ideal, side, P, V)
-    got, want = _settled(_play.table_commands, args), _settled(play.table_commands, args)
+    got = _settled(_play.table_commands, args, "_table_commands")
+    want = _settled(play.table_commands, args, "_table_commands")
     assert _same(got, want)
     assert same_bits(got[0][1], P[1]) and same_bits(got[1][1], V[1])
     # the rows are the per-motor kernels' (compensate_sided, then V over the slope)

@@ -553,6 +553,34 @@ def motor_sides(
     return out
 
 
+_motors_sides = _play_kernel.motors_sides
+
+
+def motors_sides(
+    V: np.ndarray,
+    resting: np.ndarray,
+    cols: np.ndarray,
+    side: np.ndarray,
+    f: np.ndarray,
+    e: np.ndarray,
+    new: np.ndarray,
+    last_row: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    s_first: np.ndarray,
+    s_new: np.ndarray,
+    s_col: np.ndarray,
+    eps: float,
+    out: np.ndarray,
+) -> None:
+    """Every motor's side at each point in one call, into the rows ``cols`` of
+    ``out`` (R, m) (C order, float): :func:`play.motors_sides`, compiled when
+    :data:`COMPILED`."""
+    _motors_sides(
+        V, resting, cols, side, f, e, new, last_row, lo, hi, s_first, s_new, s_col, eps, out
+    )
+
+
 # the crossings (kernel/windows.py and its twin _windows.pyx)
 _crossing_windows = _RUN["windows"].crossing_windows
 _velocity_roots = _RUN["windows"].velocity_roots

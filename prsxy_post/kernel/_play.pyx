@@ -1604,24 +1604,14 @@ def creeps(sg, P, side, double ref, double drift):
     return out_a, cur_ref
 
 
-def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, double eps):
-    """A motor's side at each point: :func:`play.motor_sides` (a window ending at
-    −1 sets the last point, as numpy's index −1 does)."""
-    cdef const double[::1] v = _vec(V)
-    cdef const unsigned char[::1] rest = np.ascontiguousarray(resting, dtype=np.uint8)
-    cdef const long[::1] fv = np.ascontiguousarray(f, dtype=np.int_)
-    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
-    cdef const long[::1] nv = np.ascontiguousarray(new, dtype=np.int_)
-    cdef const long[::1] lv = np.ascontiguousarray(last_row, dtype=np.int_)
-    cdef const long[::1] sf = np.ascontiguousarray(s_first, dtype=np.int_)
-    cdef const long[::1] sn = np.ascontiguousarray(s_new, dtype=np.int_)
-    cdef Py_ssize_t m = v.shape[0], w = ev.shape[0], i, j, k
-    cdef long lo_f
-    _lengths("one value a point, as V", m, resting=len(rest))
-    _lengths("one value a window, as e", w, f=len(fv), new=len(nv), last_row=len(lv))
-    _lengths("one value a standing crossing, as s_first", sf.shape[0], s_new=len(sn))
-    out = np.empty(m, dtype=int)
-    cdef long[::1] sg = out
+cdef void _sides_core(const double* v, const unsigned char* rest, Py_ssize_t m,
+                      const long* fv, const long* ev, const long* nv, const long* lv,
+                      Py_ssize_t w, const long* sf, const long* sn, Py_ssize_t ns, long side,
+                      double eps, long* sg) noexcept nogil:
+    """:func:`play.motor_sides` of one motor into ``sg`` (m,), over pointers: its w
+    windows and its ns standing crossings."""
+    cdef Py_ssize_t i, j, k
+    cdef long lo_f, cur = side
     for i in range(m):
         sg[i] = 0 if rest[i] else (1 if v[i] > eps else (-1 if v[i] < -eps else 0))
     for i in range(w):
@@ -1635,13 +1625,95 @@ def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, doub
     for i in range(w):
         k = ev[i] if ev[i] >= 0 else ev[i] + m
         sg[k] = nv[i]
-    for i in range(sf.shape[0]):
+    for i in range(ns):
         k = sf[i] if sf[i] >= 0 else sf[i] + m
         sg[k] = sn[i]
     # carried(out, side) in place: the last direction at or before each row
-    cdef long cur = side
     for i in range(m):
         if sg[i] != 0:
             cur = sg[i]
         sg[i] = cur
+
+
+def _longs(a):
+    return np.ascontiguousarray(a, dtype=np.int_)
+
+
+def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, double eps):
+    """A motor's side at each point: :func:`play.motor_sides` (a window ending at
+    −1 sets the last point, as numpy's index −1 does)."""
+    cdef const double[::1] v = _vec(V)
+    cdef const unsigned char[::1] rest = np.ascontiguousarray(resting, dtype=np.uint8)
+    cdef const long[::1] fv = _longs(f)
+    cdef const long[::1] ev = _longs(e)
+    cdef const long[::1] nv = _longs(new)
+    cdef const long[::1] lv = _longs(last_row)
+    cdef const long[::1] sf = _longs(s_first)
+    cdef const long[::1] sn = _longs(s_new)
+    cdef Py_ssize_t m = v.shape[0], w = ev.shape[0]
+    _lengths("one value a point, as V", m, resting=len(rest))
+    _lengths("one value a window, as e", w, f=len(fv), new=len(nv), last_row=len(lv))
+    _lengths("one value a standing crossing, as s_first", sf.shape[0], s_new=len(sn))
+    out = np.empty(m, dtype=int)
+    cdef long[::1] sg = out
+    if m:
+        _sides_core(&v[0], &rest[0], m, &fv[0] if w else NULL, &ev[0] if w else NULL,
+                    &nv[0] if w else NULL, &lv[0] if w else NULL, w,
+                    &sf[0] if sf.shape[0] else NULL, &sn[0] if sf.shape[0] else NULL,
+                    sf.shape[0], side, eps, &sg[0])
     return out
+
+
+def motors_sides(V, resting, cols, side, f, e, new, last_row, lo, hi, s_first, s_new, s_col,
+                 double eps, out):
+    """Every motor's side at each point, into the rows ``cols`` of ``out``:
+    :func:`play.motors_sides`."""
+    _in_place(out, "out")
+    cdef double[:, ::1] o = out
+    cdef Py_ssize_t R = o.shape[0], m = o.shape[1], nc, w, ns, i, k, a, c
+    cdef const double[:, ::1] v = _rows(V, "V", R, m)
+    cdef const unsigned char[::1] rest = np.ascontiguousarray(resting, dtype=np.uint8)
+    cdef const long[::1] cv = _longs(cols)
+    cdef const long[::1] sd = _longs(side)
+    cdef const long[::1] fv = _longs(f)
+    cdef const long[::1] ev = _longs(e)
+    cdef const long[::1] nv = _longs(new)
+    cdef const long[::1] lv = _longs(last_row)
+    cdef const long[::1] lo_v = _longs(lo)
+    cdef const long[::1] hi_v = _longs(hi)
+    cdef const long[::1] sf = _longs(s_first)
+    cdef const long[::1] sn = _longs(s_new)
+    cdef const long[::1] sc = _longs(s_col)
+    nc, w, ns = cv.shape[0], ev.shape[0], sf.shape[0]
+    _lengths("one value a point, as out's rows", m, resting=len(rest))
+    _lengths("one value a motor, as out's rows", R, side=len(sd))
+    _lengths("one value a motor, as cols", nc, lo=len(lo_v), hi=len(hi_v))
+    _lengths("one value a window, as e", w, f=len(fv), new=len(nv), last_row=len(lv))
+    _lengths("one value a standing crossing, as s_first", ns, s_new=len(sn), s_col=len(sc))
+    for i in range(nc):
+        if not 0 <= cv[i] < R:
+            raise ValueError(f"cols must be rows of out (0 to {R - 1}), got {cv[i]}")
+        if not 0 <= lo_v[i] <= hi_v[i] <= w:
+            raise ValueError(f"lo, hi must cut the windows (0 to {w}), got {lo_v[i]}, {hi_v[i]}")
+    cdef char* mem = <char*>PyMem_Malloc((m + 2 * ns + 1) * sizeof(long))
+    if mem == NULL:
+        raise MemoryError()
+    cdef long* sg = <long*>mem
+    cdef long* mf = sg + m
+    cdef long* mn = mf + ns
+    try:
+        for i in range(nc):
+            c = 0
+            for k in range(ns):  # its standing crossings, in their order
+                if sc[k] == cv[i]:
+                    mf[c], mn[c] = sf[k], sn[k]
+                    c += 1
+            a = lo_v[i]
+            if m:
+                _sides_core(&v[cv[i], 0], &rest[0], m, &fv[a] if w else NULL,
+                            &ev[a] if w else NULL, &nv[a] if w else NULL,
+                            &lv[a] if w else NULL, hi_v[i] - a, mf, mn, c, sd[cv[i]], eps, sg)
+            for k in range(m):
+                o[cv[i], k] = sg[k]
+    finally:
+        PyMem_Free(mem)

@@ -972,3 +972,43 @@ def motor_sides(
     sg[e] = new
     sg[s_first] = s_new
     return carried(sg, side)
+
+
+def motors_sides(
+    V: np.ndarray,
+    resting: np.ndarray,
+    cols: np.ndarray,
+    side: np.ndarray,
+    f: np.ndarray,
+    e: np.ndarray,
+    new: np.ndarray,
+    last_row: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    s_first: np.ndarray,
+    s_new: np.ndarray,
+    s_col: np.ndarray,
+    eps: float,
+    out: np.ndarray,
+) -> None:
+    """:func:`motor_sides` of every motor ``cols`` (c,) in one call, into the rows
+    ``cols`` of ``out`` (R, m) in place: motor ``cols[i]``'s velocities ``V[col]``
+    (V (R, m) [mm/s]), its windows ``f``, ``e``, ``new``, ``last_row`` from
+    ``lo[i]`` to ``hi[i]`` (each motor's sorted by their ends), its standing
+    crossings those of ``s_first``, ``s_new`` whose ``s_col`` is it, its side
+    before the chunk ``side[col]`` (side (R,))."""
+    for i, col in enumerate(cols.tolist()):
+        a, b = int(lo[i]), int(hi[i])
+        here = s_col == col
+        out[col] = motor_sides(
+            V[col],
+            resting,
+            f[a:b],
+            e[a:b],
+            new[a:b],
+            last_row[a:b],
+            s_first[here],
+            s_new[here],
+            int(side[col]),
+            eps,
+        )
