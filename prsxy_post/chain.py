@@ -813,15 +813,16 @@ class Pipeline:
             every = len(self.table_cols) == pc.P_ideal.shape[1]
             P_cmd = np.empty_like(by_motor[0]) if every else by_motor[0].copy()
             V_cmd = np.empty_like(by_motor[1]) if every else by_motor[1].copy()
-            # the kernel on each motor's contiguous rows (what axiscomp.compensate_sided
-            # and MotorTable.slope do, without their conversions and reshapes)
-            for col, table in self.table_cols:
-                P_cmd[col] = kernel.compensate_sided(table.flat, by_motor[0][col], by_motor[2][col])
-                np.divide(
-                    by_motor[1][col],
-                    kernel.play_slope(table.flat, P_cmd[col], by_motor[2][col]),
-                    out=V_cmd[col],
-                )
+            # the kernel on the motors' contiguous rows, every motor in one call (what
+            # axiscomp.compensate_sided and MotorTable.slope do, without their
+            # conversions and reshapes)
+            kernel.table_commands(
+                tuple(table.flat for _, table in self.table_cols),
+                np.array([col for col, _ in self.table_cols], dtype=int),
+                *by_motor,
+                P_cmd,
+                V_cmd,
+            )
             if self.play_cols:
                 self._settle(pc, by_motor, contacts, P_cmd, V_cmd)
             pc.P_cmd, pc.V_cmd = np.ascontiguousarray(P_cmd.T), np.ascontiguousarray(V_cmd.T)
@@ -1165,8 +1166,10 @@ class Pipeline:
         the motor's next crossing begins goes into that crossing, which is then
         reckoned again from where the part is (the part followed through the
         commands as written, :func:`.kernel.play.follow_stretches`), and what is left
-        at the chunk's end goes on in the next. Per motor, the kernel does it over
-        arrays (:func:`.kernel.play.settle_crossings`).
+        at the chunk's end goes on in the next. The kernel does it for every motor
+        in one call (:func:`.kernel.play.settle_motors`), each over arrays
+        (:func:`.kernel.play.settle_crossings`); with straight lines, the points
+        inside a window on its chord (:func:`.kernel.play.across`).
 
         ``by_motor``: the chunk's P_ideal, V_ideal and sides, (5, n) each; the
         commands ``P_cmd``, ``V_cmd`` (5, n) [mm, mm/s] are rows the same way.
@@ -1181,11 +1184,30 @@ class Pipeline:
             short = self._shorts(
                 _gather(pc.q_target, rows), pc.tool_length[rows], at, contacts[:, 2]
             )
-        for col in self.play_cols:
-            ours = contacts[:, 2] == col
-            self._settle_motor(
-                pc, by_motor, contacts[ours], short[ours], col, P_cmd, V_cmd, (s_path, t)
-            )
+        cols = self.play_cols
+        # the wanted positions at the point before the chunk (the first point's at
+        # the start): each motor's wanted move into the first point
+        P_before = self.last.P_ideal[0] if self.last is not None else pc.P_ideal[0]
+        ch = play.Chunk(*by_motor, pc.speed, pc.dt, s_path, t, P_before)
+        before = np.array([self._part_before(col, P_cmd) for col in cols]).reshape(-1, 3)
+        carried = np.array([self.catch.pop(col, 0.0) for col in cols])
+        y_end, carry = kernel.settle_motors(
+            tuple(self.tables[MOTORS[col]].flat for col in cols),
+            np.array(cols, dtype=int),
+            ch,
+            before,
+            carried,
+            play.Contacts(contacts[:, 0], contacts[:, 1], contacts[:, 2], short),
+            P_cmd,
+            V_cmd,
+            self.limits.segment == "cubic",
+            reversals.CATCH_UP_SHARE,
+            reversals.CATCH_UP_HURRY,
+        )
+        for col, y, c in zip(cols, y_end.tolist(), carry.tolist(), strict=True):
+            self.play_y[col] = y
+            if not np.isnan(c):
+                self.catch[col] = c
         if self.limits.segment != "cubic":
             self._straight_through(pc, contacts, P_cmd, t)
         self.last_cmd = (P_cmd[:, -1].copy(), V_cmd[:, -1].copy())
@@ -1209,77 +1231,6 @@ class Pipeline:
             np.cumsum(run, out=run)
         return run
 
-    def _settle_motor(
-        self,
-        pc: PointChunk,
-        by_motor: tuple[np.ndarray, np.ndarray, np.ndarray],
-        mine: np.ndarray,
-        short: np.ndarray,
-        col: int,
-        P_cmd: np.ndarray,
-        V_cmd: np.ndarray,
-        runs: tuple[np.ndarray, np.ndarray],
-    ) -> None:
-        """:meth:`_settle` for motor ``col`` through its crossings ``mine`` (c, 3)
-        (rows of the contacts: end, beginning, column), each ending ``short`` (c,)
-        [mm] of its contact (:meth:`_crossing_short`); ``by_motor`` the chunk's
-        P_ideal, V_ideal and sides transposed, (5, n) each: its commands in ``P_cmd``,
-        ``V_cmd`` (5, n) [mm, mm/s] updated in place, an offset left from the
-        chunk before taken up first; where its part is after the chunk kept in
-        ``play_y`` [mm]. ``runs``: s_path (n,) [mm] as :meth:`_path_run`, and the
-        time (n,) [s] since the point before the chunk."""
-        n = len(pc)
-        s_path, t = runs
-        cubic = self.limits.segment == "cubic"
-        table = self.tables[MOTORS[col]]
-        y0, P0, V0 = self._part_before(col, P_cmd)
-        # the motor's wanted moves into each point (the first from the last point
-        # made): a part left ahead of its way is taken up no faster than they go
-        P_before = self.last.P_ideal[0, col] if self.last is not None else pc.P_ideal[0, col]
-        P_ideal, V_ideal, side = (a[col] for a in by_motor)
-        # np.diff with P_before prepended, without the joined copy
-        dP = np.empty(n)
-        if n:
-            dP[0] = P_ideal[0] - P_before
-            np.subtract(P_ideal[1:], P_ideal[:-1], out=dP[1:])
-        mo = play.Motion(
-            *(
-                np.ascontiguousarray(a, dtype=float)
-                for a in (P_ideal, V_ideal, dP, pc.speed, pc.dt, s_path, side)
-            )
-        )
-        carried = self.catch.pop(col, 0.0)
-        if carried:
-            # what it leaves where the first crossing begins, the follow below sees
-            stop = int(mine[0, 1]) if len(mine) else n
-            # the motor's rows, contiguous: updated in place
-            _, carry = kernel.catch_up_commands(
-                table.flat,
-                mo,
-                np.array([carried]),
-                np.array([-1]),
-                np.array([stop]),
-                P_cmd[col],
-                V_cmd[col],
-                reversals.CATCH_UP_SHARE,
-                reversals.CATCH_UP_HURRY,
-            )
-            if not np.isnan(carry):
-                self.catch[col] = carry
-        if len(mine):
-            y0, P0, V0 = self._settle_crossings(mine, short, col, (y0, P0, V0), P_cmd, V_cmd, mo, t)
-            # from the last contact on, the corrected commands carry the part
-            rest = slice(int(mine[:, 0].max()) + 1, len(pc))
-        else:
-            rest = slice(0, len(pc))
-        if rest.start < len(pc):
-            y0 = float(
-                reversals.follow(
-                    table.flat, y0, P0, V0, P_cmd[col, rest], V_cmd[col, rest], pc.dt[rest], cubic
-                )[0][-1]
-            )
-        self.play_y[col] = y0
-
     def _part_before(self, col: int, P_cmd: np.ndarray) -> tuple[float, float, float]:
         """Where motor ``col``'s part stands before the chunk [mm], and the
         command's position [mm] and velocity [mm/s] there (``P_cmd`` (5, n))."""
@@ -1290,49 +1241,6 @@ class Pipeline:
             return y0, float(P_cmd[col, 0]), 0.0
         prev_P, prev_V = self.last_cmd
         return self.play_y[col], float(prev_P[col]), float(prev_V[col])
-
-    def _settle_crossings(
-        self,
-        mine: np.ndarray,
-        short: np.ndarray,
-        col: int,
-        before: tuple[float, float, float],
-        P_cmd: np.ndarray,
-        V_cmd: np.ndarray,
-        mo: play.Motion,
-        t: np.ndarray,
-    ) -> tuple[float, float, float]:
-        """End each of motor ``col``'s crossings ``mine`` where its part really
-        stands (``short`` (c,) [mm] of it: :meth:`_crossing_short`), followed
-        from ``before`` (the part [mm], the command [mm, mm/s] before the chunk)
-        through the commands as made, and take up the part's offset after each, an
-        offset carried into the next crossing reckoned again
-        (:func:`.kernel.play.settle_crossings`); ``mo`` the motor's columns, ``t``
-        (n,) [s] the time since the point before the chunk, the commands (5, n).
-        Returns the part, the command's position and velocity at the last contact."""
-        cubic = self.limits.segment == "cubic"
-        table = self.tables[MOTORS[col]]
-        e, b = mine[:, 0], mine[:, 1]
-        across = self._across_rows(t, e, b)
-        self._across(across, before[1], P_cmd[col], V_cmd[col])
-        r = kernel.settle_crossings(
-            table.flat,
-            mo,
-            before,
-            e,
-            b,
-            short,
-            P_cmd[col],
-            V_cmd[col],
-            cubic,
-            reversals.CATCH_UP_SHARE,
-            reversals.CATCH_UP_HURRY,
-        )
-        P_cmd[col], V_cmd[col] = r.P, r.V
-        if not np.isnan(r.carry):
-            self.catch[col] = r.carry
-        self._across(across, before[1], P_cmd[col], V_cmd[col])
-        return r.y, r.P_last, r.V_last
 
     def _straight_through(
         self, pc: PointChunk, contacts: np.ndarray, P_cmd: np.ndarray, t: np.ndarray
@@ -1372,45 +1280,6 @@ class Pipeline:
         )
         k, bb, ee, frac = k[near], bb[near], ee[near], frac[near]
         P_cmd[:, k] = P_cmd[:, bb] + frac.T * (P_cmd[:, ee] - P_cmd[:, bb])
-
-    def _across_rows(
-        self, t: np.ndarray, e: np.ndarray, b: np.ndarray
-    ) -> tuple[np.ndarray, ...] | None:
-        """The points inside a motor's crossing windows that begin at ``b`` and end
-        at ``e`` for :meth:`_across`, with what it reckons from the times ``t`` (n,)
-        [s] since the point before the chunk: the points, each window's first point
-        (clipped to 0) and whether it is in the chunk, its last point, and the
-        time from the first to the last and to each point. None where there are
-        none (or the segments are cubics)."""
-        inner = e - b - 1
-        if self.limits.segment == "cubic" or not np.any(inner > 0):
-            return None
-        w = np.flatnonzero(inner > 0)
-        idx = play.ranges(b[w] + 1, inner[w])
-        bb, ee = np.repeat(b[w], inner[w]), np.repeat(e[w], inner[w])
-        inside, b0 = bb >= 0, np.maximum(bb, 0)
-        t_b = np.where(inside, t[b0], 0.0)
-        return idx, b0, inside, ee, t[ee] - t_b, t[idx] - t_b
-
-    @staticmethod
-    def _across(
-        rows: tuple[np.ndarray, ...] | None, P0: float, P: np.ndarray, V: np.ndarray
-    ) -> None:
-        """Straight lines between the points (corrected G-code): the points inside
-        a motor's crossing windows (``rows``: :meth:`_across_rows`; a step's end
-        where the window reaches past it, another motor's window edge) on the
-        straight way from the window's first command to its last, by time (``P0``:
-        the command before the chunk). Commanded on the old side, the motor pushed
-        its part on up to the point inside, and the window was one on one side of
-        the root. The motor's commands ``P``, ``V`` (n,) [mm, mm/s] are updated in
-        place."""
-        if rows is None:
-            return
-        idx, b0, inside, ee, span, since = rows
-        P_b = np.where(inside, P[b0], P0)
-        rate = (P[ee] - P_b) / span
-        P[idx] = P_b + rate * since
-        V[idx] = rate
 
     def _crossing_short(self, q: np.ndarray, tool: np.ndarray, col: int) -> np.ndarray:
         """How far [mm] short of where motor ``col`` meets its part a crossing

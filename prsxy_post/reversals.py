@@ -811,12 +811,14 @@ def find_reversals(
         V_all[:, 0] = prev[1]
         rest_all = np.concatenate([[prev[2]], resting])
         ch = _Chunk(t_end, dt, resting, P_all, V_all, rest_all, 1)
-    drift = DRIFT_SHARE * tol
-    seen: list[_Turns] = []
-    for col in cols:
-        turns, ref[col] = _turns(ch, col, side, float(ref[col]), drift)
-        seen.append(turns)
-    return Found(ch, seen, [_motor_dips(t, ch, tol) for t in seen])
+    # every motor's reversals, dips and settings-off back in one kernel call
+    found = kernel.motor_reversals(
+        V_all, P_all, ch.rest, np.array(cols, dtype=int), side, ref, DRIFT_SHARE * tol,
+        ch.off, V_EPS, dt, tol,
+    )  # fmt: skip
+    seen = [_turns(ch, col, found, i) for i, col in enumerate(cols)]
+    ref[cols] = found.reach  # where each got farthest its way, for the next chunk
+    return Found(ch, seen, [_motor_dips(ch, found, i) for i in range(len(cols))])
 
 
 def roots_search(found: Found, steps: int = ROOT_STEPS) -> RootSearch:
@@ -997,20 +999,16 @@ def _place_points(
     ins.mid_k, ins.mid_t = _distinct_points(ek, et)
 
 
-def _turns(
-    ch: _Chunk, col: int, side: np.ndarray, ref: float, drift: float
-) -> tuple[_Turns, float]:
+def _turns(ch: _Chunk, col: int, found: kernel_windows.Reversals, i: int) -> _Turns:
     """Motor ``col``'s reversals in the chunk and their kinds (:class:`_Turns`),
-    the roots and accelerations of those in motion on the steps' cubics; and where
-    it got farthest its last way (the ``ref`` [mm] carried to the next chunk,
-    :func:`.kernel.play.creeps`). ``side`` (5,) the side each motor is on before the chunk;
-    ``drift`` [mm] the drift back that makes a creeping motor cross."""
+    the roots and accelerations of those in motion on the steps' cubics, from the
+    kernel's answer ``found`` (its ``i``-th motor: :func:`.kernel.windows.motor_reversals`:
+    creeps back made reversals, :func:`.kernel.play.creeps`)."""
     off, dt = ch.off, ch.dt
     p, v = ch.P[col], ch.V[col]
-    # creeps back become reversals; the reach is carried to the next chunk
-    sg, came, r, kind, reach_ref = kernel.motor_turns(
-        v, p, ch.rest, int(side[col]), ref, drift, off, V_EPS
-    )
+    sg, came = found.sg[i], found.came[i]
+    at = slice(int(found.turns[i]), int(found.turns[i + 1]))
+    r, kind = found.r[at], found.kind[at]
     k = r - off
     new = sg[r]
     # a step whose chord goes the old way sets off that way first and turns
@@ -1026,8 +1024,7 @@ def _turns(
     mid = kind == kernel_windows.MID
     km, rm = k[mid], r[mid]
     sr, acc = velocity_roots(p[rm - 1], v[rm - 1], p[rm], v[rm], dt[km], new[mid])
-    turns = _Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc, v)
-    return turns, reach_ref
+    return _Turns(col, sg, came, k, new, p, at_rest, crept_f, stood, mid, sr, acc, v)
 
 
 def _motor_windows(
@@ -1067,11 +1064,12 @@ def _motor_windows(
     )
 
 
-def _motor_dips(t: _Turns, ch: _Chunk, tol: float) -> list[_Dip]:
+def _motor_dips(ch: _Chunk, found: kernel_windows.Reversals, i: int) -> list[_Dip]:
     """One motor's dips and settings-off back, in that order: the two turning
     points of every step whose cubic turns back and on again while the motor
     moves the same way at both of its ends (:func:`_dip_windows` gives their
-    windows), with the kernel's :func:`.kernel.windows.motor_dips`.
+    windows), from the kernel's answer ``found`` for the chunk's ``i``-th motor
+    (:func:`.kernel.windows.motor_reversals`, :func:`.kernel.windows.motor_dips`).
 
     A dip shallower than ``tol`` is left alone: the part stands at the first
     turning point while the motor goes back and forth within its play, and misses
@@ -1091,14 +1089,16 @@ def _motor_dips(t: _Turns, ch: _Chunk, tol: float) -> list[_Dip]:
     # and turns inside the step (from rest through the extreme of a tilt: 0.5
     # µm off the path, test_controller_truth's found programs)
     out = []
-    for sets_off in (False, True):
-        j, s1, s2, A1, A2 = kernel.motor_dips(t.p, t.v, ch.dt, t.sg, t.came, ch.off, tol, sets_off)
+    sg = found.sg[i]
+    for part in (2 * i, 2 * i + 1):  # its dips, then its settings-off back
+        at = slice(int(found.dips[part]), int(found.dips[part + 1]))
+        j, s1, s2, A1, A2 = (found.j[at], found.s1[at], found.s2[at], found.A1[at], found.A2[at])
         k = j - ch.off
         h = ch.dt[k]
         t1 = ch.t_end[k]
         t0 = t1 - h
         tm = t0 + 0.5 * (s1 + s2) * h
-        out.append(_Dip(k, t.sg[j], s1, s2, A1, A2, h, t0, tm, t1))
+        out.append(_Dip(k, sg[j], s1, s2, A1, A2, h, t0, tm, t1))
     return out
 
 
@@ -1381,42 +1381,37 @@ def sides_by_motor(
     """
     m = len(rows.step)
     out = np.empty((len(side), m))
-    # the motors with play get their rows below; the others keep their side
-    held = [c for c in range(len(side)) if c not in cols]
-    out[held] = np.asarray(side, dtype=int)[held, None]
+    out[:] = np.asarray(side, dtype=int)[:, None]
     f_all = rows.first_plain(ins.w_k)
     last_row = rows.last(ins.w_kb)  # its end's step's end
     e_all = rows.at(ins.w_kb, ins.w_tb, ins.w_t0b, last_row)
     s_first, s_col, s_new = rows.first(ins.s_k), ins.s_col, ins.s_new
     # every motor's windows by their ends, in one sort (stable: as each motor's own;
-    # lexsort((e_all, w_col))'s order as one int key, the ends points from −1), and
-    # its standing crossings in their order: each motor's a slice of arrays
-    # gathered once (not gathered again for each motor)
+    # lexsort((e_all, w_col))'s order as one int key, the ends points from −1)
     by_col = np.argsort(ins.w_col * (m + 1) + (e_all + 1), kind="stable")
     w_cols = ins.w_col[by_col]
-    w_f, w_e, w_new, w_last = f_all[by_col], e_all[by_col], ins.w_new[by_col], last_row[by_col]
-    by_s = np.argsort(s_col, kind="stable")
-    s_cols, s_at, s_way = s_col[by_s], s_first[by_s], s_new[by_s]
     lo, hi = np.searchsorted(w_cols, cols, "left"), np.searchsorted(w_cols, cols, "right")
-    s_lo, s_hi = np.searchsorted(s_cols, cols, "left"), np.searchsorted(s_cols, cols, "right")
-    for i, col in enumerate(cols):
-        w, c = slice(lo[i], hi[i]), slice(s_lo[i], s_hi[i])
-        # the points after a window's end inside its step (another motor's window,
-        # a blend's point before a corner) are on the new side: where the path turns
-        # a corner the cubic's root is before the corner, the plan's velocity turns
-        # at it (kernel.play.motor_sides)
-        out[col] = kernel.motor_sides(
-            V_cols[col],
-            resting,
-            w_f[w],
-            w_e[w],
-            w_new[w],
-            w_last[w],
-            s_at[c],
-            s_way[c],
-            int(side[col]),
-            V_EPS,
-        )
+    # the points after a window's end inside its step (another motor's window, a
+    # blend's point before a corner) are on the new side: where the path turns a
+    # corner the cubic's root is before the corner, the plan's velocity turns at
+    # it (kernel.play.motor_sides); every motor in one call
+    kernel.motors_sides(
+        V_cols,
+        resting,
+        np.array(cols, dtype=int),
+        side,
+        f_all[by_col],
+        e_all[by_col],
+        ins.w_new[by_col],
+        last_row[by_col],
+        lo,
+        hi,
+        s_first,
+        s_new,
+        s_col,
+        V_EPS,
+        out,
+    )
     return out, e_all, s_first
 
 

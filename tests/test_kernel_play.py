@@ -30,10 +30,9 @@ from .kernel_cases import compiled, record, same_bits
 #: the kernel's entry points (prsxy_post.kernel's names) and their reference
 ENTRIES: dict[str, Any] = {
     "_play_lo": play.lo,
-    "_play_slope": play.slope,
-    "_compensate_sided": play.compensate_sided,
-    "_settle_crossings": play.settle_crossings,
-    "_motor_sides": play.motor_sides,
+    "_settle_motors": play.settle_motors,
+    "_table_commands": play.table_commands,
+    "_motors_sides": play.motors_sides,
 }
 
 
@@ -43,20 +42,35 @@ def _same(got: Any, want: Any) -> bool:
     return same_bits(got, want)
 
 
+#: the arguments each kernel updates in place
+IN_PLACE = {"_settle_motors": (6, 7), "_table_commands": (5, 6), "_motors_sides": (14,)}
+
+
+def _settled(f: Any, args: tuple[Any, ...], attr: str = "_settle_motors") -> tuple[Any, ...]:
+    """The answer of ``f`` (one of :data:`IN_PLACE`) on a copy of ``args``, and the
+    arguments it updated in place."""
+    mine = copy.deepcopy(args)
+    got = f(*mine)
+    return (*(() if got is None else got), *(mine[i] for i in IN_PLACE[attr]))
+
+
 #: what the chain calls through the kernel's names, and how often at least while
-#: the samples convert (the envelopes alone at the start). carried and creeps run
-#: inside windows.motor_turns on both paths (its recorded and generated inputs:
-#: tests/test_kernel_windows.py), and on generated inputs here
+#: the samples convert (the envelopes alone at the start; the commands through the
+#: tables, table_commands, are compensate_sided and slope motor by motor in the
+#: reference: the settle's pieces below and the generated inputs test those).
+#: carried and creeps run inside windows.motor_reversals on both paths (its
+#: recorded and generated inputs: tests/test_kernel_windows.py), and on generated
+#: inputs here
 RECORDED = {
     "_play_lo": 1,
-    "_play_slope": 10,
-    "_compensate_sided": 10,
-    "_settle_crossings": 3,
-    "_motor_sides": 10,
+    "_settle_motors": 2,  # one call a chunk, every motor
+    "_table_commands": 2,
+    "_motors_sides": 2,
 }
 #: what the settle calls inside the kernel (recorded from the reference settle on
 #: the recorded settles' inputs), and how often at least
 INNER = {
+    "settle_crossings": 3,
     "follow_stretches": 3,
     "catch_up": 3,
     "lo_inv": 3,
@@ -72,18 +86,25 @@ def test_sample_programs_play_model_is_bit_identical(attr: str, tmp_path: Path) 
     calls = record(attr, tmp_path)
     assert len(calls) >= RECORDED[attr]
     for args in calls:
+        name = attr.removeprefix("_play_").removeprefix("_")
+        if attr in IN_PLACE:
+            # the commands (sides) are updated in place: compared with the answers
+            got_, want_ = (
+                _settled(getattr(_play, name), args, attr),
+                _settled(ENTRIES[attr], args, attr),
+            )
+            assert _same(got_, want_), attr
+            continue
         want = ENTRIES[attr](*args)
-        got = getattr(_play, attr.removeprefix("_play_").removeprefix("_"))(*args)
+        got = getattr(_play, name)(*args)
         assert _same(tuple(got) if attr == "_settle_crossings" else got, want), attr
-        if attr == "_motor_sides":
-            assert got.dtype == want.dtype
 
 
 @pytest.fixture(scope="module")
 def inner_calls(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[Any, ...]]]:
     """The calls the reference settle makes of the pieces, on the settles the
     sample programs make."""
-    settles = record("_settle_crossings", tmp_path_factory.mktemp("settle"))
+    settles = record("_settle_motors", tmp_path_factory.mktemp("settle"))
     calls: dict[str, list[tuple[Any, ...]]] = {k: [] for k in INNER}
     mp = pytest.MonkeyPatch()
     for name in INNER:
@@ -96,7 +117,7 @@ def inner_calls(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tupl
         mp.setattr(play, name, spy)
     try:
         for args in settles:
-            play.settle_crossings(*args)
+            play.settle_motors(*copy.deepcopy(args))
     finally:
         mp.undo()
     return calls
@@ -112,7 +133,7 @@ def test_sample_programs_settle_pieces_are_bit_identical(
     for args in calls:
         want = getattr(play, name)(*copy.deepcopy(args))
         got = getattr(_play, name)(*copy.deepcopy(args))
-        assert _same(got, want), name
+        assert _same(tuple(got) if name == "settle_crossings" else got, want), name
 
 
 def test_sample_programs_follow_their_parts_through_turning_points(
@@ -321,6 +342,90 @@ def test_generated_settles_reckon_crossings_again(monkeypatch: pytest.MonkeyPatc
     assert rounds > 10
 
 
+def _settle_motors_case(
+    tabs: list[play.PlayTable], seed: int, n: int, cubic: bool
+) -> tuple[Any, ...]:
+    """settle_motors' arguments: motors 0 and 2 of three (one table each) with up to
+    four crossings each in n points (interleaved by their ends, as the chain sorts
+    them), offsets carried from the chunk before or none."""
+    rng = np.random.default_rng(seed)
+    cols = np.array([0, 2])
+    mids = [0.5 * (t.breaks[0] + t.breaks[-1]) for t in tabs]
+    P_ideal = (
+        np.cumsum(rng.normal(0, 0.02, (3, n)), axis=1) + np.array([mids[0], 0, mids[1]])[:, None]
+    )
+    s_path = np.cumsum(np.where(rng.random(n) < 0.1, 0.0, rng.uniform(0, 0.3, n)))
+    dt = np.where(rng.random(n) < 0.05, 0.0, rng.uniform(0.001, 0.01, n))
+    ch = play.Chunk(
+        P_ideal,
+        rng.normal(0, 5, (3, n)),
+        rng.choice([-1.0, 1.0], (3, n)),
+        np.abs(rng.normal(0, 10, n)),
+        dt,
+        s_path,
+        np.cumsum(dt),
+        P_ideal[:, 0] + rng.normal(0, 0.01, 3),
+    )
+    rows = []
+    for col in cols:
+        k = min(n + 1, 2 * int(rng.integers(0, 5)))
+        cuts = np.sort(rng.choice(np.arange(-1, n), size=k, replace=False))
+        for b, e in zip(cuts[0::2], cuts[1::2], strict=False):
+            rows.append((e, b, col))
+    x = np.array(rows, dtype=int).reshape(-1, 3)
+    x = x[np.lexsort((x[:, 2], x[:, 1], x[:, 0]))]
+    contacts = play.Contacts(x[:, 0], x[:, 1], x[:, 2], np.abs(rng.normal(0, 1e-7, len(x))))
+    before = np.column_stack(
+        [mids + rng.normal(0, 1e-3, 2), mids + rng.normal(0, 1e-3, 2), rng.normal(0, 5, 2)]
+    )
+    carried_off = rng.normal(0, 2e-4, 2) * (rng.random(2) < 0.5)
+    P = P_ideal + rng.normal(0, 2e-3, (3, n))
+    V = ch.V_ideal + rng.normal(0, 0.1, (3, n))
+    share = float(rng.choice([5e-5, 5e-3]))
+    return (tuple(tabs), cols, ch, before, carried_off, contacts, P, V, cubic, share, 2.0)
+
+
+@settings(max_examples=150, deadline=None)
+@given(tables(), tables(), st.integers(0, 2**32 - 1), st.integers(1, 60), st.booleans())
+def test_generated_settle_motors_are_bit_identical(
+    t0: axiscomp.MotorTable, t2: axiscomp.MotorTable, seed: int, n: int, cubic: bool
+) -> None:
+    """Two motors through a chunk in one call: offsets carried in from the chunk
+    before, chains of crossings, none at all (the part followed through the
+    whole chunk), straight lines' windows put on their chords: the commands
+    (updated in place), the parts and the offsets carried on, to the bit."""
+    _play = compiled("_play")
+    args = _settle_motors_case([t0.flat, t2.flat], seed, n, cubic)
+    got, want = _settled(_play.settle_motors, args), _settled(play.settle_motors, args)
+    assert _same(got, want)
+    # the motor without play is left as it was
+    assert same_bits(got[2][1], args[6][1]) and same_bits(got[3][1], args[7][1])
+
+
+def test_generated_settle_motors_move_points_onto_chords() -> None:
+    """Straight lines: the settle of every motor puts points inside windows on the
+    window's chord (play.across, with V the chord's rate), the same in both."""
+    _play = compiled("_play")
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-50.0, 0.0, 50.0]), np.zeros(3), np.array([0.004, 0.002, 0.004]))
+    ).flat
+    moved = 0
+    for seed in range(30):
+        args = _settle_motors_case([t, t], seed, 40, False)
+        got, want = _settled(_play.settle_motors, args), _settled(play.settle_motors, args)
+        assert _same(got, want)
+        x = args[5]
+        inner = x.e - x.b - 1 > 0
+        for e, b, col in zip(x.e[inner], x.b[inner], x.col[inner], strict=True):
+            if b < 0:
+                continue
+            P, V, tt = got[2][col], got[3][col], args[2].t
+            # one rate, and the points on the line from the window's first command
+            on = np.allclose(P[b + 1 : e], P[b] + V[b + 1 : e] * (tt[b + 1 : e] - tt[b]), 0, 1e-9)
+            moved += int(np.all(V[b + 1 : e] == V[b + 1]) and on)
+    assert moved > 10
+
+
 @settings(max_examples=100, deadline=None)
 @given(tables(), st.integers(0, 2**32 - 1), st.integers(1, 60))
 def test_generated_catch_up_commands_are_bit_identical(
@@ -401,6 +506,60 @@ def test_generated_motor_sides_are_identical(n: int, seed: int, w: int, s: int) 
     args = (V, resting, f, e, new, last_row, s_first, s_new, side, 5e-4)
     got, want = _play.motor_sides(*args), play.motor_sides(*args)
     assert got.dtype == want.dtype and np.array_equal(got, want)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 40), st.integers(0, 2**32 - 1), st.integers(0, 6), st.integers(0, 4))
+def test_generated_motors_sides_are_identical(n: int, seed: int, w: int, s: int) -> None:
+    """Motors 0, 2 and 3 of four in one call: each motor's windows a slice of the
+    flat arrays (some none), its standing crossings picked by their motor, the
+    other motor's row left as it was: the same sides as the reference's
+    motor_sides motor by motor."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    cols = np.array([0, 2, 3])
+    V = rng.normal(0, 1e-3, (4, n)) * np.where(rng.random((4, n)) < 0.5, 1.0, 1e4)
+    resting = rng.random(n) < 0.2
+    w_col = np.sort(rng.choice(cols, w)) if n else np.zeros(0, dtype=int)
+    e = rng.integers(-1, n, len(w_col))
+    e = e[np.lexsort((e, w_col))]
+    f = np.maximum(e - rng.integers(0, 4, len(e)), 0)
+    last_row = np.minimum(e + rng.integers(0, 4, len(e)), n - 1)
+    new = rng.choice([-1, 1], len(e))
+    lo, hi = np.searchsorted(w_col, cols, "left"), np.searchsorted(w_col, cols, "right")
+    k = s if n else 0
+    s_first, s_new, s_col = (
+        rng.integers(0, max(n, 1), k),
+        rng.choice([-1, 1], k),
+        rng.choice(cols, k),
+    )
+    side = rng.choice([-1, 1], 4)
+    out = rng.normal(0, 1, (4, n))
+    args = (V, resting, cols, side, f, e, new, last_row, lo, hi, s_first, s_new, s_col, 5e-4, out)
+    got = _settled(_play.motors_sides, args, "_motors_sides")[0]
+    want = _settled(play.motors_sides, args, "_motors_sides")[0]
+    assert got.dtype == want.dtype and np.array_equal(got, want)
+    assert same_bits(got[1], out[1])
+
+
+def test_compiled_motors_sides_refuses_arrays_of_the_wrong_shape() -> None:
+    _play = compiled("_play")
+    n = 6
+    V, out, rest = np.zeros((3, n)), np.zeros((3, n)), np.zeros(n, bool)
+    cols, side, e = np.array([0, 2]), np.ones(3, dtype=int), np.array([1, 3])
+    lo, hi, none = np.array([0, 1]), np.array([1, 2]), np.zeros(0, dtype=int)
+    rows = (e, e, e, e, lo, hi, none, none, none, 5e-4)
+    _play.motors_sides(V, rest, cols, side, *rows, out.copy())  # the right shapes pass
+    with pytest.raises(ValueError, match=r"out must be a writeable C-ordered float array"):
+        _play.motors_sides(V, rest, cols, side, *rows, out.astype(int))
+    with pytest.raises(ValueError, match=r"resting must have one value a point.* got 5"):
+        _play.motors_sides(V, rest[:-1], cols, side, *rows, out.copy())
+    with pytest.raises(ValueError, match=r"new must have one value a window, as e .* got 1"):
+        _play.motors_sides(V, rest, cols, side, e, e, e[:1], *rows[3:], out.copy())
+    with pytest.raises(ValueError, match=r"lo, hi must cut the windows \(0 to 2\), got 1, 3"):
+        _play.motors_sides(V, rest, cols, side, *rows[:5], hi + 1, *rows[6:], out.copy())
+    with pytest.raises(ValueError, match=r"s_col must have one value a standing crossing"):
+        _play.motors_sides(V, rest, cols, side, *rows[:8], e, 5e-4, out.copy())
 
 
 def test_the_twin_turns_where_the_reference_does() -> None:
@@ -496,3 +655,83 @@ def test_compiled_play_refuses_arrays_of_the_wrong_length() -> None:
         _play.settle_crossings(
             t, mo, (0.0, 0.0, 0.0), e, e - 1, np.zeros(1), P, _short(V), True, 5e-5, 2.0
         )
+
+
+def test_compiled_settle_motors_refuses_arrays_of_the_wrong_shape() -> None:
+    """settle_motors runs on pointers into its rows: commands it cannot update in
+    place, rows or columns of other lengths, a motor outside the rows are refused
+    with a ValueError saying what was expected."""
+    _play = compiled("_play")
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-50.0, 0.0, 50.0]), np.zeros(3), np.array([0.004, 0.002, 0.004]))
+    ).flat
+    args = list(_settle_motors_case([t, t], 3, 12, True))
+
+    def refused(i: int, value: Any, match: str) -> None:
+        bad = copy.deepcopy(args)
+        bad[i] = value
+        with pytest.raises(ValueError, match=match):
+            _play.settle_motors(*bad)
+
+    P, ch, x = args[6], args[2], args[5]
+    refused(6, np.asfortranarray(P), r"P must be a writeable C-ordered float array")
+    refused(7, args[7].astype(np.float32), r"V must be a writeable C-ordered float array")
+    refused(7, args[7][:, :-1].copy(), r"V must have one row a motor .* \(3, 12\), got \(3, 11\)")
+    refused(2, ch._replace(side=ch.side[:2]), r"side must have one row a motor")
+    refused(2, ch._replace(dt=ch.dt[:-1]), r"dt must have one value a point, as P \(12 values\)")
+    refused(2, ch._replace(P_before=ch.P_before[:2]), r"P_before must have one value a motor")
+    refused(1, np.array([0, 3]), r"cols must be rows of P \(0 to 2\), got 3")
+    refused(0, (t,), r"tables must have one value a motor, as cols \(2 values\), got 1")
+    refused(4, np.zeros(1), r"carried_off must have one value a motor")
+    refused(5, x._replace(short=x.short[:-1]), r"short must have one value a crossing")
+    # no crossing: the reference's e.max() has no answer, the twin says so
+    mo = _motion(np.random.default_rng(1), 6)
+    none = np.zeros(0, dtype=int)
+    with pytest.raises(ValueError, match=r"e must have a crossing at least"):
+        _play.settle_crossings(
+            t, mo, (0.0, 0.0, 0.0), none, none, np.zeros(0), mo.P_ideal, mo.V_ideal, True, 5e-5, 2.0
+        )
+
+
+@settings(max_examples=150, deadline=None)
+@given(tables(), tables(), st.integers(0, 2**32 - 1), st.integers(0, 80))
+def test_generated_table_commands_are_bit_identical(
+    t0: axiscomp.MotorTable, t2: axiscomp.MotorTable, seed: int, n: int
+) -> None:
+    """Motors 0 and 2 of three through their tables in one call (periodic terms or
+    none, positions inside and outside the tables, at their breaks, both sides):
+    the commands and their rates to the bit, the other motor's rows untouched."""
+    _play = compiled("_play")
+    rng = np.random.default_rng(seed)
+    P_ideal = np.empty((3, n))
+    for row, t in ((0, t0.flat), (1, t0.flat), (2, t2.flat)):
+        P_ideal[row] = rng.uniform(t.breaks[0] - 5, t.breaks[-1] + 5, n)
+        k = rng.random(n) < 0.1
+        P_ideal[row, k] = rng.choice(t.breaks, int(k.sum()))
+    V_ideal = rng.normal(0, 20, (3, n))
+    side = rng.choice([-1.0, 1.0], (3, n))
+    P, V = rng.normal(0, 1, (3, n)), rng.normal(0, 1, (3, n))
+    args = ((t0.flat, t2.flat), np.array([0, 2]), P_ideal, V_ideal, side, P, V)
+    got = _settled(_play.table_commands, args, "_table_commands")
+    want = _settled(play.table_commands, args, "_table_commands")
+    assert _same(got, want)
+    assert same_bits(got[0][1], P[1]) and same_bits(got[1][1], V[1])
+    # the rows are the per-motor kernels' (compensate_sided, then V over the slope)
+    assert same_bits(got[0][2], _play.compensate_sided(t2.flat, P_ideal[2], side[2]))
+
+
+def test_compiled_table_commands_refuses_arrays_of_the_wrong_shape() -> None:
+    _play = compiled("_play")
+    t = axiscomp.MotorTable.from_comp(
+        AxisComp(1, np.array([-50.0, 0.0, 50.0]), np.zeros(3), np.array([0.004, 0.002, 0.004]))
+    ).flat
+    rows = np.zeros((3, 6))
+    cols = np.array([0, 2])
+    with pytest.raises(ValueError, match=r"P must be a writeable C-ordered float array"):
+        _play.table_commands((t, t), cols, rows, rows, rows, rows.T.copy().T, rows.copy())
+    with pytest.raises(ValueError, match=r"side must have one row a motor .* got \(3, 5\)"):
+        _play.table_commands((t, t), cols, rows, rows, rows[:, :5], rows.copy(), rows.copy())
+    with pytest.raises(ValueError, match=r"tables must have one value a motor, as cols"):
+        _play.table_commands((t,), cols, rows, rows, rows, rows.copy(), rows.copy())
+    with pytest.raises(ValueError, match=r"cols must be rows of P \(0 to 2\), got 5"):
+        _play.table_commands((t, t), np.array([0, 5]), rows, rows, rows, rows.copy(), rows.copy())

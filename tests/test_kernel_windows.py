@@ -36,12 +36,11 @@ def _same_pair(got: tuple[np.ndarray, np.ndarray], want: tuple[np.ndarray, np.nd
 
 
 #: how often at least the samples' conversions call them, and on how many rows
-#: in all (a motor's reversals: every row, once a motor with play and chunk;
-#: dips: every row, twice a motor with play and chunk, the steps where it keeps
-#: its way and its settings-off; roots: the reversals in motion, once a motor
-#: with play and chunk, few steps). dip_roots runs inside motor_dips on both
-#: paths: generated inputs test it (test_generated_roots_are_bit_identical)
-ROOT_CALLS = {"_velocity_roots": (5, 3), "_motor_turns": (10, 100), "_motor_dips": (20, 100)}
+#: in all (roots: the reversals in motion, once a motor with play and chunk, few
+#: steps). dip_roots runs inside motor_dips on both paths: generated inputs test
+#: it (test_generated_roots_are_bit_identical); motor_turns and motor_dips run
+#: inside motor_reversals (test_sample_programs_motor_reversals_are_bit_identical)
+ROOT_CALLS = {"_velocity_roots": (5, 3)}
 
 
 @pytest.mark.parametrize("attr", sorted(ROOT_CALLS))
@@ -56,6 +55,36 @@ def test_sample_programs_roots_are_bit_identical(attr: str, tmp_path: Path) -> N
         assert len(got) == len(want) and all(
             same_bits(g, w) for g, w in zip(got, want, strict=True)
         )
+
+
+def _same_reversals(got: windows.Reversals, want: windows.Reversals) -> bool:
+    return all(
+        same_bits(g, w) and g.dtype == w.dtype and g.shape == w.shape
+        for g, w in zip(got, want, strict=True)
+    )
+
+
+def test_sample_programs_motor_reversals_are_bit_identical(tmp_path: Path) -> None:
+    """Every motor's reversals, kinds, dips and settings-off back, one call a chunk
+    (every row of every motor with play), compiled against the reference; and
+    against the reference's pieces motor by motor (motor_turns, motor_dips)."""
+    _windows = compiled("_windows")
+    calls = record("_motor_reversals", tmp_path)
+    assert len(calls) >= 2
+    assert sum(args[0].shape[1] * len(args[3]) for args in calls) >= 100
+    kinds: set[int] = set()
+    for args in calls:
+        want = windows.motor_reversals(*args)
+        assert _same_reversals(_windows.motor_reversals(*args), want)
+        V, P, rest, cols, side, ref, drift, off, eps, _h, _tol = args
+        for i, col in enumerate(cols.tolist()):
+            turns = _windows.motor_turns(
+                V[col], P[col], rest, int(side[col]), ref[col], drift, off, eps
+            )
+            at = slice(want.turns[i], want.turns[i + 1])
+            assert same_bits(turns[2], want.r[at]) and same_bits(turns[3], want.kind[at])
+            kinds |= set(turns[3].tolist())
+    assert len(kinds) >= 2
 
 
 _vel = st.one_of(
@@ -224,11 +253,11 @@ def test_compiled_windows_refuse_arrays_of_the_wrong_length() -> None:
 
 
 @st.composite
-def _motor_rows(draw: st.DrawFn) -> tuple[Any, ...]:
+def _motor_rows(draw: st.DrawFn, rows: int | None = None) -> tuple[Any, ...]:
     """A motor's rows as motor_turns takes them: velocities fast, creeping, zero
     or −0.0 either way, positions drifting or standing, rows at rest; with or
-    without the point before the chunk (off)."""
-    n = draw(st.integers(0, 40))
+    without the point before the chunk (off); ``rows`` of them, or 0 to 40."""
+    n = draw(st.integers(0, 40)) if rows is None else rows
     v = st.one_of(
         st.floats(-30.0, 30.0),
         st.sampled_from([0.0, -0.0, 4e-4, -4e-4, 5e-4, -6e-4, 2.0, -2.0]),
@@ -309,6 +338,35 @@ def test_dips_at_signed_zeros_and_velocities_against_the_way_are_bit_identical(
         assert len(want[0]) > 0
 
 
+@st.composite
+def _chunk_rows(draw: st.DrawFn) -> tuple[Any, ...]:
+    """motor_reversals' arguments: motors 0 and 2 of three, each drawn as
+    :func:`_motor_rows` draws one (its own velocities, positions, side and ref) on
+    the chunk's rows at rest, with or without the point before the chunk."""
+    one = draw(_motor_rows())
+    n, rest, off, drift = len(one[0]), one[2], one[6], one[5]
+    V, P, side, ref = np.zeros((3, n)), np.zeros((3, n)), np.ones(3, dtype=int), np.zeros(3)
+    V[0], P[0], side[0], ref[0] = one[0], one[1], one[3], one[4]
+    other = draw(_motor_rows(n))
+    V[2], P[2], side[2], ref[2] = other[0], other[1], other[3], other[4]
+    return V, P, rest, np.array([0, 2]), side, ref, drift, off
+
+
+@settings(max_examples=200, deadline=None)
+@given(case=_chunk_rows(), tol=st.sampled_from([0.0, 1e-7, 5e-5]), seed=st.integers(0, 2**16))
+def test_generated_motor_reversals_are_bit_identical(
+    case: tuple[Any, ...], tol: float, seed: int
+) -> None:
+    """Two motors' reversals, kinds, dips and settings-off back in one call, compiled
+    against the reference (motor_turns and motor_dips motor by motor): the same
+    rows, kinds, roots and offsets, to the bit and dtype."""
+    _windows = compiled("_windows")
+    V, P, rest, cols, side, ref, drift, off = case
+    h = np.random.default_rng(seed).choice([0.01, 0.00977, 2.5e-4], V.shape[1] - off)
+    args = (V, P, rest, cols, side, ref, drift, off, reversals.V_EPS, h, tol)
+    assert _same_reversals(_windows.motor_reversals(*args), windows.motor_reversals(*args))
+
+
 def test_compiled_motor_rows_refuse_arrays_of_the_wrong_length() -> None:
     _windows = compiled("_windows")
     V, P, rest = np.ones(5), np.ones(5), np.zeros(5, bool)
@@ -319,6 +377,25 @@ def test_compiled_motor_rows_refuse_arrays_of_the_wrong_length() -> None:
         _windows.motor_dips(P, V, np.ones(5), sg, sg[:3], 0, 1e-4, False)
     with pytest.raises(ValueError, match=r"h must have at most 4 values \(one a step\), got 5"):
         _windows.motor_dips(P, V, np.ones(5), sg, sg, 1, 1e-4, False)
+    V2, P2, cols, side, ref = (
+        np.ones((3, 5)),
+        np.ones((3, 5)),
+        np.array([0, 2]),
+        np.ones(3),
+        np.zeros(3),
+    )
+    rows = (rest, cols, side, ref, 1e-4, 1, 5e-4, np.ones(4), 1e-6)
+    _windows.motor_reversals(V2, P2, *rows)  # the right shapes pass
+    with pytest.raises(ValueError, match=r"V must have one row a motor .* \(3, 5\), got \(3, 4\)"):
+        _windows.motor_reversals(V2[:, :4], P2, *rows)
+    with pytest.raises(ValueError, match=r"rest must have one value a row, as P .* got 4"):
+        _windows.motor_reversals(V2, P2, rest[:-1], *rows[1:])
+    with pytest.raises(ValueError, match=r"ref must have one value a motor, as P's rows .* got 2"):
+        _windows.motor_reversals(V2, P2, rest, cols, side, ref[:2], *rows[4:])
+    with pytest.raises(ValueError, match=r"cols must be rows of P \(0 to 2\), got 3"):
+        _windows.motor_reversals(V2, P2, rest, np.array([3]), *rows[2:])
+    with pytest.raises(ValueError, match=r"h must have at most 4 values \(one a step\), got 5"):
+        _windows.motor_reversals(V2, P2, *rows[:-2], np.ones(5), 1e-6)
 
 
 def _polyline(n: int) -> str:

@@ -35,7 +35,7 @@ from types import ModuleType
 
 import numpy as np
 
-from . import fk, gwrite, ik, legendre, path, play, timelaw
+from . import fk, gwrite, ik, legendre, path, play, timelaw, windows
 
 #: The environment variable that selects the reference kernels (value ``pure``).
 ENV = "PRSXY_KERNEL"
@@ -383,6 +383,24 @@ def compensate_sided(t: play.PlayTable, target: np.ndarray, side: np.ndarray) ->
     return out
 
 
+_table_commands = _play_kernel.table_commands
+
+
+def table_commands(
+    tables: tuple[play.PlayTable, ...],
+    cols: np.ndarray,
+    P_ideal: np.ndarray,
+    V_ideal: np.ndarray,
+    side: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+) -> None:
+    """Every motor's commands through its table in one call, into the rows of ``P``,
+    ``V`` (R, n) (C order, float): :func:`play.table_commands`, compiled when
+    :data:`COMPILED`."""
+    _table_commands(tables, cols, P_ideal, V_ideal, side, P, V)
+
+
 def clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The play model's scan (n,): :func:`play.clamp_scan`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _clamp_scan(lo, hi)
@@ -469,6 +487,31 @@ def settle_crossings(
     return out
 
 
+_settle_motors = _play_kernel.settle_motors
+
+
+def settle_motors(
+    tables: tuple[play.PlayTable, ...],
+    cols: np.ndarray,
+    ch: play.Chunk,
+    before: np.ndarray,
+    carried_off: np.ndarray,
+    x: play.Contacts,
+    P: np.ndarray,
+    V: np.ndarray,
+    cubic: bool,
+    share: float,
+    hurry: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every motor with play settled through a chunk in one call, the commands ``P``,
+    ``V`` (R, n) (C order, float) updated in place: :func:`play.settle_motors`,
+    compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _settle_motors(
+        tables, cols, ch, before, carried_off, x, P, V, cubic, share, hurry
+    )
+    return out
+
+
 _carried = _play_kernel.carried
 
 
@@ -512,12 +555,39 @@ def motor_sides(
     return out
 
 
+_motors_sides = _play_kernel.motors_sides
+
+
+def motors_sides(
+    V: np.ndarray,
+    resting: np.ndarray,
+    cols: np.ndarray,
+    side: np.ndarray,
+    f: np.ndarray,
+    e: np.ndarray,
+    new: np.ndarray,
+    last_row: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    s_first: np.ndarray,
+    s_new: np.ndarray,
+    s_col: np.ndarray,
+    eps: float,
+    out: np.ndarray,
+) -> None:
+    """Every motor's side at each point in one call, into the rows ``cols`` of
+    ``out`` (R, m) (C order, float): :func:`play.motors_sides`, compiled when
+    :data:`COMPILED`."""
+    _motors_sides(
+        V, resting, cols, side, f, e, new, last_row, lo, hi, s_first, s_new, s_col, eps, out
+    )
+
+
 # the crossings (kernel/windows.py and its twin _windows.pyx)
 _crossing_windows = _RUN["windows"].crossing_windows
 _velocity_roots = _RUN["windows"].velocity_roots
 _turning_points = _RUN["windows"].turning_points
 _dip_roots = _RUN["windows"].dip_roots
-_motor_turns = _RUN["windows"].motor_turns
 _corner_blends = _RUN["windows"].corner_blends
 
 
@@ -539,42 +609,26 @@ def corner_blends(
     return out
 
 
-_motor_dips = _RUN["windows"].motor_dips
+_motor_reversals = _RUN["windows"].motor_reversals
 
 
-def motor_turns(
+def motor_reversals(
     V: np.ndarray,
     P: np.ndarray,
     rest: np.ndarray,
-    side: int,
-    ref: float,
+    cols: np.ndarray,
+    side: np.ndarray,
+    ref: np.ndarray,
     drift: float,
     off: int,
     eps: float,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
-    """A motor's reversals in a chunk and their kinds: :func:`windows.motor_turns`,
-    compiled when :data:`COMPILED`."""
-    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float] = _motor_turns(
-        V, P, rest, side, ref, drift, off, eps
-    )
-    return out
-
-
-def motor_dips(
-    P: np.ndarray,
-    V: np.ndarray,
     h: np.ndarray,
-    sg: np.ndarray,
-    came: np.ndarray,
-    off: int,
     tol: float,
-    sets_off: bool,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """A motor's dips or settings-off back in a chunk: :func:`windows.motor_dips`,
-    compiled when :data:`COMPILED`."""
-    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] = _motor_dips(
-        P, V, h, sg, came, off, tol, sets_off
-    )
+) -> windows.Reversals:
+    """Every motor's reversals and their kinds, its dips and settings-off back in a
+    chunk, in one call: :func:`windows.motor_reversals`, compiled when
+    :data:`COMPILED`."""
+    out: windows.Reversals = _motor_reversals(V, P, rest, cols, side, ref, drift, off, eps, h, tol)
     return out
 
 

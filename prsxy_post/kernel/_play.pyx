@@ -348,26 +348,32 @@ def hi_inv(t, target):
     return _inv(t, target, False)
 
 
+cdef inline double _slope1(const Tab* T, double pi_, double sdi,
+                           Py_ssize_t* lo_i) noexcept nogil:
+    """:func:`play.slope` at one position ``pi_`` on side ``sdi``, its interval
+    searched from ``lo_i`` (the row before's) and left there."""
+    cdef Py_ssize_t k
+    cdef double v = 1.0, w
+    if T.nb > 1:
+        if pi_ >= T.breaks[0] and pi_ < T.breaks[T.nb - 1]:
+            # breaks[lo_i] <= p < breaks[lo_i + 1], unique: searched from the
+            # row before's
+            lo_i[0] = _find(pi_, T.breaks, T.nb, lo_i[0])
+            v = v + (T.s_lo[lo_i[0]] if sdi > 0 else T.s_hi[lo_i[0]])
+        else:
+            v = v + 0.0
+    for k in range(T.nc):
+        w = TWO_PI / T.period[k]
+        v = v + T.amp[k] * w * cos(w * pi_ + T.phase[k])
+    return v
+
+
 cdef void _slope_core(const Tab* T, const double* x, const double* sd, Py_ssize_t n,
                       double* o) noexcept nogil:
     """:func:`play.slope` of ``x`` (n,) on sides ``sd`` (n,) into ``o``."""
-    cdef Py_ssize_t i, k, lo_i = -1
-    cdef double v, pi_, w
+    cdef Py_ssize_t i, lo_i = -1
     for i in range(n):
-        v = 1.0
-        pi_ = x[i]
-        if T.nb > 1:
-            if pi_ >= T.breaks[0] and pi_ < T.breaks[T.nb - 1]:
-                # breaks[lo_i] <= p < breaks[lo_i + 1], unique: searched from the
-                # row before's
-                lo_i = _find(pi_, T.breaks, T.nb, lo_i)
-                v = v + (T.s_lo[lo_i] if sd[i] > 0 else T.s_hi[lo_i])
-            else:
-                v = v + 0.0
-        for k in range(T.nc):
-            w = TWO_PI / T.period[k]
-            v = v + T.amp[k] * w * cos(w * pi_ + T.phase[k])
-        o[i] = v
+        o[i] = _slope1(T, x[i], sd[i], &lo_i)
 
 
 def slope(t, p, side):
@@ -443,6 +449,63 @@ def compensate_sided(t, target, side):
     if n:
         _sided_core(&tb.tab, &x[0], &sd[0], n, &o[0])
     return out
+
+
+cdef int _commands_row(const Tab* T, const double* x, const double* vi, const double* sd,
+                       Py_ssize_t n, double* Po, double* Vo) except -1:
+    """:func:`play.table_commands` for one motor: ``Po`` = compensate_sided of ``x``
+    (n,) on sides ``sd``, ``Vo`` = ``vi`` / the slope there. Without periodic terms
+    in one pass (each value is its own); with them the inversion first, over the
+    whole row (the reference's iteration runs over the array)."""
+    cdef Py_ssize_t i, g_up = -1, g_dn = -1, lo_i = -1
+    if T.nc == 0:
+        for i in range(n):
+            if sd[i] > 0:
+                Po[i] = _invert_g(x[i], T.lo_vals, T.breaks, T.lo_err, T.si_lo, T.nb, &g_up)
+            else:
+                Po[i] = _invert_g(x[i], T.hi_vals, T.breaks, T.hi_err, T.si_hi, T.nb, &g_dn)
+            Vo[i] = vi[i] / _slope1(T, Po[i], sd[i], &lo_i)
+        return 0
+    _sided_core(T, x, sd, n, Po)
+    for i in range(n):
+        Vo[i] = vi[i] / _slope1(T, Po[i], sd[i], &lo_i)
+    return 0
+
+
+def _in_place(a, str name):
+    """Refuse an array the kernel cannot update in place as (motors, points)."""
+    if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 2
+            and a.flags.c_contiguous and a.flags.writeable):
+        raise ValueError(f"{name} must be a writeable C-ordered float array (motors, "
+                         f"points), updated in place; got {type(a).__name__}")
+
+
+def table_commands(tables, cols, P_ideal, V_ideal, side, P, V):
+    """The commands of the motors ``cols`` through their tables:
+    :func:`play.table_commands` (``P``, ``V`` C-ordered float arrays (R, n), their
+    rows ``cols`` written in place)."""
+    _in_place(P, "P")
+    _in_place(V, "V")
+    cdef double[:, ::1] Pm = P
+    cdef double[:, ::1] Vm = V
+    cdef Py_ssize_t R = Pm.shape[0], n = Pm.shape[1], i, nc
+    _rows(V, "V", R, n)
+    cdef const double[:, ::1] x = _rows(P_ideal, "P_ideal", R, n)
+    cdef const double[:, ::1] vi = _rows(V_ideal, "V_ideal", R, n)
+    cdef const double[:, ::1] sd = _rows(side, "side", R, n)
+    cdef const long[::1] cv = np.ascontiguousarray(cols, dtype=np.int_)
+    nc = cv.shape[0]
+    _lengths("one value a motor, as cols", nc, tables=len(tables))
+    for i in range(nc):
+        if not 0 <= cv[i] < R:
+            raise ValueError(f"cols must be rows of P (0 to {R - 1}), got {cv[i]}")
+    cdef _Table tb
+    if n == 0:
+        return
+    for i in range(nc):
+        tb = _table(tables[i])
+        _commands_row(&tb.tab, &x[cv[i], 0], &vi[cv[i], 0], &sd[cv[i], 0], n, &Pm[cv[i], 0],
+                      &Vm[cv[i], 0])
 
 
 def clamp_scan(lo, hi):
@@ -1067,24 +1130,15 @@ cdef struct Crossings:
     Py_ssize_t c
 
 
-def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double share,
-                     double hurry):
-    """The crossings ended where the parts stand: :func:`play.settle_crossings`."""
-    cdef _Table tb = _table(t)
-    cdef const Tab* T = &tb.tab
-    cdef _Motion mv = _Motion(mo)
-    cdef const double[::1] shv = _vec(shortfall)
-    P_a = np.array(P, dtype=np.float64)
-    V_a = np.array(V, dtype=np.float64)
-    cdef double[::1] Pv = P_a
-    cdef double[::1] Vv = V_a
-    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
-    cdef const long[::1] bv = np.ascontiguousarray(b, dtype=np.int_)
-    cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0], i, k, upto = 0, w
-    cdef double y0 = before[0], P0 = before[1], V0 = before[2], carry = NAN, cr
-    _motion_lengths(mo, n)
-    _lengths("one value a point, as P", n, V=len(Vv))
-    _lengths("one value a crossing, as e", c, b=len(bv), shortfall=len(shv))
+cdef int _settle_core(const Tab* T, const Mo* mo, double y0, double P0, double V0,
+                      const long* ev, const long* bv, const double* shv, Py_ssize_t c,
+                      double* Pv, double* Vv, bint cubic, double share, double hurry,
+                      double* res) except -1:
+    """:func:`play.settle_crossings` for c >= 1 crossings, the commands ``Pv``, ``Vv``
+    (mo.n,) updated in place: ``res`` the part, the command's position and
+    velocity at the last contact and the offset carried (NaN: none)."""
+    cdef Py_ssize_t n = mo.n, i, k, upto = 0, w
+    cdef double carry = NAN, cr
     for i in range(c):
         if ev[i] + 1 > upto:
             upto = ev[i] + 1
@@ -1115,24 +1169,23 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
     cdef long one_step = upto
     cdef Crossings X
     try:
-        _follow_core(T, &y0, &P0, &V0, &one_step, 1, &Pv[0], &Vv[0], mv.mo.dt, upto, cubic,
-                     y_pt, lo_, hi_)
+        _follow_core(T, &y0, &P0, &V0, &one_step, 1, Pv, Vv, mo.dt, upto, cubic, y_pt, lo_,
+                     hi_)
         for i in range(c):
             at_beg[i] = y_pt[bv[i] if bv[i] > 0 else 0] if bv[i] >= 0 else y0
             cuts[2 * i] = bv[i] + 1 if bv[i] + 1 > 0 else 0
             cuts[2 * i + 1] = ev[i] + 1
-            u[i] = mv.mo.side[ev[i]] > 0
+            u[i] = mo.side[ev[i]] > 0
             stops[i] = bv[i + 1] if i + 1 < c else n
             made[i] = Pv[ev[i]]
         _extreme(lo_, hi_, upto, cuts, at_beg, u, y_s, c)
-        _contact_core(T, y_s, u, &shv[0], c, ct)
+        _contact_core(T, y_s, u, shv, c, ct)
         for i in range(c):
             Pv[ev[i]] = ct[i]
-            off[i] = y_s[i] - mv.mo.P_ideal[ev[i]]
-        memcpy(P_made, &Pv[0], n * sizeof(double))
-        memcpy(V_made, &Vv[0], n * sizeof(double))
-        _commands_core(T, &mv.mo, off, &ev[0], stops, c, &Pv[0], &Vv[0], share, hurry, left,
-                       &cr)
+            off[i] = y_s[i] - mo.P_ideal[ev[i]]
+        memcpy(P_made, Pv, n * sizeof(double))
+        memcpy(V_made, Vv, n * sizeof(double))
+        _commands_core(T, mo, off, ev, stops, c, Pv, Vv, share, hurry, left, &cr)
         if cr == cr:
             carry = cr
         # a part still off where the next crossing begins takes that offset into it
@@ -1141,11 +1194,11 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
             if left[i - 1] != 0.0:
                 todo[w] = i
                 w += 1
-        X.e, X.b, X.u, X.shortfall, X.stops = &ev[0], &bv[0], u, &shv[0], stops
+        X.e, X.b, X.u, X.shortfall, X.stops = ev, bv, u, shv, stops
         X.made, X.P_made, X.V_made, X.c = made, P_made, V_made, c
         while w:
-            w = _reckon_again(T, &mv.mo, &X, todo, w, y_s, left, &Pv[0], &Vv[0], cubic, share,
-                              hurry, &cr, nxt)
+            w = _reckon_again(T, mo, &X, todo, w, y_s, left, Pv, Vv, cubic, share, hurry, &cr,
+                              nxt)
             if cr == cr:
                 carry = cr
             todo, nxt = nxt, todo
@@ -1153,11 +1206,39 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
         for i in range(c):
             if ev[i] > ev[k]:
                 k = i
-        return _pure.Settled(P_a, V_a, y_s[k], Pv[upto - 1], Vv[upto - 1], carry)
+        res[0] = y_s[k]
+        res[1] = Pv[upto - 1]
+        res[2] = Vv[upto - 1]
+        res[3] = carry
+        return 0
     finally:
         PyMem_Free(buf)
         PyMem_Free(ibuf)
         PyMem_Free(u)
+
+
+def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double share,
+                     double hurry):
+    """The crossings ended where the parts stand: :func:`play.settle_crossings`."""
+    cdef _Table tb = _table(t)
+    cdef _Motion mv = _Motion(mo)
+    cdef const double[::1] shv = _vec(shortfall)
+    P_a = np.array(P, dtype=np.float64)
+    V_a = np.array(V, dtype=np.float64)
+    cdef double[::1] Pv = P_a
+    cdef double[::1] Vv = V_a
+    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
+    cdef const long[::1] bv = np.ascontiguousarray(b, dtype=np.int_)
+    cdef Py_ssize_t n = Pv.shape[0], c = ev.shape[0]
+    cdef double res[4]
+    _motion_lengths(mo, n)
+    _lengths("one value a point, as P", n, V=len(Vv))
+    _lengths("one value a crossing, as e", c, b=len(bv), shortfall=len(shv))
+    if c == 0:
+        raise ValueError("e must have a crossing at least (the reference's e.max()), got none")
+    _settle_core(&tb.tab, &mv.mo, before[0], before[1], before[2], &ev[0], &bv[0], &shv[0], c,
+                 &Pv[0], &Vv[0], cubic, share, hurry, res)
+    return _pure.Settled(P_a, V_a, res[0], res[1], res[2], res[3])
 
 
 cdef Py_ssize_t _reckon_again(const Tab* T, const Mo* mo, const Crossings* X, const long* todo,
@@ -1263,6 +1344,177 @@ cdef Py_ssize_t _reckon_again(const Tab* T, const Mo* mo, const Crossings* X, co
         PyMem_Free(uu)
 
 
+cdef int _across(const double* t, const long* e, const long* b, Py_ssize_t c, double P0,
+                 double* P, double* V) except -1:
+    """:func:`play.across` on :func:`play.across_rows`' rows of the crossings (c,):
+    every window's first and last command taken before any point inside is moved
+    (numpy's gather, then its scatter, in the rows' order)."""
+    cdef Py_ssize_t i, j, b0
+    cdef double* buf = <double*>PyMem_Malloc((3 * c + 1) * sizeof(double))
+    if buf == NULL:
+        raise MemoryError()
+    cdef double* P_b = buf
+    cdef double* rate = buf + c
+    cdef double* t_b = buf + 2 * c
+    for i in range(c):
+        if e[i] - b[i] - 1 > 0:
+            b0 = b[i] if b[i] > 0 else 0
+            t_b[i] = t[b0] if b[i] >= 0 else 0.0
+            P_b[i] = P[b0] if b[i] >= 0 else P0
+            rate[i] = (P[e[i]] - P_b[i]) / (t[e[i]] - t_b[i])
+    for i in range(c):
+        if e[i] - b[i] - 1 > 0:
+            for j in range(b[i] + 1, e[i]):
+                P[j] = P_b[i] + rate[i] * (t[j] - t_b[i])
+                V[j] = rate[i]
+    PyMem_Free(buf)
+    return 0
+
+
+cdef struct Chunk:
+    # a chunk's columns (play.Chunk), the motors' as rows of n
+    const double* P_ideal
+    const double* V_ideal
+    const double* side
+    const double* speed
+    const double* dt
+    const double* s_path
+    const double* t
+    const double* P_before
+    Py_ssize_t n
+
+
+cdef int _settle_one(const Tab* T, const Chunk* ch, long col, const double* before,
+                     double carried_off, const long* e, const long* b, const double* sh,
+                     Py_ssize_t c, double* Pv, double* Vv, bint cubic, double share,
+                     double hurry, double* dP, double* out) except -1:
+    """:func:`play._settle_motor` for motor ``col`` (its c crossings ``e``, ``b``,
+    ``sh``; its commands ``Pv``, ``Vv`` (n,) in place; ``dP`` (n,) work space):
+    ``out`` the part at the chunk's end and the offset carried (NaN: none)."""
+    cdef Py_ssize_t n = ch.n, j, start = 0
+    cdef Mo mo
+    cdef double carry = NAN, cr, off0 = carried_off, left, y0, P0, V0
+    cdef long st = -1, sp, length
+    cdef double res[4]
+    mo.P_ideal = ch.P_ideal + col * n
+    mo.V_ideal = ch.V_ideal + col * n
+    mo.side = ch.side + col * n
+    mo.speed, mo.dt, mo.s_path, mo.dP, mo.n = ch.speed, ch.dt, ch.s_path, dP, n
+    if n:
+        dP[0] = mo.P_ideal[0] - ch.P_before[col]
+    for j in range(1, n):
+        dP[j] = mo.P_ideal[j] - mo.P_ideal[j - 1]
+    if off0 != 0.0:
+        # what it leaves where the first crossing begins, the follow below sees
+        sp = b[0] if c else n
+        _commands_core(T, &mo, &off0, &st, &sp, 1, Pv, Vv, share, hurry, &left, &cr)
+        carry = cr
+    y0, P0, V0 = before[0], before[1], before[2]
+    if c:
+        if not cubic:
+            _across(ch.t, e, b, c, P0, Pv, Vv)
+        _settle_core(T, &mo, y0, P0, V0, e, b, sh, c, Pv, Vv, cubic, share, hurry, res)
+        if res[3] == res[3]:
+            carry = res[3]
+        if not cubic:
+            _across(ch.t, e, b, c, P0, Pv, Vv)
+        y0, P0, V0 = res[0], res[1], res[2]
+        # from the last contact on, the corrected commands carry the part
+        for j in range(c):
+            if e[j] + 1 > start:
+                start = e[j] + 1
+    if start < n:
+        length = n - start
+        buf = <double*>PyMem_Malloc((3 * length + 1) * sizeof(double))
+        if buf == NULL:
+            raise MemoryError()
+        try:
+            _follow_core(T, &y0, &P0, &V0, &length, 1, Pv + start, Vv + start, ch.dt + start,
+                         length, cubic, buf, buf + length, buf + 2 * length)
+            y0 = buf[length - 1]
+        finally:
+            PyMem_Free(buf)
+    out[0] = y0
+    out[1] = carry
+    return 0
+
+
+def _rows(a, str name, Py_ssize_t r, Py_ssize_t n):
+    """``a`` as a C-ordered (r, n) float array (refused otherwise)."""
+    out = np.ascontiguousarray(a, dtype=np.float64)
+    if out.shape != (r, n):
+        raise ValueError(f"{name} must have one row a motor of one value a point ({r}, {n}), "
+                         f"got {out.shape}")
+    return out
+
+
+def settle_motors(tables, cols, ch, before, carried_off, x, P, V, bint cubic, double share,
+                  double hurry):
+    """Every motor with play through a chunk: :func:`play.settle_motors` (``P``,
+    ``V`` C-ordered float arrays (R, n), updated in place)."""
+    _in_place(P, "P")
+    _in_place(V, "V")
+    cdef double[:, ::1] Pm = P
+    cdef double[:, ::1] Vm = V
+    cdef Py_ssize_t R = Pm.shape[0], n = Pm.shape[1], nc, m, i, k, c
+    _rows(V, "V", R, n)
+    keep = [_rows(a, f, R, n) for f, a in zip(("P_ideal", "V_ideal", "side"), ch[:3])]
+    keep += [_vec(a) for a in ch[3:]]
+    for f, a in zip(ch._fields[3:7], keep[3:7]):
+        _lengths("one value a point, as P", n, **{f: len(a)})
+    _lengths("one value a motor, as P's rows", R, P_before=len(keep[7]))
+    cdef const long[::1] cv = np.ascontiguousarray(cols, dtype=np.int_)
+    nc = cv.shape[0]
+    cdef const double[:, ::1] bf = np.ascontiguousarray(before, dtype=np.float64).reshape(-1, 3)
+    cdef const double[::1] co = _vec(carried_off)
+    _lengths("one value a motor, as cols", nc, tables=len(tables), before=bf.shape[0],
+             carried_off=len(co))
+    for i in range(nc):
+        if not 0 <= cv[i] < R:
+            raise ValueError(f"cols must be rows of P (0 to {R - 1}), got {cv[i]}")
+    cdef const long[::1] ev = np.ascontiguousarray(x.e, dtype=np.int_)
+    cdef const long[::1] bv = np.ascontiguousarray(x.b, dtype=np.int_)
+    cdef const long[::1] xc = np.ascontiguousarray(x.col, dtype=np.int_)
+    cdef const double[::1] sh = _vec(x.short)
+    m = ev.shape[0]
+    _lengths("one value a crossing, as e", m, b=len(bv), col=len(xc), short=len(sh))
+    cdef Chunk C
+    cdef const double* ptr[8]
+    cdef const double[::1] flat
+    for k in range(8):
+        flat = keep[k].reshape(-1)
+        ptr[k] = &flat[0] if flat.shape[0] else NULL
+    C.P_ideal, C.V_ideal, C.side, C.speed = ptr[0], ptr[1], ptr[2], ptr[3]
+    C.dt, C.s_path, C.t, C.P_before, C.n = ptr[4], ptr[5], ptr[6], ptr[7], n
+    y_a, carry_a = np.empty(nc), np.empty(nc)
+    cdef double[::1] ya = y_a
+    cdef double[::1] ca = carry_a
+    cdef double out[2]
+    cdef _Table tb
+    cdef char* mem = <char*>PyMem_Malloc((n + m + 1) * sizeof(double) + (2 * m + 1) * sizeof(long))
+    if mem == NULL:
+        raise MemoryError()
+    cdef double* dP = <double*>mem
+    cdef double* ms = dP + n
+    cdef long* me = <long*>(ms + m + 1)
+    cdef long* mb = me + m
+    try:
+        for i in range(nc):
+            tb = _table(tables[i])
+            c = 0
+            for k in range(m):  # the motor's own crossings, in their order
+                if xc[k] == cv[i]:
+                    me[c], mb[c], ms[c] = ev[k], bv[k], sh[k]
+                    c += 1
+            _settle_one(&tb.tab, &C, cv[i], &bf[i, 0], co[i], me, mb, ms, c,
+                        &Pm[cv[i], 0] if n else NULL, &Vm[cv[i], 0] if n else NULL, cubic,
+                        share, hurry, dP, out)
+            ya[i], ca[i] = out[0], out[1]
+    finally:
+        PyMem_Free(mem)
+    return y_a, carry_a
+
+
 def carried(sg, side):
     """The side carried through the rows without a direction: :func:`play.carried`
     (the result's type as numpy's where gives it)."""
@@ -1352,24 +1604,14 @@ def creeps(sg, P, side, double ref, double drift):
     return out_a, cur_ref
 
 
-def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, double eps):
-    """A motor's side at each point: :func:`play.motor_sides` (a window ending at
-    −1 sets the last point, as numpy's index −1 does)."""
-    cdef const double[::1] v = _vec(V)
-    cdef const unsigned char[::1] rest = np.ascontiguousarray(resting, dtype=np.uint8)
-    cdef const long[::1] fv = np.ascontiguousarray(f, dtype=np.int_)
-    cdef const long[::1] ev = np.ascontiguousarray(e, dtype=np.int_)
-    cdef const long[::1] nv = np.ascontiguousarray(new, dtype=np.int_)
-    cdef const long[::1] lv = np.ascontiguousarray(last_row, dtype=np.int_)
-    cdef const long[::1] sf = np.ascontiguousarray(s_first, dtype=np.int_)
-    cdef const long[::1] sn = np.ascontiguousarray(s_new, dtype=np.int_)
-    cdef Py_ssize_t m = v.shape[0], w = ev.shape[0], i, j, k
-    cdef long lo_f
-    _lengths("one value a point, as V", m, resting=len(rest))
-    _lengths("one value a window, as e", w, f=len(fv), new=len(nv), last_row=len(lv))
-    _lengths("one value a standing crossing, as s_first", sf.shape[0], s_new=len(sn))
-    out = np.empty(m, dtype=int)
-    cdef long[::1] sg = out
+cdef void _sides_core(const double* v, const unsigned char* rest, Py_ssize_t m,
+                      const long* fv, const long* ev, const long* nv, const long* lv,
+                      Py_ssize_t w, const long* sf, const long* sn, Py_ssize_t ns, long side,
+                      double eps, long* sg) noexcept nogil:
+    """:func:`play.motor_sides` of one motor into ``sg`` (m,), over pointers: its w
+    windows and its ns standing crossings."""
+    cdef Py_ssize_t i, j, k
+    cdef long lo_f, cur = side
     for i in range(m):
         sg[i] = 0 if rest[i] else (1 if v[i] > eps else (-1 if v[i] < -eps else 0))
     for i in range(w):
@@ -1383,13 +1625,95 @@ def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, doub
     for i in range(w):
         k = ev[i] if ev[i] >= 0 else ev[i] + m
         sg[k] = nv[i]
-    for i in range(sf.shape[0]):
+    for i in range(ns):
         k = sf[i] if sf[i] >= 0 else sf[i] + m
         sg[k] = sn[i]
     # carried(out, side) in place: the last direction at or before each row
-    cdef long cur = side
     for i in range(m):
         if sg[i] != 0:
             cur = sg[i]
         sg[i] = cur
+
+
+def _longs(a):
+    return np.ascontiguousarray(a, dtype=np.int_)
+
+
+def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, double eps):
+    """A motor's side at each point: :func:`play.motor_sides` (a window ending at
+    −1 sets the last point, as numpy's index −1 does)."""
+    cdef const double[::1] v = _vec(V)
+    cdef const unsigned char[::1] rest = np.ascontiguousarray(resting, dtype=np.uint8)
+    cdef const long[::1] fv = _longs(f)
+    cdef const long[::1] ev = _longs(e)
+    cdef const long[::1] nv = _longs(new)
+    cdef const long[::1] lv = _longs(last_row)
+    cdef const long[::1] sf = _longs(s_first)
+    cdef const long[::1] sn = _longs(s_new)
+    cdef Py_ssize_t m = v.shape[0], w = ev.shape[0]
+    _lengths("one value a point, as V", m, resting=len(rest))
+    _lengths("one value a window, as e", w, f=len(fv), new=len(nv), last_row=len(lv))
+    _lengths("one value a standing crossing, as s_first", sf.shape[0], s_new=len(sn))
+    out = np.empty(m, dtype=int)
+    cdef long[::1] sg = out
+    if m:
+        _sides_core(&v[0], &rest[0], m, &fv[0] if w else NULL, &ev[0] if w else NULL,
+                    &nv[0] if w else NULL, &lv[0] if w else NULL, w,
+                    &sf[0] if sf.shape[0] else NULL, &sn[0] if sf.shape[0] else NULL,
+                    sf.shape[0], side, eps, &sg[0])
     return out
+
+
+def motors_sides(V, resting, cols, side, f, e, new, last_row, lo, hi, s_first, s_new, s_col,
+                 double eps, out):
+    """Every motor's side at each point, into the rows ``cols`` of ``out``:
+    :func:`play.motors_sides`."""
+    _in_place(out, "out")
+    cdef double[:, ::1] o = out
+    cdef Py_ssize_t R = o.shape[0], m = o.shape[1], nc, w, ns, i, k, a, c
+    cdef const double[:, ::1] v = _rows(V, "V", R, m)
+    cdef const unsigned char[::1] rest = np.ascontiguousarray(resting, dtype=np.uint8)
+    cdef const long[::1] cv = _longs(cols)
+    cdef const long[::1] sd = _longs(side)
+    cdef const long[::1] fv = _longs(f)
+    cdef const long[::1] ev = _longs(e)
+    cdef const long[::1] nv = _longs(new)
+    cdef const long[::1] lv = _longs(last_row)
+    cdef const long[::1] lo_v = _longs(lo)
+    cdef const long[::1] hi_v = _longs(hi)
+    cdef const long[::1] sf = _longs(s_first)
+    cdef const long[::1] sn = _longs(s_new)
+    cdef const long[::1] sc = _longs(s_col)
+    nc, w, ns = cv.shape[0], ev.shape[0], sf.shape[0]
+    _lengths("one value a point, as out's rows", m, resting=len(rest))
+    _lengths("one value a motor, as out's rows", R, side=len(sd))
+    _lengths("one value a motor, as cols", nc, lo=len(lo_v), hi=len(hi_v))
+    _lengths("one value a window, as e", w, f=len(fv), new=len(nv), last_row=len(lv))
+    _lengths("one value a standing crossing, as s_first", ns, s_new=len(sn), s_col=len(sc))
+    for i in range(nc):
+        if not 0 <= cv[i] < R:
+            raise ValueError(f"cols must be rows of out (0 to {R - 1}), got {cv[i]}")
+        if not 0 <= lo_v[i] <= hi_v[i] <= w:
+            raise ValueError(f"lo, hi must cut the windows (0 to {w}), got {lo_v[i]}, {hi_v[i]}")
+    cdef char* mem = <char*>PyMem_Malloc((m + 2 * ns + 1) * sizeof(long))
+    if mem == NULL:
+        raise MemoryError()
+    cdef long* sg = <long*>mem
+    cdef long* mf = sg + m
+    cdef long* mn = mf + ns
+    try:
+        for i in range(nc):
+            c = 0
+            for k in range(ns):  # its standing crossings, in their order
+                if sc[k] == cv[i]:
+                    mf[c], mn[c] = sf[k], sn[k]
+                    c += 1
+            a = lo_v[i]
+            if m:
+                _sides_core(&v[cv[i], 0], &rest[0], m, &fv[a] if w else NULL,
+                            &ev[a] if w else NULL, &nv[a] if w else NULL,
+                            &lv[a] if w else NULL, hi_v[i] - a, mf, mn, c, sd[cv[i]], eps, sg)
+            for k in range(m):
+                o[cv[i], k] = sg[k]
+    finally:
+        PyMem_Free(mem)

@@ -7,6 +7,7 @@ bit. numpy's ``maximum`` and ``minimum`` as numpy's (a NaN wins). Compiled with 
 
 import numpy as np
 
+from . import windows as _pure
 from ._play import creeps as _creeps
 
 from libc.math cimport sqrt, fabs, copysign, signbit, INFINITY, NAN
@@ -426,6 +427,19 @@ def motor_dips(P, V, h, sg, came, Py_ssize_t off, double tol, bint sets_off):
                         rr[m, 0] = lo
                         rr[m, 1] = hi
                         m += 1
+    return _dips_of(p, v, hh, off, j_a, r_a, m, tol, sets_off)
+
+
+def _dips_of(const double[::1] p, const double[::1] v, const double[::1] hh, Py_ssize_t off,
+             j_a, r_a, Py_ssize_t m, double tol, bint sets_off):
+    """:func:`motor_dips` past its candidates: of the m candidate rows ``j_a`` and
+    their roots ``r_a`` (rows of (cap, 2) turning points, or (cap, 1) velocity
+    roots setting off), the roots' cubes by numpy's power over the array the
+    reference makes, the depths, and the steps that dip with their roots and
+    accelerations."""
+    cdef const Py_ssize_t[::1] jj = j_a
+    cdef const double[:, ::1] rr = r_a
+    cdef Py_ssize_t i, j, k = 0
     cdef const double[:, ::1] S3 = np.ascontiguousarray(r_a[:m] ** 3)
     keep_a = np.empty(m, dtype=np.intp)
     cdef Py_ssize_t[::1] kp = keep_a
@@ -469,6 +483,144 @@ def motor_dips(P, V, h, sg, came, Py_ssize_t off, double tol, bint sets_off):
             A1[m] = (2 * a * k1 + b) / hh[j - off]
             A2[m] = (2 * a * k2 + b) / hh[j - off]
     return out_j, out_s1, out_s2, out_1, out_2
+
+
+cdef Py_ssize_t _turn_pass(const double* p, const double* v, const unsigned char* rs,
+                           const double* hh, long* sg, long* came, const long* cr, long side,
+                           Py_ssize_t N, Py_ssize_t off, Py_ssize_t n_h, Py_ssize_t* r,
+                           signed char* kind, Py_ssize_t* j0, double* r0, Py_ssize_t* m0,
+                           Py_ssize_t* j1, double* r1, Py_ssize_t* m1) noexcept nogil:
+    """One pass over a motor's rows, its creeps ``cr`` known: the creeps made its
+    directions in ``sg``, the way each row comes from into ``came``, its reversals
+    and their kinds (:func:`motor_turns`: their count returned), and the candidates
+    of :func:`motor_dips` (rows and roots: its dips into ``j0``, ``r0`` (cap, 2),
+    ``m0`` of them, its settings-off back into ``j1``, ``r1``, ``m1``). Every test
+    at row i reads rows up to i, final by then: the separate passes' answers."""
+    cdef Py_ssize_t i, m = 0, a0 = 0, a1 = 0, b1, b2
+    cdef Py_ssize_t lo_j = off if off > 1 else 1
+    cdef Py_ssize_t hi_j = off + n_h if off + n_h < N else N
+    cdef long cur = side, nw
+    cdef bint old_way, at_rest, crept_f, stood
+    cdef double lo, hi
+    for i in range(N):
+        if cr[i] != 0:
+            sg[i] = cr[i]
+        came[i] = cur
+        if sg[i] != 0:
+            cur = sg[i]
+        if i >= off and sg[i] != 0 and sg[i] != came[i]:
+            nw = sg[i]
+            b1 = i - 1 if i >= 1 else 0
+            b2 = i - 2 if i >= 2 else 0
+            old_way = nw * (p[i] - p[b1]) < 0.0
+            at_rest = i == 0 or (rs[b1] and not old_way)
+            crept_f = cr[i] != 0 and not at_rest and sg[b1] != -nw
+            stood = (
+                not at_rest and not crept_f and i - off >= 1 and i >= 2 and sg[b1] == 0
+                and sg[b2] == 0 and fabs(p[b1] - p[b2]) < 1e-9 and not old_way
+            )
+            r[m] = i
+            kind[m] = AT_REST if at_rest else (CREPT if crept_f else (STOOD if stood else MID))
+            m += 1
+        if i < lo_j or i >= hi_j:
+            continue
+        if sg[i] == sg[i - 1] and sg[i] != 0:
+            if _turns_twice(p[i - 1], v[i - 1], p[i], v[i], hh[i - off], &lo, &hi):
+                j0[a0] = i
+                r0[2 * a0] = lo
+                r0[2 * a0 + 1] = hi
+                a0 += 1
+        if (sg[i] != 0 and sg[i - 1] == 0 and came[i] == sg[i]
+                and sg[i] * (p[i] - p[i - 1]) < 0.0):
+            j1[a1] = i
+            r1[a1] = _velocity_root(p[i - 1], v[i - 1], p[i], v[i], hh[i - off], <double>sg[i])
+            a1 += 1
+    m0[0] = a0
+    m1[0] = a1
+    return m
+
+
+def _row_major(a, str name, Py_ssize_t r, Py_ssize_t n):
+    """``a`` as a C-ordered (r, n) float array (refused otherwise)."""
+    out = np.ascontiguousarray(a, dtype=np.float64)
+    if out.shape != (r, n):
+        raise ValueError(f"{name} must have one row a motor of one value a row, as P "
+                         f"({r}, {n}), got {out.shape}")
+    return out
+
+
+def motor_reversals(V, P, rest, cols, side, ref, double drift, Py_ssize_t off, double eps, h,
+                    double tol):
+    """:func:`prsxy_post.kernel.windows.motor_reversals`, compiled: for each motor,
+    its directions (one pass), its creeps (:func:`.play.creeps`, compiled), then one
+    pass (:func:`_turn_pass`) for its reversals, their kinds and the candidates of
+    its dips and settings-off back, then those (:func:`_dips_of`), as
+    :func:`motor_turns` and :func:`motor_dips` make them."""
+    P_a = np.ascontiguousarray(P, dtype=np.float64)
+    if P_a.ndim != 2:
+        raise ValueError(f"P must have one row a motor, got {P_a.ndim} dimensions")
+    cdef Py_ssize_t R = P_a.shape[0], N = P_a.shape[1], c, i, k, m, M = 0, m0, m1, cap
+    cdef const double[:, ::1] Pv = P_a
+    cdef const double[:, ::1] Vv = _row_major(V, "V", R, N)
+    cdef const unsigned char[::1] rs = np.ascontiguousarray(rest, dtype=np.bool_).view(np.uint8)
+    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
+    cdef const long[::1] cv = np.ascontiguousarray(cols, dtype=np.int_)
+    cdef const long[::1] sd = np.ascontiguousarray(side, dtype=np.int_)
+    cdef const double[::1] rf = np.ascontiguousarray(ref, dtype=np.float64)
+    c = cv.shape[0]
+    _lengths("one value a row, as P", N, rest=len(rs))
+    _lengths("one value a motor, as P's rows", R, side=len(sd), ref=len(rf))
+    if hh.shape[0] > N - off:
+        raise ValueError(f"h must have at most {N - off} values (one a step), got {hh.shape[0]}")
+    for i in range(c):
+        if not 0 <= cv[i] < R:
+            raise ValueError(f"cols must be rows of P (0 to {R - 1}), got {cv[i]}")
+    sg_a = np.empty((c, N), dtype=np.int_)
+    came_a = np.empty((c, N), dtype=np.int_)
+    r_a = np.empty(c * N, dtype=np.intp)
+    kind_a = np.empty(c * N, dtype=np.int8)
+    turns_a = np.zeros(c + 1, dtype=np.intp)
+    reach_a = np.empty(c)
+    cdef long[:, ::1] sg = sg_a
+    cdef long[:, ::1] came = came_a
+    cdef Py_ssize_t[::1] r = r_a
+    cdef signed char[::1] kind = kind_a
+    cdef const long[::1] cr
+    cdef Py_ssize_t[::1] j0
+    cdef Py_ssize_t[::1] j1
+    cdef double[:, ::1] r0
+    cdef double[:, ::1] r1
+    cdef Py_ssize_t lo_j = off if off > 1 else 1
+    cdef Py_ssize_t hi_j = off + hh.shape[0] if off + hh.shape[0] < N else N
+    cap = hi_j - lo_j if hi_j > lo_j else 0
+    parts = []
+    for i in range(c):
+        col = cv[i]
+        for k in range(N):
+            sg[i, k] = 0 if rs[k] else (1 if Vv[col, k] > eps else (-1 if Vv[col, k] < -eps else 0))
+        crept_a, reach_a[i] = _creeps(sg_a[i], P_a[col], sd[col], rf[col], drift)
+        cr = crept_a
+        # the candidates' roots: (m, 2) turning points as turning_points' rows, or
+        # (m, 1) velocity_roots' s setting off (motor_dips' arrays)
+        j0_a, j1_a = np.empty(cap, dtype=np.intp), np.empty(cap, dtype=np.intp)
+        r0_a, r1_a = np.empty((cap, 2)), np.empty((cap, 1))
+        j0, j1, r0, r1 = j0_a, j1_a, r0_a, r1_a
+        if N:
+            m = _turn_pass(&Pv[col, 0], &Vv[col, 0], &rs[0], &hh[0] if hh.shape[0] else NULL,
+                           &sg[i, 0], &came[i, 0], &cr[0], sd[col], N, off, hh.shape[0],
+                           &r[M], &kind[M], &j0[0] if cap else NULL,
+                           &r0[0, 0] if cap else NULL, &m0, &j1[0] if cap else NULL,
+                           &r1[0, 0] if cap else NULL, &m1)
+        else:
+            m = m0 = m1 = 0
+        M += m
+        turns_a[i + 1] = M
+        parts.append(_dips_of(P_a[col], Vv[col], hh, off, j0_a, r0_a, m0, tol, False))
+        parts.append(_dips_of(P_a[col], Vv[col], hh, off, j1_a, r1_a, m1, tol, True))
+    dips_a = np.cumsum([0] + [len(x[0]) for x in parts])
+    none = (np.zeros(0, dtype=np.intp),) + (np.zeros(0),) * 4
+    flat = [np.concatenate([none[f]] + [x[f] for x in parts]) for f in range(5)]
+    return _pure.Reversals(sg_a, came_a, r_a[:M], kind_a[:M], turns_a, reach_a, *flat, dips_a)
 
 
 def corner_blends(V_in, V_out, cols, h, double accel, double v_eps, double turn_mm,

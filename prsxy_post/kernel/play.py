@@ -160,6 +160,26 @@ def compensate_sided(t: PlayTable, target: np.ndarray, side: np.ndarray) -> np.n
     return out
 
 
+def table_commands(
+    tables: tuple[PlayTable, ...],
+    cols: np.ndarray,
+    P_ideal: np.ndarray,
+    V_ideal: np.ndarray,
+    side: np.ndarray,
+    P: np.ndarray,
+    V: np.ndarray,
+) -> None:
+    """The commands of the motors ``cols`` (c,) through their tables (``tables``,
+    one a motor), a motor a row: P[col] = :func:`compensate_sided` of its wanted
+    positions ``P_ideal[col]`` on its sides ``side[col]``, V[col] = its wanted
+    velocities ``V_ideal[col]`` over the :func:`slope` there (the tables' dP/dp,
+    the commands' rate). ``P``, ``V`` (R, n) [mm, mm/s] are written in place, the
+    rows of ``cols`` only."""
+    for t, col in zip(tables, cols.tolist(), strict=True):
+        P[col] = compensate_sided(t, P_ideal[col], side[col])
+        np.divide(V_ideal[col], slope(t, P[col], side[col]), out=V[col])
+
+
 def clamp_scan(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The play model y_0 = lo_0, y_k = min(max(y_(k−1), lo_k), hi_k) for (n,)
     envelopes.
@@ -675,6 +695,182 @@ def _reckon_again(
     return moved[moved + 1 < len(e)] + 1, carry
 
 
+class Chunk(NamedTuple):
+    """A chunk of n points as :func:`settle_motors` takes it, the motors' columns
+    as rows (R motors, R × n, C order).
+
+    P_ideal, V_ideal : (R, n) the motors' wanted positions [mm] and velocities [mm/s]
+    side : (R, n) the side of its play each motor is on (+1 up, −1 down)
+    speed, dt : (n,) the path's planned speed [mm/s], each step's duration [s]
+    s_path : (n,) path length run by each point since the point before the chunk [mm]
+    t : (n,) the time of each point since the point before the chunk [s]
+    P_before : (R,) the wanted positions at the point before the chunk [mm] (the
+        chunk's first where there is none)
+    """
+
+    P_ideal: np.ndarray
+    V_ideal: np.ndarray
+    side: np.ndarray
+    speed: np.ndarray
+    dt: np.ndarray
+    s_path: np.ndarray
+    t: np.ndarray
+    P_before: np.ndarray
+
+
+class Contacts(NamedTuple):
+    """Every motor's crossings in a chunk, each a row: the point where it ends
+    ``e`` and where it began ``b`` (−1: before the chunk), the motor ``col``, and
+    how far short of the contact it ends ``short`` [mm]; (M,) each, by their ends
+    (a motor's own in their order)."""
+
+    e: np.ndarray
+    b: np.ndarray
+    col: np.ndarray
+    short: np.ndarray
+
+
+def settle_motors(
+    tables: tuple[PlayTable, ...],
+    cols: np.ndarray,
+    ch: Chunk,
+    before: np.ndarray,
+    carried_off: np.ndarray,
+    x: Contacts,
+    P: np.ndarray,
+    V: np.ndarray,
+    cubic: bool,
+    share: float,
+    hurry: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every motor with play through a chunk in one call (``chain.Pipeline._settle``
+    tells the method): for motor ``cols[i]`` (table ``tables[i]``), an offset
+    ``carried_off[i]`` [mm] left by the chunk before taken up first (0.0: none,
+    :func:`catch_up_commands`), its crossings ended where the part stands
+    (:func:`settle_crossings`; with straight lines, the points inside each window
+    on the window's chord before and after, :func:`across`), and its part followed
+    from the last contact to the chunk's end (:func:`follow_stretches`).
+
+    ``before`` (c, 3): each motor's part [mm] and the command [mm, mm/s] at the
+    point before the chunk. The commands ``P``, ``V`` (R, n) [mm, mm/s] are
+    updated in place. Returns where each part stands at the chunk's end [mm] and
+    the offset each carries into the next chunk (c,) [mm] (NaN: none).
+    """
+    y_end = np.empty(len(cols))
+    carry = np.full(len(cols), np.nan)
+    for i, col in enumerate(cols.tolist()):
+        y_end[i], carry[i] = _settle_motor(
+            tables[i], col, ch, before[i], float(carried_off[i]), x, P, V, cubic, (share, hurry)
+        )
+    return y_end, carry
+
+
+def chunk_motion(ch: Chunk, col: int) -> Motion:
+    """Motor ``col``'s columns of a chunk as the settle takes them (its wanted move
+    into the first point from the point before the chunk)."""
+    P_ideal = ch.P_ideal[col]
+    n = len(P_ideal)
+    # np.diff with P_before prepended, without the joined copy
+    dP = np.empty(n)
+    if n:
+        dP[0] = P_ideal[0] - ch.P_before[col]
+        np.subtract(P_ideal[1:], P_ideal[:-1], out=dP[1:])
+    return Motion(
+        *(
+            np.ascontiguousarray(a, dtype=float)
+            for a in (P_ideal, ch.V_ideal[col], dP, ch.speed, ch.dt, ch.s_path, ch.side[col])
+        )
+    )
+
+
+def _settle_motor(
+    t: PlayTable,
+    col: int,
+    ch: Chunk,
+    before: np.ndarray,
+    carried_off: float,
+    x: Contacts,
+    P: np.ndarray,
+    V: np.ndarray,
+    cubic: bool,
+    rates: tuple[float, float],
+) -> tuple[float, float]:
+    """:func:`settle_motors` for motor ``col``: where its part stands at the
+    chunk's end, and the offset it carries into the next chunk (NaN: none)."""
+    n = len(ch.dt)
+    mo = chunk_motion(ch, col)
+    mine = x.col == col
+    e, b, short = x.e[mine], x.b[mine], x.short[mine]
+    carry = math.nan
+    if carried_off:
+        # what it leaves where the first crossing begins, the follow below sees
+        stop = int(b[0]) if len(e) else n
+        _, carry = catch_up_commands(
+            t, mo, np.array([carried_off]), np.array([-1]), np.array([stop]), P[col], V[col], *rates
+        )
+    y0, P0, V0 = (float(v) for v in before)
+    start = 0
+    if len(e):
+        rows = None if cubic else across_rows(ch.t, e, b)
+        across(rows, P0, P[col], V[col])
+        r = settle_crossings(t, mo, (y0, P0, V0), e, b, short, P[col], V[col], cubic, *rates)
+        P[col], V[col] = r.P, r.V
+        carry = r.carry if not math.isnan(r.carry) else carry
+        across(rows, P0, P[col], V[col])
+        y0, P0, V0 = r.y, r.P_last, r.V_last
+        # from the last contact on, the corrected commands carry the part
+        start = int(e.max()) + 1
+    if start < n:
+        one = np.ones(1)
+        y_pt, _, _ = follow_stretches(
+            t,
+            y0 * one,
+            P0 * one,
+            V0 * one,
+            P[col, start:],
+            V[col, start:],
+            ch.dt[start:],
+            np.array([n - start]),
+            cubic,
+        )
+        y0 = float(y_pt[-1])
+    return y0, carry
+
+
+def across_rows(t: np.ndarray, e: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...] | None:
+    """The points inside a motor's crossing windows that begin at ``b`` and end at
+    ``e`` (c,) for :func:`across`, with what it reckons from the times ``t`` (n,)
+    [s] since the point before the chunk: the points, each window's first point
+    (clipped to 0) and whether it is in the chunk, its last point, and the time
+    from the first to the last and to each point. None where there are none."""
+    inner = e - b - 1
+    if not np.any(inner > 0):
+        return None
+    w = np.flatnonzero(inner > 0)
+    idx = ranges(b[w] + 1, inner[w])
+    bb, ee = np.repeat(b[w], inner[w]), np.repeat(e[w], inner[w])
+    inside, b0 = bb >= 0, np.maximum(bb, 0)
+    t_b = np.where(inside, t[b0], 0.0)
+    return idx, b0, inside, ee, t[ee] - t_b, t[idx] - t_b
+
+
+def across(rows: tuple[np.ndarray, ...] | None, P0: float, P: np.ndarray, V: np.ndarray) -> None:
+    """Straight lines between the points (corrected G-code): the points inside a
+    motor's crossing windows (``rows``: :func:`across_rows`; a step's end where the
+    window reaches past it, another motor's window edge) on the straight way from
+    the window's first command to its last, by time (``P0``: the command before the
+    chunk). Commanded on the old side, the motor pushed its part on up to the point
+    inside, and the window was one on one side of the root. The motor's commands
+    ``P``, ``V`` (n,) [mm, mm/s] are updated in place."""
+    if rows is None:
+        return
+    idx, b0, inside, ee, span, since = rows
+    P_b = np.where(inside, P[b0], P0)
+    rate = (P[ee] - P_b) / span
+    P[idx] = P_b + rate * since
+    V[idx] = rate
+
+
 def carried(sg: np.ndarray, side: np.ndarray | float) -> np.ndarray:
     """The last nonzero direction at or before each row of ``sg`` (along axis 0),
     ``side`` before any: the side a motor is on, carried through the rows where it
@@ -776,3 +972,43 @@ def motor_sides(
     sg[e] = new
     sg[s_first] = s_new
     return carried(sg, side)
+
+
+def motors_sides(
+    V: np.ndarray,
+    resting: np.ndarray,
+    cols: np.ndarray,
+    side: np.ndarray,
+    f: np.ndarray,
+    e: np.ndarray,
+    new: np.ndarray,
+    last_row: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    s_first: np.ndarray,
+    s_new: np.ndarray,
+    s_col: np.ndarray,
+    eps: float,
+    out: np.ndarray,
+) -> None:
+    """:func:`motor_sides` of every motor ``cols`` (c,) in one call, into the rows
+    ``cols`` of ``out`` (R, m) in place: motor ``cols[i]``'s velocities ``V[col]``
+    (V (R, m) [mm/s]), its windows ``f``, ``e``, ``new``, ``last_row`` from
+    ``lo[i]`` to ``hi[i]`` (each motor's sorted by their ends), its standing
+    crossings those of ``s_first``, ``s_new`` whose ``s_col`` is it, its side
+    before the chunk ``side[col]`` (side (R,))."""
+    for i, col in enumerate(cols.tolist()):
+        a, b = int(lo[i]), int(hi[i])
+        here = s_col == col
+        out[col] = motor_sides(
+            V[col],
+            resting,
+            f[a:b],
+            e[a:b],
+            new[a:b],
+            last_row[a:b],
+            s_first[here],
+            s_new[here],
+            int(side[col]),
+            eps,
+        )

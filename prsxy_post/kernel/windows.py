@@ -13,6 +13,8 @@ the same order (the same bits). The rules (why each) are
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .play import carried, creeps, hermite, velocity_quadratic
@@ -212,6 +214,99 @@ def motor_dips(
         P[j - 1], V[j - 1], P[j], V[j], h[j - off], sg[j], tol, sets_off
     )
     return j[keep], s1, s2, A1, A2
+
+
+class Reversals(NamedTuple):
+    """Every motor's reversals, dips and settings-off back in a chunk
+    (:func:`motor_reversals`), motor after motor.
+
+    sg, came : (c, N) each motor's direction at each row and the one it comes from
+        (:func:`motor_turns`)
+    r, kind : (M,) the rows where the motors reverse and the reversals' kinds,
+        motor ``i``'s from ``turns[i]`` to ``turns[i + 1]``
+    turns : (c + 1,) where each motor's reversals begin in ``r``, ``kind``
+    reach : (c,) the ``ref`` each motor carries to the next chunk [mm]
+    j, s1, s2, A1, A2 : (D,) the rows that dip or set off back, their turning
+        points and accelerations (:func:`motor_dips`): motor ``i``'s dips from
+        ``dips[2 i]`` to ``dips[2 i + 1]``, its settings-off back on to
+        ``dips[2 i + 2]``
+    dips : (2 c + 1,) where they begin
+    """
+
+    sg: np.ndarray
+    came: np.ndarray
+    r: np.ndarray
+    kind: np.ndarray
+    turns: np.ndarray
+    reach: np.ndarray
+    j: np.ndarray
+    s1: np.ndarray
+    s2: np.ndarray
+    A1: np.ndarray
+    A2: np.ndarray
+    dips: np.ndarray
+
+
+def motor_reversals(
+    V: np.ndarray,
+    P: np.ndarray,
+    rest: np.ndarray,
+    cols: np.ndarray,
+    side: np.ndarray,
+    ref: np.ndarray,
+    drift: float,
+    off: int,
+    eps: float,
+    h: np.ndarray,
+    tol: float,
+) -> Reversals:
+    """The reversals and their kinds (:func:`motor_turns`), the dips and the
+    settings-off back (:func:`motor_dips`) of every motor ``cols`` (c,) in a
+    chunk, in one call; the rules are :func:`prsxy_post.reversals.find_reversals`'.
+
+    Parameters
+    ----------
+    V, P : (R, off + n) the motors' wanted velocities [mm/s] and positions [mm], a
+        motor a row (the point before the chunk first where ``off`` is 1)
+    rest : (off + n,) bool, the path stands at the row
+    side, ref : (R,) the side each motor is on before the chunk and where it got
+        farthest its last way [mm]
+    drift, eps : as :func:`motor_turns`'
+    h : (n,) each step's duration [s]
+    tol : the dips' depth left alone [mm]
+    """
+    sgs, cames, rs, kinds, reach = [], [], [], [], []
+    parts: list[tuple[np.ndarray, ...]] = []
+    for col in cols.tolist():
+        sg, came, r, kind, rc = motor_turns(
+            V[col], P[col], rest, int(side[col]), float(ref[col]), drift, off, eps
+        )
+        sgs.append(sg)
+        cames.append(came)
+        rs.append(r)
+        kinds.append(kind)
+        reach.append(rc)
+        for sets_off in (False, True):
+            parts.append(motor_dips(P[col], V[col], h, sg, came, off, tol, sets_off))
+    N = P.shape[1]
+    at = np.cumsum([0] + [len(r) for r in rs])
+    dip_at = np.cumsum([0] + [len(p[0]) for p in parts])
+    none = (np.zeros(0, dtype=np.intp),) + (np.zeros(0),) * 4
+    j, s1, s2, A1, A2 = (np.concatenate([none[f]] + [p[f] for p in parts]) for f in range(5))
+    return Reversals(
+        np.array(sgs, dtype=int).reshape(len(sgs), N),
+        np.array(cames, dtype=int).reshape(len(cames), N),
+        np.concatenate([np.zeros(0, dtype=np.intp), *rs]),
+        np.concatenate([np.zeros(0, dtype=np.int8), *kinds]),
+        at,
+        np.array(reach, dtype=float),
+        j,
+        s1,
+        s2,
+        A1,
+        A2,
+        dip_at,
+    )
 
 
 def corner_blends(
