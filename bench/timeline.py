@@ -269,6 +269,13 @@ def report(by_role: dict[str, list[dict[str, Any]]], t_start: float, t_end: floa
         spans += [(e["t0"] - t_start, e["t1"] - t_start, "-") for e in sends]
         spans += [(e["t0"] - t_start, e["t1"] - t_start, ".") for e in waits]
         strips[role] = _strip(spans, total, width)
+        if role == "interp" and work:
+            rest = work[1:] or work
+            rows.append(
+                f"        first chunk made in {work[0]['t1'] - work[0]['t0']:.3f} s "
+                f"(CPU {work[0]['cpu']:.3f}), the others in {_sum(rest) / len(rest):.3f} s "
+                f"(CPU {_sum(rest, 'cpu') / len(rest):.3f}) on average"
+            )
         if role == "main":
             first = min((e["t1"] for e in waits), default=t_start)
             out_last = max((e["t1"] for e in chunk_sends), default=t_start)
