@@ -252,8 +252,14 @@ def report(by_role: dict[str, list[dict[str, Any]]], t_start: float, t_end: floa
         rows.append(
             f"{role:7s} start {t0 - t_start:6.3f} end {t1 - t_start:6.3f} "
             f"wall {t1 - t0:6.3f} CPU {cpu:6.3f} | work {_sum(work):6.3f} s "
-            f"(CPU {_sum(work, 'cpu'):6.3f}) | waits for input {_sum(waits):6.3f} s | "
-            f"sends {len(sends)} msgs {nbytes / 1e6:6.1f} MB in {_sum(sends):6.3f} s "
+            f"(CPU {_sum(work, 'cpu'):6.3f}) | waits for input {_sum(waits):6.3f} s"
+            + (
+                f" (receiving: CPU {_sum(recvs, 'cpu'):.3f})"
+                if role != "main" and recvs
+                else ""
+            )
+            + " | "
+            + f"sends {len(sends)} msgs {nbytes / 1e6:6.1f} MB in {_sum(sends):6.3f} s "
             f"(CPU {_sum(sends, 'cpu'):.3f}; writing {_sum(writes):.3f}, "
             f"max MB/chunk {max((e['nbytes'] for e in chunk_sends), default=0) / 1e6:.2f})"
         )
