@@ -77,6 +77,12 @@ def _timed(kind: str, fn: Any, *args: Any, **extra: Any) -> Any:
 
 def _install() -> None:
     """Wrap the conversion's calls (in this process, before any fork)."""
+    _install_channel()
+    _install_stages()
+
+
+def _install_channel() -> None:
+    """sinks.Channel's send and recv, logged with their bytes and waits."""
     send, write, recv, read_into = (
         sinks.Channel.send,
         sinks.Channel._write,
@@ -134,6 +140,9 @@ def _install() -> None:
     sinks.Channel.recv = t_recv  # type: ignore[method-assign]
     sinks.Channel._read_into = t_read_into  # type: ignore[method-assign]
 
+
+def _install_stages() -> None:
+    """The processes' roles and lives, their work and the queue to the chain."""
     planning_child, serve, planned_here = (
         convert._planning_child,
         sinks._serve,
@@ -253,11 +262,7 @@ def report(by_role: dict[str, list[dict[str, Any]]], t_start: float, t_end: floa
             f"{role:7s} start {t0 - t_start:6.3f} end {t1 - t_start:6.3f} "
             f"wall {t1 - t0:6.3f} CPU {cpu:6.3f} | work {_sum(work):6.3f} s "
             f"(CPU {_sum(work, 'cpu'):6.3f}) | waits for input {_sum(waits):6.3f} s"
-            + (
-                f" (receiving: CPU {_sum(recvs, 'cpu'):.3f})"
-                if role != "main" and recvs
-                else ""
-            )
+            + (f" (receiving: CPU {_sum(recvs, 'cpu'):.3f})" if role != "main" and recvs else "")
             + " | "
             + f"sends {len(sends)} msgs {nbytes / 1e6:6.1f} MB in {_sum(sends):6.3f} s "
             f"(CPU {_sum(sends, 'cpu'):.3f}; writing {_sum(writes):.3f}, "
