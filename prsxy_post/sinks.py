@@ -313,25 +313,6 @@ def part_path(out: str, part: int, split: bool) -> str:
     return f"{base}.part{part + 1}{ext}"
 
 
-#: text of a part after which the system is asked to start writing it to disk
-#: (:func:`_write_back`) [characters]
-WRITEBACK_CHARS = 4 << 20
-
-
-def _write_back(fh: Any) -> None:
-    """Start writing what ``fh`` holds to disk now, without waiting for it: the
-    fsync that ends the conversion then waits for the last MB only, not for all of
-    them (17 MB: 12-19 ms -> 2-3 ms on this machine's ext4, measured). Linux
-    starts the writeback of a file's dirty pages on POSIX_FADV_DONTNEED (and drops
-    its clean ones from the cache, the output is not read here again); elsewhere
-    the fsync does it all."""
-    if hasattr(os, "posix_fadvise"):
-        fh.flush()
-        # only a hint: where a file system refuses it, the fsync does it all
-        with contextlib.suppress(OSError):
-            os.posix_fadvise(fh.fileno(), 0, 0, os.POSIX_FADV_DONTNEED)
-
-
 @dataclass
 class Parts:
     """The output's parts as temp files beside their targets (or in memory for
@@ -342,7 +323,6 @@ class Parts:
     temps: dict[int, str] = field(default_factory=dict)
     memory: dict[int, list[str]] = field(default_factory=dict)
     _files: dict[int, Any] = field(default_factory=dict)
-    _unsent: dict[int, int] = field(default_factory=dict)  # characters since a writeback
 
     def emit(self, pieces: list[Piece]) -> None:
         for part, text in pieces:
@@ -358,10 +338,6 @@ class Parts:
                 self.temps[part] = tmp
                 self._files[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
             self._files[part].write(text)
-            self._unsent[part] = self._unsent.get(part, 0) + len(text)
-            if self._unsent[part] >= WRITEBACK_CHARS:
-                self._unsent[part] = 0
-                _write_back(self._files[part])
 
     def close(self) -> None:
         """Every part complete on disk."""

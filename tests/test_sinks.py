@@ -263,31 +263,3 @@ def test_a_channel_reads_into_a_block_only_once_no_array_from_it_is_left() -> No
     assert np.array_equal(got_first, first) and np.array_equal(kept, kept_copy)
     send.close()
     recv.close()
-
-
-@pytest.mark.parametrize("max_points", [0, 4000])
-def test_parts_written_back_as_they_grow_hold_the_same_bytes(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, max_points: int
-) -> None:
-    """The writeback started every few kB of a part (sinks.WRITEBACK_CHARS) on
-    each of the files, one or a split program's parts, in this process and the
-    writer's: the same bytes as written in one go, nothing left behind."""
-    calls: list[int] = []
-    write_back = sinks._write_back
-
-    def counted(fh: object) -> None:
-        calls.append(1)
-        write_back(fh)
-
-    prof = _profile(tmp_path, max_points_per_program=max_points)
-    program = _program(tmp_path, 6000, [])
-    whole = _run(program, prof, tmp_path / "a" / "job.pmc", parallel=False)
-    monkeypatch.setattr(sinks, "WRITEBACK_CHARS", 5000)
-    monkeypatch.setattr(sinks, "_write_back", counted)
-    here = _run(program, prof, tmp_path / "b" / "job.pmc", parallel=False)
-    apart = _run(program, prof, tmp_path / "c" / "job.pmc", parallel=True)
-    assert isinstance(whole, dict) and isinstance(here, dict) and isinstance(apart, dict)
-    assert here == apart == whole
-    assert (len(here) > 1) == (max_points > 0)
-    assert len(calls) >= len(here)  # in this process: every part's text is over 5000
-    assert _leftovers(tmp_path / "b") == _leftovers(tmp_path / "c") == []
