@@ -223,3 +223,43 @@ def test_a_channel_carries_arrays_whole_and_says_when_the_other_end_closed() -> 
     with pytest.raises(EOFError):
         recv.recv()
     recv.close()
+
+
+def test_a_channel_reads_into_a_block_only_once_no_array_from_it_is_left() -> None:
+    """The arrays of a message received stay as they came while later messages
+    are read (a view of one kept alone holds its block too); a block no array of
+    which is left is read into again (its pages mapped already) rather than a
+    new one taken; and the blocks kept stay at Channel.POOL however many messages
+    are held at once."""
+    import numpy as np
+
+    recv, send = sinks.pipe(duplex=False)
+    rng = np.random.default_rng(1)
+
+    def across(a: np.ndarray) -> np.ndarray:
+        send.send(("chunk", {"q": a}, 0))
+        got: np.ndarray = recv.recv()[1]["q"]
+        return got
+
+    first = rng.normal(size=(3000, 5))
+    got_first = across(first)
+    kept = across(rng.normal(size=(3000, 5)))[100:200]  # a view alone
+    kept_copy = kept.copy()
+    blocks = len(recv._blocks)
+    assert blocks == 2
+    for _ in range(5):  # each dropped before the next comes: one block serves them
+        a = rng.normal(size=(3000, 5))
+        assert np.array_equal(across(a), a)
+    assert len(recv._blocks) == blocks + 1
+    assert np.array_equal(got_first, first) and np.array_equal(kept, kept_copy)
+    sent = [rng.normal(size=(3000, 5)) for _ in range(2 * sinks.Channel.POOL)]
+    held = [across(a) for a in sent]  # held at once, then more read on top
+    assert len(recv._blocks) <= sinks.Channel.POOL
+    for _ in range(3):
+        a = rng.normal(size=(3000, 5))
+        assert np.array_equal(across(a), a)
+    for a, got in zip(sent, held, strict=True):
+        assert np.array_equal(got, a)
+    assert np.array_equal(got_first, first) and np.array_equal(kept, kept_copy)
+    send.close()
+    recv.close()
