@@ -403,8 +403,8 @@ def measure(truth, text: str) -> dict[str, float]:
         # arcsec and 0.12 um X Y Z: bench/linuxcnc_sides.py), so those sides are two
         # lines that turn A and B, and LinuxCNC joins such lines only parabolically
         # (tp.c tcRotaryMotionCheck): a stop or half the acceleration, about v / a
-        # a side. 1.16 x the plan with fitted end tilts (1.33 x before), 1.08 x with
-        # the tolerance loosened five-fold (docs/measurements.md)
+        # a side (1.175 x on the nominal machine with each side in two blocks). 1.16 x
+        # the plan with fitted end tilts, 1.33 x before (docs/measurements.md)
         pytest.param(
             11,
             "five-axis",
