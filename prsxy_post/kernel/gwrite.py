@@ -952,7 +952,8 @@ def gcode_ops(
     val : (M,) float64
         A G1's or an ARC's F (inverse time [1/min]).
     tilts : (J, 2) float64
-        The tilts held before runs of arcs [deg] (``_Run.center_tilt``).
+        The tilts held before runs of arcs (``_Run.center_tilt``) and the chords'
+        fitted end tilts (``_Run.fit_tilt``) [deg].
     """
     r = _Run(st)
     resume = r.stop_at != NONE
