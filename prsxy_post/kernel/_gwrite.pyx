@@ -467,6 +467,8 @@ cdef int _chord_check(W* w, const double* qk, const double* pts, Py_ssize_t npts
         if sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > w.tol:
             return CHORD_NO
         if off[3] > w.tilt_chord or off[4] > w.tilt_chord:
+            if w.tilt_fit <= 0.0:
+                return CHORD_NO
             tilt_ok = False
     if tilt_ok:
         return CHORD_OK

@@ -433,6 +433,8 @@ class _Run:
             if math.sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > tol:
                 return CHORD_NO
             if off[3] > tilt or off[4] > tilt:
+                if self.tilt_fit <= 0.0:
+                    return CHORD_NO  # no fit (machines with play): no need to go on
                 tilt_ok = False
         if tilt_ok:
             return CHORD_OK
