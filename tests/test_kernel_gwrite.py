@@ -306,7 +306,14 @@ def test_generated_runs_are_bit_identical(
     _gwrite = compiled("_gwrite")
     arc = 0.5 / 3600.0
     st_r = gwrite.new_state(
-        tol, 0.00025, 0.5 * arc, 0.6 * arc if hold else 0.0, 0.2 * arc, *accel, all_exact
+        tol,
+        0.00025,
+        0.5 * arc,
+        0.6 * arc if hold else 0.0,
+        0.2 * arc,
+        *accel,
+        all_exact,
+        tilt_fit=0.6 * arc if hold else 0.0,
     )
     st_c = copy.deepcopy(st_r)
     n = len(prog[0])
@@ -378,6 +385,37 @@ def test_arcs_decisions_are_bit_identical() -> None:
             assert _same_state(st_s, st_fit)
     # stops for both kinds of request, resumed
     assert kinds.count(gwrite.REQ_REARC) > 0 and kinds.count(gwrite.REQ_ARC_TO) > 0
+
+
+def test_fitted_tilts_are_bit_identical() -> None:
+    """Every call while the five-axis square converts for random machines without
+    play, whole and in chunks of 5 points: chords whose A and B stray from the
+    compensated tilt by more than ``tilt_chord`` written with a fitted end tilt
+    (``_Run.fit_tilt``), a block end's carried over a chunk's end in the corner."""
+    from .test_linuxcnc_motion import PROGRAMS
+    from .test_tracking import convert, truth_machine
+
+    calls: list[tuple[Any, ...]] = []
+    inner: Callable[..., Ops] = kernel._gcode_ops
+
+    def spy(*args: Any) -> Ops:
+        calls.append(tuple(copy.deepcopy(a) for a in args))
+        return inner(*args)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(kernel, "_gcode_ops", spy)
+    try:
+        for seed in (11, 12, 13):
+            m = truth_machine("random", seed, play=False)
+            for feed in (3000.0, 10000.0):
+                for chunk in (0, 5):
+                    convert(m, PROGRAMS["five-axis"](feed), "gcode", chunk)
+    finally:
+        mp.undo()
+    ops = [_both(args) for args in calls]
+    # fitted tilts: rows of the calls' tilts, written by G1s (no arcs here)
+    assert sum(len(o[5]) for o in ops) > 20
+    assert not any(np.any(o[0] == gwrite.ARC) for o in ops)
 
 
 def test_stops_resumed_in_place_write_the_references_text() -> None:

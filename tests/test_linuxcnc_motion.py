@@ -415,10 +415,13 @@ def measure(truth, text: str) -> dict[str, float]:
         # 1.30 x F before, the blend out of a line that turns A and B into one
         # whose end joins tangentially
         (13, "helix", 600.0),
-        # open (issue 33): the compensated tilt along a 40 mm side departs 0.33" from
-        # a straight line, so a side is several lines that turn A and B, each blended
-        # parabolically at half its acceleration (tp.c tcRotaryMotionCheck): 1.33 x
-        # the plan, 1.19 x the uncorrected program (docs/measurements.md)
+        # open (issue 33): along two sides of the square the corrected points depart
+        # from the best single line by more than the tolerance (0.76 arcsec in A; 0.48
+        # arcsec and 0.12 um X Y Z: bench/linuxcnc_sides.py), so those sides are two
+        # lines that turn A and B, and LinuxCNC joins such lines only parabolically
+        # (tp.c tcRotaryMotionCheck): a stop or half the acceleration, about v / a
+        # a side (1.175 x on the nominal machine with each side in two blocks). 1.16 x
+        # the plan with fitted end tilts, 1.33 x before (docs/measurements.md)
         pytest.param(
             11,
             "five-axis",

@@ -21,14 +21,14 @@ F_NAMES = (
     "tol", "blend", "tilt_cut", "tilt_hold", "tilt_chord", "accel", "accel_deg",
     "prev_accel", "t_total", "last_speed", "peak", "trough", "plan_peak", "stretch",
     "len_sum", "dt_sum", "corner_t", "prev_len", "prev_t", "patch_f",
-    "smooth", "arc_hold", "speed0", "ca_len", "ca_dt",
+    "smooth", "arc_hold", "speed0", "ca_len", "ca_dt", "tilt_fit",
 )
 I_NAMES = (
     "all_exact", "n", "has_line", "last_line", "run_n", "run_src", "corner_src",
     "held_src", "exact", "after_settle", "prev_idx", "prev_turns", "prev_blend",
     "has_prev", "patch", "keep",
     "plane", "stop_at", "req_kind", "req_arc", "req_answer", "corner_arc", "ca_plane",
-    "ca_from", "decimals",
+    "ca_from", "decimals", "corner_fit",
 )
 
 cdef enum:
@@ -42,6 +42,9 @@ DEF PATCH_STOP = 2
 DEF CORNER_SRC = -2
 DEF REQ_REARC = 1
 DEF REQ_ARC_TO = 2
+DEF CHORD_NO = 0
+DEF CHORD_OK = 1
+DEF CHORD_FIT = 2
 DEF SERVO_PERIOD_S = 1e-3
 DEF DIP_SHARE = 1e-3
 DEF T27 = 134217729.0  # 2**27 + 1: Dekker's split
@@ -57,6 +60,8 @@ cdef struct W:
     double smooth, arc_hold, speed0, ca_len, ca_dt
     long long plane, stop_at, req_kind, req_arc, req_answer, corner_arc, ca_plane
     long long ca_from, decimals
+    double tilt_fit
+    long long corner_fit
     double last_q[5]
     double last_ab[2]
     double held_ab[2]
@@ -380,25 +385,81 @@ cdef double _chord_time(W* w, double arc_mm=0.0) noexcept nogil:
     return t
 
 
-cdef bint _within(W* w, const double* qk) noexcept nogil:
+cdef double _scale(W* w) noexcept nogil:
+    """10.0**decimals (exact: a power of ten below 1e23 is a double)."""
+    cdef double scale = 1.0
+    cdef long long c
+    for c in range(w.decimals):
+        scale = scale * 10.0
+    return scale
+
+
+cdef bint _fit_tilt(W* w, const double* qk, const double* pts, Py_ssize_t npts,
+                    double* out) noexcept nogil:
+    # _Run.fit_tilt: False where none fits (out unset)
+    cdef const double* a = w.last_q
+    cdef const double* p
+    cdef double d[3]
+    cdef double x[3]
+    cdef double h, dd, tau, s, own, lo, hi, r
+    cdef Py_ssize_t j
+    cdef int i, c
+    h = w.tilt_fit - 0.5 / _scale(w)
+    if h <= 0.0:
+        return False
+    for i in range(3):
+        d[i] = qk[i] - a[i]
+    for i in range(3):
+        x[i] = d[i] * d[i]
+    dd = _fsum(x, 3)
+    if dd == 0:
+        return False
+    for c in range(2):
+        s = w.last_ab[c]
+        own = qk[3 + c] - s
+        lo = own - h
+        hi = own + h
+        for j in range(npts):
+            p = &pts[5 * j]
+            for i in range(3):
+                x[i] = (p[i] - a[i]) * d[i]
+            tau = _fsum(x, 3) / dd
+            tau = 0.0 if tau < 0.0 else (1.0 if tau > 1.0 else tau)
+            r = p[3 + c] - s
+            if tau > 0.0:
+                lo = _pmax(lo, (r - h) / tau)
+                hi = _pmin(hi, (r + h) / tau)
+            elif fabs(r) > h:
+                return False
+        if lo > hi:
+            return False
+        out[c] = s + _pmin(_pmax(own, lo), hi)
+    return True
+
+
+cdef int _chord_check(W* w, const double* qk, const double* pts, Py_ssize_t npts) noexcept nogil:
+    # _Run.chord_check
     cdef const double* a = w.last_q
     cdef const double* p
     cdef double d[5]
     cdef double x[5]
     cdef double off[5]
+    cdef double fit[2]
     cdef double dd, t
-    cdef int i, j
-    if not w.run_n or w.n == 0:
-        return True
+    cdef bint tilt_ok = True
+    cdef Py_ssize_t j
+    cdef int i
+    if not npts or w.n == 0:
+        return CHORD_OK
     for i in range(5):
         d[i] = qk[i] - a[i]
     for i in range(5):
         x[i] = d[i] * d[i]
     dd = _fsum(x, 5)
     if dd == 0:
-        return False
-    for j in range(w.run_n):
-        p = &w.run[5 * j]
+        return CHORD_NO
+    for j in range(npts):
+        p = &pts[5 * j]
         for i in range(5):
             x[i] = (p[i] - a[i]) * d[i]
         t = _fsum(x, 5) / dd
@@ -406,10 +467,26 @@ cdef bint _within(W* w, const double* qk) noexcept nogil:
         for i in range(5):
             off[i] = fabs(p[i] - (a[i] + t * d[i]))
         if sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > w.tol:
-            return False
+            return CHORD_NO
         if off[3] > w.tilt_chord or off[4] > w.tilt_chord:
-            return False
-    return True
+            if w.tilt_fit <= 0.0:
+                return CHORD_NO
+            tilt_ok = False
+    if tilt_ok:
+        return CHORD_OK
+    return CHORD_FIT if _fit_tilt(w, qk, pts, npts, fit) else CHORD_NO
+
+
+cdef inline bint _within(W* w, const double* qk) noexcept nogil:
+    return _chord_check(w, qk, w.run, w.run_n) != CHORD_NO
+
+
+cdef bint _fit_end(W* w, const double* qk, const double* pts, Py_ssize_t npts,
+                   double* out) noexcept nogil:
+    # _Run.fit_end: True with the fitted end tilt in out
+    if _chord_check(w, qk, pts, npts) != CHORD_FIT:
+        return False
+    return _fit_tilt(w, qk, pts, npts, out)
 
 
 cdef void _blend_within_f(W* w, double length_n, double t_n, double a_n) noexcept nogil:
@@ -470,18 +547,27 @@ cdef long long _tilt_held(W* w, long long src, const double* q, double hold) noe
 
 
 cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact,
-              long long arc=NONE, double arc_len=0.0, long long plane=17) noexcept nogil:
+              long long arc=NONE, double arc_len=0.0, long long plane=17,
+              const double* fit=NULL) noexcept nogil:
     cdef double q[5]
     cdef double d_xyz[3]
     cdef double d_ab[2]
-    cdef double length, accel, a_n
+    cdef double length, accel, a_n, scale
     cdef long long ab_src
     cdef bint turns, parabolic, mode
     cdef int i
     for i in range(5):
         q[i] = q_in[i]  # q_in may be a held-back row the ops below do not touch
     exact = exact or w.all_exact != 0
-    ab_src = _tilt_held(w, src, q, w.tilt_hold if arc == NONE else w.arc_hold)
+    if fit != NULL:
+        scale = _scale(w)
+        for i in range(2):
+            w.held_ab[i] = rint(fit[i] * scale) / scale + 0.0
+            w.tilts[2 * w.nt + i] = w.held_ab[i]
+        w.held_src = ab_src = w.npts + w.nt
+        w.nt += 1
+    else:
+        ab_src = _tilt_held(w, src, q, w.tilt_hold if arc == NONE else w.arc_hold)
     turns = w.held_ab[0] != w.last_ab[0] or w.held_ab[1] != w.last_ab[1]
     length = _dist(w.last_q, q, 3) if arc == NONE else arc_len
     for i in range(3):
@@ -525,15 +611,18 @@ cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact,
 
 cdef void _write_held(W* w) noexcept nogil:
     cdef double qh[5]
+    cdef double fit[2]
     cdef double t
+    cdef bint fitted
     cdef int i
     if not w.run_n:
         return
     for i in range(5):
         qh[i] = w.run[5 * (w.run_n - 1) + i]
+    fitted = _fit_end(w, qh, w.run, w.run_n - 1, fit)
     t = _chord_time(w)
     w.run_n = 0
-    _g1(w, w.run_src, qh, t, False)
+    _g1(w, w.run_src, qh, t, False, NONE, 0.0, 17, &fit[0] if fitted else NULL)
 
 
 cdef inline void _at_rest(W* w) noexcept nogil:
@@ -546,7 +635,7 @@ cdef void _resolve_corner(W* w, const double* q_next, double dt_next) noexcept n
     cdef double q_in[5]
     cdef double t = w.corner_t, mm, deg, t_in
     cdef long long src = w.corner_src, arc
-    cdef bint exact = False
+    cdef bint exact = False, fitted
     cdef int i
     if w.corner_src == NONE:
         return
@@ -563,10 +652,12 @@ cdef void _resolve_corner(W* w, const double* q_next, double dt_next) noexcept n
             q_in[i] = w.corner_in[i]
         t_in = w.ca_dt
     w.corner_arc = NONE
+    fitted = w.corner_fit != 0
+    w.corner_fit = 0
     if q_next != NULL and w.n > 0 and dt_next > 0.0:
         _corner_cut(q_in, qc, q_next, t_in, dt_next, w.accel, &mm, &deg)
         exact = mm > w.blend or deg > w.tilt_cut
-    _g1(w, src, qc, t, exact, arc, w.ca_len, w.ca_plane)
+    _g1(w, src, qc, t, exact, arc, w.ca_len, w.ca_plane, &qc[3] if fitted else NULL)
 
 
 cdef inline bint _same5(const double* a, const double* b) noexcept nogil:
@@ -605,7 +696,7 @@ cdef void _arc_in(W* w, long long a, double t, const double* q_before, const dou
         out[i] = q_end[i] - d[i] * step
 
 
-cdef void _center_tilt(W* w, long long a) noexcept nogil:
+cdef bint _center_tilt(W* w, long long a) noexcept nogil:
     # _Run.center_tilt, numpy's operations one column at a time
     cdef long long start = w.arc_i[4 * a], end = w.arc_i[4 * a + 1], nxt, j, rows[3]
     cdef double lo[2]
@@ -614,12 +705,12 @@ cdef void _center_tilt(W* w, long long a) noexcept nogil:
     cdef double high[2]
     cdef double value[2]
     cdef double emax, emin, x, margin, scale, d
-    cdef bint covers = True
+    cdef bint covers = True, loose
     cdef int c, r
     if w.tilt_hold <= 0.0 or w.held_src == NONE or not w.run_n:
-        return
+        return False
     if not _same5(&w.run[5 * (w.run_n - 1)], &w.q[5 * start]):
-        return
+        return False
     while end + 1 < w.npts and w.arc_of[end + 1] >= 0:
         nxt = w.arc_of[end + 1]
         if w.arc_i[4 * nxt] != end:
@@ -649,8 +740,22 @@ cdef void _center_tilt(W* w, long long a) noexcept nogil:
         high[c] = _npmin(lo[c] + w.arc_hold, emin + w.tilt_hold)
         covers = covers and w.held_ab[c] >= low[c] and w.held_ab[c] <= high[c]
     if covers:
-        return  # the tilt held covers the run
+        return False  # the tilt held covers the run
     margin = 0.001 * w.tilt_hold
+    loose = w.run_n == 1 and (low[0] + margin > high[0] - margin
+                              or low[1] + margin > high[1] - margin)
+    if loose:
+        # the line to the start is one piece: the end and the point after it only
+        for c in range(2):
+            emax = w.q[5 * rows[1] + 3 + c]
+            emin = emax
+            x = w.q[5 * rows[2] + 3 + c]
+            if x > emax:
+                emax = x
+            if x < emin:
+                emin = x
+            low[c] = _npmax(hi[c] - w.arc_hold, emax - w.tilt_hold)
+            high[c] = _npmin(lo[c] + w.arc_hold, emin + w.tilt_hold)
     scale = 1.0
     for c in range(w.decimals):
         scale = scale * 10.0
@@ -666,6 +771,7 @@ cdef void _center_tilt(W* w, long long a) noexcept nogil:
         w.tilts[2 * w.nt + c] = value[c]
     w.held_src = w.npts + w.nt
     w.nt += 1
+    return loose
 
 
 cdef bint _tilt_leaves(W* w, const double* qk) noexcept nogil:
@@ -703,11 +809,20 @@ cdef bint _on_arc(W* w, long long k, const double* qk, double dtk, const double*
     cdef long long a = w.arc_of[k]
     cdef long long start = w.arc_i[4 * a], end = w.arc_i[4 * a + 1]
     cdef long long plane = w.arc_i[4 * a + 2], refit = w.arc_i[4 * a + 3]
+    cdef double qh[5]
+    cdef double held[2]
     cdef double t
     cdef bint settled
     cdef int i
     if k == start + 1:
-        _center_tilt(w, a)
+        if _center_tilt(w, a):
+            for i in range(5):
+                qh[i] = w.run[5 * (w.run_n - 1) + i]
+            held[0] = w.held_ab[0]
+            held[1] = w.held_ab[1]
+            t = _chord_time(w)
+            w.run_n = 0
+            _g1(w, w.run_src, qh, t, False, NONE, 0.0, 17, held)
         _write_held(w)
         settled = w.after_settle and not w.all_exact and not refit
         if settled or not _same5(w.last_q, &w.q[5 * start]):
@@ -742,7 +857,9 @@ cdef bint _on_arc(W* w, long long k, const double* qk, double dtk, const double*
 cdef void _chords(W* w, long long k, const double* qk, double dtk, double spd, bint bend,
                   const double* lead, double plan) noexcept nogil:
     # _Run.chords
+    cdef double fit[2]
     cdef double t
+    cdef bint fitted
     cdef int i
     if w.tol > 0 and not bend and spd > 0:
         if not _within(w, qk) or _dips(w, qk, dtk, lead):
@@ -752,15 +869,21 @@ cdef void _chords(W* w, long long k, const double* qk, double dtk, double spd, b
     if w.run_n and (not _within(w, qk) or _dips(w, qk, dtk, lead)):
         _write_held(w)
     _hold(w, k, qk, dtk, lead, plan)
+    fitted = _fit_end(w, qk, w.run, w.run_n - 1, fit)
     t = _chord_time(w)
     w.run_n = 0
     if spd > 0.0 and bend:
+        # the corner's fitted tilt (if any) rides in its pose
         for i in range(5):
             w.corner_q[i] = qk[i]
+        if fitted:
+            w.corner_q[3] = fit[0]
+            w.corner_q[4] = fit[1]
+        w.corner_fit = fitted
         w.corner_t = t
         w.corner_src = k
         return
-    _g1(w, k, qk, t, spd == 0.0)
+    _g1(w, k, qk, t, spd == 0.0, NONE, 0.0, 17, &fit[0] if fitted else NULL)
 
 
 cdef bint _point(W* w, long long k, const double* qk, double dtk, long long line, double spd,
@@ -829,6 +952,7 @@ cdef void _load(W* w, double[::1] f, long long[::1] iv, st):
     w.plane, w.stop_at, w.req_kind, w.req_arc = iv[16], iv[17], iv[18], iv[19]
     w.req_answer, w.corner_arc, w.ca_plane, w.ca_from, w.decimals = (
         iv[20], iv[21], iv[22], iv[23], iv[24])
+    w.tilt_fit, w.corner_fit = f[25], iv[25]
     a = st.corner_in
     for i in range(5):
         w.corner_in[i] = a[i]
@@ -864,6 +988,7 @@ cdef void _store(W* w, double[::1] f, long long[::1] iv, st):
     iv[16], iv[17], iv[18], iv[19] = w.plane, w.stop_at, w.req_kind, w.req_arc
     iv[20], iv[21], iv[22], iv[23], iv[24] = (
         w.req_answer, w.corner_arc, w.ca_plane, w.ca_from, w.decimals)
+    f[25], iv[25] = w.tilt_fit, w.corner_fit
     a = st.corner_in
     for i in range(5):
         a[i] = w.corner_in[i]
@@ -1002,7 +1127,7 @@ def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint e
     resume = iv[17] != NONE
     m0 = len(st.pend_i) if resume else 0
     nt0 = len(st.pend_t) if resume else 0
-    ops_i, val, tilts = _buffers(st, resume, m0 + 14 * n + 16, nt0 + n + 1, n)
+    ops_i, val, tilts = _buffers(st, resume, m0 + 14 * n + 16, nt0 + 3 * n + 4, n)
     code, arg, ab, aux = ops_i[0], ops_i[1], ops_i[2], ops_i[3]
     cdef long long[::1] cv = code, av = arg, abv = ab, xv = aux
     cdef double[::1] vv = val

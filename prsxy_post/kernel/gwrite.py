@@ -50,7 +50,7 @@ F_NAMES = (
     "tol", "blend", "tilt_cut", "tilt_hold", "tilt_chord", "accel", "accel_deg",
     "prev_accel", "t_total", "last_speed", "peak", "trough", "plan_peak", "stretch",
     "len_sum", "dt_sum", "corner_t", "prev_len", "prev_t", "patch_f",
-    "smooth", "arc_hold", "speed0", "ca_len", "ca_dt",
+    "smooth", "arc_hold", "speed0", "ca_len", "ca_dt", "tilt_fit",
 )  # fmt: skip
 #: the integer scalars of the state (``GState.i``), by index
 I_NAMES = (
@@ -58,7 +58,7 @@ I_NAMES = (
     "held_src", "exact", "after_settle", "prev_idx", "prev_turns", "prev_blend",
     "has_prev", "patch", "keep",
     "plane", "stop_at", "req_kind", "req_arc", "req_answer", "corner_arc", "ca_plane",
-    "ca_from", "decimals",
+    "ca_from", "decimals", "corner_fit",
 )  # fmt: skip
 #: what the chunk did to the line carried from the chunk before (``patch``): its F
 #: lowered to ``patch_f``, or a G4 P0 after it
@@ -68,6 +68,9 @@ PATCH_NONE, PATCH_F, PATCH_STOP = 0, 1, 2
 #: (``arcs.refit_arcs``), and with ARC_TO first the arc from its start to the point
 #: before as one arc (``i[req_answer]``: its index, or -1 where none fits)
 REQ_REARC, REQ_ARC_TO = 1, 2
+#: a chord against the points it replaces (``_Run.chord_check``): fails, passes
+#: with the compensated tilt, passes with a fitted end tilt
+CHORD_NO, CHORD_OK, CHORD_FIT = 0, 1, 2
 #: the columns of the arcs' integer rows (``arc_i``) and float rows (``arc_f``)
 A_START, A_END, A_PLANE, A_REFIT = range(4)
 A_LEN, A_RADIUS = range(2)
@@ -117,6 +120,7 @@ def new_state(
     smooth: float = 0.0,
     arc_hold: float = 0.0,
     decimals: int = 4,
+    tilt_fit: float = 0.0,
 ) -> GState:
     """A writer's state before its first point (module docstring; the settings'
     meanings are :class:`prsxy_post.writers.linuxcnc.GcodeWriter`'s)."""
@@ -134,6 +138,7 @@ def new_state(
         ("stretch", math.inf),
         ("smooth", smooth),
         ("arc_hold", arc_hold),
+        ("tilt_fit", tilt_fit),
     ):
         f[F_NAMES.index(name)] = v
     for name, iv in (
@@ -256,6 +261,7 @@ class _Run:
     speed0: float
     ca_len: float
     ca_dt: float
+    tilt_fit: float
     all_exact: int
     n: int
     has_line: int
@@ -281,6 +287,7 @@ class _Run:
     ca_plane: int
     ca_from: int
     decimals: int
+    corner_fit: int
 
     def __init__(self, st: GState) -> None:
         for name, v in zip(F_NAMES, st.f.tolist(), strict=True):
@@ -404,38 +411,98 @@ class _Run:
 
     def within(self, qk: list[float]) -> bool:
         """Would the chord from the last written point to qk pass the held-back points,
-        within ``tol`` in X Y Z and ``tilt_chord`` in A and B?
+        within ``tol`` in X Y Z and ``tilt_chord`` in A and B, or, where A and B
+        stray further, within ``tol`` and a fitted end tilt (``fit_tilt``)?"""
+        return self.chord_check(qk, self.run) != CHORD_NO
 
-        Each held point p is taken at its nearest place along the chord a + t d,
+    def chord_check(self, qk: list[float], pts: list[list[float]]) -> int:
+        """The chord from the last written point to qk against the points ``pts``:
+        CHORD_NO, CHORD_OK (within ``tol`` in X Y Z and ``tilt_chord`` in A and B of
+        the compensated chord) or CHORD_FIT (X Y Z within ``tol``, A and B within
+        ``tilt_fit`` of a line from the tilt written last to a fitted end tilt).
+
+        Each point p is taken at its nearest place along the chord a + t d,
         t = clip((p − a)·d / d·d, 0, 1) (A and B read as mm at 1 mm per degree), and
         its offset |p − (a + t d)| judged. The dot products exactly rounded
         (``math.fsum``), so that the twin can give the same bits."""
-        if not self.run or self.n == 0:
-            return True
+        if not pts or self.n == 0:
+            return CHORD_OK
         a = self.last_q
         d = [x - y for x, y in zip(qk, a, strict=True)]
         dd = math.fsum(x * x for x in d)
         if dd == 0:
-            return False
+            return CHORD_NO
         tol, tilt = self.tol, self.tilt_chord
-        for p in self.run:
+        tilt_ok = True
+        for p in pts:
             t = math.fsum((x - y) * z for x, y, z in zip(p, a, d, strict=True)) / dd
             t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
             off = [abs(x - (y + t * z)) for x, y, z in zip(p, a, d, strict=True)]
             if math.sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > tol:
-                return False
+                return CHORD_NO
             if off[3] > tilt or off[4] > tilt:
-                return False
-        return True
+                if self.tilt_fit <= 0.0:
+                    return CHORD_NO  # no fit (machines with play): no need to go on
+                tilt_ok = False
+        if tilt_ok:
+            return CHORD_OK
+        return CHORD_FIT if self.fit_tilt(qk, pts) else CHORD_NO
+
+    def fit_tilt(self, qk: list[float], pts: list[list[float]]) -> list[float]:
+        """The end tilt [deg] of the line from the last written point (its written
+        tilt s) to qk that keeps A and B of qk and of every point p within h =
+        ``tilt_fit`` (less the written value's rounding) of the line's, LinuxCNC
+        moving A and B in proportion to X Y Z along a line (``tcGetPosReal``): with
+        τ_p = (p − a)·d / d·d in X Y Z (clipped to [0, 1]), the end e keeps
+        |p_A − s − τ_p (e − s)| ≤ h for each p and |qk_A − e| ≤ h, an interval of
+        e (its Chebyshev fit, the end shared with the next line); the value
+        nearest qk's own in it. Empty where none does (or h is 0: machines with
+        play, which keep the tilt as compensated)."""
+        h = self.tilt_fit - 0.5 / 10.0**self.decimals
+        if h <= 0.0:
+            return []
+        a = self.last_q
+        d = [qk[0] - a[0], qk[1] - a[1], qk[2] - a[2]]
+        dd = math.fsum(x * x for x in d)
+        if dd == 0:
+            return []
+        taus = []
+        for p in pts:
+            tau = math.fsum((p[j] - a[j]) * d[j] for j in range(3)) / dd
+            taus.append(0.0 if tau < 0.0 else (1.0 if tau > 1.0 else tau))
+        out = []
+        for c in range(2):
+            s = self.last_ab[c]
+            own = qk[3 + c] - s
+            lo, hi = own - h, own + h
+            for p, tau in zip(pts, taus, strict=True):
+                r = p[3 + c] - s
+                if tau > 0.0:
+                    lo = max(lo, (r - h) / tau)
+                    hi = min(hi, (r + h) / tau)
+                elif abs(r) > h:
+                    return []
+            if lo > hi:
+                return []
+            out.append(s + min(max(own, lo), hi))
+        return out
+
+    def fit_end(self, qk: list[float], pts: list[list[float]]) -> list[float]:
+        """The fitted end tilt of the chord to qk over ``pts`` where only a fit
+        passes them (``chord_check``), else empty (qk's own tilt, or the one held)."""
+        if self.chord_check(qk, pts) != CHORD_FIT:
+            return []
+        return self.fit_tilt(qk, pts)
 
     def write_held(self) -> None:
         """Write the last held-back point (it becomes the new chord start)."""
         if not self.run:
             return
         qh, src = self.run[-1], self.run_src
+        fit = self.fit_end(qh, self.run[:-1])
         t = self.chord_time()
         self.run = []
-        self.g1(src, qh, t, False)  # only points in motion are held back
+        self.g1(src, qh, t, False, fit=fit)  # only points in motion are held back
 
     def at_rest(self) -> None:
         """A machine function or a dwell follows: LinuxCNC blends nothing across it."""
@@ -455,11 +522,13 @@ class _Run:
         if arc != NONE:
             q_in, t_in = self.corner_in, self.ca_dt
         self.corner_arc = NONE
+        fit = qc[3:5] if self.corner_fit else []
+        self.corner_fit = 0
         exact = False
         if q_next is not None and self.n > 0 and dt_next > 0.0:
             mm, deg = corner_cut(q_in, qc, q_next, t_in, dt_next, self.accel)
             exact = mm > self.blend or deg > self.tilt_cut
-        self.g1(src, qc, t, exact, arc, self.ca_len, self.ca_plane)
+        self.g1(src, qc, t, exact, arc, self.ca_len, self.ca_plane, fit)
 
     def tilt_held(self, src: int, q: list[float], hold: float) -> int:
         """The point whose A and B the line to ``q`` (the point ``src``) writes: the
@@ -483,6 +552,7 @@ class _Run:
         arc: int = NONE,
         arc_len: float = 0.0,
         plane: int = 17,
+        fit: list[float] | None = None,
     ) -> None:
         """Write the line to ``q`` (the point ``src``) taking ``t`` seconds, in G61
         where ``exact`` (a line ending where the motion stands, or at a corner
@@ -492,9 +562,17 @@ class _Run:
         stopping it all the same (the writer's module docstring, rule 4). With
         ``arc`` (an arc's index, or CORNER_SRC: the held corner's), the move is that
         G2/G3 of ``arc_len`` [mm] in ``plane`` (rule 5), its acceleration limit the
-        axes' (emccanon.cc:1783-1791)."""
+        axes' (emccanon.cc:1783-1791). With ``fit`` (a chord's fitted end tilt,
+        ``fit_tilt``) the line writes that tilt, rounded as written: a new row of
+        the chunk's tilts."""
         exact = exact or bool(self.all_exact)
-        ab_src = self.tilt_held(src, q, self.tilt_hold if arc == NONE else self.arc_hold)
+        if fit:
+            value = np.round(np.asarray(fit, dtype=float), self.decimals) + 0.0
+            self.held_ab = value.tolist()
+            self.held_src = ab_src = len(self.q) + len(self.tilts)
+            self.tilts.append(self.held_ab)
+        else:
+            ab_src = self.tilt_held(src, q, self.tilt_hold if arc == NONE else self.arc_hold)
         turns = self.held_ab != self.last_ab
         length = vnorm.dist(self.last_q[:3], q[:3]) if arc == NONE else arc_len
         ab_now = list(self.held_ab)
@@ -644,7 +722,7 @@ class _Run:
         step = self.arc_f[a][A_LEN] / t * dt / n
         return [e - x * step for e, x in zip(q_end, d, strict=True)]
 
-    def center_tilt(self, a: int) -> None:
+    def center_tilt(self, a: int) -> bool:
         """Before a run of arcs whose start is still held back: hold A and B from
         its start at the value nearest the one held that covers the run's tilt
         within ``arc_hold`` and its ends' within ``tilt_hold`` (or, where none
@@ -652,10 +730,10 @@ class _Run:
         arcs turn them as seldom as possible (rule 5). The line to the start writes
         it; the value is a new row of the chunk's tilts (its ``ab``: N + row)."""
         if self.tilt_hold <= 0.0 or self.held_src == NONE or not self.run:
-            return
+            return False
         start, end = self.arc_i[a][A_START], self.arc_i[a][A_END]
         if self.run[-1] != self.q[start]:
-            return
+            return False
         n = len(self.q)
         while end + 1 < n and self.arc_of[end + 1] >= 0:
             nxt = self.arc_i[self.arc_of[end + 1]]
@@ -673,8 +751,18 @@ class _Run:
         low = np.maximum(hi - self.arc_hold, ends.max(axis=0) - self.tilt_hold)
         high = np.minimum(lo + self.arc_hold, ends.min(axis=0) + self.tilt_hold)
         if np.all(held >= low) and np.all(held <= high):
-            return  # the tilt held covers the run
+            return False  # the tilt held covers the run
         margin = 0.001 * self.tilt_hold  # the written value's rounding
+        loose = len(self.run) == 1 and bool(np.any(low + margin > high - margin))
+        if loose:
+            # none does, and the line to the start is one piece (no point between to
+            # stray from it): the start, an arc's point, may stay arc_hold from the
+            # value as the others; the end and the point after it within tilt_hold
+            # still (a line from the end that turned A or B halved the last arc's
+            # acceleration, tcGetOverallMaxAccel: 1.08 x the plan on a helix)
+            tail = q[[end, min(end + 1, n - 1)], 3:5]
+            low = np.maximum(hi - self.arc_hold, tail.max(axis=0) - self.tilt_hold)
+            high = np.minimum(lo + self.arc_hold, tail.min(axis=0) + self.tilt_hold)
         value = np.where(
             low + margin <= high - margin,
             np.clip(held, low + margin, high - margin),
@@ -684,6 +772,7 @@ class _Run:
         self.held_ab = value.tolist()
         self.held_src = n + len(self.tilts)
         self.tilts.append(self.held_ab)
+        return loose
 
     def tilt_leaves(self, qk: list[float]) -> bool:
         """Would the point qk's A or B be written anew on an arc? Never where the
@@ -721,7 +810,13 @@ class _Run:
         a = self.arc_of[k]
         start, end, plane, refit = self.arc_i[a]
         if k == start + 1:
-            self.center_tilt(a)
+            if self.center_tilt(a):
+                # the line to the start writes the value, further than tilt_hold
+                # from the start's own (a line of one piece: center_tilt)
+                qh, src = self.run[-1], self.run_src
+                t = self.chord_time()
+                self.run = []
+                self.g1(src, qh, t, False, fit=list(self.held_ab))
             self.write_held()  # the arc starts where a line ends
             # the line after a stop runs in G61: one piece, and the arc from its end
             settled = self.after_settle and not self.all_exact and not refit
@@ -803,12 +898,15 @@ class _Run:
         if self.run and (not self.within(qk) or self.dips(qk, dtk, lead)):
             self.write_held()
         self.hold(k, qk, dtk, lead, plan)
+        fit = self.fit_end(qk, self.run[:-1])
         t = self.chord_time()
         self.run = []
         if spd > 0.0 and bend:
-            self.corner_q, self.corner_t, self.corner_src = qk, t, k
+            # the corner's fitted tilt (if any) rides in its pose
+            self.corner_q, self.corner_t, self.corner_src = qk[:3] + fit if fit else qk, t, k
+            self.corner_fit = int(bool(fit))
             return False
-        self.g1(k, qk, t, spd == 0.0)
+        self.g1(k, qk, t, spd == 0.0, fit=fit)
         return False
 
 
@@ -866,7 +964,8 @@ def gcode_ops(
     val : (M,) float64
         A G1's or an ARC's F (inverse time [1/min]).
     tilts : (J, 2) float64
-        The tilts held before runs of arcs [deg] (``_Run.center_tilt``).
+        The tilts held before runs of arcs (``_Run.center_tilt``) and the chords'
+        fitted end tilts (``_Run.fit_tilt``) [deg].
     """
     r = _Run(st)
     resume = r.stop_at != NONE
