@@ -114,10 +114,7 @@ class Channel:
     large reads and writes (a chunk of points is MB: Connection copies it through
     the pickle, a buffer and 64 KiB reads, three times the CPU). The arrays
     rebuilt lie in one block of memory, each :data:`ALIGN` bytes aligned from its
-    start, and can be written to. The block is one an earlier message was read
-    into where no array rebuilt from it is left (:meth:`_block`): its pages are
-    mapped already, where a new block's are mapped one fault at a time as the
-    read fills them (half of what receiving costs, measured: bench/timeline.py).
+    start, and can be written to.
 
     Raises as Connection does: EOFError when the other end closed, OSError when
     writing to a closed pipe, whatever unpickling raises for what cannot be read.
@@ -126,14 +123,9 @@ class Channel:
     #: where each rebuilt array starts in the received bytes [bytes]
     ALIGN = 64
 
-    #: blocks of received messages kept to read later ones into: as many as the
-    #: messages a receiver holds at once (convert.AHEAD queued, the one in hand)
-    POOL = 12
-
     def __init__(self, conn: Any) -> None:
         self.conn = conn
         self.fd: int = conn.fileno()
-        self._blocks: list[Any] = []  # (n,) uint8 ndarrays
 
     def fileno(self) -> int:
         return self.fd
@@ -182,38 +174,13 @@ class Channel:
         sizes = struct.unpack_from(f"<{n_bufs}Q", head, 12)
         spans = [size + (-size % self.ALIGN) for size in sizes]
         data = bytearray(n_data)
-        body = self._block(sum(spans))
-        self._read_into([memoryview(data), body])
+        body = bytearray(sum(spans))
+        self._read_into([memoryview(data), memoryview(body)])
         views, at = [], 0
         for size, span in zip(sizes, spans, strict=True):
-            views.append(body[at : at + size])
+            views.append(memoryview(body)[at : at + size])
             at += span
         return pickle.loads(data, buffers=views)
-
-    def _block(self, n: int) -> memoryview:
-        """``n`` writable bytes to read a message's arrays into: the smallest
-        block of :attr:`_blocks` that holds them and that nothing else refers
-        to, or a new one kept there (in place of those still in use, which are
-        freed with the last array made from them).
-
-        Every array rebuilt from a block refers to it (through its memoryview,
-        which holds the block as its exporter), so a block whose only
-        references are this method's own has no array left to overwrite."""
-        import numpy as np
-
-        if n == 0:  # a message without arrays
-            return memoryview(bytearray(0))
-        free = [b for b in self._blocks if sys.getrefcount(b) <= _OWN_REFS]
-        fits = [b for b in free if n <= b.nbytes]
-        if fits:
-            return min(fits, key=len).data[:n]
-        if len(self._blocks) >= self.POOL:  # those in use go, then the smallest
-            free.sort(key=len)
-            self._blocks = free[max(0, len(free) - self.POOL + 1) :]
-        # room for the larger messages to come (whole MiB), not much more
-        block = np.empty(-(-n // _STEP) * _STEP, dtype=np.uint8)
-        self._blocks.append(block)
-        return block.data[:n]
 
     def _read(self, n: int) -> bytearray:
         out = bytearray(n)
@@ -233,14 +200,6 @@ class Channel:
                 else:
                     views[0] = views[0][n:]
                     n = 0
-
-
-#: references to a block of Channel._blocks that Channel._block itself holds
-#: while it looks at it (the list's, the comprehension's, getrefcount's argument)
-_OWN_REFS = 3
-
-#: a new receiving block's size is a multiple of this [bytes]
-_STEP = 1 << 20
 
 
 def forked(target: Callable[..., None], *args: Any) -> Any:
