@@ -735,3 +735,33 @@ def test_compiled_table_commands_refuses_arrays_of_the_wrong_shape() -> None:
         _play.table_commands((t,), cols, rows, rows, rows, rows.copy(), rows.copy())
     with pytest.raises(ValueError, match=r"cols must be rows of P \(0 to 2\), got 5"):
         _play.table_commands((t, t), np.array([0, 5]), rows, rows, rows, rows.copy(), rows.copy())
+
+
+def test_compiled_sides_refuse_points_outside_the_chunk() -> None:
+    """A window or standing crossing at a point the chunk has not: the reference's
+    indexing raises IndexError; the twin, which writes without bounds checks,
+    must refuse it too (a ValueError) rather than write past its array."""
+    _play = compiled("_play")
+    n = 6
+    V, rest = np.zeros(n), np.zeros(n, bool)
+    f, e, new = np.array([0]), np.array([2]), np.array([1])
+    none = np.zeros(0, dtype=int)
+    cases = [
+        (f, e, new, np.array([n + 40]), none, none),  # after its end: past the chunk
+        (f, np.array([n]), new, np.array([n]), none, none),  # its end past the chunk
+        (f, np.array([-n - 1]), new, np.array([0]), none, none),  # before it
+        (f, e, new, np.array([3]), np.array([n + 1]), np.array([1])),  # standing
+    ]
+    for case in cases:
+        with pytest.raises(IndexError):
+            play.motor_sides(V, rest, *case, 1, 5e-4)
+        with pytest.raises(ValueError, match=r"must be points of the chunk"):
+            _play.motor_sides(V, rest, *case, 1, 5e-4)
+        fv, ev, nv, lv, sf, sn = case
+        out = np.zeros((2, n))
+        args = (np.zeros((2, n)), rest, np.array([1]), np.ones(2, dtype=int), fv, ev, nv, lv)
+        with pytest.raises(ValueError, match=r"must be points of the chunk"):
+            _play.motors_sides(
+                *args, np.array([0]), np.array([1]), sf, sn, np.ones(len(sf), int), 5e-4, out
+            )
+        assert not out.any()  # nothing written before refusing

@@ -1639,6 +1639,38 @@ def _longs(a):
     return np.ascontiguousarray(a, dtype=np.int_)
 
 
+cdef Py_ssize_t _outside(const long* fv, const long* ev, const long* lv, Py_ssize_t w,
+                         const long* sf, Py_ssize_t ns, Py_ssize_t m) noexcept nogil:
+    """The first window (or w + the first standing crossing) for which
+    :func:`_sides_core` would write outside its m points, −1 if none: where the
+    reference's indexing raises IndexError, the core, without bounds checks,
+    would write past the array."""
+    cdef Py_ssize_t i
+    cdef long lo_f
+    for i in range(w):
+        if not -m <= ev[i] < m:
+            return i
+        if lv[i] - ev[i] - 1 > 0 and (ev[i] + 1 < 0 or lv[i] > m):
+            return i
+        lo_f = 0 if i == 0 else ev[i - 1] + 1
+        lo_f = fv[i] if fv[i] > lo_f else lo_f
+        if ev[i] - lo_f > 0 and lo_f < 0:
+            return i
+    for i in range(ns):
+        if not -m <= sf[i] < m:
+            return w + i
+    return -1
+
+
+def _refuse_outside(Py_ssize_t bad, Py_ssize_t w, Py_ssize_t m):
+    if bad >= w:
+        raise ValueError(f"s_first must be points of the chunk (-{m} to {m - 1}), "
+                         f"got standing crossing {bad - w} outside")
+    if bad >= 0:
+        raise ValueError(f"f, e, last_row must be points of the chunk (-{m} to {m - 1}), "
+                         f"got window {bad} outside")
+
+
 def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, double eps):
     """A motor's side at each point: :func:`play.motor_sides` (a window ending at
     −1 sets the last point, as numpy's index −1 does)."""
@@ -1654,6 +1686,9 @@ def motor_sides(V, resting, f, e, new, last_row, s_first, s_new, long side, doub
     _lengths("one value a point, as V", m, resting=len(rest))
     _lengths("one value a window, as e", w, f=len(fv), new=len(nv), last_row=len(lv))
     _lengths("one value a standing crossing, as s_first", sf.shape[0], s_new=len(sn))
+    _refuse_outside(_outside(&fv[0] if w else NULL, &ev[0] if w else NULL,
+                             &lv[0] if w else NULL, w, &sf[0] if sf.shape[0] else NULL,
+                             sf.shape[0], m), w, m)
     out = np.empty(m, dtype=int)
     cdef long[::1] sg = out
     if m:
@@ -1702,6 +1737,16 @@ def motors_sides(V, resting, cols, side, f, e, new, last_row, lo, hi, s_first, s
     cdef long* mf = sg + m
     cdef long* mn = mf + ns
     try:
+        for i in range(nc):  # refuse indexes outside the chunk before writing a row
+            c = 0
+            for k in range(ns):
+                if sc[k] == cv[i]:
+                    mf[c] = sf[k]
+                    c += 1
+            a = lo_v[i]
+            _refuse_outside(_outside(&fv[a] if w else NULL, &ev[a] if w else NULL,
+                                     &lv[a] if w else NULL, hi_v[i] - a, mf, c, m),
+                            hi_v[i] - a, m)
         for i in range(nc):
             c = 0
             for k in range(ns):  # its standing crossings, in their order
