@@ -347,7 +347,8 @@ def _settle_motors_case(
 ) -> tuple[Any, ...]:
     """settle_motors' arguments: motors 0 and 2 of three (one table each) with up to
     four crossings each in n points (interleaved by their ends, as the chain sorts
-    them), offsets carried from the chunk before or none."""
+    them), offsets carried from the chunk before or none; steps of no duration at
+    about 5 % of the points, never a window's last."""
     rng = np.random.default_rng(seed)
     cols = np.array([0, 2])
     mids = [0.5 * (t.breaks[0] + t.breaks[-1]) for t in tabs]
@@ -356,6 +357,15 @@ def _settle_motors_case(
     )
     s_path = np.cumsum(np.where(rng.random(n) < 0.1, 0.0, rng.uniform(0, 0.3, n)))
     dt = np.where(rng.random(n) < 0.05, 0.0, rng.uniform(0.001, 0.01, n))
+    rows = []
+    for col in cols:
+        k = min(n + 1, 2 * int(rng.integers(0, 5)))
+        cuts = np.sort(rng.choice(np.arange(-1, n), size=k, replace=False))
+        for b, e in zip(cuts[0::2], cuts[1::2], strict=False):
+            rows.append((e, b, col))
+            # a crossing takes time: its window's last step has a duration, as the
+            # chain's windows do (steps of no duration occur elsewhere)
+            dt[e] = dt[e] or 0.001
     ch = play.Chunk(
         P_ideal,
         rng.normal(0, 5, (3, n)),
@@ -366,12 +376,6 @@ def _settle_motors_case(
         np.cumsum(dt),
         P_ideal[:, 0] + rng.normal(0, 0.01, 3),
     )
-    rows = []
-    for col in cols:
-        k = min(n + 1, 2 * int(rng.integers(0, 5)))
-        cuts = np.sort(rng.choice(np.arange(-1, n), size=k, replace=False))
-        for b, e in zip(cuts[0::2], cuts[1::2], strict=False):
-            rows.append((e, b, col))
     x = np.array(rows, dtype=int).reshape(-1, 3)
     x = x[np.lexsort((x[:, 2], x[:, 1], x[:, 0]))]
     contacts = play.Contacts(x[:, 0], x[:, 1], x[:, 2], np.abs(rng.normal(0, 1e-7, len(x))))

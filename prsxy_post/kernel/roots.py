@@ -57,8 +57,9 @@ def seek_step(
 
     Returns
     -------
-    x, going, ok, moved, s_a, v_a, s_b, v_b, last : (m,) after the step (new
-    arrays)
+    x, going, ok, moved, s_a, v_a, s_b, v_b, last : (m,) after the step (going,
+    ok and moved new arrays; the others the inputs themselves where no root is
+    still sought, as the caller only rebinds them)
     """
     n = len(x)
     going, ok, moved = going.copy(), ok.copy(), moved.copy()
