@@ -1241,6 +1241,32 @@ def settle_crossings(t, mo, before, e, b, shortfall, P, V, bint cubic, double sh
     return _pure.Settled(P_a, V_a, res[0], res[1], res[2], res[3])
 
 
+cdef void _stretches(const Mo* mo, const Crossings* X, const long* todo, Py_ssize_t w,
+                     const long* span, Py_ssize_t K, const double* y_s, const double* Pv,
+                     const double* Vv, double* y0, double* P0, double* V0, double* Pw,
+                     double* Vw, double* dtw) noexcept nogil:
+    """:func:`_reckon_again`'s stretches, from each crossing before to each
+    crossing's end (K points in all), their starts, and the crossings' ends as
+    made (numpy's order: the last write wins, index −1 the last element)."""
+    cdef Py_ssize_t i, j, k = 0, ti, ep
+    for i in range(w):
+        ti = todo[i]
+        ep = X.e[ti - 1]
+        y0[i] = y_s[ti - 1]
+        P0[i] = Pv[ep]
+        V0[i] = Vv[ep]
+        for j in range(span[i]):
+            Pw[k] = Pv[ep + 1 + j]
+            Vw[k] = Vv[ep + 1 + j]
+            dtw[k] = mo.dt[ep + 1 + j]
+            k += 1
+    k = 0
+    for i in range(w):
+        k += span[i]
+        if K:
+            Pw[k - 1 if k >= 1 else K - 1] = X.made[todo[i]]
+
+
 cdef Py_ssize_t _reckon_again(const Tab* T, const Mo* mo, const Crossings* X, const long* todo,
                               Py_ssize_t w, double* y_s, double* left, double* Pv, double* Vv,
                               bint cubic, double share, double hurry, double* carry,
@@ -1279,26 +1305,7 @@ cdef Py_ssize_t _reckon_again(const Tab* T, const Mo* mo, const Crossings* X, co
     cdef double* off = ct + w
     cdef double* new_left = off + w
     try:
-        # the stretches: from each crossing before to each crossing's end
-        k = 0
-        for i in range(w):
-            ti = todo[i]
-            ep = X.e[ti - 1]
-            y0[i] = y_s[ti - 1]
-            P0[i] = Pv[ep]
-            V0[i] = Vv[ep]
-            for j in range(span[i]):
-                Pw[k] = Pv[ep + 1 + j]
-                Vw[k] = Vv[ep + 1 + j]
-                dtw[k] = mo.dt[ep + 1 + j]
-                k += 1
-        # the crossings' ends as made (numpy's order: the last write wins, index −1
-        # the last element)
-        k = 0
-        for i in range(w):
-            k += span[i]
-            if K:
-                Pw[k - 1 if k >= 1 else K - 1] = X.made[todo[i]]
+        _stretches(mo, X, todo, w, span, K, y_s, Pv, Vv, y0, P0, V0, Pw, Vw, dtw)
         _follow_core(T, y0, P0, V0, span, w, Pw, Vw, dtw, K, cubic, y_w, lo_w, hi_w)
         base = 0
         for i in range(w):
