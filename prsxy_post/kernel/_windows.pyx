@@ -260,6 +260,23 @@ def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,
 cdef signed char MID = 0, AT_REST = 1, CREPT = 2, STOOD = 3
 
 
+cdef signed char _turn_kind(const double* p, const unsigned char* rs, const long* sg,
+                            const long* cr, Py_ssize_t i, Py_ssize_t off) noexcept nogil:
+    """The kind of the reversal at row i (its direction ``sg[i]`` new, the rows
+    before final): from rest, a creep's end, after standing, or in mid motion
+    (:func:`prsxy_post.kernel.windows.motor_turns`)."""
+    cdef long nw = sg[i]
+    cdef Py_ssize_t b1 = i - 1 if i >= 1 else 0, b2 = i - 2 if i >= 2 else 0
+    cdef bint old_way = nw * (p[i] - p[b1]) < 0.0
+    cdef bint at_rest = i == 0 or (rs[b1] and not old_way)
+    cdef bint crept_f = cr[i] != 0 and not at_rest and sg[b1] != -nw
+    cdef bint stood = (
+        not at_rest and not crept_f and i - off >= 1 and i >= 2 and sg[b1] == 0
+        and sg[b2] == 0 and fabs(p[b1] - p[b2]) < 1e-9 and not old_way
+    )
+    return AT_REST if at_rest else (CREPT if crept_f else (STOOD if stood else MID))
+
+
 def motor_turns(V, P, rest, long side, double ref, double drift, Py_ssize_t off,
                 double eps):
     """:func:`prsxy_post.kernel.windows.motor_turns`, compiled (the creeps by the
@@ -268,7 +285,7 @@ def motor_turns(V, P, rest, long side, double ref, double drift, Py_ssize_t off,
     cdef const double[::1] v = np.ascontiguousarray(V, dtype=np.float64)
     cdef const double[::1] p = P_a
     cdef const unsigned char[::1] rs = np.ascontiguousarray(rest, dtype=np.bool_).view(np.uint8)
-    cdef Py_ssize_t N = v.shape[0], i, m = 0, b1, b2
+    cdef Py_ssize_t N = v.shape[0], i, m = 0
     _lengths("one value a row, as V", N, P=len(p), rest=len(rs))
     sg_a = np.empty(N, dtype=np.int_)
     cdef long[::1] sg = sg_a
@@ -278,7 +295,7 @@ def motor_turns(V, P, rest, long side, double ref, double drift, Py_ssize_t off,
     cdef const long[::1] cr = crept_a
     came_a = np.empty(N, dtype=np.int_)
     cdef long[::1] came = came_a
-    cdef long cur = side, nw
+    cdef long cur = side
     for i in range(N):
         if cr[i] != 0:
             sg[i] = cr[i]
@@ -292,23 +309,12 @@ def motor_turns(V, P, rest, long side, double ref, double drift, Py_ssize_t off,
     kind_a = np.empty(m, dtype=np.int8)
     cdef Py_ssize_t[::1] r = r_a
     cdef signed char[::1] kind = kind_a
-    cdef bint old_way, at_rest, crept_f, stood
     m = 0
     for i in range(off, N):
         if not (sg[i] != 0 and sg[i] != came[i]):
             continue
-        nw = sg[i]
-        b1 = i - 1 if i >= 1 else 0
-        b2 = i - 2 if i >= 2 else 0
-        old_way = nw * (p[i] - p[b1]) < 0.0
-        at_rest = i == 0 or (rs[b1] and not old_way)
-        crept_f = cr[i] != 0 and not at_rest and sg[b1] != -nw
-        stood = (
-            not at_rest and not crept_f and i - off >= 1 and i >= 2 and sg[b1] == 0
-            and sg[b2] == 0 and fabs(p[b1] - p[b2]) < 1e-9 and not old_way
-        )
         r[m] = i
-        kind[m] = AT_REST if at_rest else (CREPT if crept_f else (STOOD if stood else MID))
+        kind[m] = _turn_kind(&p[0], &rs[0], &sg[0], &cr[0], i, off)
         m += 1
     return sg_a, came_a, r_a, kind_a, reach
 
@@ -496,11 +502,10 @@ cdef Py_ssize_t _turn_pass(const double* p, const double* v, const unsigned char
     of :func:`motor_dips` (rows and roots: its dips into ``j0``, ``r0`` (cap, 2),
     ``m0`` of them, its settings-off back into ``j1``, ``r1``, ``m1``). Every test
     at row i reads rows up to i, final by then: the separate passes' answers."""
-    cdef Py_ssize_t i, m = 0, a0 = 0, a1 = 0, b1, b2
+    cdef Py_ssize_t i, m = 0, a0 = 0, a1 = 0
     cdef Py_ssize_t lo_j = off if off > 1 else 1
     cdef Py_ssize_t hi_j = off + n_h if off + n_h < N else N
-    cdef long cur = side, nw
-    cdef bint old_way, at_rest, crept_f, stood
+    cdef long cur = side
     cdef double lo, hi
     for i in range(N):
         if cr[i] != 0:
@@ -509,18 +514,8 @@ cdef Py_ssize_t _turn_pass(const double* p, const double* v, const unsigned char
         if sg[i] != 0:
             cur = sg[i]
         if i >= off and sg[i] != 0 and sg[i] != came[i]:
-            nw = sg[i]
-            b1 = i - 1 if i >= 1 else 0
-            b2 = i - 2 if i >= 2 else 0
-            old_way = nw * (p[i] - p[b1]) < 0.0
-            at_rest = i == 0 or (rs[b1] and not old_way)
-            crept_f = cr[i] != 0 and not at_rest and sg[b1] != -nw
-            stood = (
-                not at_rest and not crept_f and i - off >= 1 and i >= 2 and sg[b1] == 0
-                and sg[b2] == 0 and fabs(p[b1] - p[b2]) < 1e-9 and not old_way
-            )
             r[m] = i
-            kind[m] = AT_REST if at_rest else (CREPT if crept_f else (STOOD if stood else MID))
+            kind[m] = _turn_kind(p, rs, sg, cr, i, off)
             m += 1
         if i < lo_j or i >= hi_j:
             continue
