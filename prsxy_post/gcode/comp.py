@@ -301,8 +301,10 @@ def _straight_next(
             )
         )
     if not concave and beta > small:  # convex: an arc round the corner
+        # the move before goes out as it is, then the arc (a rapid in G0)
+        q.move_endpoint_and_flush(cx, cy, line)
         mid = (opx + radius * math.cos(alpha + gamma), opy + radius * math.sin(alpha + gamma))
-        _corner_arc(it, motion, line, p, mid)
+        _corner_arc(it, line, p, mid, rapid=motion != 1)
     elif concave:
         if front is None or front["kind"] != "arc":
             halfcorner = (beta + math.pi) / 2.0
@@ -322,21 +324,21 @@ def _straight_next(
 
 
 def _corner_arc(
-    it: Interpreter, motion: int, line: int, p: list[float], mid: tuple[float, float]
+    it: Interpreter, line: int, p: list[float], mid: tuple[float, float], rapid: bool
 ) -> None:
-    """A convex corner before a straight move: the move before goes out as it is,
-    then an arc (a rapid in G0) round the programmed corner to ``mid``, a radius
-    from it square to the new move."""
+    """A convex corner: an arc (a rapid where ``rapid``) round the programmed
+    corner to ``mid``, a radius from it square to the next move, the rotary axes
+    moving to ``p``'s on it; the queue flushed after it, its end the next move's
+    start."""
     st = it.st
     iu, iv, iw = _AXES[st.plane]
     q = it.queue
-    cx, cy = st.pos[iu], st.pos[iv]
-    q.move_endpoint_and_flush(cx, cy, line)
     corner = list(st.pos)
     corner[iu], corner[iv] = mid
     corner[3], corner[4] = p[3], p[4]  # the rotary axes move on the added arc
-    corner[iw] = st.pos[iw]
-    if motion == 1:
+    if rapid:
+        q.hold(line=line, kind="rapid", end=tuple(corner), **it.extras())
+    else:
         op = st.program
         center = [0.0, 0.0, 0.0]
         center[iu], center[iv], center[iw] = op[iu], op[iv], st.pos[iw]
@@ -350,8 +352,6 @@ def _corner_arc(
             rotation=-1 if st.comp_side == LEFT else 1,
             **it.extras(),
         )
-    else:
-        q.hold(line=line, kind="rapid", end=tuple(corner), **it.extras())
     q.flush()
     q.set_endpoint(*mid)
 
@@ -539,26 +539,9 @@ def _arc_next(
             mx, my = _arcs_cut_back(it, front, (centerx, centery), arc_radius, turn, line, gw)
         q.move_endpoint_and_flush(mx, my, line)
     elif beta > small:  # convex: an arc round the corner, then the arc
-        midx = opx + radius * math.cos(delta)
-        midy = opy + radius * math.sin(delta)
         q.flush()
-        corner = list(st.pos)
-        corner[iu], corner[iv] = midx, midy
-        corner[3], corner[4] = p[3], p[4]
-        center = [0.0, 0.0, 0.0]
-        center[iu], center[iv], center[iw] = opx, opy, st.pos[iw]
-        q.hold(
-            line=line,
-            kind="arc",
-            end=tuple(corner),
-            feed=it.feed_now(),
-            plane=st.plane,
-            center=tuple(center),
-            rotation=-1 if side == LEFT else 1,
-            **it.extras(),
-        )
-        q.flush()
-        q.set_endpoint(midx, midy)
+        mid = (opx + radius * math.cos(delta), opy + radius * math.sin(delta))
+        _corner_arc(it, line, p, mid, rapid=False)
     else:  # convex, smooth: the arc alone
         q.flush()
         q.set_endpoint(cx, cy)
