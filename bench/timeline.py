@@ -44,6 +44,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+import bench  # noqa: E402
 from prsxy_post import chain, convert, sinks  # noqa: E402
 
 _LOG: dict[str, Any] = {"dir": "", "role": "main", "pid": -1, "fh": None}
@@ -336,8 +337,6 @@ def main() -> None:
     args = ap.parse_args()
     _install()
     with tempfile.TemporaryDirectory() as d:
-        import bench
-
         program = args.program
         if program is None:
             program = os.path.join(d, f"finish-{args.lines}.ngc")
