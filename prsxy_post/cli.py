@@ -15,6 +15,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
+from . import blas_threads  # noqa: F401  (before numpy: OpenBLAS reads it once)
+
+# isort: split
 import click
 import numpy as np
 
