@@ -40,7 +40,7 @@ from .interpolate import (
     junctions,
     next_tangent,
 )
-from .interpolate.geometry import CURVE_SHARE, REVERSAL_SHARE
+from .interpolate.geometry import CURVE_SHARE, REVERSAL_SHARE, path_arrays
 from .interpolate.lookahead import KAPPA, REVERSAL_SLOPE, STAND_SLOPE
 from .interpolate.pieces import Pieces
 from .interpolate.sampling import sample, steps
@@ -50,6 +50,7 @@ from .profile import MOTORS, Profile, nominal_kinematics
 
 if TYPE_CHECKING:
     from .gcode import Motion
+    from .kernel.path import PathArrays
 
 
 @dataclass(frozen=True)
@@ -864,7 +865,10 @@ class Pipeline:
             self.ref,
             self.reversal_tol,
         )
-        velocity = self._path_velocity(plan, s, pc)
+        # the plan's paths as the path kernel takes them, made once for every
+        # look at the plan below (the roots' search asks it several times)
+        paths = None if plan is None else path_arrays(plan.blocks)
+        velocity = self._path_velocity(plan, s, pc, paths)
         if velocity is not None and found.seen:
             # the roots in motion onto the path: the search asks where to look,
             # the plan and the IK answer (reversals.roots_search)
@@ -902,7 +906,7 @@ class Pipeline:
         when = t_end
         before = np.zeros(n, dtype=bool)
         if ins:
-            extra, e_step, e_when, e_before, dt = self._new_points(plan, s, pc, t_end, ins)
+            extra, e_step, e_when, e_before, dt = self._new_points(plan, s, pc, t_end, ins, paths)
             places = _merge_places(n, e_step, e_when, e_before)
             pc = self._joined(pc, dt, extra, places)
             step = _merged(step, e_step, places)
@@ -959,7 +963,7 @@ class Pipeline:
         return PointChunk(**fields)
 
     def _path_velocity(
-        self, plan: Plan | None, s: Samples, pc: PointChunk
+        self, plan: Plan | None, s: Samples, pc: PointChunk, paths: PathArrays | None = None
     ) -> reversals.Velocity | None:
         """The wanted velocity of motors inside the chunk's steps, from the plan
         (:data:`.reversals.Velocity`): the IK and its velocity at the pose the plan
@@ -967,7 +971,8 @@ class Pipeline:
         taken linear between the step's ends (it changes by µm over mm: its
         curvature over a step is far below the rounding of the written numbers),
         not evaluated again. NaN in a step that begins in another block (its start
-        is not in the row's block). None without a plan."""
+        is not in the row's block). None without a plan. ``paths``: the plan's
+        ``path_arrays(plan.blocks)``, if made already."""
         if plan is None:
             return None
         # the map's correction at each point and at the point before the chunk
@@ -983,7 +988,7 @@ class Pipeline:
                 return np.full(len(k), np.nan)
             if not every:
                 k, frac, tau, cols = k[inside], frac[inside], tau[inside], cols[inside]
-            q, qdot = at_times(plan, s.block[k], tau)
+            q, qdot = at_times(plan, s.block[k], tau, paths)
             e0 = np.where((k >= 1)[:, None], _gather(fix, np.maximum(k - 1, 0)), fix_before)
             q_t = q - (e0 + frac[:, None] * (_gather(fix, k) - e0))
             # the IK and its velocity in one pass of the kernel (the rows of
@@ -1357,10 +1362,12 @@ class Pipeline:
         pc: PointChunk,
         t_end: np.ndarray,
         ins: reversals.Insertions,
+        paths: PathArrays | None = None,
     ) -> tuple[list[PointChunk], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The standing points and the points inside steps that the reversals need
         (a record of each kind there is, joined with the chunk's points by the
-        caller), and the chunk's step times cut at them."""
+        caller), and the chunk's step times cut at them. ``paths``: the plan's
+        ``path_arrays(plan.blocks)``, if made already."""
         parts: list[PointChunk] = []
         e_step: list[np.ndarray] = [np.zeros(0, dtype=int)]
         e_when: list[np.ndarray] = [np.zeros(0)]
@@ -1377,7 +1384,7 @@ class Pipeline:
             tt = ins.mid_t
             blk = s.block[ks]
             tau = s.tau[ks] - (t_end[ks] - tt)
-            q, qdot = at_times(plan, blk, tau)
+            q, qdot = at_times(plan, blk, tau, paths)
             v = np.linalg.norm(qdot[:, :3], axis=1)
             v = np.where(v > 0, v, np.linalg.norm(qdot[:, 3:], axis=1))
             q_t, P, V, _ = self._solve(q, qdot, s.tool_length[ks], s.line[ks])

@@ -539,41 +539,53 @@ class _Dip(NamedTuple):
 
 
 def _dip_windows(
-    d: _Dip,
+    dips: list[_Dip],
     rules: _Rules,
-    w1: tuple[np.ndarray, np.ndarray] | None,
-    w2: tuple[np.ndarray, np.ndarray] | None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The two crossings of every dip ``d`` (:func:`_motor_dips`), within the
-    ``reach`` w1, w2 (:func:`reach`; None: the tolerance alone decides) about its
-    first and second turning point. Each of the two windows keeps to its own half
-    of the step (cut between the two turning points), so that they never overlap.
+    reaches: list[tuple[np.ndarray, np.ndarray]] | None,
+) -> list[tuple[np.ndarray, ...]]:
+    """The two crossings of every dip of ``dips`` (every motor's :func:`_motor_dips`,
+    one after another), within the reach (:func:`reach`) about its first and
+    second turning point: ``reaches`` two a part of ``dips`` (before, after)
+    (None: the tolerance alone decides). Each of the two windows keeps to its own
+    half of the step (cut between the two turning points), so that they never
+    overlap.
 
-    Returns (step, new side, window start, window end) for 2 m windows, the first
-    crossing of every dip before the second.
+    Returns, for each part of ``dips``, (step, new side of the first crossing,
+    of the second, first window's start, second's, first window's end, second's):
+    views of arrays made in one call for every motor (the windows are made row by
+    row).
     """
-    # both halves in one call (the windows are made row by row)
+    if not dips:
+        return []
+    k, sg, s1, s2, A1, A2, h, t0, tm, t1 = (
+        np.concatenate([getattr(d, f) for d in dips]) for f in _Dip._fields
+    )
+    n = len(k)
+    wide = None
+    if reaches is not None:
+        # every first turning point's, then every second's (as the rows below)
+        halves = reaches[0::2] + reaches[1::2]
+        wide = (np.concatenate([r[0] for r in halves]), np.concatenate([r[1] for r in halves]))
     ta, tb = windows(
-        np.concatenate([d.t0, d.tm]),
-        np.concatenate([d.tm, d.t1]),
-        np.concatenate([d.t0 + d.s1 * d.h, d.t0 + d.s2 * d.h]),
-        np.concatenate([d.A1, d.A2]),
+        np.concatenate([t0, tm]),
+        np.concatenate([tm, t1]),
+        np.concatenate([t0 + s1 * h, t0 + s2 * h]),
+        np.concatenate([A1, A2]),
         rules.tol,
         rules.longest,
-        None if w1 is None and w2 is None else _joined_reach(w1, w2, len(d.k)),
+        wide,
         rules.chords,
     )
-    return np.concatenate([d.k, d.k]), np.concatenate([-d.sg, d.sg]), ta, tb
-
-
-def _joined_reach(
-    w1: tuple[np.ndarray, np.ndarray] | None, w2: tuple[np.ndarray, np.ndarray] | None, m: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """The reaches (before, after) of two sets of m windows joined, None an unbound
-    reach (inf, as :func:`windows` takes it)."""
-    free = (np.full(m, np.inf), np.full(m, np.inf))
-    a, b = free if w1 is None else w1, free if w2 is None else w2
-    return np.concatenate([a[0], b[0]]), np.concatenate([a[1], b[1]])
+    back = -sg
+    out: list[tuple[np.ndarray, ...]] = []
+    a = 0
+    for d in dips:
+        b = a + len(d.k)
+        out.append(
+            (k[a:b], back[a:b], sg[a:b], ta[a:b], ta[n + a : n + b], tb[a:b], tb[n + a : n + b])
+        )
+        a = b
+    return out
 
 
 def reach(
@@ -936,25 +948,35 @@ def place_insertions(
         acc_all = np.concatenate([np.zeros(0)] + [acc for p in parts for _, _, acc in p])
         q = len(acc_all)
         r_before, r_after = reach((allowed[0][:q], allowed[1][:q]), acc_all)
-    for t, dips, edges in zip(found.seen, found.dips, parts, strict=True):
+    # the reaches about every motor's turning points, in _edge_parts' order: its
+    # dips' and settings-off's (two each), then its reversals in motion's
+    dip_reach: list[tuple[np.ndarray, np.ndarray]] = []
+    wide: list[tuple[np.ndarray, np.ndarray] | None] = []
+    for edges in parts:
+        if allowed is None:
+            wide.append(None)
+            continue
+        for j, (k, _, _) in enumerate(edges):
+            r = (r_before[at : at + len(k)], r_after[at : at + len(k)])
+            at += len(k)
+            if j < 4:
+                dip_reach.append(r)
+            else:
+                wide.append(r)
+    # every motor's dips' and settings-off's windows in one call
+    dw = _dip_windows(
+        [d for dips in found.dips for d in dips], rules, None if allowed is None else dip_reach
+    )
+    for i, t in enumerate(found.seen):
         s_k.append(t.k[t.at_rest])
         s_col.append(np.full(len(s_k[-1]), t.col))
         s_new.append(t.new[t.at_rest])
-        reaches: list[tuple[np.ndarray, np.ndarray] | None] = []
-        for k, _, _ in edges:
-            if allowed is None:
-                reaches.append(None)
-                continue
-            m = len(k)
-            reaches.append((r_before[at : at + m], r_after[at : at + m]))
-            at += m
-        ks, tas, tbs, news = _motor_windows(t, dips, ch, rules, bent, reaches)
+        ks, tas, tbs, news = _motor_windows(t, dw[2 * i : 2 * i + 2], ch, rules, bent, wide[i])
         w.k.extend(ks)
         w.ta.extend(tas)
         w.tb.extend(tbs)
-        new_all = np.concatenate(news)
-        w.col.append(np.full(len(new_all), t.col))
-        w.new.append(new_all)
+        w.col.append(np.full(sum(len(x) for x in news), t.col))
+        w.new.extend(news)
     ins.s_k, ins.s_col, ins.s_new = (np.concatenate(x) for x in (s_k, s_col, s_new))
     # distinct rows, sorted (np.unique's answer, a tenth of its time here)
     rows = np.sort(ins.s_k)
@@ -1029,17 +1051,18 @@ def _turns(ch: _Chunk, col: int, found: kernel_windows.Reversals, i: int) -> _Tu
 
 def _motor_windows(
     t: _Turns,
-    dips: list[_Dip],
+    dw: list[tuple[np.ndarray, ...]],
     ch: _Chunk,
     rules: _Rules,
     corners_at: np.ndarray | None,
-    reaches: list[tuple[np.ndarray, np.ndarray] | None],
+    wide: tuple[np.ndarray, np.ndarray] | None,
 ) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
     """One motor's crossing windows inside steps: for its reversals creeping,
-    standing, in motion, and its dips and settings-off back (two windows each),
-    in that order, the windows' steps, starts and ends [s] and new sides (four
-    lists of five arrays). ``reaches``: the :func:`reach` about its turning
-    points in :func:`_edge_parts`' order (None: the tolerance alone decides)."""
+    standing, in motion, and its dips and settings-off back (two windows each,
+    ``dw``: :func:`_dip_windows`' answer for the motor's two parts), in that
+    order, the windows' steps, starts and ends [s] and new sides (four lists of
+    seven arrays). ``wide``: the :func:`reach` about its reversals in motion
+    (None: the tolerance alone decides)."""
     # a creeping motor has drifted back past the allowance: it crosses over the
     # end of this step (its speed makes the crossing's error tiny)
     kc = t.k[t.crept_f]
@@ -1051,16 +1074,13 @@ def _motor_windows(
     t1 = ch.t_end[ks]
     t0 = t1 - ch.dt[ks]
     ta_s, tb_s = np.where(t1 - t0 <= 1.5 * rules.longest, t0, t1 - rules.longest), t1
-    dw = [
-        _dip_windows(dips[0], rules, reaches[0], reaches[1]),
-        _dip_windows(dips[1], rules, reaches[2], reaches[3]),
-    ]
-    km, ta_m, tb_m = _motion_windows(t, ch, rules, dw, corners_at, reaches[4])
+    d, o = dw
+    km, ta_m, tb_m = _motion_windows(t, ch, rules, [d[0], o[0]], corners_at, wide)
     return (
-        [kc, ks, km, dw[0][0], dw[1][0]],
-        [ta_c, ta_s, ta_m, dw[0][2], dw[1][2]],
-        [tb_c, tb_s, tb_m, dw[0][3], dw[1][3]],
-        [t.new[t.crept_f], t.new[t.stood], t.new[t.mid], dw[0][1], dw[1][1]],
+        [kc, ks, km, d[0], d[0], o[0], o[0]],
+        [ta_c, ta_s, ta_m, d[3], d[4], o[3], o[4]],
+        [tb_c, tb_s, tb_m, d[5], d[6], o[5], o[6]],
+        [t.new[t.crept_f], t.new[t.stood], t.new[t.mid], d[1], d[2], o[1], o[2]],
     )
 
 
@@ -1106,14 +1126,15 @@ def _motion_windows(
     t: _Turns,
     ch: _Chunk,
     rules: _Rules,
-    dips: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+    dips: list[np.ndarray],
     corners_at: np.ndarray | None,
     wide: tuple[np.ndarray, np.ndarray] | None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One motor's windows about its reversals in motion, within the reach
     ``wide`` (:func:`reach`): their steps, starts and ends [s] (:func:`windows`,
     or :func:`chord_windows` with ``chords``, which may reach into a step beside
-    that has no other window of the motor's: ``dips``' windows)."""
+    that has no other window of the motor's: ``dips``, the steps of its dips'
+    and settings-off's windows)."""
     # a reversal in motion: the window about the root of the step's cubic
     sr, acc = t.sr, t.acc
     km = t.k[t.mid]
@@ -1121,7 +1142,7 @@ def _motion_windows(
     t1 = ch.t_end[km]
     t0 = t1 - h
     if rules.chords:
-        busy = np.concatenate([t.k, t.k[t.stood] - 1, dips[0][0], dips[1][0]])
+        busy = np.concatenate([t.k, t.k[t.stood] - 1, dips[0], dips[1]])
         t_before, t_after = _chord_room(km, t0, t1, ch, busy, corners_at)
         ta, tb = chord_windows(
             t0, t1, t0 + sr * h, acc, rules.tol, rules.longest, wide, t_before, t_after

@@ -25,7 +25,6 @@ from hypothesis import strategies as st
 from prsxy_post import kernel, reversals
 from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.kernel import windows
-from prsxy_post.kernel.play import carried
 
 from .conftest import ROOT
 from .kernel_cases import compiled, record, same_bits
@@ -37,9 +36,11 @@ def _same_pair(got: tuple[np.ndarray, np.ndarray], want: tuple[np.ndarray, np.nd
 
 #: how often at least the samples' conversions call them, and on how many rows
 #: in all (roots: the reversals in motion, once a motor with play and chunk, few
-#: steps). dip_roots runs inside motor_dips on both paths: generated inputs test
-#: it (test_generated_roots_are_bit_identical); motor_turns and motor_dips run
-#: inside motor_reversals (test_sample_programs_motor_reversals_are_bit_identical)
+#: steps). dip_roots runs inside the reference's motor_dips and fused into the
+#: twin's motor_reversals: generated inputs test it
+#: (test_generated_roots_are_bit_identical); the reference's motor_turns and
+#: motor_dips run inside its motor_reversals
+#: (test_sample_programs_motor_reversals_are_bit_identical)
 ROOT_CALLS = {"_velocity_roots": (5, 3)}
 
 
@@ -67,22 +68,22 @@ def _same_reversals(got: windows.Reversals, want: windows.Reversals) -> bool:
 def test_sample_programs_motor_reversals_are_bit_identical(tmp_path: Path) -> None:
     """Every motor's reversals, kinds, dips and settings-off back, one call a chunk
     (every row of every motor with play), compiled against the reference; and
-    against the reference's pieces motor by motor (motor_turns, motor_dips)."""
+    against the reference's pieces motor by motor (motor_turns)."""
     _windows = compiled("_windows")
     calls = record("_motor_reversals", tmp_path)
     assert len(calls) >= 2
     assert sum(args[0].shape[1] * len(args[3]) for args in calls) >= 100
     kinds: set[int] = set()
     for args in calls:
-        want = windows.motor_reversals(*args)
-        assert _same_reversals(_windows.motor_reversals(*args), want)
+        got = _windows.motor_reversals(*args)
+        assert _same_reversals(got, windows.motor_reversals(*args))
         V, P, rest, cols, side, ref, drift, off, eps, _h, _tol = args
         for i, col in enumerate(cols.tolist()):
-            turns = _windows.motor_turns(
+            turns = windows.motor_turns(
                 V[col], P[col], rest, int(side[col]), ref[col], drift, off, eps
             )
-            at = slice(want.turns[i], want.turns[i + 1])
-            assert same_bits(turns[2], want.r[at]) and same_bits(turns[3], want.kind[at])
+            at = slice(got.turns[i], got.turns[i + 1])
+            assert same_bits(turns[2], got.r[at]) and same_bits(turns[3], got.kind[at])
             kinds |= set(turns[3].tolist())
     assert len(kinds) >= 2
 
@@ -155,9 +156,10 @@ def test_a_cubic_from_rest_turns_at_its_second_root_the_way_it_ends() -> None:
 def test_sample_programs_windows_are_bit_identical(tmp_path: Path) -> None:
     _windows = compiled("_windows")
     calls = record("_crossing_windows", tmp_path)
-    # every motor's reversals in motion, dips and settings-off a chunk: mostly
-    # none, some windows in the five-axis samples
-    assert len(calls) >= 20
+    # every motor's reversals in motion a chunk, and every motor's dips and
+    # settings-off together once a chunk: mostly none, some windows in the
+    # five-axis samples
+    assert len(calls) >= 10
     assert sum(len(args[0]) for args in calls) >= 3
     for args in calls:
         want = windows.crossing_windows(*args)
@@ -284,24 +286,28 @@ def _motor_rows(draw: st.DrawFn, rows: int | None = None) -> tuple[Any, ...]:
 def test_generated_motor_turns_and_dips_are_bit_identical(
     case: tuple[Any, ...], tol: float, seed: int
 ) -> None:
-    """A motor's reversals and their kinds, and its dips and settings-off back,
-    compiled against the reference: the same rows, kinds and roots to the bit."""
+    """A motor's reversals and their kinds, and its dips and settings-off back
+    (motor_reversals of the motor alone), compiled against the reference's pieces
+    (motor_turns, motor_dips): the same rows, kinds and roots to the bit."""
     _windows = compiled("_windows")
     V, P, rest, side, ref, drift, off = case
-    args = (V, P, rest, side, ref, drift, off, reversals.V_EPS)
-    want = windows.motor_turns(*args)
-    got = _windows.motor_turns(*args)
-    assert len(got) == len(want) and all(
-        same_bits(np.asarray(g), np.asarray(w)) for g, w in zip(got, want, strict=True)
-    )
-    assert got[3].dtype == np.int8 and set(got[3].tolist()) <= {0, 1, 2, 3}
-    sg, came = want[0], want[1]
     h = np.random.default_rng(seed).choice([0.01, 0.00977, 2.5e-4], len(V) - off)
-    for sets_off in (False, True):
-        d_args = (P, V, h, sg, came, off, tol, sets_off)
-        w_d = windows.motor_dips(*d_args)
-        g_d = _windows.motor_dips(*d_args)
-        assert all(same_bits(g, w) for g, w in zip(g_d, w_d, strict=True))
+    got = _windows.motor_reversals(
+        V[None, :], P[None, :], rest, np.array([0]), np.array([side]), np.array([ref]),
+        drift, off, reversals.V_EPS, h, tol,
+    )  # fmt: skip
+    want = windows.motor_turns(V, P, rest, side, ref, drift, off, reversals.V_EPS)
+    assert all(
+        same_bits(np.asarray(g), np.asarray(w))
+        for g, w in zip((got.sg[0], got.came[0], got.r, got.kind, got.reach[0]), want, strict=True)
+    )
+    assert got.kind.dtype == np.int8 and set(got.kind.tolist()) <= {0, 1, 2, 3}
+    sg, came = want[0], want[1]
+    for part, sets_off in enumerate((False, True)):
+        w_d = windows.motor_dips(P, V, h, sg, came, off, tol, sets_off)
+        at = slice(got.dips[part], got.dips[part + 1])
+        g_d = (got.j[at], got.s1[at], got.s2[at], got.A1[at], got.A2[at])
+        assert all(same_bits(g, w) and g.dtype == w.dtype for g, w in zip(g_d, w_d, strict=True))
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -310,12 +316,17 @@ def test_dips_at_signed_zeros_and_velocities_against_the_way_are_bit_identical(
 ) -> None:
     """The twin's dip pass skips a step before its roots are made where their
     signs rule out two inside it (c = V0 zero, a against c, b's sign bit against
-    c): steps at ±0.0 velocities, chords that make b exactly ±0.0, velocities
-    against ``sg`` and dips of either way, compiled against the reference."""
+    c): steps at ±0.0 velocities (a motor's way made by its creeps there), chords
+    that make b exactly ±0.0, velocities against the way and dips of either way;
+    motor_reversals of the motor alone, compiled against the reference."""
     _windows = compiled("_windows")
     rng = np.random.default_rng(seed)
     n = 4000
-    V = rng.choice([0.0, -0.0, 1e-300, -1e-300, 3.0, -3.0, 1.0, -1.0, 7.5], n)
+    # runs of one way, some rows against it; ±0.0 and ±1e-300 stand (their way
+    # from the creeps or none)
+    way = np.repeat(rng.choice([1.0, -1.0], n // 8 + 1), 8)[:n]
+    way[rng.random(n) < 0.05] *= -1.0
+    V = way * rng.choice([0.0, 1e-300, 3.0, 1.0, 7.5], n)
     h = rng.choice([0.01, 0.00977, 2.5e-4], n - 1)
     # chords: none, ±0.0, along the mean velocity, short of it (a dip), against it
     k = rng.integers(0, 6, n - 1)
@@ -327,15 +338,15 @@ def test_dips_at_signed_zeros_and_velocities_against_the_way_are_bit_identical(
     )
     P = np.concatenate([[0.0], np.cumsum(step)])
     P[1:][k == 1] = P[:-1][k == 1]  # exactly no chord
-    sg = rng.choice([1, -1], n) * np.where(rng.random(n) < 0.9, 1, 0)
-    sg = np.where(rng.random(n) < 0.8, np.roll(sg, 1), sg)  # runs of one way
-    # the way each row comes from: the last way before it (motor_turns' came)
-    came = np.concatenate([[1], carried(sg, 1)[:-1]])
-    for sets_off in (False, True):
-        args = (P, V, h, sg, came, 1, 1e-6, sets_off)
-        got, want = _windows.motor_dips(*args), windows.motor_dips(*args)
-        assert all(same_bits(g, w) for g, w in zip(got, want, strict=True))
-        assert len(want[0]) > 0
+    rest = rng.random(n) < 0.02
+    args = (
+        V[None, :], P[None, :], rest, np.array([0]), np.array([1]), np.array([np.nan]),
+        1e-6, 1, reversals.V_EPS, h, 1e-6,
+    )  # fmt: skip
+    got, want = _windows.motor_reversals(*args), windows.motor_reversals(*args)
+    assert _same_reversals(got, want)
+    # dips, and settings-off back, found
+    assert want.dips[1] > want.dips[0] and want.dips[2] > want.dips[1]
 
 
 @st.composite
@@ -369,14 +380,7 @@ def test_generated_motor_reversals_are_bit_identical(
 
 def test_compiled_motor_rows_refuse_arrays_of_the_wrong_length() -> None:
     _windows = compiled("_windows")
-    V, P, rest = np.ones(5), np.ones(5), np.zeros(5, bool)
-    with pytest.raises(ValueError, match=r"rest must have one value a row, as V .* got 4"):
-        _windows.motor_turns(V, P, rest[:-1], 1, 0.0, 1e-4, 0, 5e-4)
-    sg = np.ones(5, dtype=int)
-    with pytest.raises(ValueError, match=r"came must have one value a row, as P .* got 3"):
-        _windows.motor_dips(P, V, np.ones(5), sg, sg[:3], 0, 1e-4, False)
-    with pytest.raises(ValueError, match=r"h must have at most 4 values \(one a step\), got 5"):
-        _windows.motor_dips(P, V, np.ones(5), sg, sg, 1, 1e-4, False)
+    rest = np.zeros(5, bool)
     V2, P2, cols, side, ref = (
         np.ones((3, 5)),
         np.ones((3, 5)),

@@ -600,10 +600,14 @@ def _in_plane() -> np.ndarray:
 _IN_PLANE = _in_plane()
 
 
-def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pose_at(
+    b: Blocks, k: np.ndarray, s: np.ndarray, paths: PathArrays | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Pose q(s) and tangent dq/ds at path distance ``s`` into blocks ``k``.
 
     Lines and arcs: :func:`prsxy_post.kernel.path.poses`; curves here.
+    ``paths``: ``path_arrays(b)`` where the caller has it (made here otherwise:
+    a pass over every block, where a few points are asked many times a chunk).
 
     Returns
     -------
@@ -613,7 +617,7 @@ def pose_at(b: Blocks, k: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.nda
     """
     k = np.asarray(k, dtype=np.intp)
     s = np.asarray(s, dtype=float)
-    q, dq = kernel.poses(path_arrays(b), k, s)
+    q, dq = kernel.poses(path_arrays(b) if paths is None else paths, k, s)
     on_curve = b.kind[k] == KIND_CURVE
     if np.any(on_curve):
         rows = np.flatnonzero(on_curve)

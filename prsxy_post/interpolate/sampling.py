@@ -17,6 +17,7 @@ from typing import ClassVar
 import numpy as np
 
 from .. import kernel
+from ..kernel.path import PathArrays
 from ..points import Columns
 from .geometry import KIND_DWELL, KIND_FUNCTION, Blocks, PlanLimits, pose_at, segment_limit
 from .lookahead import Plan
@@ -191,10 +192,14 @@ def sample(plan: Plan, limits: PlanLimits, n_steps: np.ndarray | None = None) ->
     )
 
 
-def at_times(plan: Plan, k: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def at_times(
+    plan: Plan, k: np.ndarray, tau: np.ndarray, paths: PathArrays | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Pose and planned velocity at local times ``tau`` inside blocks ``k`` (no corner
-    averaging: for points strictly inside a block)."""
+    averaging: for points strictly inside a block). ``paths``: the plan's
+    ``path_arrays(plan.blocks)`` where the caller asks the same plan many times
+    (:func:`.geometry.pose_at`)."""
     b, law = plan.blocks, plan.law
     s, v = kernel.along(law, k, tau)
-    q, dq = pose_at(b, k, s)
+    q, dq = pose_at(b, k, s, paths)
     return q, v[:, None] * dq

@@ -256,7 +256,8 @@ def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,
     return out_a, out_b
 
 
-# the kinds of :func:`motor_turns` (windows.MID, AT_REST, CREPT, STOOD)
+# the kinds of :func:`prsxy_post.kernel.windows.motor_turns` (windows.MID, AT_REST,
+# CREPT, STOOD)
 cdef signed char MID = 0, AT_REST = 1, CREPT = 2, STOOD = 3
 
 
@@ -275,48 +276,6 @@ cdef signed char _turn_kind(const double* p, const unsigned char* rs, const long
         and sg[b2] == 0 and fabs(p[b1] - p[b2]) < 1e-9 and not old_way
     )
     return AT_REST if at_rest else (CREPT if crept_f else (STOOD if stood else MID))
-
-
-def motor_turns(V, P, rest, long side, double ref, double drift, Py_ssize_t off,
-                double eps):
-    """:func:`prsxy_post.kernel.windows.motor_turns`, compiled (the creeps by the
-    compiled :func:`prsxy_post.kernel.play.creeps`)."""
-    P_a = np.ascontiguousarray(P, dtype=np.float64)
-    cdef const double[::1] v = np.ascontiguousarray(V, dtype=np.float64)
-    cdef const double[::1] p = P_a
-    cdef const unsigned char[::1] rs = np.ascontiguousarray(rest, dtype=np.bool_).view(np.uint8)
-    cdef Py_ssize_t N = v.shape[0], i, m = 0
-    _lengths("one value a row, as V", N, P=len(p), rest=len(rs))
-    sg_a = np.empty(N, dtype=np.int_)
-    cdef long[::1] sg = sg_a
-    for i in range(N):
-        sg[i] = 0 if rs[i] else (1 if v[i] > eps else (-1 if v[i] < -eps else 0))
-    crept_a, reach = _creeps(sg_a, P_a, side, ref, drift)
-    cdef const long[::1] cr = crept_a
-    came_a = np.empty(N, dtype=np.int_)
-    cdef long[::1] came = came_a
-    cdef long cur = side
-    for i in range(N):
-        if cr[i] != 0:
-            sg[i] = cr[i]
-        came[i] = cur
-        if sg[i] != 0:
-            cur = sg[i]
-    for i in range(off, N):
-        if sg[i] != 0 and sg[i] != came[i]:
-            m += 1
-    r_a = np.empty(m, dtype=np.intp)
-    kind_a = np.empty(m, dtype=np.int8)
-    cdef Py_ssize_t[::1] r = r_a
-    cdef signed char[::1] kind = kind_a
-    m = 0
-    for i in range(off, N):
-        if not (sg[i] != 0 and sg[i] != came[i]):
-            continue
-        r[m] = i
-        kind[m] = _turn_kind(&p[0], &rs[0], &sg[0], &cr[0], i, off)
-        m += 1
-    return sg_a, came_a, r_a, kind_a, reach
 
 
 cdef inline bint _turns_twice(double P0, double V0, double P1, double V1, double h,
@@ -389,56 +348,13 @@ cdef inline double _velocity_root(double P0, double V0, double P1, double V1, do
     return _root(P0, V0, P1, V1, h, nw, True, &a, &b)
 
 
-def motor_dips(P, V, h, sg, came, Py_ssize_t off, double tol, bint sets_off):
-    """:func:`prsxy_post.kernel.windows.motor_dips`, compiled, :func:`dip_roots`
-    fused in: one pass finds the candidate steps and their roots (a dip's only
-    where the step's cubic turns twice inside it, :func:`turning_points`' test:
-    :func:`dip_roots` keeps no other; a setting-off's root by
-    :func:`velocity_roots`), then the roots' cubes by numpy's power over the
-    array the reference makes (the same rows in the same order), then the
-    depths and accelerations over the candidates."""
-    cdef const double[::1] p = np.ascontiguousarray(P, dtype=np.float64)
-    cdef const double[::1] v = np.ascontiguousarray(V, dtype=np.float64)
-    cdef const double[::1] hh = np.ascontiguousarray(h, dtype=np.float64)
-    cdef const long[::1] s = np.ascontiguousarray(sg, dtype=np.int_)
-    cdef const long[::1] c = np.ascontiguousarray(came, dtype=np.int_)
-    cdef Py_ssize_t N = p.shape[0], n = hh.shape[0], j, i, m = 0, k = 0, lo_j, hi_j
-    _lengths("one value a row, as P", N, V=len(v), sg=len(s), came=len(c))
-    if n > N - off:
-        raise ValueError(f"h must have at most {N - off} values (one a step), got {n}")
-    lo_j = off if off > 1 else 1
-    hi_j = off + n if off + n < N else N
-    cdef Py_ssize_t cap = hi_j - lo_j if hi_j > lo_j else 0
-    j_a = np.empty(cap, dtype=np.intp)
-    # the candidates' roots: (m, 2) turning points as turning_points' rows, or
-    # (m, 1) velocity_roots' s setting off
-    r_a = np.empty((cap, 1 if sets_off else 2))
-    cdef Py_ssize_t[::1] jj = j_a
-    cdef double[:, ::1] rr = r_a
-    cdef double lo, hi
-    with nogil:
-        if sets_off:
-            for j in range(lo_j, hi_j):
-                if (s[j] != 0 and s[j - 1] == 0 and c[j] == s[j]
-                        and s[j] * (p[j] - p[j - 1]) < 0.0):
-                    jj[m] = j
-                    rr[m, 0] = _velocity_root(p[j - 1], v[j - 1], p[j], v[j], hh[j - off],
-                                              <double>s[j])
-                    m += 1
-        else:
-            for j in range(lo_j, hi_j):
-                if s[j] == s[j - 1] and s[j] != 0:
-                    if _turns_twice(p[j - 1], v[j - 1], p[j], v[j], hh[j - off], &lo, &hi):
-                        jj[m] = j
-                        rr[m, 0] = lo
-                        rr[m, 1] = hi
-                        m += 1
-    return _dips_of(p, v, hh, off, j_a, r_a, m, tol, sets_off)
-
-
 def _dips_of(const double[::1] p, const double[::1] v, const double[::1] hh, Py_ssize_t off,
              j_a, r_a, Py_ssize_t m, double tol, bint sets_off):
-    """:func:`motor_dips` past its candidates: of the m candidate rows ``j_a`` and
+    """:func:`prsxy_post.kernel.windows.motor_dips` past its candidates (for
+    :func:`motor_reversals`, which finds them, :func:`dip_roots` fused in: a
+    dip's only where the step's cubic turns twice inside it,
+    :func:`turning_points`' test; a setting-off's root by :func:`velocity_roots`):
+    of the m candidate rows ``j_a`` and
     their roots ``r_a`` (rows of (cap, 2) turning points, or (cap, 1) velocity
     roots setting off), the roots' cubes by numpy's power over the array the
     reference makes, the depths, and the steps that dip with their roots and
@@ -498,9 +414,11 @@ cdef Py_ssize_t _turn_pass(const double* p, const double* v, const unsigned char
                            Py_ssize_t* j1, double* r1, Py_ssize_t* m1) noexcept nogil:
     """One pass over a motor's rows, its creeps ``cr`` known: the creeps made its
     directions in ``sg``, the way each row comes from into ``came``, its reversals
-    and their kinds (:func:`motor_turns`: their count returned), and the candidates
-    of :func:`motor_dips` (rows and roots: its dips into ``j0``, ``r0`` (cap, 2),
-    ``m0`` of them, its settings-off back into ``j1``, ``r1``, ``m1``). Every test
+    and their kinds (the reference's :func:`~prsxy_post.kernel.windows.motor_turns`:
+    their count returned), and the candidates of the reference's
+    :func:`~prsxy_post.kernel.windows.motor_dips` (rows and roots: its dips into
+    ``j0``, ``r0`` (cap, 2), ``m0`` of them, its settings-off back into ``j1``,
+    ``r1``, ``m1``). Every test
     at row i reads rows up to i, final by then: the separate passes' answers."""
     cdef Py_ssize_t i, m = 0, a0 = 0, a1 = 0
     cdef Py_ssize_t lo_j = off if off > 1 else 1
@@ -550,7 +468,8 @@ def motor_reversals(V, P, rest, cols, side, ref, double drift, Py_ssize_t off, d
     its directions (one pass), its creeps (:func:`.play.creeps`, compiled), then one
     pass (:func:`_turn_pass`) for its reversals, their kinds and the candidates of
     its dips and settings-off back, then those (:func:`_dips_of`), as
-    :func:`motor_turns` and :func:`motor_dips` make them."""
+    the reference's :func:`~prsxy_post.kernel.windows.motor_turns` and
+    :func:`~prsxy_post.kernel.windows.motor_dips` make them."""
     P_a = np.ascontiguousarray(P, dtype=np.float64)
     if P_a.ndim != 2:
         raise ValueError(f"P must have one row a motor, got {P_a.ndim} dimensions")
