@@ -412,27 +412,28 @@ class Planning:
         n = len(k)
         if not n:
             return
-        # each moving block's start and end, with the tangent into the block from
-        # there: from whole columns where every block moves (a CAM program's
-        # chunks), the same rows gathered where not
+        # each moving block's start and end (whole columns where every block moves:
+        # a CAM program's chunks; the same rows gathered where not), the IK there
+        # and along the tangents in one pass of the kernel
         every = n == len(b)
-        q = np.empty((2 * n, 5))
-        dq = np.empty((2 * n, 5))
+        m = self.geo.ik_arrays
         if every:
-            q[:n], q[n:], dq[:n] = b.start, b.end, b.dq_in
-            np.negative(b.dq_out, out=dq[n:])
-            tool = np.concatenate([b.tool_length, b.tool_length])
+            tz = kernel.ik.tool_z(m, n, b.tool_length)
+            d_in, d_out = kernel.end_slopes(m, b.start, b.end, b.dq_in, b.dq_out, tz, DIR_STEP_MM)
         else:
-            q[:n], q[n:], dq[:n] = b.start[k], b.end[k], b.dq_in[k]
-            np.negative(b.dq_out[k], out=dq[n:])
-            tool = np.tile(b.tool_length[k], 2)
-        P = self._ends_ik(q, tool)
-        d = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
+            tz = kernel.ik.tool_z(m, n, b.tool_length[k])
+            d_in, d_out = kernel.end_slopes(
+                m,
+                np.take(b.start, k, axis=0),
+                np.take(b.end, k, axis=0),
+                np.take(b.dq_in, k, axis=0),
+                np.take(b.dq_out, k, axis=0),
+                tz,
+                DIR_STEP_MM,
+            )
         cols = self.play_cols
-        if cols == _ALL_MOTORS:
-            d_in, d_out = d[:n], -d[n:]
-        else:
-            d_in, d_out = d[:n, cols], -d[n:, cols]
+        if cols != _ALL_MOTORS:
+            d_in, d_out = d_in[:, cols], d_out[:, cols]
         if every and cols == _ALL_MOTORS:
             b.dP_in[:], b.dP_out[:] = d_in, d_out
         else:
@@ -461,33 +462,6 @@ class Planning:
         for j in range(1, len(cols)):
             crosses |= against[:, j]
         b.cross_in[k] = crosses
-
-    def _ik_rows(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
-        """(m, 5) [mm] :func:`kinematics.inverse`'s P of poses ``q`` (m, 5) with tool
-        lengths ``tool`` (m,), without its other results."""
-        m = self.geo.ik_arrays
-        return kernel.inverse_rows(m, q, kernel.ik.tool_z(m, len(q), tool))
-
-    def _ends_ik(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
-        """(2n, 5) [mm] the IK of n blocks' starts (``q``'s first n rows) and ends
-        (the last n), with their tool lengths ``tool`` (2n,). A start that is the
-        block before's end, to the bit and with the same tool length (a path's
-        every junction), takes that end's IK: the IK solves each row alone, so
-        the same row gives the same bits (a quarter of the planner's IK saved)."""
-        n = len(q) // 2
-        # each row's 40 bytes as one value (np.all over rows of 5 is slow)
-        bits = np.ascontiguousarray(q).view(np.dtype((np.void, q.itemsize * 5))).reshape(-1)
-        tool_bits = tool.view(np.int64)
-        again = np.zeros(n, dtype=bool)
-        again[1:] = (bits[1:n] == bits[n : 2 * n - 1]) & (
-            tool_bits[1:n] == tool_bits[n : 2 * n - 1]
-        )
-        P = np.empty((2 * n, 5))
-        P[n:] = self._ik_rows(q[n:], tool[n:])
-        P[1:n] = P[n : 2 * n - 1]
-        fresh = np.flatnonzero(~again)
-        P[fresh] = self._ik_rows(np.take(q, fresh, axis=0), tool[fresh])
-        return P
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:
         """Where a split program's parts end: at rest after a block, the last place

@@ -85,6 +85,7 @@ _inverse_rows = _RUN["ik"].inverse_rows
 _platform_cols = _RUN["ik"].platform_cols
 _motion_rows = _RUN["ik"].motion_rows
 _derivative_rows = _RUN["ik"].derivative_rows
+_end_slopes = _RUN["ik"].end_slopes
 _jacobian_rows = _RUN["ik"].jacobian_rows
 _correct_virtual = _RUN["legendre"].correct_virtual
 _fixed_rows = _RUN["text"].format_fixed_rows
@@ -128,6 +129,21 @@ def derivative_rows(
     """The IK's one-sided difference (N, 5) along ``dq`` from poses ``q`` whose IK
     is ``P``: :func:`ik.derivative_rows`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _derivative_rows(m, q, dq, tz, P, step)
+    return out
+
+
+def end_slopes(
+    m: ik.IKArrays,
+    start: np.ndarray,
+    end: np.ndarray,
+    dq_in: np.ndarray,
+    dq_out: np.ndarray,
+    tz: np.ndarray,
+    step: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The motors' dP/ds (n, 5) at blocks' starts along ``dq_in`` and at their ends
+    back along ``dq_out``: :func:`ik.end_slopes`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _end_slopes(m, start, end, dq_in, dq_out, tz, step)
     return out
 
 
