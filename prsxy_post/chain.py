@@ -435,32 +435,23 @@ class Planning:
         if cols != _ALL_MOTORS:
             d_in, d_out = d_in[:, cols], d_out[:, cols]
         if every and cols == _ALL_MOTORS:
-            b.dP_in[:], b.dP_out[:] = d_in, d_out
+            b.dP_in, b.dP_out = d_in, d_out  # the kernel's own arrays, (n, 5) as theirs
         else:
             b.dP_in[k[:, None], cols] = d_in
             b.dP_out[k[:, None], cols] = d_out
-        # each moving block's start, then its end, in order: the way each motor
-        # last moved clearly up to it, carried on from the chunk before
-        ends = np.empty((2 * n, len(cols)))
-        ends[0::2], ends[1::2] = d_in, d_out
-        way = np.where(np.abs(ends) > REVERSAL_SLOPE, np.sign(ends), 0.0)
-        came = kernel.carried(way, self.way)
-        # the way before each start: the chunk's before the first, else the way
-        # after the block before's end
-        before = np.empty((n, len(cols)))
-        before[0], before[1:] = self.way, came[1:-1:2]
-        self.way = came[-1].copy()
-        still = np.abs(d_out) <= STAND_SLOPE
-        stood = np.empty((n, len(cols)), dtype=bool)
-        stood[0], stood[1:] = self.stood, still[:-1]
-        self.stood = still[-1].copy()
-        # setting off faster than a creep at the block's speed limit (the points'
-        # half takes a direction from V_EPS on)
-        sets_off = np.abs(d_in) * b.vmax[k, None] > reversals.V_EPS
-        against = sets_off & (np.sign(d_in) == -before) & stood
-        crosses = against[:, 0].copy()  # any over each row, a column at a time
-        for j in range(1, len(cols)):
-            crosses |= against[:, j]
+        # the way each motor last moved clearly, carried across chunks: where one
+        # that stood sets off against it (the points' half takes a direction from
+        # V_EPS on)
+        crosses, self.way, self.stood = kernel.set_offs(
+            d_in,
+            d_out,
+            b.vmax if every else b.vmax[k],
+            self.way,
+            self.stood,
+            REVERSAL_SLOPE,
+            STAND_SLOPE,
+            reversals.V_EPS,
+        )
         b.cross_in[k] = crosses
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:

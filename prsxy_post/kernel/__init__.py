@@ -98,6 +98,7 @@ _phase_times = _RUN["timelaw"].phase_times
 _backward_pass = _RUN["timelaw"].backward_pass
 _forward_pass = _RUN["timelaw"].forward_pass
 _play_stops = _RUN["timelaw"].play_stops
+_set_offs = _RUN["timelaw"].set_offs
 _poses = _RUN["path"].poses
 _velocities = _RUN["path"].velocities
 _play_kernel = _RUN["play"]
@@ -326,6 +327,25 @@ def play_stops(
     :func:`timelaw.play_stops`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _play_stops(
         dq_out, dq_in, dP_out, dP_in, cross_in, head, reversal_slope, stand_slope, gain_max
+    )
+    return out
+
+
+def set_offs(
+    d_in: np.ndarray,
+    d_out: np.ndarray,
+    vmax: np.ndarray,
+    way: np.ndarray,
+    stood: np.ndarray,
+    reversal_slope: float,
+    stand_slope: float,
+    v_eps: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where a motor with play sets off against the way it last moved, and each
+    motor's way and standing after the blocks: :func:`timelaw.set_offs`, compiled
+    when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _set_offs(
+        d_in, d_out, vmax, way, stood, reversal_slope, stand_slope, v_eps
     )
     return out
 
