@@ -198,8 +198,10 @@ class Planned:
 
     problems : the chunk's program-level problems (raised, or collected, first)
     start_line : the first chunk's line, where the start point is given
-    plan, samples : the planned blocks and their points (None when nothing is
-        ready: the look-ahead holds the blocks)
+    plan, steps : the planned blocks and their steps per phase (n, 3)
+        (:func:`.interpolate.sampling.steps`; None when nothing is ready: the
+        look-ahead holds the blocks); their points are made piece by piece
+        (:meth:`Planning.cut`)
     late : problems at the ends of long blocks, reported after the points before
         them are made (an earlier line's problem comes first)
     final : the program's last chunk; moves_nothing: and nothing moved
@@ -209,7 +211,7 @@ class Planned:
     problems: list[PrsxyError]
     start_line: int | None = None
     plan: Plan | None = None
-    samples: Samples | None = None
+    steps: np.ndarray | None = None
     late: list[PrsxyError] = field(default_factory=list)
     final: bool = False
     moves_nothing: bool = False
@@ -344,15 +346,18 @@ class Planning:
                     plan = plan.head(cut)
                     n_steps, phases = n_steps[:cut], phases[:cut]
             self._guard(plan, n_steps)
-            out.plan, out.samples = plan, sample(plan, self.limits, phases)
+            out.plan, out.steps = plan, phases
         out.moves_nothing = final and not self.any_motion
         out.seconds = time.process_time() - t0
         return out
 
     def cut(self, planned: Planned, solve: bool = False) -> Ready:
         """A planned chunk in whole pieces (:mod:`.interpolate.pieces`; the rest held
-        for the next), in the order :meth:`Pipeline.feed_ready` makes their points;
-        with ``solve``, their poses solved too (:meth:`solve`)."""
+        for the next) and their points, in the order :meth:`Pipeline.feed_ready`
+        makes their points; with ``solve``, their poses solved too (:meth:`solve`).
+        A piece's points are made from its plan once it is whole: each block's
+        points depend on the block alone (and the tangent after it), so they are
+        the points of the runs it joins, without the runs' points made and joined."""
         out = Ready(
             planned.problems,
             start_line=planned.start_line,
@@ -362,17 +367,23 @@ class Planning:
             seconds=planned.seconds,
         )
 
-        def solved(pieces: list[tuple[Plan, Samples]]) -> list[Piece]:
-            return [
-                (plan, s, self.solve(s.q, s.qdot, s.tool_length, s.line) if solve else None)
-                for plan, s in pieces
-            ]
+        def solved(pieces: list[tuple[Plan, np.ndarray]]) -> list[Piece]:
+            made = []
+            for plan, n_steps in pieces:
+                t0 = time.process_time()
+                s = sample(plan, self.limits, n_steps)
+                out.seconds += time.process_time() - t0
+                made.append(
+                    (plan, s, self.solve(s.q, s.qdot, s.tool_length, s.line) if solve else None)
+                )
+            return made
 
         if planned.problems:  # the points of earlier lines, and their problems, first
-            out.earlier = solved(self.pieces.take(final=True))
-        if planned.plan is not None and planned.samples is not None:
-            self.pieces.add(planned.plan, planned.samples)
-        out.pieces = solved(self.pieces.take(final=planned.final or bool(planned.late)))
+            out.earlier = solved(self.pieces.take(final=True))  # type: ignore[arg-type]
+        if planned.plan is not None and planned.steps is not None:
+            self.pieces.add(planned.plan, planned.steps)
+        final = planned.final or bool(planned.late)
+        out.pieces = solved(self.pieces.take(final=final))  # type: ignore[arg-type]
         return out
 
     def solve(self, q: np.ndarray, qdot: np.ndarray, tool: np.ndarray, line: np.ndarray) -> Solved:
