@@ -199,8 +199,10 @@ class Planned:
 
     problems : the chunk's program-level problems (raised, or collected, first)
     start_line : the first chunk's line, where the start point is given
-    plan, samples : the planned blocks and their points (None when nothing is
-        ready: the look-ahead holds the blocks)
+    plan, steps : the planned blocks and their steps per phase (n, 3)
+        (:func:`.interpolate.sampling.steps`; None when nothing is ready: the
+        look-ahead holds the blocks); their points are made piece by piece
+        (:meth:`Planning.cut`)
     late : problems at the ends of long blocks, reported after the points before
         them are made (an earlier line's problem comes first)
     final : the program's last chunk; moves_nothing: and nothing moved
@@ -210,7 +212,7 @@ class Planned:
     problems: list[PrsxyError]
     start_line: int | None = None
     plan: Plan | None = None
-    samples: Samples | None = None
+    steps: np.ndarray | None = None
     late: list[PrsxyError] = field(default_factory=list)
     final: bool = False
     moves_nothing: bool = False
@@ -345,15 +347,18 @@ class Planning:
                     plan = plan.head(cut)
                     n_steps, phases = n_steps[:cut], phases[:cut]
             self._guard(plan, n_steps)
-            out.plan, out.samples = plan, sample(plan, self.limits, phases)
+            out.plan, out.steps = plan, phases
         out.moves_nothing = final and not self.any_motion
         out.seconds = time.process_time() - t0
         return out
 
     def cut(self, planned: Planned, solve: bool = False) -> Ready:
         """A planned chunk in whole pieces (:mod:`.interpolate.pieces`; the rest held
-        for the next), in the order :meth:`Pipeline.feed_ready` makes their points;
-        with ``solve``, their poses solved too (:meth:`solve`)."""
+        for the next) and their points, in the order :meth:`Pipeline.feed_ready`
+        makes their points; with ``solve``, their poses solved too (:meth:`solve`).
+        A piece's points are made from its plan once it is whole: each block's
+        points depend on the block alone (and the tangent after it), so they are
+        the points of the runs it joins, without the runs' points made and joined."""
         out = Ready(
             planned.problems,
             start_line=planned.start_line,
@@ -363,17 +368,23 @@ class Planning:
             seconds=planned.seconds,
         )
 
-        def solved(pieces: list[tuple[Plan, Samples]]) -> list[Piece]:
-            return [
-                (plan, s, self.solve(s.q, s.qdot, s.tool_length, s.line) if solve else None)
-                for plan, s in pieces
-            ]
+        def solved(pieces: list[tuple[Plan, np.ndarray]]) -> list[Piece]:
+            made = []
+            for plan, n_steps in pieces:
+                t0 = time.process_time()
+                s = sample(plan, self.limits, n_steps)
+                out.seconds += time.process_time() - t0
+                made.append(
+                    (plan, s, self.solve(s.q, s.qdot, s.tool_length, s.line) if solve else None)
+                )
+            return made
 
         if planned.problems:  # the points of earlier lines, and their problems, first
-            out.earlier = solved(self.pieces.take(final=True))
-        if planned.plan is not None and planned.samples is not None:
-            self.pieces.add(planned.plan, planned.samples)
-        out.pieces = solved(self.pieces.take(final=planned.final or bool(planned.late)))
+            out.earlier = solved(self.pieces.take(final=True))  # type: ignore[arg-type]
+        if planned.plan is not None and planned.steps is not None:
+            self.pieces.add(planned.plan, planned.steps)
+        final = planned.final or bool(planned.late)
+        out.pieces = solved(self.pieces.take(final=final))  # type: ignore[arg-type]
         return out
 
     def solve(self, q: np.ndarray, qdot: np.ndarray, tool: np.ndarray, line: np.ndarray) -> Solved:
@@ -413,82 +424,47 @@ class Planning:
         n = len(k)
         if not n:
             return
-        # each moving block's start and end, with the tangent into the block from
-        # there: from whole columns where every block moves (a CAM program's
-        # chunks), the same rows gathered where not
+        # each moving block's start and end (whole columns where every block moves:
+        # a CAM program's chunks; the same rows gathered where not), the IK there
+        # and along the tangents in one pass of the kernel
         every = n == len(b)
-        q = np.empty((2 * n, 5))
-        dq = np.empty((2 * n, 5))
+        m = self.geo.ik_arrays
         if every:
-            q[:n], q[n:], dq[:n] = b.start, b.end, b.dq_in
-            np.negative(b.dq_out, out=dq[n:])
-            tool = np.concatenate([b.tool_length, b.tool_length])
+            tz = kernel.ik.tool_z(m, n, b.tool_length)
+            d_in, d_out = kernel.end_slopes(m, b.start, b.end, b.dq_in, b.dq_out, tz, DIR_STEP_MM)
         else:
-            q[:n], q[n:], dq[:n] = b.start[k], b.end[k], b.dq_in[k]
-            np.negative(b.dq_out[k], out=dq[n:])
-            tool = np.tile(b.tool_length[k], 2)
-        P = self._ends_ik(q, tool)
-        d = ik_derivative(self.geo, q, dq, tool, P, DIR_STEP_MM)
+            tz = kernel.ik.tool_z(m, n, b.tool_length[k])
+            d_in, d_out = kernel.end_slopes(
+                m,
+                np.take(b.start, k, axis=0),
+                np.take(b.end, k, axis=0),
+                np.take(b.dq_in, k, axis=0),
+                np.take(b.dq_out, k, axis=0),
+                tz,
+                DIR_STEP_MM,
+            )
         cols = self.play_cols
-        if cols == _ALL_MOTORS:
-            d_in, d_out = d[:n], -d[n:]
-        else:
-            d_in, d_out = d[:n, cols], -d[n:, cols]
+        if cols != _ALL_MOTORS:
+            d_in, d_out = d_in[:, cols], d_out[:, cols]
         if every and cols == _ALL_MOTORS:
-            b.dP_in[:], b.dP_out[:] = d_in, d_out
+            b.dP_in, b.dP_out = d_in, d_out  # the kernel's own arrays, (n, 5) as theirs
         else:
             b.dP_in[k[:, None], cols] = d_in
             b.dP_out[k[:, None], cols] = d_out
-        # each moving block's start, then its end, in order: the way each motor
-        # last moved clearly up to it, carried on from the chunk before
-        ends = np.empty((2 * n, len(cols)))
-        ends[0::2], ends[1::2] = d_in, d_out
-        way = np.where(np.abs(ends) > REVERSAL_SLOPE, np.sign(ends), 0.0)
-        came = kernel.carried(way, self.way)
-        # the way before each start: the chunk's before the first, else the way
-        # after the block before's end
-        before = np.empty((n, len(cols)))
-        before[0], before[1:] = self.way, came[1:-1:2]
-        self.way = came[-1].copy()
-        still = np.abs(d_out) <= STAND_SLOPE
-        stood = np.empty((n, len(cols)), dtype=bool)
-        stood[0], stood[1:] = self.stood, still[:-1]
-        self.stood = still[-1].copy()
-        # setting off faster than a creep at the block's speed limit (the points'
-        # half takes a direction from V_EPS on)
-        sets_off = np.abs(d_in) * b.vmax[k, None] > reversals.V_EPS
-        against = sets_off & (np.sign(d_in) == -before) & stood
-        crosses = against[:, 0].copy()  # any over each row, a column at a time
-        for j in range(1, len(cols)):
-            crosses |= against[:, j]
-        b.cross_in[k] = crosses
-
-    def _ik_rows(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
-        """(m, 5) [mm] :func:`kinematics.inverse`'s P of poses ``q`` (m, 5) with tool
-        lengths ``tool`` (m,), without its other results."""
-        m = self.geo.ik_arrays
-        return kernel.inverse_rows(m, q, kernel.ik.tool_z(m, len(q), tool))
-
-    def _ends_ik(self, q: np.ndarray, tool: np.ndarray) -> np.ndarray:
-        """(2n, 5) [mm] the IK of n blocks' starts (``q``'s first n rows) and ends
-        (the last n), with their tool lengths ``tool`` (2n,). A start that is the
-        block before's end, to the bit and with the same tool length (a path's
-        every junction), takes that end's IK: the IK solves each row alone, so
-        the same row gives the same bits (a quarter of the planner's IK saved)."""
-        n = len(q) // 2
-        # each row's 40 bytes as one value (np.all over rows of 5 is slow)
-        bits = np.ascontiguousarray(q).view(np.dtype((np.void, q.itemsize * 5))).reshape(-1)
-        tool_bits = tool.view(np.int64)
-        again = np.zeros(n, dtype=bool)
-        again[1:] = (bits[1:n] == bits[n : 2 * n - 1]) & (
-            tool_bits[1:n] == tool_bits[n : 2 * n - 1]
+        # the way each motor last moved clearly, carried across chunks: where one
+        # that stood sets off against it (the points' half takes a direction from
+        # V_EPS on)
+        crosses, self.way, self.stood = kernel.set_offs(
+            d_in,
+            d_out,
+            b.vmax if every else b.vmax[k],
+            self.way,
+            self.stood,
+            REVERSAL_SLOPE,
+            STAND_SLOPE,
+            reversals.V_EPS,
         )
-        P = np.empty((2 * n, 5))
-        P[n:] = self._ik_rows(q[n:], tool[n:])
-        P[1:n] = P[n : 2 * n - 1]
-        fresh = np.flatnonzero(~again)
-        P[fresh] = self._ik_rows(np.take(q, fresh, axis=0), tool[fresh])
-        return P
+        b.cross_in[k] = crosses
 
     def _parts(self, new: Blocks, final: bool) -> Blocks:
         """Where a split program's parts end: at rest after a block, the last place

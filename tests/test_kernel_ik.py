@@ -192,7 +192,7 @@ def _compiled_ik() -> ModuleType:
 
 def test_sample_programs_ik_differences_are_bit_identical(tmp_path: Path) -> None:
     """The IK's velocity, directional derivatives and Jacobians as the sample
-    programs ask for them (the chain's points, the planner's directions, the
+    programs ask for them (the chain's points, the corners' velocities, the
     crossing windows' levers, the settling's shorts): compiled, reference, and the
     differences as the chain took them before (IK of the stepped poses, numpy's
     difference) all the same bits."""
@@ -210,7 +210,9 @@ def test_sample_programs_ik_differences_are_bit_identical(tmp_path: Path) -> Non
         assert not V[~moving].any()
         rows += len(q)
     assert rows > 5_000
-    assert calls["_derivative_rows"] and calls["_jacobian_rows"]
+    # (the planner's directions, the samples' calls of derivative_rows once, go
+    # through end_slopes now: test_sample_programs_end_slopes_are_bit_identical)
+    assert calls["_jacobian_rows"]
     for m, q, dq, tz, P, step in calls["_derivative_rows"]:
         got = _ik.derivative_rows(m, q, dq, tz, P, step)
         assert same_bits(got, ik.derivative_rows(m, q, dq, tz, P, step))
@@ -283,6 +285,84 @@ def test_generated_ik_differences_are_bit_identical(
     assert same_bits(_ik.jacobian_rows(m, q, tz, step, Pj), ik.jacobian_rows(m, q, tz, step, Pj))
 
 
+def _slopes_as_before(
+    m: ik.IKArrays,
+    start: np.ndarray,
+    end: np.ndarray,
+    dq_in: np.ndarray,
+    dq_out: np.ndarray,
+    tz: np.ndarray,
+    step: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The planner's directions as the chain made them before the kernel took them:
+    the compiled IK of every start and end, then the compiled differences."""
+    _ik = _compiled_ik()
+    d_in = _ik.derivative_rows(m, start, dq_in, tz, _ik.inverse_rows(m, start, tz), step)
+    d_out = -_ik.derivative_rows(m, end, -dq_out, tz, _ik.inverse_rows(m, end, tz), step)
+    return d_in, d_out
+
+
+def test_sample_programs_end_slopes_are_bit_identical(tmp_path: Path) -> None:
+    """The planner's directions at the blocks' ends (chain.Planning._directions) as
+    the sample programs ask for them: compiled, reference, and the IK and its
+    differences taken row by row as before, all the same bits."""
+    _ik = _compiled_ik()
+    calls = record("_end_slopes", tmp_path)
+    assert calls  # the perturbed profile's motors have play (the shop's have none)
+    rows = 0
+    shared = 0
+    for m, start, end, dq_in, dq_out, tz, step in calls:
+        got = _ik.end_slopes(m, start, end, dq_in, dq_out, tz, step)
+        want = ik.end_slopes(m, start, end, dq_in, dq_out, tz, step)
+        before = _slopes_as_before(m, start, end, dq_in, dq_out, tz, step)
+        for g, w, b in zip(got, want, before, strict=True):
+            assert same_bits(g, w) and same_bits(g, b)
+        rows += len(start)
+        shared += int(np.all(start[1:] == end[:-1], axis=1).sum())
+    assert rows >= 10 and shared > rows // 2  # a path's junctions: their IK taken again
+
+
+#: a block's tangent: any direction, or none along the tilts
+TANGENT = st.one_of(POSE, POSE.map(lambda p: (p[0], p[1], p[2], 0.0, 0.0)))
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.lists(st.tuples(POSE, POSE, TANGENT, TANGENT, st.booleans()), min_size=1, max_size=25),
+    st.sampled_from(PROFILES),
+    st.lists(st.sampled_from([0.0, -0.0, 12.5, 40.0]), min_size=25, max_size=25),
+    st.sampled_from([1e-4, 1e-6, 0.5]),
+    st.one_of(st.none(), hnp.arrays(np.float64, 2, elements=st.floats(-0.05, 0.05))),
+)
+def test_generated_end_slopes_are_bit_identical(
+    blocks: list[tuple[tuple[float, ...], ...]],
+    path: Path,
+    tools: list[float],
+    step: float,
+    straight: np.ndarray | None,
+) -> None:
+    """Blocks that start where the block before ends (to the bit, the IK taken
+    again) or elsewhere, with the same tool length or another (0.0 and −0.0: other
+    bits, the same height), inside and outside the workspace (NaN rows), the
+    table's straightness: compiled, reference and the row-by-row differences agree."""
+    _ik = _compiled_ik()
+    m = _arrays(path)._replace(straightness=straight, squareness=1e-4)
+    start = np.array([b[0] for b in blocks], dtype=float)
+    end = np.array([b[1] for b in blocks], dtype=float)
+    joined = np.array([b[4] for b in blocks])
+    joined[0] = False
+    for j in np.flatnonzero(joined):
+        start[j] = end[j - 1]
+    dq_in = np.array([b[2] for b in blocks], dtype=float)
+    dq_out = np.array([b[3] for b in blocks], dtype=float)
+    tz = ik.tool_z(m, len(start), np.array(tools[: len(start)]))
+    got = _ik.end_slopes(m, start, end, dq_in, dq_out, tz, step)
+    want = ik.end_slopes(m, start, end, dq_in, dq_out, tz, step)
+    before = _slopes_as_before(m, start, end, dq_in, dq_out, tz, step)
+    for g, w, b in zip(got, want, before, strict=True):
+        assert same_bits(g, w) and same_bits(g, b)
+
+
 def test_ik_differences_with_bowed_guides_run_the_reference() -> None:
     _ik = _compiled_ik()
     m = _arrays(PROFILES[0])._replace(bow=np.array([0.01, -0.02, 0.005]))
@@ -296,6 +376,12 @@ def test_ik_differences_with_bowed_guides_run_the_reference() -> None:
         ik.derivative_rows(m, q, qdot, tz, want[0], 1e-4),
     )
     assert same_bits(_ik.jacobian_rows(m, q, tz, 1e-4), ik.jacobian_rows(m, q, tz, 1e-4))
+    for g, w in zip(
+        _ik.end_slopes(m, q, q[::-1], qdot, qdot, tz, 1e-4),
+        ik.end_slopes(m, q, q[::-1], qdot, qdot, tz, 1e-4),
+        strict=True,
+    ):
+        assert same_bits(g, w)
 
 
 def test_compiled_ik_differences_refuse_mismatched_rows() -> None:
@@ -314,3 +400,7 @@ def test_compiled_ik_differences_refuse_mismatched_rows() -> None:
         _ik.jacobian_rows(m, q, tz, 1e-4, np.zeros((3, 4)))
     with pytest.raises(ValueError, match="tz"):
         _ik.jacobian_rows(m, q, tz[:1], 1e-4)
+    with pytest.raises(ValueError, match="dq_out"):
+        _ik.end_slopes(m, q, q, q, np.zeros((2, 5)), tz, 1e-4)
+    with pytest.raises(ValueError, match="tz"):
+        _ik.end_slopes(m, q, q, q, q, tz[:2], 1e-4)

@@ -189,3 +189,24 @@ def test_a_fitted_map_is_bit_identical() -> None:
     want = legendre.map_rows(em.arrays, q2)
     assert same_bits(want, _by_legvander(em, q2))
     assert same_bits(_legendre.map_rows(em.arrays, q2), want)
+
+
+def test_compiled_map_keeps_its_plan_only_for_the_map_it_was_made_from() -> None:
+    """The compiled map keeps the last map's plan of products from call to call (a
+    conversion's chunks): a map changed in place, another map, or a map of other
+    products after it, each evaluates as the reference does."""
+    _legendre = compiled("_legendre")
+    rng = np.random.default_rng(9)
+    q = _poses(rng, 50)
+    em2, em3 = _random_map(rng, 2, "eq5", flat=-1), _random_map(rng, 3, "eq5-coupled", flat=1)
+    m = em2.arrays._replace(coef=em2.arrays.coef.copy(), lo=em2.arrays.lo.copy())
+    for change in ("", "coef", "lo", "", "other map", "back"):
+        if change == "coef":
+            m.coef[1, 0] += 1e-3
+        elif change == "lo":
+            m.lo[2] -= 5.0
+        arrays = em3.arrays if change == "other map" else m
+        for it in (1, 2):
+            want = legendre.correct_virtual(arrays, q, it)
+            assert same_bits(_legendre.correct_virtual(arrays, q, it), want), change
+        assert same_bits(_legendre.map_rows(arrays, q), legendre.map_rows(arrays, q)), change

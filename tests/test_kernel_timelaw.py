@@ -39,6 +39,7 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[A
         "_backward_pass",
         "_forward_pass",
         "_play_stops",
+        "_set_offs",
     ]
     return record_many(attrs, tmp_path_factory.mktemp("timelaw"))
 
@@ -281,6 +282,92 @@ def test_generated_play_stops_are_the_same(rows: list[tuple[Any, ...]]) -> None:
     P_out, P_in, t_out, t_in, cross = (np.array(c) for c in zip(*rows, strict=True))
     args = (t_out, t_in, P_out, P_in, cross, 3, 1e-3, 1e-6, (1.0 + 1e-4) ** 2)
     assert np.array_equal(_tl.play_stops(*args), timelaw.play_stops(*args))
+
+
+def _same_set_offs(args: tuple[Any, ...]) -> None:
+    """set_offs compiled and reference: the same crossings, ways (to the bit) and
+    standing; the inputs left as they were."""
+    _tl = compiled("_timelaw")
+    way, stood = args[3].copy(), args[4].copy()
+    got, want = _tl.set_offs(*args), timelaw.set_offs(*args)
+    assert np.array_equal(got[0], want[0]) and got[0].dtype == want[0].dtype == bool
+    assert same_bits(got[1], want[1])
+    assert np.array_equal(got[2], want[2]) and got[2].dtype == bool
+    assert same_bits(args[3], way) and np.array_equal(args[4], stood)
+
+
+def test_sample_programs_set_offs_are_the_same(
+    recorded: dict[str, list[tuple[Any, ...]]],
+) -> None:
+    calls = recorded["_set_offs"]
+    assert calls  # the perturbed profile's motors have play
+    for args in calls:
+        _same_set_offs(args)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.integers(1, 5),
+    st.lists(
+        st.tuples(
+            st.lists(SLOPE, min_size=5, max_size=5),
+            st.lists(SLOPE, min_size=5, max_size=5),
+            st.sampled_from([0.0, 1e-3, 0.25, 5.0, 100.0]),
+        ),
+        min_size=1,
+        max_size=20,
+    ),
+    st.lists(st.sampled_from([1.0, -1.0, 0.0]), min_size=5, max_size=5),
+    st.lists(st.booleans(), min_size=5, max_size=5),
+)
+def test_generated_set_offs_are_the_same(
+    k: int, rows: list[tuple[Any, ...]], way: list[float], stood: list[bool]
+) -> None:
+    """Motors standing, creeping, moving either way at blocks' starts and ends,
+    speed limits from rest to fast, any way and standing before the first block."""
+    d_in, d_out, vmax = (np.array(c) for c in zip(*rows, strict=True))
+    args = (
+        d_in[:, :k],
+        d_out[:, :k],
+        vmax,
+        np.array(way[:k]),
+        np.array(stood[:k]),
+        1e-3,
+        1e-6,
+        5e-4,
+    )
+    _same_set_offs(args)
+
+
+def test_a_motor_that_stood_setting_off_against_its_way_crosses() -> None:
+    """A motor that last moved up (way +1), stood at the block before's end, and
+    sets off down at 0.01 mm/mm on a block of 1 mm/s crosses there; the same
+    setting off up, or not having stood, or creeping off (1e-4 mm/mm at 1 mm/s:
+    1e-4 mm/s, under v_eps 5e-4 mm/s) does not; its way and standing after the
+    last block go on to the next chunk."""
+    for kern in (compiled("_timelaw"), timelaw):
+        d_out = np.array([[0.0], [0.5]])
+
+        def cross(start: float, stood: bool, kern: Any = kern, d_out: Any = d_out) -> bool:
+            d_in = np.array([[start], [0.0]])
+            got = kern.set_offs(
+                d_in, d_out, np.ones(2), np.ones(1), np.array([stood]), 1e-3, 1e-6, 5e-4
+            )
+            return bool(got[0][0])
+
+        assert cross(-0.01, True)
+        assert not cross(0.01, True) and not cross(-0.01, False) and not cross(-1e-4, True)
+        got = kern.set_offs(
+            np.array([[-0.01]]),
+            np.array([[2e-7]]),
+            np.ones(1),
+            np.ones(1),
+            np.array([False]),
+            1e-3,
+            1e-6,
+            5e-4,
+        )
+        assert got[1].tolist() == [-1.0] and got[2].tolist() == [True]
 
 
 def test_a_head_motor_reversing_is_a_stop() -> None:

@@ -9,6 +9,7 @@ of a motor's play near a run's end once came out a few nm apart.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -164,3 +165,54 @@ def test_convert_writes_the_same_bytes_whatever_the_chunk_size(
         )
         outputs[chunk] = out.read_bytes()
     assert len(set(outputs.values())) == 1, {c: len(o) for c, o in outputs.items()}
+
+
+@pytest.mark.parametrize(("chunk", "size"), [(7, 5), (3, 16), (50, 64), (1000, 4096)])
+def test_a_pieces_points_are_the_points_of_the_runs_it_joins(chunk: int, size: int) -> None:
+    """The chain makes a piece's points from its plan once it is whole (the steps
+    of its blocks cut and joined with it, Planning.cut): they are the points of
+    the runs the look-ahead committed, each sampled and joined, to the bit, field
+    by field. The sample five-axis program with arcs and dwells, fed a few motions
+    at a time."""
+    from prsxy_post import chain, gcode, program
+    from prsxy_post.interpolate.sampling import sample
+
+    prof = profile_mod.loads((ROOT / "profiles" / "prsxy-shop.toml").read_text(), "shop")
+    lines = ["G21 G90 G17 G94 G64", "G0 X-10 Y-10 Z5 A0 B0", "G1 Z0 F1500"]
+    for i in range(120):
+        x, a = 10.0 * math.sin(i / 7.0), 8.0 * math.cos(i / 11.0)
+        lines.append(f"G1 X{x:.4f} Y{i * 0.2 - 10:.4f} A{a:.4f} B{a / 2:.4f}")
+        if i % 17 == 5:
+            lines.append(f"G2 X{x + 2:.4f} Y{i * 0.2 - 9:.4f} R{3 + i % 5}")
+        if i % 41 == 7:
+            lines.append("G4 P0.2")
+    motions = gcode.interpret(
+        "\n".join([*lines, "G0 Z5", "M2"]) + "\n", program.interpreter_config(prof)
+    )
+    planning = chain.Planning(prof)
+    by_rows, by_points = pieces.Pieces(size=size), pieces.Pieces(size=size)
+    made: list[tuple[Plan, Samples]] = []
+    want: list[tuple[Plan, Samples]] = []
+    for i in range(0, len(motions) + 1, chunk):
+        final = i + chunk > len(motions)
+        planned = planning.plan(chain.prepare(motions[i : i + chunk], prof, planning.limits), final)
+        if planned.plan is not None and planned.steps is not None:
+            by_rows.add(planned.plan, planned.steps)
+            by_points.add(planned.plan, sample(planned.plan, planning.limits, planned.steps))
+        for plan, steps in by_rows.take(final):
+            assert isinstance(steps, np.ndarray) and len(steps) == len(plan.blocks)
+            made.append((plan, sample(plan, planning.limits, steps)))
+        want += by_points.take(final)  # type: ignore[arg-type]
+    assert len(made) == len(want) > (2 if size <= 16 else 0)  # many pieces joined
+    n_points = 0
+    for (plan, got), (plan_w, s) in zip(made, want, strict=True):
+        assert np.array_equal(plan.blocks.line, plan_w.blocks.line)
+        for f in Samples.FIELDS:
+            a, b = getattr(got, f), getattr(s, f)
+            assert a.dtype == b.dtype, f
+            if a.dtype.kind == "f":
+                assert np.array_equal(a.view(np.int64), b.view(np.int64)), f
+            else:
+                assert np.array_equal(a, b), f
+        n_points += len(got)
+    assert n_points > 500

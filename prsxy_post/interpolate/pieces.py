@@ -7,6 +7,10 @@ crossing of its play near the piece's end cannot see the next piece), so the
 points would depend on where the runs end. Cutting them again at whole multiples
 of :data:`PIECE_BLOCKS` from the program's first block makes the pieces, and so
 the output, the same however the program was fed.
+
+A plan travels with its points (:class:`Samples`), or with an array of rows per
+block (the planner's steps per phase, from which the points of a piece are made
+once it is whole: :meth:`~prsxy_post.chain.Planning.cut`).
 """
 
 from __future__ import annotations
@@ -20,9 +24,13 @@ from .sampling import Samples
 #: count, small enough that a piece's points stay a few MB
 PIECE_BLOCKS = 4096
 
+#: what travels with a plan: its points, or an (n_blocks, ...) array of rows per block
+Rows = Samples | np.ndarray
+
 
 class Pieces:
-    """Committed plans and their points in, pieces of :data:`PIECE_BLOCKS` out.
+    """Committed plans and their points (or rows per block: :data:`Rows`) in,
+    pieces of :data:`PIECE_BLOCKS` out.
 
     ``add`` the runs in program order; ``take`` returns the pieces that are whole
     (every piece, the last one short, once ``final``)."""
@@ -30,19 +38,19 @@ class Pieces:
     def __init__(
         self,
         size: int | None = None,
-        runs: list[tuple[Plan, Samples]] | None = None,
+        runs: list[tuple[Plan, Rows]] | None = None,
         held: int = 0,
     ) -> None:
         self.size = PIECE_BLOCKS if size is None else size
         self.runs = [] if runs is None else runs
         self.held = held  # blocks in ``runs``
 
-    def add(self, plan: Plan, samples: Samples) -> None:
+    def add(self, plan: Plan, samples: Rows) -> None:
         if len(plan.blocks):
             self.runs.append((plan, samples))
             self.held += len(plan.blocks)
 
-    def take(self, final: bool = False) -> list[tuple[Plan, Samples]]:
+    def take(self, final: bool = False) -> list[tuple[Plan, Rows]]:
         """The whole pieces held, in order (and the rest as one, with ``final``).
 
         A piece is joined from the parts of the runs it spans only (the rest of
@@ -64,7 +72,7 @@ class Pieces:
         self.held -= start
         return out
 
-    def _parts(self, begins: list[int], start: int, stop: int) -> list[tuple[Plan, Samples, int]]:
+    def _parts(self, begins: list[int], start: int, stop: int) -> list[tuple[Plan, Rows, int]]:
         """Blocks start..stop of the runs held, run by run: (plan, points, index of
         the run) of each run's part."""
         out = []
@@ -74,7 +82,7 @@ class Pieces:
                 out.append((*_between(plan, samples, lo - begins[j], hi - begins[j]), j))
         return out
 
-    def _span(self, begins: list[int], start: int, stop: int) -> tuple[Plan, Samples]:
+    def _span(self, begins: list[int], start: int, stop: int) -> tuple[Plan, Rows]:
         """Blocks start..stop of the runs held as one plan and its points, as
         :func:`_between` cuts them out of all the runs joined."""
         parts = self._parts(begins, start, stop)
@@ -87,19 +95,24 @@ class Pieces:
         return plan, samples
 
 
-def _joined(runs: list[tuple[Plan, Samples]]) -> tuple[Plan, Samples]:
+def _joined(runs: list[tuple[Plan, Rows]]) -> tuple[Plan, Rows]:
     if len(runs) == 1:
         return runs[0]
-    offsets = np.cumsum([0] + [len(p.blocks) for p, _ in runs[:-1]])
     plan = Plan.concat([p for p, _ in runs])
-    return plan, Samples.concat([s for _, s in runs], [int(o) for o in offsets])
+    rows = [s for _, s in runs]
+    if not isinstance(rows[0], Samples):
+        return plan, np.concatenate(rows)  # type: ignore[arg-type]
+    offsets = np.cumsum([0] + [len(p.blocks) for p, _ in runs[:-1]])
+    return plan, Samples.concat(rows, [int(o) for o in offsets])  # type: ignore[arg-type]
 
 
-def _between(plan: Plan, samples: Samples, start: int, stop: int) -> tuple[Plan, Samples]:
+def _between(plan: Plan, samples: Rows, start: int, stop: int) -> tuple[Plan, Rows]:
     """Blocks start..stop of a plan, with their points (``block`` counted from
-    ``start``)."""
+    ``start``) or rows."""
     if start == 0 and stop == len(plan.blocks):
         return plan, samples
+    if not isinstance(samples, Samples):
+        return plan.head(stop).tail(start), samples[start:stop]
     lo, hi = np.searchsorted(samples.block, [start, stop])
     part = samples.take(slice(int(lo), int(hi)))
     part.block = part.block - start  # part is new: samples' own block stays as it is

@@ -85,6 +85,7 @@ _inverse_rows = _RUN["ik"].inverse_rows
 _platform_cols = _RUN["ik"].platform_cols
 _motion_rows = _RUN["ik"].motion_rows
 _derivative_rows = _RUN["ik"].derivative_rows
+_end_slopes = _RUN["ik"].end_slopes
 _jacobian_rows = _RUN["ik"].jacobian_rows
 _correct_virtual = _RUN["legendre"].correct_virtual
 _fixed_rows = _RUN["text"].format_fixed_rows
@@ -97,6 +98,7 @@ _phase_times = _RUN["timelaw"].phase_times
 _backward_pass = _RUN["timelaw"].backward_pass
 _forward_pass = _RUN["timelaw"].forward_pass
 _play_stops = _RUN["timelaw"].play_stops
+_set_offs = _RUN["timelaw"].set_offs
 _poses = _RUN["path"].poses
 _velocities = _RUN["path"].velocities
 _play_kernel = _RUN["play"]
@@ -128,6 +130,21 @@ def derivative_rows(
     """The IK's one-sided difference (N, 5) along ``dq`` from poses ``q`` whose IK
     is ``P``: :func:`ik.derivative_rows`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _derivative_rows(m, q, dq, tz, P, step)
+    return out
+
+
+def end_slopes(
+    m: ik.IKArrays,
+    start: np.ndarray,
+    end: np.ndarray,
+    dq_in: np.ndarray,
+    dq_out: np.ndarray,
+    tz: np.ndarray,
+    step: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The motors' dP/ds (n, 5) at blocks' starts along ``dq_in`` and at their ends
+    back along ``dq_out``: :func:`ik.end_slopes`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _end_slopes(m, start, end, dq_in, dq_out, tz, step)
     return out
 
 
@@ -310,6 +327,25 @@ def play_stops(
     :func:`timelaw.play_stops`, compiled when :data:`COMPILED`."""
     out: np.ndarray = _play_stops(
         dq_out, dq_in, dP_out, dP_in, cross_in, head, reversal_slope, stand_slope, gain_max
+    )
+    return out
+
+
+def set_offs(
+    d_in: np.ndarray,
+    d_out: np.ndarray,
+    vmax: np.ndarray,
+    way: np.ndarray,
+    stood: np.ndarray,
+    reversal_slope: float,
+    stand_slope: float,
+    v_eps: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where a motor with play sets off against the way it last moved, and each
+    motor's way and standing after the blocks: :func:`timelaw.set_offs`, compiled
+    when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _set_offs(
+        d_in, d_out, vmax, way, stood, reversal_slope, stand_slope, v_eps
     )
     return out
 

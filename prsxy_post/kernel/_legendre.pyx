@@ -130,9 +130,11 @@ class _Plan:
         if self.lo.shape != (5,) or self.span.shape != (5,):
             raise ValueError(f"lo and span must be (5,), got {self.lo.shape}, {self.span.shape}")
         one = 5 * (degree + 1)  # tab's entry 1.0
-        self.tab = np.empty(one + 1)
-        self.tab[one] = 1.0
+        self.n_tab = one + 1
         self.degree = degree
+        # what the plan was made from (:meth:`made_from`)
+        self.made = (np.array(m.lo, dtype=np.float64), np.array(m.span, dtype=np.float64),
+                     np.array(m.exps), np.array(m.coef))
         # each product's factors (variables x..B, as the reference multiplies them)
         facs = []
         for k in range(nk):
@@ -162,8 +164,7 @@ class _Plan:
         # a constant product (no factor) is the start itself
         self.ops = np.array(ops if ops else [(0, one, 0)], dtype=np.intc).reshape(-1)
         self.n_ops = len(ops)
-        self.col = np.empty(max(len(slot), 1 + nk))
-        self.col[0] = 1.0
+        self.n_col = max(len(slot), 1 + nk)
         # each component's terms: products in order, zero coefficients skipped as
         # the reference skips them
         terms = [
@@ -195,13 +196,49 @@ class _Plan:
                     self.dense_cf[5 * i + c] = coef[k, c]
 
 
-cdef _Map _map(plan):
-    """The C view of a :class:`_Plan` (valid while ``plan`` lives)."""
+    def made_from(self, m):
+        """True when map ``m`` holds what this plan was made from."""
+        lo, span, exps, coef = self.made
+        return (
+            int(m.degree) == self.degree
+            and np.array_equal(m.lo, lo) and np.array_equal(m.span, span)
+            and np.array_equal(m.exps, exps) and np.array_equal(m.coef, coef)
+        )
+
+    def scratch(self):
+        """A call's own rows of Legendre values (tab, its last entry 1.0) and of
+        products (col, its first 1.0)."""
+        tab = np.empty(self.n_tab)
+        tab[self.n_tab - 1] = 1.0
+        col = np.empty(self.n_col)
+        col[0] = 1.0
+        return tab, col
+
+
+#: the last map's plan (a conversion evaluates one map, chunk after chunk)
+_last = [None, None]
+
+
+def _plan_of(m):
+    """The :class:`_Plan` of map ``m``: the last one made, when made from ``m``
+    and ``m`` still holds what it held then (a plan costs more than the map on a
+    few hundred rows)."""
+    last_m, plan = _last
+    if last_m is m and plan.made_from(m):
+        return plan
+    plan = _Plan(m)
+    _last[:] = [m, plan]
+    return plan
+
+
+cdef _Map _map(plan, tab_a, col_a):
+    """The C view of a :class:`_Plan` and a call's scratch rows (valid while they
+    live)."""
     cdef _Map M
     cdef const double[::1] lo = plan.lo, span = plan.span, tf = plan.term_cf
     cdef const int[::1] ops = plan.ops, tk = plan.term_k, dk = plan.dense_k
     cdef const double[::1] dcf = plan.dense_cf
-    cdef double[::1] tab = plan.tab, col = plan.col
+    cdef double[::1] tab = tab_a, col = col_a
     M.lo = &lo[0]
     M.span = &span[0]
     M.degree = plan.degree
@@ -223,8 +260,9 @@ def map_rows(m, q):
     cdef const double[:, ::1] qv = np.ascontiguousarray(q, dtype=np.float64)
     if qv.ndim != 2 or qv.shape[1] != 5:
         raise ValueError("q must be (N, 5)")
-    plan = _Plan(m)
-    cdef _Map M = _map(plan)
+    plan = _plan_of(m)
+    tab, col = plan.scratch()
+    cdef _Map M = _map(plan, tab, col)
     cdef Py_ssize_t n = qv.shape[0], i
     out = np.empty((n, 5))
     cdef double[:, ::1] ov = out
@@ -240,8 +278,9 @@ def correct_virtual(m, q, int iterations=2):
     cdef const double[:, ::1] qv = np.ascontiguousarray(q, dtype=np.float64)
     if qv.ndim != 2 or qv.shape[1] != 5:
         raise ValueError("q must be (N, 5)")
-    plan = _Plan(m)
-    cdef _Map M = _map(plan)
+    plan = _plan_of(m)
+    tab, col = plan.scratch()
+    cdef _Map M = _map(plan, tab, col)
     cdef Py_ssize_t n = qv.shape[0], i, c
     cdef int it
     out = np.empty((n, 5))

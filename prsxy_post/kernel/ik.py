@@ -220,6 +220,47 @@ def derivative_rows(
     return (inverse_rows(m, q + step * dq, tz) - P) / step
 
 
+def _row_bits(q: np.ndarray) -> np.ndarray:
+    """(N,) each row of ``q`` (N, 5) as one value of its 40 bytes (rows compared
+    to the bit in one pass; np.all over rows of 5 is slow)."""
+    return np.ascontiguousarray(q).view(np.dtype((np.void, q.itemsize * 5))).reshape(-1)
+
+
+def end_slopes(
+    m: IKArrays,
+    start: np.ndarray,
+    end: np.ndarray,
+    dq_in: np.ndarray,
+    dq_out: np.ndarray,
+    tz: np.ndarray,
+    step: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The motors' dP/ds at the starts and ends of n blocks: (d_in, d_out), (n, 5)
+    each [mm/mm].
+
+    d_in = (P(start + h dq_in) − P(start)) / h along the tangent into each block,
+    d_out = −((P(end − h dq_out) − P(end)) / h) back along the tangent out of it
+    (:func:`derivative_rows` over ``step`` h), for poses ``start``, ``end`` (n, 5)
+    with tool heights ``tz`` (n,). A start with the bits of the block before's
+    end, and its tool height (a path's every junction), takes that end's IK: the
+    IK solves each row alone, so the same row gives the same bits.
+    """
+    n = len(start)
+    P_end = inverse_rows(m, end, tz)
+    again = np.zeros(n, dtype=bool)
+    if n > 1:
+        again[1:] = (_row_bits(start[1:]) == _row_bits(end[:-1])) & (
+            tz[1:].view(np.int64) == tz[:-1].view(np.int64)
+        )
+    P_start = np.empty((n, 5))
+    P_start[1:] = P_end[:-1]
+    fresh = np.flatnonzero(~again)
+    P_start[fresh] = inverse_rows(m, np.take(start, fresh, axis=0), tz[fresh])
+    d_in = derivative_rows(m, start, dq_in, tz, P_start, step)
+    d_out = -derivative_rows(m, end, -dq_out, tz, P_end, step)
+    return d_in, d_out
+
+
 def motion_rows(
     m: IKArrays, q: np.ndarray, qdot: np.ndarray, tz: np.ndarray, step: float
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -300,3 +300,55 @@ def play_stops(
     stop |= cross_in[1:] & np.any(head_sets_off[:, :head], axis=1)
     out: np.ndarray = stop
     return out
+
+
+def set_offs(
+    d_in: np.ndarray,
+    d_out: np.ndarray,
+    vmax: np.ndarray,
+    way: np.ndarray,
+    stood: np.ndarray,
+    reversal_slope: float,
+    stand_slope: float,
+    v_eps: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where a motor with play sets off against the way it last moved: (cross (n,)
+    bool, way (k,), stood (k,) bool after the last block), for n moving blocks.
+
+    Parameters
+    ----------
+    d_in, d_out : (n, k) the k motors' dP/ds at each block's start and end [mm/mm]
+    vmax : (n,) each block's speed limit [mm/s]
+    way : (k,) the way each motor last moved (±1) before the first block
+    stood : (k,) bool, each motor stood at the end of the moving block before
+    reversal_slope : a motor moves a way where |dP/ds| is above it (a creep,
+        below, does not set the way)
+    stand_slope : a motor stands at a block's end where |dP/ds| is at most this
+    v_eps : a block's start sets a motor off where |dP/ds| times the block's
+        speed limit is above it
+
+    A block's start crosses where a motor that stood at the block before's end
+    sets off faster than ``v_eps`` against the way it last moved, that way carried
+    through the blocks' starts and ends in turn (and across chunks: the ``way``
+    and ``stood`` returned).
+    """
+    n, k = d_in.shape
+    # each block's start, then its end, in order: the way each motor last moved
+    # clearly up to it, carried on from before the first
+    ends = np.empty((2 * n, k))
+    ends[0::2], ends[1::2] = d_in, d_out
+    moved = np.where(np.abs(ends) > reversal_slope, np.sign(ends), 0.0)
+    rows = np.arange(2 * n)[:, None]
+    last = np.maximum.accumulate(np.where(moved != 0, rows, -1), axis=0)
+    came = np.where(last >= 0, np.take_along_axis(moved, np.maximum(last, 0), 0), way)
+    # the way before each start: the way given before the first, else the way
+    # after the block before's end
+    before = np.empty((n, k))
+    before[0], before[1:] = way, came[1:-1:2]
+    still = np.abs(d_out) <= stand_slope
+    was = np.empty((n, k), dtype=bool)
+    was[0], was[1:] = stood, still[:-1]
+    sets_off = np.abs(d_in) * vmax[:, None] > v_eps
+    against = sets_off & (np.sign(d_in) == -before) & was
+    cross: np.ndarray = np.any(against, axis=1)
+    return cross, came[-1].copy(), still[-1].copy()
