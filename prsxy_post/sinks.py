@@ -34,8 +34,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from . import wire
 from .errors import ProcessFailed, PrsxyError, write_failed
-from .points import PointChunk
 from .runtime import peak_rss_mb
 
 Piece = tuple[int, str]
@@ -414,8 +414,9 @@ def _serve(conn: Any, here: WriterHere) -> None:
 
 
 def _fields(chunk: Any, names: tuple[str, ...]) -> dict[str, Any]:
-    """The fields ``names`` of a point chunk, for :func:`_chunk` to rebuild."""
-    return {name: getattr(chunk, name) for name in names}
+    """The fields ``names`` of a point chunk in their narrowest exact form
+    (:func:`.wire.pack_points`), for :func:`_chunk` to rebuild."""
+    return wire.pack_points(chunk, names)
 
 
 def _chunk(sent: Any) -> Any:
@@ -424,8 +425,7 @@ def _chunk(sent: Any) -> Any:
     writer reading one it did not declare fails loudly."""
     if not isinstance(sent, dict):
         return sent
-    given: dict[str, Any] = {name: sent.get(name) for name in PointChunk.FIELDS}
-    return PointChunk(**given)
+    return wire.unpack_points(sent)
 
 
 class WriterProcess:
