@@ -34,6 +34,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from . import wire
 from .errors import ProcessFailed, PrsxyError, write_failed
 from .runtime import peak_rss_mb
@@ -174,11 +176,13 @@ class Channel:
         sizes = struct.unpack_from(f"<{n_bufs}Q", head, 12)
         spans = [size + (-size % self.ALIGN) for size in sizes]
         data = bytearray(n_data)
-        body = bytearray(sum(spans))
-        self._read_into([memoryview(data), memoryview(body)])
+        # not zeroed first (bytearray(n) would write every byte once more before
+        # the read writes it: a third of the reading's CPU on MB of points)
+        body = np.empty(sum(spans), dtype=np.uint8).data
+        self._read_into([memoryview(data), body])
         views, at = [], 0
         for size, span in zip(sizes, spans, strict=True):
-            views.append(memoryview(body)[at : at + size])
+            views.append(body[at : at + size])
             at += span
         return pickle.loads(data, buffers=views)
 

@@ -15,9 +15,13 @@ the receiver reads, in forms that arrive bit for bit as they left:
   them);
 - a column zero in every bit on most rows (arc data on lines, split marks, the
   standing points) crosses as the rows that are not (:class:`Sparse`), an object
-  column (machine functions, curves) as its rows that are not None;
-- an integer column crosses in the narrowest integer type its values fit
-  (:class:`Narrow`) and is widened on arrival.
+  column (machine functions, curves) as its rows that are not None, looked for
+  only where the contract lets them be (function points stand, curves are at
+  curve blocks).
+
+Integer columns are not narrowed: checking that the values fit, and widening
+them again, cost more CPU than the 4 bytes a point save in the pipe (measured
+with bench/wire.py).
 
 Floats cross as they are (float64 stays float64). A Ready made in this process
 (one process) is not packed at all: both paths give the same points.
@@ -31,7 +35,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .chain import BLOCKS_READ, LAW_READ, Piece, Ready, Solved
-from .interpolate import Blocks, Plan, Samples, TimeLaw
+from .interpolate import KIND_CURVE, Blocks, Plan, Samples, TimeLaw
 from .points import PointChunk
 
 #: a column crosses as its rows not zero where at most this share of them are not
@@ -47,80 +51,80 @@ class Sparse(NamedTuple):
     rows: np.ndarray
 
 
-class Narrow(NamedTuple):
-    """An integer column ``values`` in a narrower type than its own, ``dtype``."""
-
-    values: np.ndarray
-    dtype: str
-
-
-Column = np.ndarray | Sparse | Narrow | None
+Column = np.ndarray | Sparse | None
 
 
 def _nonzero_rows(a: np.ndarray) -> np.ndarray:
     """(n,) bool: the rows of ``a`` (n, ...) with a bit set (−0.0 and NaN are not
-    zero), or not None in an object column."""
-    if a.dtype == object:
-        return np.asarray(a != None, dtype=bool)  # noqa: E711 (elementwise)
-    flat = a.reshape(len(a), int(np.prod(a.shape[1:])))  # (n, 1) for a column
-    set_ = flat != 0
-    if a.dtype.kind == "f":
-        set_ |= np.signbit(flat)
-    out: np.ndarray = set_.any(axis=1) if flat.shape[1] != 1 else set_[:, 0]
+    zero: the bits are compared, as unsigned integers of the same size)."""
+    bits = a.view(f"u{a.dtype.itemsize}") != 0
+    if bits.ndim == 1:
+        return bits
+    out: np.ndarray = bits.reshape(len(a), int(np.prod(a.shape[1:]))).any(axis=1)
     return out
 
 
-def _narrowed(a: np.ndarray) -> np.ndarray | Narrow:
-    """An int64 (or int32) column in the narrowest signed type its values fit."""
-    if a.dtype.kind not in "iu" or a.dtype.itemsize == 1 or not a.size:
-        return a
-    lo, hi = int(a.min()), int(a.max())
-    for t in (np.int8, np.int16, np.int32):
-        if t().itemsize < a.dtype.itemsize and np.iinfo(t).min <= lo and hi <= np.iinfo(t).max:
-            return Narrow(a.astype(t), a.dtype.str)
-    return a
-
-
-def _sparse_at(a: np.ndarray, at: np.ndarray) -> Sparse:
-    """``a`` (n, ...) as its rows ``at`` (k,) (the others zero, or None)."""
-    idx = _narrowed(at.astype(np.int64))
-    return Sparse(len(a), idx.values if isinstance(idx, Narrow) else idx, a[at])
-
-
 def packed(a: np.ndarray | None) -> Column:
-    """A column (n, ...) in its narrowest exact form: the rows not zero
-    (:class:`Sparse`) where at most :data:`SPARSE_SHARE` of them are, an integer
-    column narrowed (:class:`Narrow`), else itself."""
+    """A numeric column (n, ...) as its rows not zero (:class:`Sparse`) where at
+    most :data:`SPARSE_SHARE` of them are, else itself; an object column as its
+    rows not None."""
     if a is None:
         return None
-    at = np.flatnonzero(_nonzero_rows(a))
-    if a.dtype == object or len(at) <= SPARSE_SHARE * len(a):
-        return _sparse_at(a, at)
-    return _narrowed(a)
+    if a.dtype == object:
+        return _present(a, np.arange(len(a)))
+    at = _nonzero_rows(a).nonzero()[0]
+    return Sparse(len(a), at, a[at]) if len(at) <= SPARSE_SHARE * len(a) else a
+
+
+def _present(values: np.ndarray, maybe: np.ndarray) -> Sparse:
+    """An object column (n,) as its rows not None, which are among rows ``maybe``
+    (k,) (the contract says where a value may be: only those are looked at)."""
+    at = maybe[np.asarray(values[maybe] != None, dtype=bool)]  # noqa: E711 (elementwise)
+    return Sparse(len(values), at, values[at])
+
+
+#: the columns that are zero (or None) on most rows, the only ones looked at row
+#: by row (:func:`packed`): arc data and the plane are zero on lines, the tool
+#: length without G43; the standing points and split ends are few
+MOSTLY_ZERO = frozenset(
+    {"plane", "center", "sweep", "r0", "r1", "theta0", "tool_length", "dwell", "split"}
+)
+
+
+def _column(name: str, a: np.ndarray | None) -> Column:
+    """Column ``name``: :func:`packed` if it is among :data:`MOSTLY_ZERO`, else as
+    it is."""
+    return packed(a) if name in MOSTLY_ZERO else a
+
+
+def _nones(n: int) -> np.ndarray:
+    """(n,) object, every row None: a view of one array that cannot be written to
+    (what reads a chunk's machine functions only reads them; a write would raise),
+    made again only when a longer one is asked for."""
+    global _NONES
+    if len(_NONES) < n:
+        _NONES = np.empty(max(n, 2 * len(_NONES)), dtype=object)
+        _NONES.flags.writeable = False
+    return _NONES[:n]
+
+
+_NONES = np.empty(0, dtype=object)
 
 
 def unpacked(c: Column) -> Any:
     """A column as it was before :func:`packed` (the same bits, dtype and shape),
     or None where None was packed (an ndarray or None: typed Any, so that a record
     whose unread fields are None can be made)."""
-    if isinstance(c, Narrow):
-        return c.values.astype(c.dtype)
-    if isinstance(c, Sparse):
-        if c.rows.dtype == object:
-            out = np.empty(c.n, dtype=object)
-        else:
-            out = np.zeros((c.n, *c.rows.shape[1:]), dtype=c.rows.dtype)
-        out[c.at] = c.rows
-        return out
-    return c
-
-
-def _functions(fn: np.ndarray, standing: np.ndarray) -> Sparse:
-    """The machine functions (n,) object as the points that have one: they stand
-    (``standing`` (n,) bool: a function point stands, PointChunk and Samples say),
-    so only those are looked at, not every point of the chunk."""
-    k = np.flatnonzero(standing)
-    return _sparse_at(fn, k[np.asarray(fn[k] != None, dtype=bool)])  # noqa: E711
+    if not isinstance(c, Sparse):
+        return c
+    if c.rows.dtype == object:
+        if not len(c.at):
+            return _nones(c.n)
+        out = np.empty(c.n, dtype=object)
+    else:
+        out = np.zeros((c.n, *c.rows.shape[1:]), dtype=c.rows.dtype)
+    out[c.at] = c.rows
+    return out
 
 
 # -- a planned chunk, interpreter process -> chain
@@ -160,17 +164,19 @@ def _pack_piece(piece: Piece, plan_read: bool) -> tuple[dict[str, Any], ...]:
     plan, s, solved = piece
     b = plan.blocks
     fields = (*BLOCKS_READ, "line", "tool_length") if plan_read else ("line", "tool_length")
-    blocks = {f: packed(getattr(b, f)) for f in fields}
-    law = {f: packed(getattr(plan.law, f)) for f in (LAW_READ if plan_read else ())}
+    blocks = {f: _column(f, getattr(b, f)) for f in fields}
+    if "curve" in blocks:  # a spline's Nurbs, at curve blocks only (Blocks says)
+        blocks["curve"] = _present(b.curve, (b.kind == KIND_CURVE).nonzero()[0])
+    law = {f: getattr(plan.law, f) for f in (LAW_READ if plan_read else ())}
     points = {
         "q": s.q,
         "qdot": s.qdot,
         "dt": s.dt,
-        "block": packed(s.block),
+        "block": s.block,
         "tau": s.tau,
         "speed": s.speed,
         "dwell": packed(s.dwell),
-        "fn": _functions(s.fn, s.dwell),
+        "fn": _present(s.fn, s.dwell.nonzero()[0]),  # a function point stands
         "block_end": s.block_end,
         "split": packed(s.split),
     }
@@ -178,7 +184,7 @@ def _pack_piece(piece: Piece, plan_read: bool) -> tuple[dict[str, Any], ...]:
     if solved is None:
         return plan_, points
     # the fields themselves (dataclasses.asdict would copy every array)
-    poses = {f.name: getattr(solved, f.name) for f in dataclasses.fields(solved)}
+    poses = dict(vars(solved))
     if solved.q_target is s.q:  # no map: the points' own poses, crossing once
         poses["q_target"] = None
     return plan_, points, poses
@@ -202,8 +208,7 @@ def _unpack_samples(points: dict[str, Any], blocks: Blocks) -> Samples:
     each point its block's, the first point of a block where its number changes
     (as :func:`.interpolate.sampling.sample` makes them, and as a piece, cut at
     block ends, keeps them)."""
-    block = unpacked(points["block"])
-    assert block is not None
+    block = points["block"]
     first = np.ones(len(block), dtype=bool)
     first[1:] = block[1:] != block[:-1]
     return Samples(
@@ -230,12 +235,10 @@ def pack_points(chunk: PointChunk, names: tuple[str, ...]) -> dict[str, Column]:
     among them."""
     out: dict[str, Column] = {}
     for name in names:
-        if name == "fn" and "dwell" in names:
-            out[name] = _functions(chunk.fn, chunk.dwell)
-        elif name in ("line", "split", "dwell", "fn"):
-            out[name] = packed(getattr(chunk, name))
+        if name == "fn" and "dwell" in names:  # a function point stands (PointChunk)
+            out[name] = _present(chunk.fn, chunk.dwell.nonzero()[0])
         else:
-            out[name] = getattr(chunk, name)  # floats and the bools: as they are
+            out[name] = _column(name, getattr(chunk, name))
     return out
 
 
