@@ -13,9 +13,6 @@ the receiver reads, in forms that arrive bit for bit as they left:
   point's source line and tool length are its block's, a block's first point is
   where the block number changes (as :func:`.interpolate.sampling.sample` makes
   them);
-- a column with the bits of another on most rows (a block's start is the end of
-  the block before it; a line's end tangent is its start tangent) crosses as the
-  rows where it has not (:class:`Alike`);
 - a column zero in every bit on most rows (arc data on lines, split marks, the
   standing points) crosses as the rows that are not (:class:`Sparse`), an object
   column (machine functions, curves) as its rows that are not None, looked for
@@ -100,47 +97,6 @@ def _column(name: str, a: np.ndarray | None) -> Column:
     return packed(a) if name in MOSTLY_ZERO else a
 
 
-class Alike(NamedTuple):
-    """A column with the bits of column ``like`` of its record moved down ``shift``
-    rows, but at rows ``at`` (k,) (every row before ``shift`` among them), whose
-    values are ``rows`` (k, ...)."""
-
-    like: str
-    shift: int
-    at: np.ndarray
-    rows: np.ndarray
-
-
-#: the blocks' columns that mostly repeat another's bits: (that column, rows
-#: moved down). A block starts where the one before it ends; a line's tangent at
-#: its end is the one at its start
-ALIKE = {"start": ("end", 1), "dq_out": ("dq_in", 0)}
-
-
-def _alike(a: np.ndarray, ref: np.ndarray, like: str, shift: int) -> np.ndarray | Alike:
-    """``a`` (n, ...) as the rows where its bits are not those of ``ref`` (column
-    ``like``, of ``a``'s dtype and shape) ``shift`` rows before (:class:`Alike`)
-    where at most :data:`SPARSE_SHARE` of them are not, else itself."""
-    n = len(a)
-    if a.dtype != ref.dtype or a.shape != ref.shape or a.dtype == object:
-        return a
-    u = f"u{a.dtype.itemsize}"
-    m = max(n - shift, 0)
-    same = a.view(u)[n - m :] == ref.view(u)[:m]
-    differ = np.ones(n, dtype=bool)
-    differ[n - m :] = ~same.reshape(m, int(np.prod(a.shape[1:]))).all(axis=1)
-    at = differ.nonzero()[0]
-    return Alike(like, shift, at, a[at]) if len(at) <= SPARSE_SHARE * n else a
-
-
-def _unalike(c: Alike, ref: np.ndarray) -> np.ndarray:
-    """The column :func:`_alike` was given, from its ``like`` column ``ref``."""
-    out = np.empty_like(ref)
-    out[c.shift :] = ref[: len(ref) - c.shift]
-    out[c.at] = c.rows
-    return out
-
-
 def _nones(n: int) -> np.ndarray:
     """(n,) object, every row None: a view of one array that cannot be written to
     (what reads a chunk's machine functions only reads them; a write would raise),
@@ -208,10 +164,7 @@ def _pack_piece(piece: Piece, plan_read: bool) -> tuple[dict[str, Any], ...]:
     plan, s, solved = piece
     b = plan.blocks
     fields = (*BLOCKS_READ, "line", "tool_length") if plan_read else ("line", "tool_length")
-    blocks: dict[str, Any] = {f: _column(f, getattr(b, f)) for f in fields}
-    for f, (like, shift) in ALIKE.items():
-        if f in blocks and like in blocks:
-            blocks[f] = _alike(getattr(b, f), getattr(b, like), like, shift)
+    blocks = {f: _column(f, getattr(b, f)) for f in fields}
     if "curve" in blocks:  # a spline's Nurbs, at curve blocks only (Blocks says)
         blocks["curve"] = _present(b.curve, (b.kind == KIND_CURVE).nonzero()[0])
     law = {f: getattr(plan.law, f) for f in (LAW_READ if plan_read else ())}
@@ -240,12 +193,7 @@ def _pack_piece(piece: Piece, plan_read: bool) -> tuple[dict[str, Any], ...]:
 def _unpack_piece(
     plan_: dict[str, Any], points: dict[str, Any], poses: dict[str, Any] | None = None
 ) -> Piece:
-    sent = plan_["blocks"]
-    cols = {f: unpacked(sent.get(f)) for f in Blocks.FIELDS}
-    for f, c in sent.items():
-        if isinstance(c, Alike):  # after the column it is like
-            cols[f] = _unalike(c, cols[c.like])
-    blocks = Blocks(**cols)
+    blocks = Blocks(**{f: unpacked(plan_["blocks"].get(f)) for f in Blocks.FIELDS})
     law = TimeLaw(*(unpacked(plan_["law"].get(f)) for f in TimeLaw._fields))
     s = _unpack_samples(points, blocks)
     solved = None

@@ -85,29 +85,6 @@ def test_a_mostly_zero_column_crosses_as_its_rows_not_zero() -> None:
     assert wire.packed(busy) is busy  # most rows set: as it is
 
 
-@settings(max_examples=200, deadline=None)
-@given(
-    hnp.arrays(np.float64, st.tuples(st.integers(0, 30), st.just(5)), elements=None),
-    st.lists(st.integers(0, 29), max_size=4),
-    st.sampled_from([0, 1]),
-)
-def test_a_column_like_another_crosses_as_the_rows_where_it_is_not(
-    ref: np.ndarray, off: list[int], shift: int
-) -> None:
-    """A block's start is the end of the one before (shift 1), a line's end
-    tangent its start tangent (shift 0): the column crosses as the rows whose bits
-    differ (−0.0 against 0.0 too), and arrives with the same bits."""
-    a = np.empty_like(ref)
-    a[shift:] = ref[: len(ref) - shift]
-    a[:shift] = 7.0
-    for k in off:
-        if k < len(a):
-            a[k, k % 5] = -0.0 if a[k, k % 5] == 0.0 and not np.signbit(a[k, k % 5]) else 0.5
-    sent = _crossed(wire._alike(a, ref, "ref", shift))
-    back = wire._unalike(sent, ref) if isinstance(sent, wire.Alike) else sent
-    assert same_bits(back, a)
-
-
 def test_the_machine_functions_arrive_where_none_is_read_only() -> None:
     """A chunk without machine functions gets a column of None that cannot be
     written to (shared between chunks: a write would raise, not spread)."""
