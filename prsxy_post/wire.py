@@ -10,9 +10,8 @@ the receiver reads, in forms that arrive bit for bit as they left:
 - a field the receiver never reads does not cross; it arrives None, so a read of
   one fails loudly (:data:`chain.BLOCKS_READ`, a writer's ``reads``);
 - a column the receiver makes again exactly from others crosses as nothing: a
-  point's source line and tool length are its block's, a block's first point is
-  where the block number changes (as :func:`.interpolate.sampling.sample` makes
-  them);
+  point's source line and tool length are its block's (as
+  :func:`.interpolate.sampling.sample` makes them);
 - a column zero in every bit on most rows (arc data on lines, split marks, the
   standing points) crosses as the rows that are not (:class:`Sparse`), an object
   column (machine functions, curves) as its rows that are not None, looked for
@@ -174,6 +173,7 @@ def _pack_piece(piece: Piece, plan_read: bool) -> tuple[dict[str, Any], ...]:
         "dt": s.dt,
         "block": s.block,
         "tau": s.tau,
+        "first": s.first,  # 1 B a point: cheaper to send than to make again
         "speed": s.speed,
         "dwell": packed(s.dwell),
         "fn": _present(s.fn, s.dwell.nonzero()[0]),  # a function point stands
@@ -195,7 +195,8 @@ def _unpack_piece(
 ) -> Piece:
     blocks = Blocks(**{f: unpacked(plan_["blocks"].get(f)) for f in Blocks.FIELDS})
     law = TimeLaw(*(unpacked(plan_["law"].get(f)) for f in TimeLaw._fields))
-    s = _unpack_samples(points, blocks)
+    tool = plan_["blocks"]["tool_length"]
+    s = _unpack_samples(points, blocks, isinstance(tool, Sparse) and not len(tool.at))
     solved = None
     if poses is not None:
         q_target = s.q if poses["q_target"] is None else poses["q_target"]
@@ -203,14 +204,13 @@ def _unpack_piece(
     return Plan(blocks, law, plan_["next_dq_in"]), s, solved
 
 
-def _unpack_samples(points: dict[str, Any], blocks: Blocks) -> Samples:
+def _unpack_samples(points: dict[str, Any], blocks: Blocks, no_tool: bool) -> Samples:
     """A piece's points from :func:`_pack_piece`'s: the line and tool length of
-    each point its block's, the first point of a block where its number changes
-    (as :func:`.interpolate.sampling.sample` makes them, and as a piece, cut at
-    block ends, keeps them)."""
+    each point its block's (as :func:`.interpolate.sampling.sample` makes them);
+    ``no_tool``: every block's tool length is 0.0."""
     block = points["block"]
-    first = np.ones(len(block), dtype=bool)
-    first[1:] = block[1:] != block[:-1]
+    # no tool length offset in the piece (most programs): zeros, not gathered
+    tool = np.zeros(len(block)) if no_tool else blocks.tool_length[block]
     return Samples(
         q=points["q"],
         qdot=points["qdot"],
@@ -218,8 +218,8 @@ def _unpack_samples(points: dict[str, Any], blocks: Blocks) -> Samples:
         line=blocks.line[block],
         block=block,
         tau=points["tau"],
-        first=first,
-        tool_length=blocks.tool_length[block],
+        first=points["first"],
+        tool_length=tool,
         speed=points["speed"],
         dwell=unpacked(points["dwell"]),
         fn=unpacked(points["fn"]),
