@@ -244,6 +244,31 @@ class Solved:
 #: their poses solved (None: to be solved by the points' half)
 Piece = tuple[Plan, Samples, Solved | None]
 
+#: the fields of a piece's blocks that the points' half reads where a motor has
+#: play (:meth:`Pipeline._reversals` and what it calls: :func:`at_times`'s poses,
+#: :func:`next_tangent` and the corners' tangents, the speed limits of
+#: :meth:`Pipeline._edge_speed`); without play it reads none. A process that
+#: planned the piece sends only these (:mod:`prsxy_post.wire`)
+BLOCKS_READ = (
+    "kind",
+    "start",
+    "end",
+    "length",
+    "plane",
+    "center",
+    "sweep",
+    "r0",
+    "r1",
+    "theta0",
+    "curve",
+    "dq_in",
+    "dq_out",
+    "vmax",
+)
+#: the fields of a piece's time law that the points' half reads where a motor has
+#: play (:func:`at_times`), as :data:`BLOCKS_READ`
+LAW_READ = ("v0", "v1", "vp", "a1", "a3", "t1", "t2", "t3")
+
 
 @dataclass
 class Ready:
@@ -306,6 +331,9 @@ class Planning:
         self.part_used = 1  # the start point belongs to the first part
         self.started = False
         self.any_motion = False
+        #: the points' half reads the pieces' plans (:data:`BLOCKS_READ`): a motor
+        #: has play (:meth:`Pipeline._reversals`)
+        self.plan_read = bool(self.play_cols)
         # the work guard's counters: the points and time planned so far
         self.n_planned = 0
         self.t_planned = 0.0

@@ -30,7 +30,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from . import sinks
+from . import sinks, wire
 from .chain import Stages
 from .errors import ProcessFailed, PrsxyError, write_failed
 from .files import (
@@ -99,11 +99,16 @@ class ConvertStats:
 
 
 def _planned_here(
-    job: ConvertJob, prof: Any, counts: dict[str, float], bar: Any = None
+    job: ConvertJob,
+    prof: Any,
+    counts: dict[str, float],
+    bar: Any = None,
+    planning_made: Callable[[Any], None] | None = None,
 ) -> Iterator[Any]:
     """The program's motions, chunk by chunk, through :func:`chain.prepare`, the
     planner and the map and IK of its pieces' points (:class:`chain.Planning`,
-    :meth:`~chain.Planning.cut`), the last one final."""
+    :meth:`~chain.Planning.cut`), the last one final; ``planning_made`` is given
+    the :class:`chain.Planning` before the first chunk."""
     from . import chain, gcode, program
 
     cfg = program.interpreter_config(prof, job.start, on_message=job.on_message)
@@ -132,6 +137,8 @@ def _planned_here(
         segment=dialect.segment,
         max_part_points=dialect.parts(writers.settings_of(prof, job.fmt)),
     )
+    if planning_made is not None:
+        planning_made(planning)
     limits = planning.limits
     chunks = gcode.rows.chunks(items, job.chunk)
     while True:
@@ -157,9 +164,11 @@ def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
         chars[0] = n
 
     counts = {"lines": 0.0, "motions": 0.0, "parse": 0.0}
+    made: list[Any] = []
     try:
-        for ready in _planned_here(job, prof, counts, progress):
-            conn.send(("chunk", ready, chars[0]))
+        for ready in _planned_here(job, prof, counts, progress, made.append):
+            # only what the chain reads crosses, in its narrowest exact form
+            conn.send(("chunk", wire.pack_ready(ready, made[0].plan_read), chars[0]))
         conn.send(("done", counts, peak_rss_mb(), chars[0]))
     except PrsxyError as err:
         conn.send(("error", err, counts))
@@ -238,7 +247,7 @@ def _planned_chunks(
             if msg[0] == "chunk":
                 if bar is not None:
                     bar(msg[2])
-                yield msg[1]
+                yield wire.unpack_ready(msg[1])
                 continue
             counts.update(msg[2] if msg[0] != "done" else msg[1])
             if msg[0] == "done":
