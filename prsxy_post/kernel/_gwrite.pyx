@@ -14,7 +14,7 @@ import numpy as np
 from libc.math cimport sqrt, fabs, frexp, ldexp, rint, INFINITY, NAN
 from libc.string cimport memmove
 
-from . import _arcs
+from . import _arcs, gwrite
 
 #: the reference's names of the state's scalars, in this module's order
 F_NAMES = (
@@ -1053,8 +1053,10 @@ cdef tuple _buffers(st, bint resume, Py_ssize_t cap, Py_ssize_t cap_t, Py_ssize_
     """The op buffers of a call: ops (4, cap) int64 (code, arg, ab, aux), val
     (cap,), tilts (cap_t, 2), holding the ops so far of a resumed call. A call
     that resumes its own stop (``st.pend_*`` views of the buffers it left) goes on
-    in them, without allocating or copying; others get buffers with room for a
-    chunk's stops (twice the first call's need), the ops so far copied in."""
+    in them, without allocating or copying; others fill the state's scratch
+    buffers (:class:`gwrite.Scratch`) again where they have room, else get new
+    ones with room for a chunk's stops (twice the first call's need), kept there,
+    the ops so far copied in."""
     cdef Py_ssize_t m0 = len(st.pend_i) if resume else 0
     cdef Py_ssize_t nt0 = len(st.pend_t) if resume else 0
     if resume:
@@ -1066,16 +1068,32 @@ cdef tuple _buffers(st, bint resume, Py_ssize_t cap, Py_ssize_t cap_t, Py_ssize_
                 and vb.__array_interface__["data"][0]
                 == st.pend_v.__array_interface__["data"][0]):
             return ops_i, vb, tilts
-    cap += 14 * n + 16
-    cap_t += n + 1
-    ops_i = np.empty((4, cap), dtype=np.int64)
-    val = np.empty(cap, dtype=np.float64)
-    tilts = np.empty((cap_t, 2), dtype=np.float64)
+    bufs = _scratch(st, cap, cap_t)
+    if bufs is None:
+        bufs = (np.empty((4, cap + 14 * n + 16), dtype=np.int64),
+                np.empty(cap + 14 * n + 16, dtype=np.float64),
+                np.empty((cap_t + n + 1, 2), dtype=np.float64))
+        if isinstance(getattr(st, "scratch", None), gwrite.Scratch):
+            st.scratch.bufs = bufs
+    ops_i, val, tilts = bufs
     if resume:
-        ops_i[:, :m0] = np.asarray(st.pend_i, dtype=np.int64).reshape(-1, 4).T
-        val[:m0] = st.pend_v
-        tilts[:nt0] = np.asarray(st.pend_t).reshape(-1, 2)
+        # np.copyto, as the pending ops may be views of these buffers themselves
+        np.copyto(ops_i[:, :m0], np.asarray(st.pend_i, dtype=np.int64).reshape(-1, 4).T)
+        np.copyto(val[:m0], st.pend_v)
+        np.copyto(tilts[:nt0], np.asarray(st.pend_t).reshape(-1, 2))
     return ops_i, val, tilts
+
+
+cdef object _scratch(st, Py_ssize_t cap, Py_ssize_t cap_t):
+    """The state's scratch buffers (ops, val, tilts) where they hold ``cap`` ops
+    and ``cap_t`` tilts, else None."""
+    sc = getattr(st, "scratch", None)
+    if not isinstance(sc, gwrite.Scratch) or sc.bufs is None:
+        return None
+    ops_i, val, tilts = sc.bufs
+    if ops_i.shape[1] < cap or val.shape[0] < cap or tilts.shape[0] < cap_t:
+        return None
+    return sc.bufs
 
 
 def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint end,

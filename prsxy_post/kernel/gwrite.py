@@ -76,6 +76,31 @@ A_START, A_END, A_PLANE, A_REFIT = range(4)
 A_LEN, A_RADIUS = range(2)
 
 
+class Scratch:
+    """The op buffers of a compiled :func:`gcode_ops` call, kept for the writer's
+    next call: buffers with room for a chunk's worst case (14 ops a point) of which
+    a call fills about a thirtieth, and numpy asks the OS for huge pages for
+    arrays this large, so a fresh set costs a 2 MiB page zeroed for each array
+    touched. Holds no state: a copy or a pickle of it starts empty.
+
+    Attributes
+    ----------
+    bufs : tuple or None
+        ops (4, capacity) int64, val (capacity,), tilts (capacity', 2), or None.
+    """
+
+    __slots__ = ("bufs",)
+
+    def __init__(self) -> None:
+        self.bufs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def __deepcopy__(self, memo: dict[int, object]) -> Scratch:
+        return Scratch()
+
+    def __reduce__(self) -> tuple[type[Scratch], tuple[()]]:
+        return (Scratch, ())
+
+
 @dataclass
 class GState:
     """The writer's state between chunks (mutable; both kernels update it in place).
@@ -87,7 +112,8 @@ class GState:
     points (``i[run_n]`` of them); corner_in (5,) where a line into the held
     corner closing an arc would start (``_Run.arc_in``); pend_i (M, 4) int64 and
     pend_v (M,) the ops of a chunk stopped mid way (code, arg, ab, aux; val),
-    pend_t (J, 2) its centered tilts [deg].
+    pend_t (J, 2) its centered tilts [deg]; scratch, the op buffers a compiled
+    call may fill again (:class:`Scratch`: no state, a copy starts without).
     """
 
     f: np.ndarray
@@ -106,6 +132,7 @@ class GState:
     #: :func:`.arcs.refit_arcs` gives them, numbered on from the call's arc_i
     fit_i: np.ndarray = field(default_factory=lambda: np.zeros((0, 4), dtype=np.int64))
     fit_f: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    scratch: Scratch = field(default_factory=lambda: Scratch(), repr=False, compare=False)
 
 
 def new_state(
