@@ -396,12 +396,19 @@ cdef double _scale(W* w) noexcept nogil:
 
 cdef bint _fit_tilt(W* w, const double* qk, const double* pts, Py_ssize_t npts,
                     double* out) noexcept nogil:
-    # _Run.fit_tilt: False where none fits (out unset)
+    # _Run.fit_tilt: False where none fits (out then holds nothing). Each point's
+    # τ made once, for A and B both: each tilt's bounds narrowed point by point in
+    # the reference's order, so the same bits; a point or a tilt that fails fails
+    # the fit whichever tilt the reference looks at first.
     cdef const double* a = w.last_q
     cdef const double* p
     cdef double d[3]
     cdef double x[3]
-    cdef double h, dd, tau, s, own, lo, hi, r
+    cdef double s[2]
+    cdef double own[2]
+    cdef double lo[2]
+    cdef double hi[2]
+    cdef double h, dd, tau, r
     cdef Py_ssize_t j
     cdef int i, c
     h = w.tilt_fit - 0.5 / _scale(w)
@@ -415,36 +422,38 @@ cdef bint _fit_tilt(W* w, const double* qk, const double* pts, Py_ssize_t npts,
     if dd == 0:
         return False
     for c in range(2):
-        s = w.last_ab[c]
-        own = qk[3 + c] - s
-        lo = own - h
-        hi = own + h
-        for j in range(npts):
-            p = &pts[5 * j]
-            for i in range(3):
-                x[i] = (p[i] - a[i]) * d[i]
-            tau = _fsum(x, 3) / dd
-            tau = 0.0 if tau < 0.0 else (1.0 if tau > 1.0 else tau)
-            r = p[3 + c] - s
+        s[c] = w.last_ab[c]
+        own[c] = qk[3 + c] - s[c]
+        lo[c] = own[c] - h
+        hi[c] = own[c] + h
+    for j in range(npts):
+        p = &pts[5 * j]
+        for i in range(3):
+            x[i] = (p[i] - a[i]) * d[i]
+        tau = _fsum(x, 3) / dd
+        tau = 0.0 if tau < 0.0 else (1.0 if tau > 1.0 else tau)
+        for c in range(2):
+            r = p[3 + c] - s[c]
             if tau > 0.0:
-                lo = _pmax(lo, (r - h) / tau)
-                hi = _pmin(hi, (r + h) / tau)
+                lo[c] = _pmax(lo[c], (r - h) / tau)
+                hi[c] = _pmin(hi[c], (r + h) / tau)
             elif fabs(r) > h:
                 return False
-        if lo > hi:
+    for c in range(2):
+        if lo[c] > hi[c]:
             return False
-        out[c] = s + _pmin(_pmax(own, lo), hi)
+        out[c] = s[c] + _pmin(_pmax(own[c], lo[c]), hi[c])
     return True
 
 
-cdef int _chord_check(W* w, const double* qk, const double* pts, Py_ssize_t npts) noexcept nogil:
-    # _Run.chord_check
+cdef int _chord_check(W* w, const double* qk, const double* pts, Py_ssize_t npts,
+                      double* fit) noexcept nogil:
+    # _Run.chord_check: with CHORD_FIT the fitted end tilt in fit (2)
     cdef const double* a = w.last_q
     cdef const double* p
     cdef double d[5]
     cdef double x[5]
     cdef double off[5]
-    cdef double fit[2]
     cdef double dd, t
     cdef bint tilt_ok = True
     cdef Py_ssize_t j
@@ -478,15 +487,14 @@ cdef int _chord_check(W* w, const double* qk, const double* pts, Py_ssize_t npts
 
 
 cdef inline bint _within(W* w, const double* qk) noexcept nogil:
-    return _chord_check(w, qk, w.run, w.run_n) != CHORD_NO
+    cdef double fit[2]
+    return _chord_check(w, qk, w.run, w.run_n, fit) != CHORD_NO
 
 
 cdef bint _fit_end(W* w, const double* qk, const double* pts, Py_ssize_t npts,
                    double* out) noexcept nogil:
-    # _Run.fit_end: True with the fitted end tilt in out
-    if _chord_check(w, qk, pts, npts) != CHORD_FIT:
-        return False
-    return _fit_tilt(w, qk, pts, npts, out)
+    # _Run.fit_end: True with the fitted end tilt in out (the chord check's own)
+    return _chord_check(w, qk, pts, npts, out) == CHORD_FIT
 
 
 cdef void _blend_within_f(W* w, double length_n, double t_n, double a_n) noexcept nogil:

@@ -440,25 +440,26 @@ class _Run:
         """Would the chord from the last written point to qk pass the held-back points,
         within ``tol`` in X Y Z and ``tilt_chord`` in A and B, or, where A and B
         stray further, within ``tol`` and a fitted end tilt (``fit_tilt``)?"""
-        return self.chord_check(qk, self.run) != CHORD_NO
+        return self.chord_check(qk, self.run)[0] != CHORD_NO
 
-    def chord_check(self, qk: list[float], pts: list[list[float]]) -> int:
+    def chord_check(self, qk: list[float], pts: list[list[float]]) -> tuple[int, list[float]]:
         """The chord from the last written point to qk against the points ``pts``:
         CHORD_NO, CHORD_OK (within ``tol`` in X Y Z and ``tilt_chord`` in A and B of
         the compensated chord) or CHORD_FIT (X Y Z within ``tol``, A and B within
-        ``tilt_fit`` of a line from the tilt written last to a fitted end tilt).
+        ``tilt_fit`` of a line from the tilt written last to a fitted end tilt),
+        with that end tilt (``fit_tilt``; empty unless CHORD_FIT).
 
         Each point p is taken at its nearest place along the chord a + t d,
         t = clip((p − a)·d / d·d, 0, 1) (A and B read as mm at 1 mm per degree), and
         its offset |p − (a + t d)| judged. The dot products exactly rounded
         (``math.fsum``), so that the twin can give the same bits."""
         if not pts or self.n == 0:
-            return CHORD_OK
+            return CHORD_OK, []
         a = self.last_q
         d = [x - y for x, y in zip(qk, a, strict=True)]
         dd = math.fsum(x * x for x in d)
         if dd == 0:
-            return CHORD_NO
+            return CHORD_NO, []
         tol, tilt = self.tol, self.tilt_chord
         tilt_ok = True
         for p in pts:
@@ -466,14 +467,15 @@ class _Run:
             t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
             off = [abs(x - (y + t * z)) for x, y, z in zip(p, a, d, strict=True)]
             if math.sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > tol:
-                return CHORD_NO
+                return CHORD_NO, []
             if off[3] > tilt or off[4] > tilt:
                 if self.tilt_fit <= 0.0:
-                    return CHORD_NO  # no fit (machines with play): no need to go on
+                    return CHORD_NO, []  # no fit (machines with play): no need to go on
                 tilt_ok = False
         if tilt_ok:
-            return CHORD_OK
-        return CHORD_FIT if self.fit_tilt(qk, pts) else CHORD_NO
+            return CHORD_OK, []
+        fit = self.fit_tilt(qk, pts)
+        return (CHORD_FIT, fit) if fit else (CHORD_NO, [])
 
     def fit_tilt(self, qk: list[float], pts: list[list[float]]) -> list[float]:
         """The end tilt [deg] of the line from the last written point (its written
@@ -516,10 +518,10 @@ class _Run:
 
     def fit_end(self, qk: list[float], pts: list[list[float]]) -> list[float]:
         """The fitted end tilt of the chord to qk over ``pts`` where only a fit
-        passes them (``chord_check``), else empty (qk's own tilt, or the one held)."""
-        if self.chord_check(qk, pts) != CHORD_FIT:
-            return []
-        return self.fit_tilt(qk, pts)
+        passes them (``chord_check``, which made it), else empty (qk's own tilt, or
+        the one held)."""
+        verdict, fit = self.chord_check(qk, pts)
+        return fit if verdict == CHORD_FIT else []
 
     def write_held(self) -> None:
         """Write the last held-back point (it becomes the new chord start)."""
