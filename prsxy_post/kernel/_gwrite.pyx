@@ -326,13 +326,15 @@ cdef double _rate(W* w, const double* qk, double dtk, double* step) noexcept nog
     return step[0] / dtk if dtk > 0.0 else 0.0
 
 
-cdef bint _dips(W* w, const double* qk, double dtk, const double* lead) noexcept nogil:
-    cdef double step, rate, moved, x
+cdef bint _dips(W* w, const double* qk, double dtk, const double* lead,
+                double* step) noexcept nogil:
+    # _Run.dips; the piece's length into step (unset where nothing is held)
+    cdef double rate, moved, x
     cdef bint dip
     cdef int i
     if not w.run_n:
         return False
-    rate = _rate(w, qk, dtk, &step)
+    rate = _rate(w, qk, dtk, step)
     moved = fabs(lead[0] - w.lead0[0])
     for i in range(1, 5):
         x = fabs(lead[i] - w.lead0[i])
@@ -343,11 +345,17 @@ cdef bint _dips(W* w, const double* qk, double dtk, const double* lead) noexcept
 
 
 cdef void _hold(W* w, long long k, const double* qk, double dtk, const double* lead,
-                double plan) noexcept nogil:
+                double plan, double known=-1.0) noexcept nogil:
+    # _Run.hold; known >= 0: the piece's length, as _dips just measured it from
+    # the same held point (its rate then as _rate makes it)
     cdef const double* prev = _last_held(w)
     cdef double step, rate, xyz_rate
     cdef int i
-    rate = _rate(w, qk, dtk, &step)
+    if known >= 0.0:
+        step = known
+        rate = step / dtk if dtk > 0.0 else 0.0
+    else:
+        rate = _rate(w, qk, dtk, &step)
     if not w.run_n:
         w.peak = 0.0
         w.trough = 0.0
@@ -866,17 +874,19 @@ cdef void _chords(W* w, long long k, const double* qk, double dtk, double spd, b
                   const double* lead, double plan) noexcept nogil:
     # _Run.chords
     cdef double fit[2]
-    cdef double t
+    cdef double t, step = -1.0  # the piece's length _dips measured, if it did
     cdef bint fitted
     cdef int i
     if w.tol > 0 and not bend and spd > 0:
-        if not _within(w, qk) or _dips(w, qk, dtk, lead):
+        if not _within(w, qk) or _dips(w, qk, dtk, lead, &step):
             _write_held(w)
-        _hold(w, k, qk, dtk, lead, plan)
+            step = -1.0  # from another point now
+        _hold(w, k, qk, dtk, lead, plan, step)
         return
-    if w.run_n and (not _within(w, qk) or _dips(w, qk, dtk, lead)):
+    if w.run_n and (not _within(w, qk) or _dips(w, qk, dtk, lead, &step)):
         _write_held(w)
-    _hold(w, k, qk, dtk, lead, plan)
+        step = -1.0
+    _hold(w, k, qk, dtk, lead, plan, step)
     fitted = _fit_end(w, qk, w.run, w.run_n - 1, fit)
     t = _chord_time(w)
     w.run_n = 0
