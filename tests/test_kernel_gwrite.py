@@ -456,3 +456,40 @@ def test_stops_resumed_in_place_write_the_references_text() -> None:
             mp.undo()
     assert texts["twin"] == texts["reference"]
     assert len(in_place) > 5 and all(in_place)
+
+
+def test_calls_on_one_state_fill_its_scratch_again() -> None:
+    """The twin's calls on one writer state fill the buffers the first call left
+    in ``st.scratch`` again (no new ones: a fresh set costs zeroed huge pages),
+    and the writer's text stays the reference's; a copy or a pickle of the state
+    starts without them, so that two states never share buffers."""
+    import pickle
+
+    from .test_tracking import convert, truth_machine
+
+    _gwrite = compiled("_gwrite")
+    reused: list[bool] = []
+
+    def twin(st: gwrite.GState, *args: Any) -> Ops:
+        before = st.scratch.bufs
+        out: Ops = _gwrite.gcode_ops(st, *args)
+        assert st.scratch.bufs is not None
+        if before is not None:
+            reused.append(st.scratch.bufs is before)
+        kept = copy.deepcopy(st)
+        assert kept.scratch.bufs is None and _same_state(kept, st)
+        assert pickle.loads(pickle.dumps(st)).scratch.bufs is None
+        return out
+
+    texts = {}
+    for name, fn in (("reference", gwrite.gcode_ops), ("twin", twin)):
+        mp = pytest.MonkeyPatch()
+        mp.setattr(kernel, "_gcode_ops", fn)
+        try:
+            m = truth_machine("random", 13)
+            texts[name] = [convert(m, text, "gcode", 5)[2] for text in arc_programs()]
+        finally:
+            mp.undo()
+    assert texts["twin"] == texts["reference"]
+    # a writer per program: its later calls in the buffers of its first
+    assert len(reused) >= len(arc_programs()) and all(reused)

@@ -14,7 +14,7 @@ import numpy as np
 from libc.math cimport sqrt, fabs, frexp, ldexp, rint, INFINITY, NAN
 from libc.string cimport memmove
 
-from . import _arcs
+from . import _arcs, gwrite
 
 #: the reference's names of the state's scalars, in this module's order
 F_NAMES = (
@@ -326,13 +326,15 @@ cdef double _rate(W* w, const double* qk, double dtk, double* step) noexcept nog
     return step[0] / dtk if dtk > 0.0 else 0.0
 
 
-cdef bint _dips(W* w, const double* qk, double dtk, const double* lead) noexcept nogil:
-    cdef double step, rate, moved, x
+cdef bint _dips(W* w, const double* qk, double dtk, const double* lead,
+                double* step) noexcept nogil:
+    # _Run.dips; the piece's length into step (unset where nothing is held)
+    cdef double rate, moved, x
     cdef bint dip
     cdef int i
     if not w.run_n:
         return False
-    rate = _rate(w, qk, dtk, &step)
+    rate = _rate(w, qk, dtk, step)
     moved = fabs(lead[0] - w.lead0[0])
     for i in range(1, 5):
         x = fabs(lead[i] - w.lead0[i])
@@ -343,11 +345,17 @@ cdef bint _dips(W* w, const double* qk, double dtk, const double* lead) noexcept
 
 
 cdef void _hold(W* w, long long k, const double* qk, double dtk, const double* lead,
-                double plan) noexcept nogil:
+                double plan, double known=-1.0) noexcept nogil:
+    # _Run.hold; known >= 0: the piece's length, as _dips just measured it from
+    # the same held point (its rate then as _rate makes it)
     cdef const double* prev = _last_held(w)
     cdef double step, rate, xyz_rate
     cdef int i
-    rate = _rate(w, qk, dtk, &step)
+    if known >= 0.0:
+        step = known
+        rate = step / dtk if dtk > 0.0 else 0.0
+    else:
+        rate = _rate(w, qk, dtk, &step)
     if not w.run_n:
         w.peak = 0.0
         w.trough = 0.0
@@ -396,12 +404,19 @@ cdef double _scale(W* w) noexcept nogil:
 
 cdef bint _fit_tilt(W* w, const double* qk, const double* pts, Py_ssize_t npts,
                     double* out) noexcept nogil:
-    # _Run.fit_tilt: False where none fits (out unset)
+    # _Run.fit_tilt: False where none fits (out then holds nothing). Each point's
+    # τ made once, for A and B both: each tilt's bounds narrowed point by point in
+    # the reference's order, so the same bits; a point or a tilt that fails fails
+    # the fit whichever tilt the reference looks at first.
     cdef const double* a = w.last_q
     cdef const double* p
     cdef double d[3]
     cdef double x[3]
-    cdef double h, dd, tau, s, own, lo, hi, r
+    cdef double s[2]
+    cdef double own[2]
+    cdef double lo[2]
+    cdef double hi[2]
+    cdef double h, dd, tau, r
     cdef Py_ssize_t j
     cdef int i, c
     h = w.tilt_fit - 0.5 / _scale(w)
@@ -415,36 +430,38 @@ cdef bint _fit_tilt(W* w, const double* qk, const double* pts, Py_ssize_t npts,
     if dd == 0:
         return False
     for c in range(2):
-        s = w.last_ab[c]
-        own = qk[3 + c] - s
-        lo = own - h
-        hi = own + h
-        for j in range(npts):
-            p = &pts[5 * j]
-            for i in range(3):
-                x[i] = (p[i] - a[i]) * d[i]
-            tau = _fsum(x, 3) / dd
-            tau = 0.0 if tau < 0.0 else (1.0 if tau > 1.0 else tau)
-            r = p[3 + c] - s
+        s[c] = w.last_ab[c]
+        own[c] = qk[3 + c] - s[c]
+        lo[c] = own[c] - h
+        hi[c] = own[c] + h
+    for j in range(npts):
+        p = &pts[5 * j]
+        for i in range(3):
+            x[i] = (p[i] - a[i]) * d[i]
+        tau = _fsum(x, 3) / dd
+        tau = 0.0 if tau < 0.0 else (1.0 if tau > 1.0 else tau)
+        for c in range(2):
+            r = p[3 + c] - s[c]
             if tau > 0.0:
-                lo = _pmax(lo, (r - h) / tau)
-                hi = _pmin(hi, (r + h) / tau)
+                lo[c] = _pmax(lo[c], (r - h) / tau)
+                hi[c] = _pmin(hi[c], (r + h) / tau)
             elif fabs(r) > h:
                 return False
-        if lo > hi:
+    for c in range(2):
+        if lo[c] > hi[c]:
             return False
-        out[c] = s + _pmin(_pmax(own, lo), hi)
+        out[c] = s[c] + _pmin(_pmax(own[c], lo[c]), hi[c])
     return True
 
 
-cdef int _chord_check(W* w, const double* qk, const double* pts, Py_ssize_t npts) noexcept nogil:
-    # _Run.chord_check
+cdef int _chord_check(W* w, const double* qk, const double* pts, Py_ssize_t npts,
+                      double* fit) noexcept nogil:
+    # _Run.chord_check: with CHORD_FIT the fitted end tilt in fit (2)
     cdef const double* a = w.last_q
     cdef const double* p
     cdef double d[5]
     cdef double x[5]
     cdef double off[5]
-    cdef double fit[2]
     cdef double dd, t
     cdef bint tilt_ok = True
     cdef Py_ssize_t j
@@ -478,15 +495,14 @@ cdef int _chord_check(W* w, const double* qk, const double* pts, Py_ssize_t npts
 
 
 cdef inline bint _within(W* w, const double* qk) noexcept nogil:
-    return _chord_check(w, qk, w.run, w.run_n) != CHORD_NO
+    cdef double fit[2]
+    return _chord_check(w, qk, w.run, w.run_n, fit) != CHORD_NO
 
 
 cdef bint _fit_end(W* w, const double* qk, const double* pts, Py_ssize_t npts,
                    double* out) noexcept nogil:
-    # _Run.fit_end: True with the fitted end tilt in out
-    if _chord_check(w, qk, pts, npts) != CHORD_FIT:
-        return False
-    return _fit_tilt(w, qk, pts, npts, out)
+    # _Run.fit_end: True with the fitted end tilt in out (the chord check's own)
+    return _chord_check(w, qk, pts, npts, out) == CHORD_FIT
 
 
 cdef void _blend_within_f(W* w, double length_n, double t_n, double a_n) noexcept nogil:
@@ -858,17 +874,19 @@ cdef void _chords(W* w, long long k, const double* qk, double dtk, double spd, b
                   const double* lead, double plan) noexcept nogil:
     # _Run.chords
     cdef double fit[2]
-    cdef double t
+    cdef double t, step = -1.0  # the piece's length _dips measured, if it did
     cdef bint fitted
     cdef int i
     if w.tol > 0 and not bend and spd > 0:
-        if not _within(w, qk) or _dips(w, qk, dtk, lead):
+        if not _within(w, qk) or _dips(w, qk, dtk, lead, &step):
             _write_held(w)
-        _hold(w, k, qk, dtk, lead, plan)
+            step = -1.0  # from another point now
+        _hold(w, k, qk, dtk, lead, plan, step)
         return
-    if w.run_n and (not _within(w, qk) or _dips(w, qk, dtk, lead)):
+    if w.run_n and (not _within(w, qk) or _dips(w, qk, dtk, lead, &step)):
         _write_held(w)
-    _hold(w, k, qk, dtk, lead, plan)
+        step = -1.0
+    _hold(w, k, qk, dtk, lead, plan, step)
     fitted = _fit_end(w, qk, w.run, w.run_n - 1, fit)
     t = _chord_time(w)
     w.run_n = 0
@@ -1053,8 +1071,10 @@ cdef tuple _buffers(st, bint resume, Py_ssize_t cap, Py_ssize_t cap_t, Py_ssize_
     """The op buffers of a call: ops (4, cap) int64 (code, arg, ab, aux), val
     (cap,), tilts (cap_t, 2), holding the ops so far of a resumed call. A call
     that resumes its own stop (``st.pend_*`` views of the buffers it left) goes on
-    in them, without allocating or copying; others get buffers with room for a
-    chunk's stops (twice the first call's need), the ops so far copied in."""
+    in them, without allocating or copying; others fill the state's scratch
+    buffers (:class:`gwrite.Scratch`) again where they have room, else get new
+    ones with room for a chunk's stops (twice the first call's need), kept there,
+    the ops so far copied in."""
     cdef Py_ssize_t m0 = len(st.pend_i) if resume else 0
     cdef Py_ssize_t nt0 = len(st.pend_t) if resume else 0
     if resume:
@@ -1066,16 +1086,32 @@ cdef tuple _buffers(st, bint resume, Py_ssize_t cap, Py_ssize_t cap_t, Py_ssize_
                 and vb.__array_interface__["data"][0]
                 == st.pend_v.__array_interface__["data"][0]):
             return ops_i, vb, tilts
-    cap += 14 * n + 16
-    cap_t += n + 1
-    ops_i = np.empty((4, cap), dtype=np.int64)
-    val = np.empty(cap, dtype=np.float64)
-    tilts = np.empty((cap_t, 2), dtype=np.float64)
+    bufs = _scratch(st, cap, cap_t)
+    if bufs is None:
+        bufs = (np.empty((4, cap + 14 * n + 16), dtype=np.int64),
+                np.empty(cap + 14 * n + 16, dtype=np.float64),
+                np.empty((cap_t + n + 1, 2), dtype=np.float64))
+        if isinstance(getattr(st, "scratch", None), gwrite.Scratch):
+            st.scratch.bufs = bufs
+    ops_i, val, tilts = bufs
     if resume:
-        ops_i[:, :m0] = np.asarray(st.pend_i, dtype=np.int64).reshape(-1, 4).T
-        val[:m0] = st.pend_v
-        tilts[:nt0] = np.asarray(st.pend_t).reshape(-1, 2)
+        # np.copyto, as the pending ops may be views of these buffers themselves
+        np.copyto(ops_i[:, :m0], np.asarray(st.pend_i, dtype=np.int64).reshape(-1, 4).T)
+        np.copyto(val[:m0], st.pend_v)
+        np.copyto(tilts[:nt0], np.asarray(st.pend_t).reshape(-1, 2))
     return ops_i, val, tilts
+
+
+cdef object _scratch(st, Py_ssize_t cap, Py_ssize_t cap_t):
+    """The state's scratch buffers (ops, val, tilts) where they hold ``cap`` ops
+    and ``cap_t`` tilts, else None."""
+    sc = getattr(st, "scratch", None)
+    if not isinstance(sc, gwrite.Scratch) or sc.bufs is None:
+        return None
+    ops_i, val, tilts = sc.bufs
+    if ops_i.shape[1] < cap or val.shape[0] < cap or tilts.shape[0] < cap_t:
+        return None
+    return sc.bufs
 
 
 def gcode_ops(st, q, dt, line, speed, block_end, fn, fn_end, dwell, lead, bint end,

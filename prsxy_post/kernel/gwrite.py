@@ -76,6 +76,31 @@ A_START, A_END, A_PLANE, A_REFIT = range(4)
 A_LEN, A_RADIUS = range(2)
 
 
+class Scratch:
+    """The op buffers of a compiled :func:`gcode_ops` call, kept for the writer's
+    next call: buffers with room for a chunk's worst case (14 ops a point) of which
+    a call fills about a thirtieth, and numpy asks the OS for huge pages for
+    arrays this large, so a fresh set costs a 2 MiB page zeroed for each array
+    touched. Holds no state: a copy or a pickle of it starts empty.
+
+    Attributes
+    ----------
+    bufs : tuple or None
+        ops (4, capacity) int64, val (capacity,), tilts (capacity', 2), or None.
+    """
+
+    __slots__ = ("bufs",)
+
+    def __init__(self) -> None:
+        self.bufs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def __deepcopy__(self, memo: dict[int, object]) -> Scratch:
+        return Scratch()
+
+    def __reduce__(self) -> tuple[type[Scratch], tuple[()]]:
+        return (Scratch, ())
+
+
 @dataclass
 class GState:
     """The writer's state between chunks (mutable; both kernels update it in place).
@@ -87,7 +112,8 @@ class GState:
     points (``i[run_n]`` of them); corner_in (5,) where a line into the held
     corner closing an arc would start (``_Run.arc_in``); pend_i (M, 4) int64 and
     pend_v (M,) the ops of a chunk stopped mid way (code, arg, ab, aux; val),
-    pend_t (J, 2) its centered tilts [deg].
+    pend_t (J, 2) its centered tilts [deg]; scratch, the op buffers a compiled
+    call may fill again (:class:`Scratch`: no state, a copy starts without).
     """
 
     f: np.ndarray
@@ -106,6 +132,7 @@ class GState:
     #: :func:`.arcs.refit_arcs` gives them, numbered on from the call's arc_i
     fit_i: np.ndarray = field(default_factory=lambda: np.zeros((0, 4), dtype=np.int64))
     fit_f: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    scratch: Scratch = field(default_factory=lambda: Scratch(), repr=False, compare=False)
 
 
 def new_state(
@@ -413,25 +440,26 @@ class _Run:
         """Would the chord from the last written point to qk pass the held-back points,
         within ``tol`` in X Y Z and ``tilt_chord`` in A and B, or, where A and B
         stray further, within ``tol`` and a fitted end tilt (``fit_tilt``)?"""
-        return self.chord_check(qk, self.run) != CHORD_NO
+        return self.chord_check(qk, self.run)[0] != CHORD_NO
 
-    def chord_check(self, qk: list[float], pts: list[list[float]]) -> int:
+    def chord_check(self, qk: list[float], pts: list[list[float]]) -> tuple[int, list[float]]:
         """The chord from the last written point to qk against the points ``pts``:
         CHORD_NO, CHORD_OK (within ``tol`` in X Y Z and ``tilt_chord`` in A and B of
         the compensated chord) or CHORD_FIT (X Y Z within ``tol``, A and B within
-        ``tilt_fit`` of a line from the tilt written last to a fitted end tilt).
+        ``tilt_fit`` of a line from the tilt written last to a fitted end tilt),
+        with that end tilt (``fit_tilt``; empty unless CHORD_FIT).
 
         Each point p is taken at its nearest place along the chord a + t d,
         t = clip((p − a)·d / d·d, 0, 1) (A and B read as mm at 1 mm per degree), and
         its offset |p − (a + t d)| judged. The dot products exactly rounded
         (``math.fsum``), so that the twin can give the same bits."""
         if not pts or self.n == 0:
-            return CHORD_OK
+            return CHORD_OK, []
         a = self.last_q
         d = [x - y for x, y in zip(qk, a, strict=True)]
         dd = math.fsum(x * x for x in d)
         if dd == 0:
-            return CHORD_NO
+            return CHORD_NO, []
         tol, tilt = self.tol, self.tilt_chord
         tilt_ok = True
         for p in pts:
@@ -439,14 +467,15 @@ class _Run:
             t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
             off = [abs(x - (y + t * z)) for x, y, z in zip(p, a, d, strict=True)]
             if math.sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]) > tol:
-                return CHORD_NO
+                return CHORD_NO, []
             if off[3] > tilt or off[4] > tilt:
                 if self.tilt_fit <= 0.0:
-                    return CHORD_NO  # no fit (machines with play): no need to go on
+                    return CHORD_NO, []  # no fit (machines with play): no need to go on
                 tilt_ok = False
         if tilt_ok:
-            return CHORD_OK
-        return CHORD_FIT if self.fit_tilt(qk, pts) else CHORD_NO
+            return CHORD_OK, []
+        fit = self.fit_tilt(qk, pts)
+        return (CHORD_FIT, fit) if fit else (CHORD_NO, [])
 
     def fit_tilt(self, qk: list[float], pts: list[list[float]]) -> list[float]:
         """The end tilt [deg] of the line from the last written point (its written
@@ -489,10 +518,10 @@ class _Run:
 
     def fit_end(self, qk: list[float], pts: list[list[float]]) -> list[float]:
         """The fitted end tilt of the chord to qk over ``pts`` where only a fit
-        passes them (``chord_check``), else empty (qk's own tilt, or the one held)."""
-        if self.chord_check(qk, pts) != CHORD_FIT:
-            return []
-        return self.fit_tilt(qk, pts)
+        passes them (``chord_check``, which made it), else empty (qk's own tilt, or
+        the one held)."""
+        verdict, fit = self.chord_check(qk, pts)
+        return fit if verdict == CHORD_FIT else []
 
     def write_held(self) -> None:
         """Write the last held-back point (it becomes the new chord start)."""
