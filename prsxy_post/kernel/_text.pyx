@@ -211,8 +211,9 @@ cdef inline Py_ssize_t _fixed(char* out, Py_ssize_t pos, const Col* c, Py_ssize_
     t = a * c.scale
     r = rint(t)
     k = <uint64_t> (<int64_t> r)
-    # floor(t) from rint(t): both are whole doubles below 2^52, so r - 1 is exact
-    if fabs(t - (r if r <= t else r - 1.0) - 0.5) < 1e-6:
+    # floor(t) from rint(t) without a branch (rint rounds up half the time): both
+    # are whole doubles below 2^52, so r - 1 is exact
+    if fabs(t - (r - <double> (r > t)) - 0.5) < 1e-6:
         k = _tie(x, d)
     # no branch on the sign (a speed's is no better than a coin toss to predict)
     out[pos] = 45  # '-'
