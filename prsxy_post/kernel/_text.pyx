@@ -178,6 +178,25 @@ cdef inline Py_ssize_t _whole4(char* out, Py_ssize_t pos, uint32_t w) noexcept n
     return pos + nw
 
 
+cdef inline void _decimals(char* end, uint64_t f, int d) noexcept nogil:
+    """The d decimals of f (f < 10^d, leading zeros kept) ending before ``end``:
+    from 4 on, the last four apart from the others (two chains of divisions, not
+    one) and stored as one word."""
+    cdef uint32_t lo, lo_hi
+    cdef uint16_t a, b
+    cdef uint32_t word
+    if d < 4 or d > 9:
+        _digits(end, f, d)
+        return
+    lo = <uint32_t> (f % 10000)
+    _digits(end - 4, f // 10000, d - 4)
+    lo_hi = lo // 100
+    memcpy(&a, &_PAIRS[2 * lo_hi], 2)
+    memcpy(&b, &_PAIRS[2 * (lo - lo_hi * 100)], 2)
+    word = <uint32_t> a | (<uint32_t> b << 16)
+    memcpy(end - 4, &word, 4)
+
+
 cdef inline uint64_t _whole(uint64_t k, int d) noexcept nogil:
     """k // 10^d, by a constant for the usual d (a multiplication, not a division)."""
     if d == 7:
@@ -228,7 +247,7 @@ cdef inline Py_ssize_t _fixed(char* out, Py_ssize_t pos, const Col* c, Py_ssize_
     if d:
         out[pos] = 46  # '.'
         pos += d + 1
-        _digits(out + pos, k - w * _P10[d], d)
+        _decimals(out + pos, k - w * _P10[d], d)
     return pos
 
 
@@ -252,6 +271,8 @@ cdef inline Py_ssize_t _row(char* out, Py_ssize_t pos, Py_ssize_t i, _Cols s) ex
 #: a buffer kept from one call to the next: a fresh one each call would be fresh
 #: pages, each faulted in and zeroed by the system (a large part of the time)
 cdef char* _spare = NULL
+#: the largest buffer kept [bytes] (a segment of 20 000 PMAC points takes 7 MB)
+cdef Py_ssize_t _KEEP_MAX = 64 << 20
 cdef Py_ssize_t _spare_n = 0
 
 
@@ -270,9 +291,13 @@ cdef char* _take(Py_ssize_t n) except NULL:
 
 
 cdef void _give(char* buf, Py_ssize_t n) noexcept:
-    """Keep buf (n bytes) for the next call, the larger of it and the one kept."""
+    """Keep buf (n bytes) for the next call, the larger of it and the one kept,
+    up to :data:`_KEEP_MAX`."""
     global _spare, _spare_n
-    if _spare == NULL or n > _spare_n:
+    if n > _KEEP_MAX:
+        # an unusually large call: its buffer is not held for the process's life
+        PyMem_Free(buf)
+    elif _spare == NULL or n > _spare_n:
         PyMem_Free(_spare)
         _spare = buf
         _spare_n = n
