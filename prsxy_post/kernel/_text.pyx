@@ -216,24 +216,12 @@ cdef inline uint64_t _whole(uint64_t k, int d) noexcept nogil:
     return k // _P10[d]
 
 
-cdef inline Py_ssize_t _fixed(char* out, Py_ssize_t pos, const Col* c, Py_ssize_t i) except -2:
-    """Value i of column c in fixed point at out[pos] (``%.{d}f``); the position
-    after it, or -1 when the value is too large for the integer digits (or not
-    finite)."""
-    cdef double x = (<const double*> (c.data + i * c.step))[0]
-    cdef double a = fabs(x)
-    cdef double t, r
-    cdef uint64_t k, w
-    cdef int d = c.d, nw
-    if not (a < c.lim):
-        return -1
-    t = a * c.scale
-    r = rint(t)
-    k = <uint64_t> (<int64_t> r)
-    # floor(t) from rint(t) without a branch (rint rounds up half the time): both
-    # are whole doubles below 2^52, so r - 1 is exact
-    if fabs(t - (r - <double> (r > t)) - 0.5) < 1e-6:
-        k = _tie(x, d)
+cdef inline Py_ssize_t _put(
+    char* out, Py_ssize_t pos, double x, uint64_t k, int d
+) noexcept nogil:
+    """``%.{d}f`` of x at out[pos], given k, |x| 10^d rounded; the position after."""
+    cdef uint64_t w
+    cdef int nw
     # no branch on the sign (a speed's is no better than a coin toss to predict)
     out[pos] = 45  # '-'
     pos += signbit(x) != 0
@@ -251,10 +239,39 @@ cdef inline Py_ssize_t _fixed(char* out, Py_ssize_t pos, const Col* c, Py_ssize_
     return pos
 
 
+cdef inline double _value(const Col* c, Py_ssize_t i) noexcept nogil:
+    return (<const double*> (c.data + i * c.step))[0]
+
+
+cdef inline Py_ssize_t _fixed(char* out, Py_ssize_t pos, const Col* c, Py_ssize_t i) noexcept nogil:
+    """Value i of column c in fixed point at out[pos] (``%.{d}f``); the position
+    after it, -1 when the value is too large for the integer digits (or not
+    finite), -2 near a rounding tie (:func:`_fixed_tie` writes it)."""
+    cdef double x = _value(c, i)
+    cdef double a = fabs(x)
+    cdef double t, r
+    if not (a < c.lim):
+        return -1
+    t = a * c.scale
+    r = rint(t)
+    # floor(t) from rint(t) without a branch (rint rounds up half the time): both
+    # are whole doubles below 2^52, so r - 1 is exact
+    if fabs(t - (r - <double> (r > t)) - 0.5) < 1e-6:
+        return -2
+    return _put(out, pos, x, <uint64_t> (<int64_t> r), c.d)
+
+
+cdef Py_ssize_t _fixed_tie(char* out, Py_ssize_t pos, const Col* c, Py_ssize_t i) except -3:
+    """Value i of column c near a rounding tie, where the binary value decides:
+    Python's own rounding (as the reference)."""
+    cdef double x = _value(c, i)
+    return _put(out, pos, x, _tie(x, c.d), c.d)
+
+
 cdef inline Py_ssize_t _row(char* out, Py_ssize_t pos, Py_ssize_t i, _Cols s) except -2:
     """Row i of the columns (prefix, value, ...) at out[pos], without its end; -1
     where a value is too large."""
-    cdef Py_ssize_t c, j
+    cdef Py_ssize_t c, at
     cdef const Col* col
     for c in range(s.ncol):
         col = &s.c[c]
@@ -262,9 +279,13 @@ cdef inline Py_ssize_t _row(char* out, Py_ssize_t pos, Py_ssize_t i, _Cols s) ex
             memcpy(out + pos, col.pre8, 8)
         else:
             memcpy(out + pos, col.pre, col.npre)
-        pos = _fixed(out, pos + col.npre, col, i)
-        if pos < 0:
+        pos += col.npre
+        at = _fixed(out, pos, col, i)
+        if at == -2:
+            at = _fixed_tie(out, pos, col, i)
+        if at < 0:
             return -1
+        pos = at
     return pos
 
 
