@@ -9,7 +9,8 @@ It converts the program once with PMAC output (in this process) and keeps the
 arguments of every ``pvt_segment_text`` call (``--load`` reads them from a file
 ``--save`` wrote instead); then it runs the selected kernel (compiled, or the
 reference under PRSXY_KERNEL=pure) on all of them ``--repeat`` times and prints
-the best CPU time (``time.process_time``) in all and a point.
+the best CPU time (``time.process_time``) in all and a point. ``--rows-only``
+clears the line comments and PVT times (the points' rows alone).
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from prsxy_post import kernel
 from prsxy_post.convert import ConvertJob, convert_file
@@ -58,6 +61,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--save", help="write the recorded calls to this file")
     ap.add_argument("--load", help="read the calls from this file instead of converting")
+    ap.add_argument("--rows-only", action="store_true", help="no line comments or PVT times")
     a = ap.parse_args()
     if a.load:
         calls = pickle.loads(Path(a.load).read_bytes())
@@ -65,6 +69,11 @@ def main() -> None:
         calls = record(a.program, a.profile)
     if a.save:
         Path(a.save).write_bytes(pickle.dumps(calls))
+    if a.rows_only:
+        calls = [
+            (c[0], c[1], np.zeros(len(c[1]), bool), c[3], np.zeros(len(c[1]), bool), *c[5:])
+            for c in calls
+        ]
     fn = kernel._pvt_segment
     points = sum(len(c[1]) for c in calls)
     best = float("inf")
