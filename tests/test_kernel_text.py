@@ -175,3 +175,30 @@ def test_pvt_times_and_line_numbers_as_python_writes_them(
     assert text.int_rows("; line ", np.array(lines, dtype=np.int64)) == [
         f"; line {x}\n" for x in lines
     ]
+
+
+#: prefixes the compiled kernel copies as one word (up to 8 bytes) or byte by byte
+PREFIXES = st.sampled_from(["", "X", " Y", ":", " LONGPREFIX", "#12->A=", "a" * 17])
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.data())
+def test_views_long_prefixes_and_many_decimals_are_byte_identical(data: st.DataObject) -> None:
+    """Columns read in place (views of a row-major array, steps of any sign), prefixes
+    over 8 bytes, decimals 10-22 (the 64-bit fraction path, and beyond 19 the
+    reference's own text): compiled and reference agree, rows and segments."""
+    _text = compiled("_text")
+    m = data.draw(st.integers(1, 10))
+    ncol = data.draw(st.integers(1, 6))
+    block = data.draw(hnp.arrays(np.float64, (m, ncol), elements=FLOATS))
+    if data.draw(st.booleans()):
+        block = block[::-1]  # negative steps
+    decimals = data.draw(st.lists(st.integers(0, 22), min_size=ncol, max_size=ncol))
+    prefixes = data.draw(st.lists(PREFIXES, min_size=ncol, max_size=ncol))
+    cols = [(prefixes[i], block[:, i], decimals[i]) for i in range(ncol)]
+    assert _text.format_fixed_rows(cols) == text.format_fixed_rows(cols)
+    line = np.arange(m, dtype=np.int64) * 7919
+    masks = hnp.arrays(bool, (m,))
+    quanta = data.draw(hnp.arrays(np.int64, (m,), elements=st.integers(0, 2**24)))
+    seg = (cols, line, data.draw(masks), quanta, data.draw(masks), np.zeros(0, np.intp), [])
+    assert _text.pvt_segment_text(*seg) == text.pvt_segment_text(*seg)

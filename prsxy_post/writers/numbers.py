@@ -8,8 +8,13 @@ from .. import kernel
 
 
 def round_clean(x: np.ndarray, decimals: int) -> np.ndarray:
-    """Round and clear negative zeros so equal values print equal bytes."""
-    return np.round(x, decimals) + 0.0
+    """Round and clear negative zeros so equal values print equal bytes.
+
+    The zeros are cleared in the rounded array itself (``-0.0 + 0.0`` is ``0.0``):
+    a second array of a chunk's size is fresh pages, dearer than the sum."""
+    out: np.ndarray = np.round(np.asarray(x, dtype=float), decimals)
+    out += 0.0
+    return out
 
 
 #: Rows of fixed-point text, ``prefix value prefix value ...``, the same text as
