@@ -273,15 +273,17 @@ def test_what_the_interpreter_sends_that_cannot_be_read_is_an_error(
 ) -> None:
     """The interpreter process sends a chunk that does not unpickle: the thread
     reading the pipe reports it, and the command exits 3 with the reason, where
-    it once waited forever. The forked interpreter inherits the patch."""
+    it once waited forever. The forked interpreter inherits the patch (on what it
+    sends: its third chunk as packed for the pipe)."""
     program = _program(tmp_path / "big.ngc", 40_000)
-    planned_here = convert._planned_here
+    pack_ready = convert.wire.pack_ready
+    sent = [0]
 
-    def spoiled(*args: object, **kwargs: object):  # type: ignore[no-untyped-def]
-        for i, planned in enumerate(planned_here(*args, **kwargs)):  # type: ignore[arg-type]
-            yield _Unreadable() if i == 2 else planned
+    def spoiled(*args: object, **kwargs: object) -> object:
+        sent[0] += 1
+        return _Unreadable() if sent[0] == 3 else pack_ready(*args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(convert, "_planned_here", spoiled)
+    monkeypatch.setattr(convert.wire, "pack_ready", spoiled)
     out = tmp_path / "big.pmc"
     t0 = time.monotonic()
     r = CliRunner().invoke(main, ["convert", str(program), "--profile", SHOP, "-o", str(out)])
