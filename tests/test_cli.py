@@ -575,3 +575,28 @@ def test_gcode_tolerance_reduction_stays_within_it(runner: CliRunner, tmp_path: 
         t = np.clip(np.einsum("ij,ij->i", p - a, d) / dd, 0, 1)
         worst = max(worst, float(np.min(np.linalg.norm(p - (a + t[:, None] * d), axis=1))))
     assert worst <= tol + 2e-5
+
+
+def test_the_executable_ends_with_its_output_whole_and_its_exit_code(
+    runner: CliRunner, tmp_path: Path
+) -> None:
+    """``prsxy-post`` (cli.run) ends its process without Python's shutdown: what a
+    conversion printed to a pipe arrives whole, byte for byte what it writes to a
+    file, and each exit code is the command's (0, 1 bad input, 2 bad usage)."""
+    import subprocess
+    import sys
+
+    def command(*args: str) -> subprocess.CompletedProcess[bytes]:
+        cmd = [sys.executable, "-m", "prsxy_post.cli", *args]
+        return subprocess.run(cmd, capture_output=True, cwd=ROOT, check=False)
+
+    piped = command("convert", "samples/pocket.ngc", "--profile", SHOP, "-o", "-", "-q")
+    assert piped.returncode == 0, piped.stderr
+    out = tmp_path / "pocket.pmc"
+    r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP, "-o", str(out), "-q")
+    assert r.exit_code == 0
+    assert piped.stdout == out.read_bytes()
+    missing = command("convert", str(tmp_path / "missing.ngc"), "--profile", SHOP, "-o", "-")
+    assert missing.returncode == 1
+    assert b"missing.ngc: cannot read G-code program" in missing.stderr
+    assert command("convert").returncode == 2
