@@ -297,16 +297,20 @@ def test_corrected_gcode_on_linuxcnc(seed: int, text: str) -> None:
 
 @pytest.mark.xfail(strict=True, reason="open: an arc into a line that starts a tilt")
 def test_a_found_program_with_an_arc_into_a_tilt_on_linuxcnc() -> None:
-    """led-floor-tiny-arc-as-lines-F1000 (random machine 31), the one found program
-    of ``bench/linuxcnc_truth.py`` out of bounds on LinuxCNC: as written (each line in
-    its G93 time) 0.14 µm off the path and at F, but on LinuxCNC 9.9 µm and 1.23 x F
-    where the arc of its line 34 ends and line 35 starts turning A, although
-    LinuxCNC's commanded poses stay within 0.49 µm of the written lines. Since
-    5ab487d (arcs kept as G2/G3 in the corrected G-code; found by git bisect on this
-    program): written with ``tolerance_mm = 0`` (a line to every point, no arcs) it
-    runs 0.61 µm off and at F (all measured). The written arc ends in G64 P into a
-    line that turns A, a join LinuxCNC blends parabolically (tp.c,
-    tcRotaryMotionCheck)."""
+    """led-floor-tiny-arc-as-lines-F1000 (random machine 31), one of the two found
+    programs of ``bench/linuxcnc_truth.py`` out of bounds on LinuxCNC: as written
+    (each line in its G93 time) 0.14 µm off the path and at F, but on LinuxCNC
+    9.9 µm off and 1.23 x F where the arc of its line 34 (R 0.22 mm) ends into line
+    35, which starts turning A. LinuxCNC's own commands cut the arc there by 9.8 µm
+    (``segments``' distance; A already 4 arcsec on its way): it blends the arc's end
+    parabolically into the line that turns A (tp.c, ``tcRotaryMotionCheck``), both
+    running at once, and the join is tangent, so the G64 P tolerance, which enters
+    only through the angle between the two ends, does not shorten the blend, while
+    the arc's curvature over the overlap cuts the path. The writer judges an arc's
+    corner from its last piece's direction only (docstring of writers/linuxcnc.py,
+    rule 5). Since 5ab487d (arcs kept as G2/G3; git bisect on this program): with
+    ``tolerance_mm = 0`` (a line to every point, no arcs) it runs 0.61 µm off and at
+    F (all measured)."""
     seed, text = dict(zip(FOUND_IDS, FOUND, strict=True))["led-floor-tiny-arc-as-lines-F1000"]
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text, "gcode")
