@@ -1512,8 +1512,8 @@ def run() -> NoReturn:
 
     When a command returns, its outputs are published, its processes joined and
     its threads done; what Python's own shutdown would do next is free every
-    object one by one in a process about to end (about 0.03 s after a 200 000-line
-    conversion, ``docs/measurements.md``, "Start-up"; mypy ends the same way). The
+    object one by one in a process about to end (0.033 s against 0.004 s after a
+    200 000-line conversion, ``bench/ending.py``; mypy ends the same way). The
     standard streams are flushed first; where that fails (a reader gone), Python
     ends the process as it always does.
     """
