@@ -295,22 +295,17 @@ def test_corrected_gcode_on_linuxcnc(seed: int, text: str) -> None:
     assert_within(tr, None, TOL_MM)
 
 
-@pytest.mark.xfail(strict=True, reason="open: an arc into a line that starts a tilt")
 def test_a_found_program_with_an_arc_into_a_tilt_on_linuxcnc() -> None:
-    """led-floor-tiny-arc-as-lines-F1000 (random machine 31), one of the two found
-    programs of ``bench/linuxcnc_truth.py`` out of bounds on LinuxCNC: as written
-    (each line in its G93 time) 0.14 µm off the path and at F, but on LinuxCNC
-    9.9 µm off and 1.23 x F where the arc of its line 34 (R 0.22 mm) ends into line
-    35, which starts turning A. LinuxCNC's own commands cut the arc there by 9.8 µm
-    (``segments``' distance; A already 4 arcsec on its way): it blends the arc's end
-    parabolically into the line that turns A (tp.c, ``tcRotaryMotionCheck``), both
-    running at once, and the join is tangent, so the G64 P tolerance, which enters
-    only through the angle between the two ends, does not shorten the blend, while
-    the arc's curvature over the overlap cuts the path. The writer judges an arc's
-    corner from its last piece's direction only (docstring of writers/linuxcnc.py,
-    rule 5). Since 5ab487d (arcs kept as G2/G3; git bisect on this program): with
-    ``tolerance_mm = 0`` (a line to every point, no arcs) it runs 0.61 µm off and at
-    F (all measured)."""
+    """led-floor-tiny-arc-as-lines-F1000 (random machine 31): the arc of its line 34
+    (R 0.22 mm) ends into line 35, which starts turning A. LinuxCNC blends such a
+    join parabolically (tp.c, ``tcRotaryMotionCheck``), the arc and the line running
+    at once, and the join is tangent, so the G64 P tolerance, which enters only
+    through the angle between the two ends, does not shorten the blend: the arc's
+    rise over its tangent along the overlap cut the path by 9.8 µm (LinuxCNC's own
+    commands, ``segments``), 9.9 µm and 1.23 x F as the machine ran it, since
+    5ab487d kept arcs as G2/G3 (git bisect on this program). The writer now stops
+    the arc there where the blend's cut (``gwrite.arc_blend_cut``: 9.86 µm for
+    this join) passes the G64 P tolerance (writers/linuxcnc.py, rule 5)."""
     seed, text = dict(zip(FOUND_IDS, FOUND, strict=True))["led-floor-tiny-arc-as-lines-F1000"]
     truth = truth_machine("random", seed)
     motions, res, texts = convert(truth, text, "gcode")

@@ -21,7 +21,8 @@ F_NAMES = (
     "tol", "blend", "tilt_cut", "tilt_hold", "tilt_chord", "accel", "accel_deg",
     "prev_accel", "t_total", "last_speed", "peak", "trough", "plan_peak", "stretch",
     "len_sum", "dt_sum", "corner_t", "prev_len", "prev_t", "patch_f",
-    "smooth", "arc_hold", "speed0", "ca_len", "ca_dt", "tilt_fit",
+    "smooth", "arc_hold", "speed0", "ca_len", "ca_dt", "tilt_fit", "ca_radius",
+    "prev_radius",
 )
 I_NAMES = (
     "all_exact", "n", "has_line", "last_line", "run_n", "run_src", "corner_src",
@@ -46,6 +47,7 @@ DEF CHORD_NO = 0
 DEF CHORD_OK = 1
 DEF CHORD_FIT = 2
 DEF SERVO_PERIOD_S = 1e-3
+DEF BLEND_STEPS = 64  # gwrite.BLEND_STEPS
 DEF DIP_SHARE = 1e-3
 DEF T27 = 134217729.0  # 2**27 + 1: Dekker's split
 
@@ -62,6 +64,7 @@ cdef struct W:
     long long ca_from, decimals
     double tilt_fit
     long long corner_fit
+    double ca_radius, prev_radius
     double last_q[5]
     double last_ab[2]
     double held_ab[2]
@@ -532,24 +535,83 @@ cdef void _blend_within_f(W* w, double length_n, double t_n, double a_n) noexcep
         else:
             w.val[idx] = f
     else:
-        if idx == CARRIED:
-            w.patch = PATCH_STOP
+        _stop_prev(w)
+
+
+cdef void _stop_prev(W* w) noexcept nogil:
+    # _Run.stop_prev
+    cdef long long idx = w.prev_idx
+    if idx == CARRIED:
+        w.patch = PATCH_STOP
+    elif idx != NONE:
+        # a G4 P0 after the line idx: the ops after it move down by one
+        memmove(&w.code[idx + 2], &w.code[idx + 1], (w.m - idx - 1) * sizeof(long long))
+        memmove(&w.arg[idx + 2], &w.arg[idx + 1], (w.m - idx - 1) * sizeof(long long))
+        memmove(&w.ab[idx + 2], &w.ab[idx + 1], (w.m - idx - 1) * sizeof(long long))
+        memmove(&w.val[idx + 2], &w.val[idx + 1], (w.m - idx - 1) * sizeof(double))
+        memmove(&w.aux[idx + 2], &w.aux[idx + 1], (w.m - idx - 1) * sizeof(long long))
+        w.code[idx + 1] = OP_G4P0
+        w.arg[idx + 1] = 0
+        w.ab[idx + 1] = 0
+        w.val[idx + 1] = 0.0
+        w.aux[idx + 1] = 0
+        w.m += 1
+    w.after_settle = 1
+    w.prev_idx = NONE
+    w.prev_blend = 0
+
+
+cdef inline double _rise(double a, double b, double radius) noexcept nogil:
+    return (b * (2.0 * a - b) if b < a else a * a) / (2.0 * radius)
+
+
+cdef double _arc_blend_cut(double len_p, double t_p, double a_p, double r_p, double len_n,
+                           double t_n, double a_n, double r_n) noexcept nogil:
+    # gwrite.arc_blend_cut
+    cdef double v_n, reach_p, reach_n, t_b, v_b, overlap, cut = 0.0, t, left, tn, gone, e, step
+    cdef long long k
+    if t_p <= 0.0 or t_n <= 0.0 or len_p <= 0.0 or len_n <= 0.0:
+        return 0.0
+    v_n = len_n / t_n
+    reach_p = _pmin(len_p / t_p, sqrt(a_p * len_p))
+    reach_n = _pmin(v_n, sqrt(a_n * len_n))
+    t_b = _pmin(_pmin(len_p / reach_p, len_n / reach_n), _pmax(reach_p / a_p, reach_n / a_n))
+    v_b = _pmin(reach_p, t_b * a_p)
+    overlap = v_b * v_b / (2.0 * a_p)
+    step = v_b / a_p / BLEND_STEPS
+    for k in range(BLEND_STEPS + 1):
+        t = <double>k * step
+        left = _pmax(overlap - v_b * t + a_p * t * t / 2.0, 0.0)
+        tn = t + SERVO_PERIOD_S
+        if a_n * tn < v_n:
+            gone = a_n * tn * tn / 2.0
         else:
-            # a G4 P0 after the line idx: the ops after it move down by one
-            memmove(&w.code[idx + 2], &w.code[idx + 1], (w.m - idx - 1) * sizeof(long long))
-            memmove(&w.arg[idx + 2], &w.arg[idx + 1], (w.m - idx - 1) * sizeof(long long))
-            memmove(&w.ab[idx + 2], &w.ab[idx + 1], (w.m - idx - 1) * sizeof(long long))
-            memmove(&w.val[idx + 2], &w.val[idx + 1], (w.m - idx - 1) * sizeof(double))
-            memmove(&w.aux[idx + 2], &w.aux[idx + 1], (w.m - idx - 1) * sizeof(long long))
-            w.code[idx + 1] = OP_G4P0
-            w.arg[idx + 1] = 0
-            w.ab[idx + 1] = 0
-            w.val[idx + 1] = 0.0
-            w.aux[idx + 1] = 0
-            w.m += 1
-        w.after_settle = 1
-        w.prev_idx = NONE
-        w.prev_blend = 0
+            gone = v_n * tn - v_n * v_n / (2.0 * a_n)
+        gone = _pmin(gone, len_n)
+        e = 0.0
+        if r_p > 0.0:
+            e += _rise(left, gone, r_p)
+        if r_n > 0.0:
+            e += _rise(gone, left, r_n)
+        cut = _pmax(cut, e)
+    return cut
+
+
+def arc_blend_cut(double len_p, double t_p, double a_p, double r_p, double len_n, double t_n,
+                  double a_n, double r_n):
+    """:func:`prsxy_post.kernel.gwrite.arc_blend_cut`, compiled."""
+    return _arc_blend_cut(len_p, t_p, a_p, r_p, len_n, t_n, a_n, r_n)
+
+
+cdef double _arc_cut(W* w, double length_n, double t_n, double a_n, double radius_n) noexcept nogil:
+    # _Run.arc_cut
+    cdef double a_p, a_next
+    if w.prev_idx == NONE or (w.prev_radius <= 0.0 and radius_n <= 0.0):
+        return 0.0
+    a_p = w.prev_accel / (4.0 if w.prev_radius > 0.0 else 2.0)
+    a_next = a_n / 2.0 if radius_n > 0.0 else a_n
+    return _arc_blend_cut(w.prev_len, w.prev_t, a_p, w.prev_radius, length_n, t_n, a_next,
+                          radius_n)
 
 
 cdef long long _tilt_held(W* w, long long src, const double* q, double hold) noexcept nogil:
@@ -564,7 +626,7 @@ cdef long long _tilt_held(W* w, long long src, const double* q, double hold) noe
 
 cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact,
               long long arc=NONE, double arc_len=0.0, long long plane=17,
-              const double* fit=NULL) noexcept nogil:
+              const double* fit=NULL, double radius=0.0) noexcept nogil:
     cdef double q[5]
     cdef double d_xyz[3]
     cdef double d_ab[2]
@@ -597,7 +659,10 @@ cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact,
     w.last_ab[1] = w.held_ab[1]
     if w.has_prev and w.prev_blend and (w.prev_turns or turns):
         a_n = accel / 2.0 if turns or exact else accel
-        _blend_within_f(w, length, t, a_n)
+        if _arc_cut(w, length, t, a_n, radius) > w.blend:
+            _stop_prev(w)
+        else:
+            _blend_within_f(w, length, t, a_n)
     parabolic = w.has_prev and w.prev_blend and (w.prev_turns or turns)
     mode = (exact or w.after_settle != 0) and not (exact and parabolic and not w.all_exact)
     if mode != (w.exact != 0):
@@ -617,6 +682,7 @@ cdef void _g1(W* w, long long src, const double* q_in, double t, bint exact,
     w.prev_turns = turns
     w.prev_blend = not mode and not exact
     w.prev_accel = accel
+    w.prev_radius = radius
     w.after_settle = exact
     if exact:
         _emit(w, OP_G4P0, 0, 0, 0.0)
@@ -673,7 +739,8 @@ cdef void _resolve_corner(W* w, const double* q_next, double dt_next) noexcept n
     if q_next != NULL and w.n > 0 and dt_next > 0.0:
         _corner_cut(q_in, qc, q_next, t_in, dt_next, w.accel, &mm, &deg)
         exact = mm > w.blend or deg > w.tilt_cut
-    _g1(w, src, qc, t, exact, arc, w.ca_len, w.ca_plane, &qc[3] if fitted else NULL)
+    _g1(w, src, qc, t, exact, arc, w.ca_len, w.ca_plane, &qc[3] if fitted else NULL,
+        w.ca_radius if arc != NONE else 0.0)
 
 
 cdef inline bint _same5(const double* a, const double* b) noexcept nogil:
@@ -809,7 +876,8 @@ cdef void _write_arc_to(W* w, long long k, long long part) noexcept nogil:
             qh[i] = w.run[5 * (w.run_n - 1) + i]
         t = _arc_time(w, part)
         w.run_n = 0
-        _g1(w, w.run_src, qh, t, False, part, w.arc_f[2 * part], w.arc_i[4 * part + 2])
+        _g1(w, w.run_src, qh, t, False, part, w.arc_f[2 * part], w.arc_i[4 * part + 2],
+            NULL, w.arc_f[2 * part + 1])
         return
     held_n = w.run_n
     w.run_n = 0
@@ -863,10 +931,11 @@ cdef bint _on_arc(W* w, long long k, const double* qk, double dtk, const double*
             w.corner_arc = a
             w.ca_dt = dtk
             w.ca_len = w.arc_f[2 * a]
+            w.ca_radius = w.arc_f[2 * a + 1]
             w.ca_plane = plane
             _arc_in(w, a, t, &w.q[5 * (k - 1)], qk, dtk, w.corner_in)
         else:
-            _g1(w, k, qk, t, False, a, w.arc_f[2 * a], plane)
+            _g1(w, k, qk, t, False, a, w.arc_f[2 * a], plane, NULL, w.arc_f[2 * a + 1])
     return False
 
 
@@ -971,6 +1040,7 @@ cdef void _load(W* w, double[::1] f, long long[::1] iv, st):
     w.req_answer, w.corner_arc, w.ca_plane, w.ca_from, w.decimals = (
         iv[20], iv[21], iv[22], iv[23], iv[24])
     w.tilt_fit, w.corner_fit = f[25], iv[25]
+    w.ca_radius, w.prev_radius = f[26], f[27]
     a = st.corner_in
     for i in range(5):
         w.corner_in[i] = a[i]
@@ -1007,6 +1077,7 @@ cdef void _store(W* w, double[::1] f, long long[::1] iv, st):
     iv[20], iv[21], iv[22], iv[23], iv[24] = (
         w.req_answer, w.corner_arc, w.ca_plane, w.ca_from, w.decimals)
     f[25], iv[25] = w.tilt_fit, w.corner_fit
+    f[26], f[27] = w.ca_radius, w.prev_radius
     a = st.corner_in
     for i in range(5):
         a[i] = w.corner_in[i]

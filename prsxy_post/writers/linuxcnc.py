@@ -177,7 +177,14 @@ it, after a stop for the most part), and where the written A or B must change al
 the same, the arc ends a point
 before, a line of one piece turns them, and the arc goes on from its end: LinuxCNC
 all but stops there (from 93 to 6 mm/s on the helix at F10000, measured), as at
-every line that turns A or B.
+every line that turns A or B. Where LinuxCNC blends an arc and a line parabolically
+all the same (one of them turns A or B), the two run at once over the blend, and on
+a tangent join the G64 P tolerance, which enters only through the angle between
+their ends (``tpComputeBlendVelocity``, tp.c:2254-2282), does not shorten it: the
+arc's rise over its tangent along the overlap cuts the path (9.8 µm on an R0.22 arc
+into a line turning A, measured). So where that cut (``arc_blend_cut``, timed as
+tp.c times the blend) passes ``blend``, the move before stops there (G4 P0, the
+next in G61), as rule 4 stops a line.
 LinuxCNC's motion controller does not command the planner's points: each joint's
 command is a cubic B-spline through way points (x₋₁ + 4 x + x₊₁) / 6 of them
 (``cubicAddPoint`` and ``cubicInterpolate``, control.c:1358-1377; ``wayPoint``,
@@ -192,7 +199,8 @@ These rules decide, point by point, which points become lines, each line's time 
 F, its mode and the G4 P0 after it: the kernel makes those decisions
 (:mod:`prsxy_post.kernel.gwrite`, its functions named here: ``within``,
 ``chord_time``, ``dips``, ``tilt_held``, ``resolve_corner``, ``g1``,
-``blend_within_f``; compiled in ``_gwrite.pyx``), and this writer makes the text.
+``blend_within_f``, ``arc_blend_cut``; compiled in ``_gwrite.pyx``), and this
+writer makes the text.
 """
 
 from __future__ import annotations
