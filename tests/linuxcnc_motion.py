@@ -379,6 +379,17 @@ def motion_lines(text: str) -> dict[int, int]:
     return out
 
 
+def named_segments(run_: MotionRun, text: str) -> np.ndarray:
+    """For each cycle, the written point ending the segment LinuxCNC's planner
+    names (``motion.program-line``), (m,): before the first motion line the first
+    segment, after a line that names none the last one named."""
+    of = motion_lines(text)
+    seg = np.array([of.get(int(n), -1) for n in run_.line])
+    first_known = np.flatnonzero(seg >= 0)
+    seg[: first_known[0] if len(first_known) else len(seg)] = 1
+    return np.maximum(np.maximum.accumulate(seg), 1)
+
+
 def segments(
     run_: MotionRun, text: str, points: np.ndarray, arcs: dict | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -389,12 +400,7 @@ def segments(
     so the nearer of the named one and its neighbours (in pose space, a degree
     weighing as a µm) is taken. ``arcs``: the G2/G3 moves by the point they end at
     (`tests.controllers.GcodeRun.arcs`), whose distance is to the arc."""
-    of = motion_lines(text)
-    seg = np.array([of.get(int(n), -1) for n in run_.line])
-    # before the first motion line and after the last: the first and last segment
-    first_known = np.flatnonzero(seg >= 0)
-    seg[: first_known[0] if len(first_known) else len(seg)] = 1
-    seg = np.maximum(np.maximum.accumulate(seg), 1)
+    seg = named_segments(run_, text)
     best = np.full(len(seg), np.inf)
     out = seg.copy()
     w = np.array([1.0, 1.0, 1.0, 1e-3, 1e-3])
