@@ -247,6 +247,8 @@ cdef enum:
     # division a row); a lane a row, the same operation on LANES rows at once, in
     # the same order for each as a row at a time (so the same bits), overlaps them
     LANES = 4
+    # rows forward_poses solves at a time (its scratch rows: 24 doubles each)
+    BLOCK = 512
 
 
 cdef void _solve6_lanes(double A[6][6][LANES], double b[6][LANES], double s[6][LANES]) noexcept nogil:
@@ -590,9 +592,13 @@ def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int
     cdef const double[:, ::1] t = np.ascontiguousarray(t_in)
     cdef const double[::1] o = np.ascontiguousarray(origin_in)
     cdef const double[:, ::1] D = np.ascontiguousarray(D_in)
-    offs_a = np.empty((n, 9))
-    x_a = np.empty((n, 6))
-    R_a = np.empty((n, 9))
+    # the offsets, solutions and rotations of BLOCK rows at a time, in buffers made
+    # once a call: a chunk's worth of each would be fresh pages (faulted in and
+    # zeroed by the kernel) for values read once
+    cdef Py_ssize_t nb = min(n, <Py_ssize_t>BLOCK), b0, m_b
+    offs_a = np.empty((nb, 9))
+    x_a = np.empty((nb, 6))
+    R_a = np.empty((nb, 9))
     ok_a = np.zeros(n, dtype=bool)
     q_a = np.empty((n, 5))
     cdef double[:, ::1] offs = offs_a
@@ -606,16 +612,21 @@ def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int
     if n == 0:
         return q_a, ok_a
     with nogil:
-        # the hinges' offsets a_k − g_k = P_k d_k (``Geometry.hinge_offset``)
-        for i in range(n):
-            for k in range(3):
-                for j in range(3):
-                    offs[i, 3 * k + j] = P[i, k] * dd[3 * k + j]
-        _newton_rows(&G, &offs[0, 0], x0, limit, max_iter, res_tol, x, ok, &R[0, 0])
-        for i in range(n):
-            if not ok[i]:
-                for k in range(5):
-                    q[i, k] = NAN
-                continue
-            _tip(&x[i, 0], &R[i, 0], &t[i, 0], &o[0], &D[i, 0], &q[i, 0])
+        b0 = 0
+        while b0 < n:
+            m_b = min(nb, n - b0)
+            # the hinges' offsets a_k − g_k = P_k d_k (``Geometry.hinge_offset``)
+            for i in range(m_b):
+                for k in range(3):
+                    for j in range(3):
+                        offs[i, 3 * k + j] = P[b0 + i, k] * dd[3 * k + j]
+            _newton_rows(&G, &offs[0, 0], x0[b0 : b0 + m_b], limit, max_iter, res_tol, x,
+                         ok[b0 : b0 + m_b], &R[0, 0])
+            for i in range(m_b):
+                if not ok[b0 + i]:
+                    for k in range(5):
+                        q[b0 + i, k] = NAN
+                    continue
+                _tip(&x[i, 0], &R[i, 0], &t[b0 + i, 0], &o[0], &D[b0 + i, 0], &q[b0 + i, 0])
+            b0 += m_b
     return q_a, ok_a
