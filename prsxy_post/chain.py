@@ -830,7 +830,11 @@ class Pipeline:
             )
             if self.play_cols:
                 self._settle(pc, by_motor, contacts, P_cmd, V_cmd)
-            pc.P_cmd, pc.V_cmd = np.ascontiguousarray(P_cmd.T), np.ascontiguousarray(V_cmd.T)
+            # the commands' velocities are written in motor space only (a PVT
+            # program's V): in pose space they stay the view of the motors' rows
+            # they were made in (the same values), not copied into point order
+            V_out = V_cmd.T if self.written.space == "pose" else np.ascontiguousarray(V_cmd.T)
+            pc.P_cmd, pc.V_cmd = np.ascontiguousarray(P_cmd.T), V_out
         self.timings["axis_tables"] += time.process_time() - t0
         self.last = pc.take(slice(len(pc) - 1, len(pc)))
         self.last_plain = plain_last

@@ -303,6 +303,30 @@ def test_forward_kinematics_is_bit_identical_with_either_kernel(
     assert all(same_bits(a, b) for a, b in zip(got, want, strict=True))
 
 
+@pytest.mark.parametrize("n", [511, 512, 513, 3 * 512 + 5])
+def test_whole_fk_across_its_blocks_is_bit_identical(n: int) -> None:
+    """The compiled whole FK solves its rows a block at a time (``BLOCK`` rows of
+    scratch): chunks ending on, before and after a block's edge, with rows that do
+    not converge (a motor far off its reach, a NaN) on either side of an edge, give
+    the reference's bits, row for row."""
+    _fk = compiled("_fk")
+    geo = _geometry(PROFILES[0])
+    rng = np.random.default_rng(11)
+    q = np.column_stack(
+        [rng.uniform(-100, 100, (n, 2)), rng.uniform(-60, 0, n), rng.uniform(-30, 30, (n, 2))]
+    )
+    P = kinematics.inverse(geo, q).P + rng.normal(0, 1e-3, (n, 5))
+    P[[0, 510, n - 1], 0] = [1e6, np.nan, -1e6]
+    x0 = kinematics.fk_start(geo, q)
+    t = np.broadcast_to(geo.tool, (n, 3)).copy()
+    D = kinematics.table_displacement(geo, P[:, 3], P[:, 4])
+    args = (geo.fk_arrays, geo.d, P, x0, t, geo.origin, D, LIMIT, MAX_ITER, RES_TOL)
+    with np.errstate(all="ignore"):  # the unreachable rows: numpy warns, C does not
+        want = fk.forward_poses(*args)
+    assert _same(_fk.forward_poses(*args), want)
+    assert not want[1][[0, 510, n - 1]].any() and want[1][1:510].all()
+
+
 def test_compiled_fk_refuses_wrong_shapes() -> None:
     """The twin runs without bounds checks: it checks its inputs' shapes first."""
     _fk = compiled("_fk")

@@ -85,7 +85,7 @@ cdef void _pose(
     cdef double cg = cos(x[5]), sg = sin(x[5])
     cdef double R[9]
     cdef double r0, r1, r2, v0, v1, v2, w0, w1, w2, nw, e0, e1, e2, u0, u1, u2, c0, c1, c2
-    cdef int k
+    cdef Py_ssize_t k
     R[0] = cb * cg + sb * sa * sg
     R[1] = sb * sa * cg - cb * sg
     R[2] = sb * ca
@@ -141,7 +141,7 @@ cdef void _pose(
 
 cdef void _solve6(double* A, double* b, double* s) noexcept nogil:
     """s with A s = b (A 6 × 6 row-major and b overwritten): ``fk.solve6``."""
-    cdef int k, i, j, p
+    cdef Py_ssize_t k, i, j, p
     cdef double big, a, t, lk
     for k in range(6):
         p = k
@@ -247,6 +247,8 @@ cdef enum:
     # division a row); a lane a row, the same operation on LANES rows at once, in
     # the same order for each as a row at a time (so the same bits), overlaps them
     LANES = 4
+    # rows forward_poses solves at a time (its scratch rows: 24 doubles each)
+    BLOCK = 512
 
 
 cdef void _solve6_lanes(double A[6][6][LANES], double b[6][LANES], double s[6][LANES]) noexcept nogil:
@@ -256,7 +258,7 @@ cdef void _solve6_lanes(double A[6][6][LANES], double b[6][LANES], double s[6][L
     knows they do not overlap and runs the lanes' operations side by side (one
     vector instruction for two lanes: each lane's own IEEE operations, the same
     bits; -ffp-contract=off, so never fused)."""
-    cdef int k, i, j, p, l
+    cdef Py_ssize_t k, i, j, p, l
     cdef double big, a, t
     cdef double lk[LANES]
     cdef double tt[LANES]
@@ -324,7 +326,7 @@ cdef void _pose_lanes(
     cdef double nw[LANES]
     cdef double v0, v1, v2, e0, e1, e2, c0, c1, c2
     cdef double b0, b1, b2, g0, g1, g2, u0, u1, u2, Lk
-    cdef int k, l
+    cdef Py_ssize_t k, l
     for l in range(LANES):
         ca[l] = cos(xs[3][l])
         sa[l] = sin(xs[3][l])
@@ -395,7 +397,7 @@ cdef void _pose_lanes(
 cdef inline bint _step(double* xr, const double* s, double limit, bint* conv) noexcept nogil:
     """x += s unless s is not finite; True when this row stops (``fk.forward_newton``)."""
     cdef bint finite = True, done = True
-    cdef int j
+    cdef Py_ssize_t j
     for j in range(6):
         if not isfinite(s[j]):
             finite = False
@@ -420,7 +422,7 @@ cdef void _newton_rows(
     (N × 9, a row's legs one after the other), LANES rows side by side; x (N, 6),
     ok (N,) out, and R at each solution (N × 9) into Rs unless NULL."""
     cdef Py_ssize_t n = x0.shape[0], i = 0, j, r
-    cdef int it, l, nl
+    cdef Py_ssize_t it, l, nl
     cdef double o[LANES][9]
     cdef double os[9][LANES]
     cdef double xr[LANES][6]
@@ -507,7 +509,7 @@ cdef inline void _tip(
 ) noexcept nogil:
     """q (5) of a solution xr (6) with its R (9) (``fk.tool_poses``): R t summed as
     numpy's einsum sums it, then − o + D; A and B in degrees (numpy's degrees)."""
-    cdef int k
+    cdef Py_ssize_t k
     for k in range(3):
         q[k] = (
             xr[k]
@@ -590,9 +592,13 @@ def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int
     cdef const double[:, ::1] t = np.ascontiguousarray(t_in)
     cdef const double[::1] o = np.ascontiguousarray(origin_in)
     cdef const double[:, ::1] D = np.ascontiguousarray(D_in)
-    offs_a = np.empty((n, 9))
-    x_a = np.empty((n, 6))
-    R_a = np.empty((n, 9))
+    # the offsets, solutions and rotations of BLOCK rows at a time, in buffers made
+    # once a call: a chunk's worth of each would be fresh pages (faulted in and
+    # zeroed by the kernel) for values read once
+    cdef Py_ssize_t nb = min(n, <Py_ssize_t>BLOCK), b0, m_b
+    offs_a = np.empty((nb, 9))
+    x_a = np.empty((nb, 6))
+    R_a = np.empty((nb, 9))
     ok_a = np.zeros(n, dtype=bool)
     q_a = np.empty((n, 5))
     cdef double[:, ::1] offs = offs_a
@@ -606,16 +612,21 @@ def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int
     if n == 0:
         return q_a, ok_a
     with nogil:
-        # the hinges' offsets a_k − g_k = P_k d_k (``Geometry.hinge_offset``)
-        for i in range(n):
-            for k in range(3):
-                for j in range(3):
-                    offs[i, 3 * k + j] = P[i, k] * dd[3 * k + j]
-        _newton_rows(&G, &offs[0, 0], x0, limit, max_iter, res_tol, x, ok, &R[0, 0])
-        for i in range(n):
-            if not ok[i]:
-                for k in range(5):
-                    q[i, k] = NAN
-                continue
-            _tip(&x[i, 0], &R[i, 0], &t[i, 0], &o[0], &D[i, 0], &q[i, 0])
+        b0 = 0
+        while b0 < n:
+            m_b = min(nb, n - b0)
+            # the hinges' offsets a_k − g_k = P_k d_k (``Geometry.hinge_offset``)
+            for i in range(m_b):
+                for k in range(3):
+                    for j in range(3):
+                        offs[i, 3 * k + j] = P[b0 + i, k] * dd[3 * k + j]
+            _newton_rows(&G, &offs[0, 0], x0[b0 : b0 + m_b], limit, max_iter, res_tol, x,
+                         ok[b0 : b0 + m_b], &R[0, 0])
+            for i in range(m_b):
+                if not ok[b0 + i]:
+                    for k in range(5):
+                        q[b0 + i, k] = NAN
+                    continue
+                _tip(&x[i, 0], &R[i, 0], &t[b0 + i, 0], &o[0], &D[b0 + i, 0], &q[b0 + i, 0])
+            b0 += m_b
     return q_a, ok_a

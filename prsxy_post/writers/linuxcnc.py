@@ -352,7 +352,12 @@ class GcodeWriter:
         if len(chunk) == 0:
             return []
         q_arr = round_clean(written_points(self.cgeo, chunk), self.dec)
-        fn = chunk.fn != None  # noqa: E711 (elementwise: the points with machine functions)
+        # the points with machine functions: a function point stands (PointChunk),
+        # so only the standing ones are looked at (a comparison of every row of an
+        # object column with None is a Python call a row)
+        fn = np.zeros(len(chunk), dtype=bool)
+        standing = np.flatnonzero(chunk.dwell)
+        fn[standing] = chunk.fn[standing] != None  # noqa: E711 (elementwise)
         fn_end = np.zeros(len(chunk), dtype=bool)
         for k in np.flatnonzero(fn).tolist():
             fn_end[k] = any(w in (("M", 2.0), ("M", 30.0)) for w in chunk.fn[k])
