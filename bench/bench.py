@@ -133,6 +133,29 @@ def child_convert(program: str, prof: str, out: str, fmt: str) -> None:
     )
 
 
+def program_parser(description: str) -> argparse.ArgumentParser:
+    """The options of a script that runs one program on one profile: a generated
+    program (``--lines``, :func:`generate`) or a file (``--program``), a profile
+    (``--profile``, else :func:`bench_profile`), the output format, the runs."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--lines", type=int, default=200_000, help="generated program's size")
+    ap.add_argument("--program", help="a G-code file instead of a generated one")
+    ap.add_argument("--profile", help="a profile (default: bench.py's bench_profile)")
+    ap.add_argument("--format", choices=["pmac", "gcode"], default="pmac")
+    ap.add_argument("--runs", type=int, default=1)
+    return ap
+
+
+def program_and_profile(args: argparse.Namespace, tmp: Path) -> tuple[str, str]:
+    """The program and the profile :func:`program_parser`'s ``args`` name, those
+    to generate written into ``tmp``."""
+    program = args.program
+    if program is None:
+        program = str(tmp / f"finish-{args.lines}.ngc")
+        Path(program).write_text(generate(args.lines))
+    return program, args.profile or str(bench_profile(tmp / "bench.toml"))
+
+
 def time_rs274(program: Path) -> float | None:
     """``rs274 -g`` on a program, as a whole command [s]; None where not installed."""
     exe = shutil.which("rs274")
@@ -310,7 +333,7 @@ def main() -> None:
         return
     results = run(args.lines or [200_000, 2_000_000], args.pygcode_limit, args.format)
     if args.markdown:
-        import mdsection
+        import mdsection  # beside this script: bench.py is imported as bench.bench too
 
         title = "Conversion speed" if args.format == "pmac" else "Corrected G-code speed"
         print(mdsection.header(title))

@@ -25,7 +25,6 @@ runs made side by side, and look at CPU against wall.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import json
 import os
@@ -328,20 +327,10 @@ def run_once(program: str, profile: str, fmt: str, output: str) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--lines", type=int, default=200_000, help="generated program's size")
-    ap.add_argument("--program", help="a G-code file instead of a generated one")
-    ap.add_argument("--profile", help="a profile (default: bench.py's bench_profile)")
-    ap.add_argument("--format", choices=["pmac", "gcode"], default="pmac")
-    ap.add_argument("--runs", type=int, default=1)
-    args = ap.parse_args()
+    args = bench.program_parser(__doc__.split("\n")[0]).parse_args()
     _install()
     with tempfile.TemporaryDirectory() as d:
-        program = args.program
-        if program is None:
-            program = os.path.join(d, f"finish-{args.lines}.ngc")
-            Path(program).write_text(bench.generate(args.lines))
-        profile = args.profile or str(bench.bench_profile(Path(d) / "bench.toml"))
+        program, profile = bench.program_and_profile(args, Path(d))
         suffix = ".pmc" if args.format == "pmac" else ".out.ngc"
         for i in range(args.runs):
             output = os.path.join(d, f"out{i}{suffix}")

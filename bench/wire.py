@@ -17,8 +17,6 @@ compare runs made side by side).
 
 from __future__ import annotations
 
-import argparse
-import os
 import sys
 import tempfile
 import time
@@ -29,6 +27,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+import bench  # noqa: E402
 from prsxy_post import convert, sinks, wire  # noqa: E402
 from prsxy_post.files import load_profile  # noqa: E402
 
@@ -83,21 +82,9 @@ def crossing(chunks: list[Any], plan_read: bool, packed: bool) -> tuple[float, f
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--lines", type=int, default=200_000, help="generated program's size")
-    ap.add_argument("--program", help="a G-code file instead of a generated one")
-    ap.add_argument("--profile", help="a profile (default: bench.py's bench_profile)")
-    ap.add_argument("--format", choices=["pmac", "gcode"], default="pmac")
-    ap.add_argument("--runs", type=int, default=1)
-    args = ap.parse_args()
+    args = bench.program_parser(__doc__.split("\n")[0]).parse_args()
     with tempfile.TemporaryDirectory() as d:
-        import bench
-
-        program = args.program
-        if program is None:
-            program = os.path.join(d, f"finish-{args.lines}.ngc")
-            Path(program).write_text(bench.generate(args.lines))
-        profile = args.profile or str(bench.bench_profile(Path(d) / "bench.toml"))
+        program, profile = bench.program_and_profile(args, Path(d))
         chunks, plan_read = readies(program, profile, args.format)
         points = sum(len(s) for r in chunks for _, s, _ in r.earlier + r.pieces)
         print(f"{len(chunks)} chunks, {points:,} points; the chain reads the plans: {plan_read}")
