@@ -287,16 +287,26 @@ def part_path(out: str, part: int, split: bool) -> str:
     return f"{base}.part{part + 1}{ext}"
 
 
+#: a part's text is put on disk (``fdatasync``) each time this much more of it
+#: [characters: the text is ASCII, bytes] has been written, so the disk writes as
+#: the conversion runs and the end waits only for the rest: the last ``fsync`` of
+#: a 69 MB PMAC program took 0.04 s of the command's wall time on its own
+#: (``bench/timeline.py --lines 200000``: the writer ran 0.047 s after the chain's
+#: last chunk)
+SYNC_CHARS = 8 << 20
+
+
 @dataclass
 class Parts:
     """The output's parts as temp files beside their targets (or in memory for
-    standard output, ``output == "-"``)."""
+    standard output, ``output == "-"``), each on disk at :meth:`close`."""
 
     output: str
     split: bool
     temps: dict[int, str] = field(default_factory=dict)
     memory: dict[int, list[str]] = field(default_factory=dict)
     _files: dict[int, Any] = field(default_factory=dict)
+    _unsynced: dict[int, int] = field(default_factory=dict)
 
     def emit(self, pieces: list[Piece]) -> None:
         for part, text in pieces:
@@ -311,7 +321,14 @@ class Parts:
                 )
                 self.temps[part] = tmp
                 self._files[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
-            self._files[part].write(text)
+                self._unsynced[part] = 0
+            fh = self._files[part]
+            fh.write(text)
+            self._unsynced[part] += len(text)
+            if self._unsynced[part] >= SYNC_CHARS:
+                fh.flush()
+                _datasync(fh.fileno())
+                self._unsynced[part] = 0
 
     def close(self) -> None:
         """Every part complete on disk."""
@@ -328,6 +345,12 @@ class Parts:
         for tmp in self.temps.values():
             if os.path.exists(tmp):
                 os.unlink(tmp)
+
+
+def _datasync(fd: int) -> None:
+    """The file's data on disk (``fdatasync``; ``fsync`` where the system has no
+    such call): :meth:`Parts.close`'s ``fsync`` then has only the rest to write."""
+    getattr(os, "fdatasync", os.fsync)(fd)
 
 
 @dataclass

@@ -223,3 +223,29 @@ def test_a_channel_carries_arrays_whole_and_says_when_the_other_end_closed() -> 
     with pytest.raises(EOFError):
         recv.recv()
     recv.close()
+
+
+def test_a_part_is_put_on_disk_as_it_is_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each time SYNC_CHARS more of a part is written, everything written so far
+    is in the file (Python's buffer flushed) when its data is synced, so the end
+    waits only for the rest; the parts of a split output each on their own count,
+    and the files hold the text whole."""
+    synced: list[tuple[str, int]] = []
+
+    def datasync(fd: int) -> None:
+        synced.append((os.readlink(f"/proc/self/fd/{fd}"), os.fstat(fd).st_size))
+
+    monkeypatch.setattr(sinks, "SYNC_CHARS", 100)
+    monkeypatch.setattr(os, "fdatasync", datasync)
+    parts = sinks.Parts(str(tmp_path / "x.pmc"), split=True)
+    pieces = [(0, "a" * 60), (1, "b" * 150), (0, "c" * 60), (0, "d" * 30), (1, "e" * 10)]
+    for piece in pieces:
+        parts.emit([piece])
+    first, second = parts.temps[0], parts.temps[1]
+    # part 1 passes 100 characters at once (150), part 0 at its second piece (120)
+    assert synced == [(second, 150), (first, 120)]
+    parts.close()
+    assert Path(first).read_text() == "a" * 60 + "c" * 60 + "d" * 30
+    assert Path(second).read_text() == "b" * 150 + "e" * 10
