@@ -201,3 +201,42 @@ def test_output_pmac_section() -> None:
         profile_mod.loads(text + "\n[output.pmac]\nbacklash_takeup_mm = 0\n", "x.toml")
     with pytest.raises(ProfileError, match=r"output.pmac.takeup: unknown key"):
         profile_mod.loads(text + "\n[output.pmac]\ntakeup = 1\n", "x.toml")
+
+
+PROFILE_FILES = sorted((ROOT / "profiles").glob("*.toml")) + sorted(VECTORS.glob("*.toml"))
+
+
+def test_a_profile_text_is_parsed_once_and_each_load_gets_its_own_profile(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A batch loads the same profile for every program: its TOML is parsed once
+    per text (a changed text again, the last PARSED_KEEP kept), and every load
+    still validates into a profile of its own, equal to one made from a fresh
+    parse, whose document is its own copy: the parse kept for the next load is
+    the text's, whatever was done with the profiles made from it."""
+    import tomllib
+
+    monkeypatch.setattr(profile_mod, "_PARSED", {})
+    parses: list[str] = []
+    parse = tomllib.loads
+
+    def counted(text: str) -> dict:  # type: ignore[type-arg]
+        parses.append(text)
+        return parse(text)
+
+    monkeypatch.setattr(profile_mod.tomllib, "loads", counted)
+    texts = [p.read_text() for p in PROFILE_FILES]
+    first = [profile_mod.loads(t, str(p)) for t, p in zip(texts, PROFILE_FILES, strict=True)]
+    first[0].raw["kinematics"]["tool_length"] = -1.0  # what a caller may do with its own
+    again = [profile_mod.loads(t, str(p)) for t, p in zip(texts, PROFILE_FILES, strict=True)]
+    assert parses == texts
+    for a, b, text in zip(first, again, texts, strict=True):
+        assert a is not b and a.raw is not b.raw
+        assert b.raw == parse(text)
+        assert b.kinematics == profile_mod.profile_from_dict(parse(text)).kinematics
+        assert repr(b) == repr(a)
+    edited = texts[0].replace("tool_length = 150.0", "tool_length = 151.0", 1)
+    assert edited != texts[0]
+    assert profile_mod.loads(edited).kinematics.tool_length == 151.0
+    assert parses[-1] == edited
+    assert len(profile_mod._PARSED) <= profile_mod.PARSED_KEEP

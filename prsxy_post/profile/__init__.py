@@ -525,10 +525,30 @@ def _tools(c: _Checker, tools_raw: Any) -> dict[int, Tool]:
     return tools
 
 
+#: the documents parsed last, by their text (at most :data:`PARSED_KEEP`): a batch
+#: converts every program with one profile, and parsing its TOML (error maps and
+#: tables of thousands of numbers) was about a third of a small program's
+#: conversion. :func:`profile_from_dict` only reads a document (what it keeps, it
+#: deep-copies), so one parse serves every load of the same text
+_PARSED: dict[str, dict[str, Any]] = {}
+PARSED_KEEP = 4
+
+
+def _parsed(text: str) -> dict[str, Any]:
+    """``tomllib.loads(text)``, parsed once per text (:data:`_PARSED`)."""
+    doc = _PARSED.get(text)
+    if doc is None:
+        doc = tomllib.loads(text)
+        if len(_PARSED) >= PARSED_KEEP:
+            del _PARSED[next(iter(_PARSED))]
+        _PARSED[text] = doc
+    return doc
+
+
 def loads(text: str, source: str = "<profile>") -> Profile:
     """Parse and validate profile TOML text."""
     try:
-        doc = tomllib.loads(text)
+        doc = _parsed(text)
     except tomllib.TOMLDecodeError as exc:
         msg = str(exc)
         line = col = None
