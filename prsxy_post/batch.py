@@ -1,5 +1,5 @@
-"""Several programs at once (``convert --jobs``): each in a forked process of its
-own, a few at a time, and what became of each.
+"""Several programs at once (``convert --jobs``): N forked worker processes, each
+converting one program after another, and what became of each.
 
 One program's error does not stop the others. Ctrl-C does: every worker is told
 to stop at once (SIGTERM), removes its temp files, and says whether its outputs
@@ -122,11 +122,28 @@ def _raise_stop(signum: int, frame: Any) -> None:
     raise _Stop
 
 
-def _job_process(conn: Any, job: ConvertJob) -> None:
-    """A --jobs worker (forked by :func:`sinks.forked`): converts one program and
-    sends ("done", files) the moment they are in place, or ("error", PrsxyError),
-    ("crash", text), ("stopped",)."""
+def _job_worker(conn: Any, jobs: Sequence[ConvertJob]) -> None:
+    """A --jobs worker (forked by :func:`sinks.forked`, once for every process that
+    converts at once): converts the jobs it is sent one after the other, ("job",
+    i) for ``jobs[i]`` (the list it was forked with: a job's ``on_message`` is a
+    function of the command, which does not pickle), answering each once; ("quit",)
+    ends it. Told to stop (SIGTERM), it unwinds the conversion under way (its
+    ``finally`` blocks remove its temp files), answers it, and ends."""
     signal.signal(signal.SIGTERM, _raise_stop)
+    try:
+        while (msg := conn.recv())[0] == "job":
+            if not _convert_one(conn, jobs[msg[1]]):
+                return
+    except (_Stop, EOFError, OSError):
+        pass  # stopped between two jobs, or the parent is gone: nothing under way
+    finally:
+        conn.close()
+
+
+def _convert_one(conn: Any, job: ConvertJob) -> bool:
+    """One job in a worker: sends ("done", files) the moment they are in place, or
+    ("error", PrsxyError), ("crash", text), ("stopped",), one message a job (what
+    comes after its outputs are in place cannot undo them). False: stopped."""
     sent = False
 
     def published(files: list[str]) -> None:
@@ -135,21 +152,22 @@ def _job_process(conn: Any, job: ConvertJob) -> None:
         sent = True
 
     try:
+        answer: tuple[Any, ...]
         try:
-            stats = convert_file(job, None, published)
-            if not sent:
-                conn.send(("done", stats.written))
+            answer = ("done", convert_file(job, None, published).written)
         except PrsxyError as err:
-            conn.send(("error", err))
+            answer = ("error", err)
         except _Stop:
             if not sent:
                 conn.send(("stopped",))
+            return False
         except BaseException:
-            conn.send(("crash", traceback.format_exc()))
-        finally:
-            conn.close()
+            answer = ("crash", traceback.format_exc())
+        if not sent:
+            conn.send(answer)
+        return True
     except (_Stop, OSError):
-        pass  # stopped while it said how it ended: the parent hears nothing, or a part
+        return False  # stopped while it said how it ended: the parent hears nothing, or a part
 
 
 def _settle(o: Outcome, msg: tuple[Any, ...] | None, proc: Any) -> None:
@@ -188,60 +206,139 @@ def _message(conn: Any, timeout: float | None = None) -> tuple[Any, ...] | None:
     return msg if isinstance(msg, tuple) and msg else None
 
 
+class _Worker:
+    """A --jobs worker process, its end of the pipe, and the job it converts (None:
+    none, it waits for one)."""
+
+    def __init__(self, jobs: Sequence[ConvertJob]) -> None:
+        self.conn, child = sinks.pipe(duplex=True)
+        self.proc = sinks.forked(_job_worker, child, jobs)
+        child.close()
+        self.job: int | None = None
+
+
 def _run_in_processes(
     outcomes: list[Outcome], workers: int, finished: Callable[[Outcome], None] | None
 ) -> None:
-    """Each job in a forked process of its own, ``workers`` at a time; on Ctrl-C,
-    SIGTERM to every one running, whose answers (written whole, or stopped) are
-    then collected."""
+    """The jobs in ``workers`` forked processes, each converting one job after
+    another (a fork costs a small program's conversion time again: 80 programs
+    of 16-26 lines took as long with two processes as with one when each had a
+    process of its own); a worker that dies fails its job and another takes its
+    place. On Ctrl-C, SIGTERM to every worker, whose answers (written whole, or
+    stopped) are then collected."""
     # here, not at the top: a single conversion (most commands) never forks
     from multiprocessing.connection import wait
 
+    jobs = [o.job for o in outcomes]
     waiting = list(range(len(outcomes)))[::-1]
-    running: dict[int, tuple[Any, Any]] = {}
+    pool: list[_Worker] = []
     try:
-        while waiting or running:
-            while waiting and len(running) < workers:
-                i = waiting.pop()
-                with sinks.signals_held():  # a Ctrl-C finds it started and listed, or neither
-                    recv, send = sinks.pipe(duplex=False)
-                    outcomes[i].state = "running"
-                    running[i] = (sinks.forked(_job_process, send, outcomes[i].job), recv)
-                    send.close()
-            ready = wait([conn for _, conn in running.values()])
-            for i, (proc, conn) in list(running.items()):
-                if conn in ready:
-                    _settle(outcomes[i], _message(conn), proc)
-                    proc.join()
-                    conn.close()
-                    del running[i]
-                    if outcomes[i].state != "done":  # a worker killed outright left them
-                        sinks.remove_leftovers(outcomes[i].job.output)
-                    if finished is not None:
-                        finished(outcomes[i])
+        while waiting or any(w.job is not None for w in pool):
+            _hand_out(outcomes, waiting, pool, workers, jobs)
+            busy = [w for w in pool if w.job is not None]
+            ready = wait([w.conn.fileno() for w in busy])
+            for w in busy:
+                if w.conn.fileno() in ready:
+                    _heard(outcomes, w, pool, finished)
     except KeyboardInterrupt:
-        _stop_all(outcomes, running)
+        _stop_all(outcomes, pool)
         raise
+    _end_pool(pool)
 
 
-def _stop_all(outcomes: list[Outcome], running: dict[int, tuple[Any, Any]]) -> None:
-    """SIGTERM to every worker at once; each answers (done or stopped) and ends
-    within seconds, or is killed and its temp files removed here. A second
+def _hand_out(
+    outcomes: list[Outcome],
+    waiting: list[int],
+    pool: list[_Worker],
+    workers: int,
+    jobs: Sequence[ConvertJob],
+) -> None:
+    """The next waiting jobs to the idle workers, forking more up to ``workers``;
+    the idle workers end once no job waits."""
+    for w in pool:
+        if not waiting:
+            break
+        if w.job is None:
+            _assign(outcomes, waiting, w)
+    while waiting and len(pool) < workers:
+        with sinks.signals_held():  # a Ctrl-C finds it started and listed, or neither
+            pool.append(_Worker(jobs))
+        _assign(outcomes, waiting, pool[-1])
+    if not waiting:
+        _end_pool([w for w in pool if w.job is None])
+        pool[:] = [w for w in pool if w.job is not None]
+
+
+def _assign(outcomes: list[Outcome], waiting: list[int], w: _Worker) -> None:
+    i = waiting.pop()
+    with sinks.signals_held():  # a Ctrl-C finds it running and sent, or neither
+        outcomes[i].state = "running"
+        w.job = i
+        try:
+            w.conn.send(("job", i))
+        except OSError:
+            pass  # the worker is gone: its end of the pipe reads as closed (below)
+
+
+def _heard(
+    outcomes: list[Outcome],
+    w: _Worker,
+    pool: list[_Worker],
+    finished: Callable[[Outcome], None] | None,
+) -> None:
+    """A worker's answer to its job, or its end (the job failed): the worker leaves
+    the pool when it has ended."""
+    i = w.job
+    assert i is not None
+    msg = _message(w.conn)
+    _settle(outcomes[i], msg, w.proc)
+    w.job = None
+    if msg is None or msg[0] == "stopped":  # it has ended, or is ending
+        _ended(w)
+        pool.remove(w)
+    if outcomes[i].state != "done":  # a worker killed outright left them
+        sinks.remove_leftovers(outcomes[i].job.output)
+    if finished is not None:
+        finished(outcomes[i])
+
+
+def _end_pool(pool: list[_Worker]) -> None:
+    """Idle workers told to end, and ended."""
+    for w in pool:
+        try:
+            w.conn.send(("quit",))
+        except OSError:
+            pass  # already gone
+    for w in pool:
+        _ended(w)
+
+
+def _ended(w: _Worker) -> None:
+    """A worker that ends by itself, waited for (killed if it has not within
+    seconds), its pipe closed."""
+    w.proc.join(10.0)
+    sinks.stop(w.proc)
+    w.conn.close()
+
+
+def _stop_all(outcomes: list[Outcome], pool: list[_Worker]) -> None:
+    """SIGTERM to every worker at once; each answers its job (done or stopped) and
+    ends within seconds, or is killed and its temp files removed here. A second
     Ctrl-C meanwhile is ignored, so the cleanup is not cut short."""
     old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
-        for proc, _ in running.values():
-            if proc.is_alive():
-                proc.terminate()
+        for w in pool:
+            if w.proc.is_alive():
+                w.proc.terminate()
         deadline = time.monotonic() + 10.0
-        for i, (proc, conn) in running.items():
-            o = outcomes[i]
-            if o.state == "running":  # not yet heard (a Ctrl-C may fall just after)
+        for w in pool:
+            o = outcomes[w.job] if w.job is not None else None
+            if o is not None and o.state == "running":  # not yet heard
                 o.state = "stopped"
-                _settle(o, _message(conn, max(0.0, deadline - time.monotonic())), proc)
-            sinks.stop(proc, max(0.0, deadline - time.monotonic()))
-            conn.close()
-            if o.state != "done":
+                _settle(o, _message(w.conn, max(0.0, deadline - time.monotonic())), w.proc)
+            sinks.stop(w.proc, max(0.0, deadline - time.monotonic()))
+            w.conn.close()
+            if o is not None and o.state != "done":
                 sinks.remove_leftovers(o.job.output)
     finally:
         signal.signal(signal.SIGINT, old)

@@ -218,6 +218,120 @@ def test_batch_with_jobs(runner: CliRunner, tmp_path: Path) -> None:
         assert got == (GOLDEN / f"{Path(s).stem}.prsxy-shop.pmac").read_text()
 
 
+def test_jobs_are_converted_by_as_many_worker_processes_as_asked(
+    runner: CliRunner, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Nine programs with --jobs 2: two worker processes are forked, each converting
+    one program after another (a process per program cost as much as the small
+    programs' conversions), and every output is its golden file, one bad program
+    among them failing alone with its own error."""
+    from prsxy_post import sinks
+
+    forked = []
+    fork = sinks.forked
+
+    def counted(target, *args):  # type: ignore[no-untyped-def]
+        forked.append(target.__name__)
+        return fork(target, *args)
+
+    monkeypatch.setattr(sinks, "forked", counted)
+    bad = tmp_path / "bad.ngc"
+    bad.write_text("G1 X1 F100\nG1 X2 Q\n")
+    programs = [f"samples/{s}" for s in SAMPLES] * 3
+    programs.insert(4, str(bad))
+    names = [f"{i}-{Path(p).name}" for i, p in enumerate(programs)]
+    src = tmp_path / "src"
+    src.mkdir()
+    for name, prog in zip(names, programs, strict=True):
+        (src / name).write_text((ROOT / prog).read_text())
+    out = tmp_path / "out"
+    r = runner.invoke(
+        main,
+        [
+            "convert",
+            *[str(src / n) for n in names],
+            "--profile",
+            SHOP,
+            "--out-dir",
+            str(out),
+            "--jobs",
+            "2",
+            "--quiet",
+        ],
+    )
+    assert r.exit_code == 1, r.output
+    assert forked == ["_job_worker", "_job_worker"]
+    assert r.stderr.startswith(f"{src / names[4]}:2:"), r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    for name, prog in zip(names, programs, strict=True):
+        if prog == str(bad):
+            assert not (out / f"{Path(name).stem}.pmc").exists()
+            continue
+        got = (out / f"{Path(name).stem}.pmc").read_text()
+        want = (GOLDEN / f"{Path(prog).stem}.prsxy-shop.pmac").read_text()
+        # the golden header names the sample; the rest is the same text
+        assert got.replace(str(src / name), f"samples/{Path(prog).name}") == want
+
+
+def test_a_jobs_worker_that_dies_fails_its_program_and_another_takes_its_place(
+    runner: CliRunner, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """--jobs 2, the worker converting the first program is killed outright (the
+    patched conversion, inherited by the forked workers, kills its own process on
+    that program): that program fails, saying so, and a third worker is forked for
+    the programs still waiting, which are written whole."""
+    import signal
+
+    from prsxy_post import batch, sinks
+
+    forked = []
+    fork = sinks.forked
+    convert = batch.convert_file
+
+    def counted(target, *args):  # type: ignore[no-untyped-def]
+        forked.append(target.__name__)
+        return fork(target, *args)
+
+    def dying(job, *args):  # type: ignore[no-untyped-def]
+        if Path(job.program).name == "x.ngc":
+            os.kill(os.getpid(), signal.SIGKILL)
+        return convert(job, *args)
+
+    monkeypatch.setattr(sinks, "forked", counted)
+    monkeypatch.setattr(batch, "convert_file", dying)
+    src = tmp_path / "src"
+    src.mkdir()
+    names = ["x.ngc", "a.ngc", "b.ngc", "c.ngc"]
+    for name in names:
+        (src / name).write_text((ROOT / "samples" / "pocket.ngc").read_text())
+    out = tmp_path / "out"
+    r = runner.invoke(
+        main,
+        [
+            "convert",
+            *[str(src / n) for n in names],
+            "--profile",
+            SHOP,
+            "--out-dir",
+            str(out),
+            "--jobs",
+            "2",
+            "--quiet",
+        ],
+    )
+    assert r.exit_code == 3, r.output
+    assert r.stderr.strip() == (
+        f"{src / 'x.ngc'}: the process converting it ended without a result "
+        f"(killed by SIGKILL); {out / 'x.pmc'} not written"
+    )
+    assert forked == ["_job_worker"] * 3
+    assert sorted(p.name for p in out.iterdir()) == ["a.pmc", "b.pmc", "c.pmc"]
+    want = (GOLDEN / "pocket.prsxy-shop.pmac").read_text()
+    for name in ("a", "b", "c"):
+        got = (out / f"{name}.pmc").read_text()
+        assert got.replace(str(src / f"{name}.ngc"), "samples/pocket.ngc") == want
+
+
 def test_stdout_and_split_programs(runner: CliRunner, tmp_path: Path) -> None:
     r = invoke(runner, "convert", "samples/pocket.ngc", "--profile", SHOP, "-o", "-")
     assert r.exit_code == 0 and "OPEN PROG 1 CLEAR" in r.output
