@@ -218,16 +218,11 @@ def test_batch_with_jobs(runner: CliRunner, tmp_path: Path) -> None:
         assert got == (GOLDEN / f"{Path(s).stem}.prsxy-shop.pmac").read_text()
 
 
-def test_jobs_are_converted_by_as_many_worker_processes_as_asked(
-    runner: CliRunner, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """Nine programs with --jobs 2: two worker processes are forked, each converting
-    one program after another (a process per program cost as much as the small
-    programs' conversions), and every output is its golden file, one bad program
-    among them failing alone with its own error."""
+def _forks_counted(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """The names of the functions :func:`sinks.forked` starts from now on."""
     from prsxy_post import sinks
 
-    forked = []
+    forked: list[str] = []
     fork = sinks.forked
 
     def counted(target, *args):  # type: ignore[no-untyped-def]
@@ -235,42 +230,43 @@ def test_jobs_are_converted_by_as_many_worker_processes_as_asked(
         return fork(target, *args)
 
     monkeypatch.setattr(sinks, "forked", counted)
-    bad = tmp_path / "bad.ngc"
-    bad.write_text("G1 X1 F100\nG1 X2 Q\n")
-    programs = [f"samples/{s}" for s in SAMPLES] * 3
-    programs.insert(4, str(bad))
-    names = [f"{i}-{Path(p).name}" for i, p in enumerate(programs)]
-    src = tmp_path / "src"
+    return forked
+
+
+def _jobs_of(runner: CliRunner, src: Path, texts: dict[str, str], out: Path):  # type: ignore[no-untyped-def]
+    """``convert`` of programs ``texts`` (name: text, written into ``src``) into
+    ``out`` with --jobs 2."""
     src.mkdir()
-    for name, prog in zip(names, programs, strict=True):
-        (src / name).write_text((ROOT / prog).read_text())
-    out = tmp_path / "out"
-    r = runner.invoke(
-        main,
-        [
-            "convert",
-            *[str(src / n) for n in names],
-            "--profile",
-            SHOP,
-            "--out-dir",
-            str(out),
-            "--jobs",
-            "2",
-            "--quiet",
-        ],
-    )
+    for name, text in texts.items():
+        (src / name).write_text(text)
+    args = ["convert", *[str(src / n) for n in texts], "--profile", SHOP, "--out-dir", str(out)]
+    return runner.invoke(main, [*args, "--jobs", "2", "--quiet"])
+
+
+def test_jobs_are_converted_by_as_many_worker_processes_as_asked(
+    runner: CliRunner, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Nine programs with --jobs 2: two worker processes are forked, each converting
+    one program after another (a process per program cost as much as the small
+    programs' conversions), and every output is its golden file, one bad program
+    among them failing alone with its own error."""
+    forked = _forks_counted(monkeypatch)
+    programs = [f"samples/{s}" for s in SAMPLES] * 3
+    items = [(f"{i}-{Path(p).name}", (ROOT / p).read_text()) for i, p in enumerate(programs)]
+    items.insert(4, ("bad.ngc", "G1 X1 F100\nG1 X2 Q\n"))
+    src, out = tmp_path / "src", tmp_path / "out"
+    r = _jobs_of(runner, src, dict(items), out)
     assert r.exit_code == 1, r.output
     assert forked == ["_job_worker", "_job_worker"]
-    assert r.stderr.startswith(f"{src / names[4]}:2:"), r.stderr
+    assert r.stderr.startswith(f"{src / 'bad.ngc'}:2:"), r.stderr
     assert len(r.stderr.strip().splitlines()) == 1, r.stderr
-    for name, prog in zip(names, programs, strict=True):
-        if prog == str(bad):
-            assert not (out / f"{Path(name).stem}.pmc").exists()
-            continue
+    assert not (out / "bad.pmc").exists()
+    for i, prog in enumerate(programs):
+        name = f"{i}-{Path(prog).name}"
         got = (out / f"{Path(name).stem}.pmc").read_text()
         want = (GOLDEN / f"{Path(prog).stem}.prsxy-shop.pmac").read_text()
         # the golden header names the sample; the rest is the same text
-        assert got.replace(str(src / name), f"samples/{Path(prog).name}") == want
+        assert got.replace(str(src / name), prog) == want
 
 
 def test_a_jobs_worker_that_dies_fails_its_program_and_another_takes_its_place(
@@ -282,43 +278,20 @@ def test_a_jobs_worker_that_dies_fails_its_program_and_another_takes_its_place(
     the programs still waiting, which are written whole."""
     import signal
 
-    from prsxy_post import batch, sinks
+    from prsxy_post import batch
 
-    forked = []
-    fork = sinks.forked
+    forked = _forks_counted(monkeypatch)
     convert = batch.convert_file
-
-    def counted(target, *args):  # type: ignore[no-untyped-def]
-        forked.append(target.__name__)
-        return fork(target, *args)
 
     def dying(job, *args):  # type: ignore[no-untyped-def]
         if Path(job.program).name == "x.ngc":
             os.kill(os.getpid(), signal.SIGKILL)
         return convert(job, *args)
 
-    monkeypatch.setattr(sinks, "forked", counted)
     monkeypatch.setattr(batch, "convert_file", dying)
-    src = tmp_path / "src"
-    src.mkdir()
-    names = ["x.ngc", "a.ngc", "b.ngc", "c.ngc"]
-    for name in names:
-        (src / name).write_text((ROOT / "samples" / "pocket.ngc").read_text())
-    out = tmp_path / "out"
-    r = runner.invoke(
-        main,
-        [
-            "convert",
-            *[str(src / n) for n in names],
-            "--profile",
-            SHOP,
-            "--out-dir",
-            str(out),
-            "--jobs",
-            "2",
-            "--quiet",
-        ],
-    )
+    pocket = (ROOT / "samples" / "pocket.ngc").read_text()
+    src, out = tmp_path / "src", tmp_path / "out"
+    r = _jobs_of(runner, src, {f"{n}.ngc": pocket for n in "xabc"}, out)
     assert r.exit_code == 3, r.output
     assert r.stderr.strip() == (
         f"{src / 'x.ngc'}: the process converting it ended without a result "
@@ -327,7 +300,7 @@ def test_a_jobs_worker_that_dies_fails_its_program_and_another_takes_its_place(
     assert forked == ["_job_worker"] * 3
     assert sorted(p.name for p in out.iterdir()) == ["a.pmc", "b.pmc", "c.pmc"]
     want = (GOLDEN / "pocket.prsxy-shop.pmac").read_text()
-    for name in ("a", "b", "c"):
+    for name in "abc":
         got = (out / f"{name}.pmc").read_text()
         assert got.replace(str(src / f"{name}.ngc"), "samples/pocket.ngc") == want
 
