@@ -61,3 +61,31 @@ def test_errors_arrive_in_program_order_from_the_interpreter_process(
     apart = _error(program, tmp_path / "b.pmc", parallel=True)
     assert apart == here
     assert here.startswith(f"{program}:{line}:"), here
+
+
+def test_the_interpreter_process_makes_way_for_the_chain_and_the_writer(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The interpreter process, which runs ahead and waits for the chain most of the
+    time, runs INTERPRETER_NICE lower in priority than the command's own process
+    (where it converts the program, as the forked process inherits the patch); the
+    output is that of one process."""
+    import os
+
+    from prsxy_post import convert
+
+    planned_here = convert._planned_here
+    seen = tmp_path / "niceness"
+
+    def planned(*args, **kwargs):  # type: ignore[no-untyped-def]
+        seen.write_text(str(os.getpriority(os.PRIO_PROCESS, 0)))
+        return planned_here(*args, **kwargs)
+
+    monkeypatch.setattr(convert, "_planned_here", planned)
+    program = _program(tmp_path, 3000, {})
+    for parallel, out in ((False, tmp_path / "a.pmc"), (True, tmp_path / "b.pmc")):
+        convert_file(ConvertJob(program, SHOP, "pmac", str(out), parallel=parallel))
+        mine = os.getpriority(os.PRIO_PROCESS, 0)
+        want = min(mine + convert.INTERPRETER_NICE, 19) if parallel else mine
+        assert int(seen.read_text()) == want
+    assert (tmp_path / "b.pmc").read_bytes() == (tmp_path / "a.pmc").read_bytes()
