@@ -270,6 +270,7 @@ def _hand_out(
 
 
 def _assign(outcomes: list[Outcome], waiting: list[int], w: _Worker) -> None:
+    """The next waiting job to worker ``w``, and marked running."""
     i = waiting.pop()
     with sinks.signals_held():  # a Ctrl-C finds it running and sent, or neither
         outcomes[i].state = "running"

@@ -288,8 +288,9 @@ def _make_way() -> None:
     the command took 7-10 % less time (``bench/bench.py``, docs/measurements.md); with
     PMAC output, whose chain is, the same. The system runs the interpreter whenever
     a core is free, and with the session's processes grouped (Linux's autogroup) the
-    priority counts only against them. A system that refuses it (it cannot, on
-    POSIX, to a process lowering its own) changes the speed, not the output."""
+    priority counts only against them. POSIX lets a process lower its own priority;
+    a system that refused would change the speed only, never the output, so the
+    conversion goes on."""
     try:
         os.nice(INTERPRETER_NICE)
     except OSError:
