@@ -290,7 +290,7 @@ def _make_way() -> None:
     and waits for it most of the time, while the chain and the writer are the
     conversion's slowest steps: where the three processes want more cores than there
     are, those two get them first. With G-code output, whose writer is the slowest,
-    the command took 7-10 % less time (``bench/bench.py``, docs/measurements.md); with
+    the command took 6-10 % less time (``bench/bench.py``, docs/measurements.md); with
     PMAC output, whose chain is, the same. The system runs the interpreter whenever
     a core is free, and with the session's processes grouped (Linux's autogroup) the
     priority counts only against them. POSIX lets a process lower its own priority;
