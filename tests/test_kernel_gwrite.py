@@ -193,10 +193,7 @@ def _blend_on_circles(
     speeding up a servo cycle ahead)."""
     period = gwrite.SERVO_PERIOD_S
     v_n = len_n / t_n
-    reach_p = min(len_p / t_p, math.sqrt(a_p * len_p))
-    reach_n = min(v_n, math.sqrt(a_n * len_n))
-    t_b = min(len_p / reach_p, len_n / reach_n, max(reach_p / a_p, reach_n / a_n))
-    v_b = min(reach_p, t_b * a_p)
+    v_b = gwrite.blend_speed(len_p, t_p, a_p, len_n, t_n, a_n)
     t = np.linspace(0.0, v_b / a_p, 4001)
     left = np.maximum(v_b * v_b / (2.0 * a_p) - v_b * t + a_p * t * t / 2.0, 0.0)
     tn = t + period

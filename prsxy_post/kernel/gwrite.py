@@ -278,12 +278,8 @@ def arc_blend_cut(
     ``len_n``, ``t_n``, ``a_n``, ``r_n`` the same.
 
     LinuxCNC starts the blend once the previous move, slowing to a stop at a_p,
-    is below its blend speed (``tcIsBlending``, tc.c:529-540)
-
-        v_b = min(v̂_p, a_p t_b),  t_b = min(L_p / v̂_p, L_n / v̂_n, max(v̂_p / a_p, v̂_n / a_n))
-
-    with v̂ = min(L / t, √(a L)) (``tpComputeBlendVelocity``, tp.c:2209-2247;
-    ``tpCalculateTriangleVel``, tp.c:757-766), so its last L₀ = v_b² / (2 a_p)
+    is below its blend speed v_b (``tcIsBlending``, tc.c:529-540;
+    :func:`blend_speed`), so its last L₀ = v_b² / (2 a_p)
     overlap the next move, which speeds up from rest at a_n towards L_n / t_n a
     servo cycle ahead (rule 4). Their sum leaves the path where one is an arc:
     with ``a`` the arc's length from the join and ``b`` the line's (the arc's
@@ -298,10 +294,7 @@ def arc_blend_cut(
     if t_p <= 0.0 or t_n <= 0.0 or len_p <= 0.0 or len_n <= 0.0:
         return 0.0
     v_n = len_n / t_n
-    reach_p = min(len_p / t_p, math.sqrt(a_p * len_p))
-    reach_n = min(v_n, math.sqrt(a_n * len_n))
-    t_b = min(min(len_p / reach_p, len_n / reach_n), max(reach_p / a_p, reach_n / a_n))
-    v_b = min(reach_p, t_b * a_p)
+    v_b = blend_speed(len_p, t_p, a_p, len_n, t_n, a_n)
     overlap = v_b * v_b / (2.0 * a_p)
     cut = 0.0
     step = v_b / a_p / BLEND_STEPS
@@ -321,6 +314,23 @@ def arc_blend_cut(
             e += _rise(gone, left, r_n)
         cut = max(cut, e)
     return cut
+
+
+def blend_speed(
+    len_p: float, t_p: float, a_p: float, len_n: float, t_n: float, a_n: float
+) -> float:
+    """The speed v_b [mm/s] below which LinuxCNC starts a parabolic blend of a move
+    ``len_p`` [mm] written to take ``t_p`` [s], tangential acceleration ``a_p``
+    [mm/s²], into the next (``len_n``, ``t_n``, ``a_n``; all > 0):
+
+        v_b = min(v̂_p, a_p t_b),  t_b = min(L_p / v̂_p, L_n / v̂_n, max(v̂_p / a_p, v̂_n / a_n))
+
+    with v̂ = min(L / t, √(a L)) (``tpComputeBlendVelocity``, tp.c:2209-2247;
+    ``tpCalculateTriangleVel``, tp.c:757-766). :func:`arc_blend_cut`'s timing."""
+    reach_p = min(len_p / t_p, math.sqrt(a_p * len_p))
+    reach_n = min(len_n / t_n, math.sqrt(a_n * len_n))
+    t_b = min(min(len_p / reach_p, len_n / reach_n), max(reach_p / a_p, reach_n / a_n))
+    return min(reach_p, t_b * a_p)
 
 
 def _rise(a: float, b: float, radius: float) -> float:
