@@ -391,16 +391,17 @@ def named_segments(run_: MotionRun, text: str) -> np.ndarray:
 
 
 def segments(
-    run_: MotionRun, text: str, points: np.ndarray, arcs: dict | None = None
+    run_: MotionRun, named: np.ndarray, points: np.ndarray, arcs: dict | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """For each cycle, the written point whose segment it is in, (m,), and the
     commanded pose's distance from that segment [mm, a degree weighing as a µm].
 
-    ``motion.program-line`` names the segment being executed; in a blend two are,
-    so the nearer of the named one and its neighbours (in pose space, a degree
-    weighing as a µm) is taken. ``arcs``: the G2/G3 moves by the point they end at
+    ``motion.program-line`` names the segment being executed (``named``,
+    :func:`named_segments`); in a blend two are, so the nearer of the named one
+    and its neighbours (in pose space, a degree weighing as a µm) is taken.
+    ``arcs``: the G2/G3 moves by the point they end at
     (`tests.controllers.GcodeRun.arcs`), whose distance is to the arc."""
-    seg = named_segments(run_, text)
+    seg = named
     best = np.full(len(seg), np.inf)
     out = seg.copy()
     w = np.array([1.0, 1.0, 1.0, 1e-3, 1e-3])

@@ -85,7 +85,8 @@ def run_on_linuxcnc(truth, motions, res, text: str) -> tuple[ctl.Trace, lm.Motio
     written = ctl.run_gcode(text)
     run = lm.run(text, truth.limits, written.q[0], timeout_s=3.0 * written.t[-1] + 30.0)
     assert not run.errors, run.errors
-    seg, off = lm.segments(run, text, written.q, written.arcs)
+    named = lm.named_segments(run, text)
+    seg, off = lm.segments(run, named, written.q, written.arcs)
     # the cycle in which LinuxCNC's planner has moved on to the next segment while
     # its command, a cubic B-spline through the planner's points reaching a cycle
     # ahead (cubicAddPoint, cubicInterpolate: control.c:1358-1377), still lies
@@ -93,7 +94,6 @@ def run_on_linuxcnc(truth, motions, res, text: str) -> tuple[ctl.Trace, lm.Motio
     # next (tpHandleSplitCycle, tp.c:3279), and is judged against both blocks where
     # the one before lies within one block (a segment is judged against the blocks
     # of its two points)
-    named = lm.named_segments(run, text)
     inside = written.line[seg - 1] == written.line[seg]
     seg = np.where((named == seg + 1) & inside, named, seg)
     s = np.linspace(0.0, 1.0, SUBSTEPS + 1)[1:]
