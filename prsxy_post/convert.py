@@ -57,7 +57,8 @@ class ConvertJob:
     start : start pose (x, y, z, a, b) [mm, deg]; default the profile's
     stages : which compensation stages run
     options : how it was asked for, for the output's header
-    chunk : motions per chunk through the chain (the output does not depend on it)
+    chunk : motions per chunk through the chain (the output does not depend on it);
+        None: the output's own, :data:`CHUNK_MOTIONS`
     parallel : read, interpret and plan the program, and solve its points' map and
         IK, in a second process, and write
         the output in a third, while this one runs the rest of the chain (the output
@@ -72,7 +73,7 @@ class ConvertJob:
     start: tuple[float, ...] | None = None
     stages: Stages = field(default_factory=Stages)
     options: str = ""
-    chunk: int = 4096
+    chunk: int | None = None
     parallel: bool = False
     #: the program's (MSG/DEBUG/PRINT): on_message(source, line, kind, text)
     on_message: Callable[[str, int, str, str], None] | None = None
@@ -140,7 +141,8 @@ def _planned_here(
     if planning_made is not None:
         planning_made(planning)
     limits = planning.limits
-    chunks = gcode.rows.chunks(items, job.chunk)
+    size = job.chunk if job.chunk is not None else CHUNK_MOTIONS[dialect.segment]
+    chunks = gcode.rows.chunks(items, size)
     while True:
         t0 = time.process_time()
         batch = gcode.rows.table(next(chunks))
@@ -148,7 +150,7 @@ def _planned_here(
         counts["parse"] += time.process_time() - t0
         counts["motions"] += len(batch)
         yield planning.cut(planning.plan(prepared), solve=True)
-        if len(batch) < job.chunk:
+        if len(batch) < size:
             last = planning.plan(chain.prepare([], prof, limits), final=True)
             yield planning.cut(last, solve=True)
             return
@@ -194,6 +196,8 @@ def _planned_chunks(
     if not job.parallel or job.program == "-" or not sinks.can_fork():
         yield _planned_here(job, prof, counts, bar)
         return
+    from . import writers
+
     recv, send = sinks.pipe(duplex=False)
     proc = sinks.forked(_planning_child, send, job, prof)
     send.close()
@@ -201,7 +205,9 @@ def _planned_chunks(
     # a thread takes chunks off the pipe as they come, so the interpreter runs up
     # to AHEAD chunks ahead while this process is busy (a queue, not the pipe's
     # 64 KiB, holds them): chunk times vary, and neither side waits for the other
-    ahead: queue.Queue[tuple[Any, ...]] = queue.Queue(maxsize=AHEAD)
+    ahead: queue.Queue[tuple[Any, ...]] = queue.Queue(
+        maxsize=AHEAD[writers.dialect(job.fmt).segment]
+    )
     stop = threading.Event()
 
     def pump() -> None:
@@ -269,13 +275,24 @@ def _planned_chunks(
         recv.close()
 
 
+#: motions per chunk through the chain, by how the output moves between its points
+#: (the dialect's ``segment``). Straight lines need about 2.4 times the points of
+#: cubics for the same motions (they must stay within the chord tolerance), and a
+#: chunk's points are the memory of every process: with 4 096 motions a conversion
+#: to G-code of bench/bench.py's program at 2 M lines peaked at 301-319 MB (three
+#: processes, seven runs), with 3 072 and a look-ahead of two (:data:`AHEAD`) at
+#: 278-300 MB (eight runs), the command as fast (three alternating rounds at 2 M
+#: and at 200 k lines: the same within their spread)
+CHUNK_MOTIONS = {"cubic": 4096, "chord": 3072}
+
 #: chunks the interpreter process may run ahead of the chain (in the queue; the
-#: pipe and the thread that fills the queue hold one or two more). Each is memory
-#: of this process: 8.8 MB a chunk of G-code output's points. Three keep the chain
-#: as fed as eight did (bench/bench.py's program at 200 k lines, both formats, and
-#: G-code at 2 M: the same times within their spread) in 45-55 MB less at 2 M
-#: lines with G-code output, 17-27 MB less with PMAC output
-AHEAD = 3
+#: pipe and the thread that fills the queue hold one or two more), by the output's
+#: segment as :data:`CHUNK_MOTIONS`. Each is memory of this process: 8.8 MB a chunk
+#: of 4 096 motions' points of G-code output. Three keep the chain as fed as eight
+#: did (bench/bench.py's program at 200 k lines, both formats, and G-code at 2 M:
+#: the same times within their spread) in 45-55 MB less at 2 M lines with G-code
+#: output, 17-27 MB less with PMAC output; with G-code's smaller chunks two do
+AHEAD = {"cubic": 3, "chord": 2}
 
 #: programs from this size on are read and interpreted in a second process
 PARALLEL_FROM_BYTES = 256 * 1024
