@@ -30,7 +30,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from . import sinks, wire
+from . import sinks, wire, writers
 from .chain import Stages
 from .errors import ProcessFailed, PrsxyError, write_failed
 from .files import (
@@ -128,7 +128,7 @@ def _planned_here(
     lines_from = gcode.FileLines(job.program) if job.program != "-" else None
     # the moves of the compiled fast path come as rows, never a Motion each
     items = gcode.iter_motion_items(counted(batches), cfg, job.program, lines_from=lines_from)
-    from . import errormap, writers
+    from . import errormap
 
     dialect = writers.dialect(job.fmt)
     planning = chain.Planning(
@@ -196,8 +196,6 @@ def _planned_chunks(
     if not job.parallel or job.program == "-" or not sinks.can_fork():
         yield _planned_here(job, prof, counts, bar)
         return
-    from . import writers
-
     recv, send = sinks.pipe(duplex=False)
     proc = sinks.forked(_planning_child, send, job, prof)
     send.close()
@@ -371,7 +369,7 @@ def _convert_file(
         # the interpreter starts first: with a second process, everything below
         # up to the first chunk happens while it reads
         with _planned_chunks(job, prof, counts, bar) as source:
-            from . import chain, errormap, writers
+            from . import chain, errormap
 
             sha = inspect_source(job.program) if job.program != "-" else ""
             stages = job.stages
