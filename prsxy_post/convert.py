@@ -277,10 +277,10 @@ def _planned_chunks(
 #: (the dialect's ``segment``). Straight lines need about 2.4 times the points of
 #: cubics for the same motions (they must stay within the chord tolerance), and a
 #: chunk's points are the memory of every process: with 4 096 motions a conversion
-#: to G-code of bench/bench.py's program at 2 M lines peaked at 301-319 MB (three
-#: processes, seven runs), with 3 072 and a look-ahead of two (:data:`AHEAD`) at
-#: 278-300 MB (eight runs), the command as fast (three alternating rounds at 2 M
-#: and at 200 k lines: the same within their spread)
+#: to G-code of bench/bench.py's program at 2 M lines peaked at 301-327 MB (three
+#: processes, ten runs), with 3 072 and a look-ahead of two (:data:`AHEAD`) at
+#: 278-300 MB (eleven runs), the command as fast (alternating rounds at 2 M and at
+#: 200 k lines: the same within their spread; bench/chunk_memory.py)
 CHUNK_MOTIONS = {"cubic": 4096, "chord": 3072}
 
 #: chunks the interpreter process may run ahead of the chain (in the queue; the
