@@ -107,9 +107,13 @@ def bench_profile(path: Path) -> Path:
 def child_convert(program: str, prof: str, out: str, fmt: str) -> None:
     """Run in a child process: convert and print the stats as JSON."""
     sys.path.insert(0, str(ROOT))
+    from prsxy_post import allocator
     from prsxy_post.convert import ConvertJob, convert_file
     from prsxy_post.runtime import peak_rss_mb
 
+    # the process as the command sets it up (cli.run; OPENBLAS_NUM_THREADS comes
+    # with the environment, user_env, as numpy is loaded before this runs)
+    allocator.keep_freed_memory()
     t0, c0 = time.perf_counter(), os.times()
     st = convert_file(ConvertJob(program, prof, fmt, out, options="bench", parallel=True))
     total, c1 = time.perf_counter() - t0, os.times()
@@ -182,8 +186,12 @@ def user_env() -> dict[str, str]:
     """This environment as a user's install runs the command: Python writes the
     package's bytecode once and reads it after (without ``PYTHONDONTWRITEBYTECODE``,
     every start with sources newer than their cached bytecode compiles them again:
-    about 0.1 s of CPU)."""
-    return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    about 0.1 s of CPU). One OpenBLAS thread unless set, as the command has
+    (prsxy_post.blas_threads), for the child that times the conversion in-process
+    and imports numpy first."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env.setdefault("OPENBLAS_NUM_THREADS", "1")
+    return env
 
 
 def time_command(program: Path, prof: Path, out: Path, fmt: str) -> float:

@@ -34,8 +34,10 @@ import bench
 def child(program: str, prof: str, fmt: str, chunk: int, ahead: int, out: str) -> None:
     """Run in a child process: one conversion, its wall time and peak memory as JSON."""
     sys.path.insert(0, str(bench.ROOT))
-    from prsxy_post import convert, writers
+    from prsxy_post import allocator, convert, writers
     from prsxy_post.runtime import peak_rss_mb
+
+    allocator.keep_freed_memory()  # as the command (cli.run)
 
     convert.AHEAD[writers.dialect(fmt).segment] = ahead
     t0 = time.perf_counter()

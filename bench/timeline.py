@@ -44,7 +44,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import bench  # noqa: E402
-from prsxy_post import chain, convert, sinks  # noqa: E402
+from prsxy_post import allocator, chain, convert, sinks  # noqa: E402
 
 _LOG: dict[str, Any] = {"dir": "", "role": "main", "pid": -1, "fh": None}
 
@@ -315,6 +315,7 @@ def report(by_role: dict[str, list[dict[str, Any]]], t_start: float, t_end: floa
 def run_once(program: str, profile: str, fmt: str, output: str) -> str:
     with tempfile.TemporaryDirectory() as log_dir:
         _LOG.update(dir=log_dir, role="main", pid=-1)
+        allocator.keep_freed_memory()  # as the command (cli.run)
         t0, c0 = time.perf_counter(), time.process_time()
         job = convert.ConvertJob(program, profile, fmt, output, options="bench", parallel=True)
         convert.convert_file(job)
