@@ -9,8 +9,8 @@ Usage::
 It converts the program (bench.py's generated one unless given) in one process
 (``convert_file`` with ``parallel=False``: the same work as the command's three
 processes, without the pipes between them; the allocator set as the command sets
-it, :mod:`prsxy_post.allocator`) under :mod:`cProfile` with the process's
-CPU clock, and sorts every function's own CPU time into:
+it, :mod:`prsxy_post.allocator`) under :mod:`cProfile`, and sorts every function's
+own time into:
 
 - **kernels**: the calls into :mod:`prsxy_post.kernel` (the compiled kernels when
   built: Cython's functions are not profiled, so their time is their caller's, the
@@ -18,7 +18,8 @@ CPU clock, and sorts every function's own CPU time into:
 - **numpy**: numpy's functions and array methods;
 - **I/O**: reading the program, writing the output, syncing it to disk;
 - **Python**: the package's own Python lines (the glue between the kernels);
-- **other**: the standard library and built-ins.
+- **other**: the standard library and built-ins (imports made during the
+  conversion among them).
 
 Then the package's functions ranked by their glue: their own time and that of the
 numpy (and other non-package) calls they make, shared out to the package function
@@ -110,7 +111,10 @@ def profile_conversion(program: str, prof: str, fmt: str) -> tuple[dict, float, 
 
     with tempfile.TemporaryDirectory() as d:
         job = ConvertJob(program, prof, fmt, str(Path(d) / "out"), parallel=False)
-        pr = cProfile.Profile(time.process_time)
+        # the profiler's own clock (a Python clock function would cost every call
+        # more than most calls take, and weigh on the Python share): wall time, which
+        # in one process is its CPU but for the waits on the disk (I/O)
+        pr = cProfile.Profile()
         c0 = time.process_time()
         pr.enable()
         st = convert_file(job)
@@ -134,10 +138,10 @@ def report(stats: dict, cpu: float, points: int, top: int) -> str:
         by_group[group(key)] += tt
     total = sum(by_group.values())
     lines = [
-        f"CPU {cpu:.2f} s profiled ({total:.2f} s in functions), {points:,} points, "
-        f"{1e6 * cpu / max(points, 1):.2f} µs a point",
+        f"CPU {cpu:.2f} s profiled ({total:.2f} s in its functions by the profiler's "
+        f"clock), {points:,} points, {1e6 * cpu / max(points, 1):.2f} µs of CPU a point",
         "",
-        "| where | CPU s | share |",
+        "| where | s | share |",
         "|---|---:|---:|",
     ]
     lines += [f"| {g} | {by_group[g]:.3f} | {by_group[g] / total:.0%} |" for g in GROUPS]
@@ -146,7 +150,7 @@ def report(stats: dict, cpu: float, points: int, top: int) -> str:
         "",
         f"The package's {top} largest glues (own Python and the numpy calls made):",
         "",
-        "| function | glue CPU s | share | calls |",
+        "| function | glue s | share | calls |",
         "|---|---:|---:|---:|",
     ]
     for key, s in sorted(glue.items(), key=lambda kv: -kv[1])[:top]:
