@@ -21,11 +21,11 @@ own time into:
 - **other**: the standard library and built-ins (imports made during the
   conversion among them).
 
-Then the package's functions ranked by their glue: their own time and that of the
-numpy (and other non-package) calls they make, shared out to the package function
-that made them (a numpy function called by another numpy function counts for the
-package function that called the first). That ranking is what the next compiled
-kernel should be chosen from (issue 31).
+Then the largest kernels, and the package's functions ranked by their glue: their
+own time and that of the numpy (and other non-package) calls they make, shared out
+to the package function that made them (a numpy function called by another numpy
+function counts for the package function that called the first). That ranking is
+what the next compiled kernel should be chosen from (issue 31).
 
 The profiler costs every Python call some CPU, so the Python and numpy shares are
 somewhat larger here than in an unprofiled run, and the total is larger than
@@ -145,6 +145,17 @@ def report(stats: dict, cpu: float, points: int, top: int) -> str:
         "|---|---:|---:|",
     ]
     lines += [f"| {g} | {by_group[g]:.3f} | {by_group[g] / total:.0%} |" for g in GROUPS]
+    kernels = sorted(
+        ((k, v[2], v[1]) for k, v in stats.items() if group(k) == "kernels"), key=lambda r: -r[1]
+    )
+    lines += [
+        "",
+        f"The {top} largest kernels (their own time: the compiled call when built):",
+        "",
+        "| kernel | s | share | calls |",
+        "|---|---:|---:|---:|",
+    ]
+    lines += [f"| `{where(k)}` | {t:.3f} | {t / total:.1%} | {n:,} |" for k, t, n in kernels[:top]]
     glue = glue_by_function(stats)
     lines += [
         "",
