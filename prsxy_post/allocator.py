@@ -7,9 +7,9 @@ and hands freed memory at the top of its heap back above its trim threshold, so
 the next chunk's arrays touch new pages again: every page a fault and a page of
 zeros from the kernel. With both thresholds fixed well above a chunk's arrays, the
 memory freed is reused in place: the corrected G-code conversion of bench.py's
-200 000-line program with about 60 % fewer page faults and 4–5 % less CPU
-(``docs/measurements.md``, "The allocator"); PMAC output, with chunks of half the
-size, the same.
+200 000-line program with about 60 % fewer page faults and 4 % less time and CPU
+(``bench/allocator.py``; ``docs/measurements.md``, "Conversion speed"); PMAC output,
+with chunks of half the size, the same.
 
 The command line calls :func:`keep_freed_memory` once, before any conversion (the
 processes it forks inherit the setting); the library never does: a program that
@@ -49,8 +49,8 @@ def keep_freed_memory() -> bool:
         return False
     mallopt.argtypes = (ctypes.c_int, ctypes.c_int)
     mallopt.restype = ctypes.c_int
-    # mallopt returns 1 on success; the order matters: fixing the mmap threshold
-    # first also stops glibc moving the trim threshold
+    # mallopt returns 1 on success; setting either threshold stops glibc moving
+    # both (malloc.c: no_dyn_threshold)
     return bool(mallopt(M_MMAP_THRESHOLD, MMAP_FROM)) and bool(mallopt(M_TRIM_THRESHOLD, TRIM_FROM))
 
 
