@@ -41,23 +41,7 @@ def run_command(program: str, prof: str, fmt: str, out: str, env: dict[str, str]
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "prsxy_post.cli",
-            "convert",
-            program,
-            "--profile",
-            prof,
-            "--format",
-            fmt,
-            "-o",
-            out,
-            "-q",
-        ],
-        check=True,
-        cwd=bench.ROOT,
-        env=env,
+        bench.convert_command(program, prof, out, fmt), check=True, cwd=bench.ROOT, env=env
     )
     wall = time.perf_counter() - t0
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)

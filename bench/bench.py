@@ -194,28 +194,17 @@ def user_env() -> dict[str, str]:
     return env
 
 
+def convert_command(program: Path | str, prof: Path | str, out: Path | str, fmt: str) -> list[str]:
+    """The ``prsxy-post convert`` command line a user runs, quiet (run from
+    :data:`ROOT` with :func:`user_env`)."""
+    opts = ["--profile", str(prof), "--format", fmt, "-o", str(out), "-q"]
+    return [sys.executable, "-m", "prsxy_post.cli", "convert", str(program), *opts]
+
+
 def time_command(program: Path, prof: Path, out: Path, fmt: str) -> float:
     """Wall time of the ``prsxy-post convert`` command, start to exit."""
     t0 = time.perf_counter()
-    subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "prsxy_post.cli",
-            "convert",
-            str(program),
-            "--profile",
-            str(prof),
-            "--format",
-            fmt,
-            "-o",
-            str(out),
-            "-q",
-        ],
-        check=True,
-        cwd=ROOT,
-        env=user_env(),
-    )
+    subprocess.run(convert_command(program, prof, out, fmt), check=True, cwd=ROOT, env=user_env())
     return time.perf_counter() - t0
 
 
