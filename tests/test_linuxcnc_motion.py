@@ -273,8 +273,18 @@ def test_the_line_after_a_dwell_runs_in_exact_path_mode() -> None:
     for k in settles:  # no G64 P between a G4 P0 and the next G1
         nxt = next(j for j in range(k + 1, len(rows)) if rows[j].startswith(("G1 ", "M2")))
         assert not any(r.startswith("G64") for r in rows[k + 1 : nxt])
-    tr, _, _ = run_on_linuxcnc(truth, motions, res, texts[0])
-    assert_on_the_path(tr)
+    tr, run, _ = run_on_linuxcnc(truth, motions, res, texts[0])
+    # off the path once in a full suite's run (0.563 µm at line 7), not again in a
+    # dozen runs alone or under load, nor with LinuxCNC's task cycle at 10 or 100 ms:
+    # when it fails, say how long the motion stood with an empty queue and what
+    # was written for the worst source line
+    marks = [k for k, r in enumerate(rows) if r == f"(line {tr.worst_line})"]
+    at = marks[0] if marks else 0
+    around = "\n".join(rows[max(at - 3, 0) : at + 12])
+    assert tr.path_mm <= TOL_MM, (
+        f"{tr.path_mm * 1000:.3f} µm off the path at line {tr.worst_line}, the queue "
+        f"empty {run.waiting_s:.3f} s of the run; the written lines about it:\n{around}"
+    )
 
 
 #: Programs whose corrected G-code LinuxCNC ran out of bounds while every line was a
