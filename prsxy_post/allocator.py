@@ -40,7 +40,7 @@ def keep_freed_memory() -> bool:
     """Fix glibc's mmap and trim thresholds at :data:`MMAP_FROM` and
     :data:`TRIM_FROM` for this process and those forked from it. Returns whether
     they were set: not with another C library, nor where the user tunes malloc."""
-    if sys.platform != "linux" or not _glibc():
+    if not on_glibc():
         return False
     if any(k in os.environ for k in USER_SETTINGS):
         return False
@@ -54,8 +54,10 @@ def keep_freed_memory() -> bool:
     return bool(mallopt(M_MMAP_THRESHOLD, MMAP_FROM)) and bool(mallopt(M_TRIM_THRESHOLD, TRIM_FROM))
 
 
-def _glibc() -> bool:
-    """This process runs on glibc (musl and others have no such thresholds)."""
+def on_glibc() -> bool:
+    """This process runs on Linux's glibc (musl and others have no such thresholds)."""
+    if sys.platform != "linux":
+        return False
     try:
         return (os.confstr("CS_GNU_LIBC_VERSION") or "").startswith("glibc")
     except (ValueError, OSError):  # no such name: not glibc

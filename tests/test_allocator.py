@@ -18,11 +18,9 @@ import sys
 
 import pytest
 
-pytestmark = pytest.mark.skipif(
-    not sys.platform.startswith("linux")
-    or not (os.confstr("CS_GNU_LIBC_VERSION") or "").startswith("glibc"),
-    reason="glibc's malloc only",
-)
+from prsxy_post import allocator
+
+pytestmark = pytest.mark.skipif(not allocator.on_glibc(), reason="glibc's malloc only")
 
 ROUNDS = """
 import json, resource, sys

@@ -99,10 +99,11 @@ def judge_gcode(truth, motions, res, texts) -> tuple[ctl.Trace, float]:
     return ctl.judge(motions, q, run.t_dense, run.seg, run.line, tool, rapid), run.blend
 
 
-def assert_on_the_path(tr: ctl.Trace, path_mm: float = TOL_MM) -> None:
-    """Path and tool axis."""
-    assert tr.path_mm <= path_mm, f"{tr.path_mm * 1000:.3f} µm off the path at line {tr.worst_line}"
-    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis"
+def assert_on_the_path(tr: ctl.Trace, path_mm: float = TOL_MM, context: str = "") -> None:
+    """Path and tool axis; ``context``: what else a failure should say."""
+    where = f"{tr.path_mm * 1000:.3f} µm off the path at line {tr.worst_line}"
+    assert tr.path_mm <= path_mm, where + context
+    assert tr.ab_deg <= TOL_DEG, f"{tr.ab_deg * 3600:.3f} arcsec off the tool axis" + context
 
 
 def assert_within(tr: ctl.Trace, accel: float | None, path_mm: float = TOL_MM) -> None:

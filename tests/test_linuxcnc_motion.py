@@ -281,9 +281,10 @@ def test_the_line_after_a_dwell_runs_in_exact_path_mode() -> None:
     marks = [k for k, r in enumerate(rows) if r == f"(line {tr.worst_line})"]
     at = marks[0] if marks else 0
     around = "\n".join(rows[max(at - 3, 0) : at + 12])
-    assert tr.path_mm <= TOL_MM, (
-        f"{tr.path_mm * 1000:.3f} µm off the path at line {tr.worst_line}, the queue "
-        f"empty {run.waiting_s:.3f} s of the run; the written lines about it:\n{around}"
+    assert_on_the_path(
+        tr,
+        context=f"; the queue empty {run.waiting_s:.3f} s of the run; "
+        f"the written lines about it:\n{around}",
     )
 
 
