@@ -6,10 +6,11 @@ Usage::
     python bench/fk_speed.py prog.ngc profile.toml --against /path/to/other/tree
 
 It converts the program to G-code once (``write_stage.record``) and keeps the
-arguments the writer gives ``kernel.forward_poses`` for every chunk
-(``writers.cartesian.written_points``: the controller's geometry, warm-started at the
-IK pose of the chain's target). Each run, in a fresh interpreter, times (CPU,
-``time.process_time``) ``forward_poses`` on all of them with the package of this tree
+arguments the writer gives ``kernel.forward_poses_anchored`` for every chunk
+(``writers.cartesian.WrittenPoints``: the controller's geometry, started at the IK
+pose of the chain's target moved by the anchors' offsets). Each run, in a fresh
+interpreter, times (CPU, ``time.process_time``) ``forward_poses_anchored`` on all of
+them with the package of this tree
 and, with ``--against``, of the other one (its directory holding ``prsxy_post``,
 compiled in place), run for run, so both meet the same load on a shared machine; it
 prints each tree's median and least CPU and whether both gave the same bits.
@@ -26,46 +27,50 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 from write_stage import record  # bench/ (the script's directory)
 
 from prsxy_post import kernel, kinematics
 from prsxy_post.files import load_profile
+from prsxy_post.writers.cartesian import WrittenPoints
 
 ROOT = Path(__file__).resolve().parent.parent
 
-#: run in the child: forward_poses on the recorded arguments; CPU and a digest
+#: run in the child: forward_poses_anchored on the recorded arguments; CPU and a digest
 CHILD = """
 import hashlib, pickle, sys, time
 from prsxy_post import kernel
 calls = pickle.load(open(sys.argv[1], "rb"))
 t = time.process_time()
-out = [kernel.forward_poses(*a) for a in calls]
+out = [kernel.forward_poses_anchored(*a) for a in calls]
 cpu = time.process_time() - t
 h = hashlib.sha256()
-for q, ok in out:
+for q, ok, carry in out:
     h.update(q.tobytes())
     h.update(ok.tobytes())
+    h.update(carry.tobytes())
 print(cpu, h.hexdigest(), kernel.NAME)
 """
 
 
 def arguments(program: str, prof_path: str) -> list[tuple[object, ...]]:
-    """``forward_poses``'s arguments for every chunk, as the G-code writer makes them."""
+    """``forward_poses_anchored``'s arguments for every chunk, as the G-code writer
+    makes them."""
     chunks = record(program, prof_path, "gcode")
-    geo = kinematics.controller_geometry(load_profile(prof_path))
+    written = WrittenPoints(kinematics.controller_geometry(load_profile(prof_path)))
     calls: list[tuple[object, ...]] = []
-    real = kernel.forward_poses
+    real = kernel.forward_poses_anchored
 
     def keep(*a: object) -> object:
-        calls.append(a)
+        calls.append(tuple(x.copy() if isinstance(x, np.ndarray) else x for x in a))
         return real(*a)  # type: ignore[arg-type]
 
-    kernel.forward_poses = keep  # type: ignore[assignment]
+    kernel.forward_poses_anchored = keep  # type: ignore[assignment]
     try:
         for c in chunks:
-            kinematics.forward(geo, c.P_cmd, guess=kinematics.fk_start(geo, c.q_target))
+            written(c)
     finally:
-        kernel.forward_poses = real
+        kernel.forward_poses_anchored = real
     return calls
 
 

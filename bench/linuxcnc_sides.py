@@ -31,7 +31,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from prsxy_post import kinematics  # noqa: E402
-from prsxy_post.writers.cartesian import written_points  # noqa: E402
+from prsxy_post.writers.cartesian import WrittenPoints  # noqa: E402
 from tests.test_linuxcnc_motion import HEAD, PROGRAMS, convert, measure  # noqa: E402
 from tests.test_tracking import truth_machine  # noqa: E402
 
@@ -54,7 +54,7 @@ def departures(truth) -> list[tuple[float, float, float, float]]:
     A B (the larger) from the chord and from the best line [arcsec]."""
     _, res, _ = convert(truth, PROGRAMS["five-axis"](3000.0), "gcode")
     pts = res.points
-    q = written_points(kinematics.controller_geometry(truth), pts)
+    q = WrittenPoints(kinematics.controller_geometry(truth))(pts)
     ends = np.flatnonzero(pts.block_end)
     out = []
     for s, e in itertools.pairwise(ends):

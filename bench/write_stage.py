@@ -9,7 +9,7 @@ It converts the program once (in this process, no writer process) and keeps the
 chain's point chunks as the writer was fed them; then it feeds them again to a new
 writer ``--repeat`` times (begin, every chunk, finish) and prints the best CPU time
 (``time.process_time``) of the writer alone, and, for a Cartesian dialect, of the
-forward kinematics it runs on the points (``writers.cartesian.written_points``).
+forward kinematics it runs on the points (``writers.cartesian.WrittenPoints``).
 ``convert``'s own ``write`` timing is wall time and includes waiting for a loaded
 machine; this is the CPU the writer itself costs. PRSXY_KERNEL=pure times the
 reference kernels.
@@ -26,7 +26,7 @@ from typing import Any
 from prsxy_post import kernel, kinematics, sinks, writers
 from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.files import load_profile
-from prsxy_post.writers.cartesian import written_points
+from prsxy_post.writers.cartesian import WrittenPoints
 
 
 def record(program: str, profile: str, fmt: str) -> list[Any]:
@@ -81,7 +81,13 @@ def main() -> None:
     print(f"write stage ({a.format}): {t:.3f} s CPU, best of {a.repeat}")
     if writers.dialect(a.format).space == "pose":
         cgeo = kinematics.controller_geometry(prof)
-        t = best_cpu(lambda: [written_points(cgeo, c) for c in chunks], a.repeat)
+
+        def fk() -> None:
+            written = WrittenPoints(cgeo)
+            for c in chunks:
+                written(c)
+
+        t = best_cpu(fk, a.repeat)
         print(f"  of which the forward kinematics (written_points): {t:.3f} s CPU")
 
 

@@ -530,6 +530,52 @@ def forward(
     return kernel.tool_poses(xv, ok, t, origin, D), ok
 
 
+#: Points from one anchor of :func:`forward_anchored` to the next: the FK of a
+#: 200 000-line program's corrected G-code takes 1.75 Newton steps a point (in the
+#: kernel's groups of four) instead of 3, its written values the same
+#: (``bench/fk_steps.py``).
+FK_ANCHOR_EVERY = 16
+
+
+def forward_anchored(
+    geo: Geometry, P: np.ndarray, guess: np.ndarray, every: int, phase: int, carry: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`forward` of a run of points along a path, one call after another: each
+    point starts from ``guess`` moved by the offset to its solution found at the
+    last anchor point (every ``every``-th of the run, ``phase`` the index of P's
+    first row in it; ``carry`` (6,) the offset the run's previous call returned,
+    zeros at its start): :func:`prsxy_post.kernel.fk.anchored_starts`. A start
+    that misses the solution by as much as the offset changes between neighbouring
+    points needs one Newton step where the guess alone needs three.
+
+    Returns
+    -------
+    q : (N, 5) [mm, mm, mm, deg, deg], NaN where not converged; converged : (N,);
+    carry : (6,) for the run's next call
+    """
+    if geo.guide_bow is not None:
+        raise ValueError("anchored FK starts are for straight guides (a controller's geometry)")
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    t = _tool_vectors(geo, len(P), None)
+    D = table_displacement(geo, P[:, 3], P[:, 4])
+    origin = np.asarray(geo.origin, dtype=float)
+    return kernel.forward_poses_anchored(
+        geo.fk_arrays,
+        geo.d,
+        P,
+        guess,
+        t,
+        origin,
+        D,
+        FK_STEP,
+        FK_MAX_ITER,
+        FK_RESIDUAL,
+        every,
+        phase,
+        carry,
+    )
+
+
 def platform_guess(pose: PlatformPose, q: np.ndarray) -> np.ndarray:
     """An FK start (c, A, B, γ) from an IK solution, for warm-started FK."""
     return np.column_stack([pose.c, np.radians(q[:, 3]), np.radians(q[:, 4]), pose.gamma])

@@ -50,18 +50,20 @@ def _same(got: tuple[np.ndarray, ...], want: tuple[np.ndarray, ...]) -> bool:
 
 @pytest.fixture(scope="module")
 def recorded_calls(tmp_path_factory: pytest.TempPathFactory) -> list[tuple[Any, ...]]:
-    """The arguments of every whole FK (:func:`kernel.forward_poses`: Newton, then
-    the tool poses of its solutions) while the sample programs convert to G-code
-    (:data:`kernel_cases.RUNS`), in this process."""
+    """The arguments of every whole FK (:func:`kernel.forward_poses_anchored`: the
+    anchors' Newton, the starts, Newton, then the tool poses of its solutions) while
+    the sample programs convert to G-code (:data:`kernel_cases.RUNS`), in this
+    process: (m, d, P, x0, t, origin, D, limit, max_iter, res_tol, every, phase,
+    carry)."""
     calls: list[tuple[Any, ...]] = []
     mp = pytest.MonkeyPatch()
-    inner: Callable[..., Any] = kernel.forward_poses
+    inner: Callable[..., Any] = kernel.forward_poses_anchored
 
     def call(*args: Any) -> Any:
         calls.append(tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args))
         return inner(*args)
 
-    mp.setattr(kernel, "forward_poses", call)
+    mp.setattr(kernel, "forward_poses_anchored", call)
     tmp = tmp_path_factory.mktemp("fk")
     try:
         for i, (sample, fmt, prof) in enumerate(RUNS):
@@ -79,7 +81,7 @@ def recorded(recorded_calls: list[tuple[Any, ...]]) -> list[tuple[Any, ...]]:
     res_tol), the hinges' offsets as ``Geometry.hinge_offset`` makes them."""
     return [
         (m, P[:, :3, None] * d[None], x0, limit, max_iter, res_tol)
-        for m, d, P, x0, _t, _o, _D, limit, max_iter, res_tol in recorded_calls
+        for m, d, P, x0, _t, _o, _D, limit, max_iter, res_tol, *_ in recorded_calls
     ]
 
 
@@ -110,7 +112,7 @@ def test_sample_programs_tool_poses_are_bit_identical(
     with either kernel; the whole is the reference's parts one after the other."""
     _fk = compiled("_fk")
     assert len(recorded_calls) >= 3
-    for m, d, P, x0, t, origin, D, limit, max_iter, res_tol in recorded_calls:
+    for m, d, P, x0, t, origin, D, limit, max_iter, res_tol, *_ in recorded_calls:
         want = fk.forward_poses(m, d, P, x0, t, origin, D, limit, max_iter, res_tol)
         got = _fk.forward_poses(m, d, P, x0, t, origin, D, limit, max_iter, res_tol)
         assert _same(got, want)
@@ -118,6 +120,60 @@ def test_sample_programs_tool_poses_are_bit_identical(
         assert _same((fk.tool_poses(x, ok, t, origin, D), ok), want)
         assert _same((_fk.tool_poses(x, ok, t, origin, D),), (want[0],))
     assert sum(len(c[2]) for c in recorded_calls) > 5_000
+
+
+def test_sample_programs_anchored_fk_is_bit_identical(
+    recorded_calls: list[tuple[Any, ...]],
+) -> None:
+    """Each recorded anchored FK (the written G-code's points: the anchors, the
+    starts, Newton and the tool poses), its poses, flags and carried offset, the
+    same with either kernel; its starts are the reference's anchored starts."""
+    _fk = compiled("_fk")
+    assert len(recorded_calls) >= 3
+    phases = set()
+    for call in recorded_calls:
+        want = fk.forward_poses_anchored(*call)
+        assert _same(_fk.forward_poses_anchored(*call), want)
+        every, phase = call[10:12]
+        assert every == kinematics.FK_ANCHOR_EVERY and np.all(want[1])
+        phases.add(phase)
+    assert len(phases) > 1  # chunks that start between anchors, with a carry
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.integers(0, 1200),
+    st.integers(1, 40),
+    st.integers(0, 10**6),
+    st.sampled_from(["zeros", "small", "nan"]),
+    st.lists(st.integers(0, 1199), max_size=4),
+    st.integers(0, 2**32 - 1),
+)
+def test_generated_anchored_fk_is_bit_identical(
+    n: int, every: int, phase: int, carry_kind: str, lost: list[int], seed: int
+) -> None:
+    """Anchored FK over rows crossing the compiled twin's blocks (512 rows), any
+    spacing and phase, a carried offset of zeros, of a few µm or NaN, and rows that
+    do not converge (a motor far out of reach or NaN: an anchor among them gives no
+    offset): poses, flags and carry the reference's bits."""
+    _fk = compiled("_fk")
+    geo = _geometry(PROFILES[1])
+    rng = np.random.default_rng(seed)
+    q = np.column_stack(
+        [rng.uniform(-100, 100, (n, 2)), rng.uniform(-60, 0, n), rng.uniform(-30, 30, (n, 2))]
+    )
+    P = kinematics.inverse(geo, q).P + rng.normal(0, 1e-3, (n, 5))
+    for i, k in enumerate(r for r in lost if r < n):
+        P[k, i % 3] = (1e6, np.nan, -1e6)[i % 3]
+    x0 = kinematics.fk_start(geo, q)
+    t = np.broadcast_to(geo.tool, (n, 3)).copy()
+    D = kinematics.table_displacement(geo, P[:, 3], P[:, 4])
+    carry = {"zeros": np.zeros(6), "small": rng.normal(0, 1e-3, 6), "nan": np.full(6, np.nan)}
+    args = (geo.fk_arrays, geo.d, P, x0, t, geo.origin, D, LIMIT, MAX_ITER, RES_TOL)
+    with np.errstate(all="ignore"):  # the unreachable rows: numpy warns, C does not
+        want = fk.forward_poses_anchored(*args, every, phase % every, carry[carry_kind])
+        got = _fk.forward_poses_anchored(*args, every, phase % every, carry[carry_kind])
+    assert _same(got, want)
 
 
 VALUES = st.one_of(
@@ -345,3 +401,8 @@ def test_compiled_fk_refuses_wrong_shapes() -> None:
         _fk.tool_poses(x, np.ones(4, bool), x[:, :3], x[0, :3], x[:3, :3])
     with pytest.raises(ValueError):
         _fk.forward_poses(m, geo.d, x[:3], x, x[:, :3], x[0, :3], x[:, :3], LIMIT, 30, RES_TOL)
+    args = (m, geo.d, x, x, x[:, :3], x[0, :3], x[:, :3], LIMIT, 30, RES_TOL)
+    with pytest.raises(ValueError):
+        _fk.forward_poses_anchored(*args, 16, 0, np.zeros(5))
+    with pytest.raises(ValueError):
+        _fk.forward_poses_anchored(*args, 0, 0, np.zeros(6))

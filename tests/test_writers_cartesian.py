@@ -4,8 +4,10 @@ written poses turn back into the motor commands through the controller's IK."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -16,8 +18,7 @@ from hypothesis.extra import numpy as hnp
 from prsxy_post import kinematics
 from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.points import PointChunk
-from prsxy_post.writers import linuxcnc
-from prsxy_post.writers.cartesian import feed_words, written_points
+from prsxy_post.writers.cartesian import WrittenPoints, feed_words
 
 from .conftest import ROOT
 
@@ -56,13 +57,14 @@ def test_written_points_give_back_the_motor_commands(
     with the shop profile and with a perturbed machine, whose geometry the
     controller's (the nominal design) misses."""
     seen: list[tuple[np.ndarray, np.ndarray, np.ndarray, kinematics.Geometry]] = []
+    call = WrittenPoints.__call__
 
-    def spy(cgeo: kinematics.Geometry, chunk: PointChunk) -> np.ndarray:
-        q = written_points(cgeo, chunk)
-        seen.append((q, chunk.P_cmd.copy(), chunk.q_target.copy(), cgeo))
+    def spy(self: WrittenPoints, chunk: PointChunk) -> np.ndarray:
+        q = call(self, chunk)
+        seen.append((q, chunk.P_cmd.copy(), chunk.q_target.copy(), self.cgeo))
         return q
 
-    monkeypatch.setattr(linuxcnc, "written_points", spy)
+    monkeypatch.setattr(WrittenPoints, "__call__", spy)
     out = tmp_path / "out.ngc"
     convert_file(
         ConvertJob(str(ROOT / "samples" / "five-axis.ngc"), str(ROOT / prof), "gcode", str(out))
@@ -75,3 +77,49 @@ def test_written_points_give_back_the_motor_commands(
     # written poses are away from the chain's by the calibration in the commands
     if moved:
         assert max(np.max(np.abs(q - q_t)) for q, _, q_t, _ in seen) > moved
+
+
+@pytest.fixture(scope="module")
+def five_axis_points(tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, PointChunk]:
+    """The controller's geometry and every point the G-code writer is fed while
+    the five-axis sample converts for the perturbed machine (whose geometry the
+    controller's misses), joined into one run."""
+    chunks: list[PointChunk] = []
+    cgeo: list[kinematics.Geometry] = []
+    call = WrittenPoints.__call__
+
+    def spy(self: WrittenPoints, chunk: PointChunk) -> np.ndarray:
+        chunks.append(chunk)
+        cgeo.append(self.cgeo)
+        return call(self, chunk)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(WrittenPoints, "__call__", spy)
+    out = tmp_path_factory.mktemp("cartesian") / "out.ngc"
+    prof = str(ROOT / "tests" / "data" / "vectors" / "perturbed.toml")
+    try:
+        convert_file(ConvertJob(str(ROOT / "samples" / "five-axis.ngc"), prof, "gcode", str(out)))
+    finally:
+        mp.undo()
+    return cgeo[0], PointChunk.concat(chunks)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.integers(1, 5000), min_size=1, max_size=8))
+def test_written_points_do_not_depend_on_where_the_chunks_are_cut(
+    five_axis_points: tuple[Any, PointChunk], cuts: list[int]
+) -> None:
+    """The anchored FK counts its anchors from the program's first point and
+    carries an anchor's offset into the next chunk: the points fed in one run or
+    cut anywhere give the same poses, to the bit. And they are the FK's solutions
+    started from the chain's pose alone (``kinematics.forward``), within 1e-12 (mm,
+    deg), rounding apart."""
+    cgeo, pts = five_axis_points
+    n = len(pts)
+    whole = WrittenPoints(cgeo)(pts)
+    edges = sorted({0, n, *(c % n for c in np.cumsum(cuts))})
+    wp = WrittenPoints(cgeo)
+    parts = [wp(pts.take(slice(a, b))) for a, b in itertools.pairwise(edges)]
+    assert np.array_equal(np.concatenate(parts), whole)
+    cold, ok = kinematics.forward(cgeo, pts.P_cmd, guess=kinematics.fk_start(cgeo, pts.q_target))
+    assert ok.all() and np.max(np.abs(whole - cold)) < 1e-12

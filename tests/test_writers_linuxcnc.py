@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from prsxy_post import kinematics, writers
-from prsxy_post.writers.cartesian import written_points
+from prsxy_post.writers.cartesian import WrittenPoints
 from prsxy_post.writers.linuxcnc import GcodeWriter, corner_cut
 
 from . import controllers as ctl
@@ -263,7 +263,7 @@ def test_arcs_are_written_as_arcs_within_the_tolerance(seed: int | None) -> None
     tol = writers.settings_of(truth, "gcode")["tolerance_mm"]
     e = truth.interpolation.path_tolerance_mm - tol
     # every point the chain made, as written: its distance from the written moves
-    pts = written_points(kinematics.controller_geometry(truth), res.points)
+    pts = WrittenPoints(kinematics.controller_geometry(truth))(res.points)
     dist = np.full(len(pts), np.inf)
     for k in range(1, len(run.q)):
         a, b = run.q[k - 1], run.q[k]

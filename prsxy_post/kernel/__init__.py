@@ -249,6 +249,33 @@ def forward_poses(
     return out
 
 
+def forward_poses_anchored(
+    m: fk.FKArrays,
+    d: np.ndarray,
+    P: np.ndarray,
+    x0: np.ndarray,
+    t: np.ndarray,
+    origin: np.ndarray,
+    D: np.ndarray,
+    limit: float,
+    max_iter: int,
+    res_tol: float,
+    every: int,
+    phase: int,
+    carry: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`forward_poses` from starts set by anchors every ``every`` rows (row 0
+    the run's ``phase``-th modulo ``every``), the offset ``carry`` (6,) before the
+    first: :func:`fk.forward_poses_anchored`, compiled when :data:`COMPILED`;
+    returns q, converged and the carry for the run's next call."""
+    if every < 1 or phase < 0:
+        raise ValueError(f"every must be >= 1 and phase >= 0, not {every} and {phase}")
+    out: tuple[np.ndarray, np.ndarray, np.ndarray] = _fk_mod.forward_poses_anchored(
+        m, d, P, x0, t, origin, D, limit, max_iter, res_tol, every, phase, carry
+    )
+    return out
+
+
 def map_rows(m: legendre.MapArrays, q: np.ndarray) -> np.ndarray:
     """The virtual-axis error e(q) (N, 5) [mm, mm, mm, deg, deg] for poses ``q``
     (N, 5): :func:`legendre.map_rows`, compiled when :data:`COMPILED`."""

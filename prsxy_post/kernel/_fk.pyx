@@ -566,13 +566,8 @@ def tool_poses(x_in, ok_in, t_in, origin_in, D_in):
     return q_a
 
 
-def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int max_iter,
-                  double res_tol):
-    """q (N, 5), converged (N,): the FK of motor positions whose guides are straight
-    (``fk.forward_poses``): Newton and the tool poses in one pass, R taken from the
-    residual check's pose."""
-    cdef Geo G = _geo(m)
-    cdef Py_ssize_t n = x0_in.shape[0] if x0_in.ndim == 2 else -1, i, j, k
+def _check_poses(x0_in, P_in, d_in, t_in, origin_in, D_in):
+    cdef Py_ssize_t n = x0_in.shape[0] if x0_in.ndim == 2 else -1
     if (
         x0_in.shape != (n, 6)
         or P_in.ndim != 2
@@ -586,31 +581,110 @@ def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int
         raise ValueError(
             "x0 must be (N, 6), P (N, >= 3), d (3, 3), t (N, 3), origin (3,), D (N, 3)"
         )
+    return n
+
+
+def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int max_iter,
+                  double res_tol):
+    """q (N, 5), converged (N,): the FK of motor positions whose guides are straight
+    (``fk.forward_poses``): Newton and the tool poses in one pass, R taken from the
+    residual check's pose."""
+    q, ok, _ = _poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, limit, max_iter, res_tol,
+                      0, 0, np.zeros(6))
+    return q, ok
+
+
+def forward_poses_anchored(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit,
+                           int max_iter, double res_tol, Py_ssize_t every, Py_ssize_t phase,
+                           carry_in):
+    """q (N, 5), converged (N,), carry (6,): ``forward_poses`` from the anchored
+    starts (``fk.forward_poses_anchored``, ``fk.anchored_starts``)."""
+    if every < 1:
+        raise ValueError(f"every must be >= 1, not {every}")
+    if np.shape(carry_in) != (6,):
+        raise ValueError("carry must be (6,)")
+    return _poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, limit, max_iter, res_tol,
+                  every, phase, np.array(carry_in, dtype=float))
+
+
+cdef Py_ssize_t _starts(
+    const Geo* G, const double* offs, const double[:, :] x0, Py_ssize_t every, Py_ssize_t phase,
+    double limit, int max_iter, double res_tol, double* carry, double[:, ::1] aoffs,
+    double[:, ::1] ax0, double[:, ::1] ax, char[::1] aok, double[:, ::1] st
+) noexcept nogil:
+    """``fk.anchored_starts`` of the rows of x0 (n, 6) (offsets ``offs``, n × 9) into
+    st; the anchors' rows in the scratch rows aoffs, ax0, ax, aok; carry (6) in and
+    out. Returns how many anchors there were."""
+    cdef Py_ssize_t n = x0.shape[0], first = (every - phase % every) % every
+    cdef Py_ssize_t na = 0, r, j, k
+    cdef double dl[6]
+    r = first
+    while r < n:
+        for j in range(9):
+            aoffs[na, j] = offs[9 * r + j]
+        for j in range(6):
+            ax0[na, j] = x0[r, j]
+        na += 1
+        r += every
+    if na:
+        _newton_rows(G, &aoffs[0, 0], ax0[:na], limit, max_iter, res_tol, ax, aok[:na], NULL)
+    for j in range(6):
+        dl[j] = carry[j]
+    k = -1
+    for r in range(n):
+        if r >= first and (r - first) % every == 0:
+            k += 1
+            for j in range(6):
+                dl[j] = ax[k, j] - ax0[k, j] if aok[k] else 0.0
+        for j in range(6):
+            st[r, j] = x0[r, j] + dl[j]
+    for j in range(6):
+        carry[j] = dl[j]
+    return na
+
+
+def _poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int max_iter,
+           double res_tol, Py_ssize_t every, Py_ssize_t phase, carry_in):
+    """The FK of ``forward_poses``, from the anchored starts where every >= 1."""
+    cdef Geo G = _geo(m)
+    cdef Py_ssize_t n = _check_poses(x0_in, P_in, d_in, t_in, origin_in, D_in), i, j, k
     cdef const double[:, :] P = P_in
     cdef const double[:, :] dv = d_in
     cdef const double[:, :] x0 = x0_in
     cdef const double[:, ::1] t = np.ascontiguousarray(t_in)
     cdef const double[::1] o = np.ascontiguousarray(origin_in)
     cdef const double[:, ::1] D = np.ascontiguousarray(D_in)
+    cdef double[::1] carry = carry_in
     # the offsets, solutions and rotations of BLOCK rows at a time, in buffers made
     # once a call: a chunk's worth of each would be fresh pages (faulted in and
     # zeroed by the kernel) for values read once
     cdef Py_ssize_t nb = min(n, <Py_ssize_t>BLOCK), b0, m_b
+    cdef Py_ssize_t na = nb // every + 1 if every >= 1 else 1
     offs_a = np.empty((nb, 9))
     x_a = np.empty((nb, 6))
     R_a = np.empty((nb, 9))
+    st_a = np.empty((nb if every >= 1 else 0, 6))
+    aoffs_a = np.empty((na, 9))
+    ax0_a = np.empty((na, 6))
+    ax_a = np.empty((na, 6))
+    aok_a = np.zeros(na, dtype=np.int8)
     ok_a = np.zeros(n, dtype=bool)
     q_a = np.empty((n, 5))
     cdef double[:, ::1] offs = offs_a
     cdef double[:, ::1] x = x_a
     cdef double[:, ::1] R = R_a
+    cdef double[:, ::1] st = st_a
+    cdef double[:, ::1] aoffs = aoffs_a
+    cdef double[:, ::1] ax0 = ax0_a
+    cdef double[:, ::1] ax = ax_a
+    cdef char[::1] aok = aok_a
     cdef char[::1] ok = ok_a.view(np.int8)
     cdef double[:, ::1] q = q_a
     cdef double dd[9]
     for j in range(9):
         dd[j] = dv[j // 3, j % 3]
     if n == 0:
-        return q_a, ok_a
+        return q_a, ok_a, carry_in
     with nogil:
         b0 = 0
         while b0 < n:
@@ -620,8 +694,14 @@ def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int
                 for k in range(3):
                     for j in range(3):
                         offs[i, 3 * k + j] = P[b0 + i, k] * dd[3 * k + j]
-            _newton_rows(&G, &offs[0, 0], x0[b0 : b0 + m_b], limit, max_iter, res_tol, x,
-                         ok[b0 : b0 + m_b], &R[0, 0])
+            if every >= 1:
+                _starts(&G, &offs[0, 0], x0[b0 : b0 + m_b], every, (phase + b0) % every, limit,
+                        max_iter, res_tol, &carry[0], aoffs, ax0, ax, aok, st)
+                _newton_rows(&G, &offs[0, 0], st[:m_b], limit, max_iter, res_tol, x,
+                             ok[b0 : b0 + m_b], &R[0, 0])
+            else:
+                _newton_rows(&G, &offs[0, 0], x0[b0 : b0 + m_b], limit, max_iter, res_tol, x,
+                             ok[b0 : b0 + m_b], &R[0, 0])
             for i in range(m_b):
                 if not ok[b0 + i]:
                     for k in range(5):
@@ -629,4 +709,4 @@ def forward_poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int
                     continue
                 _tip(&x[i, 0], &R[i, 0], &t[b0 + i, 0], &o[0], &D[b0 + i, 0], &q[b0 + i, 0])
             b0 += m_b
-    return q_a, ok_a
+    return q_a, ok_a, carry_in

@@ -245,3 +245,71 @@ def forward_poses(
     off = P[:, :3, None] * d[None]
     x, ok = forward_newton(m, off, x0, limit, max_iter, res_tol)
     return tool_poses(x, ok, t, origin, D), ok
+
+
+def anchored_starts(
+    m: FKArrays,
+    off: np.ndarray,
+    x0: np.ndarray,
+    limit: float,
+    max_iter: int,
+    res_tol: float,
+    every: int,
+    phase: int,
+    carry: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Starts next to the solutions, for rows along a path whose start x0 misses
+    its solution by an offset that changes slowly from row to row.
+
+    The anchors, rows r with (phase + r) mod ``every`` = 0, are solved from x0
+    (:func:`forward_newton`); an anchor's offset is δ = x − x0 where it converged,
+    0 where not. Every row starts at x0 + δ of the last anchor at or before it; the
+    rows before the call's first anchor at x0 + ``carry`` (the last δ of the call
+    before, whose rows came before these: zeros at the start of a run). Rows a
+    path's point apart start within the change of the offset between them, so
+    most need one Newton step instead of three (``bench/fk_steps.py``).
+
+    Parameters
+    ----------
+    off : (N, leg, 3) the hinges' offsets [mm]; x0 : (N, 6) the starts
+    every : rows from one anchor to the next, >= 1
+    phase : the index of row 0 in the run, modulo ``every``
+    carry : (6,) the offset for the rows before the first anchor
+
+    Returns
+    -------
+    starts : (N, 6); carry : (6,) the offset of the last anchor (``carry`` if none)
+    """
+    n = len(x0)
+    first = (-phase) % every
+    a = np.arange(first, n, every)
+    xa, oka = forward_newton(m, off[a], x0[a], limit, max_iter, res_tol)
+    delta = np.empty((len(a) + 1, 6))
+    delta[0] = carry
+    delta[1:] = np.where(oka[:, None], xa - x0[a], 0.0)
+    # the anchor at or before each row, 0 (the carry) before the first
+    k = (np.arange(n) - first) // every + 1
+    return x0 + delta[k], delta[-1].copy()
+
+
+def forward_poses_anchored(
+    m: FKArrays,
+    d: np.ndarray,
+    P: np.ndarray,
+    x0: np.ndarray,
+    t: np.ndarray,
+    origin: np.ndarray,
+    D: np.ndarray,
+    limit: float,
+    max_iter: int,
+    res_tol: float,
+    every: int,
+    phase: int,
+    carry: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`forward_poses` from :func:`anchored_starts` of x0: q (N, 5), converged
+    (N,), and the carry for the next call (6,)."""
+    off = P[:, :3, None] * d[None]
+    starts, carry = anchored_starts(m, off, x0, limit, max_iter, res_tol, every, phase, carry)
+    x, ok = forward_newton(m, off, starts, limit, max_iter, res_tol)
+    return tool_poses(x, ok, t, origin, D), ok, carry

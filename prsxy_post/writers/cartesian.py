@@ -21,18 +21,38 @@ if TYPE_CHECKING:
     from ..points import PointChunk
 
 
-def written_points(cgeo: kinematics.Geometry, chunk: PointChunk) -> np.ndarray:
-    """FK of the controller's geometry at the motor commands, warm-started at the
-    pose the chain aimed for; (n, 5) [mm, mm, mm, deg, deg]."""
-    q, ok = kinematics.forward(cgeo, chunk.P_cmd, guess=kinematics.fk_start(cgeo, chunk.q_target))
-    if not np.all(ok):
-        k = int(np.argmin(ok))
-        raise ReachError(
-            "the controller's kinematics cannot express this point",
-            line=int(chunk.line[k]),
-            expected="a pose within reach of [controller_kinematics]",
+class WrittenPoints:
+    """The Cartesian step of one program's points, fed chunk after chunk in order:
+    the FK of the controller's geometry at the motor commands, started at the pose
+    the chain aimed for (:func:`kinematics.fk_start`) moved by the anchored offset
+    (:func:`kinematics.forward_anchored`, its anchors counted from the program's
+    first point, so the poses do not depend on where its chunks are cut)."""
+
+    def __init__(self, cgeo: kinematics.Geometry) -> None:
+        self.cgeo = cgeo
+        self.points = 0
+        self.carry = np.zeros(6)
+
+    def __call__(self, chunk: PointChunk) -> np.ndarray:
+        """(n, 5) [mm, mm, mm, deg, deg] the poses written for ``chunk``'s points."""
+        every = kinematics.FK_ANCHOR_EVERY
+        q, ok, self.carry = kinematics.forward_anchored(
+            self.cgeo,
+            chunk.P_cmd,
+            kinematics.fk_start(self.cgeo, chunk.q_target),
+            every,
+            self.points % every,
+            self.carry,
         )
-    return q
+        self.points += len(q)
+        if not np.all(ok):
+            k = int(np.argmin(ok))
+            raise ReachError(
+                "the controller's kinematics cannot express this point",
+                line=int(chunk.line[k]),
+                expected="a pose within reach of [controller_kinematics]",
+            )
+        return q
 
 
 def feed_words(dt: np.ndarray) -> dict[float, str]:

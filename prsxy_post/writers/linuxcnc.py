@@ -217,7 +217,7 @@ from ..kernel import gwrite
 from ..profile.output import OUTPUT_SETTINGS
 from .arcs import ArcTable, arc_lines
 from .base import Dialect, Piece, Provenance, header, words_text
-from .cartesian import written_points
+from .cartesian import WrittenPoints
 from .numbers import format_fixed_rows, round_clean
 
 if TYPE_CHECKING:
@@ -250,7 +250,7 @@ class GcodeWriter:
     makes the lines' text from them.
     """
 
-    #: the point fields :meth:`feed` reads (and :func:`.cartesian.written_points`
+    #: the point fields :meth:`feed` reads (and :class:`.cartesian.WrittenPoints`
     #: for it): a writer in a process of its own is sent only these
     #: (:class:`prsxy_post.sinks.WriterProcess`)
     reads = ("q_target", "P_cmd", "P_ideal", "dt", "dwell", "line", "speed", "block_end", "fn")
@@ -262,6 +262,7 @@ class GcodeWriter:
         #: every line in G61: LinuxCNC 2.9's parabolic blends run over F (module docstring)
         self.all_exact = bool(settings["g61_every_line"])
         self.cgeo = kinematics.controller_geometry(profile)
+        self.written_points = WrittenPoints(self.cgeo)
         self.blend = CORNER_SHARE * profile.interpolation.path_tolerance_mm
         tol_deg = profile.interpolation.path_tolerance_arcsec / 3600.0
         #: how far a written A or B may stay from the compensated one [deg]: within
@@ -351,7 +352,7 @@ class GcodeWriter:
     def feed(self, chunk: PointChunk) -> list[Piece]:
         if len(chunk) == 0:
             return []
-        q_arr = round_clean(written_points(self.cgeo, chunk), self.dec)
+        q_arr = round_clean(self.written_points(chunk), self.dec)
         # the points with machine functions: a function point stands (PointChunk),
         # so only the standing ones are looked at (a comparison of every row of an
         # object column with None is a Python call a row)
