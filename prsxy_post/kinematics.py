@@ -546,7 +546,9 @@ def forward_anchored(
     first row in it; ``carry`` (6,) the offset the run's previous call returned,
     zeros at its start): :func:`prsxy_post.kernel.fk.anchored_starts`. A start
     that misses the solution by as much as the offset changes between neighbouring
-    points needs one Newton step where the guess alone needs three.
+    points needs one Newton step where the guess alone needs three. An offset
+    beyond :data:`prsxy_post.kernel.fk.ANCHOR_REACH` is not handed on: a start far
+    from the guess could lead Newton to another of the FK's solutions.
 
     Returns
     -------

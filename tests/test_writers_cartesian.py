@@ -17,6 +17,7 @@ from hypothesis.extra import numpy as hnp
 
 from prsxy_post import kinematics
 from prsxy_post.convert import ConvertJob, convert_file
+from prsxy_post.kernel import fk
 from prsxy_post.points import PointChunk
 from prsxy_post.writers.cartesian import WrittenPoints, feed_words
 
@@ -123,3 +124,25 @@ def test_written_points_do_not_depend_on_where_the_chunks_are_cut(
     assert np.array_equal(np.concatenate(parts), whole)
     cold, ok = kinematics.forward(cgeo, pts.P_cmd, guess=kinematics.fk_start(cgeo, pts.q_target))
     assert ok.all() and np.max(np.abs(whole - cold)) < 1e-12
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from([1.0, 0.999, 1.001, 300.0]))
+def test_an_offset_within_reach_leads_to_the_guess_alone_solution_and_none_beyond(
+    five_axis_points: tuple[Any, PointChunk], seed: int, scale: float
+) -> None:
+    """Offsets carried into a chunk (random, up to ``ANCHOR_REACH`` times ``scale`` in
+    each component, on the chunk's first points, before its first anchor) lose no
+    point and lead Newton to the solution from the chain's pose alone, within 1e-12
+    (mm, deg). Beyond the reach the offset is not handed on: a carry of 300 (mm,
+    rad) would lead it to another of the FK's solutions, 17 130° away in A."""
+    cgeo, pts = five_axis_points
+    part = pts.take(slice(5, 200))
+    guess = kinematics.fk_start(cgeo, part.q_target)
+    reach = np.asarray(fk.ANCHOR_REACH)
+    carry = scale * reach * np.random.default_rng(seed).choice([-1.0, 1.0], 6)
+    every = kinematics.FK_ANCHOR_EVERY
+    q, ok, _ = kinematics.forward_anchored(cgeo, part.P_cmd, guess, every, 5, carry)
+    cold, cold_ok = kinematics.forward(cgeo, part.P_cmd, guess=guess)
+    assert ok.all() and cold_ok.all()
+    assert np.max(np.abs(q - cold)) < 1e-12

@@ -607,14 +607,27 @@ def forward_poses_anchored(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double l
                   every, phase, np.array(carry_in, dtype=float))
 
 
+cdef inline void _near(double* dl, const double* reach, bint ok) noexcept nogil:
+    """dl (6) set to 0.0 unless ok and every |dl_j| <= reach_j (``fk.anchored_starts``;
+    a NaN is not near)."""
+    cdef Py_ssize_t j
+    for j in range(6):
+        if not fabs(dl[j]) <= reach[j]:
+            ok = False
+    if not ok:
+        for j in range(6):
+            dl[j] = 0.0
+
+
 cdef Py_ssize_t _starts(
     const Geo* G, const double* offs, const double[:, :] x0, Py_ssize_t every, Py_ssize_t phase,
-    double limit, int max_iter, double res_tol, double* carry, double[:, ::1] aoffs,
+    double limit, int max_iter, double res_tol, double* carry, const double* reach,
+    double[:, ::1] aoffs,
     double[:, ::1] ax0, double[:, ::1] ax, char[::1] aok, double[:, ::1] st
 ) noexcept nogil:
     """``fk.anchored_starts`` of the rows of x0 (n, 6) (offsets ``offs``, n × 9) into
     st; the anchors' rows in the scratch rows aoffs, ax0, ax, aok; carry (6) in and
-    out. Returns how many anchors there were."""
+    out; ``reach`` (6) ``fk.ANCHOR_REACH``. Returns how many anchors there were."""
     cdef Py_ssize_t n = x0.shape[0], first = (every - phase % every) % every
     cdef Py_ssize_t na = 0, r, j, k
     cdef double dl[6]
@@ -630,12 +643,14 @@ cdef Py_ssize_t _starts(
         _newton_rows(G, &aoffs[0, 0], ax0[:na], limit, max_iter, res_tol, ax, aok[:na], NULL)
     for j in range(6):
         dl[j] = carry[j]
+    _near(dl, reach, True)
     k = -1
     for r in range(n):
         if r >= first and (r - first) % every == 0:
             k += 1
             for j in range(6):
-                dl[j] = ax[k, j] - ax0[k, j] if aok[k] else 0.0
+                dl[j] = ax[k, j] - ax0[k, j]
+            _near(dl, reach, aok[k])
         for j in range(6):
             st[r, j] = x0[r, j] + dl[j]
     for j in range(6):
@@ -681,8 +696,13 @@ def _poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int max_it
     cdef char[::1] ok = ok_a.view(np.int8)
     cdef double[:, ::1] q = q_a
     cdef double dd[9]
+    cdef double reach[6]
     for j in range(9):
         dd[j] = dv[j // 3, j % 3]
+    for j in range(6):
+        reach[j] = _pure.ANCHOR_REACH[j]
+    if every >= 1:  # a carry beyond the reach is not handed on, rows or not
+        _near(&carry[0], reach, True)
     if n == 0:
         return q_a, ok_a, carry_in
     with nogil:
@@ -696,7 +716,7 @@ def _poses(m, d_in, P_in, x0_in, t_in, origin_in, D_in, double limit, int max_it
                         offs[i, 3 * k + j] = P[b0 + i, k] * dd[3 * k + j]
             if every >= 1:
                 _starts(&G, &offs[0, 0], x0[b0 : b0 + m_b], every, (phase + b0) % every, limit,
-                        max_iter, res_tol, &carry[0], aoffs, ax0, ax, aok, st)
+                        max_iter, res_tol, &carry[0], reach, aoffs, ax0, ax, aok, st)
                 _newton_rows(&G, &offs[0, 0], st[:m_b], limit, max_iter, res_tol, x,
                              ok[b0 : b0 + m_b], &R[0, 0])
             else:

@@ -247,6 +247,14 @@ def forward_poses(
     return tool_poses(x, ok, t, origin, D), ok
 
 
+#: The largest offset an anchor hands on, per component of x (c [mm], A, B, γ
+#: [rad]): a point moved further from its guess starts from the guess alone. About
+#: twelve times the largest offsets of the test machines (0.081 mm, 0.0015 rad, the
+#: controller's geometry against a perturbed machine's commands), so that a start is
+#: never far from its guess, where Newton could find another of the FK's solutions.
+ANCHOR_REACH = (1.0, 1.0, 1.0, 0.02, 0.02, 0.02)
+
+
 def anchored_starts(
     m: FKArrays,
     off: np.ndarray,
@@ -262,10 +270,11 @@ def anchored_starts(
     its solution by an offset that changes slowly from row to row.
 
     The anchors, rows r with (phase + r) mod ``every`` = 0, are solved from x0
-    (:func:`forward_newton`); an anchor's offset is δ = x − x0 where it converged,
-    0 where not. Every row starts at x0 + δ of the last anchor at or before it; the
-    rows before the call's first anchor at x0 + ``carry`` (the last δ of the call
-    before, whose rows came before these: zeros at the start of a run). Rows a
+    (:func:`forward_newton`); an anchor's offset is δ = x − x0 where it converged
+    and every |δ_j| ≤ :data:`ANCHOR_REACH`, 0 where not. Every row starts at x0 + δ
+    of the last anchor at or before it; the rows before the call's first anchor at
+    x0 + ``carry`` (the last δ of the call before, whose rows came before these:
+    zeros at the start of a run; 0 too where beyond the reach). Rows a
     path's point apart start within the change of the offset between them, so
     most need one Newton step instead of three (``bench/fk_steps.py``).
 
@@ -286,7 +295,10 @@ def anchored_starts(
     xa, oka = forward_newton(m, off[a], x0[a], limit, max_iter, res_tol)
     delta = np.empty((len(a) + 1, 6))
     delta[0] = carry
-    delta[1:] = np.where(oka[:, None], xa - x0[a], 0.0)
+    delta[1:] = xa - x0[a]
+    near = np.all(np.abs(delta) <= np.asarray(ANCHOR_REACH), axis=1)
+    near[1:] &= oka
+    delta[~near] = 0.0
     # the anchor at or before each row, 0 (the carry) before the first
     k = (np.arange(n) - first) // every + 1
     return x0 + delta[k], delta[-1].copy()
