@@ -88,7 +88,7 @@ def main() -> None:
                 written(c)
 
         t = best_cpu(fk, a.repeat)
-        print(f"  of which the forward kinematics (written_points): {t:.3f} s CPU")
+        print(f"  of which the forward kinematics (WrittenPoints): {t:.3f} s CPU")
 
 
 if __name__ == "__main__":

@@ -530,9 +530,10 @@ def forward(
     return kernel.tool_poses(xv, ok, t, origin, D), ok
 
 
-#: Points from one anchor of :func:`forward_anchored` to the next: the FK of a
-#: 200 000-line program's corrected G-code takes 1.75 Newton steps a point (in the
-#: kernel's groups of four) instead of 3, its written values the same
+#: Points from one anchor of :func:`forward_anchored` to the next: the FK of the
+#: 50 000-line bench program's corrected G-code takes 1.77 Newton steps a point (in
+#: the compiled kernel's groups of four, the anchors' own included) instead of 3, its
+#: written values the same; 12, 20 and 24 took 1.80, 1.77 and 1.78
 #: (``bench/fk_steps.py``).
 FK_ANCHOR_EVERY = 16
 

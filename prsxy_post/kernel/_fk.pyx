@@ -622,8 +622,8 @@ cdef inline void _near(double* dl, const double* reach, bint ok) noexcept nogil:
 cdef Py_ssize_t _starts(
     const Geo* G, const double* offs, const double[:, :] x0, Py_ssize_t every, Py_ssize_t phase,
     double limit, int max_iter, double res_tol, double* carry, const double* reach,
-    double[:, ::1] aoffs,
-    double[:, ::1] ax0, double[:, ::1] ax, char[::1] aok, double[:, ::1] st
+    double[:, ::1] aoffs, double[:, ::1] ax0, double[:, ::1] ax, char[::1] aok,
+    double[:, ::1] st
 ) noexcept nogil:
     """``fk.anchored_starts`` of the rows of x0 (n, 6) (offsets ``offs``, n × 9) into
     st; the anchors' rows in the scratch rows aoffs, ax0, ax, aok; carry (6) in and

@@ -6,7 +6,8 @@
     f_k = (s_k − g_k)·u_k,   f_{3+k} = |w_k| − L_k,   s_k = c + R b_k,  w_k = s_k − a_k
 
 with R = R_y(B) R_x(A) R_z(γ), Newton's step J s = −f (:func:`fk_system`) until every
-component of a step is below ``limit``, then checks the residual. Every operation is
+component of a step is below ``limit``, then checks the residual. Along a path,
+:func:`anchored_starts` starts each row at the offset solved at an anchor row. Every operation is
 an element-wise IEEE operation in a fixed order: the 3 × 3 products written out as
 left-to-right sums, and the 6 × 6 solve Gaussian elimination with partial pivoting
 written out (:func:`solve6`), not BLAS and LAPACK (whose kernels, and so whose last
