@@ -18,8 +18,10 @@ conversion inside the process (what ``convert_file`` takes: read, interpret, pla
 compensate, write), ``command`` is the whole ``prsxy-post convert`` command as a user
 runs it (Python's start and imports included). In the same run and on the same file it
 times LinuxCNC's ``rs274 -g`` (a whole command too) and pygcode's ``Machine`` when
-they are installed. Large programs are interpreted in a second process and written by
-a third (docs/architecture.md); peak memory is reported for each: main + interpreter + writer.
+they are installed; the command and ``rs274 -g`` run ``--runs`` times in turns (default
+3), the table gives their medians and each run's ratio is listed under it. Large
+programs are interpreted in a second process and written by a third
+(docs/architecture.md); peak memory is reported for each: main + interpreter + writer.
 
 It is a script, not a test: the figures depend on the machine. docs/measurements.md
 shows the latest figures with the machine they were taken on (``--markdown`` prints
@@ -34,6 +36,7 @@ import os
 import platform
 import resource
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -223,7 +226,7 @@ def time_pygcode(program: Path, limit_lines: int) -> float | None:
     return time.perf_counter() - t0
 
 
-def run(sizes: list[int], pygcode_limit: int, fmt: str) -> list[dict]:
+def run(sizes: list[int], pygcode_limit: int, fmt: str, runs: int = 1) -> list[dict]:
     results = []
     with tempfile.TemporaryDirectory() as d:
         prof = bench_profile(Path(d) / "bench.toml")
@@ -241,8 +244,16 @@ def run(sizes: list[int], pygcode_limit: int, fmt: str) -> list[dict]:
             r = json.loads(proc.stdout.strip().splitlines()[-1])
             r["size_lines"] = n
             r["format"] = fmt
-            r["command_s"] = time_command(prog, prof, out, fmt)
-            r["rs274_s"] = time_rs274(prog)
+            # the command and rs274 -g in turns, so both meet the machine's changes
+            # alike; the medians are the table's, each run's ratio is listed below it
+            cmds, rss = [], []
+            for _ in range(runs):
+                cmds.append(time_command(prog, prof, out, fmt))
+                rss.append(time_rs274(prog))
+            r["command_runs"] = cmds
+            r["rs274_runs"] = rss
+            r["command_s"] = statistics.median(cmds)
+            r["rs274_s"] = None if None in rss else statistics.median(rss)
             r["pygcode_s"] = time_pygcode(prog, pygcode_limit)
             r["output_mb"] = out.stat().st_size / 1e6
             results.append(r)
@@ -279,6 +290,19 @@ def report(results: list[dict]) -> str:
             f"{f(rs, '.2f')} | {f(pg, '.1f')} | {f(rs and tot / rs, '.2f')} | "
             f"{f(rs and cmd / rs, '.2f')} | {f(pg and pg / cmd, '.1f')} |"
         )
+    turns = [r for r in results if len(r.get("command_runs", [])) > 1 and r["rs274_s"]]
+    if turns:
+        lines += [
+            "",
+            f"The command and `rs274 -g` in turns, {len(turns[0]['command_runs'])} runs "
+            "each (the table: medians); command / rs274 -g run by run:",
+            "",
+        ]
+        for r in turns:
+            each = ", ".join(
+                f"{c / x:.2f}" for c, x in zip(r["command_runs"], r["rs274_runs"], strict=True)
+            )
+            lines.append(f"- {r['lines']:,} lines: {each}")
     stages = list(results[0]["timings"])
     lines += [
         "",
@@ -321,6 +345,12 @@ def main() -> None:
         help="output format converted to (default pmac)",
     )
     ap.add_argument(
+        "--runs",
+        type=int,
+        default=3,
+        help="times the command and rs274 -g run, in turns (the table: medians; default 3)",
+    )
+    ap.add_argument(
         "--markdown", action="store_true", help="print the section of docs/measurements.md"
     )
     ap.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
@@ -328,7 +358,7 @@ def main() -> None:
     if args.child:
         child_convert(*args.child)
         return
-    results = run(args.lines or [200_000, 2_000_000], args.pygcode_limit, args.format)
+    results = run(args.lines or [200_000, 2_000_000], args.pygcode_limit, args.format, args.runs)
     if args.markdown:
         import mdsection  # beside this script: bench.py is imported as bench.bench too
 
