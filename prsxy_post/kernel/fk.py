@@ -324,5 +324,5 @@ def forward_poses_anchored(
     (N,), and the carry for the next call (6,)."""
     off = P[:, :3, None] * d[None]
     starts, carry = anchored_starts(m, off, x0, limit, max_iter, res_tol, every, phase, carry)
-    x, ok = forward_newton(m, off, starts, limit, max_iter, res_tol)
-    return tool_poses(x, ok, t, origin, D), ok, carry
+    q, ok = forward_poses(m, d, P, starts, t, origin, D, limit, max_iter, res_tol)
+    return q, ok, carry
