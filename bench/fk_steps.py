@@ -13,7 +13,8 @@ an anchor every ``kinematics.FK_ANCHOR_EVERY`` points). For each it prints how m
 Newton steps the points take, and the steps the compiled kernel runs a point (it
 steps four rows side by side until the slowest of them stops; the anchors' own
 solves counted); then how many poses the anchored starts moved, by how much, and
-how many of the written values (7 decimals) changed.
+how many of the written values (7 decimals) changed; and the largest offset of a
+solution from its guess alone (what ``kernel.fk.ANCHOR_REACH`` bounds).
 """
 
 from __future__ import annotations
@@ -63,6 +64,7 @@ def main() -> None:
     lanes = {"cold": 0, "anchored": 0}
     moved, biggest, changed, values, done = 0, 0.0, 0, 0, 0
     carry = np.zeros(6)
+    offset = np.zeros(6)  # the largest |solution - guess| per component
     for c in chunks:
         x0 = kinematics.fk_start(geo, c.q_target)
         off = geo.hinge_offset(c.P_cmd[:, :3])
@@ -75,10 +77,9 @@ def main() -> None:
         lanes["anchored"] += lane_steps(warm[-1]) + lane_steps(steps(m, off[anchors], x0[anchors]))
         t = np.broadcast_to(geo.tool, (len(c), 3)).copy()
         D = kinematics.table_displacement(geo, c.P_cmd[:, 3], c.P_cmd[:, 4])
-        q = [
-            kernel.tool_poses(*kernel.forward_newton(m, off, s, lim, it, res), t, geo.origin, D)
-            for s in (x0, starts)
-        ]
+        solved = [kernel.forward_newton(m, off, s, lim, it, res) for s in (x0, starts)]
+        q = [kernel.tool_poses(x, ok, t, geo.origin, D) for x, ok in solved]
+        offset = np.maximum(offset, np.max(np.abs(solved[0][0] - x0), axis=0, initial=0.0))
         moved += int(np.sum(np.any(q[0] != q[1], axis=1)))
         biggest = max(biggest, float(np.max(np.abs(q[0] - q[1]), initial=0.0)))
         changed += int(np.sum(round_clean(q[0], DEC) != round_clean(q[1], DEC)))
@@ -94,6 +95,10 @@ def main() -> None:
     print(
         f"poses the anchored starts moved: {moved} of {done}, by at most {biggest:.2e} "
         f"(mm, deg); written values ({DEC} decimals) changed: {changed} of {values}"
+    )
+    print(
+        f"largest offset of a solution from its guess alone: centre {offset[:3].max():.3f} mm, "
+        f"angles {offset[3:].max():.4f} rad (fk.ANCHOR_REACH: {fk.ANCHOR_REACH})"
     )
 
 

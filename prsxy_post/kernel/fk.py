@@ -250,9 +250,11 @@ def forward_poses(
 
 #: The largest offset an anchor hands on, per component of x (c [mm], A, B, γ
 #: [rad]): a point moved further from its guess starts from the guess alone. About
-#: twelve times the largest offsets of the test machines (0.081 mm, 0.0015 rad, the
-#: controller's geometry against a perturbed machine's commands), so that a start is
-#: never far from its guess, where Newton could find another of the FK's solutions.
+#: twelve times the largest offsets of the test machines (0.081 mm, 0.0015 rad: the
+#: controller's geometry against the contract's perturbed machine's commands,
+#: ``python bench/fk_steps.py samples/five-axis.ngc tests/data/vectors/perturbed.toml``),
+#: so that a start is never far from its guess, where Newton could find another of
+#: the FK's solutions.
 ANCHOR_REACH = (1.0, 1.0, 1.0, 0.02, 0.02, 0.02)
 
 
