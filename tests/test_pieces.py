@@ -138,6 +138,7 @@ def programs(draw: st.DrawFn) -> str:
     return "\n".join(out) + "\n"
 
 
+@pytest.mark.parametrize("fmt", ["pmac", "gcode"])
 @settings(
     max_examples=12,
     deadline=None,
@@ -149,23 +150,16 @@ def test_convert_writes_the_same_bytes_whatever_the_chunk_size(
     machine_with_everything: Path,
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
+    fmt: str,
     text: str,
     chunks: list[int],
     piece: int,
 ) -> None:
-    _same_bytes_by_chunk(machine_with_everything, tmp_path, monkeypatch, text, chunks, piece)
-
-
-def _same_bytes_by_chunk(
-    prof: Path,
-    tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
-    text: str,
-    chunks: list[int],
-    piece: int,
-    fmt: str = "pmac",
-) -> None:
-    """``text`` converted with every chunk size of [1, 7, *chunks]: the same bytes."""
+    """The program converted with every chunk size of [1, 7, *chunks]: the same
+    bytes. The corrected G-code writer carries its state from chunk to chunk too
+    (its lines held back, the forward kinematics' anchored starts: the anchors
+    counted from the program's first point, an anchor's offset carried into the
+    next chunk)."""
     # small pieces, so that a program of a few hundred points crosses many cuts
     monkeypatch.setattr(pieces, "PIECE_BLOCKS", piece)
     src = tmp_path / "p.ngc"
@@ -173,33 +167,9 @@ def _same_bytes_by_chunk(
     outputs = {}
     for chunk in [1, 7, *chunks]:
         out = tmp_path / f"p{chunk}.out"
-        convert_file(ConvertJob(str(src), str(prof), fmt, str(out), chunk=chunk))
+        convert_file(ConvertJob(str(src), str(machine_with_everything), fmt, str(out), chunk=chunk))
         outputs[chunk] = out.read_bytes()
     assert len(set(outputs.values())) == 1, {c: len(o) for c, o in outputs.items()}
-
-
-@settings(
-    max_examples=5,
-    deadline=None,
-    derandomize=True,
-    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
-)
-@given(programs(), st.lists(st.integers(1, 10**6), min_size=2, max_size=3), st.integers(5, 40))
-def test_corrected_gcode_is_the_same_bytes_whatever_the_chunk_size(
-    machine_with_everything: Path,
-    tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
-    text: str,
-    chunks: list[int],
-    piece: int,
-) -> None:
-    """The corrected G-code writer carries its state from chunk to chunk (its lines
-    held back, the forward kinematics' anchored starts: the anchors counted from the
-    program's first point, an anchor's offset carried into the next chunk), so the
-    chunk size changes no byte."""
-    _same_bytes_by_chunk(
-        machine_with_everything, tmp_path, monkeypatch, text, chunks, piece, "gcode"
-    )
 
 
 @pytest.mark.parametrize(("chunk", "size"), [(7, 5), (3, 16), (50, 64), (1000, 4096)])
