@@ -5,10 +5,13 @@ The library's conversion engine (the ``convert`` command is a thin shell over
 line batches, interpreted, and fed chunk by chunk through the compensation
 chain (:mod:`prsxy_post.chain`) into the dialect's writer; memory stays flat on
 programs of millions of lines. A program of :data:`PARALLEL_FROM_BYTES` or more
-may be read, interpreted and planned, and its points put through the error map and
-the IK, in a second process while this one runs the rest of the chain (reversals,
-real-axis tables, play, servo lead), and its text formatted and written in a third
-(:mod:`prsxy_post.sinks`); the output is byte for byte the same.
+may have its text formatted and written in a second process
+(:mod:`prsxy_post.sinks`) while this one runs the chain, and, where the output's
+dialect leaves a core for it (``Dialect.interpreter_apart``: PMAC's light writer
+does, G-code's, which solves the FK at every point, does not), be read, interpreted
+and planned, and its points put through the error map and the IK, in a third,
+while this one runs the rest of the chain (reversals, real-axis tables, play, servo
+lead); the output is byte for byte the same.
 
 Example
 -------
@@ -59,10 +62,10 @@ class ConvertJob:
     options : how it was asked for, for the output's header
     chunk : motions per chunk through the chain (the output does not depend on it);
         None: the output's own, :data:`CHUNK_MOTIONS`
-    parallel : read, interpret and plan the program, and solve its points' map and
-        IK, in a second process, and write
-        the output in a third, while this one runs the rest of the chain (the output
-        is the same; only the wall time changes)
+    parallel : write the output in a second process and, where the dialect says so
+        (``interpreter_apart``), read, interpret and plan the program, and solve its
+        points' map and IK, in a third, while this one runs the rest of the chain
+        (the output is the same; only the wall time changes)
     on_message : receives the program's messages (gcode.InterpreterConfig)
     """
 
@@ -189,11 +192,13 @@ def _planned_chunks(
 ) -> Iterator[Iterator[Any]]:
     """Planned chunks of the program (read, interpreted, planned and sampled, cut
     into pieces whose points' map and IK are solved: :class:`chain.Ready`), made
-    here or, with ``job.parallel`` where processes can fork, by a second process
-    that runs ahead, at most :data:`AHEAD` chunks (a bounded queue, then the pipe,
-    hold it back), so memory stays bounded. Errors arrive in program order: every
+    here or, with ``job.parallel`` where processes can fork and the dialect keeps
+    its interpreter apart, by a second process that runs ahead, at most
+    :data:`AHEAD` chunks (a bounded queue, then the pipe, hold it back), so memory
+    stays bounded. Errors arrive in program order: every
     chunk before a G-code error is delivered first, as when run here."""
-    if not job.parallel or job.program == "-" or not sinks.can_fork():
+    apart = job.parallel and writers.dialect(job.fmt).interpreter_apart
+    if not apart or job.program == "-" or not sinks.can_fork():
         yield _planned_here(job, prof, counts, bar)
         return
     recv, send = sinks.pipe(duplex=False)
@@ -278,9 +283,10 @@ def _planned_chunks(
 #: cubics for the same motions (they must stay within the chord tolerance), and a
 #: chunk's points are the memory of every process: with 4 096 motions a conversion
 #: to G-code of bench/bench.py's program at 2 M lines peaked at 301-327 MB (three
-#: processes, ten runs), with 3 072 and a look-ahead of two (:data:`AHEAD`) at
-#: 278-300 MB (eleven runs), the command as fast (alternating rounds at 2 M and at
-#: 200 k lines: the same within their spread; bench/chunk_memory.py)
+#: processes, as G-code's conversion then ran; ten runs), with 3 072 and a
+#: look-ahead of two (:data:`AHEAD`) at 278-300 MB (eleven runs), the command as
+#: fast (alternating rounds at 2 M and at 200 k lines: the same within their
+#: spread; bench/chunk_memory.py)
 CHUNK_MOTIONS = {"cubic": 4096, "chord": 3072}
 
 #: chunks the interpreter process may run ahead of the chain (in the queue; the
@@ -289,10 +295,12 @@ CHUNK_MOTIONS = {"cubic": 4096, "chord": 3072}
 #: of 4 096 motions' points of G-code output. Three keep the chain as fed as eight
 #: did (bench/bench.py's program at 200 k lines, both formats, and G-code at 2 M:
 #: the same times within their spread) in 45-55 MB less at 2 M lines with G-code
-#: output, 17-27 MB less with PMAC output; with G-code's smaller chunks two do
+#: output, 17-27 MB less with PMAC output; with G-code's smaller chunks two do (the
+#: chord's figures from when G-code's interpreter ran apart, which it no longer
+#: does: ``Dialect.interpreter_apart``)
 AHEAD = {"cubic": 3, "chord": 2}
 
-#: programs from this size on are read and interpreted in a second process
+#: programs from this size on are converted in parallel (``ConvertJob.parallel``)
 PARALLEL_FROM_BYTES = 256 * 1024
 
 #: how far the interpreter process lowers its scheduling priority (nice, :func:`_make_way`)
@@ -304,9 +312,10 @@ def _make_way() -> None:
     :data:`INTERPRETER_NICE`. It runs up to :data:`AHEAD` chunks ahead of the chain
     and waits for it most of the time, while the chain and the writer are the
     conversion's slowest steps: where the three processes want more cores than there
-    are, those two get them first. With G-code output, whose writer is the slowest,
-    the command took 6-10 % less time (``bench/bench.py``, docs/measurements.md); with
-    PMAC output, whose chain is, the same. The system runs the interpreter whenever
+    are, those two get them first. With G-code output, when its interpreter ran apart
+    (``Dialect.interpreter_apart``), the command took 6-10 % less time
+    (``bench/bench.py``, docs/measurements.md); with PMAC output, whose chain is the
+    slowest, the same. The system runs the interpreter whenever
     a core is free, and with the session's processes grouped (Linux's autogroup) the
     priority counts only against them. POSIX lets a process lower its own priority;
     a system that refused would change the speed only, never the output, so the
@@ -464,7 +473,8 @@ def _publish_parts(
 
 
 def worth_a_second_process(program: str) -> bool:
-    """A single large program: one core interprets while the other runs the chain."""
+    """A single large program: its conversion's processes share the cores
+    (:attr:`ConvertJob.parallel`)."""
     try:
         return program != "-" and os.path.getsize(program) >= PARALLEL_FROM_BYTES
     except OSError:

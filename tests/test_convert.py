@@ -89,3 +89,34 @@ def test_the_interpreter_process_makes_way_for_the_chain_and_the_writer(
         want = min(mine + convert.INTERPRETER_NICE, 19) if parallel else mine
         assert int(seen.read_text()) == want
     assert (tmp_path / "b.pmc").read_bytes() == (tmp_path / "a.pmc").read_bytes()
+
+
+@pytest.mark.parametrize(
+    ("fmt", "processes"),
+    [("pmac", ["_planning_child", "_serve"]), ("gcode", ["_serve"])],
+)
+def test_the_dialect_says_whether_the_interpreter_runs_apart(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, fmt: str, processes: list[str]
+) -> None:
+    """In parallel, PMAC output is converted in three processes (the interpreter's
+    forked first, then the writer's) and corrected G-code in two (the writer's,
+    which solves the FK at every point and has the second core to itself; the
+    interpreter runs in this one): ``Dialect.interpreter_apart``. Either way the
+    output is that of one process."""
+    from prsxy_post import sinks
+
+    forked = sinks.forked
+    seen: list[str] = []
+
+    def spy(target, *args):  # type: ignore[no-untyped-def]
+        seen.append(target.__name__)
+        return forked(target, *args)
+
+    monkeypatch.setattr(sinks, "forked", spy)
+    program = _program(tmp_path, 3000, {})
+    outs = [tmp_path / d / f"job.{fmt}" for d in ("here", "apart")]
+    for parallel, out in zip((False, True), outs, strict=True):
+        out.parent.mkdir()
+        convert_file(ConvertJob(program, SHOP, fmt, str(out), parallel=parallel))
+    assert seen == processes
+    assert outs[1].read_bytes() == outs[0].read_bytes()

@@ -65,6 +65,13 @@ class Dialect(NamedTuple):
         ends each part at rest at a block end
     space : what its numbers are: "motor" positions or the tip's "pose" (rounded
         to the setting ``decimals``: :meth:`written`)
+    interpreter_apart : whether a large program converted in parallel is read,
+        interpreted and planned, and its points' map and IK solved, in a process of
+        its own (three processes: that one, the chain's and the writer's) or in the
+        chain's (two). Each dialect's by measurement (``bench/bench.py``,
+        docs/measurements.md, "Conversion speed"): a third process costs CPU (its
+        points cross a pipe), which a light writer leaves room for on a second core
+        and a heavy one does not
     """
 
     name: str
@@ -75,6 +82,7 @@ class Dialect(NamedTuple):
     make: Callable[[Profile, Mapping[str, Any], Provenance], Writer]
     parts: Callable[[Mapping[str, Any]], int] = lambda s: 0
     space: str = "motor"
+    interpreter_apart: bool = True
 
     def written(self, settings: Mapping[str, Any]) -> Written:
         """How the chain's numbers are rounded on the way out (:class:`points.Written`)."""

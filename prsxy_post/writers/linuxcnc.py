@@ -609,6 +609,13 @@ DIALECT = Dialect(
     settings=SETTINGS,
     space="pose",
     make=_make,
+    # its writer solves the controller's FK at every point, the largest share of
+    # the conversion's CPU, and keeps the second core busy: a third process would add
+    # the copies of every point through a pipe (bench/process_layout.py, bench.py's
+    # program: 1.396 s apart against 1.313 s here at 200 000 lines, medians of five
+    # runs; 12.31 s against 11.77 s at 2 M; PMAC output the other way, 0.695 s
+    # against 0.903 s)
+    interpreter_apart=False,
 )
 
 
