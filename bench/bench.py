@@ -20,8 +20,9 @@ runs it (Python's start and imports included). In the same run and on the same f
 times LinuxCNC's ``rs274 -g`` (a whole command too) and pygcode's ``Machine`` when
 they are installed; the command and ``rs274 -g`` run ``--runs`` times in turns (default
 3), the table gives their medians and each run's ratio is listed under it. Large
-programs are interpreted in a second process and written by a third
-(docs/architecture.md); peak memory is reported for each: main + interpreter + writer.
+programs are written by a second process and, where the output's dialect keeps its
+interpreter apart (PMAC), interpreted in a third (docs/architecture.md); peak memory
+is reported for each: main + interpreter + writer (0 where none ran).
 
 It is a script, not a test: the figures depend on the machine. docs/measurements.md
 shows the latest figures with the machine they were taken on (``--markdown`` prints
