@@ -1,4 +1,4 @@
-"""Timeline of a parallel conversion: its three processes, when each works and waits.
+"""Timeline of a parallel conversion: its processes, when each works and waits.
 
 Usage::
 
@@ -7,7 +7,8 @@ Usage::
     python bench/timeline.py --program x.ngc --profile p.toml --runs 3
 
 ``convert_file`` runs as the ``convert`` command runs it (``parallel=True``): an
-interpreter process (read, interpret, plan, the map and the IK), this process (the
+interpreter process (read, interpret, plan, the map and the IK; with G-code output
+none, this process doing its work: ``Dialect.interpreter_apart``), this process (the
 rest of the chain) and a writer process (text). The script wraps, in this process
 before the others are forked from it, the pipe's ``send`` and ``recv``
 (:class:`prsxy_post.sinks.Channel`), the interpreter's chunk generator, the
