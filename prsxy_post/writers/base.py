@@ -68,7 +68,7 @@ class Dialect(NamedTuple):
     interpreter_apart : whether a large program converted in parallel is read,
         interpreted and planned, and its points' map and IK solved, in a process of
         its own (three processes: that one, the chain's and the writer's) or in the
-        chain's (two). Each dialect's by measurement (``bench/bench.py``,
+        chain's (two). Each dialect's by measurement (``bench/process_layout.py``,
         docs/measurements.md, "Conversion speed"): a third process costs CPU (its
         points cross a pipe), which a light writer leaves room for on a second core
         and a heavy one does not
