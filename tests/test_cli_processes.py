@@ -161,17 +161,22 @@ def test_ctrl_c_with_jobs_stops_everything_and_says_what_was_written(
     assert _descendants(proc.pid) == []
 
 
-def test_ctrl_c_on_one_large_program_stops_its_three_processes(tmp_path: Path) -> None:
-    """One large program is read by an interpreter process and written by a
-    writer process: Ctrl-C on the terminal reaches all three; the command says
-    the output was not written, an existing file of that name is untouched,
-    and no temp file or child process is left."""
+@pytest.mark.parametrize(("fmt", "children"), [("pmac", 2), ("gcode", 1)])
+def test_ctrl_c_on_one_large_program_stops_its_processes(
+    tmp_path: Path, fmt: str, children: int
+) -> None:
+    """One large program is written by a writer process and, with PMAC output,
+    read by an interpreter process (corrected G-code's interpreter runs in the
+    command's own: Dialect.interpreter_apart): Ctrl-C on the terminal reaches them
+    all; the command says the output was not written, an existing file of that
+    name is untouched, and no temp file or child process is left."""
     program = _program(tmp_path / "big.ngc", 300_000)
-    out = tmp_path / "big.pmc"
+    out = tmp_path / f"big.{fmt}"
     out.write_text("keep me")
-    proc = _start("convert", str(program), "--profile", SHOP, "-o", str(out))
-    _wait_for(lambda: len(_descendants(proc.pid)) >= 2, 60, proc)
-    _wait_for(lambda: any(p.name.startswith(".big.pmc.") for p in tmp_path.iterdir()), 60, proc)
+    proc = _start("convert", str(program), "--profile", SHOP, "--format", fmt, "-o", str(out))
+    _wait_for(lambda: len(_descendants(proc.pid)) >= children, 60, proc)
+    temp = f".{out.name}."
+    _wait_for(lambda: any(p.name.startswith(temp) for p in tmp_path.iterdir()), 60, proc)
     os.killpg(proc.pid, signal.SIGINT)
     code, err, _ = _ended_within(proc, 10.0)
     assert code == INTERRUPTED, err
@@ -187,24 +192,27 @@ def test_ctrl_c_on_one_large_program_stops_its_three_processes(tmp_path: Path) -
 # ---------------------------------------------------------------- a process that dies
 
 
-@pytest.mark.parametrize("which", ["interpreter", "writer"])
-def test_a_killed_process_is_exit_3_within_seconds(tmp_path: Path, which: str) -> None:
-    """SIGKILL the interpreter process (the one reading the program) or the
-    writer process (the one writing the temp file) mid-run: exit 3 and a
-    message naming it within 10 s, not a hang; no output, no temp file."""
+@pytest.mark.parametrize(
+    ("which", "fmt"), [("interpreter", "pmac"), ("writer", "pmac"), ("writer", "gcode")]
+)
+def test_a_killed_process_is_exit_3_within_seconds(tmp_path: Path, which: str, fmt: str) -> None:
+    """SIGKILL the interpreter process (the one reading the program; PMAC output
+    has one) or the writer process (the one writing the temp file) mid-run: exit 3
+    and a message naming it within 10 s, not a hang; no output, no temp file."""
     program = _program(tmp_path / "big.ngc", 300_000)
-    out = tmp_path / "big.pmc"
-    proc = _start("convert", str(program), "--profile", SHOP, "-o", str(out))
+    out = tmp_path / f"big.{fmt}"
+    temp = f".{out.name}."
+    proc = _start("convert", str(program), "--profile", SHOP, "--format", fmt, "-o", str(out))
 
     def holding(pid: int) -> bool:
         if which == "interpreter":
             return _has_open(pid, lambda f: f == str(program))
-        return _has_open(pid, lambda f: Path(f).name.startswith(".big.pmc."))
+        return _has_open(pid, lambda f: Path(f).name.startswith(temp))
 
     def victim() -> int | None:
         # the writer has the temp file open once text comes; the interpreter has
         # the program open while it reads, which it does ahead of the chain
-        if not any(p.name.startswith(".big.pmc.") for p in tmp_path.iterdir()):
+        if not any(p.name.startswith(temp) for p in tmp_path.iterdir()):
             return None
         return next((p for p in _descendants(proc.pid) if holding(p)), None)
 
