@@ -1,5 +1,5 @@
 """Chunk size and look-ahead of a conversion: its time and the peak memory of its
-three processes, setting against setting.
+processes, setting against setting.
 
 Usage::
 
@@ -13,7 +13,9 @@ the command runs it (``parallel=True``), in a fresh child process each time (a
 process's peak memory is its whole life's). The settings take turns, ``--runs``
 rounds of one run each, so that a machine getting slower or faster over the runs
 weighs on every setting alike. Printed per setting: each run's wall time [s] and
-peak resident memory, main + interpreter + writer = all [MB]. The program and
+peak resident memory, main + interpreter + writer = all [MB] (no interpreter
+process, 0, and no look-ahead where the output's dialect keeps its interpreter in
+the main process: corrected G-code, ``Dialect.interpreter_apart``). The program and
 profile are bench.py's unless given (``bench.program_parser``).
 """
 
@@ -45,7 +47,8 @@ def child(program: str, prof: str, fmt: str, chunk: int, ahead: int, out: str) -
         convert.ConvertJob(program, prof, fmt, out, chunk=chunk, parallel=True)
     )
     wall = time.perf_counter() - t0
-    mb = (peak_rss_mb(), st.helper_peak_rss_mb, st.writer_peak_rss_mb)
+    # no interpreter process where the dialect keeps its interpreter here (G-code)
+    mb = (peak_rss_mb(), st.helper_peak_rss_mb or 0.0, st.writer_peak_rss_mb or 0.0)
     print(json.dumps({"wall_s": wall, "mb": mb}))
 
 

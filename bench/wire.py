@@ -12,7 +12,9 @@ before and :func:`~prsxy_post.wire.unpack_ready` after), a forked process receiv
 them all through a :func:`prsxy_post.sinks.pipe` while this one sends them. It
 prints the MB sent, this process's CPU to pack and send them, and the receiving
 process's CPU to read and unpack them (thread CPU seconds: on a loaded machine
-compare runs made side by side).
+compare runs made side by side). With ``--format gcode`` it measures what would
+cross: corrected G-code's interpreter runs in the chain's process, partly for this
+cost (``Dialect.interpreter_apart``, docs/measurements.md).
 """
 
 from __future__ import annotations
