@@ -612,9 +612,9 @@ DIALECT = Dialect(
     # its writer solves the controller's FK at every point, the largest share of
     # the conversion's CPU, and keeps the second core busy: a third process would add
     # the copies of every point through a pipe (bench/process_layout.py, bench.py's
-    # program: 1.396 s apart against 1.313 s here at 200 000 lines, medians of five
-    # runs; 12.31 s against 11.77 s at 2 M; PMAC output the other way, 0.695 s
-    # against 0.903 s)
+    # program: 1.360 s and 2.38 s of CPU apart against 1.269 s and 2.19 s here at
+    # 200 000 lines, medians of five runs; 12.09 s against 11.45 s at 2 M; PMAC
+    # output the other way, 0.674 s against 0.895 s)
     interpreter_apart=False,
 )
 
