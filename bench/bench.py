@@ -247,14 +247,14 @@ def run(sizes: list[int], pygcode_limit: int, fmt: str, runs: int = 1) -> list[d
             r["format"] = fmt
             # the command and rs274 -g in turns, so both meet the machine's changes
             # alike; the medians are the table's, each run's ratio is listed below it
-            cmds, rss = [], []
+            cmds, rs274s = [], []
             for _ in range(runs):
                 cmds.append(time_command(prog, prof, out, fmt))
-                rss.append(time_rs274(prog))
+                rs274s.append(time_rs274(prog))
             r["command_runs"] = cmds
-            r["rs274_runs"] = rss
+            r["rs274_runs"] = rs274s
             r["command_s"] = statistics.median(cmds)
-            r["rs274_s"] = None if None in rss else statistics.median(rss)
+            r["rs274_s"] = None if None in rs274s else statistics.median(rs274s)
             r["pygcode_s"] = time_pygcode(prog, pygcode_limit)
             r["output_mb"] = out.stat().st_size / 1e6
             results.append(r)
