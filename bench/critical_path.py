@@ -15,9 +15,10 @@ in turns with ``rs274 -g`` on the same program, ``--runs`` rounds. Then the same
 conversion once in one process (``parallel=False``), its CPU.
 
 It prints the medians, and the floor: the command's start (until ``convert_file``)
-plus half the CPU of all its processes, what two cores would take were that work
-shared evenly between them with nothing waiting (pipes, the first chunk, the
-writer's last). Issue 31 asks the command at 2 x ``rs274 -g`` with G-code output:
+plus half the CPU of all its processes after it (their CPU less what this process
+used before ``convert_file``, on one core during the start), what two cores would
+take were that work shared evenly between them with nothing waiting (pipes, the
+first chunk, the writer's last). Issue 31 asks the command at 2 x ``rs274 -g`` with G-code output:
 where the floor is above that, no layout of the same work reaches it; only less
 CPU does. The program and profile are bench.py's unless given
 (``bench.program_parser``); the wall times follow the machine's load, so compare
@@ -125,7 +126,9 @@ def main() -> None:
         one = one_process_cpu(program, prof, tmp / f"one.{args.format}", args.format)
     med = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
     every = statistics.median(r["CPU here"] + r["CPU forked"] for r in runs)
-    floor = med["convert_file starts"] + every / 2
+    # the start's CPU (before the fork) runs on one core, in the start's wall time
+    start_cpu = statistics.median(r["CPU here"] - r["chain CPU in convert_file"] for r in runs)
+    floor = med["convert_file starts"] + (every - start_cpu) / 2
     print(f"{args.format}, {program}: {args.runs} runs in turns with rs274 -g (medians, s)")
     print(
         "  from the command's start: Python up {python up:.3f}, imports done "
@@ -138,7 +141,10 @@ def main() -> None:
         f"in convert_file), forked {med['CPU forked']:.3f}, all {every:.3f}; "
         f"the same conversion in one process {one:.3f}"
     )
-    line = f"  floor on two cores: {med['convert_file starts']:.3f} + {every:.3f} / 2 = {floor:.3f}"
+    line = (
+        f"  floor on two cores: {med['convert_file starts']:.3f} + ({every:.3f} - "
+        f"{start_cpu:.3f}) / 2 = {floor:.3f}"
+    )
     if rs274:
         r = statistics.median(rs274)
         line += (
