@@ -114,6 +114,29 @@ def run_on_linuxcnc(truth, motions, res, text: str) -> tuple[ctl.Trace, lm.Motio
     return trace, run, float(off.max())
 
 
+def unplanned_stands(run: lm.MotionRun, text: str) -> list[int]:
+    """The written points (indices of ``ctl.run_gcode(text).q``) at which the motion
+    stood with an empty queue though the program runs on there: neither the first
+    point nor one a dwell (``G4``) follows. There LinuxCNC's task had not yet queued
+    the next line when the planner reached the end of the last one, and the planner
+    stopped (tp.c, tpHandleEmptyQueue); -1 for a stand away from every point."""
+    written = ctl.run_gcode(text)
+    stops = {0}
+    for no, k in lm.motion_lines(text).items():
+        if text.splitlines()[no - 1].strip().startswith("G4 "):
+            stops |= {k - 1, k}  # the dwell's point repeats the one before it
+    at_rest = np.r_[True, np.all(run.q[1:] == run.q[:-1], axis=1)]
+    out = set()
+    for c in np.flatnonzero(at_rest & (run.line == 0)):
+        d = np.max(np.abs(written.q - run.q[c]), axis=1)
+        k = int(np.argmin(d))
+        if d[k] > 1e-6:
+            out.add(-1)
+        elif k not in stops:
+            out.add(k)
+    return sorted(out)
+
+
 def test_an_xyz_program_for_a_machine_without_errors_runs_within_bounds() -> None:
     """The nominal machine's corrected G-code moves X Y Z only: LinuxCNC blends it
     with tangent arcs within G64 P (0.25 µm) and holds F: 0.18 µm off the path,
@@ -274,8 +297,17 @@ def test_the_line_after_a_dwell_runs_in_exact_path_mode() -> None:
         nxt = next(j for j in range(k + 1, len(rows)) if rows[j].startswith(("G1 ", "M2")))
         assert not any(r.startswith("G64") for r in rows[k + 1 : nxt])
     tr, run, _ = run_on_linuxcnc(truth, motions, res, texts[0])
-    # off the path once in a full suite's run (0.563 µm at line 7), not again in a
-    # dozen runs alone or under load, nor with LinuxCNC's task cycle at 10 or 100 ms:
+    # where LinuxCNC's task fell behind and the planner stood where the program runs
+    # on, the rest of the path may run 0.5 µm to one side (the race of
+    # test_a_stand_linuxcnc_makes_after_a_crossing_line: 0.563 µm at line 7, twice in
+    # full suites' runs): an expected failure, said as such, not a pass
+    stood = unplanned_stands(run, texts[0])
+    if stood and tr.path_mm > TOL_MM:
+        pytest.xfail(
+            f"{tr.path_mm * 1e3:.3f} µm off the path at line {tr.worst_line} after LinuxCNC "
+            f"stood with an empty queue at written points {stood} (open: the race of "
+            "test_a_stand_linuxcnc_makes_after_a_crossing_line)"
+        )
     # when it fails, say how long the motion stood with an empty queue and what
     # was written for the worst source line
     marks = [k for k, r in enumerate(rows) if r == f"(line {tr.worst_line})"]
@@ -283,9 +315,42 @@ def test_the_line_after_a_dwell_runs_in_exact_path_mode() -> None:
     around = "\n".join(rows[max(at - 3, 0) : at + 12])
     assert_on_the_path(
         tr,
-        context=f"; the queue empty {run.waiting_s:.3f} s of the run; "
-        f"the written lines about it:\n{around}",
+        context=f"; the queue empty {run.waiting_s:.3f} s of the run (at written points "
+        f"{stood} where the program runs on); the written lines about it:\n{around}",
     )
+
+
+@pytest.mark.xfail(
+    strict=True, raises=AssertionError, reason="open: LinuxCNC's path after an unplanned stand"
+)
+def test_a_stand_linuxcnc_makes_after_a_crossing_line() -> None:
+    """The race behind test_the_line_after_a_dwell_runs_in_exact_path_mode's rare
+    failure, made certain. After the G4 P0 that starts line 7 (steep-helix on machine
+    21) LinuxCNC's task queues the lines again one by one while the first, a motor's
+    crossing window of 5 µm in 0.9 ms, already runs. Where the task queues the next
+    line in time the planner runs on; where it does not, the planner stands at the
+    window's end until it comes (the suite's failed run: 0.005 s with an empty queue
+    in all, against 0.002-0.004 s in runs that pass). After a stand there, here a
+    dwell of 2 ms written after the window, LinuxCNC's command runs 0.5 µm to one side
+    of the run without it, cycle for cycle (9.3 nm in X, 500 nm in Y), from the
+    window to the program's last moves: the tip 0.563 µm off the path at line 7
+    (measured), above the 0.5 µm tolerance; without it 0.115 µm. Why LinuxCNC's
+    command moves aside after such a stand is not known yet (issue 33's note)."""
+    truth = truth_machine("random", 21)
+    motions, res, texts = convert(truth, STEEP_HELIX_AFTER_A_CIRCLE, "gcode")
+    rows = texts[0].split("\n")
+    at = rows.index("(line 7)")
+    if not (rows[at - 1] == "G4 P0" and rows[at + 1].startswith("G1 ")):
+        raise RuntimeError("line 7 no longer starts with a dwell and a window's line")
+    stand = "\n".join([*rows[: at + 2], "G4 P0.002", *rows[at + 2 :]])
+    tr, run, _ = run_on_linuxcnc(truth, motions, res, stand)
+    # the stand is one the program as written does not make, as the race's (not an
+    # AssertionError: that alone is the expected failure)
+    window_end = lm.motion_lines(texts[0])[at + 2]
+    stood = unplanned_stands(run, texts[0])
+    if window_end not in stood:
+        raise RuntimeError(f"stood at written points {stood}, not at {window_end}")
+    assert_on_the_path(tr)
 
 
 #: Programs whose corrected G-code LinuxCNC ran out of bounds while every line was a
