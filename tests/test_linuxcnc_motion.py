@@ -331,11 +331,13 @@ def test_a_stand_linuxcnc_makes_after_a_crossing_line() -> None:
     line in time the planner runs on; where it does not, the planner stands at the
     window's end until it comes (the suite's failed run: 0.005 s with an empty queue
     in all, against 0.002-0.004 s in runs that pass). After a stand there, here a
-    dwell of 2 ms written after the window, LinuxCNC's command runs 0.5 µm to one side
-    of the run without it, cycle for cycle (9.3 nm in X, 500 nm in Y), from the
-    window to the program's last moves: the tip 0.563 µm off the path at line 7
-    (measured), above the 0.5 µm tolerance; without it 0.115 µm. Why LinuxCNC's
-    command moves aside after such a stand is not known yet (issue 33's note)."""
+    dwell of 2 ms written after the window, LinuxCNC's command is the run's without
+    it moved by 0.500 µm along the line that follows the stand (9.3 nm in X, 500.0
+    nm in Y), cycle for cycle, from there to the program's last moves: the tip 0.563
+    µm off the path at line 7 (measured), above the 0.5 µm tolerance; without it
+    0.115 µm. With G64's naive-CAM merging off (Q0) the same. Why LinuxCNC moves the
+    rest of the path after such a stand is not known yet (its planner restarts from
+    its own position there, tp.c tpHandleEmptyQueue: ``goalPos = currentPos``)."""
     truth = truth_machine("random", 21)
     motions, res, texts = convert(truth, STEEP_HELIX_AFTER_A_CIRCLE, "gcode")
     rows = texts[0].split("\n")
