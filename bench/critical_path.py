@@ -21,9 +21,9 @@ take were that work shared evenly between them with nothing waiting (pipes, the
 first chunk, the writer's last). Issue 31 asks the command at 2 x ``rs274 -g``
 with G-code output: where the floor is above that, no layout of the same work
 reaches it; only less CPU does; where the command is above the floor, a layout
-that shares the work more evenly would gain up to the difference. The program and profile are bench.py's unless given
-(``bench.program_parser``); the wall times follow the machine's load, so compare
-runs made side by side.
+that shares the work more evenly would gain up to the difference. The program and
+profile are bench.py's unless given (``bench.program_parser``); the wall times
+follow the machine's load, so compare runs made side by side.
 """
 
 from __future__ import annotations
