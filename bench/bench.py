@@ -198,11 +198,17 @@ def user_env() -> dict[str, str]:
     return env
 
 
+def convert_args(program: Path | str, prof: Path | str, out: Path | str, fmt: str) -> list[str]:
+    """The ``convert`` command's arguments a user gives, quiet (from ``convert`` on:
+    for a script that runs the command wrapped)."""
+    opts = ["--profile", str(prof), "--format", fmt, "-o", str(out), "-q"]
+    return ["convert", str(program), *opts]
+
+
 def convert_command(program: Path | str, prof: Path | str, out: Path | str, fmt: str) -> list[str]:
     """The ``prsxy-post convert`` command line a user runs, quiet (run from
     :data:`ROOT` with :func:`user_env`)."""
-    opts = ["--profile", str(prof), "--format", fmt, "-o", str(out), "-q"]
-    return [sys.executable, "-m", "prsxy_post.cli", "convert", str(program), *opts]
+    return [sys.executable, "-m", "prsxy_post.cli", *convert_args(program, prof, out, fmt)]
 
 
 def time_command(program: Path, prof: Path, out: Path, fmt: str) -> float:

@@ -89,10 +89,7 @@ print(time.process_time() - c0)
 
 def timed_command(program: str, prof: str, out: Path, fmt: str, marks: Path) -> dict[str, float]:
     """The command's milestones [s from its start] and CPU [s] (:data:`WRAPPER`)."""
-    cmd = bench.convert_command(program, prof, out, fmt)
-    # convert_command's "python -m prsxy_post.cli convert ...": its arguments from
-    # "convert" on, after the wrapper and the file for the marks
-    args = [sys.executable, "-c", WRAPPER, str(marks), *cmd[3:]]
+    args = [sys.executable, "-c", WRAPPER, str(marks), *bench.convert_args(program, prof, out, fmt)]
     t0 = time.time()
     subprocess.run(args, check=True, cwd=bench.ROOT, env=bench.user_env())
     wall = time.time() - t0

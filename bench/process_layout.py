@@ -48,10 +48,7 @@ run()
 
 def timed(layout: str, program: str, prof: str, out: Path, fmt: str) -> tuple[float, float]:
     """Wall time and CPU of the command with the dialect's interpreter ``layout``."""
-    cmd = bench.convert_command(program, prof, out, fmt)
-    # bench.convert_command's "python -m prsxy_post.cli convert ...": its arguments
-    # from "convert" on, after the wrapper and the layout
-    args = [sys.executable, "-c", WRAPPER, layout, *cmd[3:]]
+    args = [sys.executable, "-c", WRAPPER, layout, *bench.convert_args(program, prof, out, fmt)]
     c0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run(args, check=True, cwd=bench.ROOT, env=bench.user_env())

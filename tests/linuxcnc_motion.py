@@ -94,15 +94,21 @@ class MotionRun:
     failed_polls: int = 0
 
     @property
+    def waiting(self) -> np.ndarray:
+        """(m,) bool, the cycles the motion stood with its queue empty: at rest,
+        executing no line (``motion.program-line`` 0). LinuxCNC's task feeds the
+        queue at the host's pace, outside the servo thread; on a loaded machine it
+        falls behind a program of short lines, and the planner waits (tp.c,
+        tpHandleEmptyQueue)."""
+        at_rest = np.r_[True, np.all(self.q[1:] == self.q[:-1], axis=1)]
+        out: np.ndarray = at_rest & (self.line == 0)
+        return out
+
+    @property
     def waiting_s(self) -> float:
         """How long the motion stood with its queue empty between its first and last
-        motion [s]: cycles at rest executing no line (``motion.program-line`` 0).
-        LinuxCNC's task feeds the queue at the host's pace, outside the servo thread;
-        on a loaded machine it falls behind a program of short lines, and the planner
-        waits (tp.c, tpHandleEmptyQueue). The planner's own time is ``t[-1]`` less
-        this."""
-        at_rest = np.r_[True, np.all(self.q[1:] == self.q[:-1], axis=1)]
-        return float(np.count_nonzero(at_rest & (self.line == 0)) * SERVO_PERIOD_S)
+        motion [s] (:attr:`waiting`). The planner's own time is ``t[-1]`` less this."""
+        return float(np.count_nonzero(self.waiting) * SERVO_PERIOD_S)
 
 
 _DISPLAY = r"""#!/usr/bin/python3

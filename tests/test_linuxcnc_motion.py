@@ -121,13 +121,13 @@ def unplanned_stands(run: lm.MotionRun, text: str) -> list[int]:
     the next line when the planner reached the end of the last one, and the planner
     stopped (tp.c, tpHandleEmptyQueue); -1 for a stand away from every point."""
     written = ctl.run_gcode(text)
+    rows = text.splitlines()
     stops = {0}
     for no, k in lm.motion_lines(text).items():
-        if text.splitlines()[no - 1].strip().startswith("G4 "):
+        if rows[no - 1].strip().startswith("G4 "):
             stops |= {k - 1, k}  # the dwell's point repeats the one before it
-    at_rest = np.r_[True, np.all(run.q[1:] == run.q[:-1], axis=1)]
     out = set()
-    for c in np.flatnonzero(at_rest & (run.line == 0)):
+    for c in np.flatnonzero(run.waiting):
         d = np.max(np.abs(written.q - run.q[c]), axis=1)
         k = int(np.argmin(d))
         if d[k] > 1e-6:
