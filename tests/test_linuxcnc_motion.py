@@ -338,7 +338,12 @@ def test_a_stand_linuxcnc_makes_after_a_crossing_line() -> None:
     in X, 500.0 nm in Y) until the queue next runs empty, at the program's next
     dwell; the tip 0.563 µm off the path at line 7, where the path runs in X, above
     the 0.5 µm tolerance (measured); without the stand 0.115 µm. With G64's
-    naive-CAM merging off (Q0) the same. The same line in G61 after the same stand
+    naive-CAM merging off (Q0) the same. LinuxCNC's planner consumes the running line
+    into the blend arc it adds (tp.c tpHandleBlendArc, blendmath.c blendCheckConsume,
+    tc.c tcCanConsume: not asked whether the line has started), and the arc starts
+    at that line's start while the planner's position, a sum of each cycle's
+    displacement (tpAddCurrentPos), keeps what the line had run (docs/measurements.md,
+    "Corrected G-code on LinuxCNC 2.9"). The same line in G61 after the same stand
     holds the path (test_a_stand_before_a_line_in_g61_leaves_the_path); the writer
     cannot tell where the host will fall behind."""
     truth = truth_machine("random", 21)
@@ -363,7 +368,9 @@ def test_a_stand_before_a_line_in_g61_leaves_the_path() -> None:
     after it written in G61 and G64 P after that line: the line runs alone and is not
     blended while it runs, so LinuxCNC's path stays where it was (0.107 µm off,
     measured, against 0.563 µm in G64 P): the cause is the blend added to a running
-    line (test_the_line_after_a_dwell_runs_in_exact_path_mode), not the stand."""
+    line, which consumes it (test_the_line_after_a_dwell_runs_in_exact_path_mode), not
+    the stand; LinuxCNC draws no blend arc from a line not in G64 (tp.c,
+    tpCheckBlendArcType)."""
     truth = truth_machine("random", 21)
     motions, res, texts = convert(truth, STEEP_HELIX_AFTER_A_CIRCLE, "gcode")
     rows = texts[0].split("\n")
