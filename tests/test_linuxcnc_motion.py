@@ -380,7 +380,11 @@ def test_a_stand_before_a_line_in_g61_leaves_the_path() -> None:
     text = "\n".join(
         [*rows[: at + 2], "G4 P0.002", "G61", rows[at + 3], rows[at + 2], *rows[at + 4 :]]
     )
-    tr, _, _ = run_on_linuxcnc(truth, motions, res, text)
+    tr, run, _ = run_on_linuxcnc(truth, motions, res, text)
+    # the race itself, elsewhere in the program, is the other test's
+    stood = unplanned_stands(run, text)
+    if stood and tr.path_mm > TOL_MM:
+        pytest.xfail(f"LinuxCNC stood with an empty queue at written points {stood}")
     assert_on_the_path(tr)
 
 
