@@ -42,7 +42,8 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from prsxy_post import kinematics
+from prsxy_post import chain, gcode, kinematics
+from prsxy_post import profile as profile_mod
 
 from . import controllers as ctl
 from . import linuxcnc_motion as lm
@@ -135,6 +136,23 @@ def unplanned_stands(run: lm.MotionRun, text: str) -> list[int]:
         elif k not in stops:
             out.add(k)
     return sorted(out)
+
+
+def xfail_after_an_unplanned_stand(tr: ctl.Trace, run: lm.MotionRun, text: str) -> list[int]:
+    """The written points where LinuxCNC stood unplanned (:func:`unplanned_stands`);
+    off the path after such a stand the test is an expected failure, said as such,
+    not a pass: the race of test_a_stand_linuxcnc_makes_after_a_crossing_line, where
+    the line after the stand starts alone and is blended while it runs, and the path
+    may run 0.5 µm to one side until the queue next runs empty (0.563 µm at line 7,
+    twice in full suites' runs)."""
+    stood = unplanned_stands(run, text)
+    if stood and tr.path_mm > TOL_MM:
+        pytest.xfail(
+            f"{tr.path_mm * 1e3:.3f} µm off the path at line {tr.worst_line} after LinuxCNC "
+            f"stood with an empty queue at written points {stood} (open: the race of "
+            "test_a_stand_linuxcnc_makes_after_a_crossing_line)"
+        )
+    return stood
 
 
 def test_an_xyz_program_for_a_machine_without_errors_runs_within_bounds() -> None:
@@ -297,18 +315,7 @@ def test_the_line_after_a_dwell_runs_in_exact_path_mode() -> None:
         nxt = next(j for j in range(k + 1, len(rows)) if rows[j].startswith(("G1 ", "M2")))
         assert not any(r.startswith("G64") for r in rows[k + 1 : nxt])
     tr, run, _ = run_on_linuxcnc(truth, motions, res, texts[0])
-    # where LinuxCNC's task fell behind and the planner stood where the program runs
-    # on, the line after the stand starts alone and is blended while it runs: the
-    # path may run 0.5 µm to one side until the queue next runs empty (the race of
-    # test_a_stand_linuxcnc_makes_after_a_crossing_line: 0.563 µm at line 7, twice in
-    # full suites' runs): an expected failure, said as such, not a pass
-    stood = unplanned_stands(run, texts[0])
-    if stood and tr.path_mm > TOL_MM:
-        pytest.xfail(
-            f"{tr.path_mm * 1e3:.3f} µm off the path at line {tr.worst_line} after LinuxCNC "
-            f"stood with an empty queue at written points {stood} (open: the race of "
-            "test_a_stand_linuxcnc_makes_after_a_crossing_line)"
-        )
+    stood = xfail_after_an_unplanned_stand(tr, run, texts[0])
     # when it fails, say how long the motion stood with an empty queue and what
     # was written for the worst source line
     marks = [k for k, r in enumerate(rows) if r == f"(line {tr.worst_line})"]
@@ -319,6 +326,18 @@ def test_the_line_after_a_dwell_runs_in_exact_path_mode() -> None:
         context=f"; the queue empty {run.waiting_s:.3f} s of the run (at written points "
         f"{stood} where the program runs on); the written lines about it:\n{around}",
     )
+
+
+def steep_helix_at_line_7() -> tuple[
+    profile_mod.Profile, list[gcode.Motion], chain.ChainResult, list[str], list[str], int
+]:
+    """steep-helix on machine 21 converted to corrected G-code: the truth, motions,
+    chain result and texts, the first text's rows and the row of its ``(line 7)``,
+    where a G4 P0 is followed by a motor's crossing window of 0.9 ms."""
+    truth = truth_machine("random", 21)
+    motions, res, texts = convert(truth, STEEP_HELIX_AFTER_A_CIRCLE, "gcode")
+    rows = texts[0].split("\n")
+    return truth, motions, res, texts, rows, rows.index("(line 7)")
 
 
 @pytest.mark.xfail(
@@ -346,10 +365,7 @@ def test_a_stand_linuxcnc_makes_after_a_crossing_line() -> None:
     "Corrected G-code on LinuxCNC 2.9"). The same line in G61 after the same stand
     holds the path (test_a_stand_before_a_line_in_g61_leaves_the_path); the writer
     cannot tell where the host will fall behind."""
-    truth = truth_machine("random", 21)
-    motions, res, texts = convert(truth, STEEP_HELIX_AFTER_A_CIRCLE, "gcode")
-    rows = texts[0].split("\n")
-    at = rows.index("(line 7)")
+    truth, motions, res, texts, rows, at = steep_helix_at_line_7()
     if not (rows[at - 1] == "G4 P0" and rows[at + 1].startswith("G1 ")):
         raise RuntimeError("line 7 no longer starts with a dwell and a window's line")
     stand = "\n".join([*rows[: at + 2], "G4 P0.002", *rows[at + 2 :]])
@@ -371,20 +387,14 @@ def test_a_stand_before_a_line_in_g61_leaves_the_path() -> None:
     line, which consumes it (test_the_line_after_a_dwell_runs_in_exact_path_mode), not
     the stand; LinuxCNC draws no blend arc from a line not in G64 (tp.c,
     tpCheckBlendArcType)."""
-    truth = truth_machine("random", 21)
-    motions, res, texts = convert(truth, STEEP_HELIX_AFTER_A_CIRCLE, "gcode")
-    rows = texts[0].split("\n")
-    at = rows.index("(line 7)")
+    truth, motions, res, _, rows, at = steep_helix_at_line_7()
     if not (rows[at + 2].startswith("G64 P") and rows[at + 3].startswith("G1 ")):
         raise RuntimeError("the window's line at line 7 is no longer followed by G64 P and G1")
     text = "\n".join(
         [*rows[: at + 2], "G4 P0.002", "G61", rows[at + 3], rows[at + 2], *rows[at + 4 :]]
     )
     tr, run, _ = run_on_linuxcnc(truth, motions, res, text)
-    # the race itself, elsewhere in the program, is the other test's
-    stood = unplanned_stands(run, text)
-    if stood and tr.path_mm > TOL_MM:
-        pytest.xfail(f"LinuxCNC stood with an empty queue at written points {stood}")
+    xfail_after_an_unplanned_stand(tr, run, text)  # the race, elsewhere in the program
     assert_on_the_path(tr)
 
 
