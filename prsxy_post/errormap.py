@@ -19,7 +19,7 @@ averages measurement noise out instead of interpolating it (the paper's warning
 about interpolating raw errors). The cross-validated RMS is kept as the map's
 honest prediction error on points it was not fitted on.
 
-The compensation is Q' = Q − e(Q) (Eq. 6), iterated in :func:`chain.correct_virtual`.
+The compensation is Q' = Q − e(Q) (Eq. 6), in :func:`chain.correct_virtual`.
 """
 
 from __future__ import annotations

@@ -155,7 +155,7 @@ class _Kin:
         q, ok = kinematics.forward(self.geo, P[None], tool)
         assert ok[0]
         out = q[0]
-        if self.emap is not None:  # undo Q' = Q − e(Q'), as OPEN FORWARD does
+        if self.emap is not None:  # undo Q' = Q − e(Q), as OPEN FORWARD does
             u = out.copy()
             for _ in range(5):
                 u = u + out - chain.correct_virtual(u[None], self.emap)[0]

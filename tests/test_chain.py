@@ -115,3 +115,63 @@ def test_merge_places_orders_new_points_as_one_sort_of_all(
     assert np.array_equal(
         np.flatnonzero(kept), rows + np.searchsorted(np.sort(step), rows, "right")
     )
+
+
+def test_a_written_program_compensates_with_the_contracts_map_formula(tmp_path) -> None:
+    """The contract's compensation is Q' = Q − e(Q) (docs/machine-model.md, the
+    paper's Eq. 6), one evaluation of the map at the programmed pose. Read back the
+    PMAC program ``convert`` writes for straight moves in G61 (no corner leaves its
+    line) on the nominal machine with a steep map (54 µm): each point's written
+    motors, through the forward kinematics (Newton on the contract's constraints),
+    give Q'; undoing the contract's formula (Q = Q' + e(Q), solved to the bit by
+    fixed-point steps) must land on the programmed line. A second fixed-point step
+    of the map (Q' = Q − e(Q')) would move these points off it by tens of nm."""
+    from prsxy_post import errormap
+    from prsxy_post import profile as profile_mod
+    from prsxy_post.convert import ConvertJob, convert_file
+
+    from .conftest import ROOT
+    from .test_tracking import read_pmac
+
+    rng = np.random.default_rng(3)
+    lo, hi = np.array([-150, -150, -60, -25, -25.0]), np.array([150, 150, 40, 25, 25.0])
+    q_fit = rng.uniform(lo, hi, (300, 5))
+    emap = errormap.fit(q_fit, 50e-3 * np.sin(q_fit / 50.0), rng=rng, degrees=(3,), lambdas=[1e-4])
+    nominal = (ROOT / "profiles" / "prsxy-nominal.toml").read_text()
+    doc = dict(profile_mod.loads(nominal, "nominal").raw, error_map=emap.to_dict())
+    prof_path = tmp_path / "mapped.toml"
+    prof_path.write_text(profile_mod.dumps(doc))
+    ends = [
+        (-40.0, -30.0, -10.0, 0.0, 0.0),
+        (60.0, 20.0, -25.0, 12.0, -8.0),
+        (10.0, 70.0, 0.0, -5.0, 15.0),
+    ]
+    words = "X{:g} Y{:g} Z{:g} A{:g} B{:g}"
+    lines = ["G21 G90 G17 G94 G61", "G0 " + words.format(*ends[0])]
+    lines += ["G1 " + words.format(*e) + " F1500" for e in ends[1:]]
+    src = tmp_path / "lines.ngc"
+    src.write_text("\n".join([*lines, "M2", ""]))
+    out = tmp_path / "lines.pmc"
+    convert_file(ConvertJob(str(src), str(prof_path), "pmac", str(out), parallel=False))
+    P, _, line = read_pmac(out.read_text())
+
+    prof = profile_mod.loads(prof_path.read_text(), str(prof_path))
+    q_cmd, ok = kinematics.forward(chain.ik_geometry(prof, chain.Stages()), P, 0.0)
+    assert ok.all()
+    q = q_cmd.copy()
+    for _ in range(30):  # Q = Q' + e(Q): contracts by |∂e/∂Q| ≈ 1e-3 a step
+        q = q_cmd + emap(q)
+    assert np.abs(q - emap(q) - q_cmd).max() < 1e-12
+
+    e = np.array(ends)
+    for k in (1, 2):  # the points of the G1 to ends[k], from ends[k - 1]
+        at = line == k + 2
+        assert at.sum() > 20
+        d = (e[k] - e[k - 1]) / np.linalg.norm(e[k] - e[k - 1])
+        rel = q[at] - e[k - 1]
+        off = rel - np.outer(rel @ d, d)
+        # written to 7 decimals: 0.05 nm a motor, well under a nanometre at the tip
+        assert np.abs(off).max() < 1e-6, np.abs(off).max()
+    # the test tells the formulas apart: the fixed point's second step moves them
+    step = chain.correct_virtual(q, emap, 2) - chain.correct_virtual(q, emap, 1)
+    assert np.abs(step).max() > 2e-5

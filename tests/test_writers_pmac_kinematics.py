@@ -113,7 +113,7 @@ def poses(rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 def project_motors(prof: profile_mod.Profile, q: np.ndarray, tlo: float = 0.0) -> np.ndarray:
-    """The project's own chain for a pose: Q' = Q − e(Q') (chain.correct_virtual),
+    """The project's own chain for a pose: Q' = Q − e(Q) (chain.correct_virtual),
     then the calibrated IK; motor positions in counts (n, 5)."""
     geo = chain.ik_geometry(prof, chain.Stages())
     emap = errormap.from_profile(prof)

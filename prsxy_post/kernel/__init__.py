@@ -283,8 +283,9 @@ def map_rows(m: legendre.MapArrays, q: np.ndarray) -> np.ndarray:
     return out
 
 
-def correct_virtual(m: legendre.MapArrays, q: np.ndarray, iterations: int = 2) -> np.ndarray:
-    """Q' (N, 5) with Q' + e(Q') = Q for poses ``q`` (N, 5), Eq. 6:
+def correct_virtual(m: legendre.MapArrays, q: np.ndarray, iterations: int = 1) -> np.ndarray:
+    """Q' = Q − e(Q) (N, 5) for poses ``q`` (N, 5), Eq. 6 (``iterations`` > 1:
+    Q' = Q − e(Q') again, ``iterations`` − 1 times):
     :func:`legendre.correct_virtual`, compiled (one pass over the rows) when
     :data:`COMPILED`."""
     out: np.ndarray = _correct_virtual(m, q, iterations)

@@ -272,9 +272,9 @@ def map_rows(m, q):
     return out
 
 
-def correct_virtual(m, q, int iterations=2):
-    """Q' (N, 5) with Q' + e(Q') = Q; the compiled twin of
-    ``legendre.correct_virtual``: every row's fixed-point steps in one pass."""
+def correct_virtual(m, q, int iterations=1):
+    """Q' (N, 5) = Q − e(Q), then Q − e(Q') ``iterations`` − 1 times; the compiled
+    twin of ``legendre.correct_virtual``: every row's steps in one pass."""
     cdef const double[:, ::1] qv = np.ascontiguousarray(q, dtype=np.float64)
     if qv.ndim != 2 or qv.shape[1] != 5:
         raise ValueError("q must be (N, 5)")

@@ -71,9 +71,9 @@ def map_rows(m: MapArrays, q: np.ndarray) -> np.ndarray:
     return out
 
 
-def correct_virtual(m: MapArrays, q: np.ndarray, iterations: int = 2) -> np.ndarray:
-    """Q' (N, 5) with Q' + e(Q') = Q: Q' = Q − e(Q), then Q' = Q − e(Q') again
-    ``iterations`` − 1 times (Eq. 6; see :func:`prsxy_post.chain.correct_virtual`)."""
+def correct_virtual(m: MapArrays, q: np.ndarray, iterations: int = 1) -> np.ndarray:
+    """Q' (N, 5) = Q − e(Q) (Eq. 6), then Q' = Q − e(Q') again ``iterations`` − 1
+    times (see :func:`prsxy_post.chain.correct_virtual`)."""
     qp = q - map_rows(m, q)
     for _ in range(iterations - 1):
         qp = q - map_rows(m, qp)

@@ -36,12 +36,12 @@ calibrated numbers as constants: the closed-form inverse (:mod:`prsxy_post.kinem
 with the platform's parasitic spin; the guide bows (6 Newton steps per leg, as
 ``kinematics._bowed_guides``) and the table's squareness, scales and
 straightness (4 fixed-point steps, as ``kinematics.table_motors``); the
-virtual-axis map Q' = Q − e(Q') of Eq. 5–6 evaluated twice, as
-``chain.correct_virtual`` does, its Legendre polynomials by their three-term
-recurrence and its clamp to the fitted domain as (|u+1| − |u−1|)/2. The forward
-program solves the head's three motors for (A, B, z) by a fixed number of Newton
-steps on the inverse's own closed form (finite-difference Jacobian, Cramer's
-rule), checks the residual, then undoes the map by fixed-point steps.
+virtual-axis map Q' = Q − e(Q) of Eq. 5–6, as ``chain.correct_virtual`` does,
+its Legendre polynomials by their three-term recurrence and its clamp to the
+fitted domain as (|u+1| − |u−1|)/2. The forward program solves the head's
+three motors for (A, B, z) by a fixed number of Newton steps on the inverse's own
+closed form (finite-difference Jacobian, Cramer's rule), checks the residual, then
+undoes the map by fixed-point steps.
 
 Not in these programs: the real-axis tables (``tables export --format pmac``: the
 controller's leadscrew and backlash tables act on the motors after the inverse),
@@ -145,21 +145,17 @@ class KinematicsFile:
 
 
 def _map_block(p: _Prog, emap: ErrorMap, src: list[str], dst: list[str]) -> None:
-    """dst = Q' with Q' = Q − e(Q'), two evaluations from Q' = Q (chain.correct_virtual);
-    src, dst: variables of x, y, z, A, B."""
+    """dst = Q' = Q − e(Q) (Eq. 6, chain.correct_virtual); src, dst: variables of
+    x, y, z, A, B."""
     exps, C = emap._plan
     deg = max(max(e) for e in exps) if exps else 0
     lo, hi = emap.lo, emap.hi
     span = np.where(hi > lo, hi - lo, 1.0)
-    for i in range(5):
-        p.let(f"m{i}", src[i])
-    p.let("mpass", "0")
-    p(f"WHILE ({p.mpass}<2)")
     for v in range(5):
         if deg == 0 or not any(e[v] for e in exps):
             continue
         a = 2.0 / span[v]
-        t = lin([(a, p.v(f"m{v}"))], -2.0 * lo[v] / span[v] - 1.0)
+        t = lin([(a, src[v])], -2.0 * lo[v] / span[v] - 1.0)
         p.let("mt", t)
         # clamp to [−1, 1] without a branch: (|t+1| − |t−1|)/2
         p.let(f"L{v}_1", f"(ABS({p.mt}+1)-ABS({p.mt}-1))/2")
@@ -181,11 +177,7 @@ def _map_block(p: _Prog, emap: ErrorMap, src: list[str], dst: list[str]) -> None
             c = float(C[uidx, i])
             p.let(f"e{i}", f"{p.v(f'e{i}')}{'-' if c < 0 else '+'}{k(abs(c))}*{p.mprod}")
     for i in range(5):
-        p.let(f"m{i}", f"{src[i]}-{p.v(f'e{i}')}")
-    p.let("mpass", f"{p.mpass}+1")
-    p("ENDWHILE")
-    for i in range(5):
-        p(f"{dst[i]}={p.v(f'm{i}')}")
+        p(f"{dst[i]}={src[i]}-{p.v(f'e{i}')}")
 
 
 # ---------------------------------------------------------------- the head
@@ -465,7 +457,7 @@ def forward_program(geo: Geometry, emap: ErrorMap | None, cpm: list[float]) -> _
     p.let("gq4", p.xb)
     geo_q = [p.v(f"gq{i}") for i in range(5)]
     if emap is not None:
-        # Q with Q − e(Q − e(Q)) = the geometry's pose: Q ← Q + (pose − Q'(Q))
+        # Q with Q − e(Q) = the geometry's pose: Q ← Q + (pose − Q'(Q))
         for i in range(5):
             p.let(f"u{i}", geo_q[i])
         p.let("un", "0")
@@ -537,7 +529,7 @@ def _header(
         kept.append("effects.table_straightness (4 fixed-point steps)")
     if emap is not None:
         comps = ", ".join(c for c in COMPONENTS if c in emap.coef)
-        kept.append(f"the virtual-axis map of Eq. 4-6 ({comps}; Q' = Q - e(Q'), two evaluations)")
+        kept.append(f"the virtual-axis map of Eq. 4-6 ({comps}; Q' = Q - e(Q))")
     hi = max(inv.next, fwd.next) - 1
     text = [
         f"prsxy-post {__version__}: embedded kinematics for Turbo PMAC coordinate system 1",
