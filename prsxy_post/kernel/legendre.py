@@ -9,9 +9,9 @@ the fitted domain and clamped to its edge:
     e_c(q) = Σ_k C[k, c] Π_v P_{E[k, v]}(u_v)
 
 (the recurrence is numpy's ``legvander``, operation for operation). The compensation
-Q' = Q − e(Q') (Eq. 6) is two fixed-point steps from Q' = Q − e(Q)
-(:func:`correct_virtual`). ``_legendre.pyx`` is the same arithmetic in C, in the same
-order, so the two agree to the bit (``tests/test_kernel_legendre.py``).
+is Q' = Q − e(Q) (Eq. 6, :func:`correct_virtual`). ``_legendre.pyx`` is the same
+arithmetic in C, in the same order, so the two agree to the bit
+(``tests/test_kernel_legendre.py``).
 """
 
 from __future__ import annotations
