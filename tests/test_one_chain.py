@@ -4,7 +4,8 @@ The simulated measurement runs (``experiments.ballbar_run``) and a program the
 simulator commands (``simulate.program_commands``) must give the truth machine the
 motor positions the written Turbo PMAC program gives the controller, read back
 from the file ``convert`` wrote: the same virtual-axis map, IK, real-axis tables
-with the crossings of their play, and one servo lead (``chain.servo_lead``).
+with the crossings of their play, and one servo lead (``chain.servo_lead``). The
+map in that file is the contract's, Q' = Q − e(Q), judged on the G-code's lines.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from prsxy_post import calibrate, errormap, experiments, gcode, program, simulate
+from prsxy_post import calibrate, chain, errormap, experiments, gcode, kinematics, program, simulate
 from prsxy_post import profile as profile_mod
 from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.diagnose.model import Data
@@ -60,8 +61,9 @@ def commanding(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPath
 
 def _written(
     tmp: Path, text: str, profile_path: Path, start: tuple[float, ...] | None = None
-) -> np.ndarray:
-    """Motor positions (N, 5) of every point of the PMAC program ``convert`` writes."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Motor positions (N, 5), segment times [s] and source lines of every point of
+    the PMAC program ``convert`` writes (:func:`read_pmac`)."""
     src = tmp / "program.ngc"
     src.write_text(text)
     out = tmp / "program.pmc"
@@ -75,7 +77,7 @@ def _written(
             start=start,
         )
     )
-    return read_pmac(out.read_text())[0]
+    return read_pmac(out.read_text())
 
 
 def _rows(dwell: np.ndarray, dt: np.ndarray) -> np.ndarray:
@@ -95,7 +97,7 @@ def test_simulate_commands_a_program_as_convert_writes_it(
     motions = gcode.interpret(text, program.interpreter_config(prof), sample)
     pts = simulate.program_commands(prof, motions).points
     P_sim = pts.P_cmd[_rows(pts.dwell, pts.dt)]
-    P_file = _written(tmp_path, text, commanding)
+    P_file = _written(tmp_path, text, commanding)[0]
     assert P_file.shape == P_sim.shape
     assert np.max(np.abs(P_file - P_sim)) <= WRITTEN_MM
     # the stages acted: the commands are not the plain IK of the poses
@@ -150,7 +152,7 @@ def test_a_simulated_ballbar_run_is_commanded_as_convert_writes_its_circle(
     )
     motions = gcode.interpret(text, program.interpreter_config(prof), "circle")
     start = next(m for m in motions if m.kind not in ("rapid", "function")).start
-    P_file = _written(tmp_path, text, commanding, tuple(start))
+    P_file = _written(tmp_path, text, commanding, tuple(start))[0]
     assert P_file.shape == given.shape
     assert np.max(np.abs(P_file - given)) <= WRITTEN_MM
 
@@ -181,3 +183,52 @@ def test_calibrate_and_diagnose_model_a_run_commanded_as_the_simulator_commanded
     obs = calibrate.observations(prof, prof.axis_comp, [], [run], ballbar_points=len(run.t))
     reached = calibrate.reached_motors(prof.axis_comp, given, None)
     assert np.percentile(np.max(np.abs(obs.P_bb - reached), axis=1), 99) < 0.5e-3
+
+
+def test_a_written_program_compensates_with_the_contracts_map_formula(tmp_path: Path) -> None:
+    """The contract's compensation is Q' = Q − e(Q) (docs/machine-model.md, the
+    paper's Eq. 6), one evaluation of the map at the programmed pose. Read back the
+    PMAC program ``convert`` writes for straight moves in G61 (no corner leaves its
+    line) on the nominal machine with a steep map (54 µm): each point's written
+    motors, through the forward kinematics (Newton on the contract's constraints),
+    give Q'; undoing the contract's formula (Q = Q' + e(Q), solved to the bit by
+    fixed-point steps) must land on the programmed line. A second fixed-point step
+    of the map (Q' = Q − e(Q')) would move these points off it by tens of nm."""
+    rng = np.random.default_rng(3)
+    lo, hi = np.array([-150, -150, -60, -25, -25.0]), np.array([150, 150, 40, 25, 25.0])
+    q_fit = rng.uniform(lo, hi, (300, 5))
+    emap = errormap.fit(q_fit, 50e-3 * np.sin(q_fit / 50.0), rng=rng, degrees=(3,), lambdas=[1e-4])
+    nominal = (ROOT / "profiles" / "prsxy-nominal.toml").read_text()
+    doc = dict(profile_mod.loads(nominal, "nominal").raw, error_map=emap.to_dict())
+    prof_path = tmp_path / "mapped.toml"
+    prof_path.write_text(profile_mod.dumps(doc))
+    ends = [
+        (-40.0, -30.0, -10.0, 0.0, 0.0),
+        (60.0, 20.0, -25.0, 12.0, -8.0),
+        (10.0, 70.0, 0.0, -5.0, 15.0),
+    ]
+    words = "X{:g} Y{:g} Z{:g} A{:g} B{:g}"
+    lines = ["G21 G90 G17 G94 G61", "G0 " + words.format(*ends[0])]
+    lines += ["G1 " + words.format(*e) + " F1500" for e in ends[1:]]
+    P, _, line = _written(tmp_path, "\n".join([*lines, "M2", ""]), prof_path)
+
+    prof = profile_mod.loads(prof_path.read_text(), str(prof_path))
+    q_cmd, ok = kinematics.forward(chain.ik_geometry(prof, chain.Stages()), P, 0.0)
+    assert ok.all()
+    q = q_cmd.copy()
+    for _ in range(30):  # Q = Q' + e(Q): contracts by |∂e/∂Q| ≈ 1e-3 a step
+        q = q_cmd + emap(q)
+    assert np.abs(q - emap(q) - q_cmd).max() < 1e-12
+
+    e = np.array(ends)
+    for k in (1, 2):  # the points of the G1 to ends[k], from ends[k - 1]
+        at = line == k + 2
+        assert at.sum() > 20
+        d = (e[k] - e[k - 1]) / np.linalg.norm(e[k] - e[k - 1])
+        rel = q[at] - e[k - 1]
+        off = rel - np.outer(rel @ d, d)
+        # written to 7 decimals: 0.05 nm a motor, well under a nanometre at the tip
+        assert np.abs(off).max() < 1e-6, np.abs(off).max()
+    # the test tells the formulas apart: the fixed point's second step moves them
+    step = chain.correct_virtual(q, emap, 2) - chain.correct_virtual(q, emap, 1)
+    assert np.abs(step).max() > 2e-5
