@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import signal
 import time
-import traceback
 from collections.abc import Callable, Sequence
 from typing import Any
 
 from . import sinks
 from .convert import ConvertJob, convert_file
 from .errors import ProcessFailed, PrsxyError
+from .runtime import crash_text
 
 
 class Outcome:
@@ -162,7 +162,7 @@ def _convert_one(conn: Any, job: ConvertJob) -> bool:
                 conn.send(("stopped",))
             return False
         except BaseException:
-            answer = ("crash", traceback.format_exc())
+            answer = ("crash", crash_text())
         if not sent:
             conn.send(answer)
         return True

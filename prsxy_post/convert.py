@@ -28,7 +28,6 @@ import queue
 import sys
 import threading
 import time
-import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -45,7 +44,7 @@ from .files import (
     sha256_of,
 )
 from .program import iter_program_batches
-from .runtime import few_gc_passes, peak_rss_mb
+from .runtime import crash_text, few_gc_passes, peak_rss_mb
 
 
 @dataclass(frozen=True)
@@ -181,7 +180,7 @@ def _planning_child(conn: Any, job: ConvertJob, prof: Any) -> None:
     except SystemExit:
         raise
     except BaseException:
-        conn.send(("crash", traceback.format_exc(), counts))
+        conn.send(("crash", crash_text(), counts))
     finally:
         conn.close()
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 import hashlib
 import os
 import sys
-import tempfile
 from pathlib import Path
 
 from .errors import PrsxyError, UsageError, write_failed
@@ -107,6 +106,10 @@ def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | b
 
     An existing output is replaced only once every new file is complete on disk.
     """
+    # here, not at the top: tempfile (with shutil and random) is 4 ms of every
+    # command's start, and a conversion writes its output elsewhere (sinks.Parts)
+    import tempfile
+
     temps: list[tuple[str, Path]] = []
     try:
         for path, content in files.items():

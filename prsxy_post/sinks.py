@@ -25,10 +25,8 @@ import os
 import re
 import signal
 import sys
-import tempfile
 import threading
 import time
-import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,7 +36,7 @@ import numpy as np
 
 from . import wire
 from .errors import ProcessFailed, PrsxyError, write_failed
-from .runtime import peak_rss_mb
+from .runtime import crash_text, peak_rss_mb
 
 Piece = tuple[int, str]
 
@@ -316,6 +314,10 @@ class Parts:
             if part not in self._files:
                 target = Path(part_path(self.output, part, self.split))
                 target.parent.mkdir(parents=True, exist_ok=True)
+                # here, not at the top: tempfile (with shutil and random) is 4 ms
+                # of every command's start, and only the writer needs it
+                import tempfile
+
                 fd, tmp = tempfile.mkstemp(
                     prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
                 )
@@ -434,7 +436,7 @@ def _serve(conn: Any, here: WriterHere) -> None:
                     # as the conversion says it when it writes in its own process
                     failed = ("error", write_failed(exc, here.parts.output))
                 except Exception:
-                    failed = ("crash", traceback.format_exc())
+                    failed = ("crash", crash_text())
             if kind == "finish":
                 assert failed is not None
                 here.discard()
@@ -446,7 +448,7 @@ def _serve(conn: Any, here: WriterHere) -> None:
     except BaseException:
         here.discard()
         with contextlib.suppress(Exception):
-            conn.send(("crash", traceback.format_exc()))
+            conn.send(("crash", crash_text()))
     finally:
         conn.close()
 
