@@ -483,40 +483,16 @@ def chord_windows(
     on the other side, to a servo cycle). A sliver of its step left beside it,
     shorter than a servo cycle (its written digits' rounding a large velocity
     error), is taken in, on both sides alike where there is room (over a short
-    step, up to twice its length), else on its side alone.
+    step, up to twice its length), else on its side alone. The arithmetic is the
+    kernel's (:func:`prsxy_post.kernel.chord_windows`, compiled when built).
 
     Returns the windows' starts and ends [s], as :func:`windows`.
     """
-    with np.errstate(divide="ignore"):
-        half = np.where(accel == 0, 0.5 * longest, np.sqrt(2.0 * tol / np.abs(accel)))
-    rb, ra = (np.inf, np.inf) if reach is None else reach
-    d = np.minimum(np.minimum(half, 0.5 * longest), np.minimum(rb, ra))
-    d = np.maximum(d, 0.5 * MIN_WINDOW_S)
-    lim_b, lim_a = np.minimum(t_before, t0), np.maximum(t_after, t1)
-    # over into a step beside: no longer than its own step (whose chord the
-    # sampler sized to the curve: chain.Pipeline._straight_through), or a servo
-    # cycle
-    over = (t_root - d < t0 - SNAP_S) | (t_root + d > t1 + SNAP_S)
-    d = np.where(over, np.maximum(np.minimum(d, 0.5 * (t1 - t0)), 0.5 * MIN_WINDOW_S), d)
-    a = np.maximum(t_root - d, lim_b)
-    b = np.minimum(t_root + d, lim_a)
-    # cut on a side, still a servo cycle: longer on the other
-    short = b - a < MIN_WINDOW_S
-    b = np.where(short & (a <= lim_b), np.minimum(a + MIN_WINDOW_S, lim_a), b)
-    a = np.where(short & (a > lim_b), np.maximum(b - MIN_WINDOW_S, lim_b), a)
-    # slivers of its step beside it taken in: both sides alike where there is room
-    # (twice: grown over one sliver, the window may leave one on its other side)
-    for _ in range(2):
-        sl_b = (a > t0) & (a - t0 < MIN_WINDOW_S)
-        sl_a = (b < t1) & (t1 - b < MIN_WINDOW_S)
-        # as far on the other side as the sliver's end is on this one
-        grow = np.maximum(np.where(sl_b, t_root - t0, 0.0), np.where(sl_a, t1 - t_root, 0.0))
-        even = (sl_b | sl_a) & (t_root - grow >= lim_b) & (t_root + grow <= lim_a)
-        a = np.where(even, np.minimum(a, t_root - grow), a)
-        b = np.where(even, np.maximum(b, t_root + grow), b)
-    a = np.where((a > t0) & (a - t0 < MIN_WINDOW_S), t0, a)
-    b = np.where((b < t1) & (t1 - b < MIN_WINDOW_S), t1, b)
-    return a, b
+    n = len(t_root)
+    rb, ra = (np.full(n, np.inf), np.full(n, np.inf)) if reach is None else reach
+    return kernel.chord_windows(
+        t0, t1, t_root, accel, rb, ra, tol, longest, t_before, t_after, MIN_WINDOW_S, SNAP_S
+    )
 
 
 class _Dip(NamedTuple):
@@ -1165,43 +1141,8 @@ def _chord_room(
     into the step beside where the path moves through both without a corner
     (``corners_at``, rows, sorted) between and the motor has no other
     window there (``busy``, steps), leaving it a servo cycle."""
-    n, dt, resting = len(ch.dt), ch.dt, ch.resting
-    # straight lines: a window may reach into the step beside (of this
-    # chunk) where the path moves through both without a corner between
-    # and the motor has no other window there, leaving it a servo cycle
-    prv, nxt = np.maximum(km - 1, 0), np.minimum(km + 1, n - 1)
     bent = np.zeros(0, dtype=int) if corners_at is None else corners_at
-    busy = np.sort(busy)
-    free_prev = (
-        (km >= 2)
-        & ~resting[prv]
-        & ~resting[np.maximum(km - 2, 0)]
-        & (dt[prv] > 0)
-        & ~_in_sorted(km - 1, busy)
-        & ~_in_sorted(km - 1, bent)
-    )
-    free_next = (
-        (km + 1 < n)
-        & ~resting[km]
-        & ~resting[nxt]
-        & (dt[nxt] > 0)
-        & ~_in_sorted(km + 1, busy)
-        & ~_in_sorted(km, bent)
-    )
-    t_before = t0 - np.where(free_prev, np.clip(dt[prv] - MIN_WINDOW_S, 0.0, None), 0.0)
-    t_after = t1 + np.where(free_next, np.clip(dt[nxt] - MIN_WINDOW_S, 0.0, None), 0.0)
-    return t_before, t_after
-
-
-def _in_sorted(x: np.ndarray, pool: np.ndarray) -> np.ndarray:
-    """(m,) bool, each of ``x`` (m,) ints is in ``pool`` (sorted ints): np.isin's
-    answer by binary search (np.isin builds a table as long as the pool's range,
-    every motor's every chunk again)."""
-    if not len(pool):
-        return np.zeros(len(x), dtype=bool)
-    i = np.minimum(np.searchsorted(pool, x), len(pool) - 1)
-    found: np.ndarray = pool[i] == x
-    return found
+    return kernel.chord_room(km, t0, t1, ch.dt, ch.resting, np.sort(busy), bent, MIN_WINDOW_S)
 
 
 def _place_windows(
@@ -1256,7 +1197,7 @@ def _blend_points(
     ins.near_next = float(tau_e[early == n][0]) if np.any(early == n) else 0.0
     if near_first:
         early, tau_e = np.concatenate([[0], early]), np.concatenate([[near_first], tau_e])
-    keep = (early < n) & ~_in_sorted(early, ins.stand_k)
+    keep = (early < n) & ~kernel_windows.in_sorted(early, ins.stand_k)
     early, tau_e = early[keep], tau_e[keep]
     t_early = t_end[early] - dt[early] + tau_e
     edges, starts, stops = np.sort(et), np.sort(ins.w_ta), np.sort(ins.w_tb)

@@ -61,8 +61,11 @@ def record(attr: str, tmp: Path) -> list[tuple[Any, ...]]:
     return record_many([attr], tmp)[attr]
 
 
-def record_many(attrs: list[str], tmp: Path) -> dict[str, list[tuple[Any, ...]]]:
-    """:func:`record` for several kernels in one conversion of the samples."""
+def record_many(
+    attrs: list[str], tmp: Path, runs: list[tuple[str, str, str]] | None = None
+) -> dict[str, list[tuple[Any, ...]]]:
+    """:func:`record` for several kernels in one conversion of the samples (or of
+    ``runs``: sample, format, profile, as :data:`RUNS`)."""
     calls: dict[str, list[tuple[Any, ...]]] = {a: [] for a in attrs}
 
     def spy(attr: str) -> Callable[..., Any]:
@@ -80,7 +83,7 @@ def record_many(attrs: list[str], tmp: Path) -> dict[str, list[tuple[Any, ...]]]
     for attr in attrs:
         mp.setattr(kernel, attr, spy(attr))
     try:
-        for i, (sample, fmt, prof) in enumerate(RUNS):
+        for i, (sample, fmt, prof) in enumerate(RUNS if runs is None else runs):
             job = ConvertJob(
                 str(ROOT / "samples" / sample), str(ROOT / prof), fmt, str(tmp / f"{i}.out")
             )

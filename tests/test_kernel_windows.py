@@ -27,7 +27,7 @@ from prsxy_post.convert import ConvertJob, convert_file
 from prsxy_post.kernel import windows
 
 from .conftest import ROOT
-from .kernel_cases import compiled, record, same_bits
+from .kernel_cases import compiled, record, record_many, same_bits
 
 
 def _same_pair(got: tuple[np.ndarray, np.ndarray], want: tuple[np.ndarray, np.ndarray]) -> bool:
@@ -492,3 +492,130 @@ def test_compiled_corner_blends_refuse_wrong_shapes() -> None:
         _windows.corner_blends(V, V, cols, h[:2], 250.0, 5e-4, 1e-6, 1e-3)
     with pytest.raises(ValueError, match=r"cols must be motor columns 0 to 4, got 5"):
         _windows.corner_blends(V, V, np.array([5]), h, 250.0, 5e-4, 1e-6, 1e-3)
+
+
+def test_sample_programs_chord_windows_and_their_room_are_bit_identical(
+    tmp_path: Path,
+) -> None:
+    """The windows in motion of corrected G-code (straight lines between the
+    points) and how far each may reach into the steps beside, as the samples'
+    G-code conversions ask them on the contract's test machine, every motor with
+    play: compiled and reference the same bits."""
+    _windows = compiled("_windows")
+    runs = [
+        (s, "gcode", "tests/data/vectors/perturbed.toml") for s in ("pocket.ngc", "five-axis.ngc")
+    ]
+    calls = record_many(["_chord_windows", "_chord_room"], tmp_path, runs)
+    # every motor with play a chunk
+    for attr in ("_chord_windows", "_chord_room"):
+        assert len(calls[attr]) >= 10
+        assert sum(len(args[0]) for args in calls[attr]) >= 10
+    for args in calls["_chord_windows"]:
+        assert _same_pair(_windows.chord_windows(*args), windows.chord_windows(*args))
+    for args in calls["_chord_room"]:
+        assert _same_pair(_windows.chord_room(*args), windows.chord_room(*args))
+
+
+@st.composite
+def _chord_cases(draw: st.DrawFn) -> tuple[np.ndarray, ...]:
+    """Windows in motion: roots anywhere in steps shorter and longer than a servo
+    cycle, accelerations of any size, none or −0.0, reach none or any, and room
+    beside the step none, short or long."""
+    n = draw(st.integers(0, 12))
+    rows = []
+    room = st.one_of(st.just(0.0), st.floats(0.0, 5e-4), st.floats(0.0, 0.05))
+    for _ in range(n):
+        t0 = draw(st.floats(0.0, 10.0))
+        h = draw(st.one_of(st.floats(1e-5, 5e-4), st.floats(5e-4, 0.05)))
+        s = draw(st.one_of(st.floats(0.0, 1.0), st.sampled_from([0.0, 1.0, 0.5])))
+        acc = draw(
+            st.one_of(
+                st.floats(-1e5, 1e5, allow_nan=False),
+                st.sampled_from([0.0, -0.0, 1e-12, -3.0]),
+            )
+        )
+        before, after = t0 - draw(room), t0 + h + draw(room)
+        rows.append((t0, t0 + h, t0 + s * h, acc, draw(_reach), draw(_reach), before, after))
+    arr = np.array(rows, dtype=float).reshape(n, 8)
+    return tuple(np.ascontiguousarray(arr[:, j]) for j in range(8))
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    case=_chord_cases(),
+    tol=st.sampled_from([5e-5, 1e-6, 1e-3]),
+    longest=st.sampled_from([1e-3, 2e-3, 0.25e-3]),
+)
+def test_generated_chord_windows_are_bit_identical(
+    case: tuple[np.ndarray, ...], tol: float, longest: float
+) -> None:
+    _windows = compiled("_windows")
+    args = (*case[:6], tol, longest, *case[6:], reversals.MIN_WINDOW_S, reversals.SNAP_S)
+    want = windows.chord_windows(*args)
+    assert _same_pair(_windows.chord_windows(*args), want)
+    # within the room beside its step, about its root
+    t_root, before, after = case[2], case[6], case[7]
+    a, b = want
+    assert np.all((before <= a) & (a <= b) & (b <= after))
+    assert np.all((a <= t_root) & (t_root <= b))
+
+
+@st.composite
+def _rooms(draw: st.DrawFn) -> tuple[np.ndarray, ...]:
+    """Steps of a chunk (some of no time, some at rest), windows in any of them,
+    the steps with other windows and the corner rows, sorted, with −1 and n
+    among them (a window's step before the first)."""
+    n = draw(st.integers(1, 10))
+    dt = np.array(
+        draw(st.lists(st.sampled_from([0.0, 1e-4, 2.5e-4, 3e-3]), min_size=n, max_size=n))
+    )
+    resting = np.array(draw(st.lists(st.booleans(), min_size=n, max_size=n)))
+    km = np.array(draw(st.lists(st.integers(0, n - 1), max_size=8)), dtype=int)
+    t0 = np.arange(len(km), dtype=float) * 0.01
+    t1 = t0 + 0.005
+    steps = st.lists(st.integers(-1, n), max_size=6)
+    busy = np.sort(np.array(draw(steps), dtype=int))
+    bent = np.sort(np.array(draw(steps), dtype=int))
+    return km, t0, t1, dt, resting, busy, bent
+
+
+@settings(max_examples=400, deadline=None)
+@given(case=_rooms())
+def test_generated_chord_room_is_bit_identical(case: tuple[np.ndarray, ...]) -> None:
+    _windows = compiled("_windows")
+    km, t0, t1, dt, resting, busy, bent = case
+    args = (*case, reversals.MIN_WINDOW_S)
+    t_before, t_after = windows.chord_room(*args)
+    assert _same_pair(_windows.chord_room(*args), (t_before, t_after))
+    # room only into a step beside that moves, where no other window or corner is
+    prev_free = (
+        (km >= 2)
+        & ~resting[np.maximum(km - 1, 0)]
+        & ~resting[np.maximum(km - 2, 0)]
+        & (dt[np.maximum(km - 1, 0)] > 0)
+        & ~np.isin(km - 1, busy)
+        & ~np.isin(km - 1, bent)
+    )
+    assert np.all((t_before < t0) <= prev_free)
+    assert np.all(t_before <= t0) and np.all(t_after >= t1)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    x=st.lists(st.integers(-3, 12), max_size=10),
+    pool=st.lists(st.integers(-3, 12), max_size=10),
+)
+def test_in_sorted_is_numpys_isin(x: list[int], pool: list[int]) -> None:
+    xs, ps = np.array(x, dtype=int), np.sort(np.array(pool, dtype=int))
+    assert np.array_equal(windows.in_sorted(xs, ps), np.isin(xs, ps))
+
+
+def test_compiled_chord_room_refuses_steps_outside_the_chunk() -> None:
+    _windows = compiled("_windows")
+    dt, resting, none = np.full(3, 1e-3), np.zeros(3, dtype=bool), np.zeros(0, dtype=int)
+    with pytest.raises(ValueError, match=r"km must be steps of dt \(0 to 2\), got 3"):
+        _windows.chord_room(np.array([3]), np.zeros(1), np.ones(1), dt, resting, none, none, 2.5e-4)
+    with pytest.raises(ValueError, match=r"t1 must have one value a window \(2 values"):
+        _windows.chord_room(
+            np.array([0, 1]), np.zeros(2), np.ones(1), dt, resting, none, none, 2.5e-4
+        )

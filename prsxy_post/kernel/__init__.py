@@ -649,6 +649,8 @@ def motors_sides(
 
 # the crossings (kernel/windows.py and its twin _windows.pyx)
 _crossing_windows = _RUN["windows"].crossing_windows
+_chord_windows = _RUN["windows"].chord_windows
+_chord_room = _RUN["windows"].chord_room
 _velocity_roots = _RUN["windows"].velocity_roots
 _turning_points = _RUN["windows"].turning_points
 _dip_roots = _RUN["windows"].dip_roots
@@ -755,6 +757,44 @@ def crossing_windows(
     out: tuple[np.ndarray, np.ndarray] = _crossing_windows(
         t0, t1, t_root, accel, rb, ra, tol, longest, chords, min_w
     )
+    return out
+
+
+def chord_windows(
+    t0: np.ndarray,
+    t1: np.ndarray,
+    t_root: np.ndarray,
+    accel: np.ndarray,
+    rb: np.ndarray,
+    ra: np.ndarray,
+    tol: float,
+    longest: float,
+    t_before: np.ndarray,
+    t_after: np.ndarray,
+    min_w: float,
+    snap: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The windows' starts and ends (n,) [s] for straight lines between the
+    points: :func:`windows.chord_windows`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _chord_windows(
+        t0, t1, t_root, accel, rb, ra, tol, longest, t_before, t_after, min_w, snap
+    )
+    return out
+
+
+def chord_room(
+    km: np.ndarray,
+    t0: np.ndarray,
+    t1: np.ndarray,
+    dt: np.ndarray,
+    resting: np.ndarray,
+    busy: np.ndarray,
+    bent: np.ndarray,
+    min_w: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """How far (m,) [s] windows in steps ``km`` may reach before and after them:
+    :func:`windows.chord_room`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _chord_room(km, t0, t1, dt, resting, busy, bent, min_w)
     return out
 
 

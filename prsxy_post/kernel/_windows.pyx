@@ -256,6 +256,115 @@ def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,
     return out_a, out_b
 
 
+
+def chord_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest, t_before,
+                  t_after, double min_w, double snap):
+    """:func:`prsxy_post.kernel.windows.chord_windows`, compiled."""
+    cdef const double[::1] T0 = np.ascontiguousarray(t0, dtype=np.float64)
+    cdef const double[::1] T1 = np.ascontiguousarray(t1, dtype=np.float64)
+    cdef const double[::1] TR = np.ascontiguousarray(t_root, dtype=np.float64)
+    cdef const double[::1] AC = np.ascontiguousarray(accel, dtype=np.float64)
+    cdef const double[::1] RB = np.ascontiguousarray(rb, dtype=np.float64)
+    cdef const double[::1] RA = np.ascontiguousarray(ra, dtype=np.float64)
+    cdef const double[::1] TB = np.ascontiguousarray(t_before, dtype=np.float64)
+    cdef const double[::1] TA = np.ascontiguousarray(t_after, dtype=np.float64)
+    cdef Py_ssize_t n = T0.shape[0], i
+    cdef int j
+    _lengths("one value a window", n, t1=len(T1), t_root=len(TR), accel=len(AC), rb=len(RB),
+             ra=len(RA), t_before=len(TB), t_after=len(TA))
+    out_a = np.empty(n)
+    out_b = np.empty(n)
+    cdef double[::1] A = out_a
+    cdef double[::1] B = out_b
+    cdef double x0, x1, xr, acc, half, d, lim_b, lim_a, a, b, grow
+    cdef double half_longest = 0.5 * longest
+    cdef double half_min = 0.5 * min_w
+    cdef double two_tol = 2.0 * tol
+    cdef bint short, sl_b, sl_a, even
+    with nogil:
+        for i in range(n):
+            x0, x1, xr, acc = T0[i], T1[i], TR[i], AC[i]
+            half = half_longest if acc == 0 else sqrt(two_tol / fabs(acc))
+            d = _min(_min(half, half_longest), _min(RB[i], RA[i]))
+            d = _max(d, half_min)
+            lim_b = _min(TB[i], x0)
+            lim_a = _max(TA[i], x1)
+            if (xr - d < x0 - snap) or (xr + d > x1 + snap):
+                d = _max(_min(d, 0.5 * (x1 - x0)), half_min)
+            a = _max(xr - d, lim_b)
+            b = _min(xr + d, lim_a)
+            short = b - a < min_w
+            if short and a <= lim_b:
+                b = _min(a + min_w, lim_a)
+            if short and a > lim_b:
+                a = _max(b - min_w, lim_b)
+            for j in range(2):
+                sl_b = (a > x0) and (a - x0 < min_w)
+                sl_a = (b < x1) and (x1 - b < min_w)
+                grow = _max(xr - x0 if sl_b else 0.0, x1 - xr if sl_a else 0.0)
+                even = (sl_b or sl_a) and (xr - grow >= lim_b) and (xr + grow <= lim_a)
+                if even:
+                    a = _min(a, xr - grow)
+                    b = _max(b, xr + grow)
+            if (a > x0) and (a - x0 < min_w):
+                a = x0
+            if (b < x1) and (x1 - b < min_w):
+                b = x1
+            A[i] = a
+            B[i] = b
+    return out_a, out_b
+
+
+cdef inline bint _in(long x, const long* pool, Py_ssize_t m) noexcept nogil:
+    """x is one of pool[0..m−1] (sorted): :func:`windows.in_sorted`'s answer."""
+    cdef Py_ssize_t lo = 0, hi = m, mid
+    while lo < hi:  # the first not below x (numpy's searchsorted, side left)
+        mid = (lo + hi) // 2
+        if pool[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo < m and pool[lo] == x
+
+
+def chord_room(km, t0, t1, dt, resting, busy, bent, double min_w):
+    """:func:`prsxy_post.kernel.windows.chord_room`, compiled."""
+    cdef const long[::1] K = np.ascontiguousarray(km, dtype=np.int_)
+    cdef const double[::1] T0 = np.ascontiguousarray(t0, dtype=np.float64)
+    cdef const double[::1] T1 = np.ascontiguousarray(t1, dtype=np.float64)
+    cdef const double[::1] DT = np.ascontiguousarray(dt, dtype=np.float64)
+    cdef const unsigned char[::1] RS = np.ascontiguousarray(resting, dtype=bool).view(np.uint8)
+    busy_a = np.ascontiguousarray(busy, dtype=np.int_)
+    bent_a = np.ascontiguousarray(bent, dtype=np.int_)
+    cdef const long[::1] BU = busy_a
+    cdef const long[::1] BE = bent_a
+    cdef Py_ssize_t m = K.shape[0], n = DT.shape[0], nb = BU.shape[0], ne = BE.shape[0], i
+    _lengths("one value a window", m, t0=len(T0), t1=len(T1))
+    _lengths("one value a step", n, resting=len(RS))
+    for i in range(m):
+        if not 0 <= K[i] < n:
+            raise ValueError(f"km must be steps of dt (0 to {n - 1}), got {K[i]}")
+    cdef const long* pb = &BU[0] if nb else NULL
+    cdef const long* pe = &BE[0] if ne else NULL
+    out_b = np.empty(m)
+    out_a = np.empty(m)
+    cdef double[::1] TB = out_b
+    cdef double[::1] TA = out_a
+    cdef long k, prv, nxt
+    cdef bint free
+    with nogil:
+        for i in range(m):
+            k = K[i]
+            prv = k - 1 if k >= 1 else 0
+            nxt = k + 1 if k + 1 <= n - 1 else n - 1
+            free = (k >= 2 and not RS[prv] and not RS[k - 2 if k >= 2 else 0]
+                    and DT[prv] > 0 and not _in(k - 1, pb, nb) and not _in(k - 1, pe, ne))
+            TB[i] = T0[i] - (_max(DT[prv] - min_w, 0.0) if free else 0.0)
+            free = (k + 1 < n and not RS[k] and not RS[nxt] and DT[nxt] > 0
+                    and not _in(k + 1, pb, nb) and not _in(k, pe, ne))
+            TA[i] = T1[i] + (_max(DT[nxt] - min_w, 0.0) if free else 0.0)
+    return out_b, out_a
+
 # the kinds of :func:`prsxy_post.kernel.windows.motor_turns` (windows.MID, AT_REST,
 # CREPT, STOOD)
 cdef signed char MID = 0, AT_REST = 1, CREPT = 2, STOOD = 3

@@ -427,3 +427,123 @@ def crossing_windows(
     grow_a = (a - t0 < 0.5 * width) & (before_ok | (a - t0 < min_w))
     a = np.where(grow_a, t0, a)
     return np.where(whole, t0, a), np.where(whole, t1, b)
+
+
+def chord_windows(
+    t0: np.ndarray,
+    t1: np.ndarray,
+    t_root: np.ndarray,
+    accel: np.ndarray,
+    rb: np.ndarray,
+    ra: np.ndarray,
+    tol: float,
+    longest: float,
+    t_before: np.ndarray,
+    t_after: np.ndarray,
+    min_w: float,
+    snap: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The windows [a, b] about reversals in motion at ``t_root`` inside steps
+    [t0, t1] for straight lines between the points (the rules, and why, are
+    :func:`prsxy_post.reversals.chord_windows`').
+
+    Each side d of the root is sqrt(2 tol / |A|), at most half the ``longest``
+    and the reach ``rb``, ``ra`` on either side, at least half of ``min_w``; a
+    window passing its step's end by more than ``snap`` is no longer than its step
+    (at least ``min_w``) and reaches over no further than ``t_before``,
+    ``t_after``; cut there, it is ``min_w`` long on the other side; a sliver of its
+    step beside it shorter than ``min_w`` is taken in (twice: both sides alike
+    where the reach allows), then on its side alone.
+
+    Parameters
+    ----------
+    t0, t1, t_root : (n,) the steps' starts, ends and the roots [s]
+    accel : (n,) the motors' accelerations at the roots [mm/s²]
+    rb, ra : (n,) the reach before and after the roots [s] (inf: none)
+    tol : the path error allowed [mm]
+    longest, min_w : the longest and shortest windows [s]
+    t_before, t_after : (n,) how far the window may reach before and after its
+        step [s]
+    snap : how far past its step's end a window still is inside it [s]
+
+    Returns
+    -------
+    a, b : (n,) the windows' starts and ends [s]
+    """
+    with np.errstate(divide="ignore", over="ignore"):  # inf: a tiny acceleration
+        half = np.where(accel == 0, 0.5 * longest, np.sqrt(2.0 * tol / np.abs(accel)))
+    d = np.minimum(np.minimum(half, 0.5 * longest), np.minimum(rb, ra))
+    d = np.maximum(d, 0.5 * min_w)
+    lim_b, lim_a = np.minimum(t_before, t0), np.maximum(t_after, t1)
+    over = (t_root - d < t0 - snap) | (t_root + d > t1 + snap)
+    d = np.where(over, np.maximum(np.minimum(d, 0.5 * (t1 - t0)), 0.5 * min_w), d)
+    a = np.maximum(t_root - d, lim_b)
+    b = np.minimum(t_root + d, lim_a)
+    short = b - a < min_w
+    b = np.where(short & (a <= lim_b), np.minimum(a + min_w, lim_a), b)
+    a = np.where(short & (a > lim_b), np.maximum(b - min_w, lim_b), a)
+    for _ in range(2):
+        sl_b = (a > t0) & (a - t0 < min_w)
+        sl_a = (b < t1) & (t1 - b < min_w)
+        grow = np.maximum(np.where(sl_b, t_root - t0, 0.0), np.where(sl_a, t1 - t_root, 0.0))
+        even = (sl_b | sl_a) & (t_root - grow >= lim_b) & (t_root + grow <= lim_a)
+        a = np.where(even, np.minimum(a, t_root - grow), a)
+        b = np.where(even, np.maximum(b, t_root + grow), b)
+    a = np.where((a > t0) & (a - t0 < min_w), t0, a)
+    b = np.where((b < t1) & (t1 - b < min_w), t1, b)
+    return a, b
+
+
+def in_sorted(x: np.ndarray, pool: np.ndarray) -> np.ndarray:
+    """(m,) bool, each of ``x`` (m,) ints is in ``pool`` (sorted ints): np.isin's
+    answer by binary search (np.isin builds a table as long as the pool's range,
+    every motor's every chunk again)."""
+    if not len(pool):
+        return np.zeros(len(x), dtype=bool)
+    i = np.minimum(np.searchsorted(pool, x), len(pool) - 1)
+    found: np.ndarray = pool[i] == x
+    return found
+
+
+def chord_room(
+    km: np.ndarray,
+    t0: np.ndarray,
+    t1: np.ndarray,
+    dt: np.ndarray,
+    resting: np.ndarray,
+    busy: np.ndarray,
+    bent: np.ndarray,
+    min_w: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """How far [s] a window in step ``km`` (m,) [t0, t1] may reach before and after
+    its step, for :func:`chord_windows` (the rules, and why, are
+    :func:`prsxy_post.reversals.chord_windows`'): into the step beside, less
+    ``min_w``, where the path moves through both (``dt`` (n,) > 0, not ``resting``
+    (n,) at either end of it), the motor has no window in it (steps ``busy``,
+    sorted) and no corner is between (rows ``bent``, sorted); else not at all.
+
+    Returns
+    -------
+    t_before, t_after : (m,) [s]
+    """
+    n = len(dt)
+    prv, nxt = np.maximum(km - 1, 0), np.minimum(km + 1, n - 1)
+    free_prev = (
+        (km >= 2)
+        & ~resting[prv]
+        & ~resting[np.maximum(km - 2, 0)]
+        & (dt[prv] > 0)
+        & ~in_sorted(km - 1, busy)
+        & ~in_sorted(km - 1, bent)
+    )
+    free_next = (
+        (km + 1 < n)
+        & ~resting[km]
+        & ~resting[nxt]
+        & (dt[nxt] > 0)
+        & ~in_sorted(km + 1, busy)
+        & ~in_sorted(km, bent)
+    )
+    t_before = t0 - np.where(free_prev, np.clip(dt[prv] - min_w, 0.0, None), 0.0)
+    t_after = t1 + np.where(free_next, np.clip(dt[nxt] - min_w, 0.0, None), 0.0)
+    return t_before, t_after
