@@ -73,3 +73,60 @@ def test_reach_problems_only_where_a_position_is_not_finite() -> None:
     probs = rules.reach_problems(geo, q_far, tool, P_far, line)
     assert [(p.kind, p.line) for p in probs] == [("reach", 3)]
     assert probs[0].excess > 0
+
+
+def _all_travel(P_cmd: np.ndarray, line: np.ndarray) -> list[rules.Problem]:
+    """Every point's excess over its motor's travel measured, worst per line and
+    motor (the rule without its shortcut by the motors' extremes)."""
+    bad = np.flatnonzero(~np.all(np.isfinite(P_cmd), axis=1))
+    out: list[rules.Problem] = []
+    for col, m in enumerate(profile.MOTORS):
+        mc = PROF.motor(m)
+        p = P_cmd[:, col]
+        with np.errstate(invalid="ignore"):
+            excess = np.maximum(p - mc.max, mc.min - p)
+        excess[bad] = -np.inf
+        out += [
+            rules.Problem("travel", int(line[i]), float(p[i]), float(excess[i]), m)
+            for i in rules._worst_per_line(excess, line)
+        ]
+    return out
+
+
+def _near_travel() -> st.SearchStrategy[float]:
+    """Commands about every motor's travel ends, within and beyond the tolerance."""
+    ends = sorted(
+        {float(v) for m in profile.MOTORS for v in (PROF.motor(m).min, PROF.motor(m).max)}
+    )
+    t = rules.TOLERANCE
+    edges = [e + d for e in ends for d in (0.0, t, -t, 2 * t, -2 * t, 0.5 * t, 1e-3, -1e-3)]
+    return st.one_of(st.sampled_from(edges), st.floats(-400, 400), st.sampled_from([np.nan]))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.tuples(*[_near_travel()] * 5, st.integers(1, 6)), min_size=0, max_size=30))
+def test_travel_problems_are_those_of_every_point_measured(
+    rows: list[tuple[float, float, float, float, float, int]],
+) -> None:
+    P_cmd = np.array([r[:5] for r in rows], dtype=float).reshape(len(rows), 5)
+    line = np.array([r[5] for r in rows], dtype=int)
+    assert rules.travel_problems(PROF, P_cmd, line) == _all_travel(P_cmd, line)
+
+
+def test_travel_problems_at_the_tolerance_about_every_end() -> None:
+    """Each motor commanded just within and just beyond each end of its travel by
+    fractions of the tolerance (the other motors mid-travel): a problem exactly
+    where the point's own excess is above it."""
+    t = rules.TOLERANCE
+    mid = [0.5 * (PROF.motor(m).min + PROF.motor(m).max) for m in profile.MOTORS]
+    found = 0
+    for col, m in enumerate(profile.MOTORS):
+        mc = PROF.motor(m)
+        for end, way in ((mc.max, 1.0), (mc.min, -1.0)):
+            for k in (0.0, 0.5, 1.0, 1.5, 2.0, 4.0):
+                P = np.array([mid, mid], dtype=float)
+                P[1, col] = end + way * k * t
+                got = rules.travel_problems(PROF, P, np.array([1, 2]))
+                assert got == _all_travel(P, np.array([1, 2]))
+                found += len(got)
+    assert found >= 2 * len(profile.MOTORS) * 3  # 1.5, 2 and 4 tolerances beyond
