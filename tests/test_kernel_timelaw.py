@@ -40,6 +40,7 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[tuple[A
         "_forward_pass",
         "_play_stops",
         "_set_offs",
+        "_junction_speeds",
     ]
     return record_many(attrs, tmp_path_factory.mktemp("timelaw"))
 
@@ -390,3 +391,90 @@ def test_a_head_motor_reversing_is_a_stop() -> None:
         assert not stop(kern, [0, 0.5, 0, 0, 0], [0, 0.4, 0, 0, 0])
         assert not stop(kern, [0, 0.3, 0, 0.5, 0], [0, 0.3, 0, -0.4, 0])
         assert stop(kern, [0, 0.0, 0, 0.5, 0], [0, 0.3, 0, -0.4, 0])
+
+
+def _same_junctions(args: tuple[Any, ...]) -> None:
+    """junction_speeds compiled and reference: the same speeds to the bit, the
+    same corners."""
+    _tl = compiled("_timelaw")
+    got, want = _tl.junction_speeds(*args), timelaw.junction_speeds(*args)
+    assert same_bits(got[0], want[0]) and np.array_equal(got[1], want[1])
+
+
+def test_sample_programs_junction_speeds_are_bit_identical(
+    recorded: dict[str, list[tuple[Any, ...]]],
+) -> None:
+    calls = recorded["_junction_speeds"]
+    assert len(calls) >= 7  # a plan at least per run
+    junctions = stops = corners = 0
+    for args in calls:
+        _same_junctions(args)
+        vj, corner = timelaw.junction_speeds(*args)
+        junctions += len(vj) - 1
+        stops += int(np.count_nonzero(vj[:-1] == 0.0))
+        corners += int(np.count_nonzero(corner))
+    # the samples' junctions: stops, corners taken at speed and tangent ones
+    assert junctions > 100 and stops > 5 and corners > 10
+
+
+_UNIT = st.sampled_from([1.0, -1.0, 0.0, -0.0, 0.6, 0.8, 1e-10])
+_RULES = timelaw.JunctionRules(
+    period=1e-3, min_phase=2.5e-3, a_xyz=0.5 * 2000.0, a_ab=0.5 * 3600.0,
+    an=math.sqrt(0.75) * 2000.0, tol_gain=27.0 * 0.25, eps=1e-9, exact=-1.0,
+)  # fmt: skip
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.lists(_UNIT | st.floats(-1.0, 1.0), min_size=5, max_size=5),
+            st.lists(_UNIT | st.floats(-1.0, 1.0), min_size=5, max_size=5),
+            st.sampled_from([0.0, 10.0, 50.0, np.inf]) | st.floats(0.0, 200.0),
+            st.sampled_from([0.0, 1e-4]) | st.floats(0.0, 50.0),
+            st.sampled_from([np.inf, 0.0]) | st.floats(0.0, 5.0),
+            st.booleans(),
+            st.booleans(),
+            st.sampled_from([0.0, 10.0]),
+            st.sampled_from([0.01, -1.0, 0.0]),
+            st.sampled_from([np.inf, 0.5, 30.0, np.nan]),
+            st.booleans(),
+        ),
+        min_size=0,
+        max_size=12,
+    )
+)
+def test_generated_junction_speeds_are_bit_identical(rows: list[tuple[Any, ...]]) -> None:
+    """Tangents turning any way or not at all (±0.0 among them), speed limits of
+    none, zero or any, blocks of no length, curves and lines, dwells, rotary-only
+    moves, tool changes, exact stops and play stops."""
+    n = len(rows)
+    cols = list(zip(*rows, strict=True)) if rows else [[]] * 11
+    dq_in = np.array(cols[0], dtype=float).reshape(n, 5)
+    dq_out = np.array(cols[1], dtype=float).reshape(n, 5)
+    vmax, length, seg = (np.array(cols[j], dtype=float) for j in (2, 3, 4))
+    stops, angular = (np.array(cols[j], dtype=bool) for j in (5, 6))
+    tool, tol, curv_r = (np.array(cols[j], dtype=float) for j in (7, 8, 9))
+    play = np.array(cols[10][1:], dtype=bool)
+    dot = np.einsum("ij,ij->i", dq_in[1:, :3], dq_out[:-1, :3])
+    args = (dq_in, dq_out, dot, vmax, length, seg, stops, angular, tool, tol, tol, curv_r, play)
+    with np.errstate(all="ignore"):
+        _same_junctions((*args, _RULES))
+
+
+def test_compiled_junction_speeds_refuse_ragged_inputs() -> None:
+    _tl = compiled("_timelaw")
+    n = 4
+    one, flags, q = np.ones(n), np.zeros(n, dtype=bool), np.zeros((n, 5))
+    args = [q, q, np.zeros(n - 1), one, one, one, flags, flags, one, one, one, one,
+            np.zeros(n - 1, dtype=bool), _RULES]  # fmt: skip
+    bad = list(args)
+    bad[4] = np.ones(n - 1)
+    with pytest.raises(
+        ValueError, match=r"length must have one value a block \(4, as vmax\), got 3"
+    ):
+        _tl.junction_speeds(*bad)
+    bad = list(args)
+    bad[2] = np.zeros(n)
+    with pytest.raises(ValueError, match=r"dot and play must have one value a junction \(3\)"):
+        _tl.junction_speeds(*bad)

@@ -43,7 +43,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..gcode import EXACT_STOP
-from ..kernel import backward_pass, forward_pass, play_stops
+from ..kernel import backward_pass, forward_pass, junction_speeds, play_stops
+from ..kernel.timelaw import JunctionRules
 from .geometry import CORNER_SHARE, Blocks, PlanLimits, segment_limit
 from .timelaw import TimeLaw, time_law
 
@@ -89,6 +90,19 @@ def row_norm(x: np.ndarray) -> np.ndarray:
 def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarray]:
     """Speed limit at the end of each block (its junction with the next one).
 
+    The fastest each junction's corner may be taken with the mean velocity, within
+    both blocks' speed limits, the path tolerance and κ of the acceleration (the
+    module docstring's two bounds, XYZ and A/B; next to an arc the blend shares the
+    normal acceleration v²/r spends: v²/r + 2 v d / h_lo ≤ sqrt(1 − ½²) a, h_lo the
+    shortest step beside the junction: a phase lasts at least ``min_phase_s``, or
+    the whole block, and curves cut steps shorter); 0 at a stop: a corner of 90° or
+    more (taking it at the speed the tolerance allows, tenths of a mm/s, gains
+    nothing, and a motor reversing there is best turned at rest), a dwell or a
+    machine function, a rotary-only move, a change of tool length, G61.1
+    (``EXACT_STOP``), or a motor crossing its play at rest (:func:`_play_stops`).
+    The arithmetic is the kernel's (:func:`prsxy_post.kernel.junction_speeds`,
+    compiled when built).
+
     Returns
     -------
     vj : (n,) [mm/s or deg/s]; the last block ends at rest
@@ -96,93 +110,25 @@ def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarr
         the mean velocity: the blocks on both sides leave κ of their acceleration
         for it. corner[0] and corner[n] are False.
     """
-    n = len(b)
-    vj = np.zeros(n)
-    corner = np.zeros(n + 1, dtype=bool)
-    if n < 2:
-        return vj, corner
-    d_xyz = row_norm(b.dq_in[1:, :3] - b.dq_out[:-1, :3])
-    d_ab = row_norm(b.dq_in[1:, 3:] - b.dq_out[:-1, 3:])
-    v = _blend_speeds(b, limits, d_xyz, d_ab)
-    stop = _plain_stops(b, d_xyz) | _play_stops(b)
-    v = np.where(stop, 0.0, v)
-    vj[:-1] = v
-    corner[1:-1] = ~stop & ((d_xyz > TANGENT_EPS) | (d_ab > TANGENT_EPS))
-    return vj, corner
-
-
-def _shortest_steps(b: Blocks, limits: PlanLimits) -> np.ndarray:
-    """The shortest step next to each junction, h_lo: (n − 1,) [s].
-
-    A phase lasts at least ``min_phase_s`` (or is the whole block, at least
-    L / vmax), and curves cut steps shorter (:func:`.geometry.segment_limit`).
-    """
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dur = np.where(b.stops, 0.0, b.length / b.vmax)
-        h_curve = 0.5 * segment_limit(b, limits) / b.vmax
-    h_blk = np.minimum(np.minimum(dur, h_curve), limits.min_phase_s)
-    return np.minimum(h_blk[:-1], h_blk[1:])
-
-
-def _blend_speeds(b: Blocks, limits: PlanLimits, d_xyz: np.ndarray, d_ab: np.ndarray) -> np.ndarray:
-    """The fastest each junction's corner may be taken with the mean velocity:
-    (n − 1,) [mm/s or deg/s], within both blocks' speed limits, the path tolerance
-    and κ of the acceleration (the module docstring's two bounds, XYZ and A/B).
-
-    d_xyz, d_ab : (n − 1,) |t_out − t_in| of the tangents' XYZ [mm/mm] and A/B
-        [deg/deg] parts at each junction
-    """
-    period = limits.period_s
-    h_lo = _shortest_steps(b, limits)
-    tol = b.tol[:-1]
-    tol_deg = b.tol_deg[:-1]
-    a_xyz = KAPPA * limits.accel_mm_s2
-    a_ab = KAPPA * limits.accel_deg_s2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v_tol = np.minimum(
-            np.where(
-                d_xyz > TANGENT_EPS, 27.0 * CORNER_SHARE * tol / (2.0 * period * d_xyz), np.inf
-            ),
-            np.where(
-                d_ab > TANGENT_EPS, 27.0 * CORNER_SHARE * tol_deg / (2.0 * period * d_ab), np.inf
-            ),
-        )
-        v_acc = np.minimum(
-            np.where(d_xyz > TANGENT_EPS, a_xyz * h_lo / (2.0 * d_xyz), np.inf),
-            np.where(d_ab > TANGENT_EPS, a_ab * h_lo / (2.0 * d_ab), np.inf),
-        )
-    # an arc next to the junction already spends its normal acceleration on v²/r:
-    # the blend must share it, v²/r + 2 v d / h_lo ≤ sqrt(1 − ½²) a
-    r_min = np.minimum(b.curv_r[:-1], b.curv_r[1:])
-    curved = np.isfinite(r_min) & (d_xyz > TANGENT_EPS)
-    if np.any(curved):
-        an = math.sqrt(0.75) * limits.accel_mm_s2
-        c = np.flatnonzero(curved)
-        p = 2.0 * d_xyz[c] / np.where(h_lo[c] > 0, h_lo[c], np.inf)
-        r = r_min[c]
-        # v² / r + p v − an = 0
-        v_acc[c] = np.minimum(v_acc[c], 0.5 * r * (-p + np.sqrt(p * p + 4.0 * an / r)))
-    return np.minimum(np.minimum(b.vmax[:-1], b.vmax[1:]), np.minimum(v_tol, v_acc))
-
-
-def _plain_stops(b: Blocks, d_xyz: np.ndarray) -> np.ndarray:
-    """(n − 1,) bool, the junctions that are stops whatever the motors do: sharp
-    corners, dwells and machine functions, rotary-only moves, a change of tool
-    length, G61.1. ``d_xyz`` as :func:`_blend_speeds`."""
-    # a corner of 90° or more is a stop: taking it at the speed the tolerance allows
-    # (tenths of a mm/s) gains nothing, and a motor reversing there is best turned
-    # at rest
-    sharp = np.einsum("ij,ij->i", b.dq_in[1:, :3], b.dq_out[:-1, :3]) <= 0.0
-    sharp &= (d_xyz > TANGENT_EPS) & ~b.angular[:-1] & ~b.angular[1:]
-    return (
-        sharp
-        | b.stops[:-1]
-        | b.stops[1:]
-        | b.angular[:-1]
-        | b.angular[1:]
-        | (b.tool_length[:-1] != b.tool_length[1:])
-        | (b.tol[:-1] == EXACT_STOP)
+    if len(b) < 2:
+        return np.zeros(len(b)), np.zeros(len(b) + 1, dtype=bool)
+    rules = JunctionRules(
+        period=limits.period_s,
+        min_phase=limits.min_phase_s,
+        a_xyz=KAPPA * limits.accel_mm_s2,
+        a_ab=KAPPA * limits.accel_deg_s2,
+        an=math.sqrt(0.75) * limits.accel_mm_s2,
+        tol_gain=27.0 * CORNER_SHARE,
+        eps=TANGENT_EPS,
+        exact=EXACT_STOP,
     )
+    # the XYZ tangents' dot product at each junction, as einsum sums it (its sign
+    # makes a corner of 90° or more a stop)
+    dot = np.einsum("ij,ij->i", b.dq_in[1:, :3], b.dq_out[:-1, :3])
+    return junction_speeds(
+        b.dq_in, b.dq_out, dot, b.vmax, b.length, segment_limit(b, limits), b.stops,
+        b.angular, b.tool_length, b.tol, b.tol_deg, b.curv_r, _play_stops(b), rules,
+    )  # fmt: skip
 
 
 def _play_stops(b: Blocks) -> np.ndarray:

@@ -99,6 +99,7 @@ _backward_pass = _RUN["timelaw"].backward_pass
 _forward_pass = _RUN["timelaw"].forward_pass
 _play_stops = _RUN["timelaw"].play_stops
 _set_offs = _RUN["timelaw"].set_offs
+_junction_speeds = _RUN["timelaw"].junction_speeds
 _poses = _RUN["path"].poses
 _velocities = _RUN["path"].velocities
 _play_kernel = _RUN["play"]
@@ -356,6 +357,31 @@ def play_stops(
     out: np.ndarray = _play_stops(
         dq_out, dq_in, dP_out, dP_in, cross_in, head, reversal_slope, stand_slope, gain_max
     )
+    return out
+
+
+def junction_speeds(
+    dq_in: np.ndarray,
+    dq_out: np.ndarray,
+    dot: np.ndarray,
+    vmax: np.ndarray,
+    length: np.ndarray,
+    seg: np.ndarray,
+    stops: np.ndarray,
+    angular: np.ndarray,
+    tool_length: np.ndarray,
+    tol: np.ndarray,
+    tol_deg: np.ndarray,
+    curv_r: np.ndarray,
+    play: np.ndarray,
+    rules: timelaw.JunctionRules,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The junction speeds (n,) and corners (n + 1,) of n blocks:
+    :func:`timelaw.junction_speeds`, compiled when :data:`COMPILED`."""
+    out: tuple[np.ndarray, np.ndarray] = _junction_speeds(
+        dq_in, dq_out, dot, vmax, length, seg, stops, angular, tool_length, tol, tol_deg,
+        curv_r, play, rules,
+    )  # fmt: skip
     return out
 
 

@@ -7,7 +7,7 @@ differently from numpy's separate multiply and add)."""
 
 import numpy as np
 
-from libc.math cimport INFINITY, fabs, sqrt
+from libc.math cimport INFINITY, fabs, isfinite, sqrt
 
 from .timelaw import BISECT_STEPS as _STEPS
 from .timelaw import TimeLaw
@@ -475,3 +475,82 @@ def set_offs(d_in_in, d_out_in, vmax_in, way_in, stood_in, double reversal_slope
                 stood[c] = fabs(b) <= stand_slope
             cross[i] = hit
     return cross_a, way_a, stood_a
+
+
+cdef inline double _nmin(double a, double b) noexcept nogil:
+    # numpy's minimum over arrays: the first when it is NaN or below the second, else
+    # the second (so the second on a tie of ±0.0)
+    return a if (a < b or a != a) else b
+
+
+def junction_speeds(dq_in, dq_out, dot, vmax, length, seg, stops, angular, tool_length, tol,
+                    tol_deg, curv_r, play, r):
+    """The compiled twin of ``timelaw.junction_speeds``: junction by junction."""
+    cdef const double[:, ::1] qi = np.ascontiguousarray(dq_in, dtype=np.float64)
+    cdef const double[:, ::1] qo = np.ascontiguousarray(dq_out, dtype=np.float64)
+    cdef const double[::1] dt_ = np.ascontiguousarray(dot, dtype=np.float64)
+    cdef const double[::1] vm = np.ascontiguousarray(vmax, dtype=np.float64)
+    cdef const double[::1] ln = np.ascontiguousarray(length, dtype=np.float64)
+    cdef const double[::1] sg = np.ascontiguousarray(seg, dtype=np.float64)
+    cdef const unsigned char[::1] st = np.ascontiguousarray(stops, dtype=bool).view(np.uint8)
+    cdef const unsigned char[::1] an_ = np.ascontiguousarray(angular, dtype=bool).view(np.uint8)
+    cdef const double[::1] tl = np.ascontiguousarray(tool_length, dtype=np.float64)
+    cdef const double[::1] to = np.ascontiguousarray(tol, dtype=np.float64)
+    cdef const double[::1] td = np.ascontiguousarray(tol_deg, dtype=np.float64)
+    cdef const double[::1] cr = np.ascontiguousarray(curv_r, dtype=np.float64)
+    cdef const unsigned char[::1] pl = np.ascontiguousarray(play, dtype=bool).view(np.uint8)
+    cdef Py_ssize_t n = vm.shape[0], i, j
+    for name, got in (("length", len(ln)), ("seg", len(sg)), ("stops", len(st)),
+                      ("angular", len(an_)), ("tool_length", len(tl)), ("tol", len(to)),
+                      ("tol_deg", len(td)), ("curv_r", len(cr))):
+        if got != n:
+            raise ValueError(f"{name} must have one value a block ({n}, as vmax), got {got}")
+    if qi.shape[0] != n or qo.shape[0] != n or qi.shape[1] != 5 or qo.shape[1] != 5:
+        raise ValueError(f"dq_in and dq_out must be ({n}, 5), one row a block")
+    cdef Py_ssize_t nj = n - 1 if n > 1 else 0
+    if n > 1 and (dt_.shape[0] != nj or pl.shape[0] != nj):
+        raise ValueError(f"dot and play must have one value a junction ({nj}), got "
+                         f"{dt_.shape[0]} and {pl.shape[0]}")
+    vj_a = np.zeros(n)
+    corner_a = np.zeros(n + 1, dtype=bool)
+    if n < 2:
+        return vj_a, corner_a
+    cdef double[::1] vj = vj_a
+    cdef unsigned char[::1] co = corner_a.view(np.uint8)
+    cdef double period2 = 2.0 * float(r.period)
+    cdef double min_phase = r.min_phase, a_xyz = r.a_xyz, a_ab = r.a_ab
+    cdef double an4 = 4.0 * float(r.an), gain = r.tol_gain, eps = r.eps, exact = r.exact
+    cdef double dx, dab, x, h0, h1, h_lo, v_tol, v_acc, r_min, p, v
+    cdef bint stop
+    with nogil:
+        for i in range(nj):
+            x = qi[i + 1, 0] - qo[i, 0]
+            dx = x * x
+            x = qi[i + 1, 1] - qo[i, 1]
+            dx = dx + x * x
+            x = qi[i + 1, 2] - qo[i, 2]
+            dx = sqrt(dx + x * x)
+            x = qi[i + 1, 3] - qo[i, 3]
+            dab = x * x
+            x = qi[i + 1, 4] - qo[i, 4]
+            dab = sqrt(dab + x * x)
+            # the shortest step beside the junction (lookahead._shortest_steps)
+            h0 = _nmin(_nmin(0.0 if st[i] else ln[i] / vm[i], 0.5 * sg[i] / vm[i]), min_phase)
+            h1 = _nmin(_nmin(0.0 if st[i + 1] else ln[i + 1] / vm[i + 1],
+                             0.5 * sg[i + 1] / vm[i + 1]), min_phase)
+            h_lo = _nmin(h0, h1)
+            v_tol = _nmin(gain * to[i] / (period2 * dx) if dx > eps else INFINITY,
+                          gain * td[i] / (period2 * dab) if dab > eps else INFINITY)
+            v_acc = _nmin(a_xyz * h_lo / (2.0 * dx) if dx > eps else INFINITY,
+                          a_ab * h_lo / (2.0 * dab) if dab > eps else INFINITY)
+            r_min = _nmin(cr[i], cr[i + 1])
+            if isfinite(r_min) and dx > eps:  # next to an arc
+                p = 2.0 * dx / (h_lo if h_lo > 0 else INFINITY)
+                v_acc = _nmin(v_acc, 0.5 * r_min * (-p + sqrt(p * p + an4 / r_min)))
+            v = _nmin(_nmin(vm[i], vm[i + 1]), _nmin(v_tol, v_acc))
+            stop = ((dt_[i] <= 0.0 and dx > eps and not an_[i] and not an_[i + 1])
+                    or st[i] or st[i + 1] or an_[i] or an_[i + 1] or tl[i] != tl[i + 1]
+                    or to[i] == exact or pl[i])
+            vj[i] = 0.0 if stop else v
+            co[i + 1] = (not stop) and (dx > eps or dab > eps)
+    return vj_a, corner_a

@@ -12,7 +12,10 @@ at vp, constant deceleration a3 to the exit speed v1. Here, for a batch of block
 - :func:`backward_pass`, :func:`forward_pass`: the look-ahead's limits on the
   junction speeds, v² changing by at most 2aL per block;
 - :func:`play_stops`: the junctions where a motor with play must cross it at rest
-  (:func:`prsxy_post.interpolate.lookahead.junction_limits` says why).
+  (:func:`prsxy_post.interpolate.lookahead.junction_limits` says why);
+- :func:`junction_speeds`: the fastest each junction may be taken and which are
+  corners (the look-ahead's junction limits, :mod:`prsxy_post.interpolate.lookahead`
+  says why).
 
 Every block's arithmetic depends on its own values only (so a program cut into
 chunks gets the same bits as one planned at once), and every operation is written
@@ -352,3 +355,127 @@ def set_offs(
     against = sets_off & (np.sign(d_in) == -before) & was
     cross: np.ndarray = np.any(against, axis=1)
     return cross, came[-1].copy(), still[-1].copy()
+
+
+class JunctionRules(NamedTuple):
+    """The numbers :func:`junction_speeds` takes from the plan's limits (each a
+    Python float made as :mod:`prsxy_post.interpolate.lookahead` makes it).
+
+    period : the servo period [s]; min_phase : the shortest phase [s]
+    a_xyz, a_ab : κ of the accelerations [mm/s², deg/s²]
+    an : sqrt(0.75) of the XYZ acceleration [mm/s²] (what a blend next to an arc may
+        take of it)
+    tol_gain : 27 · CORNER_SHARE, of the tolerance a corner's blend may take
+    eps : the tangents' difference below which a junction is tangent
+    exact : the block tolerance that asks an exact stop (G61.1)
+    """
+
+    period: float
+    min_phase: float
+    a_xyz: float
+    a_ab: float
+    an: float
+    tol_gain: float
+    eps: float
+    exact: float
+
+
+def junction_speeds(
+    dq_in: np.ndarray,
+    dq_out: np.ndarray,
+    dot: np.ndarray,
+    vmax: np.ndarray,
+    length: np.ndarray,
+    seg: np.ndarray,
+    stops: np.ndarray,
+    angular: np.ndarray,
+    tool_length: np.ndarray,
+    tol: np.ndarray,
+    tol_deg: np.ndarray,
+    curv_r: np.ndarray,
+    play: np.ndarray,
+    r: JunctionRules,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The speed limit at the end of each of n blocks and the corners: the
+    fastest each junction's corner may be taken with the mean velocity, within
+    both blocks' speed limits, the path tolerance (27 · CORNER_SHARE · tol /
+    (2 T d)) and κ of the acceleration (κ a h / (2 d), h the shortest step beside
+    it; next to an arc, v² / r + 2 v d / h ≤ sqrt(0.75) a), d = |t_in − t_out| of
+    the XYZ and the A/B tangents; 0 at a stop (a corner of 90° or more, a dwell or
+    function, a rotary-only move beside, a change of tool length, G61.1, or a
+    motor crossing its play at rest).
+
+    Parameters
+    ----------
+    dq_in, dq_out : (n, 5) the tangents at each block's start and end
+    dot : (n − 1,) t_in · t_out of the XYZ tangents at each junction
+    vmax, length : (n,) the blocks' speed limits and lengths
+    seg : (n,) the longest step at speed 1 on each block
+        (:func:`prsxy_post.interpolate.geometry.segment_limit`)
+    stops, angular : (n,) bool, a dwell or function; a rotary-only move
+    tool_length, tol, tol_deg, curv_r : (n,) each block's
+    play : (n − 1,) bool, a motor crosses its play at rest at the junction
+        (:func:`play_stops`)
+
+    Returns
+    -------
+    vj : (n,) the junction speeds, the last 0; corner : (n + 1,) bool, the
+    junctions taken as corners with the mean velocity (the first and last False)
+    """
+    n = len(vmax)
+    vj = np.zeros(n)
+    corner = np.zeros(n + 1, dtype=bool)
+    if n < 2:
+        return vj, corner
+    d_xyz = _row_norm(dq_in[1:, :3] - dq_out[:-1, :3])
+    d_ab = _row_norm(dq_in[1:, 3:] - dq_out[:-1, 3:])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dur = np.where(stops, 0.0, length / vmax)
+        h_curve = 0.5 * seg / vmax
+    h_blk = np.minimum(np.minimum(dur, h_curve), r.min_phase)
+    h_lo = np.minimum(h_blk[:-1], h_blk[1:])
+    tol, tol_deg = tol[:-1], tol_deg[:-1]
+    eps = r.eps
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v_tol = np.minimum(
+            np.where(d_xyz > eps, r.tol_gain * tol / (2.0 * r.period * d_xyz), np.inf),
+            np.where(d_ab > eps, r.tol_gain * tol_deg / (2.0 * r.period * d_ab), np.inf),
+        )
+        v_acc = np.minimum(
+            np.where(d_xyz > eps, r.a_xyz * h_lo / (2.0 * d_xyz), np.inf),
+            np.where(d_ab > eps, r.a_ab * h_lo / (2.0 * d_ab), np.inf),
+        )
+    r_min = np.minimum(curv_r[:-1], curv_r[1:])
+    curved = np.isfinite(r_min) & (d_xyz > eps)
+    if np.any(curved):
+        c = np.flatnonzero(curved)
+        p = 2.0 * d_xyz[c] / np.where(h_lo[c] > 0, h_lo[c], np.inf)
+        rc = r_min[c]
+        # v² / r + p v − an = 0
+        v_acc[c] = np.minimum(v_acc[c], 0.5 * rc * (-p + np.sqrt(p * p + 4.0 * r.an / rc)))
+    v = np.minimum(np.minimum(vmax[:-1], vmax[1:]), np.minimum(v_tol, v_acc))
+    sharp = (dot <= 0.0) & (d_xyz > eps) & ~angular[:-1] & ~angular[1:]
+    stop = (
+        sharp
+        | stops[:-1]
+        | stops[1:]
+        | angular[:-1]
+        | angular[1:]
+        | (tool_length[:-1] != tool_length[1:])
+        | (tol == r.exact)
+        | play
+    )
+    vj[:-1] = np.where(stop, 0.0, v)
+    corner[1:-1] = ~stop & ((d_xyz > eps) | (d_ab > eps))
+    return vj, corner
+
+
+def _row_norm(x: np.ndarray) -> np.ndarray:
+    """(n,) each row's norm, its squares summed in column order (as
+    ``np.linalg.norm(x, axis=1)``)."""
+    sq = x * x
+    total = sq[:, 0].copy()
+    for j in range(1, x.shape[1]):
+        total += sq[:, j]
+    out: np.ndarray = np.sqrt(total)
+    return out
