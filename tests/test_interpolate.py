@@ -12,6 +12,7 @@ from hypothesis.extra import numpy as hnp
 from prsxy_post import chain, gcode, interpolate, program
 from prsxy_post import profile as profile_mod
 from prsxy_post.interpolate.geometry import CORNER_SHARE
+from prsxy_post.kernel.timelaw import row_norm
 
 from .conftest import ROOT
 
@@ -242,8 +243,7 @@ def test_segment_limit_bounds_curves_and_leaves_lines_free(segment: str) -> None
     )
 )
 def test_row_norm_is_numpys_norm_of_each_row_to_the_bit(x: np.ndarray) -> None:
-    """The look-ahead's row_norm sums the squares in column order, as numpy's
-    norm(axis=1) does (the junctions' turns must keep their bits)."""
-    from prsxy_post.interpolate.lookahead import row_norm
-
+    """The kernel's row_norm (the look-ahead's junctions and bends) sums the
+    squares in column order, as numpy's norm(axis=1) does (the junctions' turns
+    must keep their bits)."""
     assert row_norm(x).tobytes() == np.linalg.norm(x, axis=1).tobytes()

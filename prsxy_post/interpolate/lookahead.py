@@ -44,7 +44,7 @@ import numpy as np
 
 from ..gcode import EXACT_STOP
 from ..kernel import backward_pass, forward_pass, junction_speeds, play_stops
-from ..kernel.timelaw import JunctionRules
+from ..kernel.timelaw import JunctionRules, row_norm
 from .geometry import CORNER_SHARE, Blocks, PlanLimits, segment_limit
 from .timelaw import TimeLaw, time_law
 
@@ -73,18 +73,6 @@ HEAD_MOTORS = 3
 #: reverses is a stop when that is more than this share on either side. (The
 #: points of a written program keep within 1e-4 of F: test_tracking.)
 TABLE_STAND_SHARE = 1e-4
-
-
-def row_norm(x: np.ndarray) -> np.ndarray:
-    """(n,) the Euclidean norm of each row of ``x`` (n, k), k small: the squares
-    summed in column order, as ``np.linalg.norm(x, axis=1)`` sums them (the same
-    bits), without numpy's reduction machinery over rows of a few (several times
-    its cost on a chunk's blocks)."""
-    sq = x * x
-    total = sq[:, 0].copy()
-    for j in range(1, x.shape[1]):
-        total += sq[:, j]
-    return np.sqrt(total)
 
 
 def junction_limits(b: Blocks, limits: PlanLimits) -> tuple[np.ndarray, np.ndarray]:

@@ -499,7 +499,7 @@ def junction_speeds(dq_in, dq_out, dot, vmax, length, seg, stops, angular, tool_
     cdef const double[::1] td = np.ascontiguousarray(tol_deg, dtype=np.float64)
     cdef const double[::1] cr = np.ascontiguousarray(curv_r, dtype=np.float64)
     cdef const unsigned char[::1] pl = np.ascontiguousarray(play, dtype=bool).view(np.uint8)
-    cdef Py_ssize_t n = vm.shape[0], i, j
+    cdef Py_ssize_t n = vm.shape[0], i
     for name, got in (("length", len(ln)), ("seg", len(sg)), ("stops", len(st)),
                       ("angular", len(an_)), ("tool_length", len(tl)), ("tol", len(to)),
                       ("tol_deg", len(td)), ("curv_r", len(cr))):

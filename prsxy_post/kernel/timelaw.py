@@ -427,8 +427,8 @@ def junction_speeds(
     corner = np.zeros(n + 1, dtype=bool)
     if n < 2:
         return vj, corner
-    d_xyz = _row_norm(dq_in[1:, :3] - dq_out[:-1, :3])
-    d_ab = _row_norm(dq_in[1:, 3:] - dq_out[:-1, 3:])
+    d_xyz = row_norm(dq_in[1:, :3] - dq_out[:-1, :3])
+    d_ab = row_norm(dq_in[1:, 3:] - dq_out[:-1, 3:])
     with np.errstate(divide="ignore", invalid="ignore"):
         dur = np.where(stops, 0.0, length / vmax)
         h_curve = 0.5 * seg / vmax
@@ -470,9 +470,11 @@ def junction_speeds(
     return vj, corner
 
 
-def _row_norm(x: np.ndarray) -> np.ndarray:
-    """(n,) each row's norm, its squares summed in column order (as
-    ``np.linalg.norm(x, axis=1)``)."""
+def row_norm(x: np.ndarray) -> np.ndarray:
+    """(n,) the Euclidean norm of each row of ``x`` (n, k), k small: the squares
+    summed in column order, as ``np.linalg.norm(x, axis=1)`` sums them (the same
+    bits), without numpy's reduction machinery over rows of a few (several times
+    its cost on a chunk's blocks)."""
     sq = x * x
     total = sq[:, 0].copy()
     for j in range(1, x.shape[1]):
