@@ -518,26 +518,14 @@ def test_sample_programs_chord_windows_and_their_room_are_bit_identical(
 
 @st.composite
 def _chord_cases(draw: st.DrawFn) -> tuple[np.ndarray, ...]:
-    """Windows in motion: roots anywhere in steps shorter and longer than a servo
-    cycle, accelerations of any size, none or −0.0, reach none or any, and room
-    beside the step none, short or long."""
-    n = draw(st.integers(0, 12))
-    rows = []
+    """Windows in motion (:func:`_cases`' steps, roots, accelerations and reach)
+    and the room beside each step: none, short or long."""
+    case = draw(_cases())
     room = st.one_of(st.just(0.0), st.floats(0.0, 5e-4), st.floats(0.0, 0.05))
-    for _ in range(n):
-        t0 = draw(st.floats(0.0, 10.0))
-        h = draw(st.one_of(st.floats(1e-5, 5e-4), st.floats(5e-4, 0.05)))
-        s = draw(st.one_of(st.floats(0.0, 1.0), st.sampled_from([0.0, 1.0, 0.5])))
-        acc = draw(
-            st.one_of(
-                st.floats(-1e5, 1e5, allow_nan=False),
-                st.sampled_from([0.0, -0.0, 1e-12, -3.0]),
-            )
-        )
-        before, after = t0 - draw(room), t0 + h + draw(room)
-        rows.append((t0, t0 + h, t0 + s * h, acc, draw(_reach), draw(_reach), before, after))
-    arr = np.array(rows, dtype=float).reshape(n, 8)
-    return tuple(np.ascontiguousarray(arr[:, j]) for j in range(8))
+    n = len(case[0])
+    before = case[0] - np.array([draw(room) for _ in range(n)], dtype=float)
+    after = case[1] + np.array([draw(room) for _ in range(n)], dtype=float)
+    return (*case, before, after)
 
 
 @settings(max_examples=400, deadline=None)
