@@ -7,7 +7,10 @@ reach the tip's speed allows; the roots of the steps where motors turn) and
 generated ones (hypothesis: roots anywhere in their steps, accelerations of any
 size, none or −0.0, reach none (inf), tiny or wide on either side, steps shorter
 than a servo cycle, cubics and chords; steps' cubics from rest, with equal end
-velocities, straight, nearly straight, turning twice, either way or none).
+velocities, straight, nearly straight, turning twice, either way or none). The
+windows in motion of corrected G-code and the room beside their steps are recorded
+from the samples' G-code conversions on the contract's test machine (every motor
+with play) and generated with the room drawn beside each step.
 """
 
 from __future__ import annotations

@@ -256,7 +256,6 @@ def crossing_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest,
     return out_a, out_b
 
 
-
 def chord_windows(t0, t1, t_root, accel, rb, ra, double tol, double longest, t_before,
                   t_after, double min_w, double snap):
     """:func:`prsxy_post.kernel.windows.chord_windows`, compiled."""
@@ -357,13 +356,14 @@ def chord_room(km, t0, t1, dt, resting, busy, bent, double min_w):
             k = K[i]
             prv = k - 1 if k >= 1 else 0
             nxt = k + 1 if k + 1 <= n - 1 else n - 1
-            free = (k >= 2 and not RS[prv] and not RS[k - 2 if k >= 2 else 0]
+            free = (k >= 2 and not RS[prv] and not RS[k - 2]
                     and DT[prv] > 0 and not _in(k - 1, pb, nb) and not _in(k - 1, pe, ne))
             TB[i] = T0[i] - (_max(DT[prv] - min_w, 0.0) if free else 0.0)
             free = (k + 1 < n and not RS[k] and not RS[nxt] and DT[nxt] > 0
                     and not _in(k + 1, pb, nb) and not _in(k, pe, ne))
             TA[i] = T1[i] + (_max(DT[nxt] - min_w, 0.0) if free else 0.0)
     return out_b, out_a
+
 
 # the kinds of :func:`prsxy_post.kernel.windows.motor_turns` (windows.MID, AT_REST,
 # CREPT, STOOD)

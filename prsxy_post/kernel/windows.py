@@ -475,16 +475,23 @@ def chord_windows(
     d = np.minimum(np.minimum(half, 0.5 * longest), np.minimum(rb, ra))
     d = np.maximum(d, 0.5 * min_w)
     lim_b, lim_a = np.minimum(t_before, t0), np.maximum(t_after, t1)
+    # over into a step beside: no longer than its own step (whose chord the
+    # sampler sized to the curve: chain.Pipeline._straight_through), or a servo
+    # cycle
     over = (t_root - d < t0 - snap) | (t_root + d > t1 + snap)
     d = np.where(over, np.maximum(np.minimum(d, 0.5 * (t1 - t0)), 0.5 * min_w), d)
     a = np.maximum(t_root - d, lim_b)
     b = np.minimum(t_root + d, lim_a)
+    # cut on a side, still a servo cycle: longer on the other
     short = b - a < min_w
     b = np.where(short & (a <= lim_b), np.minimum(a + min_w, lim_a), b)
     a = np.where(short & (a > lim_b), np.maximum(b - min_w, lim_b), a)
+    # slivers of its step beside it taken in: both sides alike where there is room
+    # (twice: grown over one sliver, the window may leave one on its other side)
     for _ in range(2):
         sl_b = (a > t0) & (a - t0 < min_w)
         sl_a = (b < t1) & (t1 - b < min_w)
+        # as far on the other side as the sliver's end is on this one
         grow = np.maximum(np.where(sl_b, t_root - t0, 0.0), np.where(sl_a, t1 - t_root, 0.0))
         even = (sl_b | sl_a) & (t_root - grow >= lim_b) & (t_root + grow <= lim_a)
         a = np.where(even, np.minimum(a, t_root - grow), a)
