@@ -101,20 +101,27 @@ def refuse_to_overwrite(output: str | Path, inputs: dict[str, str]) -> None:
         )
 
 
+def temp_beside(path: Path) -> tuple[int, str]:
+    """A new temp file beside ``path`` (its directory made if need be), named
+    ``.<name>.<random>.tmp`` and open for writing as ``mkstemp`` makes it (mode
+    0600, :func:`publish` sets the target's): its descriptor and path."""
+    # here, not at the top: tempfile (with shutil and random) is 4 ms of every
+    # command's start, and only what writes a file needs it
+    import tempfile
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+
+
 def write_atomic(files: dict[Path, str] | dict[Path, bytes] | dict[Path, str | bytes]) -> None:
     """Write every file or none: temp files beside the targets, then renames.
 
     An existing output is replaced only once every new file is complete on disk.
     """
-    # here, not at the top: tempfile (with shutil and random) is 4 ms of every
-    # command's start, and a conversion writes its output elsewhere (sinks.Parts)
-    import tempfile
-
     temps: list[tuple[str, Path]] = []
     try:
         for path, content in files.items():
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+            fd, tmp = temp_beside(path)
             temps.append((tmp, path))
             data = content.encode("utf-8") if isinstance(content, str) else content
             with os.fdopen(fd, "wb") as fh:

@@ -413,6 +413,16 @@ def root_result(st: RootSearch) -> tuple[np.ndarray, np.ndarray]:
     return np.where(moved, st.x, st.s), np.where(moved, st.slope, st.accel)
 
 
+def _reach_or_none(
+    reach: tuple[np.ndarray, np.ndarray] | None, n: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The reach before and after n roots (:func:`reach`), or none (inf) where not
+    given."""
+    if reach is None:
+        return np.full(n, np.inf), np.full(n, np.inf)
+    return reach
+
+
 def windows(
     t0: np.ndarray,
     t1: np.ndarray,
@@ -448,8 +458,7 @@ def windows(
     path's velocity, and the commands after it take the difference up along the
     path (:func:`catch_up`).
     """
-    n = len(t_root)
-    rb, ra = (np.full(n, np.inf), np.full(n, np.inf)) if reach is None else reach
+    rb, ra = _reach_or_none(reach, len(t_root))
     return kernel.crossing_windows(
         t0, t1, t_root, accel, rb, ra, tol, longest, chords, MIN_WINDOW_S
     )
@@ -488,8 +497,7 @@ def chord_windows(
 
     Returns the windows' starts and ends [s], as :func:`windows`.
     """
-    n = len(t_root)
-    rb, ra = (np.full(n, np.inf), np.full(n, np.inf)) if reach is None else reach
+    rb, ra = _reach_or_none(reach, len(t_root))
     return kernel.chord_windows(
         t0, t1, t_root, accel, rb, ra, tol, longest, t_before, t_after, MIN_WINDOW_S, SNAP_S
     )

@@ -36,6 +36,7 @@ import numpy as np
 
 from . import wire
 from .errors import ProcessFailed, PrsxyError, write_failed
+from .files import temp_beside
 from .runtime import crash_text, peak_rss_mb
 
 Piece = tuple[int, str]
@@ -312,15 +313,7 @@ class Parts:
                 self.memory.setdefault(part, []).append(text)
                 continue
             if part not in self._files:
-                target = Path(part_path(self.output, part, self.split))
-                target.parent.mkdir(parents=True, exist_ok=True)
-                # here, not at the top: tempfile (with shutil and random) is 4 ms
-                # of every command's start, and only the writer needs it
-                import tempfile
-
-                fd, tmp = tempfile.mkstemp(
-                    prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
-                )
+                fd, tmp = temp_beside(Path(part_path(self.output, part, self.split)))
                 self.temps[part] = tmp
                 self._files[part] = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
                 self._unsynced[part] = 0

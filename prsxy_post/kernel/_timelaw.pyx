@@ -372,8 +372,9 @@ def forward_pass(
 
 
 cdef inline double _min(double a, double b) noexcept nogil:
-    # numpy's minimum: the first when it is NaN or not above the second
-    return a if (a <= b or a != a) else b
+    # numpy's minimum over arrays: the first when it is NaN or below the second, else
+    # the second (so the second on a tie of ±0.0)
+    return a if (a < b or a != a) else b
 
 
 def play_stops(
@@ -477,12 +478,6 @@ def set_offs(d_in_in, d_out_in, vmax_in, way_in, stood_in, double reversal_slope
     return cross_a, way_a, stood_a
 
 
-cdef inline double _nmin(double a, double b) noexcept nogil:
-    # numpy's minimum over arrays: the first when it is NaN or below the second, else
-    # the second (so the second on a tie of ±0.0)
-    return a if (a < b or a != a) else b
-
-
 def junction_speeds(dq_in, dq_out, dot, vmax, length, seg, stops, angular, tool_length, tol,
                     tol_deg, curv_r, play, r):
     """The compiled twin of ``timelaw.junction_speeds``: junction by junction."""
@@ -535,19 +530,19 @@ def junction_speeds(dq_in, dq_out, dot, vmax, length, seg, stops, angular, tool_
             x = qi[i + 1, 4] - qo[i, 4]
             dab = sqrt(dab + x * x)
             # the shortest step beside the junction (lookahead._shortest_steps)
-            h0 = _nmin(_nmin(0.0 if st[i] else ln[i] / vm[i], 0.5 * sg[i] / vm[i]), min_phase)
-            h1 = _nmin(_nmin(0.0 if st[i + 1] else ln[i + 1] / vm[i + 1],
+            h0 = _min(_min(0.0 if st[i] else ln[i] / vm[i], 0.5 * sg[i] / vm[i]), min_phase)
+            h1 = _min(_min(0.0 if st[i + 1] else ln[i + 1] / vm[i + 1],
                              0.5 * sg[i + 1] / vm[i + 1]), min_phase)
-            h_lo = _nmin(h0, h1)
-            v_tol = _nmin(gain * to[i] / (period2 * dx) if dx > eps else INFINITY,
+            h_lo = _min(h0, h1)
+            v_tol = _min(gain * to[i] / (period2 * dx) if dx > eps else INFINITY,
                           gain * td[i] / (period2 * dab) if dab > eps else INFINITY)
-            v_acc = _nmin(a_xyz * h_lo / (2.0 * dx) if dx > eps else INFINITY,
+            v_acc = _min(a_xyz * h_lo / (2.0 * dx) if dx > eps else INFINITY,
                           a_ab * h_lo / (2.0 * dab) if dab > eps else INFINITY)
-            r_min = _nmin(cr[i], cr[i + 1])
+            r_min = _min(cr[i], cr[i + 1])
             if isfinite(r_min) and dx > eps:  # next to an arc
                 p = 2.0 * dx / (h_lo if h_lo > 0 else INFINITY)
-                v_acc = _nmin(v_acc, 0.5 * r_min * (-p + sqrt(p * p + an4 / r_min)))
-            v = _nmin(_nmin(vm[i], vm[i + 1]), _nmin(v_tol, v_acc))
+                v_acc = _min(v_acc, 0.5 * r_min * (-p + sqrt(p * p + an4 / r_min)))
+            v = _min(_min(vm[i], vm[i + 1]), _min(v_tol, v_acc))
             stop = ((dt_[i] <= 0.0 and dx > eps and not an_[i] and not an_[i + 1])
                     or st[i] or st[i + 1] or an_[i] or an_[i + 1] or tl[i] != tl[i + 1]
                     or to[i] == exact or pl[i])
